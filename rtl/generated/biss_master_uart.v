@@ -1015,7 +1015,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_ca_request_address(\regs__ca_address$453 ),
     .ch1_ca_request_count(\regs__ca_count$459 ),
     .ch1_ca_request_slave_id(\regs__ca_slave_id$469 ),
-    .\ch1_ca_request_write$447 (\regs__ca_write$481 ),
+    .\ch1_ca_request_write$446 (\regs__ca_write$481 ),
     .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$513 ),
     .ch1_cfg_break_break_time(\regs__cfg_break_time$515 ),
     .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$517 ),
@@ -1063,12 +1063,12 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$7959$0 (\$10 ),
-    .\port$7970$0 (\$11 ),
-    .\port$8047$0 (\$12 ),
-    .\port$8490$0 (\$13 ),
-    .\port$8501$0 (\$14 ),
-    .\port$8578$0 (\$15 ),
+    .\port$7807$0 (\$10 ),
+    .\port$7818$0 (\$11 ),
+    .\port$7895$0 (\$12 ),
+    .\port$8338$0 (\$13 ),
+    .\port$8349$0 (\$14 ),
+    .\port$8426$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1141,9 +1141,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$7959$0 (\$10 ),
-    .\port$7970$0 (\$11 ),
-    .\port$8047$0 (\$12 ),
+    .\port$7807$0 (\$10 ),
+    .\port$7818$0 (\$11 ),
+    .\port$7895$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1218,9 +1218,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(\regs__count_en$753 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$777 ),
-    .\port$8490$0 (\$13 ),
-    .\port$8501$0 (\$14 ),
-    .\port$8578$0 (\$15 ),
+    .\port$8338$0 (\$13 ),
+    .\port$8349$0 (\$14 ),
+    .\port$8426$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$447 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1983,45 +1983,45 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
 , ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
 , ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
 , ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id
-, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$447 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7959$0 , \port$7970$0 , ch0__ca_done, \port$8047$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$8490$0 , \port$8501$0 , ch1__ca_done, \port$8578$0 , clk);
+, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$446 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7807$0 , \port$7818$0 , ch0__ca_done, \port$7895$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$8338$0 , \port$8349$0 , ch1__ca_done, \port$8426$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
   wire [31:0] \$100 ;
-  reg [1:0] \$1000 ;
+  reg \$1000 ;
   reg \$1001 ;
   reg \$1002 ;
   reg \$1003 ;
   reg \$1004 ;
   reg \$1005 ;
   reg \$1006 ;
-  reg [7:0] \$1007 ;
-  reg [3:0] \$1008 ;
-  reg [3:0] \$1009 ;
+  reg \$1007 ;
+  reg \$1008 ;
+  reg \$1009 ;
   wire [31:0] \$101 ;
-  reg [3:0] \$1010 ;
+  reg \$1010 ;
   reg \$1011 ;
-  reg [11:0] \$1012 ;
+  reg \$1012 ;
   reg \$1013 ;
-  reg [15:0] \$1014 ;
-  reg [4:0] \$1015 ;
-  reg \$1016 ;
+  reg [2:0] \$1014 ;
+  reg [6:0] \$1015 ;
+  reg [6:0] \$1016 ;
   reg \$1017 ;
-  reg [15:0] \$1018 ;
+  reg \$1018 ;
   reg \$1019 ;
   wire [31:0] \$102 ;
-  reg [15:0] \$1020 ;
-  reg [4:0] \$1021 ;
+  reg [14:0] \$1020 ;
+  reg [3:0] \$1021 ;
   reg \$1022 ;
   reg \$1023 ;
-  reg [15:0] \$1024 ;
+  reg \$1024 ;
   reg \$1025 ;
   reg \$1026 ;
   reg \$1027 ;
   reg \$1028 ;
   reg \$1029 ;
   wire [14:0] \$103 ;
-  reg [11:0] \$1030 ;
+  reg \$1030 ;
   reg \$1031 ;
   reg \$1032 ;
   reg \$1033 ;
@@ -2043,16 +2043,16 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg \$1048 ;
   reg \$1049 ;
   wire \$105 ;
-  reg [2:0] \$1050 ;
-  reg [6:0] \$1051 ;
-  reg [6:0] \$1052 ;
+  reg \$1050 ;
+  reg \$1051 ;
+  reg \$1052 ;
   reg \$1053 ;
   reg \$1054 ;
   reg \$1055 ;
-  reg [31:0] \$1056 ;
-  reg [14:0] \$1057 ;
-  reg [14:0] \$1058 ;
-  reg [3:0] \$1059 ;
+  reg \$1056 ;
+  reg \$1057 ;
+  reg \$1058 ;
+  reg \$1059 ;
   wire \$106 ;
   reg \$1060 ;
   reg \$1061 ;
@@ -2071,7 +2071,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg \$1073 ;
   reg \$1074 ;
   reg \$1075 ;
-  reg \$1076 ;
+  reg [3:0] \$1076 ;
   reg \$1077 ;
   reg \$1078 ;
   reg \$1079 ;
@@ -2084,260 +2084,48 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg \$1085 ;
   reg \$1086 ;
   reg \$1087 ;
-  reg \$1088 ;
-  reg \$1089 ;
+  reg [5:0] \$1088 ;
+  reg [15:0] \$1089 ;
   wire \$109 ;
-  reg \$1090 ;
-  reg \$1091 ;
-  reg \$1092 ;
-  reg \$1093 ;
-  reg \$1094 ;
-  reg \$1095 ;
-  reg \$1096 ;
+  reg [12:0] \$1090 ;
+  reg [31:0] \$1091 ;
+  reg [22:0] \$1092 ;
+  reg [31:0] \$1093 ;
+  reg [7:0] \$1094 ;
+  reg [31:0] \$1095 ;
+  reg [3:0] \$1096 ;
   reg \$1097 ;
-  reg \$1098 ;
-  reg \$1099 ;
+  reg [7:0] \$1098 ;
+  reg [12:0] \$1099 ;
   wire [31:0] \$11 ;
   wire \$110 ;
   reg \$1100 ;
   reg \$1101 ;
   reg \$1102 ;
-  reg \$1103 ;
-  reg \$1104 ;
-  reg \$1105 ;
-  reg \$1106 ;
-  reg \$1107 ;
-  reg \$1108 ;
-  reg \$1109 ;
+  reg [31:0] \$1103 ;
   wire \$111 ;
-  reg \$1110 ;
-  reg \$1111 ;
-  reg \$1112 ;
-  reg \$1113 ;
-  reg [3:0] \$1114 ;
-  reg \$1115 ;
-  reg \$1116 ;
-  reg \$1117 ;
-  reg \$1118 ;
-  reg \$1119 ;
   wire \$112 ;
-  reg \$1120 ;
-  reg \$1121 ;
-  reg \$1122 ;
-  reg \$1123 ;
-  reg \$1124 ;
-  reg \$1125 ;
-  reg [5:0] \$1126 ;
-  reg [15:0] \$1127 ;
-  reg [12:0] \$1128 ;
-  reg [31:0] \$1129 ;
   wire \$113 ;
-  reg [22:0] \$1130 ;
-  reg [31:0] \$1131 ;
-  reg [7:0] \$1132 ;
-  reg [31:0] \$1133 ;
-  reg [3:0] \$1134 ;
-  reg \$1135 ;
-  reg [7:0] \$1136 ;
-  reg [12:0] \$1137 ;
-  reg \$1138 ;
-  reg \$1139 ;
   wire \$114 ;
-  reg \$1140 ;
-  reg [31:0] \$1141 ;
-  reg \$1142 ;
-  reg \$1143 ;
-  reg \$1144 ;
-  reg \$1145 ;
-  reg \$1146 ;
-  reg \$1147 ;
-  reg \$1148 ;
-  reg \$1149 ;
   wire \$115 ;
-  reg \$1150 ;
-  reg \$1151 ;
-  reg \$1152 ;
-  reg \$1153 ;
-  reg \$1154 ;
-  reg [15:0] \$1155 ;
-  reg [11:0] \$1156 ;
-  reg \$1157 ;
-  reg [23:0] \$1158 ;
-  reg \$1159 ;
   wire \$116 ;
-  reg [23:0] \$1160 ;
-  reg \$1161 ;
-  reg [23:0] \$1162 ;
-  reg \$1163 ;
-  reg [23:0] \$1164 ;
-  reg \$1165 ;
-  reg [5:0] \$1166 ;
-  reg \$1167 ;
-  reg \$1168 ;
-  reg [1:0] \$1169 ;
   wire \$117 ;
-  reg \$1170 ;
-  reg \$1171 ;
-  reg [5:0] \$1172 ;
-  reg \$1173 ;
-  reg \$1174 ;
-  reg [1:0] \$1175 ;
-  reg \$1176 ;
-  reg \$1177 ;
-  reg \$1178 ;
-  reg \$1179 ;
   wire \$118 ;
-  reg \$1180 ;
-  reg \$1181 ;
-  reg [7:0] \$1182 ;
-  reg [3:0] \$1183 ;
-  reg [3:0] \$1184 ;
-  reg [3:0] \$1185 ;
-  reg \$1186 ;
-  reg [11:0] \$1187 ;
-  reg \$1188 ;
-  reg [15:0] \$1189 ;
-  wire [14:0] \$119 ;
-  reg [4:0] \$1190 ;
-  reg \$1191 ;
-  reg \$1192 ;
-  reg [15:0] \$1193 ;
-  reg \$1194 ;
-  reg [15:0] \$1195 ;
-  reg [4:0] \$1196 ;
-  reg \$1197 ;
-  reg \$1198 ;
-  reg [15:0] \$1199 ;
+  wire \$119 ;
   wire [31:0] \$12 ;
   wire \$120 ;
-  reg \$1200 ;
-  reg \$1201 ;
-  reg \$1202 ;
-  reg \$1203 ;
-  reg \$1204 ;
-  reg [11:0] \$1205 ;
-  reg \$1206 ;
-  reg \$1207 ;
-  reg \$1208 ;
-  reg \$1209 ;
   wire \$121 ;
-  reg \$1210 ;
-  reg \$1211 ;
-  reg \$1212 ;
-  reg \$1213 ;
-  reg \$1214 ;
-  reg \$1215 ;
-  reg \$1216 ;
-  reg \$1217 ;
-  reg \$1218 ;
-  reg \$1219 ;
   wire \$122 ;
-  reg \$1220 ;
-  reg \$1221 ;
-  reg \$1222 ;
-  reg \$1223 ;
-  reg \$1224 ;
-  reg [2:0] \$1225 ;
-  reg [6:0] \$1226 ;
-  reg [6:0] \$1227 ;
-  reg \$1228 ;
-  reg \$1229 ;
   wire \$123 ;
-  reg \$1230 ;
-  reg [14:0] \$1231 ;
-  reg [14:0] \$1232 ;
-  reg [3:0] \$1233 ;
-  reg \$1234 ;
-  reg \$1235 ;
-  reg \$1236 ;
-  reg \$1237 ;
-  reg \$1238 ;
-  reg \$1239 ;
   wire \$124 ;
-  reg \$1240 ;
-  reg \$1241 ;
-  reg \$1242 ;
-  reg \$1243 ;
-  reg \$1244 ;
-  reg \$1245 ;
-  reg \$1246 ;
-  reg \$1247 ;
-  reg \$1248 ;
-  reg \$1249 ;
   wire \$125 ;
-  reg \$1250 ;
-  reg \$1251 ;
-  reg \$1252 ;
-  reg \$1253 ;
-  reg \$1254 ;
-  reg \$1255 ;
-  reg \$1256 ;
-  reg \$1257 ;
-  reg \$1258 ;
-  reg \$1259 ;
   wire \$126 ;
-  reg \$1260 ;
-  reg \$1261 ;
-  reg \$1262 ;
-  reg \$1263 ;
-  reg \$1264 ;
-  reg \$1265 ;
-  reg \$1266 ;
-  reg \$1267 ;
-  reg \$1268 ;
-  reg \$1269 ;
   wire \$127 ;
-  reg \$1270 ;
-  reg \$1271 ;
-  reg \$1272 ;
-  reg \$1273 ;
-  reg \$1274 ;
-  reg \$1275 ;
-  reg \$1276 ;
-  reg \$1277 ;
-  reg \$1278 ;
-  reg \$1279 ;
   wire \$128 ;
-  reg \$1280 ;
-  reg \$1281 ;
-  reg \$1282 ;
-  reg \$1283 ;
-  reg \$1284 ;
-  reg \$1285 ;
-  reg \$1286 ;
-  reg \$1287 ;
-  reg [3:0] \$1288 ;
-  reg \$1289 ;
   wire \$129 ;
-  reg \$1290 ;
-  reg \$1291 ;
-  reg \$1292 ;
-  reg \$1293 ;
-  reg \$1294 ;
-  reg \$1295 ;
-  reg \$1296 ;
-  reg \$1297 ;
-  reg \$1298 ;
-  reg \$1299 ;
   wire [31:0] \$13 ;
   wire \$130 ;
-  reg [5:0] \$1300 ;
-  reg [15:0] \$1301 ;
-  reg [12:0] \$1302 ;
-  reg [31:0] \$1303 ;
-  reg [22:0] \$1304 ;
-  reg [31:0] \$1305 ;
-  reg [7:0] \$1306 ;
-  reg [31:0] \$1307 ;
-  reg [3:0] \$1308 ;
-  reg \$1309 ;
   wire \$131 ;
-  reg [7:0] \$1310 ;
-  reg [12:0] \$1311 ;
-  reg \$1312 ;
-  reg \$1313 ;
-  reg \$1314 ;
-  reg [31:0] \$1315 ;
   wire \$132 ;
   wire \$133 ;
   wire \$134 ;
@@ -2372,23 +2160,23 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$160 ;
   wire \$161 ;
   wire \$162 ;
-  wire \$163 ;
-  wire \$164 ;
-  wire \$165 ;
-  wire \$166 ;
-  wire \$167 ;
-  wire \$168 ;
-  wire \$169 ;
+  wire [31:0] \$163 ;
+  wire [31:0] \$164 ;
+  wire [31:0] \$165 ;
+  wire [31:0] \$166 ;
+  wire [31:0] \$167 ;
+  wire [31:0] \$168 ;
+  wire [31:0] \$169 ;
   wire [31:0] \$17 ;
-  wire \$170 ;
-  wire \$171 ;
-  wire \$172 ;
-  wire \$173 ;
-  wire \$174 ;
-  wire \$175 ;
-  wire \$176 ;
-  wire \$177 ;
-  wire \$178 ;
+  wire [31:0] \$170 ;
+  wire [31:0] \$171 ;
+  wire [31:0] \$172 ;
+  wire [31:0] \$173 ;
+  wire [31:0] \$174 ;
+  wire [31:0] \$175 ;
+  wire [31:0] \$176 ;
+  wire [31:0] \$177 ;
+  wire [31:0] \$178 ;
   wire [31:0] \$179 ;
   wire \$18 ;
   wire [31:0] \$180 ;
@@ -2498,24 +2286,24 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire [31:0] \$274 ;
   wire [31:0] \$275 ;
   wire [31:0] \$276 ;
-  wire [31:0] \$277 ;
-  wire [31:0] \$278 ;
-  wire [31:0] \$279 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
   wire \$28 ;
-  wire [31:0] \$280 ;
-  wire [31:0] \$281 ;
-  wire [31:0] \$282 ;
-  wire [31:0] \$283 ;
-  wire [31:0] \$284 ;
-  wire [31:0] \$285 ;
-  wire [31:0] \$286 ;
-  wire [31:0] \$287 ;
-  wire [31:0] \$288 ;
-  wire [31:0] \$289 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
   wire \$29 ;
-  wire [31:0] \$290 ;
-  wire [31:0] \$291 ;
-  wire [31:0] \$292 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
   wire \$293 ;
   wire \$294 ;
   wire \$295 ;
@@ -2587,7 +2375,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$354 ;
   wire \$355 ;
   wire \$356 ;
-  wire \$357 ;
+  wire [14:0] \$357 ;
   wire \$358 ;
   wire \$359 ;
   wire \$36 ;
@@ -2605,7 +2393,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$370 ;
   wire \$371 ;
   wire \$372 ;
-  wire [14:0] \$373 ;
+  wire \$373 ;
   wire \$374 ;
   wire \$375 ;
   wire \$376 ;
@@ -2622,7 +2410,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$386 ;
   wire \$387 ;
   wire \$388 ;
-  wire [14:0] \$389 ;
+  wire \$389 ;
   wire \$39 ;
   wire \$390 ;
   wire \$391 ;
@@ -2654,41 +2442,41 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$414 ;
   wire \$415 ;
   wire \$416 ;
-  wire \$417 ;
-  wire \$418 ;
-  wire \$419 ;
+  wire [31:0] \$417 ;
+  wire [31:0] \$418 ;
+  wire [31:0] \$419 ;
   wire \$42 ;
-  wire \$420 ;
-  wire \$421 ;
-  wire \$422 ;
-  wire \$423 ;
-  wire \$424 ;
-  wire \$425 ;
-  wire \$426 ;
-  wire \$427 ;
-  wire \$428 ;
-  wire \$429 ;
+  wire [31:0] \$420 ;
+  wire [31:0] \$421 ;
+  wire [31:0] \$422 ;
+  wire [31:0] \$423 ;
+  wire [31:0] \$424 ;
+  wire [31:0] \$425 ;
+  wire [31:0] \$426 ;
+  wire [31:0] \$427 ;
+  wire [31:0] \$428 ;
+  wire [31:0] \$429 ;
   wire \$43 ;
-  wire \$430 ;
-  wire \$431 ;
-  wire \$432 ;
-  wire \$433 ;
-  wire \$434 ;
-  wire \$435 ;
-  wire \$436 ;
-  wire \$437 ;
-  wire \$438 ;
-  wire \$439 ;
+  wire [31:0] \$430 ;
+  wire [31:0] \$431 ;
+  wire [31:0] \$432 ;
+  wire [31:0] \$433 ;
+  wire [31:0] \$434 ;
+  wire [31:0] \$435 ;
+  wire [31:0] \$436 ;
+  wire [31:0] \$437 ;
+  wire [31:0] \$438 ;
+  wire [31:0] \$439 ;
   wire \$44 ;
-  wire \$440 ;
-  wire \$441 ;
-  wire \$442 ;
-  wire \$443 ;
-  wire \$444 ;
-  wire \$445 ;
-  wire \$446 ;
-  wire \$447 ;
-  wire \$448 ;
+  wire [31:0] \$440 ;
+  wire [31:0] \$441 ;
+  wire [31:0] \$442 ;
+  wire [31:0] \$443 ;
+  wire [31:0] \$444 ;
+  wire [31:0] \$445 ;
+  wire [31:0] \$446 ;
+  wire [31:0] \$447 ;
+  wire [31:0] \$448 ;
   wire [31:0] \$449 ;
   wire \$45 ;
   wire [31:0] \$450 ;
@@ -2781,41 +2569,41 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire [31:0] \$529 ;
   wire \$53 ;
   wire [31:0] \$530 ;
-  wire [31:0] \$531 ;
-  wire [31:0] \$532 ;
-  wire [31:0] \$533 ;
-  wire [31:0] \$534 ;
-  wire [31:0] \$535 ;
-  wire [31:0] \$536 ;
-  wire [31:0] \$537 ;
-  wire [31:0] \$538 ;
-  wire [31:0] \$539 ;
+  wire \$531 ;
+  wire \$532 ;
+  wire \$533 ;
+  wire \$534 ;
+  wire \$535 ;
+  wire \$536 ;
+  wire \$537 ;
+  wire \$538 ;
+  wire \$539 ;
   wire \$54 ;
-  wire [31:0] \$540 ;
-  wire [31:0] \$541 ;
-  wire [31:0] \$542 ;
-  wire [31:0] \$543 ;
-  wire [31:0] \$544 ;
-  wire [31:0] \$545 ;
-  wire [31:0] \$546 ;
-  wire [31:0] \$547 ;
-  wire [31:0] \$548 ;
-  wire [31:0] \$549 ;
+  wire \$540 ;
+  wire \$541 ;
+  wire \$542 ;
+  wire \$543 ;
+  wire \$544 ;
+  wire \$545 ;
+  wire \$546 ;
+  wire \$547 ;
+  wire \$548 ;
+  wire \$549 ;
   wire \$55 ;
-  wire [31:0] \$550 ;
-  wire [31:0] \$551 ;
-  wire [31:0] \$552 ;
-  wire [31:0] \$553 ;
-  wire [31:0] \$554 ;
-  wire [31:0] \$555 ;
-  wire [31:0] \$556 ;
-  wire [31:0] \$557 ;
-  wire [31:0] \$558 ;
-  wire [31:0] \$559 ;
+  wire \$550 ;
+  wire \$551 ;
+  wire \$552 ;
+  wire \$553 ;
+  wire \$554 ;
+  wire \$555 ;
+  wire \$556 ;
+  wire \$557 ;
+  wire \$558 ;
+  wire \$559 ;
   wire \$56 ;
-  wire [31:0] \$560 ;
-  wire [31:0] \$561 ;
-  wire [31:0] \$562 ;
+  wire \$560 ;
+  wire \$561 ;
+  wire \$562 ;
   wire \$563 ;
   wire \$564 ;
   wire \$565 ;
@@ -2873,27 +2661,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$611 ;
   wire \$612 ;
   wire \$613 ;
-  wire \$614 ;
-  wire \$615 ;
+  wire [14:0] \$614 ;
+  wire [14:0] \$615 ;
   wire \$616 ;
-  wire \$617 ;
-  wire \$618 ;
+  wire [14:0] \$617 ;
+  wire [14:0] \$618 ;
   wire \$619 ;
   wire \$62 ;
-  wire \$620 ;
-  wire \$621 ;
+  wire [14:0] \$620 ;
+  wire [14:0] \$621 ;
   wire \$622 ;
-  wire \$623 ;
-  wire \$624 ;
+  wire [14:0] \$623 ;
+  wire [14:0] \$624 ;
   wire \$625 ;
-  wire \$626 ;
+  wire [3:0] \$626 ;
   wire \$627 ;
   wire \$628 ;
   wire \$629 ;
   wire \$63 ;
-  wire \$630 ;
-  wire \$631 ;
-  wire \$632 ;
+  reg [31:0] \$630 ;
+  wire [31:0] \$631 ;
+  reg [31:0] \$632 ;
   wire \$633 ;
   wire \$634 ;
   wire \$635 ;
@@ -2908,26 +2696,26 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$643 ;
   wire \$644 ;
   wire \$645 ;
-  wire [14:0] \$646 ;
-  wire [14:0] \$647 ;
+  wire \$646 ;
+  wire \$647 ;
   wire \$648 ;
-  wire [14:0] \$649 ;
+  wire \$649 ;
   wire \$65 ;
-  wire [14:0] \$650 ;
+  wire \$650 ;
   wire \$651 ;
-  wire [14:0] \$652 ;
-  wire [14:0] \$653 ;
+  wire \$652 ;
+  wire \$653 ;
   wire \$654 ;
-  wire [14:0] \$655 ;
-  wire [14:0] \$656 ;
+  wire \$655 ;
+  wire \$656 ;
   wire \$657 ;
-  wire [3:0] \$658 ;
+  wire \$658 ;
   wire \$659 ;
   wire \$66 ;
   wire \$660 ;
-  wire [14:0] \$661 ;
+  wire \$661 ;
   wire \$662 ;
-  wire [31:0] \$663 ;
+  wire \$663 ;
   wire \$664 ;
   wire \$665 ;
   wire \$666 ;
@@ -2987,27 +2775,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$714 ;
   wire \$715 ;
   wire \$716 ;
-  wire \$717 ;
-  wire \$718 ;
+  wire [14:0] \$717 ;
+  wire [14:0] \$718 ;
   wire \$719 ;
   wire \$72 ;
-  wire \$720 ;
-  wire \$721 ;
+  wire [14:0] \$720 ;
+  wire [14:0] \$721 ;
   wire \$722 ;
-  wire \$723 ;
-  wire \$724 ;
+  wire [14:0] \$723 ;
+  wire [14:0] \$724 ;
   wire \$725 ;
-  wire \$726 ;
-  wire \$727 ;
+  wire [14:0] \$726 ;
+  wire [14:0] \$727 ;
   wire \$728 ;
-  wire \$729 ;
+  wire [3:0] \$729 ;
   wire \$73 ;
   wire \$730 ;
   wire \$731 ;
   wire \$732 ;
-  wire \$733 ;
-  wire \$734 ;
-  wire \$735 ;
+  reg [31:0] \$733 ;
+  wire [31:0] \$734 ;
+  reg [31:0] \$735 ;
   wire \$736 ;
   wire \$737 ;
   wire \$738 ;
@@ -3015,289 +2803,289 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$74 ;
   wire \$740 ;
   wire \$741 ;
-  wire \$742 ;
-  wire \$743 ;
-  wire \$744 ;
-  wire \$745 ;
-  wire \$746 ;
-  wire \$747 ;
-  wire \$748 ;
-  wire \$749 ;
+  wire [31:0] \$742 ;
+  wire [31:0] \$743 ;
+  reg \$744 ;
+  reg [10:0] \$745 ;
+  reg [31:0] \$746 ;
+  reg [3:0] \$747 ;
+  reg [31:0] \$748 ;
+  reg [3:0] \$749 ;
   wire \$75 ;
-  wire \$750 ;
-  wire \$751 ;
-  wire \$752 ;
-  wire \$753 ;
-  wire \$754 ;
-  wire \$755 ;
-  wire \$756 ;
-  wire \$757 ;
-  wire \$758 ;
-  wire \$759 ;
+  reg \$750 ;
+  reg \$751 ;
+  reg \$752 ;
+  reg \$753 ;
+  reg \$754 ;
+  reg \$755 ;
+  reg [31:0] \$756 ;
+  reg \$757 ;
+  reg \$758 ;
+  reg \$759 ;
   wire \$76 ;
-  wire \$760 ;
-  wire \$761 ;
-  wire \$762 ;
-  wire \$763 ;
-  wire \$764 ;
-  wire \$765 ;
-  wire \$766 ;
-  wire \$767 ;
-  wire \$768 ;
-  wire \$769 ;
+  reg \$760 ;
+  reg \$761 ;
+  reg \$762 ;
+  reg \$763 ;
+  reg \$764 ;
+  reg \$765 ;
+  reg \$766 ;
+  reg \$767 ;
+  reg \$768 ;
+  reg \$769 ;
   wire \$77 ;
-  wire \$770 ;
-  wire \$771 ;
-  wire \$772 ;
-  wire \$773 ;
-  wire \$774 ;
-  wire \$775 ;
-  wire \$776 ;
-  wire \$777 ;
-  wire \$778 ;
-  wire \$779 ;
+  reg [15:0] \$770 ;
+  reg [11:0] \$771 ;
+  reg \$772 ;
+  reg [23:0] \$773 ;
+  reg \$774 ;
+  reg [23:0] \$775 ;
+  reg \$776 ;
+  reg [23:0] \$777 ;
+  reg \$778 ;
+  reg [23:0] \$779 ;
   wire \$78 ;
-  wire \$780 ;
-  wire \$781 ;
-  wire \$782 ;
-  wire \$783 ;
-  wire \$784 ;
-  wire \$785 ;
-  wire \$786 ;
-  wire \$787 ;
-  wire \$788 ;
-  wire \$789 ;
+  reg \$780 ;
+  reg [5:0] \$781 ;
+  reg \$782 ;
+  reg \$783 ;
+  reg [1:0] \$784 ;
+  reg \$785 ;
+  reg \$786 ;
+  reg [5:0] \$787 ;
+  reg \$788 ;
+  reg \$789 ;
   wire \$79 ;
-  wire \$790 ;
-  wire \$791 ;
-  wire \$792 ;
-  wire \$793 ;
-  wire \$794 ;
-  wire \$795 ;
-  wire \$796 ;
-  wire \$797 ;
-  wire \$798 ;
-  wire \$799 ;
+  reg [1:0] \$790 ;
+  reg \$791 ;
+  reg \$792 ;
+  reg \$793 ;
+  reg \$794 ;
+  reg \$795 ;
+  reg \$796 ;
+  reg [7:0] \$797 ;
+  reg [3:0] \$798 ;
+  reg [3:0] \$799 ;
   wire [31:0] \$8 ;
   wire \$80 ;
-  wire \$800 ;
-  wire \$801 ;
-  wire \$802 ;
-  wire \$803 ;
-  wire \$804 ;
-  wire \$805 ;
-  wire \$806 ;
-  wire \$807 ;
-  wire \$808 ;
-  wire \$809 ;
+  reg [3:0] \$800 ;
+  reg \$801 ;
+  reg [11:0] \$802 ;
+  reg \$803 ;
+  reg [15:0] \$804 ;
+  reg [4:0] \$805 ;
+  reg \$806 ;
+  reg \$807 ;
+  reg [15:0] \$808 ;
+  reg \$809 ;
   wire \$81 ;
-  wire \$810 ;
-  wire \$811 ;
-  wire \$812 ;
-  wire \$813 ;
-  wire \$814 ;
-  wire \$815 ;
-  wire \$816 ;
-  wire \$817 ;
-  wire \$818 ;
-  wire \$819 ;
+  reg [15:0] \$810 ;
+  reg [4:0] \$811 ;
+  reg \$812 ;
+  reg \$813 ;
+  reg [15:0] \$814 ;
+  reg \$815 ;
+  reg \$816 ;
+  reg \$817 ;
+  reg \$818 ;
+  reg \$819 ;
   wire \$82 ;
-  wire \$820 ;
-  wire \$821 ;
-  wire \$822 ;
-  wire \$823 ;
-  wire \$824 ;
-  wire \$825 ;
-  wire \$826 ;
-  wire \$827 ;
-  wire \$828 ;
-  wire \$829 ;
+  reg [11:0] \$820 ;
+  reg \$821 ;
+  reg \$822 ;
+  reg \$823 ;
+  reg \$824 ;
+  reg \$825 ;
+  reg \$826 ;
+  reg \$827 ;
+  reg \$828 ;
+  reg \$829 ;
   wire \$83 ;
-  wire \$830 ;
-  wire \$831 ;
-  wire \$832 ;
-  wire \$833 ;
-  wire \$834 ;
-  wire \$835 ;
-  wire \$836 ;
-  wire \$837 ;
-  wire [14:0] \$838 ;
-  wire [14:0] \$839 ;
+  reg \$830 ;
+  reg \$831 ;
+  reg \$832 ;
+  reg \$833 ;
+  reg \$834 ;
+  reg \$835 ;
+  reg \$836 ;
+  reg \$837 ;
+  reg \$838 ;
+  reg \$839 ;
   wire \$84 ;
-  wire \$840 ;
-  wire [14:0] \$841 ;
-  wire [14:0] \$842 ;
-  wire \$843 ;
-  wire [14:0] \$844 ;
-  wire [14:0] \$845 ;
-  wire \$846 ;
-  wire [14:0] \$847 ;
-  wire [14:0] \$848 ;
-  wire \$849 ;
+  reg [2:0] \$840 ;
+  reg [6:0] \$841 ;
+  reg [6:0] \$842 ;
+  reg \$843 ;
+  reg \$844 ;
+  reg \$845 ;
+  reg [31:0] \$846 ;
+  reg [14:0] \$847 ;
+  reg [3:0] \$848 ;
+  reg \$849 ;
   wire \$85 ;
-  wire [3:0] \$850 ;
-  wire \$851 ;
-  wire \$852 ;
-  wire [14:0] \$853 ;
-  wire \$854 ;
-  wire [31:0] \$855 ;
-  wire \$856 ;
-  wire \$857 ;
-  wire \$858 ;
-  wire \$859 ;
+  reg \$850 ;
+  reg \$851 ;
+  reg \$852 ;
+  reg \$853 ;
+  reg \$854 ;
+  reg \$855 ;
+  reg \$856 ;
+  reg \$857 ;
+  reg \$858 ;
+  reg \$859 ;
   wire \$86 ;
-  wire \$860 ;
-  wire \$861 ;
-  wire \$862 ;
-  wire \$863 ;
-  wire \$864 ;
-  wire \$865 ;
-  wire \$866 ;
-  wire \$867 ;
-  wire \$868 ;
-  wire \$869 ;
+  reg \$860 ;
+  reg \$861 ;
+  reg \$862 ;
+  reg \$863 ;
+  reg \$864 ;
+  reg \$865 ;
+  reg \$866 ;
+  reg \$867 ;
+  reg \$868 ;
+  reg \$869 ;
   wire \$87 ;
-  wire \$870 ;
-  wire \$871 ;
-  wire \$872 ;
-  wire \$873 ;
-  wire \$874 ;
-  wire \$875 ;
-  wire \$876 ;
-  wire \$877 ;
-  wire \$878 ;
-  wire \$879 ;
+  reg \$870 ;
+  reg \$871 ;
+  reg \$872 ;
+  reg \$873 ;
+  reg \$874 ;
+  reg \$875 ;
+  reg \$876 ;
+  reg \$877 ;
+  reg \$878 ;
+  reg \$879 ;
   wire \$88 ;
-  wire \$880 ;
-  wire \$881 ;
-  wire \$882 ;
-  wire \$883 ;
-  wire \$884 ;
-  wire \$885 ;
-  wire \$886 ;
-  wire \$887 ;
-  wire \$888 ;
-  wire \$889 ;
+  reg \$880 ;
+  reg \$881 ;
+  reg \$882 ;
+  reg \$883 ;
+  reg \$884 ;
+  reg \$885 ;
+  reg \$886 ;
+  reg \$887 ;
+  reg \$888 ;
+  reg \$889 ;
   wire \$89 ;
-  wire \$890 ;
-  wire \$891 ;
-  wire \$892 ;
-  wire \$893 ;
-  wire \$894 ;
-  wire \$895 ;
-  wire \$896 ;
-  wire \$897 ;
-  wire \$898 ;
-  wire \$899 ;
+  reg \$890 ;
+  reg \$891 ;
+  reg \$892 ;
+  reg \$893 ;
+  reg \$894 ;
+  reg \$895 ;
+  reg \$896 ;
+  reg \$897 ;
+  reg \$898 ;
+  reg \$899 ;
   wire [31:0] \$9 ;
   wire \$90 ;
-  wire \$900 ;
-  wire \$901 ;
-  wire \$902 ;
-  wire \$903 ;
-  wire \$904 ;
-  wire \$905 ;
-  wire \$906 ;
-  wire \$907 ;
-  wire \$908 ;
-  wire \$909 ;
+  reg \$900 ;
+  reg \$901 ;
+  reg \$902 ;
+  reg [3:0] \$903 ;
+  reg \$904 ;
+  reg \$905 ;
+  reg \$906 ;
+  reg \$907 ;
+  reg \$908 ;
+  reg \$909 ;
   wire \$91 ;
-  wire \$910 ;
-  wire \$911 ;
-  wire \$912 ;
-  wire \$913 ;
-  wire \$914 ;
-  wire \$915 ;
-  wire \$916 ;
-  wire \$917 ;
-  wire \$918 ;
-  wire \$919 ;
+  reg \$910 ;
+  reg \$911 ;
+  reg \$912 ;
+  reg \$913 ;
+  reg \$914 ;
+  reg [5:0] \$915 ;
+  reg [15:0] \$916 ;
+  reg [12:0] \$917 ;
+  reg [31:0] \$918 ;
+  reg [22:0] \$919 ;
   wire \$92 ;
-  wire \$920 ;
-  wire \$921 ;
-  wire \$922 ;
-  wire \$923 ;
-  wire \$924 ;
-  wire \$925 ;
-  wire \$926 ;
-  wire \$927 ;
-  wire \$928 ;
-  wire \$929 ;
+  reg [31:0] \$920 ;
+  reg [7:0] \$921 ;
+  reg [31:0] \$922 ;
+  reg [3:0] \$923 ;
+  reg \$924 ;
+  reg [7:0] \$925 ;
+  reg [12:0] \$926 ;
+  reg \$927 ;
+  reg \$928 ;
+  reg \$929 ;
   wire \$93 ;
-  wire \$930 ;
-  wire \$931 ;
-  wire \$932 ;
-  wire \$933 ;
-  wire \$934 ;
-  wire \$935 ;
-  wire \$936 ;
-  wire \$937 ;
-  wire \$938 ;
-  wire \$939 ;
+  reg [31:0] \$930 ;
+  reg \$931 ;
+  reg \$932 ;
+  reg \$933 ;
+  reg \$934 ;
+  reg \$935 ;
+  reg \$936 ;
+  reg \$937 ;
+  reg \$938 ;
+  reg \$939 ;
   wire \$94 ;
-  wire \$940 ;
-  wire \$941 ;
-  wire \$942 ;
-  wire \$943 ;
-  wire \$944 ;
-  wire \$945 ;
-  wire \$946 ;
-  wire \$947 ;
-  wire \$948 ;
-  wire \$949 ;
+  reg \$940 ;
+  reg \$941 ;
+  reg \$942 ;
+  reg \$943 ;
+  reg [15:0] \$944 ;
+  reg [11:0] \$945 ;
+  reg \$946 ;
+  reg [23:0] \$947 ;
+  reg \$948 ;
+  reg [23:0] \$949 ;
   wire \$95 ;
-  wire \$950 ;
-  wire \$951 ;
-  wire [31:0] \$952 ;
-  wire [31:0] \$953 ;
+  reg \$950 ;
+  reg [23:0] \$951 ;
+  reg \$952 ;
+  reg [23:0] \$953 ;
   reg \$954 ;
-  reg [10:0] \$955 ;
-  reg [31:0] \$956 ;
-  reg [3:0] \$957 ;
-  reg [31:0] \$958 ;
-  reg [3:0] \$959 ;
+  reg [5:0] \$955 ;
+  reg \$956 ;
+  reg \$957 ;
+  reg [1:0] \$958 ;
+  reg \$959 ;
   wire \$96 ;
   reg \$960 ;
-  reg \$961 ;
+  reg [5:0] \$961 ;
   reg \$962 ;
   reg \$963 ;
-  reg \$964 ;
+  reg [1:0] \$964 ;
   reg \$965 ;
-  reg [31:0] \$966 ;
+  reg \$966 ;
   reg \$967 ;
   reg \$968 ;
   reg \$969 ;
   wire \$97 ;
   reg \$970 ;
-  reg \$971 ;
-  reg \$972 ;
-  reg \$973 ;
-  reg \$974 ;
+  reg [7:0] \$971 ;
+  reg [3:0] \$972 ;
+  reg [3:0] \$973 ;
+  reg [3:0] \$974 ;
   reg \$975 ;
-  reg \$976 ;
+  reg [11:0] \$976 ;
   reg \$977 ;
-  reg \$978 ;
-  reg \$979 ;
+  reg [15:0] \$978 ;
+  reg [4:0] \$979 ;
   wire [31:0] \$98 ;
-  reg [15:0] \$980 ;
-  reg [11:0] \$981 ;
-  reg \$982 ;
-  reg [23:0] \$983 ;
-  reg \$984 ;
-  reg [23:0] \$985 ;
+  reg \$980 ;
+  reg \$981 ;
+  reg [15:0] \$982 ;
+  reg \$983 ;
+  reg [15:0] \$984 ;
+  reg [4:0] \$985 ;
   reg \$986 ;
-  reg [23:0] \$987 ;
-  reg \$988 ;
-  reg [23:0] \$989 ;
+  reg \$987 ;
+  reg [15:0] \$988 ;
+  reg \$989 ;
   wire [31:0] \$99 ;
   reg \$990 ;
-  reg [5:0] \$991 ;
+  reg \$991 ;
   reg \$992 ;
   reg \$993 ;
-  reg [1:0] \$994 ;
+  reg [11:0] \$994 ;
   reg \$995 ;
   reg \$996 ;
-  reg [5:0] \$997 ;
+  reg \$997 ;
   reg \$998 ;
   reg \$999 ;
   input [10:0] bus__r_addr;
@@ -3764,7 +3552,6 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire ch0_config_read;
   wire [31:0] ch0_config_read_data;
   reg [3:0] ch0_config_read_index = 4'h0;
-  reg [14:0] ch0_config_read_select = 15'h0000;
   reg [14:0] ch0_config_written = 15'h0000;
   wire ch0_count_chain2_write;
   wire ch0_count_chain3_write;
@@ -4167,8 +3954,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$447 ;
-  reg \ch1_ca_request_write$447  = 1'h0;
+  output \ch1_ca_request_write$446 ;
+  reg \ch1_ca_request_write$446  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_chain2_write;
   wire ch1_caps_chain_write;
@@ -4330,7 +4117,6 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire ch1_config_read;
   wire [31:0] ch1_config_read_data;
   reg [3:0] ch1_config_read_index = 4'h0;
-  reg [14:0] ch1_config_read_select = 15'h0000;
   reg [14:0] ch1_config_written = 15'h0000;
   wire ch1_count_chain2_write;
   wire ch1_count_chain3_write;
@@ -4476,34 +4262,34 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$7959$0 ;
-  wire [186:0] \port$7959$0 ;
-  input [79:0] \port$7970$0 ;
-  wire [79:0] \port$7970$0 ;
-  input [9:0] \port$8047$0 ;
-  wire [9:0] \port$8047$0 ;
-  input [186:0] \port$8490$0 ;
-  wire [186:0] \port$8490$0 ;
-  input [79:0] \port$8501$0 ;
-  wire [79:0] \port$8501$0 ;
-  input [9:0] \port$8578$0 ;
-  wire [9:0] \port$8578$0 ;
+  input [186:0] \port$7807$0 ;
+  wire [186:0] \port$7807$0 ;
+  input [79:0] \port$7818$0 ;
+  wire [79:0] \port$7818$0 ;
+  input [9:0] \port$7895$0 ;
+  wire [9:0] \port$7895$0 ;
+  input [186:0] \port$8338$0 ;
+  wire [186:0] \port$8338$0 ;
+  input [79:0] \port$8349$0 ;
+  wire [79:0] \port$8349$0 ;
+  input [9:0] \port$8426$0 ;
+  wire [9:0] \port$8426$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
-  wire [3:0] \rd__addr$945 ;
+  wire [3:0] \rd__addr$943 ;
   wire [31:0] rd__data;
-  wire [31:0] \rd__data$946 ;
+  wire [31:0] \rd__data$944 ;
   input rst;
   wire rst;
   wire [3:0] wr__addr;
-  wire [3:0] \wr__addr$942 ;
+  wire [3:0] \wr__addr$940 ;
   (* init = 32'd0 *)
   wire [31:0] wr__data;
   (* init = 32'd0 *)
-  wire [31:0] \wr__data$943 ;
+  wire [31:0] \wr__data$941 ;
   wire [3:0] wr__en;
-  wire [3:0] \wr__en$944 ;
+  wire [3:0] \wr__en$942 ;
   reg [10:0] write_addr = 11'h000;
   output [31:0] write_data;
   reg [31:0] write_data = 32'd0;
@@ -4529,13 +4315,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @(posedge clk) begin
     if (wr__en[0])
-      ch0_config_memory[{ \$644 , \$643 , \$642 , \$641  }][7:0] <= config_memory0_write_data[7:0];
+      ch0_config_memory[{ \$612 , \$611 , \$610 , \$609  }][7:0] <= config_memory0_write_data[7:0];
     if (wr__en[1])
-      ch0_config_memory[{ \$644 , \$643 , \$642 , \$641  }][15:8] <= config_memory0_write_data[15:8];
+      ch0_config_memory[{ \$612 , \$611 , \$610 , \$609  }][15:8] <= config_memory0_write_data[15:8];
     if (wr__en[2])
-      ch0_config_memory[{ \$644 , \$643 , \$642 , \$641  }][23:16] <= config_memory0_write_data[23:16];
+      ch0_config_memory[{ \$612 , \$611 , \$610 , \$609  }][23:16] <= config_memory0_write_data[23:16];
     if (wr__en[3])
-      ch0_config_memory[{ \$644 , \$643 , \$642 , \$641  }][31:24] <= config_memory0_write_data[31:24];
+      ch0_config_memory[{ \$612 , \$611 , \$610 , \$609  }][31:24] <= config_memory0_write_data[31:24];
   end
   assign rd__data = ch0_config_memory[ch0_config_read_index];
   reg [31:0] ch1_config_memory [14:0];
@@ -4557,16 +4343,16 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     ch1_config_memory[14] = 32'd0;
   end
   always @(posedge clk) begin
-    if (\wr__en$944 [0])
-      ch1_config_memory[{ \$836 , \$835 , \$834 , \$833  }][7:0] <= config_memory0_write_data[7:0];
-    if (\wr__en$944 [1])
-      ch1_config_memory[{ \$836 , \$835 , \$834 , \$833  }][15:8] <= config_memory0_write_data[15:8];
-    if (\wr__en$944 [2])
-      ch1_config_memory[{ \$836 , \$835 , \$834 , \$833  }][23:16] <= config_memory0_write_data[23:16];
-    if (\wr__en$944 [3])
-      ch1_config_memory[{ \$836 , \$835 , \$834 , \$833  }][31:24] <= config_memory0_write_data[31:24];
+    if (\wr__en$942 [0])
+      ch1_config_memory[{ \$715 , \$714 , \$713 , \$712  }][7:0] <= config_memory0_write_data[7:0];
+    if (\wr__en$942 [1])
+      ch1_config_memory[{ \$715 , \$714 , \$713 , \$712  }][15:8] <= config_memory0_write_data[15:8];
+    if (\wr__en$942 [2])
+      ch1_config_memory[{ \$715 , \$714 , \$713 , \$712  }][23:16] <= config_memory0_write_data[23:16];
+    if (\wr__en$942 [3])
+      ch1_config_memory[{ \$715 , \$714 , \$713 , \$712  }][31:24] <= config_memory0_write_data[31:24];
   end
-  assign \rd__data$946  = ch1_config_memory[ch1_config_read_index];
+  assign \rd__data$944  = ch1_config_memory[ch1_config_read_index];
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__r_addr;
@@ -4667,1538 +4453,3629 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$101  = config_memory0_write_fill & \$100 ;
   assign \$102  = \$99  | \$101 ;
   assign \$103  = ch0_config_written | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
-  assign \$104  = ! config_memory0_read_index;
-  assign \$105  = config_memory0_read_index == 1'h1;
-  assign \$106  = config_memory0_read_index == 2'h2;
-  assign \$107  = config_memory0_read_index == 2'h3;
-  assign \$108  = config_memory0_read_index == 3'h4;
-  assign \$109  = config_memory0_read_index == 3'h5;
-  assign \$110  = config_memory0_read_index == 3'h6;
-  assign \$111  = config_memory0_read_index == 3'h7;
-  assign \$112  = config_memory0_read_index == 4'h8;
-  assign \$113  = config_memory0_read_index == 4'h9;
-  assign \$114  = config_memory0_read_index == 4'ha;
-  assign \$115  = config_memory0_read_index == 4'hb;
-  assign \$116  = config_memory0_read_index == 4'hc;
-  assign \$117  = config_memory0_read_index == 4'hd;
-  assign \$118  = config_memory0_read_index == 4'he;
-  assign \$119  = ch0_config_read ? { \$118 , \$117 , \$116 , \$115 , \$114 , \$113 , \$112 , \$111 , \$110 , \$109 , \$108 , \$107 , \$106 , \$105 , \$104  } : 15'h0000;
-  assign \$120  = bus__r_addr == 8'h80;
-  assign \$121  = bus__r_addr == 8'h81;
-  assign \$122  = bus__r_addr == 8'h82;
-  assign \$123  = bus__r_addr == 8'h84;
-  assign \$124  = bus__r_addr == 8'h86;
-  assign \$125  = bus__r_addr == 8'h87;
-  assign \$126  = bus__r_addr == 8'h90;
-  assign \$127  = bus__r_addr == 8'h91;
-  assign \$128  = bus__r_addr == 8'h92;
-  assign \$129  = bus__r_addr == 8'h93;
-  assign \$130  = bus__r_addr == 8'h94;
-  assign \$131  = bus__r_addr == 8'h95;
-  assign \$132  = bus__r_addr == 8'h96;
-  assign \$133  = bus__r_addr == 8'h97;
-  assign \$134  = bus__r_addr == 8'ha5;
-  assign \$135  = bus__r_addr == 8'ha6;
-  assign \$136  = bus__r_addr == 8'ha7;
-  assign \$137  = bus__r_addr == 8'ha8;
-  assign \$138  = bus__r_addr == 8'ha9;
-  assign \$139  = bus__r_addr == 8'haa;
-  assign \$140  = bus__r_addr == 8'hac;
-  assign \$141  = bus__r_addr == 8'had;
-  assign \$142  = bus__r_addr == 8'hae;
-  assign \$143  = bus__r_addr == 8'hb0;
-  assign \$144  = bus__r_addr == 8'hb1;
-  assign \$145  = bus__r_addr == 8'hb2;
-  assign \$146  = bus__r_addr == 8'hb4;
-  assign \$147  = bus__r_addr == 8'hb5;
-  assign \$148  = bus__r_addr == 8'hb6;
-  assign \$149  = bus__r_addr == 8'hb8;
-  assign \$150  = bus__r_addr == 8'hb9;
-  assign \$151  = bus__r_addr == 8'hba;
-  assign \$152  = bus__r_addr == 8'hbc;
-  assign \$153  = bus__r_addr == 8'hbd;
-  assign \$154  = bus__r_addr == 8'hbe;
-  assign \$155  = bus__r_addr == 8'hc1;
-  assign \$156  = bus__r_addr == 8'hc2;
-  assign \$157  = bus__r_addr == 8'hc3;
-  assign \$158  = bus__r_addr == 8'hc4;
-  assign \$159  = bus__r_addr == 8'hc5;
-  assign \$160  = bus__r_addr == 8'hf0;
-  assign \$161  = bus__r_addr == 8'hf1;
-  assign \$162  = bus__r_addr == 8'hf2;
-  assign \$163  = bus__r_addr == 8'hf3;
-  assign \$164  = bus__r_addr == 8'hf4;
-  assign \$165  = bus__r_addr == 8'hf5;
-  assign \$166  = bus__r_addr == 8'hf6;
-  assign \$167  = bus__r_addr == 8'hf7;
-  assign \$168  = bus__r_addr == 8'hf8;
-  assign \$169  = bus__r_addr == 8'hf9;
-  assign \$170  = bus__r_addr == 8'hfa;
-  assign \$171  = bus__r_addr == 8'hfb;
-  assign \$172  = bus__r_addr == 8'hfc;
-  assign \$173  = bus__r_addr == 8'hfd;
-  assign \$174  = ch0_read_select_90 & bus__r_load;
-  assign \$175  = bus__r_addr[10:3] == 5'h13;
-  assign \$176  = bus__r_en & \$175 ;
-  assign \$177  = bus__r_addr[10:4] == 4'he;
-  assign \$178  = bus__r_en & \$177 ;
-  assign \$179  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$181  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$104  = bus__r_addr == 8'h80;
+  assign \$105  = bus__r_addr == 8'h81;
+  assign \$106  = bus__r_addr == 8'h82;
+  assign \$107  = bus__r_addr == 8'h84;
+  assign \$108  = bus__r_addr == 8'h86;
+  assign \$109  = bus__r_addr == 8'h87;
+  assign \$110  = bus__r_addr == 8'h90;
+  assign \$111  = bus__r_addr == 8'h91;
+  assign \$112  = bus__r_addr == 8'h92;
+  assign \$113  = bus__r_addr == 8'h93;
+  assign \$114  = bus__r_addr == 8'h94;
+  assign \$115  = bus__r_addr == 8'h95;
+  assign \$116  = bus__r_addr == 8'h96;
+  assign \$117  = bus__r_addr == 8'h97;
+  assign \$118  = bus__r_addr == 8'ha5;
+  assign \$119  = bus__r_addr == 8'ha6;
+  assign \$120  = bus__r_addr == 8'ha7;
+  assign \$121  = bus__r_addr == 8'ha8;
+  assign \$122  = bus__r_addr == 8'ha9;
+  assign \$123  = bus__r_addr == 8'haa;
+  assign \$124  = bus__r_addr == 8'hac;
+  assign \$125  = bus__r_addr == 8'had;
+  assign \$126  = bus__r_addr == 8'hae;
+  assign \$127  = bus__r_addr == 8'hb0;
+  assign \$128  = bus__r_addr == 8'hb1;
+  assign \$129  = bus__r_addr == 8'hb2;
+  assign \$130  = bus__r_addr == 8'hb4;
+  assign \$131  = bus__r_addr == 8'hb5;
+  assign \$132  = bus__r_addr == 8'hb6;
+  assign \$133  = bus__r_addr == 8'hb8;
+  assign \$134  = bus__r_addr == 8'hb9;
+  assign \$135  = bus__r_addr == 8'hba;
+  assign \$136  = bus__r_addr == 8'hbc;
+  assign \$137  = bus__r_addr == 8'hbd;
+  assign \$138  = bus__r_addr == 8'hbe;
+  assign \$139  = bus__r_addr == 8'hc1;
+  assign \$140  = bus__r_addr == 8'hc2;
+  assign \$141  = bus__r_addr == 8'hc3;
+  assign \$142  = bus__r_addr == 8'hc4;
+  assign \$143  = bus__r_addr == 8'hc5;
+  assign \$144  = bus__r_addr == 8'hf0;
+  assign \$145  = bus__r_addr == 8'hf1;
+  assign \$146  = bus__r_addr == 8'hf2;
+  assign \$147  = bus__r_addr == 8'hf3;
+  assign \$148  = bus__r_addr == 8'hf4;
+  assign \$149  = bus__r_addr == 8'hf5;
+  assign \$150  = bus__r_addr == 8'hf6;
+  assign \$151  = bus__r_addr == 8'hf7;
+  assign \$152  = bus__r_addr == 8'hf8;
+  assign \$153  = bus__r_addr == 8'hf9;
+  assign \$154  = bus__r_addr == 8'hfa;
+  assign \$155  = bus__r_addr == 8'hfb;
+  assign \$156  = bus__r_addr == 8'hfc;
+  assign \$157  = bus__r_addr == 8'hfd;
+  assign \$158  = ch0_read_select_90 & bus__r_load;
+  assign \$159  = bus__r_addr[10:3] == 5'h13;
+  assign \$160  = bus__r_en & \$159 ;
+  assign \$161  = bus__r_addr[10:4] == 4'he;
+  assign \$162  = bus__r_en & \$161 ;
+  assign \$163  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$165  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$166  = \$164  | \$165 ;
+  assign \$167  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
+  assign \$168  = \$166  | \$167 ;
+  assign \$169  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$170  = \$168  | \$169 ;
+  assign \$175  = ch0_read_select_90 ? { 2'h0, \port$7807$0 [182:177], 4'h0, \port$7807$0 [186:183], 1'h0, \port$7807$0 [176:174], 1'h0, \port$7807$0 [133:131], 3'h0, \port$7807$0 [49], \port$7807$0 [3:0] } : 32'd0;
+  assign \$176  = \$174  | \$175 ;
+  assign \$177  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$178  = \$176  | \$177 ;
+  assign \$179  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$180  = \$178  | \$179 ;
+  assign \$181  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
+  assign \$183  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
   assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$185  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
   assign \$186  = \$184  | \$185 ;
-  assign \$191  = ch0_read_select_90 ? { 2'h0, \port$7959$0 [182:177], 4'h0, \port$7959$0 [186:183], 1'h0, \port$7959$0 [176:174], 1'h0, \port$7959$0 [133:131], 3'h0, \port$7959$0 [49], \port$7959$0 [3:0] } : 32'd0;
-  assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
-  assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
-  assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$198  = \$196  | \$197 ;
-  assign \$199  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
-  assign \$200  = \$198  | \$199 ;
-  assign \$201  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$202  = \$200  | \$201 ;
-  assign \$203  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
-  assign \$204  = \$202  | \$203 ;
-  assign \$205  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
-  assign \$206  = \$204  | \$205 ;
-  assign \$251  = ch0_read_select_c2 ? { 17'h00000, \port$8047$0 [9:3], 1'h0, \port$8047$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$252  = \$250  | \$251 ;
-  assign \$253  = ch0_read_select_c3 ? \port$7970$0 [31:0] : 32'd0;
-  assign \$254  = \$252  | \$253 ;
-  assign \$255  = ch0_read_select_c4 ? \port$7970$0 [63:32] : 32'd0;
-  assign \$256  = \$254  | \$255 ;
-  assign \$257  = ch0_read_select_c5 ? { 16'h0000, \port$7970$0 [79:64] } : 32'd0;
-  assign \$258  = \$256  | \$257 ;
-  assign \$259  = ch0_read_select_f0 ? { 16'h0000, ch0__result_updates } : 32'd0;
-  assign \$260  = \$258  | \$259 ;
-  assign \$287  = ch0_window0_read ? ch0__count_data : 32'd0;
-  assign \$288  = \$286  | \$287 ;
-  assign \$289  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$290  = \$288  | \$289 ;
-  assign \$291  = ch0_window2_read ? ch0_config_read_data : 32'd0;
-  assign \$292  = \$290  | \$291 ;
-  assign \$293  = write_data[0] & write_strb[0];
-  assign \$294  = ch1_ctrl_write ? \$293  : 1'h0;
-  assign \$295  = write_data[1] & write_strb[0];
-  assign \$296  = ch1_ctrl_write ? \$295  : 1'h0;
-  assign \$297  = write_data[2] & write_strb[0];
-  assign \$298  = ch1_ctrl_write ? \$297  : 1'h0;
-  assign \$299  = ch1_ctrl_write & write_strb[1];
-  assign \$300  = ch1_ctrl_write & write_strb[1];
-  assign \$301  = write_data[0] & write_strb[0];
-  assign \$302  = ch1_irq_status_write ? \$301  : 1'h0;
-  assign \$303  = write_data[1] & write_strb[0];
-  assign \$304  = ch1_irq_status_write ? \$303  : 1'h0;
-  assign \$305  = write_data[2] & write_strb[0];
-  assign \$306  = ch1_irq_status_write ? \$305  : 1'h0;
-  assign \$307  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$308  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$309  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$310  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$311  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$312  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$313  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$314  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$315  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$316  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$317  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$318  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$319  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$320  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$321  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$322  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$323  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$324  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$325  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$326  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$327  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$328  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$329  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$330  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$331  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$332  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$333  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$334  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$335  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$336  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$337  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$338  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$339  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$340  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$341  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$342  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$343  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$344  = ch1_cfg_checks_config_write & config_write_strb[3];
-  assign \$345  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$346  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$347  = ch1_cfg_crc0_config_write & config_write_strb[0];
-  assign \$348  = ch1_cfg_crc0_config_write & config_write_strb[1];
-  assign \$349  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$350  = ch1_cfg_crc0_config_write & config_write_strb[3];
-  assign \$351  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$352  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$353  = ch1_cfg_crc1_config_write & config_write_strb[0];
-  assign \$354  = ch1_cfg_crc1_config_write & config_write_strb[1];
-  assign \$355  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$356  = ch1_cfg_crc1_config_write & config_write_strb[3];
-  assign \$357  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$358  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$359  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$360  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$361  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$362  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$363  = ch1_cfg_ssi_config_write & config_write_strb[2];
-  assign \$364  = ch1_cfg_ssi_config_write & config_write_strb[3];
-  assign \$365  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$366  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$367  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$368  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$369  = write_data[0] & write_strb[0];
-  assign \$370  = ch1_ca_ctrl_write ? \$369  : 1'h0;
-  assign \$371  = write_data[1] & write_strb[0];
-  assign \$372  = ch1_ca_ctrl_write ? \$371  : 1'h0;
-  assign \$373  = ch1_config_written | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
-  assign \$374  = ! config_memory0_read_index;
-  assign \$375  = config_memory0_read_index == 1'h1;
-  assign \$376  = config_memory0_read_index == 2'h2;
-  assign \$377  = config_memory0_read_index == 2'h3;
-  assign \$378  = config_memory0_read_index == 3'h4;
-  assign \$379  = config_memory0_read_index == 3'h5;
-  assign \$380  = config_memory0_read_index == 3'h6;
-  assign \$381  = config_memory0_read_index == 3'h7;
-  assign \$382  = config_memory0_read_index == 4'h8;
-  assign \$383  = config_memory0_read_index == 4'h9;
-  assign \$384  = config_memory0_read_index == 4'ha;
-  assign \$385  = config_memory0_read_index == 4'hb;
-  assign \$386  = config_memory0_read_index == 4'hc;
-  assign \$387  = config_memory0_read_index == 4'hd;
-  assign \$388  = config_memory0_read_index == 4'he;
-  assign \$389  = ch1_config_read ? { \$388 , \$387 , \$386 , \$385 , \$384 , \$383 , \$382 , \$381 , \$380 , \$379 , \$378 , \$377 , \$376 , \$375 , \$374  } : 15'h0000;
-  assign \$390  = bus__r_addr == 9'h100;
-  assign \$391  = bus__r_addr == 9'h101;
-  assign \$392  = bus__r_addr == 9'h102;
-  assign \$393  = bus__r_addr == 9'h104;
-  assign \$394  = bus__r_addr == 9'h106;
-  assign \$395  = bus__r_addr == 9'h107;
-  assign \$396  = bus__r_addr == 9'h110;
-  assign \$397  = bus__r_addr == 9'h111;
-  assign \$398  = bus__r_addr == 9'h112;
-  assign \$399  = bus__r_addr == 9'h113;
-  assign \$400  = bus__r_addr == 9'h114;
-  assign \$401  = bus__r_addr == 9'h115;
-  assign \$402  = bus__r_addr == 9'h116;
-  assign \$403  = bus__r_addr == 9'h117;
-  assign \$404  = bus__r_addr == 9'h125;
-  assign \$405  = bus__r_addr == 9'h126;
-  assign \$406  = bus__r_addr == 9'h127;
-  assign \$407  = bus__r_addr == 9'h128;
-  assign \$408  = bus__r_addr == 9'h129;
-  assign \$409  = bus__r_addr == 9'h12a;
-  assign \$410  = bus__r_addr == 9'h12c;
-  assign \$411  = bus__r_addr == 9'h12d;
-  assign \$412  = bus__r_addr == 9'h12e;
-  assign \$413  = bus__r_addr == 9'h130;
-  assign \$414  = bus__r_addr == 9'h131;
-  assign \$415  = bus__r_addr == 9'h132;
-  assign \$416  = bus__r_addr == 9'h134;
-  assign \$417  = bus__r_addr == 9'h135;
-  assign \$418  = bus__r_addr == 9'h136;
-  assign \$419  = bus__r_addr == 9'h138;
-  assign \$420  = bus__r_addr == 9'h139;
-  assign \$421  = bus__r_addr == 9'h13a;
-  assign \$422  = bus__r_addr == 9'h13c;
-  assign \$423  = bus__r_addr == 9'h13d;
-  assign \$424  = bus__r_addr == 9'h13e;
-  assign \$425  = bus__r_addr == 9'h141;
-  assign \$426  = bus__r_addr == 9'h142;
-  assign \$427  = bus__r_addr == 9'h143;
-  assign \$428  = bus__r_addr == 9'h144;
-  assign \$429  = bus__r_addr == 9'h145;
-  assign \$430  = bus__r_addr == 9'h170;
-  assign \$431  = bus__r_addr == 9'h171;
-  assign \$432  = bus__r_addr == 9'h172;
-  assign \$433  = bus__r_addr == 9'h173;
-  assign \$434  = bus__r_addr == 9'h174;
-  assign \$435  = bus__r_addr == 9'h175;
-  assign \$436  = bus__r_addr == 9'h176;
-  assign \$437  = bus__r_addr == 9'h177;
-  assign \$438  = bus__r_addr == 9'h178;
-  assign \$439  = bus__r_addr == 9'h179;
-  assign \$440  = bus__r_addr == 9'h17a;
-  assign \$441  = bus__r_addr == 9'h17b;
-  assign \$442  = bus__r_addr == 9'h17c;
-  assign \$443  = bus__r_addr == 9'h17d;
-  assign \$444  = ch1_read_select_110 & bus__r_load;
-  assign \$445  = bus__r_addr[10:3] == 6'h23;
-  assign \$446  = bus__r_en & \$445 ;
-  assign \$447  = bus__r_addr[10:4] == 5'h16;
-  assign \$448  = bus__r_en & \$447 ;
-  assign \$449  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$451  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$452  = \$450  | \$451 ;
-  assign \$453  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
-  assign \$454  = \$452  | \$453 ;
-  assign \$455  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
-  assign \$456  = \$454  | \$455 ;
-  assign \$461  = ch1_read_select_110 ? { 2'h0, \port$8490$0 [182:177], 4'h0, \port$8490$0 [186:183], 1'h0, \port$8490$0 [176:174], 1'h0, \port$8490$0 [133:131], 3'h0, \port$8490$0 [49], \port$8490$0 [3:0] } : 32'd0;
-  assign \$462  = \$460  | \$461 ;
-  assign \$463  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
-  assign \$464  = \$462  | \$463 ;
-  assign \$465  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
-  assign \$466  = \$464  | \$465 ;
-  assign \$467  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$468  = \$466  | \$467 ;
-  assign \$469  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
-  assign \$470  = \$468  | \$469 ;
-  assign \$471  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$472  = \$470  | \$471 ;
-  assign \$473  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
-  assign \$474  = \$472  | \$473 ;
-  assign \$475  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
-  assign \$476  = \$474  | \$475 ;
-  assign \$521  = ch1_read_select_142 ? { 17'h00000, \port$8578$0 [9:3], 1'h0, \port$8578$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
-  assign \$522  = \$520  | \$521 ;
-  assign \$523  = ch1_read_select_143 ? \port$8501$0 [31:0] : 32'd0;
-  assign \$524  = \$522  | \$523 ;
-  assign \$525  = ch1_read_select_144 ? \port$8501$0 [63:32] : 32'd0;
+  assign \$187  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$188  = \$186  | \$187 ;
+  assign \$189  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
+  assign \$190  = \$188  | \$189 ;
+  assign \$235  = ch0_read_select_c2 ? { 17'h00000, \port$7895$0 [9:3], 1'h0, \port$7895$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$236  = \$234  | \$235 ;
+  assign \$237  = ch0_read_select_c3 ? \port$7818$0 [31:0] : 32'd0;
+  assign \$238  = \$236  | \$237 ;
+  assign \$239  = ch0_read_select_c4 ? \port$7818$0 [63:32] : 32'd0;
+  assign \$240  = \$238  | \$239 ;
+  assign \$241  = ch0_read_select_c5 ? { 16'h0000, \port$7818$0 [79:64] } : 32'd0;
+  assign \$242  = \$240  | \$241 ;
+  assign \$243  = ch0_read_select_f0 ? { 16'h0000, ch0__result_updates } : 32'd0;
+  assign \$244  = \$242  | \$243 ;
+  assign \$271  = ch0_window0_read ? ch0__count_data : 32'd0;
+  assign \$272  = \$270  | \$271 ;
+  assign \$273  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$274  = \$272  | \$273 ;
+  assign \$275  = ch0_window2_read ? ch0_config_read_data : 32'd0;
+  assign \$276  = \$274  | \$275 ;
+  assign \$277  = write_data[0] & write_strb[0];
+  assign \$278  = ch1_ctrl_write ? \$277  : 1'h0;
+  assign \$279  = write_data[1] & write_strb[0];
+  assign \$280  = ch1_ctrl_write ? \$279  : 1'h0;
+  assign \$281  = write_data[2] & write_strb[0];
+  assign \$282  = ch1_ctrl_write ? \$281  : 1'h0;
+  assign \$283  = ch1_ctrl_write & write_strb[1];
+  assign \$284  = ch1_ctrl_write & write_strb[1];
+  assign \$285  = write_data[0] & write_strb[0];
+  assign \$286  = ch1_irq_status_write ? \$285  : 1'h0;
+  assign \$287  = write_data[1] & write_strb[0];
+  assign \$288  = ch1_irq_status_write ? \$287  : 1'h0;
+  assign \$289  = write_data[2] & write_strb[0];
+  assign \$290  = ch1_irq_status_write ? \$289  : 1'h0;
+  assign \$291  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$292  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$293  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$294  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$295  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$296  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$297  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$298  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$299  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$300  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$301  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$302  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$303  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$304  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$305  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$306  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$307  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$308  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$309  = ch1_cfg_timeout_config_write & config_write_strb[2];
+  assign \$310  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$311  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$312  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$313  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$314  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$315  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$316  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$317  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$318  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$319  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$320  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$321  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$322  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$323  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$324  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$325  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$326  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$327  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$328  = ch1_cfg_checks_config_write & config_write_strb[3];
+  assign \$329  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$330  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$331  = ch1_cfg_crc0_config_write & config_write_strb[0];
+  assign \$332  = ch1_cfg_crc0_config_write & config_write_strb[1];
+  assign \$333  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$334  = ch1_cfg_crc0_config_write & config_write_strb[3];
+  assign \$335  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$336  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$337  = ch1_cfg_crc1_config_write & config_write_strb[0];
+  assign \$338  = ch1_cfg_crc1_config_write & config_write_strb[1];
+  assign \$339  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$340  = ch1_cfg_crc1_config_write & config_write_strb[3];
+  assign \$341  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$342  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$343  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$344  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$345  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$346  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$347  = ch1_cfg_ssi_config_write & config_write_strb[2];
+  assign \$348  = ch1_cfg_ssi_config_write & config_write_strb[3];
+  assign \$349  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$350  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$351  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$352  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$353  = write_data[0] & write_strb[0];
+  assign \$354  = ch1_ca_ctrl_write ? \$353  : 1'h0;
+  assign \$355  = write_data[1] & write_strb[0];
+  assign \$356  = ch1_ca_ctrl_write ? \$355  : 1'h0;
+  assign \$357  = ch1_config_written | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$358  = bus__r_addr == 9'h100;
+  assign \$359  = bus__r_addr == 9'h101;
+  assign \$360  = bus__r_addr == 9'h102;
+  assign \$361  = bus__r_addr == 9'h104;
+  assign \$362  = bus__r_addr == 9'h106;
+  assign \$363  = bus__r_addr == 9'h107;
+  assign \$364  = bus__r_addr == 9'h110;
+  assign \$365  = bus__r_addr == 9'h111;
+  assign \$366  = bus__r_addr == 9'h112;
+  assign \$367  = bus__r_addr == 9'h113;
+  assign \$368  = bus__r_addr == 9'h114;
+  assign \$369  = bus__r_addr == 9'h115;
+  assign \$370  = bus__r_addr == 9'h116;
+  assign \$371  = bus__r_addr == 9'h117;
+  assign \$372  = bus__r_addr == 9'h125;
+  assign \$373  = bus__r_addr == 9'h126;
+  assign \$374  = bus__r_addr == 9'h127;
+  assign \$375  = bus__r_addr == 9'h128;
+  assign \$376  = bus__r_addr == 9'h129;
+  assign \$377  = bus__r_addr == 9'h12a;
+  assign \$378  = bus__r_addr == 9'h12c;
+  assign \$379  = bus__r_addr == 9'h12d;
+  assign \$380  = bus__r_addr == 9'h12e;
+  assign \$381  = bus__r_addr == 9'h130;
+  assign \$382  = bus__r_addr == 9'h131;
+  assign \$383  = bus__r_addr == 9'h132;
+  assign \$384  = bus__r_addr == 9'h134;
+  assign \$385  = bus__r_addr == 9'h135;
+  assign \$386  = bus__r_addr == 9'h136;
+  assign \$387  = bus__r_addr == 9'h138;
+  assign \$388  = bus__r_addr == 9'h139;
+  assign \$389  = bus__r_addr == 9'h13a;
+  assign \$390  = bus__r_addr == 9'h13c;
+  assign \$391  = bus__r_addr == 9'h13d;
+  assign \$392  = bus__r_addr == 9'h13e;
+  assign \$393  = bus__r_addr == 9'h141;
+  assign \$394  = bus__r_addr == 9'h142;
+  assign \$395  = bus__r_addr == 9'h143;
+  assign \$396  = bus__r_addr == 9'h144;
+  assign \$397  = bus__r_addr == 9'h145;
+  assign \$398  = bus__r_addr == 9'h170;
+  assign \$399  = bus__r_addr == 9'h171;
+  assign \$400  = bus__r_addr == 9'h172;
+  assign \$401  = bus__r_addr == 9'h173;
+  assign \$402  = bus__r_addr == 9'h174;
+  assign \$403  = bus__r_addr == 9'h175;
+  assign \$404  = bus__r_addr == 9'h176;
+  assign \$405  = bus__r_addr == 9'h177;
+  assign \$406  = bus__r_addr == 9'h178;
+  assign \$407  = bus__r_addr == 9'h179;
+  assign \$408  = bus__r_addr == 9'h17a;
+  assign \$409  = bus__r_addr == 9'h17b;
+  assign \$410  = bus__r_addr == 9'h17c;
+  assign \$411  = bus__r_addr == 9'h17d;
+  assign \$412  = ch1_read_select_110 & bus__r_load;
+  assign \$413  = bus__r_addr[10:3] == 6'h23;
+  assign \$414  = bus__r_en & \$413 ;
+  assign \$415  = bus__r_addr[10:4] == 5'h16;
+  assign \$416  = bus__r_en & \$415 ;
+  assign \$417  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$419  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
+  assign \$420  = \$418  | \$419 ;
+  assign \$421  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
+  assign \$422  = \$420  | \$421 ;
+  assign \$423  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$424  = \$422  | \$423 ;
+  assign \$429  = ch1_read_select_110 ? { 2'h0, \port$8338$0 [182:177], 4'h0, \port$8338$0 [186:183], 1'h0, \port$8338$0 [176:174], 1'h0, \port$8338$0 [133:131], 3'h0, \port$8338$0 [49], \port$8338$0 [3:0] } : 32'd0;
+  assign \$430  = \$428  | \$429 ;
+  assign \$431  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$432  = \$430  | \$431 ;
+  assign \$433  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$434  = \$432  | \$433 ;
+  assign \$435  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$436  = \$434  | \$435 ;
+  assign \$437  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$438  = \$436  | \$437 ;
+  assign \$439  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$440  = \$438  | \$439 ;
+  assign \$441  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$442  = \$440  | \$441 ;
+  assign \$443  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
+  assign \$444  = \$442  | \$443 ;
+  assign \$489  = ch1_read_select_142 ? { 17'h00000, \port$8426$0 [9:3], 1'h0, \port$8426$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$490  = \$488  | \$489 ;
+  assign \$491  = ch1_read_select_143 ? \port$8349$0 [31:0] : 32'd0;
+  assign \$492  = \$490  | \$491 ;
+  assign \$493  = ch1_read_select_144 ? \port$8349$0 [63:32] : 32'd0;
+  assign \$494  = \$492  | \$493 ;
+  assign \$495  = ch1_read_select_145 ? { 16'h0000, \port$8349$0 [79:64] } : 32'd0;
+  assign \$496  = \$494  | \$495 ;
+  assign \$497  = ch1_read_select_170 ? { 16'h0000, ch1__result_updates } : 32'd0;
+  assign \$498  = \$496  | \$497 ;
+  assign \$525  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$526  = \$524  | \$525 ;
-  assign \$527  = ch1_read_select_145 ? { 16'h0000, \port$8501$0 [79:64] } : 32'd0;
+  assign \$527  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
   assign \$528  = \$526  | \$527 ;
-  assign \$529  = ch1_read_select_170 ? { 16'h0000, ch1__result_updates } : 32'd0;
+  assign \$529  = ch1_window2_read ? ch1_config_read_data : 32'd0;
   assign \$530  = \$528  | \$529 ;
-  assign \$557  = ch1_window0_read ? ch1__count_data : 32'd0;
-  assign \$558  = \$556  | \$557 ;
-  assign \$559  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
-  assign \$560  = \$558  | \$559 ;
-  assign \$561  = ch1_window2_read ? ch1_config_read_data : 32'd0;
-  assign \$562  = \$560  | \$561 ;
-  assign \$563  = ! write_addr;
-  assign g_id_write = write_en & \$563 ;
-  assign \$564  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$564 ;
-  assign \$565  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$565 ;
-  assign \$566  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$566 ;
-  assign \$567  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$567 ;
-  assign \$568  = bus__r_addr[10:3] == 5'h13;
-  assign ch0__count_en = bus__r_en & \$568 ;
-  assign \$569  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$569 ;
-  assign \$570  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$570 ;
-  assign \$571  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$571 ;
-  assign \$572  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$572 ;
-  assign \$573  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$573 ;
-  assign \$574  = write_addr == 8'h86;
-  assign ch0_caps_chain_write = write_en & \$574 ;
-  assign \$575  = write_addr == 8'h87;
-  assign ch0_caps_chain2_write = write_en & \$575 ;
-  assign \$576  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$576 ;
-  assign \$577  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$577 ;
-  assign \$578  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$578 ;
-  assign \$579  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$579 ;
-  assign \$580  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$580 ;
-  assign \$581  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$581 ;
-  assign \$582  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$582 ;
-  assign \$583  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$583 ;
-  assign \$584  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$584 ;
-  assign \$585  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$585 ;
-  assign \$586  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$586 ;
-  assign \$587  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$587 ;
-  assign \$588  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$588 ;
-  assign \$589  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$589 ;
-  assign \$590  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$590 ;
-  assign \$591  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$591 ;
-  assign \$592  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$592 ;
-  assign \$593  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$593 ;
-  assign \$594  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$594 ;
-  assign \$595  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$595 ;
-  assign \$596  = write_addr == 8'ha4;
-  assign ch0_cfg_ssi_write = write_en & \$596 ;
-  assign \$597  = write_addr == 8'ha5;
-  assign ch0_count_chain_write = write_en & \$597 ;
-  assign \$598  = write_addr == 8'ha6;
-  assign ch0_count_chain2_write = write_en & \$598 ;
-  assign \$599  = write_addr == 8'ha7;
-  assign ch0_count_chain3_write = write_en & \$599 ;
-  assign \$600  = write_addr == 8'ha8;
-  assign ch0_cfg_w2_write = write_en & \$600 ;
-  assign \$601  = write_addr == 8'ha9;
-  assign ch0_cfg_w2_crc_write = write_en & \$601 ;
-  assign \$602  = write_addr == 8'haa;
-  assign ch0_cfg_w2_crc_start_write = write_en & \$602 ;
-  assign \$603  = write_addr == 8'hac;
-  assign ch0_cfg_w3_write = write_en & \$603 ;
-  assign \$604  = write_addr == 8'had;
-  assign ch0_cfg_w3_crc_write = write_en & \$604 ;
-  assign \$605  = write_addr == 8'hae;
-  assign ch0_cfg_w3_crc_start_write = write_en & \$605 ;
-  assign \$606  = write_addr == 8'hb0;
-  assign ch0_cfg_w4_write = write_en & \$606 ;
-  assign \$607  = write_addr == 8'hb1;
-  assign ch0_cfg_w4_crc_write = write_en & \$607 ;
-  assign \$608  = write_addr == 8'hb2;
-  assign ch0_cfg_w4_crc_start_write = write_en & \$608 ;
-  assign \$609  = write_addr == 8'hb4;
-  assign ch0_cfg_w5_write = write_en & \$609 ;
-  assign \$610  = write_addr == 8'hb5;
-  assign ch0_cfg_w5_crc_write = write_en & \$610 ;
-  assign \$611  = write_addr == 8'hb6;
-  assign ch0_cfg_w5_crc_start_write = write_en & \$611 ;
-  assign \$612  = write_addr == 8'hb8;
-  assign ch0_cfg_w6_write = write_en & \$612 ;
-  assign \$613  = write_addr == 8'hb9;
-  assign ch0_cfg_w6_crc_write = write_en & \$613 ;
-  assign \$614  = write_addr == 8'hba;
-  assign ch0_cfg_w6_crc_start_write = write_en & \$614 ;
-  assign \$615  = write_addr == 8'hbc;
-  assign ch0_cfg_w7_write = write_en & \$615 ;
-  assign \$616  = write_addr == 8'hbd;
-  assign ch0_cfg_w7_crc_write = write_en & \$616 ;
-  assign \$617  = write_addr == 8'hbe;
-  assign ch0_cfg_w7_crc_start_write = write_en & \$617 ;
-  assign \$618  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$618 ;
-  assign \$619  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$619 ;
-  assign \$620  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$620 ;
-  assign \$621  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$621 ;
-  assign \$622  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$622 ;
-  assign \$623  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$623 ;
-  assign \$624  = write_addr[10:4] == 4'hd;
-  assign \$625  = write_en & \$624 ;
-  assign ch0__ca_wbuf_en = \$625  ? write_strb : 4'h0;
-  assign \$626  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$626 ;
-  assign \$627  = write_addr == 8'hf0;
-  assign ch0_chain_updates_write = write_en & \$627 ;
-  assign \$628  = write_addr == 8'hf1;
-  assign ch0_chain_flags_write = write_en & \$628 ;
-  assign \$629  = write_addr == 8'hf2;
-  assign ch0_chain_w2_lo_write = write_en & \$629 ;
-  assign \$630  = write_addr == 8'hf3;
-  assign ch0_chain_w2_hi_write = write_en & \$630 ;
-  assign \$631  = write_addr == 8'hf4;
-  assign ch0_chain_w3_lo_write = write_en & \$631 ;
-  assign \$632  = write_addr == 8'hf5;
-  assign ch0_chain_w3_hi_write = write_en & \$632 ;
-  assign \$633  = write_addr == 8'hf6;
-  assign ch0_chain_w4_lo_write = write_en & \$633 ;
-  assign \$634  = write_addr == 8'hf7;
-  assign ch0_chain_w4_hi_write = write_en & \$634 ;
-  assign \$635  = write_addr == 8'hf8;
-  assign ch0_chain_w5_lo_write = write_en & \$635 ;
-  assign \$636  = write_addr == 8'hf9;
-  assign ch0_chain_w5_hi_write = write_en & \$636 ;
-  assign \$637  = write_addr == 8'hfa;
-  assign ch0_chain_w6_lo_write = write_en & \$637 ;
-  assign \$638  = write_addr == 8'hfb;
-  assign ch0_chain_w6_hi_write = write_en & \$638 ;
-  assign \$639  = write_addr == 8'hfc;
-  assign ch0_chain_w7_lo_write = write_en & \$639 ;
-  assign \$640  = write_addr == 8'hfd;
-  assign ch0_chain_w7_hi_write = write_en & \$640 ;
-  assign \$641  = | { ch0_cfg_ssi_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write, ch0_cfg_checks_config_write, ch0_cfg_timeout_config_write, ch0_cfg_break_config_write, ch0_cfg_ma_config_write };
-  assign \$642  = | { ch0_ca_request_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write };
-  assign \$643  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write };
-  assign \$644  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write };
-  assign \$645  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
-  assign \$646  = ~ ch0_config_written;
-  assign \$647  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$646 ;
-  assign \$648  = | \$647 ;
-  assign \$649  = ~ ch0_config_written;
-  assign \$650  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$649 ;
-  assign \$651  = | \$650 ;
-  assign \$652  = ~ ch0_config_written;
-  assign \$653  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$652 ;
-  assign \$654  = | \$653 ;
-  assign \$655  = ~ ch0_config_written;
-  assign \$656  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$655 ;
-  assign \$657  = | \$656 ;
-  assign \$658  = config_write_strb | { \$657 , \$654 , \$651 , \$648  };
-  assign wr__en = \$645  ? \$658  : 4'h0;
-  assign \$659  = bus__r_addr[10:7] == 1'h1;
-  assign \$660  = bus__r_en & \$659 ;
-  assign ch0_config_read = \$660  & config_memory0_read_hit;
-  assign \$661  = ch0_config_read_select & ch0_config_written;
-  assign \$662  = | \$661 ;
-  assign \$663  = \$662  ? rd__data : 32'd0;
-  assign \$664  = ~ ch0_config_written[0];
-  assign \$665  = ch0_config_read_select[0] & \$664 ;
-  assign \$670  = ~ ch0_config_written[1];
-  assign \$671  = ch0_config_read_select[1] & \$670 ;
-  assign \$676  = ~ ch0_config_written[2];
-  assign \$677  = ch0_config_read_select[2] & \$676 ;
-  assign \$682  = ~ ch0_config_written[3];
-  assign \$683  = ch0_config_read_select[3] & \$682 ;
-  assign \$688  = ~ ch0_config_written[4];
-  assign \$689  = ch0_config_read_select[4] & \$688 ;
-  assign \$694  = ~ ch0_config_written[5];
-  assign \$695  = ch0_config_read_select[5] & \$694 ;
-  assign \$700  = ~ ch0_config_written[6];
-  assign \$701  = ch0_config_read_select[6] & \$700 ;
-  assign \$706  = ~ ch0_config_written[7];
-  assign \$707  = ch0_config_read_select[7] & \$706 ;
-  assign \$712  = ~ ch0_config_written[8];
-  assign \$713  = ch0_config_read_select[8] & \$712 ;
-  assign \$718  = ~ ch0_config_written[9];
-  assign \$719  = ch0_config_read_select[9] & \$718 ;
-  assign \$724  = ~ ch0_config_written[10];
-  assign \$725  = ch0_config_read_select[10] & \$724 ;
-  assign \$730  = ~ ch0_config_written[11];
-  assign \$731  = ch0_config_read_select[11] & \$730 ;
-  assign \$736  = ~ ch0_config_written[12];
-  assign \$737  = ch0_config_read_select[12] & \$736 ;
-  assign \$742  = ~ ch0_config_written[13];
-  assign \$743  = ch0_config_read_select[13] & \$742 ;
-  assign \$748  = ~ ch0_config_written[14];
-  assign \$749  = ch0_config_read_select[14] & \$748 ;
-  assign \$754  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$756  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$758  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$759 , \$757 , \$755  };
-  assign \$760  = bus__r_addr[10:3] == 6'h23;
-  assign ch1__count_en = bus__r_en & \$760 ;
-  assign \$761  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$761 ;
-  assign \$762  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$762 ;
-  assign \$763  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$763 ;
-  assign \$764  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$764 ;
-  assign \$765  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$765 ;
-  assign \$766  = write_addr == 9'h106;
-  assign ch1_caps_chain_write = write_en & \$766 ;
-  assign \$767  = write_addr == 9'h107;
-  assign ch1_caps_chain2_write = write_en & \$767 ;
-  assign \$768  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$768 ;
-  assign \$769  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$769 ;
-  assign \$770  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$770 ;
-  assign \$771  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$771 ;
-  assign \$772  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$772 ;
-  assign \$773  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$773 ;
-  assign \$774  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$774 ;
-  assign \$775  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$775 ;
-  assign \$776  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$776 ;
-  assign \$777  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$777 ;
-  assign \$778  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$778 ;
-  assign \$779  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$779 ;
-  assign \$780  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$780 ;
-  assign \$781  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$781 ;
-  assign \$782  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$782 ;
-  assign \$783  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$783 ;
-  assign \$784  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$784 ;
-  assign \$785  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$785 ;
-  assign \$786  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$786 ;
-  assign \$787  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$787 ;
-  assign \$788  = write_addr == 9'h124;
-  assign ch1_cfg_ssi_write = write_en & \$788 ;
-  assign \$789  = write_addr == 9'h125;
-  assign ch1_count_chain_write = write_en & \$789 ;
-  assign \$790  = write_addr == 9'h126;
-  assign ch1_count_chain2_write = write_en & \$790 ;
-  assign \$791  = write_addr == 9'h127;
-  assign ch1_count_chain3_write = write_en & \$791 ;
-  assign \$792  = write_addr == 9'h128;
-  assign ch1_cfg_w2_write = write_en & \$792 ;
-  assign \$793  = write_addr == 9'h129;
-  assign ch1_cfg_w2_crc_write = write_en & \$793 ;
-  assign \$794  = write_addr == 9'h12a;
-  assign ch1_cfg_w2_crc_start_write = write_en & \$794 ;
-  assign \$795  = write_addr == 9'h12c;
-  assign ch1_cfg_w3_write = write_en & \$795 ;
-  assign \$796  = write_addr == 9'h12d;
-  assign ch1_cfg_w3_crc_write = write_en & \$796 ;
-  assign \$797  = write_addr == 9'h12e;
-  assign ch1_cfg_w3_crc_start_write = write_en & \$797 ;
-  assign \$798  = write_addr == 9'h130;
-  assign ch1_cfg_w4_write = write_en & \$798 ;
-  assign \$799  = write_addr == 9'h131;
-  assign ch1_cfg_w4_crc_write = write_en & \$799 ;
-  assign \$800  = write_addr == 9'h132;
-  assign ch1_cfg_w4_crc_start_write = write_en & \$800 ;
-  assign \$801  = write_addr == 9'h134;
-  assign ch1_cfg_w5_write = write_en & \$801 ;
-  assign \$802  = write_addr == 9'h135;
-  assign ch1_cfg_w5_crc_write = write_en & \$802 ;
-  assign \$803  = write_addr == 9'h136;
-  assign ch1_cfg_w5_crc_start_write = write_en & \$803 ;
-  assign \$804  = write_addr == 9'h138;
-  assign ch1_cfg_w6_write = write_en & \$804 ;
-  assign \$805  = write_addr == 9'h139;
-  assign ch1_cfg_w6_crc_write = write_en & \$805 ;
-  assign \$806  = write_addr == 9'h13a;
-  assign ch1_cfg_w6_crc_start_write = write_en & \$806 ;
-  assign \$807  = write_addr == 9'h13c;
-  assign ch1_cfg_w7_write = write_en & \$807 ;
-  assign \$808  = write_addr == 9'h13d;
-  assign ch1_cfg_w7_crc_write = write_en & \$808 ;
-  assign \$809  = write_addr == 9'h13e;
-  assign ch1_cfg_w7_crc_start_write = write_en & \$809 ;
-  assign \$810  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$810 ;
-  assign \$811  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$811 ;
-  assign \$812  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$812 ;
-  assign \$813  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$813 ;
-  assign \$814  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$814 ;
-  assign \$815  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$815 ;
-  assign \$816  = write_addr[10:4] == 5'h15;
-  assign \$817  = write_en & \$816 ;
-  assign ch1__ca_wbuf_en = \$817  ? write_strb : 4'h0;
-  assign \$818  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$818 ;
-  assign \$819  = write_addr == 9'h170;
-  assign ch1_chain_updates_write = write_en & \$819 ;
-  assign \$820  = write_addr == 9'h171;
-  assign ch1_chain_flags_write = write_en & \$820 ;
-  assign \$821  = write_addr == 9'h172;
-  assign ch1_chain_w2_lo_write = write_en & \$821 ;
-  assign \$822  = write_addr == 9'h173;
-  assign ch1_chain_w2_hi_write = write_en & \$822 ;
-  assign \$823  = write_addr == 9'h174;
-  assign ch1_chain_w3_lo_write = write_en & \$823 ;
-  assign \$824  = write_addr == 9'h175;
-  assign ch1_chain_w3_hi_write = write_en & \$824 ;
-  assign \$825  = write_addr == 9'h176;
-  assign ch1_chain_w4_lo_write = write_en & \$825 ;
-  assign \$826  = write_addr == 9'h177;
-  assign ch1_chain_w4_hi_write = write_en & \$826 ;
-  assign \$827  = write_addr == 9'h178;
-  assign ch1_chain_w5_lo_write = write_en & \$827 ;
-  assign \$828  = write_addr == 9'h179;
-  assign ch1_chain_w5_hi_write = write_en & \$828 ;
-  assign \$829  = write_addr == 9'h17a;
-  assign ch1_chain_w6_lo_write = write_en & \$829 ;
-  assign \$830  = write_addr == 9'h17b;
-  assign ch1_chain_w6_hi_write = write_en & \$830 ;
-  assign \$831  = write_addr == 9'h17c;
-  assign ch1_chain_w7_lo_write = write_en & \$831 ;
-  assign \$832  = write_addr == 9'h17d;
-  assign ch1_chain_w7_hi_write = write_en & \$832 ;
-  assign \$833  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
-  assign \$834  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
-  assign \$835  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
-  assign \$836  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
-  assign \$837  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
-  assign \$838  = ~ ch1_config_written;
-  assign \$839  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$838 ;
-  assign \$840  = | \$839 ;
-  assign \$841  = ~ ch1_config_written;
-  assign \$842  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$841 ;
-  assign \$843  = | \$842 ;
-  assign \$844  = ~ ch1_config_written;
-  assign \$845  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$844 ;
-  assign \$846  = | \$845 ;
-  assign \$847  = ~ ch1_config_written;
-  assign \$848  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$847 ;
-  assign \$849  = | \$848 ;
-  assign \$850  = config_write_strb | { \$849 , \$846 , \$843 , \$840  };
-  assign \wr__en$944  = \$837  ? \$850  : 4'h0;
-  assign \$851  = bus__r_addr[10:7] == 2'h2;
-  assign \$852  = bus__r_en & \$851 ;
-  assign ch1_config_read = \$852  & config_memory0_read_hit;
-  assign \$853  = ch1_config_read_select & ch1_config_written;
-  assign \$854  = | \$853 ;
-  assign \$855  = \$854  ? \rd__data$946  : 32'd0;
-  assign \$856  = ~ ch1_config_written[0];
-  assign \$857  = ch1_config_read_select[0] & \$856 ;
-  assign \$862  = ~ ch1_config_written[1];
-  assign \$863  = ch1_config_read_select[1] & \$862 ;
-  assign \$868  = ~ ch1_config_written[2];
-  assign \$869  = ch1_config_read_select[2] & \$868 ;
-  assign \$874  = ~ ch1_config_written[3];
-  assign \$875  = ch1_config_read_select[3] & \$874 ;
-  assign \$880  = ~ ch1_config_written[4];
-  assign \$881  = ch1_config_read_select[4] & \$880 ;
-  assign \$886  = ~ ch1_config_written[5];
-  assign \$887  = ch1_config_read_select[5] & \$886 ;
-  assign \$892  = ~ ch1_config_written[6];
-  assign \$893  = ch1_config_read_select[6] & \$892 ;
-  assign \$898  = ~ ch1_config_written[7];
-  assign \$899  = ch1_config_read_select[7] & \$898 ;
-  assign \$904  = ~ ch1_config_written[8];
-  assign \$905  = ch1_config_read_select[8] & \$904 ;
-  assign \$910  = ~ ch1_config_written[9];
-  assign \$911  = ch1_config_read_select[9] & \$910 ;
-  assign \$916  = ~ ch1_config_written[10];
-  assign \$917  = ch1_config_read_select[10] & \$916 ;
-  assign \$922  = ~ ch1_config_written[11];
-  assign \$923  = ch1_config_read_select[11] & \$922 ;
-  assign \$928  = ~ ch1_config_written[12];
-  assign \$929  = ch1_config_read_select[12] & \$928 ;
-  assign \$934  = ~ ch1_config_written[13];
-  assign \$935  = ch1_config_read_select[13] & \$934 ;
-  assign \$940  = ~ ch1_config_written[14];
-  assign \$941  = ch1_config_read_select[14] & \$940 ;
-  assign \$946  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$948  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$950  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$951 , \$949 , \$947  };
-  assign \$953  = \$952  | ch0_read_data;
-  assign bus__r_data = \$953  | ch1_read_data;
-  always @(posedge clk)
-    write_en <= \$954 ;
-  always @(posedge clk)
-    write_addr <= \$955 ;
-  always @(posedge clk)
-    write_data <= \$956 ;
-  always @(posedge clk)
-    write_strb <= \$957 ;
-  always @(posedge clk)
-    config_write_data <= \$958 ;
-  always @(posedge clk)
-    config_write_strb <= \$959 ;
-  always @(posedge clk)
-    g_trigger_start <= \$960 ;
-  always @(posedge clk)
-    g_read_select_0 <= \$961 ;
-  always @(posedge clk)
-    g_read_select_1 <= \$962 ;
-  always @(posedge clk)
-    g_read_select_2 <= \$963 ;
-  always @(posedge clk)
-    g_read_select_3 <= \$964 ;
-  always @(posedge clk)
-    g_read_select_4 <= \$965 ;
-  always @(posedge clk)
-    g_read_data <= \$966 ;
-  always @(posedge clk)
-    ch0_ctrl_start <= \$967 ;
-  always @(posedge clk)
-    ch0_ctrl_abort <= \$968 ;
-  always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$969 ;
-  always @(posedge clk)
-    ch0_ctrl_periodic <= \$970 ;
-  always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$971 ;
-  always @(posedge clk)
-    ch0_irq_status_done <= \$972 ;
-  always @(posedge clk)
-    ch0_irq_status_error <= \$973 ;
-  always @(posedge clk)
-    ch0_irq_status_access_done <= \$974 ;
-  always @(posedge clk)
-    ch0_irq_enable_config_write <= \$975 ;
-  always @(posedge clk)
-    ch0_irq_enable_done <= \$976 ;
-  always @(posedge clk)
-    ch0_irq_enable_error <= \$977 ;
-  always @(posedge clk)
-    ch0_irq_enable_access_done <= \$978 ;
-  always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$979 ;
-  always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$980 ;
-  always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$981 ;
-  always @(posedge clk)
-    ch0_cfg_period_config_write <= \$982 ;
-  always @(posedge clk)
-    ch0_cfg_period_request_period <= \$983 ;
-  always @(posedge clk)
-    ch0_cfg_break_config_write <= \$984 ;
-  always @(posedge clk)
-    ch0_cfg_break_break_time <= \$985 ;
-  always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$986 ;
-  always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$987 ;
-  always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$988 ;
-  always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$989 ;
-  always @(posedge clk)
-    ch0_cfg_words_config_write <= \$990 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$991 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$992 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$993 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$994 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$995 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_signed <= \$996 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$997 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$998 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$999 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$1000 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$1001 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_signed <= \$1002 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$1003 ;
-  always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$1004 ;
-  always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$1005 ;
-  always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$1006 ;
-  always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$1007 ;
-  always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$1008 ;
-  always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$1009 ;
-  always @(posedge clk)
-    ch0_cfg_checks_confirm_frames <= \$1010 ;
-  always @(posedge clk)
-    ch0_cfg_quiet_config_write <= \$1011 ;
-  always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$1012 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_config_write <= \$1013 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_poly <= \$1014 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$1015 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_inverted <= \$1016 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_start_config_write <= \$1017 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_start_w0_crc_start <= \$1018 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_config_write <= \$1019 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_poly <= \$1020 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$1021 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_inverted <= \$1022 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_start_config_write <= \$1023 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_start_w1_crc_start <= \$1024 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_config_write <= \$1025 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi <= \$1026 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_error <= \$1027 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_error_low <= \$1028 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_double <= \$1029 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_delay <= \$1030 ;
-  always @(posedge clk)
-    ch0_cfg_w2_config_write <= \$1031 ;
-  always @(posedge clk)
-    ch0_cfg_w2_crc_config_write <= \$1032 ;
-  always @(posedge clk)
-    ch0_cfg_w2_crc_start_config_write <= \$1033 ;
-  always @(posedge clk)
-    ch0_cfg_w3_config_write <= \$1034 ;
-  always @(posedge clk)
-    ch0_cfg_w3_crc_config_write <= \$1035 ;
-  always @(posedge clk)
-    ch0_cfg_w3_crc_start_config_write <= \$1036 ;
-  always @(posedge clk)
-    ch0_cfg_w4_config_write <= \$1037 ;
-  always @(posedge clk)
-    ch0_cfg_w4_crc_config_write <= \$1038 ;
-  always @(posedge clk)
-    ch0_cfg_w4_crc_start_config_write <= \$1039 ;
-  always @(posedge clk)
-    ch0_cfg_w5_config_write <= \$1040 ;
-  always @(posedge clk)
-    ch0_cfg_w5_crc_config_write <= \$1041 ;
-  always @(posedge clk)
-    ch0_cfg_w5_crc_start_config_write <= \$1042 ;
-  always @(posedge clk)
-    ch0_cfg_w6_config_write <= \$1043 ;
-  always @(posedge clk)
-    ch0_cfg_w6_crc_config_write <= \$1044 ;
-  always @(posedge clk)
-    ch0_cfg_w6_crc_start_config_write <= \$1045 ;
-  always @(posedge clk)
-    ch0_cfg_w7_config_write <= \$1046 ;
-  always @(posedge clk)
-    ch0_cfg_w7_crc_config_write <= \$1047 ;
-  always @(posedge clk)
-    ch0_cfg_w7_crc_start_config_write <= \$1048 ;
-  always @(posedge clk)
-    ch0_ca_request_config_write <= \$1049 ;
-  always @(posedge clk)
-    ch0_ca_request_slave_id <= \$1050 ;
-  always @(posedge clk)
-    ch0_ca_request_address <= \$1051 ;
-  always @(posedge clk)
-    ch0_ca_request_count <= \$1052 ;
-  always @(posedge clk)
-    \ch0_ca_request_write$149  <= \$1053 ;
-  always @(posedge clk)
-    ch0_ca_ctrl_start <= \$1054 ;
-  always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$1055 ;
-  always @(posedge clk)
-    config_memory0_write_data <= \$1056 ;
-  always @(posedge clk)
-    ch0_config_written <= \$1057 ;
-  always @(posedge clk)
-    ch0_config_read_select <= \$1058 ;
-  always @(posedge clk)
-    ch0_config_read_index <= \$1059 ;
-  always @(posedge clk)
-    ch0_read_select_80 <= \$1060 ;
-  always @(posedge clk)
-    ch0_read_select_81 <= \$1061 ;
-  always @(posedge clk)
-    ch0_read_select_82 <= \$1062 ;
-  always @(posedge clk)
-    ch0_read_select_84 <= \$1063 ;
-  always @(posedge clk)
-    ch0_read_select_86 <= \$1064 ;
-  always @(posedge clk)
-    ch0_read_select_87 <= \$1065 ;
-  always @(posedge clk)
-    ch0_read_select_90 <= \$1066 ;
+  assign \$531  = ! write_addr;
+  assign g_id_write = write_en & \$531 ;
+  assign \$532  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$532 ;
+  assign \$533  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$533 ;
+  assign \$534  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$534 ;
+  assign \$535  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$535 ;
+  assign \$536  = bus__r_addr[10:3] == 5'h13;
+  assign ch0__count_en = bus__r_en & \$536 ;
+  assign \$537  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$537 ;
+  assign \$538  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$538 ;
+  assign \$539  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$539 ;
+  assign \$540  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$540 ;
+  assign \$541  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$541 ;
+  assign \$542  = write_addr == 8'h86;
+  assign ch0_caps_chain_write = write_en & \$542 ;
+  assign \$543  = write_addr == 8'h87;
+  assign ch0_caps_chain2_write = write_en & \$543 ;
+  assign \$544  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$544 ;
+  assign \$545  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$545 ;
+  assign \$546  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$546 ;
+  assign \$547  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$547 ;
+  assign \$548  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$548 ;
+  assign \$549  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$549 ;
+  assign \$550  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$550 ;
+  assign \$551  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$551 ;
+  assign \$552  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$552 ;
+  assign \$553  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$553 ;
+  assign \$554  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$554 ;
+  assign \$555  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$555 ;
+  assign \$556  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$556 ;
+  assign \$557  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$557 ;
+  assign \$558  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$558 ;
+  assign \$559  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$559 ;
+  assign \$560  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$560 ;
+  assign \$561  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$561 ;
+  assign \$562  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$562 ;
+  assign \$563  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$563 ;
+  assign \$564  = write_addr == 8'ha4;
+  assign ch0_cfg_ssi_write = write_en & \$564 ;
+  assign \$565  = write_addr == 8'ha5;
+  assign ch0_count_chain_write = write_en & \$565 ;
+  assign \$566  = write_addr == 8'ha6;
+  assign ch0_count_chain2_write = write_en & \$566 ;
+  assign \$567  = write_addr == 8'ha7;
+  assign ch0_count_chain3_write = write_en & \$567 ;
+  assign \$568  = write_addr == 8'ha8;
+  assign ch0_cfg_w2_write = write_en & \$568 ;
+  assign \$569  = write_addr == 8'ha9;
+  assign ch0_cfg_w2_crc_write = write_en & \$569 ;
+  assign \$570  = write_addr == 8'haa;
+  assign ch0_cfg_w2_crc_start_write = write_en & \$570 ;
+  assign \$571  = write_addr == 8'hac;
+  assign ch0_cfg_w3_write = write_en & \$571 ;
+  assign \$572  = write_addr == 8'had;
+  assign ch0_cfg_w3_crc_write = write_en & \$572 ;
+  assign \$573  = write_addr == 8'hae;
+  assign ch0_cfg_w3_crc_start_write = write_en & \$573 ;
+  assign \$574  = write_addr == 8'hb0;
+  assign ch0_cfg_w4_write = write_en & \$574 ;
+  assign \$575  = write_addr == 8'hb1;
+  assign ch0_cfg_w4_crc_write = write_en & \$575 ;
+  assign \$576  = write_addr == 8'hb2;
+  assign ch0_cfg_w4_crc_start_write = write_en & \$576 ;
+  assign \$577  = write_addr == 8'hb4;
+  assign ch0_cfg_w5_write = write_en & \$577 ;
+  assign \$578  = write_addr == 8'hb5;
+  assign ch0_cfg_w5_crc_write = write_en & \$578 ;
+  assign \$579  = write_addr == 8'hb6;
+  assign ch0_cfg_w5_crc_start_write = write_en & \$579 ;
+  assign \$580  = write_addr == 8'hb8;
+  assign ch0_cfg_w6_write = write_en & \$580 ;
+  assign \$581  = write_addr == 8'hb9;
+  assign ch0_cfg_w6_crc_write = write_en & \$581 ;
+  assign \$582  = write_addr == 8'hba;
+  assign ch0_cfg_w6_crc_start_write = write_en & \$582 ;
+  assign \$583  = write_addr == 8'hbc;
+  assign ch0_cfg_w7_write = write_en & \$583 ;
+  assign \$584  = write_addr == 8'hbd;
+  assign ch0_cfg_w7_crc_write = write_en & \$584 ;
+  assign \$585  = write_addr == 8'hbe;
+  assign ch0_cfg_w7_crc_start_write = write_en & \$585 ;
+  assign \$586  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$586 ;
+  assign \$587  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$587 ;
+  assign \$588  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$588 ;
+  assign \$589  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$589 ;
+  assign \$590  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$590 ;
+  assign \$591  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$591 ;
+  assign \$592  = write_addr[10:4] == 4'hd;
+  assign \$593  = write_en & \$592 ;
+  assign ch0__ca_wbuf_en = \$593  ? write_strb : 4'h0;
+  assign \$594  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$594 ;
+  assign \$595  = write_addr == 8'hf0;
+  assign ch0_chain_updates_write = write_en & \$595 ;
+  assign \$596  = write_addr == 8'hf1;
+  assign ch0_chain_flags_write = write_en & \$596 ;
+  assign \$597  = write_addr == 8'hf2;
+  assign ch0_chain_w2_lo_write = write_en & \$597 ;
+  assign \$598  = write_addr == 8'hf3;
+  assign ch0_chain_w2_hi_write = write_en & \$598 ;
+  assign \$599  = write_addr == 8'hf4;
+  assign ch0_chain_w3_lo_write = write_en & \$599 ;
+  assign \$600  = write_addr == 8'hf5;
+  assign ch0_chain_w3_hi_write = write_en & \$600 ;
+  assign \$601  = write_addr == 8'hf6;
+  assign ch0_chain_w4_lo_write = write_en & \$601 ;
+  assign \$602  = write_addr == 8'hf7;
+  assign ch0_chain_w4_hi_write = write_en & \$602 ;
+  assign \$603  = write_addr == 8'hf8;
+  assign ch0_chain_w5_lo_write = write_en & \$603 ;
+  assign \$604  = write_addr == 8'hf9;
+  assign ch0_chain_w5_hi_write = write_en & \$604 ;
+  assign \$605  = write_addr == 8'hfa;
+  assign ch0_chain_w6_lo_write = write_en & \$605 ;
+  assign \$606  = write_addr == 8'hfb;
+  assign ch0_chain_w6_hi_write = write_en & \$606 ;
+  assign \$607  = write_addr == 8'hfc;
+  assign ch0_chain_w7_lo_write = write_en & \$607 ;
+  assign \$608  = write_addr == 8'hfd;
+  assign ch0_chain_w7_hi_write = write_en & \$608 ;
+  assign \$609  = | { ch0_cfg_ssi_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write, ch0_cfg_checks_config_write, ch0_cfg_timeout_config_write, ch0_cfg_break_config_write, ch0_cfg_ma_config_write };
+  assign \$610  = | { ch0_ca_request_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write };
+  assign \$611  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write };
+  assign \$612  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write };
+  assign \$613  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
+  assign \$614  = ~ ch0_config_written;
+  assign \$615  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$614 ;
+  assign \$616  = | \$615 ;
+  assign \$617  = ~ ch0_config_written;
+  assign \$618  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$617 ;
+  assign \$619  = | \$618 ;
+  assign \$620  = ~ ch0_config_written;
+  assign \$621  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$620 ;
+  assign \$622  = | \$621 ;
+  assign \$623  = ~ ch0_config_written;
+  assign \$624  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$623 ;
+  assign \$625  = | \$624 ;
+  assign \$626  = config_write_strb | { \$625 , \$622 , \$619 , \$616  };
+  assign wr__en = \$613  ? \$626  : 4'h0;
+  assign \$627  = bus__r_addr[10:7] == 1'h1;
+  assign \$628  = bus__r_en & \$627 ;
+  assign ch0_config_read = \$628  & config_memory0_read_hit;
+  assign \$629  = ch0_config_written >> ch0_config_read_index;
+  assign \$631  = \$629  ? rd__data : \$630 ;
+  assign ch0_config_read_data = \$631  | \$632 ;
+  assign \$633  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$635  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$637  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$638 , \$636 , \$634  };
+  assign \$639  = bus__r_addr[10:3] == 6'h23;
+  assign ch1__count_en = bus__r_en & \$639 ;
+  assign \$640  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$640 ;
+  assign \$641  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$641 ;
+  assign \$642  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$642 ;
+  assign \$643  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$643 ;
+  assign \$644  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$644 ;
+  assign \$645  = write_addr == 9'h106;
+  assign ch1_caps_chain_write = write_en & \$645 ;
+  assign \$646  = write_addr == 9'h107;
+  assign ch1_caps_chain2_write = write_en & \$646 ;
+  assign \$647  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$647 ;
+  assign \$648  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$648 ;
+  assign \$649  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$649 ;
+  assign \$650  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$650 ;
+  assign \$651  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$651 ;
+  assign \$652  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$652 ;
+  assign \$653  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$653 ;
+  assign \$654  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$654 ;
+  assign \$655  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$655 ;
+  assign \$656  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$656 ;
+  assign \$657  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$657 ;
+  assign \$658  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$658 ;
+  assign \$659  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$659 ;
+  assign \$660  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$660 ;
+  assign \$661  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$661 ;
+  assign \$662  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$662 ;
+  assign \$663  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$663 ;
+  assign \$664  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$664 ;
+  assign \$665  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$665 ;
+  assign \$666  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$666 ;
+  assign \$667  = write_addr == 9'h124;
+  assign ch1_cfg_ssi_write = write_en & \$667 ;
+  assign \$668  = write_addr == 9'h125;
+  assign ch1_count_chain_write = write_en & \$668 ;
+  assign \$669  = write_addr == 9'h126;
+  assign ch1_count_chain2_write = write_en & \$669 ;
+  assign \$670  = write_addr == 9'h127;
+  assign ch1_count_chain3_write = write_en & \$670 ;
+  assign \$671  = write_addr == 9'h128;
+  assign ch1_cfg_w2_write = write_en & \$671 ;
+  assign \$672  = write_addr == 9'h129;
+  assign ch1_cfg_w2_crc_write = write_en & \$672 ;
+  assign \$673  = write_addr == 9'h12a;
+  assign ch1_cfg_w2_crc_start_write = write_en & \$673 ;
+  assign \$674  = write_addr == 9'h12c;
+  assign ch1_cfg_w3_write = write_en & \$674 ;
+  assign \$675  = write_addr == 9'h12d;
+  assign ch1_cfg_w3_crc_write = write_en & \$675 ;
+  assign \$676  = write_addr == 9'h12e;
+  assign ch1_cfg_w3_crc_start_write = write_en & \$676 ;
+  assign \$677  = write_addr == 9'h130;
+  assign ch1_cfg_w4_write = write_en & \$677 ;
+  assign \$678  = write_addr == 9'h131;
+  assign ch1_cfg_w4_crc_write = write_en & \$678 ;
+  assign \$679  = write_addr == 9'h132;
+  assign ch1_cfg_w4_crc_start_write = write_en & \$679 ;
+  assign \$680  = write_addr == 9'h134;
+  assign ch1_cfg_w5_write = write_en & \$680 ;
+  assign \$681  = write_addr == 9'h135;
+  assign ch1_cfg_w5_crc_write = write_en & \$681 ;
+  assign \$682  = write_addr == 9'h136;
+  assign ch1_cfg_w5_crc_start_write = write_en & \$682 ;
+  assign \$683  = write_addr == 9'h138;
+  assign ch1_cfg_w6_write = write_en & \$683 ;
+  assign \$684  = write_addr == 9'h139;
+  assign ch1_cfg_w6_crc_write = write_en & \$684 ;
+  assign \$685  = write_addr == 9'h13a;
+  assign ch1_cfg_w6_crc_start_write = write_en & \$685 ;
+  assign \$686  = write_addr == 9'h13c;
+  assign ch1_cfg_w7_write = write_en & \$686 ;
+  assign \$687  = write_addr == 9'h13d;
+  assign ch1_cfg_w7_crc_write = write_en & \$687 ;
+  assign \$688  = write_addr == 9'h13e;
+  assign ch1_cfg_w7_crc_start_write = write_en & \$688 ;
+  assign \$689  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$689 ;
+  assign \$690  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$690 ;
+  assign \$691  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$691 ;
+  assign \$692  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$692 ;
+  assign \$693  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$693 ;
+  assign \$694  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$694 ;
+  assign \$695  = write_addr[10:4] == 5'h15;
+  assign \$696  = write_en & \$695 ;
+  assign ch1__ca_wbuf_en = \$696  ? write_strb : 4'h0;
+  assign \$697  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$697 ;
+  assign \$698  = write_addr == 9'h170;
+  assign ch1_chain_updates_write = write_en & \$698 ;
+  assign \$699  = write_addr == 9'h171;
+  assign ch1_chain_flags_write = write_en & \$699 ;
+  assign \$700  = write_addr == 9'h172;
+  assign ch1_chain_w2_lo_write = write_en & \$700 ;
+  assign \$701  = write_addr == 9'h173;
+  assign ch1_chain_w2_hi_write = write_en & \$701 ;
+  assign \$702  = write_addr == 9'h174;
+  assign ch1_chain_w3_lo_write = write_en & \$702 ;
+  assign \$703  = write_addr == 9'h175;
+  assign ch1_chain_w3_hi_write = write_en & \$703 ;
+  assign \$704  = write_addr == 9'h176;
+  assign ch1_chain_w4_lo_write = write_en & \$704 ;
+  assign \$705  = write_addr == 9'h177;
+  assign ch1_chain_w4_hi_write = write_en & \$705 ;
+  assign \$706  = write_addr == 9'h178;
+  assign ch1_chain_w5_lo_write = write_en & \$706 ;
+  assign \$707  = write_addr == 9'h179;
+  assign ch1_chain_w5_hi_write = write_en & \$707 ;
+  assign \$708  = write_addr == 9'h17a;
+  assign ch1_chain_w6_lo_write = write_en & \$708 ;
+  assign \$709  = write_addr == 9'h17b;
+  assign ch1_chain_w6_hi_write = write_en & \$709 ;
+  assign \$710  = write_addr == 9'h17c;
+  assign ch1_chain_w7_lo_write = write_en & \$710 ;
+  assign \$711  = write_addr == 9'h17d;
+  assign ch1_chain_w7_hi_write = write_en & \$711 ;
+  assign \$712  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
+  assign \$713  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
+  assign \$714  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
+  assign \$715  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
+  assign \$716  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$717  = ~ ch1_config_written;
+  assign \$718  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$717 ;
+  assign \$719  = | \$718 ;
+  assign \$720  = ~ ch1_config_written;
+  assign \$721  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$720 ;
+  assign \$722  = | \$721 ;
+  assign \$723  = ~ ch1_config_written;
+  assign \$724  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$723 ;
+  assign \$725  = | \$724 ;
+  assign \$726  = ~ ch1_config_written;
+  assign \$727  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$726 ;
+  assign \$728  = | \$727 ;
+  assign \$729  = config_write_strb | { \$728 , \$725 , \$722 , \$719  };
+  assign \wr__en$942  = \$716  ? \$729  : 4'h0;
+  assign \$730  = bus__r_addr[10:7] == 2'h2;
+  assign \$731  = bus__r_en & \$730 ;
+  assign ch1_config_read = \$731  & config_memory0_read_hit;
+  assign \$732  = ch1_config_written >> ch1_config_read_index;
+  assign \$734  = \$732  ? \rd__data$944  : \$733 ;
+  assign ch1_config_read_data = \$734  | \$735 ;
+  assign \$736  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$738  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$740  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$741 , \$739 , \$737  };
+  assign \$743  = \$742  | ch0_read_data;
+  assign bus__r_data = \$743  | ch1_read_data;
+  always @(posedge clk)
+    write_en <= \$744 ;
+  always @(posedge clk)
+    write_addr <= \$745 ;
+  always @(posedge clk)
+    write_data <= \$746 ;
+  always @(posedge clk)
+    write_strb <= \$747 ;
+  always @(posedge clk)
+    config_write_data <= \$748 ;
+  always @(posedge clk)
+    config_write_strb <= \$749 ;
+  always @(posedge clk)
+    g_trigger_start <= \$750 ;
+  always @(posedge clk)
+    g_read_select_0 <= \$751 ;
+  always @(posedge clk)
+    g_read_select_1 <= \$752 ;
+  always @(posedge clk)
+    g_read_select_2 <= \$753 ;
+  always @(posedge clk)
+    g_read_select_3 <= \$754 ;
+  always @(posedge clk)
+    g_read_select_4 <= \$755 ;
+  always @(posedge clk)
+    g_read_data <= \$756 ;
+  always @(posedge clk)
+    ch0_ctrl_start <= \$757 ;
+  always @(posedge clk)
+    ch0_ctrl_abort <= \$758 ;
+  always @(posedge clk)
+    ch0_ctrl_clear_counters <= \$759 ;
+  always @(posedge clk)
+    ch0_ctrl_periodic <= \$760 ;
+  always @(posedge clk)
+    ch0_ctrl_trigger_enable <= \$761 ;
+  always @(posedge clk)
+    ch0_irq_status_done <= \$762 ;
+  always @(posedge clk)
+    ch0_irq_status_error <= \$763 ;
+  always @(posedge clk)
+    ch0_irq_status_access_done <= \$764 ;
+  always @(posedge clk)
+    ch0_irq_enable_config_write <= \$765 ;
+  always @(posedge clk)
+    ch0_irq_enable_done <= \$766 ;
+  always @(posedge clk)
+    ch0_irq_enable_error <= \$767 ;
+  always @(posedge clk)
+    ch0_irq_enable_access_done <= \$768 ;
+  always @(posedge clk)
+    ch0_cfg_ma_config_write <= \$769 ;
+  always @(posedge clk)
+    ch0_cfg_ma_ma_half_period <= \$770 ;
+  always @(posedge clk)
+    ch0_cfg_ma_delay_limit <= \$771 ;
+  always @(posedge clk)
+    ch0_cfg_period_config_write <= \$772 ;
+  always @(posedge clk)
+    ch0_cfg_period_request_period <= \$773 ;
+  always @(posedge clk)
+    ch0_cfg_break_config_write <= \$774 ;
+  always @(posedge clk)
+    ch0_cfg_break_break_time <= \$775 ;
+  always @(posedge clk)
+    ch0_cfg_ack_config_write <= \$776 ;
+  always @(posedge clk)
+    ch0_cfg_ack_ack_limit <= \$777 ;
+  always @(posedge clk)
+    ch0_cfg_timeout_config_write <= \$778 ;
+  always @(posedge clk)
+    ch0_cfg_timeout_timeout_limit <= \$779 ;
+  always @(posedge clk)
+    ch0_cfg_words_config_write <= \$780 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_data_bits <= \$781 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_nenw <= \$782 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_lc <= \$783 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_crc <= \$784 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_gray <= \$785 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_signed <= \$786 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_data_bits <= \$787 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_nenw <= \$788 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_lc <= \$789 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_crc <= \$790 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_gray <= \$791 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_signed <= \$792 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_enable <= \$793 ;
+  always @(posedge clk)
+    ch0_cfg_checks_config_write <= \$794 ;
+  always @(posedge clk)
+    ch0_cfg_checks_end_check <= \$795 ;
+  always @(posedge clk)
+    ch0_cfg_checks_spw_check <= \$796 ;
+  always @(posedge clk)
+    ch0_cfg_checks_spw_tolerance <= \$797 ;
+  always @(posedge clk)
+    ch0_cfg_checks_noise_limit <= \$798 ;
+  always @(posedge clk)
+    ch0_cfg_checks_delay_tolerance <= \$799 ;
+  always @(posedge clk)
+    ch0_cfg_checks_confirm_frames <= \$800 ;
+  always @(posedge clk)
+    ch0_cfg_quiet_config_write <= \$801 ;
+  always @(posedge clk)
+    ch0_cfg_quiet_quiet_time <= \$802 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_config_write <= \$803 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_w0_crc_poly <= \$804 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_w0_crc_width <= \$805 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_w0_crc_inverted <= \$806 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_start_config_write <= \$807 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_start_w0_crc_start <= \$808 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_config_write <= \$809 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_w1_crc_poly <= \$810 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_w1_crc_width <= \$811 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_w1_crc_inverted <= \$812 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_start_config_write <= \$813 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_start_w1_crc_start <= \$814 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_config_write <= \$815 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi <= \$816 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_error <= \$817 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_error_low <= \$818 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_double <= \$819 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_delay <= \$820 ;
+  always @(posedge clk)
+    ch0_cfg_w2_config_write <= \$821 ;
+  always @(posedge clk)
+    ch0_cfg_w2_crc_config_write <= \$822 ;
+  always @(posedge clk)
+    ch0_cfg_w2_crc_start_config_write <= \$823 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$1067 ;
+    ch0_cfg_w3_config_write <= \$824 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$1068 ;
+    ch0_cfg_w3_crc_config_write <= \$825 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$1069 ;
+    ch0_cfg_w3_crc_start_config_write <= \$826 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$1070 ;
+    ch0_cfg_w4_config_write <= \$827 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$1071 ;
+    ch0_cfg_w4_crc_config_write <= \$828 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$1072 ;
+    ch0_cfg_w4_crc_start_config_write <= \$829 ;
   always @(posedge clk)
-    ch0_read_select_97 <= \$1073 ;
+    ch0_cfg_w5_config_write <= \$830 ;
   always @(posedge clk)
-    ch0_read_select_a5 <= \$1074 ;
+    ch0_cfg_w5_crc_config_write <= \$831 ;
   always @(posedge clk)
-    ch0_read_select_a6 <= \$1075 ;
+    ch0_cfg_w5_crc_start_config_write <= \$832 ;
   always @(posedge clk)
-    ch0_read_select_a7 <= \$1076 ;
+    ch0_cfg_w6_config_write <= \$833 ;
   always @(posedge clk)
-    ch0_read_select_a8 <= \$1077 ;
+    ch0_cfg_w6_crc_config_write <= \$834 ;
   always @(posedge clk)
-    ch0_read_select_a9 <= \$1078 ;
+    ch0_cfg_w6_crc_start_config_write <= \$835 ;
   always @(posedge clk)
-    ch0_read_select_aa <= \$1079 ;
+    ch0_cfg_w7_config_write <= \$836 ;
   always @(posedge clk)
-    ch0_read_select_ac <= \$1080 ;
+    ch0_cfg_w7_crc_config_write <= \$837 ;
   always @(posedge clk)
-    ch0_read_select_ad <= \$1081 ;
+    ch0_cfg_w7_crc_start_config_write <= \$838 ;
   always @(posedge clk)
-    ch0_read_select_ae <= \$1082 ;
+    ch0_ca_request_config_write <= \$839 ;
   always @(posedge clk)
-    ch0_read_select_b0 <= \$1083 ;
+    ch0_ca_request_slave_id <= \$840 ;
   always @(posedge clk)
-    ch0_read_select_b1 <= \$1084 ;
+    ch0_ca_request_address <= \$841 ;
   always @(posedge clk)
-    ch0_read_select_b2 <= \$1085 ;
+    ch0_ca_request_count <= \$842 ;
   always @(posedge clk)
-    ch0_read_select_b4 <= \$1086 ;
+    \ch0_ca_request_write$149  <= \$843 ;
   always @(posedge clk)
-    ch0_read_select_b5 <= \$1087 ;
+    ch0_ca_ctrl_start <= \$844 ;
   always @(posedge clk)
-    ch0_read_select_b6 <= \$1088 ;
+    ch0_ca_ctrl_abort <= \$845 ;
   always @(posedge clk)
-    ch0_read_select_b8 <= \$1089 ;
+    config_memory0_write_data <= \$846 ;
   always @(posedge clk)
-    ch0_read_select_b9 <= \$1090 ;
+    ch0_config_written <= \$847 ;
   always @(posedge clk)
-    ch0_read_select_ba <= \$1091 ;
+    ch0_config_read_index <= \$848 ;
   always @(posedge clk)
-    ch0_read_select_bc <= \$1092 ;
+    ch0_read_select_80 <= \$849 ;
   always @(posedge clk)
-    ch0_read_select_bd <= \$1093 ;
+    ch0_read_select_81 <= \$850 ;
   always @(posedge clk)
-    ch0_read_select_be <= \$1094 ;
+    ch0_read_select_82 <= \$851 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$1095 ;
+    ch0_read_select_84 <= \$852 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$1096 ;
+    ch0_read_select_86 <= \$853 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$1097 ;
+    ch0_read_select_87 <= \$854 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$1098 ;
+    ch0_read_select_90 <= \$855 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$1099 ;
+    ch0_read_select_91 <= \$856 ;
   always @(posedge clk)
-    ch0_read_select_f0 <= \$1100 ;
+    ch0_read_select_92 <= \$857 ;
   always @(posedge clk)
-    ch0_read_select_f1 <= \$1101 ;
+    ch0_read_select_93 <= \$858 ;
   always @(posedge clk)
-    ch0_read_select_f2 <= \$1102 ;
+    ch0_read_select_94 <= \$859 ;
   always @(posedge clk)
-    ch0_read_select_f3 <= \$1103 ;
+    ch0_read_select_95 <= \$860 ;
   always @(posedge clk)
-    ch0_read_select_f4 <= \$1104 ;
+    ch0_read_select_96 <= \$861 ;
   always @(posedge clk)
-    ch0_read_select_f5 <= \$1105 ;
+    ch0_read_select_97 <= \$862 ;
   always @(posedge clk)
-    ch0_read_select_f6 <= \$1106 ;
+    ch0_read_select_a5 <= \$863 ;
   always @(posedge clk)
-    ch0_read_select_f7 <= \$1107 ;
+    ch0_read_select_a6 <= \$864 ;
   always @(posedge clk)
-    ch0_read_select_f8 <= \$1108 ;
+    ch0_read_select_a7 <= \$865 ;
   always @(posedge clk)
-    ch0_read_select_f9 <= \$1109 ;
+    ch0_read_select_a8 <= \$866 ;
   always @(posedge clk)
-    ch0_read_select_fa <= \$1110 ;
+    ch0_read_select_a9 <= \$867 ;
   always @(posedge clk)
-    ch0_read_select_fb <= \$1111 ;
+    ch0_read_select_aa <= \$868 ;
   always @(posedge clk)
-    ch0_read_select_fc <= \$1112 ;
+    ch0_read_select_ac <= \$869 ;
   always @(posedge clk)
-    ch0_read_select_fd <= \$1113 ;
+    ch0_read_select_ad <= \$870 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$1114 ;
+    ch0_read_select_ae <= \$871 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$1115 ;
+    ch0_read_select_b0 <= \$872 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$1116 ;
+    ch0_read_select_b1 <= \$873 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$1117 ;
+    ch0_read_select_b2 <= \$874 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$1118 ;
+    ch0_read_select_b4 <= \$875 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$1119 ;
+    ch0_read_select_b5 <= \$876 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$1120 ;
+    ch0_read_select_b6 <= \$877 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$1121 ;
+    ch0_read_select_b8 <= \$878 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$1122 ;
+    ch0_read_select_b9 <= \$879 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$1123 ;
+    ch0_read_select_ba <= \$880 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$1124 ;
+    ch0_read_select_bc <= \$881 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$1125 ;
+    ch0_read_select_bd <= \$882 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$1126 ;
+    ch0_read_select_be <= \$883 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$1127 ;
+    ch0_read_select_c1 <= \$884 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$1128 ;
+    ch0_read_select_c2 <= \$885 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$1129 ;
+    ch0_read_select_c3 <= \$886 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$1130 ;
+    ch0_read_select_c4 <= \$887 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$1131 ;
+    ch0_read_select_c5 <= \$888 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$1132 ;
+    ch0_read_select_f0 <= \$889 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$1133 ;
+    ch0_read_select_f1 <= \$890 ;
   always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$1134 ;
+    ch0_read_select_f2 <= \$891 ;
   always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$1135 ;
+    ch0_read_select_f3 <= \$892 ;
   always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$1136 ;
+    ch0_read_select_f4 <= \$893 ;
   always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$1137 ;
+    ch0_read_select_f5 <= \$894 ;
   always @(posedge clk)
-    ch0_window0_read <= \$1138 ;
+    ch0_read_select_f6 <= \$895 ;
   always @(posedge clk)
-    ch0_window1_read <= \$1139 ;
+    ch0_read_select_f7 <= \$896 ;
   always @(posedge clk)
-    ch0_window2_read <= \$1140 ;
+    ch0_read_select_f8 <= \$897 ;
   always @(posedge clk)
-    ch0_read_data <= \$1141 ;
+    ch0_read_select_f9 <= \$898 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$1142 ;
+    ch0_read_select_fa <= \$899 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$1143 ;
+    ch0_read_select_fb <= \$900 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$1144 ;
+    ch0_read_select_fc <= \$901 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$1145 ;
+    ch0_read_select_fd <= \$902 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$1146 ;
+    ch0_result_status_status_snapshot <= \$903 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$1147 ;
+    ch0_result_status_cds_snapshot <= \$904 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$1148 ;
+    ch0_result_status_w0_ne_snapshot <= \$905 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$1149 ;
+    ch0_result_status_w0_nw_snapshot <= \$906 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$1150 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$907 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$1151 ;
+    ch0_result_status_w1_ne_snapshot <= \$908 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$1152 ;
+    ch0_result_status_w1_nw_snapshot <= \$909 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$1153 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$910 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$1154 ;
+    ch0_result_status_lc_repeat_snapshot <= \$911 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$1155 ;
+    ch0_result_status_lc_skip_snapshot <= \$912 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$1156 ;
+    ch0_result_status_lc_zero_snapshot <= \$913 ;
   always @(posedge clk)
-    ch1_cfg_period_config_write <= \$1157 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$914 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$1158 ;
+    ch0_result_status_lc_snapshot <= \$915 ;
   always @(posedge clk)
-    ch1_cfg_break_config_write <= \$1159 ;
+    ch0_result_seq_seq_snapshot <= \$916 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$1160 ;
+    ch0_result_seq_line_delay_snapshot <= \$917 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$1161 ;
+    ch0_result_w0_lo_data_snapshot <= \$918 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$1162 ;
+    ch0_result_w0_hi_data_snapshot <= \$919 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$1163 ;
+    ch0_result_w1_lo_data_snapshot <= \$920 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$1164 ;
+    ch0_result_w1_hi_data_snapshot <= \$921 ;
   always @(posedge clk)
-    ch1_cfg_words_config_write <= \$1165 ;
+    ch0_result_timestamp_time_snapshot <= \$922 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$1166 ;
+    ch0_result_line_noise_events_snapshot <= \$923 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$1167 ;
+    ch0_result_line_delay_settled_snapshot <= \$924 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$1168 ;
+    ch0_result_line_delay_spread_snapshot <= \$925 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$1169 ;
+    ch0_result_line_settled_delay_snapshot <= \$926 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$1170 ;
+    ch0_window0_read <= \$927 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_signed <= \$1171 ;
+    ch0_window1_read <= \$928 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$1172 ;
+    ch0_window2_read <= \$929 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$1173 ;
+    ch0_read_data <= \$930 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$1174 ;
+    ch1_ctrl_start <= \$931 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$1175 ;
+    ch1_ctrl_abort <= \$932 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$1176 ;
+    ch1_ctrl_clear_counters <= \$933 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_signed <= \$1177 ;
+    ch1_ctrl_periodic <= \$934 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$1178 ;
+    ch1_ctrl_trigger_enable <= \$935 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$1179 ;
+    ch1_irq_status_done <= \$936 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$1180 ;
+    ch1_irq_status_error <= \$937 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$1181 ;
+    ch1_irq_status_access_done <= \$938 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$1182 ;
+    ch1_irq_enable_config_write <= \$939 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$1183 ;
+    ch1_irq_enable_done <= \$940 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$1184 ;
+    ch1_irq_enable_error <= \$941 ;
   always @(posedge clk)
-    ch1_cfg_checks_confirm_frames <= \$1185 ;
+    ch1_irq_enable_access_done <= \$942 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_write <= \$1186 ;
+    ch1_cfg_ma_config_write <= \$943 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$1187 ;
+    ch1_cfg_ma_ma_half_period <= \$944 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_write <= \$1188 ;
+    ch1_cfg_ma_delay_limit <= \$945 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_poly <= \$1189 ;
+    ch1_cfg_period_config_write <= \$946 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$1190 ;
+    ch1_cfg_period_request_period <= \$947 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_inverted <= \$1191 ;
+    ch1_cfg_break_config_write <= \$948 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_write <= \$1192 ;
+    ch1_cfg_break_break_time <= \$949 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_w0_crc_start <= \$1193 ;
+    ch1_cfg_ack_config_write <= \$950 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_write <= \$1194 ;
+    ch1_cfg_ack_ack_limit <= \$951 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_poly <= \$1195 ;
+    ch1_cfg_timeout_config_write <= \$952 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$1196 ;
+    ch1_cfg_timeout_timeout_limit <= \$953 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_inverted <= \$1197 ;
+    ch1_cfg_words_config_write <= \$954 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_write <= \$1198 ;
+    ch1_cfg_words_w0_data_bits <= \$955 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_w1_crc_start <= \$1199 ;
+    ch1_cfg_words_w0_nenw <= \$956 ;
   always @(posedge clk)
-    ch1_cfg_ssi_config_write <= \$1200 ;
+    ch1_cfg_words_w0_lc <= \$957 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi <= \$1201 ;
+    ch1_cfg_words_w0_crc <= \$958 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error <= \$1202 ;
+    ch1_cfg_words_w0_gray <= \$959 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error_low <= \$1203 ;
+    ch1_cfg_words_w0_signed <= \$960 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_double <= \$1204 ;
+    ch1_cfg_words_w1_data_bits <= \$961 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_delay <= \$1205 ;
+    ch1_cfg_words_w1_nenw <= \$962 ;
   always @(posedge clk)
-    ch1_cfg_w2_config_write <= \$1206 ;
+    ch1_cfg_words_w1_lc <= \$963 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_config_write <= \$1207 ;
+    ch1_cfg_words_w1_crc <= \$964 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_start_config_write <= \$1208 ;
+    ch1_cfg_words_w1_gray <= \$965 ;
   always @(posedge clk)
-    ch1_cfg_w3_config_write <= \$1209 ;
+    ch1_cfg_words_w1_signed <= \$966 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_config_write <= \$1210 ;
+    ch1_cfg_words_w1_enable <= \$967 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_start_config_write <= \$1211 ;
+    ch1_cfg_checks_config_write <= \$968 ;
   always @(posedge clk)
-    ch1_cfg_w4_config_write <= \$1212 ;
+    ch1_cfg_checks_end_check <= \$969 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_config_write <= \$1213 ;
+    ch1_cfg_checks_spw_check <= \$970 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_start_config_write <= \$1214 ;
+    ch1_cfg_checks_spw_tolerance <= \$971 ;
   always @(posedge clk)
-    ch1_cfg_w5_config_write <= \$1215 ;
+    ch1_cfg_checks_noise_limit <= \$972 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_config_write <= \$1216 ;
+    ch1_cfg_checks_delay_tolerance <= \$973 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_start_config_write <= \$1217 ;
+    ch1_cfg_checks_confirm_frames <= \$974 ;
   always @(posedge clk)
-    ch1_cfg_w6_config_write <= \$1218 ;
+    ch1_cfg_quiet_config_write <= \$975 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_config_write <= \$1219 ;
+    ch1_cfg_quiet_quiet_time <= \$976 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_start_config_write <= \$1220 ;
+    ch1_cfg_crc0_config_write <= \$977 ;
   always @(posedge clk)
-    ch1_cfg_w7_config_write <= \$1221 ;
+    ch1_cfg_crc0_w0_crc_poly <= \$978 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_config_write <= \$1222 ;
+    ch1_cfg_crc0_w0_crc_width <= \$979 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_start_config_write <= \$1223 ;
+    ch1_cfg_crc0_w0_crc_inverted <= \$980 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$1224 ;
+    ch1_cfg_crc0_start_config_write <= \$981 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$1225 ;
+    ch1_cfg_crc0_start_w0_crc_start <= \$982 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$1226 ;
+    ch1_cfg_crc1_config_write <= \$983 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$1227 ;
+    ch1_cfg_crc1_w1_crc_poly <= \$984 ;
   always @(posedge clk)
-    \ch1_ca_request_write$447  <= \$1228 ;
+    ch1_cfg_crc1_w1_crc_width <= \$985 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$1229 ;
+    ch1_cfg_crc1_w1_crc_inverted <= \$986 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$1230 ;
+    ch1_cfg_crc1_start_config_write <= \$987 ;
   always @(posedge clk)
-    ch1_config_written <= \$1231 ;
+    ch1_cfg_crc1_start_w1_crc_start <= \$988 ;
   always @(posedge clk)
-    ch1_config_read_select <= \$1232 ;
+    ch1_cfg_ssi_config_write <= \$989 ;
   always @(posedge clk)
-    ch1_config_read_index <= \$1233 ;
+    ch1_cfg_ssi_ssi <= \$990 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$1234 ;
+    ch1_cfg_ssi_ssi_error <= \$991 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$1235 ;
+    ch1_cfg_ssi_ssi_error_low <= \$992 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$1236 ;
+    ch1_cfg_ssi_ssi_double <= \$993 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$1237 ;
+    ch1_cfg_ssi_ssi_delay <= \$994 ;
   always @(posedge clk)
-    ch1_read_select_106 <= \$1238 ;
+    ch1_cfg_w2_config_write <= \$995 ;
   always @(posedge clk)
-    ch1_read_select_107 <= \$1239 ;
+    ch1_cfg_w2_crc_config_write <= \$996 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$1240 ;
+    ch1_cfg_w2_crc_start_config_write <= \$997 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$1241 ;
+    ch1_cfg_w3_config_write <= \$998 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$1242 ;
+    ch1_cfg_w3_crc_config_write <= \$999 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$1243 ;
+    ch1_cfg_w3_crc_start_config_write <= \$1000 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$1244 ;
+    ch1_cfg_w4_config_write <= \$1001 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$1245 ;
+    ch1_cfg_w4_crc_config_write <= \$1002 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$1246 ;
+    ch1_cfg_w4_crc_start_config_write <= \$1003 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$1247 ;
+    ch1_cfg_w5_config_write <= \$1004 ;
   always @(posedge clk)
-    ch1_read_select_125 <= \$1248 ;
+    ch1_cfg_w5_crc_config_write <= \$1005 ;
   always @(posedge clk)
-    ch1_read_select_126 <= \$1249 ;
+    ch1_cfg_w5_crc_start_config_write <= \$1006 ;
   always @(posedge clk)
-    ch1_read_select_127 <= \$1250 ;
+    ch1_cfg_w6_config_write <= \$1007 ;
   always @(posedge clk)
-    ch1_read_select_128 <= \$1251 ;
+    ch1_cfg_w6_crc_config_write <= \$1008 ;
   always @(posedge clk)
-    ch1_read_select_129 <= \$1252 ;
+    ch1_cfg_w6_crc_start_config_write <= \$1009 ;
   always @(posedge clk)
-    ch1_read_select_12a <= \$1253 ;
+    ch1_cfg_w7_config_write <= \$1010 ;
   always @(posedge clk)
-    ch1_read_select_12c <= \$1254 ;
+    ch1_cfg_w7_crc_config_write <= \$1011 ;
   always @(posedge clk)
-    ch1_read_select_12d <= \$1255 ;
+    ch1_cfg_w7_crc_start_config_write <= \$1012 ;
   always @(posedge clk)
-    ch1_read_select_12e <= \$1256 ;
+    ch1_ca_request_config_write <= \$1013 ;
   always @(posedge clk)
-    ch1_read_select_130 <= \$1257 ;
+    ch1_ca_request_slave_id <= \$1014 ;
   always @(posedge clk)
-    ch1_read_select_131 <= \$1258 ;
+    ch1_ca_request_address <= \$1015 ;
   always @(posedge clk)
-    ch1_read_select_132 <= \$1259 ;
+    ch1_ca_request_count <= \$1016 ;
   always @(posedge clk)
-    ch1_read_select_134 <= \$1260 ;
+    \ch1_ca_request_write$446  <= \$1017 ;
   always @(posedge clk)
-    ch1_read_select_135 <= \$1261 ;
+    ch1_ca_ctrl_start <= \$1018 ;
   always @(posedge clk)
-    ch1_read_select_136 <= \$1262 ;
+    ch1_ca_ctrl_abort <= \$1019 ;
   always @(posedge clk)
-    ch1_read_select_138 <= \$1263 ;
+    ch1_config_written <= \$1020 ;
   always @(posedge clk)
-    ch1_read_select_139 <= \$1264 ;
+    ch1_config_read_index <= \$1021 ;
   always @(posedge clk)
-    ch1_read_select_13a <= \$1265 ;
+    ch1_read_select_100 <= \$1022 ;
   always @(posedge clk)
-    ch1_read_select_13c <= \$1266 ;
+    ch1_read_select_101 <= \$1023 ;
   always @(posedge clk)
-    ch1_read_select_13d <= \$1267 ;
+    ch1_read_select_102 <= \$1024 ;
   always @(posedge clk)
-    ch1_read_select_13e <= \$1268 ;
+    ch1_read_select_104 <= \$1025 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$1269 ;
+    ch1_read_select_106 <= \$1026 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$1270 ;
+    ch1_read_select_107 <= \$1027 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$1271 ;
+    ch1_read_select_110 <= \$1028 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$1272 ;
+    ch1_read_select_111 <= \$1029 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$1273 ;
+    ch1_read_select_112 <= \$1030 ;
   always @(posedge clk)
-    ch1_read_select_170 <= \$1274 ;
+    ch1_read_select_113 <= \$1031 ;
   always @(posedge clk)
-    ch1_read_select_171 <= \$1275 ;
+    ch1_read_select_114 <= \$1032 ;
   always @(posedge clk)
-    ch1_read_select_172 <= \$1276 ;
+    ch1_read_select_115 <= \$1033 ;
   always @(posedge clk)
-    ch1_read_select_173 <= \$1277 ;
+    ch1_read_select_116 <= \$1034 ;
   always @(posedge clk)
-    ch1_read_select_174 <= \$1278 ;
+    ch1_read_select_117 <= \$1035 ;
   always @(posedge clk)
-    ch1_read_select_175 <= \$1279 ;
+    ch1_read_select_125 <= \$1036 ;
   always @(posedge clk)
-    ch1_read_select_176 <= \$1280 ;
+    ch1_read_select_126 <= \$1037 ;
   always @(posedge clk)
-    ch1_read_select_177 <= \$1281 ;
+    ch1_read_select_127 <= \$1038 ;
   always @(posedge clk)
-    ch1_read_select_178 <= \$1282 ;
+    ch1_read_select_128 <= \$1039 ;
   always @(posedge clk)
-    ch1_read_select_179 <= \$1283 ;
+    ch1_read_select_129 <= \$1040 ;
   always @(posedge clk)
-    ch1_read_select_17a <= \$1284 ;
+    ch1_read_select_12a <= \$1041 ;
   always @(posedge clk)
-    ch1_read_select_17b <= \$1285 ;
+    ch1_read_select_12c <= \$1042 ;
   always @(posedge clk)
-    ch1_read_select_17c <= \$1286 ;
+    ch1_read_select_12d <= \$1043 ;
   always @(posedge clk)
-    ch1_read_select_17d <= \$1287 ;
+    ch1_read_select_12e <= \$1044 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$1288 ;
+    ch1_read_select_130 <= \$1045 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$1289 ;
+    ch1_read_select_131 <= \$1046 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$1290 ;
+    ch1_read_select_132 <= \$1047 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$1291 ;
+    ch1_read_select_134 <= \$1048 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$1292 ;
+    ch1_read_select_135 <= \$1049 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$1293 ;
+    ch1_read_select_136 <= \$1050 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$1294 ;
+    ch1_read_select_138 <= \$1051 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$1295 ;
+    ch1_read_select_139 <= \$1052 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$1296 ;
+    ch1_read_select_13a <= \$1053 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$1297 ;
+    ch1_read_select_13c <= \$1054 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$1298 ;
+    ch1_read_select_13d <= \$1055 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$1299 ;
+    ch1_read_select_13e <= \$1056 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$1300 ;
+    ch1_read_select_141 <= \$1057 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$1301 ;
+    ch1_read_select_142 <= \$1058 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$1302 ;
+    ch1_read_select_143 <= \$1059 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$1303 ;
+    ch1_read_select_144 <= \$1060 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$1304 ;
+    ch1_read_select_145 <= \$1061 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$1305 ;
+    ch1_read_select_170 <= \$1062 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$1306 ;
+    ch1_read_select_171 <= \$1063 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$1307 ;
+    ch1_read_select_172 <= \$1064 ;
   always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$1308 ;
+    ch1_read_select_173 <= \$1065 ;
   always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$1309 ;
+    ch1_read_select_174 <= \$1066 ;
   always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$1310 ;
+    ch1_read_select_175 <= \$1067 ;
   always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$1311 ;
+    ch1_read_select_176 <= \$1068 ;
   always @(posedge clk)
-    ch1_window0_read <= \$1312 ;
+    ch1_read_select_177 <= \$1069 ;
   always @(posedge clk)
-    ch1_window1_read <= \$1313 ;
+    ch1_read_select_178 <= \$1070 ;
   always @(posedge clk)
-    ch1_window2_read <= \$1314 ;
+    ch1_read_select_179 <= \$1071 ;
   always @(posedge clk)
-    ch1_read_data <= \$1315 ;
+    ch1_read_select_17a <= \$1072 ;
+  always @(posedge clk)
+    ch1_read_select_17b <= \$1073 ;
+  always @(posedge clk)
+    ch1_read_select_17c <= \$1074 ;
+  always @(posedge clk)
+    ch1_read_select_17d <= \$1075 ;
+  always @(posedge clk)
+    ch1_result_status_status_snapshot <= \$1076 ;
+  always @(posedge clk)
+    ch1_result_status_cds_snapshot <= \$1077 ;
+  always @(posedge clk)
+    ch1_result_status_w0_ne_snapshot <= \$1078 ;
+  always @(posedge clk)
+    ch1_result_status_w0_nw_snapshot <= \$1079 ;
+  always @(posedge clk)
+    ch1_result_status_w0_crc_ok_snapshot <= \$1080 ;
+  always @(posedge clk)
+    ch1_result_status_w1_ne_snapshot <= \$1081 ;
+  always @(posedge clk)
+    ch1_result_status_w1_nw_snapshot <= \$1082 ;
+  always @(posedge clk)
+    ch1_result_status_w1_crc_ok_snapshot <= \$1083 ;
+  always @(posedge clk)
+    ch1_result_status_lc_repeat_snapshot <= \$1084 ;
+  always @(posedge clk)
+    ch1_result_status_lc_skip_snapshot <= \$1085 ;
+  always @(posedge clk)
+    ch1_result_status_lc_zero_snapshot <= \$1086 ;
+  always @(posedge clk)
+    ch1_result_status_spw_mismatch_snapshot <= \$1087 ;
+  always @(posedge clk)
+    ch1_result_status_lc_snapshot <= \$1088 ;
+  always @(posedge clk)
+    ch1_result_seq_seq_snapshot <= \$1089 ;
+  always @(posedge clk)
+    ch1_result_seq_line_delay_snapshot <= \$1090 ;
+  always @(posedge clk)
+    ch1_result_w0_lo_data_snapshot <= \$1091 ;
+  always @(posedge clk)
+    ch1_result_w0_hi_data_snapshot <= \$1092 ;
+  always @(posedge clk)
+    ch1_result_w1_lo_data_snapshot <= \$1093 ;
+  always @(posedge clk)
+    ch1_result_w1_hi_data_snapshot <= \$1094 ;
+  always @(posedge clk)
+    ch1_result_timestamp_time_snapshot <= \$1095 ;
+  always @(posedge clk)
+    ch1_result_line_noise_events_snapshot <= \$1096 ;
+  always @(posedge clk)
+    ch1_result_line_delay_settled_snapshot <= \$1097 ;
+  always @(posedge clk)
+    ch1_result_line_delay_spread_snapshot <= \$1098 ;
+  always @(posedge clk)
+    ch1_result_line_settled_delay_snapshot <= \$1099 ;
+  always @(posedge clk)
+    ch1_window0_read <= \$1100 ;
+  always @(posedge clk)
+    ch1_window1_read <= \$1101 ;
+  always @(posedge clk)
+    ch1_window2_read <= \$1102 ;
+  always @(posedge clk)
+    ch1_read_data <= \$1103 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$954  = bus__w_en;
+    \$630  = 32'd0;
+    casez (ch0_config_read_index)
+      4'h0:
+          \$630  = 32'd0;
+      4'h1:
+          \$630  = 32'd0;
+      4'h2:
+          \$630  = 32'd0;
+      4'h3:
+          \$630  = 32'd0;
+      4'h4:
+          \$630  = 32'd0;
+      4'h5:
+          \$630  = 32'd0;
+      4'h6:
+          \$630  = 32'd0;
+      4'h7:
+          \$630  = 32'd0;
+      4'h8:
+          \$630  = 32'd0;
+      4'h9:
+          \$630  = 32'd0;
+      4'ha:
+          \$630  = 32'd0;
+      4'hb:
+          \$630  = 32'd0;
+      4'hc:
+          \$630  = 32'd0;
+      4'hd:
+          \$630  = 32'd0;
+      4'he:
+          \$630  = 32'd0;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$632  = 32'd0;
+    casez (ch0_config_read_index)
+      4'h0:
+          \$632  = 32'd0;
+      4'h1:
+          \$632  = 32'd0;
+      4'h2:
+          \$632  = 32'd0;
+      4'h3:
+          \$632  = 32'd0;
+      4'h4:
+          \$632  = 32'd0;
+      4'h5:
+          \$632  = 32'd0;
+      4'h6:
+          \$632  = 32'd0;
+      4'h7:
+          \$632  = 32'd0;
+      4'h8:
+          \$632  = 32'd0;
+      4'h9:
+          \$632  = 32'd0;
+      4'ha:
+          \$632  = 32'd0;
+      4'hb:
+          \$632  = 32'd0;
+      4'hc:
+          \$632  = 32'd0;
+      4'hd:
+          \$632  = 32'd0;
+      4'he:
+          \$632  = 32'd0;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$733  = 32'd0;
+    casez (ch1_config_read_index)
+      4'h0:
+          \$733  = 32'd0;
+      4'h1:
+          \$733  = 32'd0;
+      4'h2:
+          \$733  = 32'd0;
+      4'h3:
+          \$733  = 32'd0;
+      4'h4:
+          \$733  = 32'd0;
+      4'h5:
+          \$733  = 32'd0;
+      4'h6:
+          \$733  = 32'd0;
+      4'h7:
+          \$733  = 32'd0;
+      4'h8:
+          \$733  = 32'd0;
+      4'h9:
+          \$733  = 32'd0;
+      4'ha:
+          \$733  = 32'd0;
+      4'hb:
+          \$733  = 32'd0;
+      4'hc:
+          \$733  = 32'd0;
+      4'hd:
+          \$733  = 32'd0;
+      4'he:
+          \$733  = 32'd0;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$735  = 32'd0;
+    casez (ch1_config_read_index)
+      4'h0:
+          \$735  = 32'd0;
+      4'h1:
+          \$735  = 32'd0;
+      4'h2:
+          \$735  = 32'd0;
+      4'h3:
+          \$735  = 32'd0;
+      4'h4:
+          \$735  = 32'd0;
+      4'h5:
+          \$735  = 32'd0;
+      4'h6:
+          \$735  = 32'd0;
+      4'h7:
+          \$735  = 32'd0;
+      4'h8:
+          \$735  = 32'd0;
+      4'h9:
+          \$735  = 32'd0;
+      4'ha:
+          \$735  = 32'd0;
+      4'hb:
+          \$735  = 32'd0;
+      4'hc:
+          \$735  = 32'd0;
+      4'hd:
+          \$735  = 32'd0;
+      4'he:
+          \$735  = 32'd0;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$744  = bus__w_en;
+    if (rst) begin
+      \$744  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$745  = write_addr;
+    if (bus__w_en) begin
+      \$745  = bus__w_addr;
+    end
+    if (rst) begin
+      \$745  = 11'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$746  = write_data;
+    if (bus__w_en) begin
+      \$746  = bus__w_data;
+    end
+    if (rst) begin
+      \$746  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$747  = write_strb;
+    if (bus__w_en) begin
+      \$747  = 4'hf;
+    end
+    if (rst) begin
+      \$747  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$748  = config_write_data;
+    if (write_en) begin
+      \$748  = write_data;
+    end
+    if (rst) begin
+      \$748  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$749  = config_write_strb;
+    if (write_en) begin
+      \$749  = write_strb;
+    end
+    if (rst) begin
+      \$749  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$750  = \$2 ;
+    if (rst) begin
+      \$750  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$751  = g_read_select_0;
+    if (bus__r_en) begin
+      \$751  = \$3 ;
+    end
+    if (rst) begin
+      \$751  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$752  = g_read_select_1;
+    if (bus__r_en) begin
+      \$752  = \$4 ;
+    end
+    if (rst) begin
+      \$752  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$753  = g_read_select_2;
+    if (bus__r_en) begin
+      \$753  = \$5 ;
+    end
+    if (rst) begin
+      \$753  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$754  = g_read_select_3;
+    if (bus__r_en) begin
+      \$754  = \$6 ;
+    end
+    if (rst) begin
+      \$754  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$755  = g_read_select_4;
+    if (bus__r_en) begin
+      \$755  = \$7 ;
+    end
+    if (rst) begin
+      \$755  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$756  = g_read_data;
+    if (bus__r_load) begin
+      \$756  = \$17 ;
+    end
+    if (rst) begin
+      \$756  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$757  = \$19 ;
+    if (rst) begin
+      \$757  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$758  = \$21 ;
+    if (rst) begin
+      \$758  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$759  = \$23 ;
+    if (rst) begin
+      \$759  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$760  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$760  = write_data[8];
+    end
+    if (rst) begin
+      \$760  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$761  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$761  = write_data[9];
+    end
+    if (rst) begin
+      \$761  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$762  = ch0_irq_status_done;
+    if (ch0__frame_done) begin
+      \$762  = 1'h1;
+    end else if (\$27 ) begin
+      \$762  = 1'h0;
+    end
+    if (rst) begin
+      \$762  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$763  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$763  = 1'h1;
+    end else if (\$29 ) begin
+      \$763  = 1'h0;
+    end
+    if (rst) begin
+      \$763  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$764  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$764  = 1'h1;
+    end else if (\$31 ) begin
+      \$764  = 1'h0;
+    end
+    if (rst) begin
+      \$764  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$765  = ch0_irq_enable_write;
+    if (rst) begin
+      \$765  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$766  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$766  = config_write_data[0];
+    end
+    if (rst) begin
+      \$766  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$767  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$767  = config_write_data[1];
+    end
+    if (rst) begin
+      \$767  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$768  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$768  = config_write_data[2];
+    end
+    if (rst) begin
+      \$768  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$769  = ch0_cfg_ma_write;
+    if (rst) begin
+      \$769  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$770  = ch0_cfg_ma_ma_half_period;
+    if (\$35 ) begin
+      \$770 [7:0] = config_write_data[7:0];
+    end
+    if (\$36 ) begin
+      \$770 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$770  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$771  = ch0_cfg_ma_delay_limit;
+    if (\$37 ) begin
+      \$771 [7:0] = config_write_data[23:16];
+    end
+    if (\$38 ) begin
+      \$771 [11:8] = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$771  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$772  = ch0_cfg_period_write;
+    if (rst) begin
+      \$772  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$773  = ch0_cfg_period_request_period;
+    if (\$39 ) begin
+      \$773 [7:0] = config_write_data[7:0];
+    end
+    if (\$40 ) begin
+      \$773 [15:8] = config_write_data[15:8];
+    end
+    if (\$41 ) begin
+      \$773 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$773  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$774  = ch0_cfg_break_write;
+    if (rst) begin
+      \$774  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$775  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
+      \$775 [7:0] = config_write_data[7:0];
+    end
+    if (\$43 ) begin
+      \$775 [15:8] = config_write_data[15:8];
+    end
+    if (\$44 ) begin
+      \$775 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$775  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$776  = ch0_cfg_ack_write;
+    if (rst) begin
+      \$776  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$777  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
+      \$777 [7:0] = config_write_data[7:0];
+    end
+    if (\$46 ) begin
+      \$777 [15:8] = config_write_data[15:8];
+    end
+    if (\$47 ) begin
+      \$777 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$777  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$778  = ch0_cfg_timeout_write;
+    if (rst) begin
+      \$778  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$779  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
+      \$779 [7:0] = config_write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$779 [15:8] = config_write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$779 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$779  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$780  = ch0_cfg_words_write;
+    if (rst) begin
+      \$780  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$781  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$781  = config_write_data[5:0];
+    end
+    if (rst) begin
+      \$781  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$782  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$782  = config_write_data[6];
+    end
+    if (rst) begin
+      \$782  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$783  = ch0_cfg_words_w0_lc;
+    if (\$53 ) begin
+      \$783  = config_write_data[7];
+    end
+    if (rst) begin
+      \$783  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$784  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$784  = config_write_data[9:8];
+    end
+    if (rst) begin
+      \$784  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$785  = ch0_cfg_words_w0_gray;
+    if (\$55 ) begin
+      \$785  = config_write_data[10];
+    end
+    if (rst) begin
+      \$785  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$786  = ch0_cfg_words_w0_signed;
+    if (\$56 ) begin
+      \$786  = config_write_data[11];
+    end
+    if (rst) begin
+      \$786  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$787  = ch0_cfg_words_w1_data_bits;
+    if (\$57 ) begin
+      \$787  = config_write_data[21:16];
+    end
+    if (rst) begin
+      \$787  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$788  = ch0_cfg_words_w1_nenw;
+    if (\$58 ) begin
+      \$788  = config_write_data[22];
+    end
+    if (rst) begin
+      \$788  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$789  = ch0_cfg_words_w1_lc;
+    if (\$59 ) begin
+      \$789  = config_write_data[23];
+    end
+    if (rst) begin
+      \$789  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$790  = ch0_cfg_words_w1_crc;
+    if (\$60 ) begin
+      \$790  = config_write_data[25:24];
+    end
+    if (rst) begin
+      \$790  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$791  = ch0_cfg_words_w1_gray;
+    if (\$61 ) begin
+      \$791  = config_write_data[26];
+    end
+    if (rst) begin
+      \$791  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$792  = ch0_cfg_words_w1_signed;
+    if (\$62 ) begin
+      \$792  = config_write_data[27];
+    end
+    if (rst) begin
+      \$792  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$793  = ch0_cfg_words_w1_enable;
+    if (\$63 ) begin
+      \$793  = config_write_data[31];
+    end
+    if (rst) begin
+      \$793  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$794  = ch0_cfg_checks_write;
+    if (rst) begin
+      \$794  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$795  = ch0_cfg_checks_end_check;
+    if (\$64 ) begin
+      \$795  = config_write_data[0];
+    end
+    if (rst) begin
+      \$795  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$796  = ch0_cfg_checks_spw_check;
+    if (\$65 ) begin
+      \$796  = config_write_data[1];
+    end
+    if (rst) begin
+      \$796  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$797  = ch0_cfg_checks_spw_tolerance;
+    if (\$66 ) begin
+      \$797  = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$797  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$798  = ch0_cfg_checks_noise_limit;
+    if (\$67 ) begin
+      \$798  = config_write_data[19:16];
+    end
+    if (rst) begin
+      \$798  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$799  = ch0_cfg_checks_delay_tolerance;
+    if (\$68 ) begin
+      \$799  = config_write_data[23:20];
+    end
+    if (rst) begin
+      \$799  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$800  = ch0_cfg_checks_confirm_frames;
+    if (\$69 ) begin
+      \$800  = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$800  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$801  = ch0_cfg_quiet_write;
+    if (rst) begin
+      \$801  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$802  = ch0_cfg_quiet_quiet_time;
+    if (\$70 ) begin
+      \$802 [7:0] = config_write_data[7:0];
+    end
+    if (\$71 ) begin
+      \$802 [11:8] = config_write_data[11:8];
+    end
+    if (rst) begin
+      \$802  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$803  = ch0_cfg_crc0_write;
+    if (rst) begin
+      \$803  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$804  = ch0_cfg_crc0_w0_crc_poly;
+    if (\$72 ) begin
+      \$804 [7:0] = config_write_data[7:0];
+    end
+    if (\$73 ) begin
+      \$804 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$804  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$805  = ch0_cfg_crc0_w0_crc_width;
+    if (\$74 ) begin
+      \$805  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$805  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$806  = ch0_cfg_crc0_w0_crc_inverted;
+    if (\$75 ) begin
+      \$806  = config_write_data[24];
+    end
+    if (rst) begin
+      \$806  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$807  = ch0_cfg_crc0_start_write;
+    if (rst) begin
+      \$807  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$808  = ch0_cfg_crc0_start_w0_crc_start;
+    if (\$76 ) begin
+      \$808 [7:0] = config_write_data[7:0];
+    end
+    if (\$77 ) begin
+      \$808 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$808  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$809  = ch0_cfg_crc1_write;
+    if (rst) begin
+      \$809  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$810  = ch0_cfg_crc1_w1_crc_poly;
+    if (\$78 ) begin
+      \$810 [7:0] = config_write_data[7:0];
+    end
+    if (\$79 ) begin
+      \$810 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$810  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$811  = ch0_cfg_crc1_w1_crc_width;
+    if (\$80 ) begin
+      \$811  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$811  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$812  = ch0_cfg_crc1_w1_crc_inverted;
+    if (\$81 ) begin
+      \$812  = config_write_data[24];
+    end
+    if (rst) begin
+      \$812  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$813  = ch0_cfg_crc1_start_write;
+    if (rst) begin
+      \$813  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$814  = ch0_cfg_crc1_start_w1_crc_start;
+    if (\$82 ) begin
+      \$814 [7:0] = config_write_data[7:0];
+    end
+    if (\$83 ) begin
+      \$814 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$814  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$815  = ch0_cfg_ssi_write;
+    if (rst) begin
+      \$815  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$816  = ch0_cfg_ssi_ssi;
+    if (\$84 ) begin
+      \$816  = config_write_data[0];
+    end
+    if (rst) begin
+      \$816  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$817  = ch0_cfg_ssi_ssi_error;
+    if (\$85 ) begin
+      \$817  = config_write_data[1];
+    end
+    if (rst) begin
+      \$817  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$818  = ch0_cfg_ssi_ssi_error_low;
+    if (\$86 ) begin
+      \$818  = config_write_data[2];
+    end
+    if (rst) begin
+      \$818  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$819  = ch0_cfg_ssi_ssi_double;
+    if (\$87 ) begin
+      \$819  = config_write_data[3];
+    end
+    if (rst) begin
+      \$819  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$820  = ch0_cfg_ssi_ssi_delay;
+    if (\$88 ) begin
+      \$820 [7:0] = config_write_data[23:16];
+    end
+    if (\$89 ) begin
+      \$820 [11:8] = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$820  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$821  = ch0_cfg_w2_write;
+    if (rst) begin
+      \$821  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$822  = ch0_cfg_w2_crc_write;
+    if (rst) begin
+      \$822  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$823  = ch0_cfg_w2_crc_start_write;
+    if (rst) begin
+      \$823  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$824  = ch0_cfg_w3_write;
+    if (rst) begin
+      \$824  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$825  = ch0_cfg_w3_crc_write;
+    if (rst) begin
+      \$825  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$826  = ch0_cfg_w3_crc_start_write;
+    if (rst) begin
+      \$826  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$827  = ch0_cfg_w4_write;
+    if (rst) begin
+      \$827  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$828  = ch0_cfg_w4_crc_write;
+    if (rst) begin
+      \$828  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$829  = ch0_cfg_w4_crc_start_write;
+    if (rst) begin
+      \$829  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$830  = ch0_cfg_w5_write;
+    if (rst) begin
+      \$830  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$831  = ch0_cfg_w5_crc_write;
+    if (rst) begin
+      \$831  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$832  = ch0_cfg_w5_crc_start_write;
+    if (rst) begin
+      \$832  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$833  = ch0_cfg_w6_write;
+    if (rst) begin
+      \$833  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$834  = ch0_cfg_w6_crc_write;
+    if (rst) begin
+      \$834  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$835  = ch0_cfg_w6_crc_start_write;
+    if (rst) begin
+      \$835  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$836  = ch0_cfg_w7_write;
+    if (rst) begin
+      \$836  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$837  = ch0_cfg_w7_crc_write;
+    if (rst) begin
+      \$837  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$838  = ch0_cfg_w7_crc_start_write;
+    if (rst) begin
+      \$838  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$839  = ch0_ca_request_write;
+    if (rst) begin
+      \$839  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$840  = ch0_ca_request_slave_id;
+    if (\$90 ) begin
+      \$840  = config_write_data[2:0];
+    end
+    if (rst) begin
+      \$840  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$841  = ch0_ca_request_address;
+    if (\$91 ) begin
+      \$841  = config_write_data[14:8];
+    end
+    if (rst) begin
+      \$841  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$842  = ch0_ca_request_count;
+    if (\$92 ) begin
+      \$842  = config_write_data[22:16];
+    end
+    if (rst) begin
+      \$842  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$843  = \ch0_ca_request_write$149 ;
+    if (\$93 ) begin
+      \$843  = config_write_data[24];
+    end
+    if (rst) begin
+      \$843  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$844  = \$95 ;
+    if (rst) begin
+      \$844  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$845  = \$97 ;
+    if (rst) begin
+      \$845  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$846  = config_memory0_write_data;
+    if (write_en) begin
+      \$846  = \$102 ;
+    end
+    if (rst) begin
+      \$846  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$847  = \$103 ;
+    if (rst) begin
+      \$847  = 15'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$848  = ch0_config_read_index;
+    if (ch0_config_read) begin
+      \$848  = config_memory0_read_index;
+    end
+    if (rst) begin
+      \$848  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$849  = ch0_read_select_80;
+    if (bus__r_en) begin
+      \$849  = \$104 ;
+    end
+    if (rst) begin
+      \$849  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$850  = ch0_read_select_81;
+    if (bus__r_en) begin
+      \$850  = \$105 ;
+    end
+    if (rst) begin
+      \$850  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$851  = ch0_read_select_82;
+    if (bus__r_en) begin
+      \$851  = \$106 ;
+    end
+    if (rst) begin
+      \$851  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$852  = ch0_read_select_84;
+    if (bus__r_en) begin
+      \$852  = \$107 ;
+    end
+    if (rst) begin
+      \$852  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$853  = ch0_read_select_86;
+    if (bus__r_en) begin
+      \$853  = \$108 ;
+    end
+    if (rst) begin
+      \$853  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$854  = ch0_read_select_87;
+    if (bus__r_en) begin
+      \$854  = \$109 ;
+    end
+    if (rst) begin
+      \$854  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$855  = ch0_read_select_90;
+    if (bus__r_en) begin
+      \$855  = \$110 ;
+    end
+    if (rst) begin
+      \$855  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$856  = ch0_read_select_91;
+    if (bus__r_en) begin
+      \$856  = \$111 ;
+    end
+    if (rst) begin
+      \$856  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$857  = ch0_read_select_92;
+    if (bus__r_en) begin
+      \$857  = \$112 ;
+    end
+    if (rst) begin
+      \$857  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$858  = ch0_read_select_93;
+    if (bus__r_en) begin
+      \$858  = \$113 ;
+    end
+    if (rst) begin
+      \$858  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$859  = ch0_read_select_94;
+    if (bus__r_en) begin
+      \$859  = \$114 ;
+    end
+    if (rst) begin
+      \$859  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$860  = ch0_read_select_95;
+    if (bus__r_en) begin
+      \$860  = \$115 ;
+    end
+    if (rst) begin
+      \$860  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$861  = ch0_read_select_96;
+    if (bus__r_en) begin
+      \$861  = \$116 ;
+    end
+    if (rst) begin
+      \$861  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$862  = ch0_read_select_97;
+    if (bus__r_en) begin
+      \$862  = \$117 ;
+    end
+    if (rst) begin
+      \$862  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$863  = ch0_read_select_a5;
+    if (bus__r_en) begin
+      \$863  = \$118 ;
+    end
+    if (rst) begin
+      \$863  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$864  = ch0_read_select_a6;
+    if (bus__r_en) begin
+      \$864  = \$119 ;
+    end
+    if (rst) begin
+      \$864  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$865  = ch0_read_select_a7;
+    if (bus__r_en) begin
+      \$865  = \$120 ;
+    end
+    if (rst) begin
+      \$865  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$866  = ch0_read_select_a8;
+    if (bus__r_en) begin
+      \$866  = \$121 ;
+    end
+    if (rst) begin
+      \$866  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$867  = ch0_read_select_a9;
+    if (bus__r_en) begin
+      \$867  = \$122 ;
+    end
+    if (rst) begin
+      \$867  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$868  = ch0_read_select_aa;
+    if (bus__r_en) begin
+      \$868  = \$123 ;
+    end
+    if (rst) begin
+      \$868  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$869  = ch0_read_select_ac;
+    if (bus__r_en) begin
+      \$869  = \$124 ;
+    end
+    if (rst) begin
+      \$869  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$870  = ch0_read_select_ad;
+    if (bus__r_en) begin
+      \$870  = \$125 ;
+    end
+    if (rst) begin
+      \$870  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$871  = ch0_read_select_ae;
+    if (bus__r_en) begin
+      \$871  = \$126 ;
+    end
+    if (rst) begin
+      \$871  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$872  = ch0_read_select_b0;
+    if (bus__r_en) begin
+      \$872  = \$127 ;
+    end
+    if (rst) begin
+      \$872  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$873  = ch0_read_select_b1;
+    if (bus__r_en) begin
+      \$873  = \$128 ;
+    end
+    if (rst) begin
+      \$873  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$874  = ch0_read_select_b2;
+    if (bus__r_en) begin
+      \$874  = \$129 ;
+    end
+    if (rst) begin
+      \$874  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$875  = ch0_read_select_b4;
+    if (bus__r_en) begin
+      \$875  = \$130 ;
+    end
+    if (rst) begin
+      \$875  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$876  = ch0_read_select_b5;
+    if (bus__r_en) begin
+      \$876  = \$131 ;
+    end
+    if (rst) begin
+      \$876  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$877  = ch0_read_select_b6;
+    if (bus__r_en) begin
+      \$877  = \$132 ;
+    end
+    if (rst) begin
+      \$877  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$878  = ch0_read_select_b8;
+    if (bus__r_en) begin
+      \$878  = \$133 ;
+    end
+    if (rst) begin
+      \$878  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$879  = ch0_read_select_b9;
+    if (bus__r_en) begin
+      \$879  = \$134 ;
+    end
+    if (rst) begin
+      \$879  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$880  = ch0_read_select_ba;
+    if (bus__r_en) begin
+      \$880  = \$135 ;
+    end
+    if (rst) begin
+      \$880  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$881  = ch0_read_select_bc;
+    if (bus__r_en) begin
+      \$881  = \$136 ;
+    end
+    if (rst) begin
+      \$881  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$882  = ch0_read_select_bd;
+    if (bus__r_en) begin
+      \$882  = \$137 ;
+    end
+    if (rst) begin
+      \$882  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$883  = ch0_read_select_be;
+    if (bus__r_en) begin
+      \$883  = \$138 ;
+    end
+    if (rst) begin
+      \$883  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$884  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$884  = \$139 ;
+    end
+    if (rst) begin
+      \$884  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$885  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$885  = \$140 ;
+    end
+    if (rst) begin
+      \$885  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$886  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$886  = \$141 ;
+    end
+    if (rst) begin
+      \$886  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$887  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$887  = \$142 ;
+    end
+    if (rst) begin
+      \$887  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$888  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$888  = \$143 ;
+    end
+    if (rst) begin
+      \$888  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$889  = ch0_read_select_f0;
+    if (bus__r_en) begin
+      \$889  = \$144 ;
+    end
+    if (rst) begin
+      \$889  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$890  = ch0_read_select_f1;
+    if (bus__r_en) begin
+      \$890  = \$145 ;
+    end
+    if (rst) begin
+      \$890  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$891  = ch0_read_select_f2;
+    if (bus__r_en) begin
+      \$891  = \$146 ;
+    end
+    if (rst) begin
+      \$891  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$892  = ch0_read_select_f3;
+    if (bus__r_en) begin
+      \$892  = \$147 ;
+    end
+    if (rst) begin
+      \$892  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$893  = ch0_read_select_f4;
+    if (bus__r_en) begin
+      \$893  = \$148 ;
+    end
+    if (rst) begin
+      \$893  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$894  = ch0_read_select_f5;
+    if (bus__r_en) begin
+      \$894  = \$149 ;
+    end
+    if (rst) begin
+      \$894  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$895  = ch0_read_select_f6;
+    if (bus__r_en) begin
+      \$895  = \$150 ;
+    end
+    if (rst) begin
+      \$895  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$896  = ch0_read_select_f7;
+    if (bus__r_en) begin
+      \$896  = \$151 ;
+    end
+    if (rst) begin
+      \$896  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$897  = ch0_read_select_f8;
+    if (bus__r_en) begin
+      \$897  = \$152 ;
+    end
+    if (rst) begin
+      \$897  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$898  = ch0_read_select_f9;
+    if (bus__r_en) begin
+      \$898  = \$153 ;
+    end
+    if (rst) begin
+      \$898  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$899  = ch0_read_select_fa;
+    if (bus__r_en) begin
+      \$899  = \$154 ;
+    end
+    if (rst) begin
+      \$899  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$900  = ch0_read_select_fb;
+    if (bus__r_en) begin
+      \$900  = \$155 ;
+    end
+    if (rst) begin
+      \$900  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$901  = ch0_read_select_fc;
+    if (bus__r_en) begin
+      \$901  = \$156 ;
+    end
+    if (rst) begin
+      \$901  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$902  = ch0_read_select_fd;
+    if (bus__r_en) begin
+      \$902  = \$157 ;
+    end
+    if (rst) begin
+      \$902  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$903  = ch0_result_status_status_snapshot;
+    if (\$158 ) begin
+      \$903  = \port$7807$0 [3:0];
+    end
+    if (rst) begin
+      \$903  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$904  = ch0_result_status_cds_snapshot;
+    if (\$158 ) begin
+      \$904  = \port$7807$0 [49];
+    end
+    if (rst) begin
+      \$904  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$905  = ch0_result_status_w0_ne_snapshot;
+    if (\$158 ) begin
+      \$905  = \port$7807$0 [131];
+    end
+    if (rst) begin
+      \$905  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$906  = ch0_result_status_w0_nw_snapshot;
+    if (\$158 ) begin
+      \$906  = \port$7807$0 [132];
+    end
+    if (rst) begin
+      \$906  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$907  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$158 ) begin
+      \$907  = \port$7807$0 [133];
+    end
+    if (rst) begin
+      \$907  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$908  = ch0_result_status_w1_ne_snapshot;
+    if (\$158 ) begin
+      \$908  = \port$7807$0 [174];
+    end
+    if (rst) begin
+      \$908  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$909  = ch0_result_status_w1_nw_snapshot;
+    if (\$158 ) begin
+      \$909  = \port$7807$0 [175];
+    end
+    if (rst) begin
+      \$909  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$910  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$158 ) begin
+      \$910  = \port$7807$0 [176];
+    end
+    if (rst) begin
+      \$910  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$911  = ch0_result_status_lc_repeat_snapshot;
+    if (\$158 ) begin
+      \$911  = \port$7807$0 [183];
+    end
+    if (rst) begin
+      \$911  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$912  = ch0_result_status_lc_skip_snapshot;
+    if (\$158 ) begin
+      \$912  = \port$7807$0 [184];
+    end
+    if (rst) begin
+      \$912  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$913  = ch0_result_status_lc_zero_snapshot;
+    if (\$158 ) begin
+      \$913  = \port$7807$0 [185];
+    end
+    if (rst) begin
+      \$913  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$914  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$158 ) begin
+      \$914  = \port$7807$0 [186];
+    end
+    if (rst) begin
+      \$914  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$915  = ch0_result_status_lc_snapshot;
+    if (\$158 ) begin
+      \$915  = \port$7807$0 [182:177];
+    end
+    if (rst) begin
+      \$915  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$916  = ch0_result_seq_seq_snapshot;
+    if (\$158 ) begin
+      \$916  = ch0__done_count;
+    end
+    if (rst) begin
+      \$916  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$917  = ch0_result_seq_line_delay_snapshot;
+    if (\$158 ) begin
+      \$917  = \port$7807$0 [48:36];
+    end
+    if (rst) begin
+      \$917  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$918  = ch0_result_w0_lo_data_snapshot;
+    if (\$158 ) begin
+      \$918  = \port$7807$0 [107:76];
+    end
+    if (rst) begin
+      \$918  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$919  = ch0_result_w0_hi_data_snapshot;
+    if (\$158 ) begin
+      \$919  = \port$7807$0 [130:108];
+    end
+    if (rst) begin
+      \$919  = 23'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$920  = ch0_result_w1_lo_data_snapshot;
+    if (\$158 ) begin
+      \$920  = \port$7807$0 [165:134];
+    end
+    if (rst) begin
+      \$920  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$921  = ch0_result_w1_hi_data_snapshot;
+    if (\$158 ) begin
+      \$921  = \port$7807$0 [173:166];
+    end
+    if (rst) begin
+      \$921  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$922  = ch0_result_timestamp_time_snapshot;
+    if (\$158 ) begin
+      \$922  = \port$7807$0 [35:4];
+    end
+    if (rst) begin
+      \$922  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$923  = ch0_result_line_noise_events_snapshot;
+    if (\$158 ) begin
+      \$923  = \port$7807$0 [53:50];
+    end
+    if (rst) begin
+      \$923  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$924  = ch0_result_line_delay_settled_snapshot;
+    if (\$158 ) begin
+      \$924  = \port$7807$0 [54];
+    end
+    if (rst) begin
+      \$924  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$925  = ch0_result_line_delay_spread_snapshot;
+    if (\$158 ) begin
+      \$925  = \port$7807$0 [75:68];
+    end
+    if (rst) begin
+      \$925  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$926  = ch0_result_line_settled_delay_snapshot;
+    if (\$158 ) begin
+      \$926  = \port$7807$0 [67:55];
+    end
+    if (rst) begin
+      \$926  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$927  = ch0_window0_read;
+    if (bus__r_en) begin
+      \$927  = \$160 ;
+    end
+    if (rst) begin
+      \$927  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$928  = ch0_window1_read;
+    if (bus__r_en) begin
+      \$928  = \$162 ;
+    end
+    if (rst) begin
+      \$928  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$929  = ch0_window2_read;
+    if (bus__r_en) begin
+      \$929  = ch0_config_read;
+    end
+    if (rst) begin
+      \$929  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$930  = ch0_read_data;
+    if (bus__r_load) begin
+      \$930  = \$276 ;
+    end
+    if (rst) begin
+      \$930  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$931  = \$278 ;
+    if (rst) begin
+      \$931  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$932  = \$280 ;
+    if (rst) begin
+      \$932  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$933  = \$282 ;
+    if (rst) begin
+      \$933  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$934  = ch1_ctrl_periodic;
+    if (\$283 ) begin
+      \$934  = write_data[8];
+    end
+    if (rst) begin
+      \$934  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$935  = ch1_ctrl_trigger_enable;
+    if (\$284 ) begin
+      \$935  = write_data[9];
+    end
+    if (rst) begin
+      \$935  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$936  = ch1_irq_status_done;
+    if (ch1__frame_done) begin
+      \$936  = 1'h1;
+    end else if (\$286 ) begin
+      \$936  = 1'h0;
+    end
+    if (rst) begin
+      \$936  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$937  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$937  = 1'h1;
+    end else if (\$288 ) begin
+      \$937  = 1'h0;
+    end
+    if (rst) begin
+      \$937  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$938  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$938  = 1'h1;
+    end else if (\$290 ) begin
+      \$938  = 1'h0;
+    end
+    if (rst) begin
+      \$938  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$939  = ch1_irq_enable_write;
+    if (rst) begin
+      \$939  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$940  = ch1_irq_enable_done;
+    if (\$291 ) begin
+      \$940  = config_write_data[0];
+    end
+    if (rst) begin
+      \$940  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$941  = ch1_irq_enable_error;
+    if (\$292 ) begin
+      \$941  = config_write_data[1];
+    end
+    if (rst) begin
+      \$941  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$942  = ch1_irq_enable_access_done;
+    if (\$293 ) begin
+      \$942  = config_write_data[2];
+    end
+    if (rst) begin
+      \$942  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$943  = ch1_cfg_ma_write;
+    if (rst) begin
+      \$943  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$944  = ch1_cfg_ma_ma_half_period;
+    if (\$294 ) begin
+      \$944 [7:0] = config_write_data[7:0];
+    end
+    if (\$295 ) begin
+      \$944 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$944  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$945  = ch1_cfg_ma_delay_limit;
+    if (\$296 ) begin
+      \$945 [7:0] = config_write_data[23:16];
+    end
+    if (\$297 ) begin
+      \$945 [11:8] = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$945  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$946  = ch1_cfg_period_write;
+    if (rst) begin
+      \$946  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$947  = ch1_cfg_period_request_period;
+    if (\$298 ) begin
+      \$947 [7:0] = config_write_data[7:0];
+    end
+    if (\$299 ) begin
+      \$947 [15:8] = config_write_data[15:8];
+    end
+    if (\$300 ) begin
+      \$947 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$947  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$948  = ch1_cfg_break_write;
+    if (rst) begin
+      \$948  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$949  = ch1_cfg_break_break_time;
+    if (\$301 ) begin
+      \$949 [7:0] = config_write_data[7:0];
+    end
+    if (\$302 ) begin
+      \$949 [15:8] = config_write_data[15:8];
+    end
+    if (\$303 ) begin
+      \$949 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$949  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$950  = ch1_cfg_ack_write;
+    if (rst) begin
+      \$950  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$951  = ch1_cfg_ack_ack_limit;
+    if (\$304 ) begin
+      \$951 [7:0] = config_write_data[7:0];
+    end
+    if (\$305 ) begin
+      \$951 [15:8] = config_write_data[15:8];
+    end
+    if (\$306 ) begin
+      \$951 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$951  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$952  = ch1_cfg_timeout_write;
+    if (rst) begin
+      \$952  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$953  = ch1_cfg_timeout_timeout_limit;
+    if (\$307 ) begin
+      \$953 [7:0] = config_write_data[7:0];
+    end
+    if (\$308 ) begin
+      \$953 [15:8] = config_write_data[15:8];
+    end
+    if (\$309 ) begin
+      \$953 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$953  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$954  = ch1_cfg_words_write;
     if (rst) begin
       \$954  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$955  = write_addr;
-    if (bus__w_en) begin
-      \$955  = bus__w_addr;
+    \$955  = ch1_cfg_words_w0_data_bits;
+    if (\$310 ) begin
+      \$955  = config_write_data[5:0];
     end
     if (rst) begin
-      \$955  = 11'h000;
+      \$955  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$956  = write_data;
-    if (bus__w_en) begin
-      \$956  = bus__w_data;
+    \$956  = ch1_cfg_words_w0_nenw;
+    if (\$311 ) begin
+      \$956  = config_write_data[6];
     end
     if (rst) begin
-      \$956  = 32'd0;
+      \$956  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$957  = write_strb;
-    if (bus__w_en) begin
-      \$957  = 4'hf;
+    \$957  = ch1_cfg_words_w0_lc;
+    if (\$312 ) begin
+      \$957  = config_write_data[7];
     end
     if (rst) begin
-      \$957  = 4'h0;
+      \$957  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$958  = config_write_data;
-    if (write_en) begin
-      \$958  = write_data;
+    \$958  = ch1_cfg_words_w0_crc;
+    if (\$313 ) begin
+      \$958  = config_write_data[9:8];
     end
     if (rst) begin
-      \$958  = 32'd0;
+      \$958  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$959  = config_write_strb;
-    if (write_en) begin
-      \$959  = write_strb;
+    \$959  = ch1_cfg_words_w0_gray;
+    if (\$314 ) begin
+      \$959  = config_write_data[10];
     end
     if (rst) begin
-      \$959  = 4'h0;
+      \$959  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$960  = \$2 ;
+    \$960  = ch1_cfg_words_w0_signed;
+    if (\$315 ) begin
+      \$960  = config_write_data[11];
+    end
     if (rst) begin
       \$960  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$961  = g_read_select_0;
-    if (bus__r_en) begin
-      \$961  = \$3 ;
+    \$961  = ch1_cfg_words_w1_data_bits;
+    if (\$316 ) begin
+      \$961  = config_write_data[21:16];
     end
     if (rst) begin
-      \$961  = 1'h0;
+      \$961  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$962  = g_read_select_1;
-    if (bus__r_en) begin
-      \$962  = \$4 ;
+    \$962  = ch1_cfg_words_w1_nenw;
+    if (\$317 ) begin
+      \$962  = config_write_data[22];
     end
     if (rst) begin
       \$962  = 1'h0;
@@ -6206,9 +8083,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$963  = g_read_select_2;
-    if (bus__r_en) begin
-      \$963  = \$5 ;
+    \$963  = ch1_cfg_words_w1_lc;
+    if (\$318 ) begin
+      \$963  = config_write_data[23];
     end
     if (rst) begin
       \$963  = 1'h0;
@@ -6216,19 +8093,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$964  = g_read_select_3;
-    if (bus__r_en) begin
-      \$964  = \$6 ;
+    \$964  = ch1_cfg_words_w1_crc;
+    if (\$319 ) begin
+      \$964  = config_write_data[25:24];
     end
     if (rst) begin
-      \$964  = 1'h0;
+      \$964  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$965  = g_read_select_4;
-    if (bus__r_en) begin
-      \$965  = \$7 ;
+    \$965  = ch1_cfg_words_w1_gray;
+    if (\$320 ) begin
+      \$965  = config_write_data[26];
     end
     if (rst) begin
       \$965  = 1'h0;
@@ -6236,40 +8113,46 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$966  = g_read_data;
-    if (bus__r_load) begin
-      \$966  = \$17 ;
+    \$966  = ch1_cfg_words_w1_signed;
+    if (\$321 ) begin
+      \$966  = config_write_data[27];
     end
     if (rst) begin
-      \$966  = 32'd0;
+      \$966  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$967  = \$19 ;
+    \$967  = ch1_cfg_words_w1_enable;
+    if (\$322 ) begin
+      \$967  = config_write_data[31];
+    end
     if (rst) begin
       \$967  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$968  = \$21 ;
+    \$968  = ch1_cfg_checks_write;
     if (rst) begin
       \$968  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$969  = \$23 ;
+    \$969  = ch1_cfg_checks_end_check;
+    if (\$323 ) begin
+      \$969  = config_write_data[0];
+    end
     if (rst) begin
       \$969  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$970  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$970  = write_data[8];
+    \$970  = ch1_cfg_checks_spw_check;
+    if (\$324 ) begin
+      \$970  = config_write_data[1];
     end
     if (rst) begin
       \$970  = 1'h0;
@@ -6277,234 +8160,216 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$971  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$971  = write_data[9];
+    \$971  = ch1_cfg_checks_spw_tolerance;
+    if (\$325 ) begin
+      \$971  = config_write_data[15:8];
     end
     if (rst) begin
-      \$971  = 1'h0;
+      \$971  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$972  = ch0_irq_status_done;
-    if (ch0__frame_done) begin
-      \$972  = 1'h1;
-    end else if (\$27 ) begin
-      \$972  = 1'h0;
+    \$972  = ch1_cfg_checks_noise_limit;
+    if (\$326 ) begin
+      \$972  = config_write_data[19:16];
     end
     if (rst) begin
-      \$972  = 1'h0;
+      \$972  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$973  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$973  = 1'h1;
-    end else if (\$29 ) begin
-      \$973  = 1'h0;
+    \$973  = ch1_cfg_checks_delay_tolerance;
+    if (\$327 ) begin
+      \$973  = config_write_data[23:20];
     end
     if (rst) begin
-      \$973  = 1'h0;
+      \$973  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$974  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$974  = 1'h1;
-    end else if (\$31 ) begin
-      \$974  = 1'h0;
+    \$974  = ch1_cfg_checks_confirm_frames;
+    if (\$328 ) begin
+      \$974  = config_write_data[27:24];
     end
     if (rst) begin
-      \$974  = 1'h0;
+      \$974  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$975  = ch0_irq_enable_write;
+    \$975  = ch1_cfg_quiet_write;
     if (rst) begin
       \$975  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$976  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$976  = config_write_data[0];
+    \$976  = ch1_cfg_quiet_quiet_time;
+    if (\$329 ) begin
+      \$976 [7:0] = config_write_data[7:0];
+    end
+    if (\$330 ) begin
+      \$976 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$976  = 1'h0;
+      \$976  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$977  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$977  = config_write_data[1];
-    end
+    \$977  = ch1_cfg_crc0_write;
     if (rst) begin
       \$977  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$978  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$978  = config_write_data[2];
+    \$978  = ch1_cfg_crc0_w0_crc_poly;
+    if (\$331 ) begin
+      \$978 [7:0] = config_write_data[7:0];
+    end
+    if (\$332 ) begin
+      \$978 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$978  = 1'h0;
+      \$978  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$979  = ch0_cfg_ma_write;
+    \$979  = ch1_cfg_crc0_w0_crc_width;
+    if (\$333 ) begin
+      \$979  = config_write_data[20:16];
+    end
     if (rst) begin
-      \$979  = 1'h0;
+      \$979  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$980  = ch0_cfg_ma_ma_half_period;
-    if (\$35 ) begin
-      \$980 [7:0] = config_write_data[7:0];
-    end
-    if (\$36 ) begin
-      \$980 [15:8] = config_write_data[15:8];
+    \$980  = ch1_cfg_crc0_w0_crc_inverted;
+    if (\$334 ) begin
+      \$980  = config_write_data[24];
     end
     if (rst) begin
-      \$980  = 16'h0000;
+      \$980  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$981  = ch0_cfg_ma_delay_limit;
-    if (\$37 ) begin
-      \$981 [7:0] = config_write_data[23:16];
-    end
-    if (\$38 ) begin
-      \$981 [11:8] = config_write_data[27:24];
-    end
+    \$981  = ch1_cfg_crc0_start_write;
     if (rst) begin
-      \$981  = 12'h000;
+      \$981  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$982  = ch0_cfg_period_write;
+    \$982  = ch1_cfg_crc0_start_w0_crc_start;
+    if (\$335 ) begin
+      \$982 [7:0] = config_write_data[7:0];
+    end
+    if (\$336 ) begin
+      \$982 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$982  = 1'h0;
+      \$982  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$983  = ch0_cfg_period_request_period;
-    if (\$39 ) begin
-      \$983 [7:0] = config_write_data[7:0];
-    end
-    if (\$40 ) begin
-      \$983 [15:8] = config_write_data[15:8];
-    end
-    if (\$41 ) begin
-      \$983 [23:16] = config_write_data[23:16];
-    end
+    \$983  = ch1_cfg_crc1_write;
     if (rst) begin
-      \$983  = 24'h000000;
+      \$983  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$984  = ch0_cfg_break_write;
+    \$984  = ch1_cfg_crc1_w1_crc_poly;
+    if (\$337 ) begin
+      \$984 [7:0] = config_write_data[7:0];
+    end
+    if (\$338 ) begin
+      \$984 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$984  = 1'h0;
+      \$984  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$985  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
-      \$985 [7:0] = config_write_data[7:0];
-    end
-    if (\$43 ) begin
-      \$985 [15:8] = config_write_data[15:8];
-    end
-    if (\$44 ) begin
-      \$985 [23:16] = config_write_data[23:16];
+    \$985  = ch1_cfg_crc1_w1_crc_width;
+    if (\$339 ) begin
+      \$985  = config_write_data[20:16];
     end
     if (rst) begin
-      \$985  = 24'h000000;
+      \$985  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$986  = ch0_cfg_ack_write;
+    \$986  = ch1_cfg_crc1_w1_crc_inverted;
+    if (\$340 ) begin
+      \$986  = config_write_data[24];
+    end
     if (rst) begin
       \$986  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$987  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
-      \$987 [7:0] = config_write_data[7:0];
-    end
-    if (\$46 ) begin
-      \$987 [15:8] = config_write_data[15:8];
-    end
-    if (\$47 ) begin
-      \$987 [23:16] = config_write_data[23:16];
-    end
+    \$987  = ch1_cfg_crc1_start_write;
     if (rst) begin
-      \$987  = 24'h000000;
+      \$987  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$988  = ch0_cfg_timeout_write;
+    \$988  = ch1_cfg_crc1_start_w1_crc_start;
+    if (\$341 ) begin
+      \$988 [7:0] = config_write_data[7:0];
+    end
+    if (\$342 ) begin
+      \$988 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$988  = 1'h0;
+      \$988  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$989  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
-      \$989 [7:0] = config_write_data[7:0];
-    end
-    if (\$49 ) begin
-      \$989 [15:8] = config_write_data[15:8];
-    end
-    if (\$50 ) begin
-      \$989 [23:16] = config_write_data[23:16];
-    end
+    \$989  = ch1_cfg_ssi_write;
     if (rst) begin
-      \$989  = 24'h000000;
+      \$989  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$990  = ch0_cfg_words_write;
+    \$990  = ch1_cfg_ssi_ssi;
+    if (\$343 ) begin
+      \$990  = config_write_data[0];
+    end
     if (rst) begin
       \$990  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$991  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$991  = config_write_data[5:0];
+    \$991  = ch1_cfg_ssi_ssi_error;
+    if (\$344 ) begin
+      \$991  = config_write_data[1];
     end
     if (rst) begin
-      \$991  = 6'h00;
+      \$991  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$992  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$992  = config_write_data[6];
+    \$992  = ch1_cfg_ssi_ssi_error_low;
+    if (\$345 ) begin
+      \$992  = config_write_data[2];
     end
     if (rst) begin
       \$992  = 1'h0;
@@ -6512,9 +8377,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$993  = ch0_cfg_words_w0_lc;
-    if (\$53 ) begin
-      \$993  = config_write_data[7];
+    \$993  = ch1_cfg_ssi_ssi_double;
+    if (\$346 ) begin
+      \$993  = config_write_data[3];
     end
     if (rst) begin
       \$993  = 1'h0;
@@ -6522,286 +8387,226 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$994  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$994  = config_write_data[9:8];
+    \$994  = ch1_cfg_ssi_ssi_delay;
+    if (\$347 ) begin
+      \$994 [7:0] = config_write_data[23:16];
+    end
+    if (\$348 ) begin
+      \$994 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$994  = 2'h0;
+      \$994  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$995  = ch0_cfg_words_w0_gray;
-    if (\$55 ) begin
-      \$995  = config_write_data[10];
-    end
+    \$995  = ch1_cfg_w2_write;
     if (rst) begin
       \$995  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$996  = ch0_cfg_words_w0_signed;
-    if (\$56 ) begin
-      \$996  = config_write_data[11];
-    end
+    \$996  = ch1_cfg_w2_crc_write;
     if (rst) begin
       \$996  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$997  = ch0_cfg_words_w1_data_bits;
-    if (\$57 ) begin
-      \$997  = config_write_data[21:16];
-    end
+    \$997  = ch1_cfg_w2_crc_start_write;
     if (rst) begin
-      \$997  = 6'h00;
+      \$997  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$998  = ch0_cfg_words_w1_nenw;
-    if (\$58 ) begin
-      \$998  = config_write_data[22];
-    end
+    \$998  = ch1_cfg_w3_write;
     if (rst) begin
       \$998  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$999  = ch0_cfg_words_w1_lc;
-    if (\$59 ) begin
-      \$999  = config_write_data[23];
-    end
+    \$999  = ch1_cfg_w3_crc_write;
     if (rst) begin
       \$999  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1000  = ch0_cfg_words_w1_crc;
-    if (\$60 ) begin
-      \$1000  = config_write_data[25:24];
-    end
+    \$1000  = ch1_cfg_w3_crc_start_write;
     if (rst) begin
-      \$1000  = 2'h0;
+      \$1000  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1001  = ch0_cfg_words_w1_gray;
-    if (\$61 ) begin
-      \$1001  = config_write_data[26];
-    end
+    \$1001  = ch1_cfg_w4_write;
     if (rst) begin
       \$1001  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1002  = ch0_cfg_words_w1_signed;
-    if (\$62 ) begin
-      \$1002  = config_write_data[27];
-    end
+    \$1002  = ch1_cfg_w4_crc_write;
     if (rst) begin
       \$1002  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1003  = ch0_cfg_words_w1_enable;
-    if (\$63 ) begin
-      \$1003  = config_write_data[31];
-    end
+    \$1003  = ch1_cfg_w4_crc_start_write;
     if (rst) begin
       \$1003  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1004  = ch0_cfg_checks_write;
+    \$1004  = ch1_cfg_w5_write;
     if (rst) begin
       \$1004  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1005  = ch0_cfg_checks_end_check;
-    if (\$64 ) begin
-      \$1005  = config_write_data[0];
-    end
+    \$1005  = ch1_cfg_w5_crc_write;
     if (rst) begin
       \$1005  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1006  = ch0_cfg_checks_spw_check;
-    if (\$65 ) begin
-      \$1006  = config_write_data[1];
-    end
+    \$1006  = ch1_cfg_w5_crc_start_write;
     if (rst) begin
       \$1006  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1007  = ch0_cfg_checks_spw_tolerance;
-    if (\$66 ) begin
-      \$1007  = config_write_data[15:8];
-    end
+    \$1007  = ch1_cfg_w6_write;
     if (rst) begin
-      \$1007  = 8'h00;
+      \$1007  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1008  = ch0_cfg_checks_noise_limit;
-    if (\$67 ) begin
-      \$1008  = config_write_data[19:16];
-    end
+    \$1008  = ch1_cfg_w6_crc_write;
     if (rst) begin
-      \$1008  = 4'h0;
+      \$1008  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1009  = ch0_cfg_checks_delay_tolerance;
-    if (\$68 ) begin
-      \$1009  = config_write_data[23:20];
-    end
+    \$1009  = ch1_cfg_w6_crc_start_write;
     if (rst) begin
-      \$1009  = 4'h0;
+      \$1009  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1010  = ch0_cfg_checks_confirm_frames;
-    if (\$69 ) begin
-      \$1010  = config_write_data[27:24];
-    end
+    \$1010  = ch1_cfg_w7_write;
     if (rst) begin
-      \$1010  = 4'h0;
+      \$1010  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1011  = ch0_cfg_quiet_write;
+    \$1011  = ch1_cfg_w7_crc_write;
     if (rst) begin
       \$1011  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1012  = ch0_cfg_quiet_quiet_time;
-    if (\$70 ) begin
-      \$1012 [7:0] = config_write_data[7:0];
-    end
-    if (\$71 ) begin
-      \$1012 [11:8] = config_write_data[11:8];
-    end
+    \$1012  = ch1_cfg_w7_crc_start_write;
     if (rst) begin
-      \$1012  = 12'h000;
+      \$1012  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1013  = ch0_cfg_crc0_write;
+    \$1013  = ch1_ca_request_write;
     if (rst) begin
       \$1013  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1014  = ch0_cfg_crc0_w0_crc_poly;
-    if (\$72 ) begin
-      \$1014 [7:0] = config_write_data[7:0];
-    end
-    if (\$73 ) begin
-      \$1014 [15:8] = config_write_data[15:8];
+    \$1014  = ch1_ca_request_slave_id;
+    if (\$349 ) begin
+      \$1014  = config_write_data[2:0];
     end
     if (rst) begin
-      \$1014  = 16'h0000;
+      \$1014  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1015  = ch0_cfg_crc0_w0_crc_width;
-    if (\$74 ) begin
-      \$1015  = config_write_data[20:16];
+    \$1015  = ch1_ca_request_address;
+    if (\$350 ) begin
+      \$1015  = config_write_data[14:8];
     end
     if (rst) begin
-      \$1015  = 5'h00;
+      \$1015  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1016  = ch0_cfg_crc0_w0_crc_inverted;
-    if (\$75 ) begin
-      \$1016  = config_write_data[24];
+    \$1016  = ch1_ca_request_count;
+    if (\$351 ) begin
+      \$1016  = config_write_data[22:16];
     end
     if (rst) begin
-      \$1016  = 1'h0;
+      \$1016  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1017  = ch0_cfg_crc0_start_write;
+    \$1017  = \ch1_ca_request_write$446 ;
+    if (\$352 ) begin
+      \$1017  = config_write_data[24];
+    end
     if (rst) begin
       \$1017  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1018  = ch0_cfg_crc0_start_w0_crc_start;
-    if (\$76 ) begin
-      \$1018 [7:0] = config_write_data[7:0];
-    end
-    if (\$77 ) begin
-      \$1018 [15:8] = config_write_data[15:8];
-    end
+    \$1018  = \$354 ;
     if (rst) begin
-      \$1018  = 16'h0000;
+      \$1018  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1019  = ch0_cfg_crc1_write;
+    \$1019  = \$356 ;
     if (rst) begin
       \$1019  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1020  = ch0_cfg_crc1_w1_crc_poly;
-    if (\$78 ) begin
-      \$1020 [7:0] = config_write_data[7:0];
-    end
-    if (\$79 ) begin
-      \$1020 [15:8] = config_write_data[15:8];
-    end
+    \$1020  = \$357 ;
     if (rst) begin
-      \$1020  = 16'h0000;
+      \$1020  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1021  = ch0_cfg_crc1_w1_crc_width;
-    if (\$80 ) begin
-      \$1021  = config_write_data[20:16];
+    \$1021  = ch1_config_read_index;
+    if (ch1_config_read) begin
+      \$1021  = config_memory0_read_index;
     end
     if (rst) begin
-      \$1021  = 5'h00;
+      \$1021  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1022  = ch0_cfg_crc1_w1_crc_inverted;
-    if (\$81 ) begin
-      \$1022  = config_write_data[24];
+    \$1022  = ch1_read_select_100;
+    if (bus__r_en) begin
+      \$1022  = \$358 ;
     end
     if (rst) begin
       \$1022  = 1'h0;
@@ -6809,36 +8614,39 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1023  = ch0_cfg_crc1_start_write;
+    \$1023  = ch1_read_select_101;
+    if (bus__r_en) begin
+      \$1023  = \$359 ;
+    end
     if (rst) begin
       \$1023  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1024  = ch0_cfg_crc1_start_w1_crc_start;
-    if (\$82 ) begin
-      \$1024 [7:0] = config_write_data[7:0];
-    end
-    if (\$83 ) begin
-      \$1024 [15:8] = config_write_data[15:8];
+    \$1024  = ch1_read_select_102;
+    if (bus__r_en) begin
+      \$1024  = \$360 ;
     end
     if (rst) begin
-      \$1024  = 16'h0000;
+      \$1024  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1025  = ch0_cfg_ssi_write;
+    \$1025  = ch1_read_select_104;
+    if (bus__r_en) begin
+      \$1025  = \$361 ;
+    end
     if (rst) begin
       \$1025  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1026  = ch0_cfg_ssi_ssi;
-    if (\$84 ) begin
-      \$1026  = config_write_data[0];
+    \$1026  = ch1_read_select_106;
+    if (bus__r_en) begin
+      \$1026  = \$362 ;
     end
     if (rst) begin
       \$1026  = 1'h0;
@@ -6846,9 +8654,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1027  = ch0_cfg_ssi_ssi_error;
-    if (\$85 ) begin
-      \$1027  = config_write_data[1];
+    \$1027  = ch1_read_select_107;
+    if (bus__r_en) begin
+      \$1027  = \$363 ;
     end
     if (rst) begin
       \$1027  = 1'h0;
@@ -6856,9 +8664,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1028  = ch0_cfg_ssi_ssi_error_low;
-    if (\$86 ) begin
-      \$1028  = config_write_data[2];
+    \$1028  = ch1_read_select_110;
+    if (bus__r_en) begin
+      \$1028  = \$364 ;
     end
     if (rst) begin
       \$1028  = 1'h0;
@@ -6866,9 +8674,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1029  = ch0_cfg_ssi_ssi_double;
-    if (\$87 ) begin
-      \$1029  = config_write_data[3];
+    \$1029  = ch1_read_select_111;
+    if (bus__r_en) begin
+      \$1029  = \$365 ;
     end
     if (rst) begin
       \$1029  = 1'h0;
@@ -6876,185 +8684,239 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1030  = ch0_cfg_ssi_ssi_delay;
-    if (\$88 ) begin
-      \$1030 [7:0] = config_write_data[23:16];
-    end
-    if (\$89 ) begin
-      \$1030 [11:8] = config_write_data[27:24];
+    \$1030  = ch1_read_select_112;
+    if (bus__r_en) begin
+      \$1030  = \$366 ;
     end
     if (rst) begin
-      \$1030  = 12'h000;
+      \$1030  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1031  = ch0_cfg_w2_write;
+    \$1031  = ch1_read_select_113;
+    if (bus__r_en) begin
+      \$1031  = \$367 ;
+    end
     if (rst) begin
       \$1031  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1032  = ch0_cfg_w2_crc_write;
+    \$1032  = ch1_read_select_114;
+    if (bus__r_en) begin
+      \$1032  = \$368 ;
+    end
     if (rst) begin
       \$1032  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1033  = ch0_cfg_w2_crc_start_write;
+    \$1033  = ch1_read_select_115;
+    if (bus__r_en) begin
+      \$1033  = \$369 ;
+    end
     if (rst) begin
       \$1033  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1034  = ch0_cfg_w3_write;
+    \$1034  = ch1_read_select_116;
+    if (bus__r_en) begin
+      \$1034  = \$370 ;
+    end
     if (rst) begin
       \$1034  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1035  = ch0_cfg_w3_crc_write;
+    \$1035  = ch1_read_select_117;
+    if (bus__r_en) begin
+      \$1035  = \$371 ;
+    end
     if (rst) begin
       \$1035  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1036  = ch0_cfg_w3_crc_start_write;
+    \$1036  = ch1_read_select_125;
+    if (bus__r_en) begin
+      \$1036  = \$372 ;
+    end
     if (rst) begin
       \$1036  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1037  = ch0_cfg_w4_write;
+    \$1037  = ch1_read_select_126;
+    if (bus__r_en) begin
+      \$1037  = \$373 ;
+    end
     if (rst) begin
       \$1037  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1038  = ch0_cfg_w4_crc_write;
+    \$1038  = ch1_read_select_127;
+    if (bus__r_en) begin
+      \$1038  = \$374 ;
+    end
     if (rst) begin
       \$1038  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1039  = ch0_cfg_w4_crc_start_write;
+    \$1039  = ch1_read_select_128;
+    if (bus__r_en) begin
+      \$1039  = \$375 ;
+    end
     if (rst) begin
       \$1039  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1040  = ch0_cfg_w5_write;
+    \$1040  = ch1_read_select_129;
+    if (bus__r_en) begin
+      \$1040  = \$376 ;
+    end
     if (rst) begin
       \$1040  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1041  = ch0_cfg_w5_crc_write;
+    \$1041  = ch1_read_select_12a;
+    if (bus__r_en) begin
+      \$1041  = \$377 ;
+    end
     if (rst) begin
       \$1041  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1042  = ch0_cfg_w5_crc_start_write;
+    \$1042  = ch1_read_select_12c;
+    if (bus__r_en) begin
+      \$1042  = \$378 ;
+    end
     if (rst) begin
       \$1042  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1043  = ch0_cfg_w6_write;
+    \$1043  = ch1_read_select_12d;
+    if (bus__r_en) begin
+      \$1043  = \$379 ;
+    end
     if (rst) begin
       \$1043  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1044  = ch0_cfg_w6_crc_write;
+    \$1044  = ch1_read_select_12e;
+    if (bus__r_en) begin
+      \$1044  = \$380 ;
+    end
     if (rst) begin
       \$1044  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1045  = ch0_cfg_w6_crc_start_write;
+    \$1045  = ch1_read_select_130;
+    if (bus__r_en) begin
+      \$1045  = \$381 ;
+    end
     if (rst) begin
       \$1045  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1046  = ch0_cfg_w7_write;
+    \$1046  = ch1_read_select_131;
+    if (bus__r_en) begin
+      \$1046  = \$382 ;
+    end
     if (rst) begin
       \$1046  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1047  = ch0_cfg_w7_crc_write;
+    \$1047  = ch1_read_select_132;
+    if (bus__r_en) begin
+      \$1047  = \$383 ;
+    end
     if (rst) begin
       \$1047  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1048  = ch0_cfg_w7_crc_start_write;
+    \$1048  = ch1_read_select_134;
+    if (bus__r_en) begin
+      \$1048  = \$384 ;
+    end
     if (rst) begin
       \$1048  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1049  = ch0_ca_request_write;
+    \$1049  = ch1_read_select_135;
+    if (bus__r_en) begin
+      \$1049  = \$385 ;
+    end
     if (rst) begin
       \$1049  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1050  = ch0_ca_request_slave_id;
-    if (\$90 ) begin
-      \$1050  = config_write_data[2:0];
+    \$1050  = ch1_read_select_136;
+    if (bus__r_en) begin
+      \$1050  = \$386 ;
     end
     if (rst) begin
-      \$1050  = 3'h0;
+      \$1050  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1051  = ch0_ca_request_address;
-    if (\$91 ) begin
-      \$1051  = config_write_data[14:8];
+    \$1051  = ch1_read_select_138;
+    if (bus__r_en) begin
+      \$1051  = \$387 ;
     end
     if (rst) begin
-      \$1051  = 7'h00;
+      \$1051  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1052  = ch0_ca_request_count;
-    if (\$92 ) begin
-      \$1052  = config_write_data[22:16];
+    \$1052  = ch1_read_select_139;
+    if (bus__r_en) begin
+      \$1052  = \$388 ;
     end
     if (rst) begin
-      \$1052  = 7'h00;
+      \$1052  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1053  = \ch0_ca_request_write$149 ;
-    if (\$93 ) begin
-      \$1053  = config_write_data[24];
+    \$1053  = ch1_read_select_13a;
+    if (bus__r_en) begin
+      \$1053  = \$389 ;
     end
     if (rst) begin
       \$1053  = 1'h0;
@@ -7062,60 +8924,69 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1054  = \$95 ;
+    \$1054  = ch1_read_select_13c;
+    if (bus__r_en) begin
+      \$1054  = \$390 ;
+    end
     if (rst) begin
       \$1054  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1055  = \$97 ;
+    \$1055  = ch1_read_select_13d;
+    if (bus__r_en) begin
+      \$1055  = \$391 ;
+    end
     if (rst) begin
       \$1055  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1056  = config_memory0_write_data;
-    if (write_en) begin
-      \$1056  = \$102 ;
-    end
-    if (rst) begin
-      \$1056  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1057  = \$103 ;
-    if (rst) begin
-      \$1057  = 15'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1058  = ch0_config_read_select;
+    \$1056  = ch1_read_select_13e;
     if (bus__r_en) begin
-      \$1058  = \$119 ;
+      \$1056  = \$392 ;
     end
     if (rst) begin
-      \$1058  = 15'h0000;
+      \$1056  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1059  = ch0_config_read_index;
-    if (ch0_config_read) begin
-      \$1059  = config_memory0_read_index;
-    end
-    if (rst) begin
-      \$1059  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1060  = ch0_read_select_80;
+    \$1057  = ch1_read_select_141;
     if (bus__r_en) begin
-      \$1060  = \$120 ;
+      \$1057  = \$393 ;
+    end
+    if (rst) begin
+      \$1057  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$1058  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$1058  = \$394 ;
+    end
+    if (rst) begin
+      \$1058  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$1059  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$1059  = \$395 ;
+    end
+    if (rst) begin
+      \$1059  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$1060  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$1060  = \$396 ;
     end
     if (rst) begin
       \$1060  = 1'h0;
@@ -7123,9 +8994,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1061  = ch0_read_select_81;
+    \$1061  = ch1_read_select_145;
     if (bus__r_en) begin
-      \$1061  = \$121 ;
+      \$1061  = \$397 ;
     end
     if (rst) begin
       \$1061  = 1'h0;
@@ -7133,9 +9004,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1062  = ch0_read_select_82;
+    \$1062  = ch1_read_select_170;
     if (bus__r_en) begin
-      \$1062  = \$122 ;
+      \$1062  = \$398 ;
     end
     if (rst) begin
       \$1062  = 1'h0;
@@ -7143,9 +9014,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1063  = ch0_read_select_84;
+    \$1063  = ch1_read_select_171;
     if (bus__r_en) begin
-      \$1063  = \$123 ;
+      \$1063  = \$399 ;
     end
     if (rst) begin
       \$1063  = 1'h0;
@@ -7153,9 +9024,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1064  = ch0_read_select_86;
+    \$1064  = ch1_read_select_172;
     if (bus__r_en) begin
-      \$1064  = \$124 ;
+      \$1064  = \$400 ;
     end
     if (rst) begin
       \$1064  = 1'h0;
@@ -7163,9 +9034,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1065  = ch0_read_select_87;
+    \$1065  = ch1_read_select_173;
     if (bus__r_en) begin
-      \$1065  = \$125 ;
+      \$1065  = \$401 ;
     end
     if (rst) begin
       \$1065  = 1'h0;
@@ -7173,9 +9044,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1066  = ch0_read_select_90;
+    \$1066  = ch1_read_select_174;
     if (bus__r_en) begin
-      \$1066  = \$126 ;
+      \$1066  = \$402 ;
     end
     if (rst) begin
       \$1066  = 1'h0;
@@ -7183,9 +9054,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1067  = ch0_read_select_91;
+    \$1067  = ch1_read_select_175;
     if (bus__r_en) begin
-      \$1067  = \$127 ;
+      \$1067  = \$403 ;
     end
     if (rst) begin
       \$1067  = 1'h0;
@@ -7193,9 +9064,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1068  = ch0_read_select_92;
+    \$1068  = ch1_read_select_176;
     if (bus__r_en) begin
-      \$1068  = \$128 ;
+      \$1068  = \$404 ;
     end
     if (rst) begin
       \$1068  = 1'h0;
@@ -7203,9 +9074,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1069  = ch0_read_select_93;
+    \$1069  = ch1_read_select_177;
     if (bus__r_en) begin
-      \$1069  = \$129 ;
+      \$1069  = \$405 ;
     end
     if (rst) begin
       \$1069  = 1'h0;
@@ -7213,9 +9084,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1070  = ch0_read_select_94;
+    \$1070  = ch1_read_select_178;
     if (bus__r_en) begin
-      \$1070  = \$130 ;
+      \$1070  = \$406 ;
     end
     if (rst) begin
       \$1070  = 1'h0;
@@ -7223,9 +9094,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1071  = ch0_read_select_95;
+    \$1071  = ch1_read_select_179;
     if (bus__r_en) begin
-      \$1071  = \$131 ;
+      \$1071  = \$407 ;
     end
     if (rst) begin
       \$1071  = 1'h0;
@@ -7233,9 +9104,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1072  = ch0_read_select_96;
+    \$1072  = ch1_read_select_17a;
     if (bus__r_en) begin
-      \$1072  = \$132 ;
+      \$1072  = \$408 ;
     end
     if (rst) begin
       \$1072  = 1'h0;
@@ -7243,9 +9114,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1073  = ch0_read_select_97;
+    \$1073  = ch1_read_select_17b;
     if (bus__r_en) begin
-      \$1073  = \$133 ;
+      \$1073  = \$409 ;
     end
     if (rst) begin
       \$1073  = 1'h0;
@@ -7253,9 +9124,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1074  = ch0_read_select_a5;
+    \$1074  = ch1_read_select_17c;
     if (bus__r_en) begin
-      \$1074  = \$134 ;
+      \$1074  = \$410 ;
     end
     if (rst) begin
       \$1074  = 1'h0;
@@ -7263,9 +9134,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1075  = ch0_read_select_a6;
+    \$1075  = ch1_read_select_17d;
     if (bus__r_en) begin
-      \$1075  = \$135 ;
+      \$1075  = \$411 ;
     end
     if (rst) begin
       \$1075  = 1'h0;
@@ -7273,19 +9144,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1076  = ch0_read_select_a7;
-    if (bus__r_en) begin
-      \$1076  = \$136 ;
+    \$1076  = ch1_result_status_status_snapshot;
+    if (\$412 ) begin
+      \$1076  = \port$8338$0 [3:0];
     end
     if (rst) begin
-      \$1076  = 1'h0;
+      \$1076  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1077  = ch0_read_select_a8;
-    if (bus__r_en) begin
-      \$1077  = \$137 ;
+    \$1077  = ch1_result_status_cds_snapshot;
+    if (\$412 ) begin
+      \$1077  = \port$8338$0 [49];
     end
     if (rst) begin
       \$1077  = 1'h0;
@@ -7293,9 +9164,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1078  = ch0_read_select_a9;
-    if (bus__r_en) begin
-      \$1078  = \$138 ;
+    \$1078  = ch1_result_status_w0_ne_snapshot;
+    if (\$412 ) begin
+      \$1078  = \port$8338$0 [131];
     end
     if (rst) begin
       \$1078  = 1'h0;
@@ -7303,9 +9174,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1079  = ch0_read_select_aa;
-    if (bus__r_en) begin
-      \$1079  = \$139 ;
+    \$1079  = ch1_result_status_w0_nw_snapshot;
+    if (\$412 ) begin
+      \$1079  = \port$8338$0 [132];
     end
     if (rst) begin
       \$1079  = 1'h0;
@@ -7313,9 +9184,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1080  = ch0_read_select_ac;
-    if (bus__r_en) begin
-      \$1080  = \$140 ;
+    \$1080  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$412 ) begin
+      \$1080  = \port$8338$0 [133];
     end
     if (rst) begin
       \$1080  = 1'h0;
@@ -7323,9 +9194,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1081  = ch0_read_select_ad;
-    if (bus__r_en) begin
-      \$1081  = \$141 ;
+    \$1081  = ch1_result_status_w1_ne_snapshot;
+    if (\$412 ) begin
+      \$1081  = \port$8338$0 [174];
     end
     if (rst) begin
       \$1081  = 1'h0;
@@ -7333,9 +9204,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1082  = ch0_read_select_ae;
-    if (bus__r_en) begin
-      \$1082  = \$142 ;
+    \$1082  = ch1_result_status_w1_nw_snapshot;
+    if (\$412 ) begin
+      \$1082  = \port$8338$0 [175];
     end
     if (rst) begin
       \$1082  = 1'h0;
@@ -7343,9 +9214,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1083  = ch0_read_select_b0;
-    if (bus__r_en) begin
-      \$1083  = \$143 ;
+    \$1083  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$412 ) begin
+      \$1083  = \port$8338$0 [176];
     end
     if (rst) begin
       \$1083  = 1'h0;
@@ -7353,9 +9224,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1084  = ch0_read_select_b1;
-    if (bus__r_en) begin
-      \$1084  = \$144 ;
+    \$1084  = ch1_result_status_lc_repeat_snapshot;
+    if (\$412 ) begin
+      \$1084  = \port$8338$0 [183];
     end
     if (rst) begin
       \$1084  = 1'h0;
@@ -7363,9 +9234,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1085  = ch0_read_select_b2;
-    if (bus__r_en) begin
-      \$1085  = \$145 ;
+    \$1085  = ch1_result_status_lc_skip_snapshot;
+    if (\$412 ) begin
+      \$1085  = \port$8338$0 [184];
     end
     if (rst) begin
       \$1085  = 1'h0;
@@ -7373,9 +9244,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1086  = ch0_read_select_b4;
-    if (bus__r_en) begin
-      \$1086  = \$146 ;
+    \$1086  = ch1_result_status_lc_zero_snapshot;
+    if (\$412 ) begin
+      \$1086  = \port$8338$0 [185];
     end
     if (rst) begin
       \$1086  = 1'h0;
@@ -7383,9 +9254,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1087  = ch0_read_select_b5;
-    if (bus__r_en) begin
-      \$1087  = \$147 ;
+    \$1087  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$412 ) begin
+      \$1087  = \port$8338$0 [186];
     end
     if (rst) begin
       \$1087  = 1'h0;
@@ -7393,99 +9264,99 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1088  = ch0_read_select_b6;
-    if (bus__r_en) begin
-      \$1088  = \$148 ;
+    \$1088  = ch1_result_status_lc_snapshot;
+    if (\$412 ) begin
+      \$1088  = \port$8338$0 [182:177];
     end
     if (rst) begin
-      \$1088  = 1'h0;
+      \$1088  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1089  = ch0_read_select_b8;
-    if (bus__r_en) begin
-      \$1089  = \$149 ;
+    \$1089  = ch1_result_seq_seq_snapshot;
+    if (\$412 ) begin
+      \$1089  = ch1__done_count;
     end
     if (rst) begin
-      \$1089  = 1'h0;
+      \$1089  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1090  = ch0_read_select_b9;
-    if (bus__r_en) begin
-      \$1090  = \$150 ;
+    \$1090  = ch1_result_seq_line_delay_snapshot;
+    if (\$412 ) begin
+      \$1090  = \port$8338$0 [48:36];
     end
     if (rst) begin
-      \$1090  = 1'h0;
+      \$1090  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1091  = ch0_read_select_ba;
-    if (bus__r_en) begin
-      \$1091  = \$151 ;
+    \$1091  = ch1_result_w0_lo_data_snapshot;
+    if (\$412 ) begin
+      \$1091  = \port$8338$0 [107:76];
     end
     if (rst) begin
-      \$1091  = 1'h0;
+      \$1091  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1092  = ch0_read_select_bc;
-    if (bus__r_en) begin
-      \$1092  = \$152 ;
+    \$1092  = ch1_result_w0_hi_data_snapshot;
+    if (\$412 ) begin
+      \$1092  = \port$8338$0 [130:108];
     end
     if (rst) begin
-      \$1092  = 1'h0;
+      \$1092  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1093  = ch0_read_select_bd;
-    if (bus__r_en) begin
-      \$1093  = \$153 ;
+    \$1093  = ch1_result_w1_lo_data_snapshot;
+    if (\$412 ) begin
+      \$1093  = \port$8338$0 [165:134];
     end
     if (rst) begin
-      \$1093  = 1'h0;
+      \$1093  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1094  = ch0_read_select_be;
-    if (bus__r_en) begin
-      \$1094  = \$154 ;
+    \$1094  = ch1_result_w1_hi_data_snapshot;
+    if (\$412 ) begin
+      \$1094  = \port$8338$0 [173:166];
     end
     if (rst) begin
-      \$1094  = 1'h0;
+      \$1094  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1095  = ch0_read_select_c1;
-    if (bus__r_en) begin
-      \$1095  = \$155 ;
+    \$1095  = ch1_result_timestamp_time_snapshot;
+    if (\$412 ) begin
+      \$1095  = \port$8338$0 [35:4];
     end
     if (rst) begin
-      \$1095  = 1'h0;
+      \$1095  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1096  = ch0_read_select_c2;
-    if (bus__r_en) begin
-      \$1096  = \$156 ;
+    \$1096  = ch1_result_line_noise_events_snapshot;
+    if (\$412 ) begin
+      \$1096  = \port$8338$0 [53:50];
     end
     if (rst) begin
-      \$1096  = 1'h0;
+      \$1096  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1097  = ch0_read_select_c3;
-    if (bus__r_en) begin
-      \$1097  = \$157 ;
+    \$1097  = ch1_result_line_delay_settled_snapshot;
+    if (\$412 ) begin
+      \$1097  = \port$8338$0 [54];
     end
     if (rst) begin
       \$1097  = 1'h0;
@@ -7493,29 +9364,29 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1098  = ch0_read_select_c4;
-    if (bus__r_en) begin
-      \$1098  = \$158 ;
+    \$1098  = ch1_result_line_delay_spread_snapshot;
+    if (\$412 ) begin
+      \$1098  = \port$8338$0 [75:68];
     end
     if (rst) begin
-      \$1098  = 1'h0;
+      \$1098  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1099  = ch0_read_select_c5;
-    if (bus__r_en) begin
-      \$1099  = \$159 ;
+    \$1099  = ch1_result_line_settled_delay_snapshot;
+    if (\$412 ) begin
+      \$1099  = \port$8338$0 [67:55];
     end
     if (rst) begin
-      \$1099  = 1'h0;
+      \$1099  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1100  = ch0_read_select_f0;
+    \$1100  = ch1_window0_read;
     if (bus__r_en) begin
-      \$1100  = \$160 ;
+      \$1100  = \$414 ;
     end
     if (rst) begin
       \$1100  = 1'h0;
@@ -7523,9 +9394,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1101  = ch0_read_select_f1;
+    \$1101  = ch1_window1_read;
     if (bus__r_en) begin
-      \$1101  = \$161 ;
+      \$1101  = \$416 ;
     end
     if (rst) begin
       \$1101  = 1'h0;
@@ -7533,9 +9404,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1102  = ch0_read_select_f2;
+    \$1102  = ch1_window2_read;
     if (bus__r_en) begin
-      \$1102  = \$162 ;
+      \$1102  = ch1_config_read;
     end
     if (rst) begin
       \$1102  = 1'h0;
@@ -7543,2069 +9414,12 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1103  = ch0_read_select_f3;
-    if (bus__r_en) begin
-      \$1103  = \$163 ;
-    end
-    if (rst) begin
-      \$1103  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1104  = ch0_read_select_f4;
-    if (bus__r_en) begin
-      \$1104  = \$164 ;
-    end
-    if (rst) begin
-      \$1104  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1105  = ch0_read_select_f5;
-    if (bus__r_en) begin
-      \$1105  = \$165 ;
-    end
-    if (rst) begin
-      \$1105  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1106  = ch0_read_select_f6;
-    if (bus__r_en) begin
-      \$1106  = \$166 ;
-    end
-    if (rst) begin
-      \$1106  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1107  = ch0_read_select_f7;
-    if (bus__r_en) begin
-      \$1107  = \$167 ;
-    end
-    if (rst) begin
-      \$1107  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1108  = ch0_read_select_f8;
-    if (bus__r_en) begin
-      \$1108  = \$168 ;
-    end
-    if (rst) begin
-      \$1108  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1109  = ch0_read_select_f9;
-    if (bus__r_en) begin
-      \$1109  = \$169 ;
-    end
-    if (rst) begin
-      \$1109  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1110  = ch0_read_select_fa;
-    if (bus__r_en) begin
-      \$1110  = \$170 ;
-    end
-    if (rst) begin
-      \$1110  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1111  = ch0_read_select_fb;
-    if (bus__r_en) begin
-      \$1111  = \$171 ;
-    end
-    if (rst) begin
-      \$1111  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1112  = ch0_read_select_fc;
-    if (bus__r_en) begin
-      \$1112  = \$172 ;
-    end
-    if (rst) begin
-      \$1112  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1113  = ch0_read_select_fd;
-    if (bus__r_en) begin
-      \$1113  = \$173 ;
-    end
-    if (rst) begin
-      \$1113  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1114  = ch0_result_status_status_snapshot;
-    if (\$174 ) begin
-      \$1114  = \port$7959$0 [3:0];
-    end
-    if (rst) begin
-      \$1114  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1115  = ch0_result_status_cds_snapshot;
-    if (\$174 ) begin
-      \$1115  = \port$7959$0 [49];
-    end
-    if (rst) begin
-      \$1115  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1116  = ch0_result_status_w0_ne_snapshot;
-    if (\$174 ) begin
-      \$1116  = \port$7959$0 [131];
-    end
-    if (rst) begin
-      \$1116  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1117  = ch0_result_status_w0_nw_snapshot;
-    if (\$174 ) begin
-      \$1117  = \port$7959$0 [132];
-    end
-    if (rst) begin
-      \$1117  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1118  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$174 ) begin
-      \$1118  = \port$7959$0 [133];
-    end
-    if (rst) begin
-      \$1118  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1119  = ch0_result_status_w1_ne_snapshot;
-    if (\$174 ) begin
-      \$1119  = \port$7959$0 [174];
-    end
-    if (rst) begin
-      \$1119  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1120  = ch0_result_status_w1_nw_snapshot;
-    if (\$174 ) begin
-      \$1120  = \port$7959$0 [175];
-    end
-    if (rst) begin
-      \$1120  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1121  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$174 ) begin
-      \$1121  = \port$7959$0 [176];
-    end
-    if (rst) begin
-      \$1121  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1122  = ch0_result_status_lc_repeat_snapshot;
-    if (\$174 ) begin
-      \$1122  = \port$7959$0 [183];
-    end
-    if (rst) begin
-      \$1122  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1123  = ch0_result_status_lc_skip_snapshot;
-    if (\$174 ) begin
-      \$1123  = \port$7959$0 [184];
-    end
-    if (rst) begin
-      \$1123  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1124  = ch0_result_status_lc_zero_snapshot;
-    if (\$174 ) begin
-      \$1124  = \port$7959$0 [185];
-    end
-    if (rst) begin
-      \$1124  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1125  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$174 ) begin
-      \$1125  = \port$7959$0 [186];
-    end
-    if (rst) begin
-      \$1125  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1126  = ch0_result_status_lc_snapshot;
-    if (\$174 ) begin
-      \$1126  = \port$7959$0 [182:177];
-    end
-    if (rst) begin
-      \$1126  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1127  = ch0_result_seq_seq_snapshot;
-    if (\$174 ) begin
-      \$1127  = ch0__done_count;
-    end
-    if (rst) begin
-      \$1127  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1128  = ch0_result_seq_line_delay_snapshot;
-    if (\$174 ) begin
-      \$1128  = \port$7959$0 [48:36];
-    end
-    if (rst) begin
-      \$1128  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1129  = ch0_result_w0_lo_data_snapshot;
-    if (\$174 ) begin
-      \$1129  = \port$7959$0 [107:76];
-    end
-    if (rst) begin
-      \$1129  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1130  = ch0_result_w0_hi_data_snapshot;
-    if (\$174 ) begin
-      \$1130  = \port$7959$0 [130:108];
-    end
-    if (rst) begin
-      \$1130  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1131  = ch0_result_w1_lo_data_snapshot;
-    if (\$174 ) begin
-      \$1131  = \port$7959$0 [165:134];
-    end
-    if (rst) begin
-      \$1131  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1132  = ch0_result_w1_hi_data_snapshot;
-    if (\$174 ) begin
-      \$1132  = \port$7959$0 [173:166];
-    end
-    if (rst) begin
-      \$1132  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1133  = ch0_result_timestamp_time_snapshot;
-    if (\$174 ) begin
-      \$1133  = \port$7959$0 [35:4];
-    end
-    if (rst) begin
-      \$1133  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1134  = ch0_result_line_noise_events_snapshot;
-    if (\$174 ) begin
-      \$1134  = \port$7959$0 [53:50];
-    end
-    if (rst) begin
-      \$1134  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1135  = ch0_result_line_delay_settled_snapshot;
-    if (\$174 ) begin
-      \$1135  = \port$7959$0 [54];
-    end
-    if (rst) begin
-      \$1135  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1136  = ch0_result_line_delay_spread_snapshot;
-    if (\$174 ) begin
-      \$1136  = \port$7959$0 [75:68];
-    end
-    if (rst) begin
-      \$1136  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1137  = ch0_result_line_settled_delay_snapshot;
-    if (\$174 ) begin
-      \$1137  = \port$7959$0 [67:55];
-    end
-    if (rst) begin
-      \$1137  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1138  = ch0_window0_read;
-    if (bus__r_en) begin
-      \$1138  = \$176 ;
-    end
-    if (rst) begin
-      \$1138  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1139  = ch0_window1_read;
-    if (bus__r_en) begin
-      \$1139  = \$178 ;
-    end
-    if (rst) begin
-      \$1139  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1140  = ch0_window2_read;
-    if (bus__r_en) begin
-      \$1140  = ch0_config_read;
-    end
-    if (rst) begin
-      \$1140  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1141  = ch0_read_data;
+    \$1103  = ch1_read_data;
     if (bus__r_load) begin
-      \$1141  = \$292 ;
+      \$1103  = \$530 ;
     end
     if (rst) begin
-      \$1141  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1142  = \$294 ;
-    if (rst) begin
-      \$1142  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1143  = \$296 ;
-    if (rst) begin
-      \$1143  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1144  = \$298 ;
-    if (rst) begin
-      \$1144  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1145  = ch1_ctrl_periodic;
-    if (\$299 ) begin
-      \$1145  = write_data[8];
-    end
-    if (rst) begin
-      \$1145  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1146  = ch1_ctrl_trigger_enable;
-    if (\$300 ) begin
-      \$1146  = write_data[9];
-    end
-    if (rst) begin
-      \$1146  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1147  = ch1_irq_status_done;
-    if (ch1__frame_done) begin
-      \$1147  = 1'h1;
-    end else if (\$302 ) begin
-      \$1147  = 1'h0;
-    end
-    if (rst) begin
-      \$1147  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1148  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$1148  = 1'h1;
-    end else if (\$304 ) begin
-      \$1148  = 1'h0;
-    end
-    if (rst) begin
-      \$1148  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1149  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$1149  = 1'h1;
-    end else if (\$306 ) begin
-      \$1149  = 1'h0;
-    end
-    if (rst) begin
-      \$1149  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1150  = ch1_irq_enable_write;
-    if (rst) begin
-      \$1150  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1151  = ch1_irq_enable_done;
-    if (\$307 ) begin
-      \$1151  = config_write_data[0];
-    end
-    if (rst) begin
-      \$1151  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1152  = ch1_irq_enable_error;
-    if (\$308 ) begin
-      \$1152  = config_write_data[1];
-    end
-    if (rst) begin
-      \$1152  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1153  = ch1_irq_enable_access_done;
-    if (\$309 ) begin
-      \$1153  = config_write_data[2];
-    end
-    if (rst) begin
-      \$1153  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1154  = ch1_cfg_ma_write;
-    if (rst) begin
-      \$1154  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1155  = ch1_cfg_ma_ma_half_period;
-    if (\$310 ) begin
-      \$1155 [7:0] = config_write_data[7:0];
-    end
-    if (\$311 ) begin
-      \$1155 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$1155  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1156  = ch1_cfg_ma_delay_limit;
-    if (\$312 ) begin
-      \$1156 [7:0] = config_write_data[23:16];
-    end
-    if (\$313 ) begin
-      \$1156 [11:8] = config_write_data[27:24];
-    end
-    if (rst) begin
-      \$1156  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1157  = ch1_cfg_period_write;
-    if (rst) begin
-      \$1157  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1158  = ch1_cfg_period_request_period;
-    if (\$314 ) begin
-      \$1158 [7:0] = config_write_data[7:0];
-    end
-    if (\$315 ) begin
-      \$1158 [15:8] = config_write_data[15:8];
-    end
-    if (\$316 ) begin
-      \$1158 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$1158  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1159  = ch1_cfg_break_write;
-    if (rst) begin
-      \$1159  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1160  = ch1_cfg_break_break_time;
-    if (\$317 ) begin
-      \$1160 [7:0] = config_write_data[7:0];
-    end
-    if (\$318 ) begin
-      \$1160 [15:8] = config_write_data[15:8];
-    end
-    if (\$319 ) begin
-      \$1160 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$1160  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1161  = ch1_cfg_ack_write;
-    if (rst) begin
-      \$1161  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1162  = ch1_cfg_ack_ack_limit;
-    if (\$320 ) begin
-      \$1162 [7:0] = config_write_data[7:0];
-    end
-    if (\$321 ) begin
-      \$1162 [15:8] = config_write_data[15:8];
-    end
-    if (\$322 ) begin
-      \$1162 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$1162  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1163  = ch1_cfg_timeout_write;
-    if (rst) begin
-      \$1163  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1164  = ch1_cfg_timeout_timeout_limit;
-    if (\$323 ) begin
-      \$1164 [7:0] = config_write_data[7:0];
-    end
-    if (\$324 ) begin
-      \$1164 [15:8] = config_write_data[15:8];
-    end
-    if (\$325 ) begin
-      \$1164 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$1164  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1165  = ch1_cfg_words_write;
-    if (rst) begin
-      \$1165  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1166  = ch1_cfg_words_w0_data_bits;
-    if (\$326 ) begin
-      \$1166  = config_write_data[5:0];
-    end
-    if (rst) begin
-      \$1166  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1167  = ch1_cfg_words_w0_nenw;
-    if (\$327 ) begin
-      \$1167  = config_write_data[6];
-    end
-    if (rst) begin
-      \$1167  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1168  = ch1_cfg_words_w0_lc;
-    if (\$328 ) begin
-      \$1168  = config_write_data[7];
-    end
-    if (rst) begin
-      \$1168  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1169  = ch1_cfg_words_w0_crc;
-    if (\$329 ) begin
-      \$1169  = config_write_data[9:8];
-    end
-    if (rst) begin
-      \$1169  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1170  = ch1_cfg_words_w0_gray;
-    if (\$330 ) begin
-      \$1170  = config_write_data[10];
-    end
-    if (rst) begin
-      \$1170  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1171  = ch1_cfg_words_w0_signed;
-    if (\$331 ) begin
-      \$1171  = config_write_data[11];
-    end
-    if (rst) begin
-      \$1171  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1172  = ch1_cfg_words_w1_data_bits;
-    if (\$332 ) begin
-      \$1172  = config_write_data[21:16];
-    end
-    if (rst) begin
-      \$1172  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1173  = ch1_cfg_words_w1_nenw;
-    if (\$333 ) begin
-      \$1173  = config_write_data[22];
-    end
-    if (rst) begin
-      \$1173  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1174  = ch1_cfg_words_w1_lc;
-    if (\$334 ) begin
-      \$1174  = config_write_data[23];
-    end
-    if (rst) begin
-      \$1174  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1175  = ch1_cfg_words_w1_crc;
-    if (\$335 ) begin
-      \$1175  = config_write_data[25:24];
-    end
-    if (rst) begin
-      \$1175  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1176  = ch1_cfg_words_w1_gray;
-    if (\$336 ) begin
-      \$1176  = config_write_data[26];
-    end
-    if (rst) begin
-      \$1176  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1177  = ch1_cfg_words_w1_signed;
-    if (\$337 ) begin
-      \$1177  = config_write_data[27];
-    end
-    if (rst) begin
-      \$1177  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1178  = ch1_cfg_words_w1_enable;
-    if (\$338 ) begin
-      \$1178  = config_write_data[31];
-    end
-    if (rst) begin
-      \$1178  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1179  = ch1_cfg_checks_write;
-    if (rst) begin
-      \$1179  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1180  = ch1_cfg_checks_end_check;
-    if (\$339 ) begin
-      \$1180  = config_write_data[0];
-    end
-    if (rst) begin
-      \$1180  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1181  = ch1_cfg_checks_spw_check;
-    if (\$340 ) begin
-      \$1181  = config_write_data[1];
-    end
-    if (rst) begin
-      \$1181  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1182  = ch1_cfg_checks_spw_tolerance;
-    if (\$341 ) begin
-      \$1182  = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$1182  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1183  = ch1_cfg_checks_noise_limit;
-    if (\$342 ) begin
-      \$1183  = config_write_data[19:16];
-    end
-    if (rst) begin
-      \$1183  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1184  = ch1_cfg_checks_delay_tolerance;
-    if (\$343 ) begin
-      \$1184  = config_write_data[23:20];
-    end
-    if (rst) begin
-      \$1184  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1185  = ch1_cfg_checks_confirm_frames;
-    if (\$344 ) begin
-      \$1185  = config_write_data[27:24];
-    end
-    if (rst) begin
-      \$1185  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1186  = ch1_cfg_quiet_write;
-    if (rst) begin
-      \$1186  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1187  = ch1_cfg_quiet_quiet_time;
-    if (\$345 ) begin
-      \$1187 [7:0] = config_write_data[7:0];
-    end
-    if (\$346 ) begin
-      \$1187 [11:8] = config_write_data[11:8];
-    end
-    if (rst) begin
-      \$1187  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1188  = ch1_cfg_crc0_write;
-    if (rst) begin
-      \$1188  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1189  = ch1_cfg_crc0_w0_crc_poly;
-    if (\$347 ) begin
-      \$1189 [7:0] = config_write_data[7:0];
-    end
-    if (\$348 ) begin
-      \$1189 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$1189  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1190  = ch1_cfg_crc0_w0_crc_width;
-    if (\$349 ) begin
-      \$1190  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$1190  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1191  = ch1_cfg_crc0_w0_crc_inverted;
-    if (\$350 ) begin
-      \$1191  = config_write_data[24];
-    end
-    if (rst) begin
-      \$1191  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1192  = ch1_cfg_crc0_start_write;
-    if (rst) begin
-      \$1192  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1193  = ch1_cfg_crc0_start_w0_crc_start;
-    if (\$351 ) begin
-      \$1193 [7:0] = config_write_data[7:0];
-    end
-    if (\$352 ) begin
-      \$1193 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$1193  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1194  = ch1_cfg_crc1_write;
-    if (rst) begin
-      \$1194  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1195  = ch1_cfg_crc1_w1_crc_poly;
-    if (\$353 ) begin
-      \$1195 [7:0] = config_write_data[7:0];
-    end
-    if (\$354 ) begin
-      \$1195 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$1195  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1196  = ch1_cfg_crc1_w1_crc_width;
-    if (\$355 ) begin
-      \$1196  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$1196  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1197  = ch1_cfg_crc1_w1_crc_inverted;
-    if (\$356 ) begin
-      \$1197  = config_write_data[24];
-    end
-    if (rst) begin
-      \$1197  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1198  = ch1_cfg_crc1_start_write;
-    if (rst) begin
-      \$1198  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1199  = ch1_cfg_crc1_start_w1_crc_start;
-    if (\$357 ) begin
-      \$1199 [7:0] = config_write_data[7:0];
-    end
-    if (\$358 ) begin
-      \$1199 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$1199  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1200  = ch1_cfg_ssi_write;
-    if (rst) begin
-      \$1200  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1201  = ch1_cfg_ssi_ssi;
-    if (\$359 ) begin
-      \$1201  = config_write_data[0];
-    end
-    if (rst) begin
-      \$1201  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1202  = ch1_cfg_ssi_ssi_error;
-    if (\$360 ) begin
-      \$1202  = config_write_data[1];
-    end
-    if (rst) begin
-      \$1202  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1203  = ch1_cfg_ssi_ssi_error_low;
-    if (\$361 ) begin
-      \$1203  = config_write_data[2];
-    end
-    if (rst) begin
-      \$1203  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1204  = ch1_cfg_ssi_ssi_double;
-    if (\$362 ) begin
-      \$1204  = config_write_data[3];
-    end
-    if (rst) begin
-      \$1204  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1205  = ch1_cfg_ssi_ssi_delay;
-    if (\$363 ) begin
-      \$1205 [7:0] = config_write_data[23:16];
-    end
-    if (\$364 ) begin
-      \$1205 [11:8] = config_write_data[27:24];
-    end
-    if (rst) begin
-      \$1205  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1206  = ch1_cfg_w2_write;
-    if (rst) begin
-      \$1206  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1207  = ch1_cfg_w2_crc_write;
-    if (rst) begin
-      \$1207  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1208  = ch1_cfg_w2_crc_start_write;
-    if (rst) begin
-      \$1208  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1209  = ch1_cfg_w3_write;
-    if (rst) begin
-      \$1209  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1210  = ch1_cfg_w3_crc_write;
-    if (rst) begin
-      \$1210  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1211  = ch1_cfg_w3_crc_start_write;
-    if (rst) begin
-      \$1211  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1212  = ch1_cfg_w4_write;
-    if (rst) begin
-      \$1212  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1213  = ch1_cfg_w4_crc_write;
-    if (rst) begin
-      \$1213  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1214  = ch1_cfg_w4_crc_start_write;
-    if (rst) begin
-      \$1214  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1215  = ch1_cfg_w5_write;
-    if (rst) begin
-      \$1215  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1216  = ch1_cfg_w5_crc_write;
-    if (rst) begin
-      \$1216  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1217  = ch1_cfg_w5_crc_start_write;
-    if (rst) begin
-      \$1217  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1218  = ch1_cfg_w6_write;
-    if (rst) begin
-      \$1218  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1219  = ch1_cfg_w6_crc_write;
-    if (rst) begin
-      \$1219  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1220  = ch1_cfg_w6_crc_start_write;
-    if (rst) begin
-      \$1220  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1221  = ch1_cfg_w7_write;
-    if (rst) begin
-      \$1221  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1222  = ch1_cfg_w7_crc_write;
-    if (rst) begin
-      \$1222  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1223  = ch1_cfg_w7_crc_start_write;
-    if (rst) begin
-      \$1223  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1224  = ch1_ca_request_write;
-    if (rst) begin
-      \$1224  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1225  = ch1_ca_request_slave_id;
-    if (\$365 ) begin
-      \$1225  = config_write_data[2:0];
-    end
-    if (rst) begin
-      \$1225  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1226  = ch1_ca_request_address;
-    if (\$366 ) begin
-      \$1226  = config_write_data[14:8];
-    end
-    if (rst) begin
-      \$1226  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1227  = ch1_ca_request_count;
-    if (\$367 ) begin
-      \$1227  = config_write_data[22:16];
-    end
-    if (rst) begin
-      \$1227  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1228  = \ch1_ca_request_write$447 ;
-    if (\$368 ) begin
-      \$1228  = config_write_data[24];
-    end
-    if (rst) begin
-      \$1228  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1229  = \$370 ;
-    if (rst) begin
-      \$1229  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1230  = \$372 ;
-    if (rst) begin
-      \$1230  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1231  = \$373 ;
-    if (rst) begin
-      \$1231  = 15'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1232  = ch1_config_read_select;
-    if (bus__r_en) begin
-      \$1232  = \$389 ;
-    end
-    if (rst) begin
-      \$1232  = 15'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1233  = ch1_config_read_index;
-    if (ch1_config_read) begin
-      \$1233  = config_memory0_read_index;
-    end
-    if (rst) begin
-      \$1233  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1234  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$1234  = \$390 ;
-    end
-    if (rst) begin
-      \$1234  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1235  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$1235  = \$391 ;
-    end
-    if (rst) begin
-      \$1235  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1236  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$1236  = \$392 ;
-    end
-    if (rst) begin
-      \$1236  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1237  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$1237  = \$393 ;
-    end
-    if (rst) begin
-      \$1237  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1238  = ch1_read_select_106;
-    if (bus__r_en) begin
-      \$1238  = \$394 ;
-    end
-    if (rst) begin
-      \$1238  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1239  = ch1_read_select_107;
-    if (bus__r_en) begin
-      \$1239  = \$395 ;
-    end
-    if (rst) begin
-      \$1239  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1240  = ch1_read_select_110;
-    if (bus__r_en) begin
-      \$1240  = \$396 ;
-    end
-    if (rst) begin
-      \$1240  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1241  = ch1_read_select_111;
-    if (bus__r_en) begin
-      \$1241  = \$397 ;
-    end
-    if (rst) begin
-      \$1241  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1242  = ch1_read_select_112;
-    if (bus__r_en) begin
-      \$1242  = \$398 ;
-    end
-    if (rst) begin
-      \$1242  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1243  = ch1_read_select_113;
-    if (bus__r_en) begin
-      \$1243  = \$399 ;
-    end
-    if (rst) begin
-      \$1243  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1244  = ch1_read_select_114;
-    if (bus__r_en) begin
-      \$1244  = \$400 ;
-    end
-    if (rst) begin
-      \$1244  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1245  = ch1_read_select_115;
-    if (bus__r_en) begin
-      \$1245  = \$401 ;
-    end
-    if (rst) begin
-      \$1245  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1246  = ch1_read_select_116;
-    if (bus__r_en) begin
-      \$1246  = \$402 ;
-    end
-    if (rst) begin
-      \$1246  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1247  = ch1_read_select_117;
-    if (bus__r_en) begin
-      \$1247  = \$403 ;
-    end
-    if (rst) begin
-      \$1247  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1248  = ch1_read_select_125;
-    if (bus__r_en) begin
-      \$1248  = \$404 ;
-    end
-    if (rst) begin
-      \$1248  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1249  = ch1_read_select_126;
-    if (bus__r_en) begin
-      \$1249  = \$405 ;
-    end
-    if (rst) begin
-      \$1249  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1250  = ch1_read_select_127;
-    if (bus__r_en) begin
-      \$1250  = \$406 ;
-    end
-    if (rst) begin
-      \$1250  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1251  = ch1_read_select_128;
-    if (bus__r_en) begin
-      \$1251  = \$407 ;
-    end
-    if (rst) begin
-      \$1251  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1252  = ch1_read_select_129;
-    if (bus__r_en) begin
-      \$1252  = \$408 ;
-    end
-    if (rst) begin
-      \$1252  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1253  = ch1_read_select_12a;
-    if (bus__r_en) begin
-      \$1253  = \$409 ;
-    end
-    if (rst) begin
-      \$1253  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1254  = ch1_read_select_12c;
-    if (bus__r_en) begin
-      \$1254  = \$410 ;
-    end
-    if (rst) begin
-      \$1254  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1255  = ch1_read_select_12d;
-    if (bus__r_en) begin
-      \$1255  = \$411 ;
-    end
-    if (rst) begin
-      \$1255  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1256  = ch1_read_select_12e;
-    if (bus__r_en) begin
-      \$1256  = \$412 ;
-    end
-    if (rst) begin
-      \$1256  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1257  = ch1_read_select_130;
-    if (bus__r_en) begin
-      \$1257  = \$413 ;
-    end
-    if (rst) begin
-      \$1257  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1258  = ch1_read_select_131;
-    if (bus__r_en) begin
-      \$1258  = \$414 ;
-    end
-    if (rst) begin
-      \$1258  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1259  = ch1_read_select_132;
-    if (bus__r_en) begin
-      \$1259  = \$415 ;
-    end
-    if (rst) begin
-      \$1259  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1260  = ch1_read_select_134;
-    if (bus__r_en) begin
-      \$1260  = \$416 ;
-    end
-    if (rst) begin
-      \$1260  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1261  = ch1_read_select_135;
-    if (bus__r_en) begin
-      \$1261  = \$417 ;
-    end
-    if (rst) begin
-      \$1261  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1262  = ch1_read_select_136;
-    if (bus__r_en) begin
-      \$1262  = \$418 ;
-    end
-    if (rst) begin
-      \$1262  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1263  = ch1_read_select_138;
-    if (bus__r_en) begin
-      \$1263  = \$419 ;
-    end
-    if (rst) begin
-      \$1263  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1264  = ch1_read_select_139;
-    if (bus__r_en) begin
-      \$1264  = \$420 ;
-    end
-    if (rst) begin
-      \$1264  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1265  = ch1_read_select_13a;
-    if (bus__r_en) begin
-      \$1265  = \$421 ;
-    end
-    if (rst) begin
-      \$1265  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1266  = ch1_read_select_13c;
-    if (bus__r_en) begin
-      \$1266  = \$422 ;
-    end
-    if (rst) begin
-      \$1266  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1267  = ch1_read_select_13d;
-    if (bus__r_en) begin
-      \$1267  = \$423 ;
-    end
-    if (rst) begin
-      \$1267  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1268  = ch1_read_select_13e;
-    if (bus__r_en) begin
-      \$1268  = \$424 ;
-    end
-    if (rst) begin
-      \$1268  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1269  = ch1_read_select_141;
-    if (bus__r_en) begin
-      \$1269  = \$425 ;
-    end
-    if (rst) begin
-      \$1269  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1270  = ch1_read_select_142;
-    if (bus__r_en) begin
-      \$1270  = \$426 ;
-    end
-    if (rst) begin
-      \$1270  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1271  = ch1_read_select_143;
-    if (bus__r_en) begin
-      \$1271  = \$427 ;
-    end
-    if (rst) begin
-      \$1271  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1272  = ch1_read_select_144;
-    if (bus__r_en) begin
-      \$1272  = \$428 ;
-    end
-    if (rst) begin
-      \$1272  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1273  = ch1_read_select_145;
-    if (bus__r_en) begin
-      \$1273  = \$429 ;
-    end
-    if (rst) begin
-      \$1273  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1274  = ch1_read_select_170;
-    if (bus__r_en) begin
-      \$1274  = \$430 ;
-    end
-    if (rst) begin
-      \$1274  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1275  = ch1_read_select_171;
-    if (bus__r_en) begin
-      \$1275  = \$431 ;
-    end
-    if (rst) begin
-      \$1275  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1276  = ch1_read_select_172;
-    if (bus__r_en) begin
-      \$1276  = \$432 ;
-    end
-    if (rst) begin
-      \$1276  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1277  = ch1_read_select_173;
-    if (bus__r_en) begin
-      \$1277  = \$433 ;
-    end
-    if (rst) begin
-      \$1277  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1278  = ch1_read_select_174;
-    if (bus__r_en) begin
-      \$1278  = \$434 ;
-    end
-    if (rst) begin
-      \$1278  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1279  = ch1_read_select_175;
-    if (bus__r_en) begin
-      \$1279  = \$435 ;
-    end
-    if (rst) begin
-      \$1279  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1280  = ch1_read_select_176;
-    if (bus__r_en) begin
-      \$1280  = \$436 ;
-    end
-    if (rst) begin
-      \$1280  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1281  = ch1_read_select_177;
-    if (bus__r_en) begin
-      \$1281  = \$437 ;
-    end
-    if (rst) begin
-      \$1281  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1282  = ch1_read_select_178;
-    if (bus__r_en) begin
-      \$1282  = \$438 ;
-    end
-    if (rst) begin
-      \$1282  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1283  = ch1_read_select_179;
-    if (bus__r_en) begin
-      \$1283  = \$439 ;
-    end
-    if (rst) begin
-      \$1283  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1284  = ch1_read_select_17a;
-    if (bus__r_en) begin
-      \$1284  = \$440 ;
-    end
-    if (rst) begin
-      \$1284  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1285  = ch1_read_select_17b;
-    if (bus__r_en) begin
-      \$1285  = \$441 ;
-    end
-    if (rst) begin
-      \$1285  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1286  = ch1_read_select_17c;
-    if (bus__r_en) begin
-      \$1286  = \$442 ;
-    end
-    if (rst) begin
-      \$1286  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1287  = ch1_read_select_17d;
-    if (bus__r_en) begin
-      \$1287  = \$443 ;
-    end
-    if (rst) begin
-      \$1287  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1288  = ch1_result_status_status_snapshot;
-    if (\$444 ) begin
-      \$1288  = \port$8490$0 [3:0];
-    end
-    if (rst) begin
-      \$1288  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1289  = ch1_result_status_cds_snapshot;
-    if (\$444 ) begin
-      \$1289  = \port$8490$0 [49];
-    end
-    if (rst) begin
-      \$1289  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1290  = ch1_result_status_w0_ne_snapshot;
-    if (\$444 ) begin
-      \$1290  = \port$8490$0 [131];
-    end
-    if (rst) begin
-      \$1290  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1291  = ch1_result_status_w0_nw_snapshot;
-    if (\$444 ) begin
-      \$1291  = \port$8490$0 [132];
-    end
-    if (rst) begin
-      \$1291  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1292  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$444 ) begin
-      \$1292  = \port$8490$0 [133];
-    end
-    if (rst) begin
-      \$1292  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1293  = ch1_result_status_w1_ne_snapshot;
-    if (\$444 ) begin
-      \$1293  = \port$8490$0 [174];
-    end
-    if (rst) begin
-      \$1293  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1294  = ch1_result_status_w1_nw_snapshot;
-    if (\$444 ) begin
-      \$1294  = \port$8490$0 [175];
-    end
-    if (rst) begin
-      \$1294  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1295  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$444 ) begin
-      \$1295  = \port$8490$0 [176];
-    end
-    if (rst) begin
-      \$1295  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1296  = ch1_result_status_lc_repeat_snapshot;
-    if (\$444 ) begin
-      \$1296  = \port$8490$0 [183];
-    end
-    if (rst) begin
-      \$1296  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1297  = ch1_result_status_lc_skip_snapshot;
-    if (\$444 ) begin
-      \$1297  = \port$8490$0 [184];
-    end
-    if (rst) begin
-      \$1297  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1298  = ch1_result_status_lc_zero_snapshot;
-    if (\$444 ) begin
-      \$1298  = \port$8490$0 [185];
-    end
-    if (rst) begin
-      \$1298  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1299  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$444 ) begin
-      \$1299  = \port$8490$0 [186];
-    end
-    if (rst) begin
-      \$1299  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1300  = ch1_result_status_lc_snapshot;
-    if (\$444 ) begin
-      \$1300  = \port$8490$0 [182:177];
-    end
-    if (rst) begin
-      \$1300  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1301  = ch1_result_seq_seq_snapshot;
-    if (\$444 ) begin
-      \$1301  = ch1__done_count;
-    end
-    if (rst) begin
-      \$1301  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1302  = ch1_result_seq_line_delay_snapshot;
-    if (\$444 ) begin
-      \$1302  = \port$8490$0 [48:36];
-    end
-    if (rst) begin
-      \$1302  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1303  = ch1_result_w0_lo_data_snapshot;
-    if (\$444 ) begin
-      \$1303  = \port$8490$0 [107:76];
-    end
-    if (rst) begin
-      \$1303  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1304  = ch1_result_w0_hi_data_snapshot;
-    if (\$444 ) begin
-      \$1304  = \port$8490$0 [130:108];
-    end
-    if (rst) begin
-      \$1304  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1305  = ch1_result_w1_lo_data_snapshot;
-    if (\$444 ) begin
-      \$1305  = \port$8490$0 [165:134];
-    end
-    if (rst) begin
-      \$1305  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1306  = ch1_result_w1_hi_data_snapshot;
-    if (\$444 ) begin
-      \$1306  = \port$8490$0 [173:166];
-    end
-    if (rst) begin
-      \$1306  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1307  = ch1_result_timestamp_time_snapshot;
-    if (\$444 ) begin
-      \$1307  = \port$8490$0 [35:4];
-    end
-    if (rst) begin
-      \$1307  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1308  = ch1_result_line_noise_events_snapshot;
-    if (\$444 ) begin
-      \$1308  = \port$8490$0 [53:50];
-    end
-    if (rst) begin
-      \$1308  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1309  = ch1_result_line_delay_settled_snapshot;
-    if (\$444 ) begin
-      \$1309  = \port$8490$0 [54];
-    end
-    if (rst) begin
-      \$1309  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1310  = ch1_result_line_delay_spread_snapshot;
-    if (\$444 ) begin
-      \$1310  = \port$8490$0 [75:68];
-    end
-    if (rst) begin
-      \$1310  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1311  = ch1_result_line_settled_delay_snapshot;
-    if (\$444 ) begin
-      \$1311  = \port$8490$0 [67:55];
-    end
-    if (rst) begin
-      \$1311  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1312  = ch1_window0_read;
-    if (bus__r_en) begin
-      \$1312  = \$446 ;
-    end
-    if (rst) begin
-      \$1312  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1313  = ch1_window1_read;
-    if (bus__r_en) begin
-      \$1313  = \$448 ;
-    end
-    if (rst) begin
-      \$1313  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1314  = ch1_window2_read;
-    if (bus__r_en) begin
-      \$1314  = ch1_config_read;
-    end
-    if (rst) begin
-      \$1314  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1315  = ch1_read_data;
-    if (bus__r_load) begin
-      \$1315  = \$562 ;
-    end
-    if (rst) begin
-      \$1315  = 32'd0;
+      \$1103  = 32'd0;
     end
   end
   always @* begin
@@ -9755,27 +9569,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$7959$0 [3:0];
-  assign ch0__cds = \port$7959$0 [49];
-  assign ch0__word0_ne = \port$7959$0 [131];
-  assign ch0__word0_nw = \port$7959$0 [132];
-  assign ch0__word0_crc_ok = \port$7959$0 [133];
-  assign ch0__word1_ne = \port$7959$0 [174];
-  assign ch0__word1_nw = \port$7959$0 [175];
-  assign ch0__word1_crc_ok = \port$7959$0 [176];
-  assign ch0__lc_repeat = \port$7959$0 [183];
-  assign ch0__lc_skip = \port$7959$0 [184];
-  assign ch0__lc_zero = \port$7959$0 [185];
-  assign ch0__spw_mismatch = \port$7959$0 [186];
-  assign ch0__lc = \port$7959$0 [182:177];
-  assign ch0__line_delay = \port$7959$0 [48:36];
-  assign ch0__word0_position = \port$7959$0 [130:76];
-  assign ch0__word1_position = \port$7959$0 [173:134];
-  assign ch0__timestamp = \port$7959$0 [35:4];
-  assign ch0__noise_events = \port$7959$0 [53:50];
-  assign ch0__delay_settled = \port$7959$0 [54];
-  assign ch0__delay_spread = \port$7959$0 [75:68];
-  assign ch0__settled_delay = \port$7959$0 [67:55];
+  assign ch0__status = \port$7807$0 [3:0];
+  assign ch0__cds = \port$7807$0 [49];
+  assign ch0__word0_ne = \port$7807$0 [131];
+  assign ch0__word0_nw = \port$7807$0 [132];
+  assign ch0__word0_crc_ok = \port$7807$0 [133];
+  assign ch0__word1_ne = \port$7807$0 [174];
+  assign ch0__word1_nw = \port$7807$0 [175];
+  assign ch0__word1_crc_ok = \port$7807$0 [176];
+  assign ch0__lc_repeat = \port$7807$0 [183];
+  assign ch0__lc_skip = \port$7807$0 [184];
+  assign ch0__lc_zero = \port$7807$0 [185];
+  assign ch0__spw_mismatch = \port$7807$0 [186];
+  assign ch0__lc = \port$7807$0 [182:177];
+  assign ch0__line_delay = \port$7807$0 [48:36];
+  assign ch0__word0_position = \port$7807$0 [130:76];
+  assign ch0__word1_position = \port$7807$0 [173:134];
+  assign ch0__timestamp = \port$7807$0 [35:4];
+  assign ch0__noise_events = \port$7807$0 [53:50];
+  assign ch0__delay_settled = \port$7807$0 [54];
+  assign ch0__delay_spread = \port$7807$0 [75:68];
+  assign ch0__settled_delay = \port$7807$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9796,13 +9610,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$8047$0 [2:0];
-  assign ch0__ca_bytes_done = \port$8047$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$7970$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$7970$0 [31:16];
-  assign ch0__count_ca_refused = \port$7970$0 [47:32];
-  assign ch0__count_ca_aborted = \port$7970$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$7970$0 [79:64];
+  assign ch0__ca_status = \port$7895$0 [2:0];
+  assign ch0__ca_bytes_done = \port$7895$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$7818$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$7818$0 [31:16];
+  assign ch0__count_ca_refused = \port$7818$0 [47:32];
+  assign ch0__count_ca_aborted = \port$7818$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$7818$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9827,27 +9641,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch0__word5_position = 63'h0000000000000000;
   assign ch0__word6_position = 63'h0000000000000000;
   assign ch0__word7_position = 63'h0000000000000000;
-  assign ch1__status = \port$8490$0 [3:0];
-  assign ch1__cds = \port$8490$0 [49];
-  assign ch1__word0_ne = \port$8490$0 [131];
-  assign ch1__word0_nw = \port$8490$0 [132];
-  assign ch1__word0_crc_ok = \port$8490$0 [133];
-  assign ch1__word1_ne = \port$8490$0 [174];
-  assign ch1__word1_nw = \port$8490$0 [175];
-  assign ch1__word1_crc_ok = \port$8490$0 [176];
-  assign ch1__lc_repeat = \port$8490$0 [183];
-  assign ch1__lc_skip = \port$8490$0 [184];
-  assign ch1__lc_zero = \port$8490$0 [185];
-  assign ch1__spw_mismatch = \port$8490$0 [186];
-  assign ch1__lc = \port$8490$0 [182:177];
-  assign ch1__line_delay = \port$8490$0 [48:36];
-  assign ch1__word0_position = \port$8490$0 [130:76];
-  assign ch1__word1_position = \port$8490$0 [173:134];
-  assign ch1__timestamp = \port$8490$0 [35:4];
-  assign ch1__noise_events = \port$8490$0 [53:50];
-  assign ch1__delay_settled = \port$8490$0 [54];
-  assign ch1__delay_spread = \port$8490$0 [75:68];
-  assign ch1__settled_delay = \port$8490$0 [67:55];
+  assign ch1__status = \port$8338$0 [3:0];
+  assign ch1__cds = \port$8338$0 [49];
+  assign ch1__word0_ne = \port$8338$0 [131];
+  assign ch1__word0_nw = \port$8338$0 [132];
+  assign ch1__word0_crc_ok = \port$8338$0 [133];
+  assign ch1__word1_ne = \port$8338$0 [174];
+  assign ch1__word1_nw = \port$8338$0 [175];
+  assign ch1__word1_crc_ok = \port$8338$0 [176];
+  assign ch1__lc_repeat = \port$8338$0 [183];
+  assign ch1__lc_skip = \port$8338$0 [184];
+  assign ch1__lc_zero = \port$8338$0 [185];
+  assign ch1__spw_mismatch = \port$8338$0 [186];
+  assign ch1__lc = \port$8338$0 [182:177];
+  assign ch1__line_delay = \port$8338$0 [48:36];
+  assign ch1__word0_position = \port$8338$0 [130:76];
+  assign ch1__word1_position = \port$8338$0 [173:134];
+  assign ch1__timestamp = \port$8338$0 [35:4];
+  assign ch1__noise_events = \port$8338$0 [53:50];
+  assign ch1__delay_settled = \port$8338$0 [54];
+  assign ch1__delay_spread = \port$8338$0 [75:68];
+  assign ch1__settled_delay = \port$8338$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9868,13 +9682,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$8578$0 [2:0];
-  assign ch1__ca_bytes_done = \port$8578$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$8501$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$8501$0 [31:16];
-  assign ch1__count_ca_refused = \port$8501$0 [47:32];
-  assign ch1__count_ca_aborted = \port$8501$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$8501$0 [79:64];
+  assign ch1__ca_status = \port$8426$0 [2:0];
+  assign ch1__ca_bytes_done = \port$8426$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$8349$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$8349$0 [31:16];
+  assign ch1__count_ca_refused = \port$8349$0 [47:32];
+  assign ch1__count_ca_aborted = \port$8349$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$8349$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -10019,7 +9833,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
   assign ch0__ca_rbuf_addr = bus__r_addr[3:0];
-  assign wr__addr = { \$644 , \$643 , \$642 , \$641  };
+  assign wr__addr = { \$612 , \$611 , \$610 , \$609  };
   assign wr__data = config_memory0_write_data;
   assign rd__addr = ch0_config_read_index;
   assign ch1__count_addr = bus__r_addr[2:0];
@@ -10136,300 +9950,178 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$447 ;
+  assign ch1__ca_write = \ch1_ca_request_write$446 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
   assign ch1__ca_wbuf_data = write_data;
   assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
-  assign \wr__addr$942  = { \$836 , \$835 , \$834 , \$833  };
-  assign \wr__data$943  = config_memory0_write_data;
-  assign \rd__addr$945  = ch1_config_read_index;
+  assign \wr__addr$940  = { \$715 , \$714 , \$713 , \$712  };
+  assign \wr__data$941  = config_memory0_write_data;
+  assign \rd__addr$943  = ch1_config_read_index;
   assign irq = { ch1_irq, ch0_irq };
   assign ch0__ca_wbuf_addr = write_addr[3:0];
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$755  = \$754 ;
-  assign \$757  = \$756 ;
-  assign \$759  = \$758 ;
-  assign \$947  = \$946 ;
-  assign \$949  = \$948 ;
-  assign \$951  = \$950 ;
-  assign \$180  = \$179 ;
-  assign \$187  = 32'd0;
-  assign \$188  = \$186 ;
-  assign \$189  = 32'd0;
-  assign \$190  = \$186 ;
+  assign \$634  = \$633 ;
+  assign \$636  = \$635 ;
+  assign \$638  = \$637 ;
+  assign \$737  = \$736 ;
+  assign \$739  = \$738 ;
+  assign \$741  = \$740 ;
+  assign \$164  = \$163 ;
+  assign \$171  = 32'd0;
+  assign \$172  = \$170 ;
+  assign \$173  = 32'd0;
+  assign \$174  = \$170 ;
+  assign \$191  = 32'd0;
+  assign \$192  = \$190 ;
+  assign \$193  = 32'd0;
+  assign \$194  = \$190 ;
+  assign \$195  = 32'd0;
+  assign \$196  = \$190 ;
+  assign \$197  = 32'd0;
+  assign \$198  = \$190 ;
+  assign \$199  = 32'd0;
+  assign \$200  = \$190 ;
+  assign \$201  = 32'd0;
+  assign \$202  = \$190 ;
+  assign \$203  = 32'd0;
+  assign \$204  = \$190 ;
+  assign \$205  = 32'd0;
+  assign \$206  = \$190 ;
   assign \$207  = 32'd0;
-  assign \$208  = \$206 ;
+  assign \$208  = \$190 ;
   assign \$209  = 32'd0;
-  assign \$210  = \$206 ;
+  assign \$210  = \$190 ;
   assign \$211  = 32'd0;
-  assign \$212  = \$206 ;
+  assign \$212  = \$190 ;
   assign \$213  = 32'd0;
-  assign \$214  = \$206 ;
+  assign \$214  = \$190 ;
   assign \$215  = 32'd0;
-  assign \$216  = \$206 ;
+  assign \$216  = \$190 ;
   assign \$217  = 32'd0;
-  assign \$218  = \$206 ;
+  assign \$218  = \$190 ;
   assign \$219  = 32'd0;
-  assign \$220  = \$206 ;
+  assign \$220  = \$190 ;
   assign \$221  = 32'd0;
-  assign \$222  = \$206 ;
+  assign \$222  = \$190 ;
   assign \$223  = 32'd0;
-  assign \$224  = \$206 ;
+  assign \$224  = \$190 ;
   assign \$225  = 32'd0;
-  assign \$226  = \$206 ;
+  assign \$226  = \$190 ;
   assign \$227  = 32'd0;
-  assign \$228  = \$206 ;
+  assign \$228  = \$190 ;
   assign \$229  = 32'd0;
-  assign \$230  = \$206 ;
+  assign \$230  = \$190 ;
   assign \$231  = 32'd0;
-  assign \$232  = \$206 ;
+  assign \$232  = \$190 ;
   assign \$233  = 32'd0;
-  assign \$234  = \$206 ;
-  assign \$235  = 32'd0;
-  assign \$236  = \$206 ;
-  assign \$237  = 32'd0;
-  assign \$238  = \$206 ;
-  assign \$239  = 32'd0;
-  assign \$240  = \$206 ;
-  assign \$241  = 32'd0;
-  assign \$242  = \$206 ;
-  assign \$243  = 32'd0;
-  assign \$244  = \$206 ;
+  assign \$234  = \$190 ;
   assign \$245  = 32'd0;
-  assign \$246  = \$206 ;
+  assign \$246  = \$244 ;
   assign \$247  = 32'd0;
-  assign \$248  = \$206 ;
+  assign \$248  = \$244 ;
   assign \$249  = 32'd0;
-  assign \$250  = \$206 ;
+  assign \$250  = \$244 ;
+  assign \$251  = 32'd0;
+  assign \$252  = \$244 ;
+  assign \$253  = 32'd0;
+  assign \$254  = \$244 ;
+  assign \$255  = 32'd0;
+  assign \$256  = \$244 ;
+  assign \$257  = 32'd0;
+  assign \$258  = \$244 ;
+  assign \$259  = 32'd0;
+  assign \$260  = \$244 ;
   assign \$261  = 32'd0;
-  assign \$262  = \$260 ;
+  assign \$262  = \$244 ;
   assign \$263  = 32'd0;
-  assign \$264  = \$260 ;
+  assign \$264  = \$244 ;
   assign \$265  = 32'd0;
-  assign \$266  = \$260 ;
+  assign \$266  = \$244 ;
   assign \$267  = 32'd0;
-  assign \$268  = \$260 ;
+  assign \$268  = \$244 ;
   assign \$269  = 32'd0;
-  assign \$270  = \$260 ;
-  assign \$271  = 32'd0;
-  assign \$272  = \$260 ;
-  assign \$273  = 32'd0;
-  assign \$274  = \$260 ;
-  assign \$275  = 32'd0;
-  assign \$276  = \$260 ;
-  assign \$277  = 32'd0;
-  assign \$278  = \$260 ;
-  assign \$279  = 32'd0;
-  assign \$280  = \$260 ;
-  assign \$281  = 32'd0;
-  assign \$282  = \$260 ;
-  assign \$283  = 32'd0;
-  assign \$284  = \$260 ;
-  assign \$285  = 32'd0;
-  assign \$286  = \$260 ;
-  assign \$666  = 1'h0;
-  assign \$667  = 1'h0;
-  assign \$668  = 1'h0;
-  assign \$669  = 1'h0;
-  assign \$672  = 1'h0;
-  assign \$673  = 1'h0;
-  assign \$674  = 1'h0;
-  assign \$675  = 1'h0;
-  assign \$678  = 1'h0;
-  assign \$679  = 1'h0;
-  assign \$680  = 1'h0;
-  assign \$681  = 1'h0;
-  assign \$684  = 1'h0;
-  assign \$685  = 1'h0;
-  assign \$686  = 1'h0;
-  assign \$687  = 1'h0;
-  assign \$690  = 1'h0;
-  assign \$691  = 1'h0;
-  assign \$692  = 1'h0;
-  assign \$693  = 1'h0;
-  assign \$696  = 1'h0;
-  assign \$697  = 1'h0;
-  assign \$698  = 1'h0;
-  assign \$699  = 1'h0;
-  assign \$702  = 1'h0;
-  assign \$703  = 1'h0;
-  assign \$704  = 1'h0;
-  assign \$705  = 1'h0;
-  assign \$708  = 1'h0;
-  assign \$709  = 1'h0;
-  assign \$710  = 1'h0;
-  assign \$711  = 1'h0;
-  assign \$714  = 1'h0;
-  assign \$715  = 1'h0;
-  assign \$716  = 1'h0;
-  assign \$717  = 1'h0;
-  assign \$720  = 1'h0;
-  assign \$721  = 1'h0;
-  assign \$722  = 1'h0;
-  assign \$723  = 1'h0;
-  assign \$726  = 1'h0;
-  assign \$727  = 1'h0;
-  assign \$728  = 1'h0;
-  assign \$729  = 1'h0;
-  assign \$732  = 1'h0;
-  assign \$733  = 1'h0;
-  assign \$734  = 1'h0;
-  assign \$735  = 1'h0;
-  assign \$738  = 1'h0;
-  assign \$739  = 1'h0;
-  assign \$740  = 1'h0;
-  assign \$741  = 1'h0;
-  assign \$744  = 1'h0;
-  assign \$745  = 1'h0;
-  assign \$746  = 1'h0;
-  assign \$747  = 1'h0;
-  assign \$750  = 1'h0;
-  assign \$751  = 1'h0;
-  assign \$752  = 1'h0;
-  assign \$753  = 1'h0;
-  assign ch0_config_read_data = \$663 ;
-  assign \$450  = \$449 ;
+  assign \$270  = \$244 ;
+  assign \$418  = \$417 ;
+  assign \$425  = 32'd0;
+  assign \$426  = \$424 ;
+  assign \$427  = 32'd0;
+  assign \$428  = \$424 ;
+  assign \$445  = 32'd0;
+  assign \$446  = \$444 ;
+  assign \$447  = 32'd0;
+  assign \$448  = \$444 ;
+  assign \$449  = 32'd0;
+  assign \$450  = \$444 ;
+  assign \$451  = 32'd0;
+  assign \$452  = \$444 ;
+  assign \$453  = 32'd0;
+  assign \$454  = \$444 ;
+  assign \$455  = 32'd0;
+  assign \$456  = \$444 ;
   assign \$457  = 32'd0;
-  assign \$458  = \$456 ;
+  assign \$458  = \$444 ;
   assign \$459  = 32'd0;
-  assign \$460  = \$456 ;
+  assign \$460  = \$444 ;
+  assign \$461  = 32'd0;
+  assign \$462  = \$444 ;
+  assign \$463  = 32'd0;
+  assign \$464  = \$444 ;
+  assign \$465  = 32'd0;
+  assign \$466  = \$444 ;
+  assign \$467  = 32'd0;
+  assign \$468  = \$444 ;
+  assign \$469  = 32'd0;
+  assign \$470  = \$444 ;
+  assign \$471  = 32'd0;
+  assign \$472  = \$444 ;
+  assign \$473  = 32'd0;
+  assign \$474  = \$444 ;
+  assign \$475  = 32'd0;
+  assign \$476  = \$444 ;
   assign \$477  = 32'd0;
-  assign \$478  = \$476 ;
+  assign \$478  = \$444 ;
   assign \$479  = 32'd0;
-  assign \$480  = \$476 ;
+  assign \$480  = \$444 ;
   assign \$481  = 32'd0;
-  assign \$482  = \$476 ;
+  assign \$482  = \$444 ;
   assign \$483  = 32'd0;
-  assign \$484  = \$476 ;
+  assign \$484  = \$444 ;
   assign \$485  = 32'd0;
-  assign \$486  = \$476 ;
+  assign \$486  = \$444 ;
   assign \$487  = 32'd0;
-  assign \$488  = \$476 ;
-  assign \$489  = 32'd0;
-  assign \$490  = \$476 ;
-  assign \$491  = 32'd0;
-  assign \$492  = \$476 ;
-  assign \$493  = 32'd0;
-  assign \$494  = \$476 ;
-  assign \$495  = 32'd0;
-  assign \$496  = \$476 ;
-  assign \$497  = 32'd0;
-  assign \$498  = \$476 ;
+  assign \$488  = \$444 ;
   assign \$499  = 32'd0;
-  assign \$500  = \$476 ;
+  assign \$500  = \$498 ;
   assign \$501  = 32'd0;
-  assign \$502  = \$476 ;
+  assign \$502  = \$498 ;
   assign \$503  = 32'd0;
-  assign \$504  = \$476 ;
+  assign \$504  = \$498 ;
   assign \$505  = 32'd0;
-  assign \$506  = \$476 ;
+  assign \$506  = \$498 ;
   assign \$507  = 32'd0;
-  assign \$508  = \$476 ;
+  assign \$508  = \$498 ;
   assign \$509  = 32'd0;
-  assign \$510  = \$476 ;
+  assign \$510  = \$498 ;
   assign \$511  = 32'd0;
-  assign \$512  = \$476 ;
+  assign \$512  = \$498 ;
   assign \$513  = 32'd0;
-  assign \$514  = \$476 ;
+  assign \$514  = \$498 ;
   assign \$515  = 32'd0;
-  assign \$516  = \$476 ;
+  assign \$516  = \$498 ;
   assign \$517  = 32'd0;
-  assign \$518  = \$476 ;
+  assign \$518  = \$498 ;
   assign \$519  = 32'd0;
-  assign \$520  = \$476 ;
-  assign \$531  = 32'd0;
-  assign \$532  = \$530 ;
-  assign \$533  = 32'd0;
-  assign \$534  = \$530 ;
-  assign \$535  = 32'd0;
-  assign \$536  = \$530 ;
-  assign \$537  = 32'd0;
-  assign \$538  = \$530 ;
-  assign \$539  = 32'd0;
-  assign \$540  = \$530 ;
-  assign \$541  = 32'd0;
-  assign \$542  = \$530 ;
-  assign \$543  = 32'd0;
-  assign \$544  = \$530 ;
-  assign \$545  = 32'd0;
-  assign \$546  = \$530 ;
-  assign \$547  = 32'd0;
-  assign \$548  = \$530 ;
-  assign \$549  = 32'd0;
-  assign \$550  = \$530 ;
-  assign \$551  = 32'd0;
-  assign \$552  = \$530 ;
-  assign \$553  = 32'd0;
-  assign \$554  = \$530 ;
-  assign \$555  = 32'd0;
-  assign \$556  = \$530 ;
-  assign \$858  = 1'h0;
-  assign \$859  = 1'h0;
-  assign \$860  = 1'h0;
-  assign \$861  = 1'h0;
-  assign \$864  = 1'h0;
-  assign \$865  = 1'h0;
-  assign \$866  = 1'h0;
-  assign \$867  = 1'h0;
-  assign \$870  = 1'h0;
-  assign \$871  = 1'h0;
-  assign \$872  = 1'h0;
-  assign \$873  = 1'h0;
-  assign \$876  = 1'h0;
-  assign \$877  = 1'h0;
-  assign \$878  = 1'h0;
-  assign \$879  = 1'h0;
-  assign \$882  = 1'h0;
-  assign \$883  = 1'h0;
-  assign \$884  = 1'h0;
-  assign \$885  = 1'h0;
-  assign \$888  = 1'h0;
-  assign \$889  = 1'h0;
-  assign \$890  = 1'h0;
-  assign \$891  = 1'h0;
-  assign \$894  = 1'h0;
-  assign \$895  = 1'h0;
-  assign \$896  = 1'h0;
-  assign \$897  = 1'h0;
-  assign \$900  = 1'h0;
-  assign \$901  = 1'h0;
-  assign \$902  = 1'h0;
-  assign \$903  = 1'h0;
-  assign \$906  = 1'h0;
-  assign \$907  = 1'h0;
-  assign \$908  = 1'h0;
-  assign \$909  = 1'h0;
-  assign \$912  = 1'h0;
-  assign \$913  = 1'h0;
-  assign \$914  = 1'h0;
-  assign \$915  = 1'h0;
-  assign \$918  = 1'h0;
-  assign \$919  = 1'h0;
-  assign \$920  = 1'h0;
-  assign \$921  = 1'h0;
-  assign \$924  = 1'h0;
-  assign \$925  = 1'h0;
-  assign \$926  = 1'h0;
-  assign \$927  = 1'h0;
-  assign \$930  = 1'h0;
-  assign \$931  = 1'h0;
-  assign \$932  = 1'h0;
-  assign \$933  = 1'h0;
-  assign \$936  = 1'h0;
-  assign \$937  = 1'h0;
-  assign \$938  = 1'h0;
-  assign \$939  = 1'h0;
-  assign \$942  = 1'h0;
-  assign \$943  = 1'h0;
-  assign \$944  = 1'h0;
-  assign \$945  = 1'h0;
-  assign ch1_config_read_data = \$855 ;
+  assign \$520  = \$498 ;
+  assign \$521  = 32'd0;
+  assign \$522  = \$498 ;
+  assign \$523  = 32'd0;
+  assign \$524  = \$498 ;
   assign g_irq = 1'h0;
-  assign \$952  = g_read_data;
+  assign \$742  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -12584,7 +12276,7 @@ endmodule
 module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7959$0 , \port$7970$0 , regs__ca_done, \port$8047$0 , slo);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7807$0 , \port$7818$0 , regs__ca_done, \port$7895$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -12768,12 +12460,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7959$0 ;
-  wire [186:0] \port$7959$0 ;
-  output [79:0] \port$7970$0 ;
-  wire [79:0] \port$7970$0 ;
-  output [9:0] \port$8047$0 ;
-  wire [9:0] \port$8047$0 ;
+  output [186:0] \port$7807$0 ;
+  wire [186:0] \port$7807$0 ;
+  output [79:0] \port$7818$0 ;
+  wire [79:0] \port$7818$0 ;
+  output [9:0] \port$7895$0 ;
+  wire [9:0] \port$7895$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -13262,9 +12954,9 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$7959$0  = \$20 ;
-  assign \port$7970$0  = \$21 ;
-  assign \port$8047$0  = \$22 ;
+  assign \port$7807$0  = \$20 ;
+  assign \port$7818$0  = \$21 ;
+  assign \port$7895$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -14341,7 +14033,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7616$272 (cycle[274:272]),
+    .\port$7464$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -14401,7 +14093,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$7616$199 (cycle[199]),
+    .\port$7464$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -14452,7 +14144,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7616$259 (cycle[271:259]),
+    .\port$7464$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -14476,7 +14168,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7604$0 (\bit ),
+    .\port$7452$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -14544,7 +14236,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$3531$0 (\$28 ),
+    .\port$3383$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -18628,7 +18320,7 @@ module \biss_master_uart.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$7616$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$7464$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
@@ -19321,8 +19013,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7616$272 ;
-  wire [2:0] \port$7616$272 ;
+  input [2:0] \port$7464$272 ;
+  wire [2:0] \port$7464$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -19608,7 +19300,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$7616$272 [0];
+  assign error_bit = ssi & \port$7464$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -19662,7 +19354,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$7616$272 [2];
+  assign \$48  = ssi & \port$7464$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -19949,15 +19641,15 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$7616$272 [0];
+  assign \$335  = ssi & \port$7464$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$7616$272 [0];
-  assign \$343  = ~ \port$7616$272 [1];
+  assign \$342  = ssi & \port$7464$272 [0];
+  assign \$343  = ~ \port$7464$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -20589,7 +20281,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$7616$272 [0];
+  assign ssi_error = \port$7464$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -20598,8 +20290,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$7616$272 [2];
-  assign ssi_error_low = \port$7616$272 [1];
+  assign ssi_double = \port$7464$272 [2];
+  assign ssi_error_low = \port$7464$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22256,7 +21948,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$7616$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$7464$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -22308,8 +22000,8 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$7616$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$7616$199 ;
-  wire \port$7616$199 ;
+  input \port$7464$199 ;
+  wire \port$7464$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -22363,7 +22055,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$7616$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$7616$199  ? word1_len : 8'h00;
+  assign \$11  = \port$7464$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -22473,7 +22165,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$7616$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$7616$199 , 1'h1 };
+  assign enables = { \port$7464$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -24614,7 +24306,7 @@ module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7616$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7464$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -24748,8 +24440,8 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7616$259 ;
-  wire [12:0] \port$7616$259 ;
+  input [12:0] \port$7464$259 ;
+  wire [12:0] \port$7464$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -24774,7 +24466,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7616$259 [12:1] + 1'h1;
+  assign \$11  = \port$7464$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -24899,7 +24591,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7616$259 [0]),
+    .clear_high(\port$7464$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -25042,7 +24734,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7616$259 [0]) begin
+            if (\port$7464$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -25127,7 +24819,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7616$259 [0]) begin
+            if (\port$7464$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -25166,7 +24858,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7616$259 [12:1] };
+            \$85  = { 1'h0, \port$7464$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -25551,11 +25243,11 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7616$259 [12:1] };
-  assign fixed = \port$7616$259 [0];
+  assign fixed_delay = { 1'h0, \port$7464$259 [12:1] };
+  assign fixed = \port$7464$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7616$259 [0];
+  assign clear_high = \port$7464$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -25962,7 +25654,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$7604$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$7452$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -26004,8 +25696,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7604$0 ;
-  wire \port$7604$0 ;
+  input \port$7452$0 ;
+  wire \port$7452$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -26019,9 +25711,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7604$0  };
-  assign \$2  = { lc[4:0], \port$7604$0  } == last;
-  assign \$3  = { lc[4:0], \port$7604$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7452$0  };
+  assign \$2  = { lc[4:0], \port$7452$0  } == last;
+  assign \$3  = { lc[4:0], \port$7452$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -26131,7 +25823,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7604$0  };
+  assign lc_next = { lc[4:0], \port$7452$0  };
   assign zero = is_zero;
 endmodule
 
@@ -26695,7 +26387,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$3531$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$3383$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
@@ -26873,8 +26565,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$3531$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$3531$0 ;
-  wire \port$3531$0 ;
+  output \port$3383$0 ;
+  wire \port$3383$0 ;
   output report;
   wire report;
   input report_frame;
@@ -26992,7 +26684,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$3531$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3531$0  = \$2 ;
+  assign \port$3383$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -27049,7 +26741,7 @@ endmodule
 module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$8490$0 , \port$8501$0 , regs__ca_done, \port$8578$0 , slo);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$8338$0 , \port$8349$0 , regs__ca_done, \port$8426$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -27233,12 +26925,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$8490$0 ;
-  wire [186:0] \port$8490$0 ;
-  output [79:0] \port$8501$0 ;
-  wire [79:0] \port$8501$0 ;
-  output [9:0] \port$8578$0 ;
-  wire [9:0] \port$8578$0 ;
+  output [186:0] \port$8338$0 ;
+  wire [186:0] \port$8338$0 ;
+  output [79:0] \port$8349$0 ;
+  wire [79:0] \port$8349$0 ;
+  output [9:0] \port$8426$0 ;
+  wire [9:0] \port$8426$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -27727,9 +27419,9 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$8490$0  = \$20 ;
-  assign \port$8501$0  = \$21 ;
-  assign \port$8578$0  = \$22 ;
+  assign \port$8338$0  = \$20 ;
+  assign \port$8349$0  = \$21 ;
+  assign \port$8426$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -28806,7 +28498,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$8147$272 (cycle[274:272]),
+    .\port$7995$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -28866,7 +28558,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$8147$199 (cycle[199]),
+    .\port$7995$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -28917,7 +28609,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$8147$259 (cycle[271:259]),
+    .\port$7995$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -28941,7 +28633,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$8135$0 (\bit ),
+    .\port$7983$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -29009,7 +28701,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5944$0 (\$28 ),
+    .\port$5796$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -33093,7 +32785,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$8147$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$7995$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
@@ -33786,8 +33478,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$8147$272 ;
-  wire [2:0] \port$8147$272 ;
+  input [2:0] \port$7995$272 ;
+  wire [2:0] \port$7995$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -34073,7 +33765,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$8147$272 [0];
+  assign error_bit = ssi & \port$7995$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -34127,7 +33819,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$8147$272 [2];
+  assign \$48  = ssi & \port$7995$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -34414,15 +34106,15 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$8147$272 [0];
+  assign \$335  = ssi & \port$7995$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$8147$272 [0];
-  assign \$343  = ~ \port$8147$272 [1];
+  assign \$342  = ssi & \port$7995$272 [0];
+  assign \$343  = ~ \port$7995$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -35054,7 +34746,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$8147$272 [0];
+  assign ssi_error = \port$7995$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -35063,8 +34755,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$8147$272 [2];
-  assign ssi_error_low = \port$8147$272 [1];
+  assign ssi_double = \port$7995$272 [2];
+  assign ssi_error_low = \port$7995$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -36721,7 +36413,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$8147$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$7995$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -36773,8 +36465,8 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$8147$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$8147$199 ;
-  wire \port$8147$199 ;
+  input \port$7995$199 ;
+  wire \port$7995$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -36828,7 +36520,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$8147$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$8147$199  ? word1_len : 8'h00;
+  assign \$11  = \port$7995$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -36938,7 +36630,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$8147$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$8147$199 , 1'h1 };
+  assign enables = { \port$7995$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -39079,7 +38771,7 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$8147$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7995$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -39213,8 +38905,8 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$8147$259 ;
-  wire [12:0] \port$8147$259 ;
+  input [12:0] \port$7995$259 ;
+  wire [12:0] \port$7995$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -39239,7 +38931,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$8147$259 [12:1] + 1'h1;
+  assign \$11  = \port$7995$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -39364,7 +39056,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$8147$259 [0]),
+    .clear_high(\port$7995$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -39507,7 +39199,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$8147$259 [0]) begin
+            if (\port$7995$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -39592,7 +39284,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$8147$259 [0]) begin
+            if (\port$7995$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -39631,7 +39323,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$8147$259 [12:1] };
+            \$85  = { 1'h0, \port$7995$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -40016,11 +39708,11 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$8147$259 [12:1] };
-  assign fixed = \port$8147$259 [0];
+  assign fixed_delay = { 1'h0, \port$7995$259 [12:1] };
+  assign fixed = \port$7995$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$8147$259 [0];
+  assign clear_high = \port$7995$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -40427,7 +40119,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$8135$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7983$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -40469,8 +40161,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$8135$0 ;
-  wire \port$8135$0 ;
+  input \port$7983$0 ;
+  wire \port$7983$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -40484,9 +40176,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$8135$0  };
-  assign \$2  = { lc[4:0], \port$8135$0  } == last;
-  assign \$3  = { lc[4:0], \port$8135$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7983$0  };
+  assign \$2  = { lc[4:0], \port$7983$0  } == last;
+  assign \$3  = { lc[4:0], \port$7983$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -40596,7 +40288,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$8135$0  };
+  assign lc_next = { lc[4:0], \port$7983$0  };
   assign zero = is_zero;
 endmodule
 
@@ -41160,7 +40852,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5944$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5796$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire \$1 ;
@@ -41338,8 +41030,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5944$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$5944$0 ;
-  wire \port$5944$0 ;
+  output \port$5796$0 ;
+  wire \port$5796$0 ;
   output report;
   wire report;
   input report_frame;
@@ -41457,7 +41149,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5944$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5944$0  = \$2 ;
+  assign \port$5796$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -357,25 +357,18 @@ class RegisterBank(wiring.Component):
             wr.data.eq(data),
             wr.en.eq(Mux(writes.any(), self._w2_strb | first.replicate(len(wr.en)), 0)),
         ]
-        # The read: the register's index taken at r_en, the memory read at r_load. The index
-        # register feeds the memory alone, so that Yosys can make it the address register of
-        # a block RAM's read port (iCE40); the written flag and the constants are chosen by
-        # a one-hot select per register, taken at r_en too.
+        # The read: the register's index taken at r_en, the memory read at r_load.
         hit = Signal(name=f"{prefix}_config_read")
         m.d.comb += hit.eq(bus.r_en & (bus.r_addr[low:] == base // 4 >> low) & r_shadow)
         index = Signal(range(count), name=f"{prefix}_config_read_index")
-        select = Signal(count, name=f"{prefix}_config_read_select")
-        with m.If(bus.r_en):
-            m.d.sync += select.eq(Mux(hit, Cat(r_index == k for k in range(count)), 0))
         with m.If(hit):
             m.d.sync += index.eq(r_index)
         rd = memory.read_port(domain="comb")
         m.d.comb += rd.addr.eq(index)
         value = Signal(DATA_WIDTH, name=f"{prefix}_config_read_data")
-        fixed = 0
-        for k in range(count):
-            fixed = fixed | Mux(select[k] & ~written[k], reset[k], 0) | Mux(select[k], const[k], 0)
-        m.d.comb += value.eq(Mux((select & written).any(), rd.data, 0) | fixed)
+        m.d.comb += value.eq(Mux(written.bit_select(index, 1), rd.data,
+                                 Array(C(r, DATA_WIDTH) for r in reset)[index])
+                             | Array(C(c, DATA_WIDTH) for c in const)[index])
         windows.append((hit, value))
 
     def _shadow_common(self, m, registers, shadowed, absent, mask, reset):
