@@ -1082,12 +1082,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$7280$0 (\$10 ),
-    .\port$7291$0 (\$11 ),
-    .\port$7368$0 (\$12 ),
-    .\port$7811$0 (\$13 ),
-    .\port$7822$0 (\$14 ),
-    .\port$7899$0 (\$15 ),
+    .\port$7212$0 (\$10 ),
+    .\port$7223$0 (\$11 ),
+    .\port$7300$0 (\$12 ),
+    .\port$7743$0 (\$13 ),
+    .\port$7754$0 (\$14 ),
+    .\port$7831$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1163,9 +1163,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$7280$0 (\$10 ),
-    .\port$7291$0 (\$11 ),
-    .\port$7368$0 (\$12 ),
+    .\port$7212$0 (\$10 ),
+    .\port$7223$0 (\$11 ),
+    .\port$7300$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1240,9 +1240,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(\regs__count_en$767 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$791 ),
-    .\port$7811$0 (\$13 ),
-    .\port$7822$0 (\$14 ),
-    .\port$7899$0 (\$15 ),
+    .\port$7743$0 (\$13 ),
+    .\port$7754$0 (\$14 ),
+    .\port$7831$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$461 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -2016,7 +2016,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
 , ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
 , ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id
-, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$446 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7280$0 , \port$7291$0 , ch0__ca_done, \port$7368$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$7811$0 , \port$7822$0 , ch1__ca_done, \port$7899$0 , bus__w_addr);
+, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$446 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7212$0 , \port$7223$0 , ch0__ca_done, \port$7300$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$7743$0 , \port$7754$0 , ch1__ca_done, \port$7831$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2032,19 +2032,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$1008 ;
   reg \$1009 ;
   wire [31:0] \$101 ;
-  reg \$1010 ;
-  reg \$1011 ;
-  reg \$1012 ;
+  reg [2:0] \$1010 ;
+  reg [6:0] \$1011 ;
+  reg [6:0] \$1012 ;
   reg \$1013 ;
-  reg [2:0] \$1014 ;
-  reg [6:0] \$1015 ;
-  reg [6:0] \$1016 ;
-  reg \$1017 ;
+  reg \$1014 ;
+  reg \$1015 ;
+  reg [14:0] \$1016 ;
+  reg [3:0] \$1017 ;
   reg \$1018 ;
   reg \$1019 ;
   wire [31:0] \$102 ;
-  reg [14:0] \$1020 ;
-  reg [3:0] \$1021 ;
+  reg \$1020 ;
+  reg \$1021 ;
   reg \$1022 ;
   reg \$1023 ;
   reg \$1024 ;
@@ -2100,11 +2100,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$107 ;
   reg \$1070 ;
   reg \$1071 ;
-  reg \$1072 ;
+  reg [3:0] \$1072 ;
   reg \$1073 ;
   reg \$1074 ;
   reg \$1075 ;
-  reg [3:0] \$1076 ;
+  reg \$1076 ;
   reg \$1077 ;
   reg \$1078 ;
   reg \$1079 ;
@@ -2113,29 +2113,25 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$1081 ;
   reg \$1082 ;
   reg \$1083 ;
-  reg \$1084 ;
-  reg \$1085 ;
-  reg \$1086 ;
-  reg \$1087 ;
-  reg [5:0] \$1088 ;
-  reg [15:0] \$1089 ;
+  reg [5:0] \$1084 ;
+  reg [15:0] \$1085 ;
+  reg [12:0] \$1086 ;
+  reg [31:0] \$1087 ;
+  reg [22:0] \$1088 ;
+  reg [31:0] \$1089 ;
   wire \$109 ;
-  reg [12:0] \$1090 ;
+  reg [7:0] \$1090 ;
   reg [31:0] \$1091 ;
-  reg [22:0] \$1092 ;
-  reg [31:0] \$1093 ;
+  reg [3:0] \$1092 ;
+  reg \$1093 ;
   reg [7:0] \$1094 ;
-  reg [31:0] \$1095 ;
-  reg [3:0] \$1096 ;
+  reg [12:0] \$1095 ;
+  reg \$1096 ;
   reg \$1097 ;
-  reg [7:0] \$1098 ;
-  reg [12:0] \$1099 ;
+  reg \$1098 ;
+  reg [31:0] \$1099 ;
   wire [31:0] \$11 ;
   wire \$110 ;
-  reg \$1100 ;
-  reg \$1101 ;
-  reg \$1102 ;
-  reg [31:0] \$1103 ;
   wire \$111 ;
   wire \$112 ;
   wire \$113 ;
@@ -2712,9 +2708,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$628 ;
   wire \$629 ;
   wire \$63 ;
-  reg [31:0] \$630 ;
-  wire [31:0] \$631 ;
-  reg [31:0] \$632 ;
+  wire [31:0] \$630 ;
+  wire \$631 ;
+  wire \$632 ;
   wire \$633 ;
   wire \$634 ;
   wire \$635 ;
@@ -2806,52 +2802,52 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$712 ;
   wire \$713 ;
   wire \$714 ;
-  wire \$715 ;
-  wire \$716 ;
-  wire [14:0] \$717 ;
+  wire [14:0] \$715 ;
+  wire [14:0] \$716 ;
+  wire \$717 ;
   wire [14:0] \$718 ;
-  wire \$719 ;
+  wire [14:0] \$719 ;
   wire \$72 ;
-  wire [14:0] \$720 ;
+  wire \$720 ;
   wire [14:0] \$721 ;
-  wire \$722 ;
-  wire [14:0] \$723 ;
+  wire [14:0] \$722 ;
+  wire \$723 ;
   wire [14:0] \$724 ;
-  wire \$725 ;
-  wire [14:0] \$726 ;
-  wire [14:0] \$727 ;
+  wire [14:0] \$725 ;
+  wire \$726 ;
+  wire [3:0] \$727 ;
   wire \$728 ;
-  wire [3:0] \$729 ;
+  wire \$729 ;
   wire \$73 ;
   wire \$730 ;
-  wire \$731 ;
+  wire [31:0] \$731 ;
   wire \$732 ;
-  reg [31:0] \$733 ;
-  wire [31:0] \$734 ;
-  reg [31:0] \$735 ;
+  wire \$733 ;
+  wire \$734 ;
+  wire \$735 ;
   wire \$736 ;
   wire \$737 ;
-  wire \$738 ;
-  wire \$739 ;
+  wire [31:0] \$738 ;
+  wire [31:0] \$739 ;
   wire \$74 ;
-  wire \$740 ;
-  wire \$741 ;
-  wire [31:0] \$742 ;
-  wire [31:0] \$743 ;
-  reg \$744 ;
-  reg [10:0] \$745 ;
-  reg [31:0] \$746 ;
-  reg [3:0] \$747 ;
-  reg [31:0] \$748 ;
-  reg [3:0] \$749 ;
+  reg \$740 ;
+  reg [10:0] \$741 ;
+  reg [31:0] \$742 ;
+  reg [3:0] \$743 ;
+  reg [31:0] \$744 ;
+  reg [3:0] \$745 ;
+  reg \$746 ;
+  reg \$747 ;
+  reg \$748 ;
+  reg \$749 ;
   wire \$75 ;
   reg \$750 ;
   reg \$751 ;
-  reg \$752 ;
+  reg [31:0] \$752 ;
   reg \$753 ;
   reg \$754 ;
   reg \$755 ;
-  reg [31:0] \$756 ;
+  reg \$756 ;
   reg \$757 ;
   reg \$758 ;
   reg \$759 ;
@@ -2862,68 +2858,68 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$763 ;
   reg \$764 ;
   reg \$765 ;
-  reg \$766 ;
-  reg \$767 ;
+  reg [15:0] \$766 ;
+  reg [11:0] \$767 ;
   reg \$768 ;
-  reg \$769 ;
+  reg [23:0] \$769 ;
   wire \$77 ;
-  reg [15:0] \$770 ;
-  reg [11:0] \$771 ;
+  reg \$770 ;
+  reg [23:0] \$771 ;
   reg \$772 ;
   reg [23:0] \$773 ;
   reg \$774 ;
   reg [23:0] \$775 ;
   reg \$776 ;
-  reg [23:0] \$777 ;
+  reg [5:0] \$777 ;
   reg \$778 ;
-  reg [23:0] \$779 ;
+  reg \$779 ;
   wire \$78 ;
-  reg \$780 ;
-  reg [5:0] \$781 ;
+  reg [1:0] \$780 ;
+  reg \$781 ;
   reg \$782 ;
-  reg \$783 ;
-  reg [1:0] \$784 ;
+  reg [5:0] \$783 ;
+  reg \$784 ;
   reg \$785 ;
-  reg \$786 ;
-  reg [5:0] \$787 ;
+  reg [1:0] \$786 ;
+  reg \$787 ;
   reg \$788 ;
   reg \$789 ;
   wire \$79 ;
-  reg [1:0] \$790 ;
+  reg \$790 ;
   reg \$791 ;
   reg \$792 ;
-  reg \$793 ;
-  reg \$794 ;
-  reg \$795 ;
-  reg \$796 ;
-  reg [7:0] \$797 ;
-  reg [3:0] \$798 ;
-  reg [3:0] \$799 ;
+  reg [7:0] \$793 ;
+  reg [3:0] \$794 ;
+  reg [3:0] \$795 ;
+  reg [3:0] \$796 ;
+  reg \$797 ;
+  reg [11:0] \$798 ;
+  reg \$799 ;
   wire [31:0] \$8 ;
   wire \$80 ;
-  reg [3:0] \$800 ;
-  reg \$801 ;
-  reg [11:0] \$802 ;
+  reg [15:0] \$800 ;
+  reg [4:0] \$801 ;
+  reg \$802 ;
   reg \$803 ;
   reg [15:0] \$804 ;
-  reg [4:0] \$805 ;
-  reg \$806 ;
-  reg \$807 ;
-  reg [15:0] \$808 ;
+  reg \$805 ;
+  reg [15:0] \$806 ;
+  reg [4:0] \$807 ;
+  reg \$808 ;
   reg \$809 ;
   wire \$81 ;
   reg [15:0] \$810 ;
-  reg [4:0] \$811 ;
+  reg \$811 ;
   reg \$812 ;
   reg \$813 ;
-  reg [15:0] \$814 ;
+  reg \$814 ;
   reg \$815 ;
-  reg \$816 ;
+  reg [11:0] \$816 ;
   reg \$817 ;
   reg \$818 ;
   reg \$819 ;
   wire \$82 ;
-  reg [11:0] \$820 ;
+  reg \$820 ;
   reg \$821 ;
   reg \$822 ;
   reg \$823 ;
@@ -2940,20 +2936,20 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$833 ;
   reg \$834 ;
   reg \$835 ;
-  reg \$836 ;
-  reg \$837 ;
-  reg \$838 ;
+  reg [2:0] \$836 ;
+  reg [6:0] \$837 ;
+  reg [6:0] \$838 ;
   reg \$839 ;
   wire \$84 ;
-  reg [2:0] \$840 ;
-  reg [6:0] \$841 ;
-  reg [6:0] \$842 ;
-  reg \$843 ;
-  reg \$844 ;
+  reg \$840 ;
+  reg \$841 ;
+  reg [31:0] \$842 ;
+  reg [14:0] \$843 ;
+  reg [3:0] \$844 ;
   reg \$845 ;
-  reg [31:0] \$846 ;
-  reg [14:0] \$847 ;
-  reg [3:0] \$848 ;
+  reg \$846 ;
+  reg \$847 ;
+  reg \$848 ;
   reg \$849 ;
   wire \$85 ;
   reg \$850 ;
@@ -3009,13 +3005,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$896 ;
   reg \$897 ;
   reg \$898 ;
-  reg \$899 ;
+  reg [3:0] \$899 ;
   wire [31:0] \$9 ;
   wire \$90 ;
   reg \$900 ;
   reg \$901 ;
   reg \$902 ;
-  reg [3:0] \$903 ;
+  reg \$903 ;
   reg \$904 ;
   reg \$905 ;
   reg \$906 ;
@@ -3024,28 +3020,28 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$909 ;
   wire \$91 ;
   reg \$910 ;
-  reg \$911 ;
-  reg \$912 ;
-  reg \$913 ;
-  reg \$914 ;
-  reg [5:0] \$915 ;
-  reg [15:0] \$916 ;
-  reg [12:0] \$917 ;
+  reg [5:0] \$911 ;
+  reg [15:0] \$912 ;
+  reg [12:0] \$913 ;
+  reg [31:0] \$914 ;
+  reg [22:0] \$915 ;
+  reg [31:0] \$916 ;
+  reg [7:0] \$917 ;
   reg [31:0] \$918 ;
-  reg [22:0] \$919 ;
+  reg [3:0] \$919 ;
   wire \$92 ;
-  reg [31:0] \$920 ;
+  reg \$920 ;
   reg [7:0] \$921 ;
-  reg [31:0] \$922 ;
-  reg [3:0] \$923 ;
+  reg [12:0] \$922 ;
+  reg \$923 ;
   reg \$924 ;
-  reg [7:0] \$925 ;
-  reg [12:0] \$926 ;
+  reg \$925 ;
+  reg [31:0] \$926 ;
   reg \$927 ;
   reg \$928 ;
   reg \$929 ;
   wire \$93 ;
-  reg [31:0] \$930 ;
+  reg \$930 ;
   reg \$931 ;
   reg \$932 ;
   reg \$933 ;
@@ -3056,66 +3052,66 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$938 ;
   reg \$939 ;
   wire \$94 ;
-  reg \$940 ;
-  reg \$941 ;
+  reg [15:0] \$940 ;
+  reg [11:0] \$941 ;
   reg \$942 ;
-  reg \$943 ;
-  reg [15:0] \$944 ;
-  reg [11:0] \$945 ;
+  reg [23:0] \$943 ;
+  reg \$944 ;
+  reg [23:0] \$945 ;
   reg \$946 ;
   reg [23:0] \$947 ;
   reg \$948 ;
   reg [23:0] \$949 ;
   wire \$95 ;
   reg \$950 ;
-  reg [23:0] \$951 ;
+  reg [5:0] \$951 ;
   reg \$952 ;
-  reg [23:0] \$953 ;
-  reg \$954 ;
-  reg [5:0] \$955 ;
+  reg \$953 ;
+  reg [1:0] \$954 ;
+  reg \$955 ;
   reg \$956 ;
-  reg \$957 ;
-  reg [1:0] \$958 ;
+  reg [5:0] \$957 ;
+  reg \$958 ;
   reg \$959 ;
   wire \$96 ;
-  reg \$960 ;
-  reg [5:0] \$961 ;
+  reg [1:0] \$960 ;
+  reg \$961 ;
   reg \$962 ;
   reg \$963 ;
-  reg [1:0] \$964 ;
+  reg \$964 ;
   reg \$965 ;
   reg \$966 ;
-  reg \$967 ;
-  reg \$968 ;
-  reg \$969 ;
+  reg [7:0] \$967 ;
+  reg [3:0] \$968 ;
+  reg [3:0] \$969 ;
   wire \$97 ;
-  reg \$970 ;
-  reg [7:0] \$971 ;
-  reg [3:0] \$972 ;
-  reg [3:0] \$973 ;
-  reg [3:0] \$974 ;
-  reg \$975 ;
-  reg [11:0] \$976 ;
+  reg [3:0] \$970 ;
+  reg \$971 ;
+  reg [11:0] \$972 ;
+  reg \$973 ;
+  reg [15:0] \$974 ;
+  reg [4:0] \$975 ;
+  reg \$976 ;
   reg \$977 ;
   reg [15:0] \$978 ;
-  reg [4:0] \$979 ;
+  reg \$979 ;
   wire [31:0] \$98 ;
-  reg \$980 ;
-  reg \$981 ;
-  reg [15:0] \$982 ;
+  reg [15:0] \$980 ;
+  reg [4:0] \$981 ;
+  reg \$982 ;
   reg \$983 ;
   reg [15:0] \$984 ;
-  reg [4:0] \$985 ;
+  reg \$985 ;
   reg \$986 ;
   reg \$987 ;
-  reg [15:0] \$988 ;
+  reg \$988 ;
   reg \$989 ;
   wire [31:0] \$99 ;
-  reg \$990 ;
+  reg [11:0] \$990 ;
   reg \$991 ;
   reg \$992 ;
   reg \$993 ;
-  reg [11:0] \$994 ;
+  reg \$994 ;
   reg \$995 ;
   reg \$996 ;
   reg \$997 ;
@@ -4295,18 +4291,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$7280$0 ;
-  wire [186:0] \port$7280$0 ;
-  input [79:0] \port$7291$0 ;
-  wire [79:0] \port$7291$0 ;
-  input [9:0] \port$7368$0 ;
-  wire [9:0] \port$7368$0 ;
-  input [186:0] \port$7811$0 ;
-  wire [186:0] \port$7811$0 ;
-  input [79:0] \port$7822$0 ;
-  wire [79:0] \port$7822$0 ;
-  input [9:0] \port$7899$0 ;
-  wire [9:0] \port$7899$0 ;
+  input [186:0] \port$7212$0 ;
+  wire [186:0] \port$7212$0 ;
+  input [79:0] \port$7223$0 ;
+  wire [79:0] \port$7223$0 ;
+  input [9:0] \port$7300$0 ;
+  wire [9:0] \port$7300$0 ;
+  input [186:0] \port$7743$0 ;
+  wire [186:0] \port$7743$0 ;
+  input [79:0] \port$7754$0 ;
+  wire [79:0] \port$7754$0 ;
+  input [9:0] \port$7831$0 ;
+  wire [9:0] \port$7831$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
@@ -4377,13 +4373,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @(posedge clk) begin
     if (\wr__en$942 [0])
-      ch1_config_memory[{ \$715 , \$714 , \$713 , \$712  }][7:0] <= config_memory0_write_data[7:0];
+      ch1_config_memory[{ \$713 , \$712 , \$711 , \$710  }][7:0] <= config_memory0_write_data[7:0];
     if (\wr__en$942 [1])
-      ch1_config_memory[{ \$715 , \$714 , \$713 , \$712  }][15:8] <= config_memory0_write_data[15:8];
+      ch1_config_memory[{ \$713 , \$712 , \$711 , \$710  }][15:8] <= config_memory0_write_data[15:8];
     if (\wr__en$942 [2])
-      ch1_config_memory[{ \$715 , \$714 , \$713 , \$712  }][23:16] <= config_memory0_write_data[23:16];
+      ch1_config_memory[{ \$713 , \$712 , \$711 , \$710  }][23:16] <= config_memory0_write_data[23:16];
     if (\wr__en$942 [3])
-      ch1_config_memory[{ \$715 , \$714 , \$713 , \$712  }][31:24] <= config_memory0_write_data[31:24];
+      ch1_config_memory[{ \$713 , \$712 , \$711 , \$710  }][31:24] <= config_memory0_write_data[31:24];
   end
   assign \rd__data$944  = ch1_config_memory[ch1_config_read_index];
   assign \$1  = write_data[0] & write_strb[0];
@@ -4552,7 +4548,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$168  = \$166  | \$167 ;
   assign \$169  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$170  = \$168  | \$169 ;
-  assign \$175  = ch0_read_select_90 ? { 2'h0, \port$7280$0 [182:177], 4'h0, \port$7280$0 [186:183], 1'h0, \port$7280$0 [176:174], 1'h0, \port$7280$0 [133:131], 3'h0, \port$7280$0 [49], \port$7280$0 [3:0] } : 32'd0;
+  assign \$175  = ch0_read_select_90 ? { 2'h0, \port$7212$0 [182:177], 4'h0, \port$7212$0 [186:183], 1'h0, \port$7212$0 [176:174], 1'h0, \port$7212$0 [133:131], 3'h0, \port$7212$0 [49], \port$7212$0 [3:0] } : 32'd0;
   assign \$176  = \$174  | \$175 ;
   assign \$177  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$178  = \$176  | \$177 ;
@@ -4568,13 +4564,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$188  = \$186  | \$187 ;
   assign \$189  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$190  = \$188  | \$189 ;
-  assign \$235  = ch0_read_select_c2 ? { 17'h00000, \port$7368$0 [9:3], 1'h0, \port$7368$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$235  = ch0_read_select_c2 ? { 17'h00000, \port$7300$0 [9:3], 1'h0, \port$7300$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$236  = \$234  | \$235 ;
-  assign \$237  = ch0_read_select_c3 ? \port$7291$0 [31:0] : 32'd0;
+  assign \$237  = ch0_read_select_c3 ? \port$7223$0 [31:0] : 32'd0;
   assign \$238  = \$236  | \$237 ;
-  assign \$239  = ch0_read_select_c4 ? \port$7291$0 [63:32] : 32'd0;
+  assign \$239  = ch0_read_select_c4 ? \port$7223$0 [63:32] : 32'd0;
   assign \$240  = \$238  | \$239 ;
-  assign \$241  = ch0_read_select_c5 ? { 16'h0000, \port$7291$0 [79:64] } : 32'd0;
+  assign \$241  = ch0_read_select_c5 ? { 16'h0000, \port$7223$0 [79:64] } : 32'd0;
   assign \$242  = \$240  | \$241 ;
   assign \$243  = ch0_read_select_f0 ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$244  = \$242  | \$243 ;
@@ -4731,7 +4727,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$422  = \$420  | \$421 ;
   assign \$423  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$424  = \$422  | \$423 ;
-  assign \$429  = ch1_read_select_110 ? { 2'h0, \port$7811$0 [182:177], 4'h0, \port$7811$0 [186:183], 1'h0, \port$7811$0 [176:174], 1'h0, \port$7811$0 [133:131], 3'h0, \port$7811$0 [49], \port$7811$0 [3:0] } : 32'd0;
+  assign \$429  = ch1_read_select_110 ? { 2'h0, \port$7743$0 [182:177], 4'h0, \port$7743$0 [186:183], 1'h0, \port$7743$0 [176:174], 1'h0, \port$7743$0 [133:131], 3'h0, \port$7743$0 [49], \port$7743$0 [3:0] } : 32'd0;
   assign \$430  = \$428  | \$429 ;
   assign \$431  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$432  = \$430  | \$431 ;
@@ -4747,13 +4743,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$442  = \$440  | \$441 ;
   assign \$443  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$444  = \$442  | \$443 ;
-  assign \$489  = ch1_read_select_142 ? { 17'h00000, \port$7899$0 [9:3], 1'h0, \port$7899$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$489  = ch1_read_select_142 ? { 17'h00000, \port$7831$0 [9:3], 1'h0, \port$7831$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$490  = \$488  | \$489 ;
-  assign \$491  = ch1_read_select_143 ? \port$7822$0 [31:0] : 32'd0;
+  assign \$491  = ch1_read_select_143 ? \port$7754$0 [31:0] : 32'd0;
   assign \$492  = \$490  | \$491 ;
-  assign \$493  = ch1_read_select_144 ? \port$7822$0 [63:32] : 32'd0;
+  assign \$493  = ch1_read_select_144 ? \port$7754$0 [63:32] : 32'd0;
   assign \$494  = \$492  | \$493 ;
-  assign \$495  = ch1_read_select_145 ? { 16'h0000, \port$7822$0 [79:64] } : 32'd0;
+  assign \$495  = ch1_read_select_145 ? { 16'h0000, \port$7754$0 [79:64] } : 32'd0;
   assign \$496  = \$494  | \$495 ;
   assign \$497  = ch1_read_select_170 ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$498  = \$496  | \$497 ;
@@ -4941,1121 +4937,1015 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$628  = bus__r_en & \$627 ;
   assign ch0_config_read = \$628  & config_memory0_read_hit;
   assign \$629  = ch0_config_written >> ch0_config_read_index;
-  assign \$631  = \$629  ? rd__data : \$630 ;
-  assign ch0_config_read_data = \$631  | \$632 ;
-  assign \$633  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$635  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$637  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$638 , \$636 , \$634  };
-  assign \$639  = bus__w_addr[10:3] == 6'h23;
-  assign ch1__count_en = bus__r_en & \$639 ;
-  assign \$640  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$640 ;
-  assign \$641  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$641 ;
-  assign \$642  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$642 ;
-  assign \$643  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$643 ;
-  assign \$644  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$644 ;
-  assign \$645  = write_addr == 9'h106;
-  assign ch1_caps_chain_write = write_en & \$645 ;
-  assign \$646  = write_addr == 9'h107;
-  assign ch1_caps_chain2_write = write_en & \$646 ;
-  assign \$647  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$647 ;
-  assign \$648  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$648 ;
-  assign \$649  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$649 ;
-  assign \$650  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$650 ;
-  assign \$651  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$651 ;
-  assign \$652  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$652 ;
-  assign \$653  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$653 ;
-  assign \$654  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$654 ;
-  assign \$655  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$655 ;
-  assign \$656  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$656 ;
-  assign \$657  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$657 ;
-  assign \$658  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$658 ;
-  assign \$659  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$659 ;
-  assign \$660  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$660 ;
-  assign \$661  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$661 ;
-  assign \$662  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$662 ;
-  assign \$663  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$663 ;
-  assign \$664  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$664 ;
-  assign \$665  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$665 ;
-  assign \$666  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$666 ;
-  assign \$667  = write_addr == 9'h124;
-  assign ch1_cfg_ssi_write = write_en & \$667 ;
-  assign \$668  = write_addr == 9'h125;
-  assign ch1_count_chain_write = write_en & \$668 ;
-  assign \$669  = write_addr == 9'h126;
-  assign ch1_count_chain2_write = write_en & \$669 ;
-  assign \$670  = write_addr == 9'h127;
-  assign ch1_count_chain3_write = write_en & \$670 ;
-  assign \$671  = write_addr == 9'h128;
-  assign ch1_cfg_w2_write = write_en & \$671 ;
-  assign \$672  = write_addr == 9'h129;
-  assign ch1_cfg_w2_crc_write = write_en & \$672 ;
-  assign \$673  = write_addr == 9'h12a;
-  assign ch1_cfg_w2_crc_start_write = write_en & \$673 ;
-  assign \$674  = write_addr == 9'h12c;
-  assign ch1_cfg_w3_write = write_en & \$674 ;
-  assign \$675  = write_addr == 9'h12d;
-  assign ch1_cfg_w3_crc_write = write_en & \$675 ;
-  assign \$676  = write_addr == 9'h12e;
-  assign ch1_cfg_w3_crc_start_write = write_en & \$676 ;
-  assign \$677  = write_addr == 9'h130;
-  assign ch1_cfg_w4_write = write_en & \$677 ;
-  assign \$678  = write_addr == 9'h131;
-  assign ch1_cfg_w4_crc_write = write_en & \$678 ;
-  assign \$679  = write_addr == 9'h132;
-  assign ch1_cfg_w4_crc_start_write = write_en & \$679 ;
-  assign \$680  = write_addr == 9'h134;
-  assign ch1_cfg_w5_write = write_en & \$680 ;
-  assign \$681  = write_addr == 9'h135;
-  assign ch1_cfg_w5_crc_write = write_en & \$681 ;
-  assign \$682  = write_addr == 9'h136;
-  assign ch1_cfg_w5_crc_start_write = write_en & \$682 ;
-  assign \$683  = write_addr == 9'h138;
-  assign ch1_cfg_w6_write = write_en & \$683 ;
-  assign \$684  = write_addr == 9'h139;
-  assign ch1_cfg_w6_crc_write = write_en & \$684 ;
-  assign \$685  = write_addr == 9'h13a;
-  assign ch1_cfg_w6_crc_start_write = write_en & \$685 ;
-  assign \$686  = write_addr == 9'h13c;
-  assign ch1_cfg_w7_write = write_en & \$686 ;
-  assign \$687  = write_addr == 9'h13d;
-  assign ch1_cfg_w7_crc_write = write_en & \$687 ;
-  assign \$688  = write_addr == 9'h13e;
-  assign ch1_cfg_w7_crc_start_write = write_en & \$688 ;
-  assign \$689  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$689 ;
-  assign \$690  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$690 ;
-  assign \$691  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$691 ;
-  assign \$692  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$692 ;
-  assign \$693  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$693 ;
-  assign \$694  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$694 ;
-  assign \$695  = write_addr[10:4] == 5'h15;
-  assign \$696  = write_en & \$695 ;
-  assign ch1__ca_wbuf_en = \$696  ? write_strb : 4'h0;
-  assign \$697  = bus__w_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$697 ;
-  assign \$698  = write_addr == 9'h170;
-  assign ch1_chain_updates_write = write_en & \$698 ;
-  assign \$699  = write_addr == 9'h171;
-  assign ch1_chain_flags_write = write_en & \$699 ;
-  assign \$700  = write_addr == 9'h172;
-  assign ch1_chain_w2_lo_write = write_en & \$700 ;
-  assign \$701  = write_addr == 9'h173;
-  assign ch1_chain_w2_hi_write = write_en & \$701 ;
-  assign \$702  = write_addr == 9'h174;
-  assign ch1_chain_w3_lo_write = write_en & \$702 ;
-  assign \$703  = write_addr == 9'h175;
-  assign ch1_chain_w3_hi_write = write_en & \$703 ;
-  assign \$704  = write_addr == 9'h176;
-  assign ch1_chain_w4_lo_write = write_en & \$704 ;
-  assign \$705  = write_addr == 9'h177;
-  assign ch1_chain_w4_hi_write = write_en & \$705 ;
-  assign \$706  = write_addr == 9'h178;
-  assign ch1_chain_w5_lo_write = write_en & \$706 ;
-  assign \$707  = write_addr == 9'h179;
-  assign ch1_chain_w5_hi_write = write_en & \$707 ;
-  assign \$708  = write_addr == 9'h17a;
-  assign ch1_chain_w6_lo_write = write_en & \$708 ;
-  assign \$709  = write_addr == 9'h17b;
-  assign ch1_chain_w6_hi_write = write_en & \$709 ;
-  assign \$710  = write_addr == 9'h17c;
-  assign ch1_chain_w7_lo_write = write_en & \$710 ;
-  assign \$711  = write_addr == 9'h17d;
-  assign ch1_chain_w7_hi_write = write_en & \$711 ;
-  assign \$712  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
-  assign \$713  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
-  assign \$714  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
-  assign \$715  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
-  assign \$716  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
-  assign \$717  = ~ ch1_config_written;
-  assign \$718  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$717 ;
-  assign \$719  = | \$718 ;
-  assign \$720  = ~ ch1_config_written;
-  assign \$721  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$720 ;
-  assign \$722  = | \$721 ;
-  assign \$723  = ~ ch1_config_written;
-  assign \$724  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$723 ;
-  assign \$725  = | \$724 ;
-  assign \$726  = ~ ch1_config_written;
-  assign \$727  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$726 ;
-  assign \$728  = | \$727 ;
-  assign \$729  = config_write_strb | { \$728 , \$725 , \$722 , \$719  };
-  assign \wr__en$942  = \$716  ? \$729  : 4'h0;
-  assign \$730  = bus__w_addr[10:7] == 2'h2;
-  assign \$731  = bus__r_en & \$730 ;
-  assign ch1_config_read = \$731  & config_memory0_read_hit;
-  assign \$732  = ch1_config_written >> ch1_config_read_index;
-  assign \$734  = \$732  ? \rd__data$944  : \$733 ;
-  assign ch1_config_read_data = \$734  | \$735 ;
-  assign \$736  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$738  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$740  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$741 , \$739 , \$737  };
-  assign \$743  = \$742  | ch0_read_data;
-  assign bus__r_data = \$743  | ch1_read_data;
+  assign \$630  = \$629  ? rd__data : 32'd0;
+  assign \$631  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$633  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$635  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$636 , \$634 , \$632  };
+  assign \$637  = bus__w_addr[10:3] == 6'h23;
+  assign ch1__count_en = bus__r_en & \$637 ;
+  assign \$638  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$638 ;
+  assign \$639  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$639 ;
+  assign \$640  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$640 ;
+  assign \$641  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$641 ;
+  assign \$642  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$642 ;
+  assign \$643  = write_addr == 9'h106;
+  assign ch1_caps_chain_write = write_en & \$643 ;
+  assign \$644  = write_addr == 9'h107;
+  assign ch1_caps_chain2_write = write_en & \$644 ;
+  assign \$645  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$645 ;
+  assign \$646  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$646 ;
+  assign \$647  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$647 ;
+  assign \$648  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$648 ;
+  assign \$649  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$649 ;
+  assign \$650  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$650 ;
+  assign \$651  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$651 ;
+  assign \$652  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$652 ;
+  assign \$653  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$653 ;
+  assign \$654  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$654 ;
+  assign \$655  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$655 ;
+  assign \$656  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$656 ;
+  assign \$657  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$657 ;
+  assign \$658  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$658 ;
+  assign \$659  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$659 ;
+  assign \$660  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$660 ;
+  assign \$661  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$661 ;
+  assign \$662  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$662 ;
+  assign \$663  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$663 ;
+  assign \$664  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$664 ;
+  assign \$665  = write_addr == 9'h124;
+  assign ch1_cfg_ssi_write = write_en & \$665 ;
+  assign \$666  = write_addr == 9'h125;
+  assign ch1_count_chain_write = write_en & \$666 ;
+  assign \$667  = write_addr == 9'h126;
+  assign ch1_count_chain2_write = write_en & \$667 ;
+  assign \$668  = write_addr == 9'h127;
+  assign ch1_count_chain3_write = write_en & \$668 ;
+  assign \$669  = write_addr == 9'h128;
+  assign ch1_cfg_w2_write = write_en & \$669 ;
+  assign \$670  = write_addr == 9'h129;
+  assign ch1_cfg_w2_crc_write = write_en & \$670 ;
+  assign \$671  = write_addr == 9'h12a;
+  assign ch1_cfg_w2_crc_start_write = write_en & \$671 ;
+  assign \$672  = write_addr == 9'h12c;
+  assign ch1_cfg_w3_write = write_en & \$672 ;
+  assign \$673  = write_addr == 9'h12d;
+  assign ch1_cfg_w3_crc_write = write_en & \$673 ;
+  assign \$674  = write_addr == 9'h12e;
+  assign ch1_cfg_w3_crc_start_write = write_en & \$674 ;
+  assign \$675  = write_addr == 9'h130;
+  assign ch1_cfg_w4_write = write_en & \$675 ;
+  assign \$676  = write_addr == 9'h131;
+  assign ch1_cfg_w4_crc_write = write_en & \$676 ;
+  assign \$677  = write_addr == 9'h132;
+  assign ch1_cfg_w4_crc_start_write = write_en & \$677 ;
+  assign \$678  = write_addr == 9'h134;
+  assign ch1_cfg_w5_write = write_en & \$678 ;
+  assign \$679  = write_addr == 9'h135;
+  assign ch1_cfg_w5_crc_write = write_en & \$679 ;
+  assign \$680  = write_addr == 9'h136;
+  assign ch1_cfg_w5_crc_start_write = write_en & \$680 ;
+  assign \$681  = write_addr == 9'h138;
+  assign ch1_cfg_w6_write = write_en & \$681 ;
+  assign \$682  = write_addr == 9'h139;
+  assign ch1_cfg_w6_crc_write = write_en & \$682 ;
+  assign \$683  = write_addr == 9'h13a;
+  assign ch1_cfg_w6_crc_start_write = write_en & \$683 ;
+  assign \$684  = write_addr == 9'h13c;
+  assign ch1_cfg_w7_write = write_en & \$684 ;
+  assign \$685  = write_addr == 9'h13d;
+  assign ch1_cfg_w7_crc_write = write_en & \$685 ;
+  assign \$686  = write_addr == 9'h13e;
+  assign ch1_cfg_w7_crc_start_write = write_en & \$686 ;
+  assign \$687  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$687 ;
+  assign \$688  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$688 ;
+  assign \$689  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$689 ;
+  assign \$690  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$690 ;
+  assign \$691  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$691 ;
+  assign \$692  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$692 ;
+  assign \$693  = write_addr[10:4] == 5'h15;
+  assign \$694  = write_en & \$693 ;
+  assign ch1__ca_wbuf_en = \$694  ? write_strb : 4'h0;
+  assign \$695  = bus__w_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$695 ;
+  assign \$696  = write_addr == 9'h170;
+  assign ch1_chain_updates_write = write_en & \$696 ;
+  assign \$697  = write_addr == 9'h171;
+  assign ch1_chain_flags_write = write_en & \$697 ;
+  assign \$698  = write_addr == 9'h172;
+  assign ch1_chain_w2_lo_write = write_en & \$698 ;
+  assign \$699  = write_addr == 9'h173;
+  assign ch1_chain_w2_hi_write = write_en & \$699 ;
+  assign \$700  = write_addr == 9'h174;
+  assign ch1_chain_w3_lo_write = write_en & \$700 ;
+  assign \$701  = write_addr == 9'h175;
+  assign ch1_chain_w3_hi_write = write_en & \$701 ;
+  assign \$702  = write_addr == 9'h176;
+  assign ch1_chain_w4_lo_write = write_en & \$702 ;
+  assign \$703  = write_addr == 9'h177;
+  assign ch1_chain_w4_hi_write = write_en & \$703 ;
+  assign \$704  = write_addr == 9'h178;
+  assign ch1_chain_w5_lo_write = write_en & \$704 ;
+  assign \$705  = write_addr == 9'h179;
+  assign ch1_chain_w5_hi_write = write_en & \$705 ;
+  assign \$706  = write_addr == 9'h17a;
+  assign ch1_chain_w6_lo_write = write_en & \$706 ;
+  assign \$707  = write_addr == 9'h17b;
+  assign ch1_chain_w6_hi_write = write_en & \$707 ;
+  assign \$708  = write_addr == 9'h17c;
+  assign ch1_chain_w7_lo_write = write_en & \$708 ;
+  assign \$709  = write_addr == 9'h17d;
+  assign ch1_chain_w7_hi_write = write_en & \$709 ;
+  assign \$710  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
+  assign \$711  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
+  assign \$712  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
+  assign \$713  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
+  assign \$714  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$715  = ~ ch1_config_written;
+  assign \$716  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$715 ;
+  assign \$717  = | \$716 ;
+  assign \$718  = ~ ch1_config_written;
+  assign \$719  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$718 ;
+  assign \$720  = | \$719 ;
+  assign \$721  = ~ ch1_config_written;
+  assign \$722  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$721 ;
+  assign \$723  = | \$722 ;
+  assign \$724  = ~ ch1_config_written;
+  assign \$725  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$724 ;
+  assign \$726  = | \$725 ;
+  assign \$727  = config_write_strb | { \$726 , \$723 , \$720 , \$717  };
+  assign \wr__en$942  = \$714  ? \$727  : 4'h0;
+  assign \$728  = bus__w_addr[10:7] == 2'h2;
+  assign \$729  = bus__r_en & \$728 ;
+  assign ch1_config_read = \$729  & config_memory0_read_hit;
+  assign \$730  = ch1_config_written >> ch1_config_read_index;
+  assign \$731  = \$730  ? \rd__data$944  : 32'd0;
+  assign \$732  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$734  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$736  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$737 , \$735 , \$733  };
+  assign \$739  = \$738  | ch0_read_data;
+  assign bus__r_data = \$739  | ch1_read_data;
   always @(posedge clk)
-    write_en <= \$744 ;
+    write_en <= \$740 ;
   always @(posedge clk)
-    write_addr <= \$745 ;
+    write_addr <= \$741 ;
   always @(posedge clk)
-    write_data <= \$746 ;
+    write_data <= \$742 ;
   always @(posedge clk)
-    write_strb <= \$747 ;
+    write_strb <= \$743 ;
   always @(posedge clk)
-    config_write_data <= \$748 ;
+    config_write_data <= \$744 ;
   always @(posedge clk)
-    config_write_strb <= \$749 ;
+    config_write_strb <= \$745 ;
   always @(posedge clk)
-    g_trigger_start <= \$750 ;
+    g_trigger_start <= \$746 ;
   always @(posedge clk)
-    g_read_select_0 <= \$751 ;
+    g_read_select_0 <= \$747 ;
   always @(posedge clk)
-    g_read_select_1 <= \$752 ;
+    g_read_select_1 <= \$748 ;
   always @(posedge clk)
-    g_read_select_2 <= \$753 ;
+    g_read_select_2 <= \$749 ;
   always @(posedge clk)
-    g_read_select_3 <= \$754 ;
+    g_read_select_3 <= \$750 ;
   always @(posedge clk)
-    g_read_select_4 <= \$755 ;
+    g_read_select_4 <= \$751 ;
   always @(posedge clk)
-    g_read_data <= \$756 ;
+    g_read_data <= \$752 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$757 ;
+    ch0_ctrl_start <= \$753 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$758 ;
+    ch0_ctrl_abort <= \$754 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$759 ;
+    ch0_ctrl_clear_counters <= \$755 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$760 ;
+    ch0_ctrl_periodic <= \$756 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$761 ;
+    ch0_ctrl_trigger_enable <= \$757 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$762 ;
+    ch0_irq_status_done <= \$758 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$763 ;
+    ch0_irq_status_error <= \$759 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$764 ;
+    ch0_irq_status_access_done <= \$760 ;
   always @(posedge clk)
-    ch0_irq_enable_config_write <= \$765 ;
+    ch0_irq_enable_config_write <= \$761 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$766 ;
+    ch0_irq_enable_done <= \$762 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$767 ;
+    ch0_irq_enable_error <= \$763 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$768 ;
+    ch0_irq_enable_access_done <= \$764 ;
   always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$769 ;
+    ch0_cfg_ma_config_write <= \$765 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$770 ;
+    ch0_cfg_ma_ma_half_period <= \$766 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$771 ;
+    ch0_cfg_ma_delay_limit <= \$767 ;
   always @(posedge clk)
-    ch0_cfg_period_config_write <= \$772 ;
+    ch0_cfg_period_config_write <= \$768 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$773 ;
+    ch0_cfg_period_request_period <= \$769 ;
   always @(posedge clk)
-    ch0_cfg_break_config_write <= \$774 ;
+    ch0_cfg_break_config_write <= \$770 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$775 ;
+    ch0_cfg_break_break_time <= \$771 ;
   always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$776 ;
+    ch0_cfg_ack_config_write <= \$772 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$777 ;
+    ch0_cfg_ack_ack_limit <= \$773 ;
   always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$778 ;
+    ch0_cfg_timeout_config_write <= \$774 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$779 ;
+    ch0_cfg_timeout_timeout_limit <= \$775 ;
   always @(posedge clk)
-    ch0_cfg_words_config_write <= \$780 ;
+    ch0_cfg_words_config_write <= \$776 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$781 ;
+    ch0_cfg_words_w0_data_bits <= \$777 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$782 ;
+    ch0_cfg_words_w0_nenw <= \$778 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$783 ;
+    ch0_cfg_words_w0_lc <= \$779 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$784 ;
+    ch0_cfg_words_w0_crc <= \$780 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$785 ;
+    ch0_cfg_words_w0_gray <= \$781 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_signed <= \$786 ;
+    ch0_cfg_words_w0_signed <= \$782 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$787 ;
+    ch0_cfg_words_w1_data_bits <= \$783 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$788 ;
+    ch0_cfg_words_w1_nenw <= \$784 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$789 ;
+    ch0_cfg_words_w1_lc <= \$785 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$790 ;
+    ch0_cfg_words_w1_crc <= \$786 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$791 ;
+    ch0_cfg_words_w1_gray <= \$787 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_signed <= \$792 ;
+    ch0_cfg_words_w1_signed <= \$788 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$793 ;
+    ch0_cfg_words_w1_enable <= \$789 ;
   always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$794 ;
+    ch0_cfg_checks_config_write <= \$790 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$795 ;
+    ch0_cfg_checks_end_check <= \$791 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$796 ;
+    ch0_cfg_checks_spw_check <= \$792 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$797 ;
+    ch0_cfg_checks_spw_tolerance <= \$793 ;
   always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$798 ;
+    ch0_cfg_checks_noise_limit <= \$794 ;
   always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$799 ;
+    ch0_cfg_checks_delay_tolerance <= \$795 ;
   always @(posedge clk)
-    ch0_cfg_checks_confirm_frames <= \$800 ;
+    ch0_cfg_checks_confirm_frames <= \$796 ;
   always @(posedge clk)
-    ch0_cfg_quiet_config_write <= \$801 ;
+    ch0_cfg_quiet_config_write <= \$797 ;
   always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$802 ;
+    ch0_cfg_quiet_quiet_time <= \$798 ;
   always @(posedge clk)
-    ch0_cfg_crc0_config_write <= \$803 ;
+    ch0_cfg_crc0_config_write <= \$799 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_poly <= \$804 ;
+    ch0_cfg_crc0_w0_crc_poly <= \$800 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$805 ;
+    ch0_cfg_crc0_w0_crc_width <= \$801 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_inverted <= \$806 ;
+    ch0_cfg_crc0_w0_crc_inverted <= \$802 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_config_write <= \$807 ;
+    ch0_cfg_crc0_start_config_write <= \$803 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_w0_crc_start <= \$808 ;
+    ch0_cfg_crc0_start_w0_crc_start <= \$804 ;
   always @(posedge clk)
-    ch0_cfg_crc1_config_write <= \$809 ;
+    ch0_cfg_crc1_config_write <= \$805 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_poly <= \$810 ;
+    ch0_cfg_crc1_w1_crc_poly <= \$806 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$811 ;
+    ch0_cfg_crc1_w1_crc_width <= \$807 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_inverted <= \$812 ;
+    ch0_cfg_crc1_w1_crc_inverted <= \$808 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_config_write <= \$813 ;
+    ch0_cfg_crc1_start_config_write <= \$809 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_w1_crc_start <= \$814 ;
+    ch0_cfg_crc1_start_w1_crc_start <= \$810 ;
   always @(posedge clk)
-    ch0_cfg_ssi_config_write <= \$815 ;
+    ch0_cfg_ssi_config_write <= \$811 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi <= \$816 ;
+    ch0_cfg_ssi_ssi <= \$812 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_error <= \$817 ;
+    ch0_cfg_ssi_ssi_error <= \$813 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_error_low <= \$818 ;
+    ch0_cfg_ssi_ssi_error_low <= \$814 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_double <= \$819 ;
+    ch0_cfg_ssi_ssi_double <= \$815 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_delay <= \$820 ;
+    ch0_cfg_ssi_ssi_delay <= \$816 ;
   always @(posedge clk)
-    ch0_cfg_w2_config_write <= \$821 ;
+    ch0_cfg_w2_config_write <= \$817 ;
   always @(posedge clk)
-    ch0_cfg_w2_crc_config_write <= \$822 ;
+    ch0_cfg_w2_crc_config_write <= \$818 ;
   always @(posedge clk)
-    ch0_cfg_w2_crc_start_config_write <= \$823 ;
+    ch0_cfg_w2_crc_start_config_write <= \$819 ;
   always @(posedge clk)
-    ch0_cfg_w3_config_write <= \$824 ;
+    ch0_cfg_w3_config_write <= \$820 ;
   always @(posedge clk)
-    ch0_cfg_w3_crc_config_write <= \$825 ;
+    ch0_cfg_w3_crc_config_write <= \$821 ;
   always @(posedge clk)
-    ch0_cfg_w3_crc_start_config_write <= \$826 ;
+    ch0_cfg_w3_crc_start_config_write <= \$822 ;
   always @(posedge clk)
-    ch0_cfg_w4_config_write <= \$827 ;
+    ch0_cfg_w4_config_write <= \$823 ;
   always @(posedge clk)
-    ch0_cfg_w4_crc_config_write <= \$828 ;
+    ch0_cfg_w4_crc_config_write <= \$824 ;
   always @(posedge clk)
-    ch0_cfg_w4_crc_start_config_write <= \$829 ;
+    ch0_cfg_w4_crc_start_config_write <= \$825 ;
   always @(posedge clk)
-    ch0_cfg_w5_config_write <= \$830 ;
+    ch0_cfg_w5_config_write <= \$826 ;
   always @(posedge clk)
-    ch0_cfg_w5_crc_config_write <= \$831 ;
+    ch0_cfg_w5_crc_config_write <= \$827 ;
   always @(posedge clk)
-    ch0_cfg_w5_crc_start_config_write <= \$832 ;
+    ch0_cfg_w5_crc_start_config_write <= \$828 ;
   always @(posedge clk)
-    ch0_cfg_w6_config_write <= \$833 ;
+    ch0_cfg_w6_config_write <= \$829 ;
   always @(posedge clk)
-    ch0_cfg_w6_crc_config_write <= \$834 ;
+    ch0_cfg_w6_crc_config_write <= \$830 ;
   always @(posedge clk)
-    ch0_cfg_w6_crc_start_config_write <= \$835 ;
+    ch0_cfg_w6_crc_start_config_write <= \$831 ;
   always @(posedge clk)
-    ch0_cfg_w7_config_write <= \$836 ;
+    ch0_cfg_w7_config_write <= \$832 ;
   always @(posedge clk)
-    ch0_cfg_w7_crc_config_write <= \$837 ;
+    ch0_cfg_w7_crc_config_write <= \$833 ;
   always @(posedge clk)
-    ch0_cfg_w7_crc_start_config_write <= \$838 ;
+    ch0_cfg_w7_crc_start_config_write <= \$834 ;
   always @(posedge clk)
-    ch0_ca_request_config_write <= \$839 ;
+    ch0_ca_request_config_write <= \$835 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$840 ;
+    ch0_ca_request_slave_id <= \$836 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$841 ;
+    ch0_ca_request_address <= \$837 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$842 ;
+    ch0_ca_request_count <= \$838 ;
   always @(posedge clk)
-    \ch0_ca_request_write$149  <= \$843 ;
+    \ch0_ca_request_write$149  <= \$839 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$844 ;
+    ch0_ca_ctrl_start <= \$840 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$845 ;
+    ch0_ca_ctrl_abort <= \$841 ;
   always @(posedge clk)
-    config_memory0_write_data <= \$846 ;
+    config_memory0_write_data <= \$842 ;
   always @(posedge clk)
-    ch0_config_written <= \$847 ;
+    ch0_config_written <= \$843 ;
   always @(posedge clk)
-    ch0_config_read_index <= \$848 ;
+    ch0_config_read_index <= \$844 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$849 ;
+    ch0_read_select_80 <= \$845 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$850 ;
+    ch0_read_select_81 <= \$846 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$851 ;
+    ch0_read_select_82 <= \$847 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$852 ;
+    ch0_read_select_84 <= \$848 ;
   always @(posedge clk)
-    ch0_read_select_86 <= \$853 ;
+    ch0_read_select_86 <= \$849 ;
   always @(posedge clk)
-    ch0_read_select_87 <= \$854 ;
+    ch0_read_select_87 <= \$850 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$855 ;
+    ch0_read_select_90 <= \$851 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$856 ;
+    ch0_read_select_91 <= \$852 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$857 ;
+    ch0_read_select_92 <= \$853 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$858 ;
+    ch0_read_select_93 <= \$854 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$859 ;
+    ch0_read_select_94 <= \$855 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$860 ;
+    ch0_read_select_95 <= \$856 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$861 ;
+    ch0_read_select_96 <= \$857 ;
   always @(posedge clk)
-    ch0_read_select_97 <= \$862 ;
+    ch0_read_select_97 <= \$858 ;
   always @(posedge clk)
-    ch0_read_select_a5 <= \$863 ;
+    ch0_read_select_a5 <= \$859 ;
   always @(posedge clk)
-    ch0_read_select_a6 <= \$864 ;
+    ch0_read_select_a6 <= \$860 ;
   always @(posedge clk)
-    ch0_read_select_a7 <= \$865 ;
+    ch0_read_select_a7 <= \$861 ;
   always @(posedge clk)
-    ch0_read_select_a8 <= \$866 ;
+    ch0_read_select_a8 <= \$862 ;
   always @(posedge clk)
-    ch0_read_select_a9 <= \$867 ;
+    ch0_read_select_a9 <= \$863 ;
   always @(posedge clk)
-    ch0_read_select_aa <= \$868 ;
+    ch0_read_select_aa <= \$864 ;
   always @(posedge clk)
-    ch0_read_select_ac <= \$869 ;
+    ch0_read_select_ac <= \$865 ;
   always @(posedge clk)
-    ch0_read_select_ad <= \$870 ;
+    ch0_read_select_ad <= \$866 ;
   always @(posedge clk)
-    ch0_read_select_ae <= \$871 ;
+    ch0_read_select_ae <= \$867 ;
   always @(posedge clk)
-    ch0_read_select_b0 <= \$872 ;
+    ch0_read_select_b0 <= \$868 ;
   always @(posedge clk)
-    ch0_read_select_b1 <= \$873 ;
+    ch0_read_select_b1 <= \$869 ;
   always @(posedge clk)
-    ch0_read_select_b2 <= \$874 ;
+    ch0_read_select_b2 <= \$870 ;
   always @(posedge clk)
-    ch0_read_select_b4 <= \$875 ;
+    ch0_read_select_b4 <= \$871 ;
   always @(posedge clk)
-    ch0_read_select_b5 <= \$876 ;
+    ch0_read_select_b5 <= \$872 ;
   always @(posedge clk)
-    ch0_read_select_b6 <= \$877 ;
+    ch0_read_select_b6 <= \$873 ;
   always @(posedge clk)
-    ch0_read_select_b8 <= \$878 ;
+    ch0_read_select_b8 <= \$874 ;
   always @(posedge clk)
-    ch0_read_select_b9 <= \$879 ;
+    ch0_read_select_b9 <= \$875 ;
   always @(posedge clk)
-    ch0_read_select_ba <= \$880 ;
+    ch0_read_select_ba <= \$876 ;
   always @(posedge clk)
-    ch0_read_select_bc <= \$881 ;
+    ch0_read_select_bc <= \$877 ;
   always @(posedge clk)
-    ch0_read_select_bd <= \$882 ;
+    ch0_read_select_bd <= \$878 ;
   always @(posedge clk)
-    ch0_read_select_be <= \$883 ;
+    ch0_read_select_be <= \$879 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$884 ;
+    ch0_read_select_c1 <= \$880 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$885 ;
+    ch0_read_select_c2 <= \$881 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$886 ;
+    ch0_read_select_c3 <= \$882 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$887 ;
+    ch0_read_select_c4 <= \$883 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$888 ;
+    ch0_read_select_c5 <= \$884 ;
   always @(posedge clk)
-    ch0_read_select_f0 <= \$889 ;
+    ch0_read_select_f0 <= \$885 ;
   always @(posedge clk)
-    ch0_read_select_f1 <= \$890 ;
+    ch0_read_select_f1 <= \$886 ;
   always @(posedge clk)
-    ch0_read_select_f2 <= \$891 ;
+    ch0_read_select_f2 <= \$887 ;
   always @(posedge clk)
-    ch0_read_select_f3 <= \$892 ;
+    ch0_read_select_f3 <= \$888 ;
   always @(posedge clk)
-    ch0_read_select_f4 <= \$893 ;
+    ch0_read_select_f4 <= \$889 ;
   always @(posedge clk)
-    ch0_read_select_f5 <= \$894 ;
+    ch0_read_select_f5 <= \$890 ;
   always @(posedge clk)
-    ch0_read_select_f6 <= \$895 ;
+    ch0_read_select_f6 <= \$891 ;
   always @(posedge clk)
-    ch0_read_select_f7 <= \$896 ;
+    ch0_read_select_f7 <= \$892 ;
   always @(posedge clk)
-    ch0_read_select_f8 <= \$897 ;
+    ch0_read_select_f8 <= \$893 ;
   always @(posedge clk)
-    ch0_read_select_f9 <= \$898 ;
+    ch0_read_select_f9 <= \$894 ;
   always @(posedge clk)
-    ch0_read_select_fa <= \$899 ;
+    ch0_read_select_fa <= \$895 ;
   always @(posedge clk)
-    ch0_read_select_fb <= \$900 ;
+    ch0_read_select_fb <= \$896 ;
   always @(posedge clk)
-    ch0_read_select_fc <= \$901 ;
+    ch0_read_select_fc <= \$897 ;
   always @(posedge clk)
-    ch0_read_select_fd <= \$902 ;
+    ch0_read_select_fd <= \$898 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$903 ;
+    ch0_result_status_status_snapshot <= \$899 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$904 ;
+    ch0_result_status_cds_snapshot <= \$900 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$905 ;
+    ch0_result_status_w0_ne_snapshot <= \$901 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$906 ;
+    ch0_result_status_w0_nw_snapshot <= \$902 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$907 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$903 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$908 ;
+    ch0_result_status_w1_ne_snapshot <= \$904 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$909 ;
+    ch0_result_status_w1_nw_snapshot <= \$905 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$910 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$906 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$911 ;
+    ch0_result_status_lc_repeat_snapshot <= \$907 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$912 ;
+    ch0_result_status_lc_skip_snapshot <= \$908 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$913 ;
+    ch0_result_status_lc_zero_snapshot <= \$909 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$914 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$910 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$915 ;
+    ch0_result_status_lc_snapshot <= \$911 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$916 ;
+    ch0_result_seq_seq_snapshot <= \$912 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$917 ;
+    ch0_result_seq_line_delay_snapshot <= \$913 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$918 ;
+    ch0_result_w0_lo_data_snapshot <= \$914 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$919 ;
+    ch0_result_w0_hi_data_snapshot <= \$915 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$920 ;
+    ch0_result_w1_lo_data_snapshot <= \$916 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$921 ;
+    ch0_result_w1_hi_data_snapshot <= \$917 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$922 ;
+    ch0_result_timestamp_time_snapshot <= \$918 ;
   always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$923 ;
+    ch0_result_line_noise_events_snapshot <= \$919 ;
   always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$924 ;
+    ch0_result_line_delay_settled_snapshot <= \$920 ;
   always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$925 ;
+    ch0_result_line_delay_spread_snapshot <= \$921 ;
   always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$926 ;
+    ch0_result_line_settled_delay_snapshot <= \$922 ;
   always @(posedge clk)
-    ch0_window0_read <= \$927 ;
+    ch0_window0_read <= \$923 ;
   always @(posedge clk)
-    ch0_window1_read <= \$928 ;
+    ch0_window1_read <= \$924 ;
   always @(posedge clk)
-    ch0_window2_read <= \$929 ;
+    ch0_window2_read <= \$925 ;
   always @(posedge clk)
-    ch0_read_data <= \$930 ;
+    ch0_read_data <= \$926 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$931 ;
+    ch1_ctrl_start <= \$927 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$932 ;
+    ch1_ctrl_abort <= \$928 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$933 ;
+    ch1_ctrl_clear_counters <= \$929 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$934 ;
+    ch1_ctrl_periodic <= \$930 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$935 ;
+    ch1_ctrl_trigger_enable <= \$931 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$936 ;
+    ch1_irq_status_done <= \$932 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$937 ;
+    ch1_irq_status_error <= \$933 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$938 ;
+    ch1_irq_status_access_done <= \$934 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$939 ;
+    ch1_irq_enable_config_write <= \$935 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$940 ;
+    ch1_irq_enable_done <= \$936 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$941 ;
+    ch1_irq_enable_error <= \$937 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$942 ;
+    ch1_irq_enable_access_done <= \$938 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$943 ;
+    ch1_cfg_ma_config_write <= \$939 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$944 ;
+    ch1_cfg_ma_ma_half_period <= \$940 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$945 ;
+    ch1_cfg_ma_delay_limit <= \$941 ;
   always @(posedge clk)
-    ch1_cfg_period_config_write <= \$946 ;
+    ch1_cfg_period_config_write <= \$942 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$947 ;
+    ch1_cfg_period_request_period <= \$943 ;
   always @(posedge clk)
-    ch1_cfg_break_config_write <= \$948 ;
+    ch1_cfg_break_config_write <= \$944 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$949 ;
+    ch1_cfg_break_break_time <= \$945 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$950 ;
+    ch1_cfg_ack_config_write <= \$946 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$951 ;
+    ch1_cfg_ack_ack_limit <= \$947 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$952 ;
+    ch1_cfg_timeout_config_write <= \$948 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$953 ;
+    ch1_cfg_timeout_timeout_limit <= \$949 ;
   always @(posedge clk)
-    ch1_cfg_words_config_write <= \$954 ;
+    ch1_cfg_words_config_write <= \$950 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$955 ;
+    ch1_cfg_words_w0_data_bits <= \$951 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$956 ;
+    ch1_cfg_words_w0_nenw <= \$952 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$957 ;
+    ch1_cfg_words_w0_lc <= \$953 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$958 ;
+    ch1_cfg_words_w0_crc <= \$954 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$959 ;
+    ch1_cfg_words_w0_gray <= \$955 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_signed <= \$960 ;
+    ch1_cfg_words_w0_signed <= \$956 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$961 ;
+    ch1_cfg_words_w1_data_bits <= \$957 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$962 ;
+    ch1_cfg_words_w1_nenw <= \$958 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$963 ;
+    ch1_cfg_words_w1_lc <= \$959 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$964 ;
+    ch1_cfg_words_w1_crc <= \$960 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$965 ;
+    ch1_cfg_words_w1_gray <= \$961 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_signed <= \$966 ;
+    ch1_cfg_words_w1_signed <= \$962 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$967 ;
+    ch1_cfg_words_w1_enable <= \$963 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$968 ;
+    ch1_cfg_checks_config_write <= \$964 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$969 ;
+    ch1_cfg_checks_end_check <= \$965 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$970 ;
+    ch1_cfg_checks_spw_check <= \$966 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$971 ;
+    ch1_cfg_checks_spw_tolerance <= \$967 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$972 ;
+    ch1_cfg_checks_noise_limit <= \$968 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$973 ;
+    ch1_cfg_checks_delay_tolerance <= \$969 ;
   always @(posedge clk)
-    ch1_cfg_checks_confirm_frames <= \$974 ;
+    ch1_cfg_checks_confirm_frames <= \$970 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_write <= \$975 ;
+    ch1_cfg_quiet_config_write <= \$971 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$976 ;
+    ch1_cfg_quiet_quiet_time <= \$972 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_write <= \$977 ;
+    ch1_cfg_crc0_config_write <= \$973 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_poly <= \$978 ;
+    ch1_cfg_crc0_w0_crc_poly <= \$974 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$979 ;
+    ch1_cfg_crc0_w0_crc_width <= \$975 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_inverted <= \$980 ;
+    ch1_cfg_crc0_w0_crc_inverted <= \$976 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_write <= \$981 ;
+    ch1_cfg_crc0_start_config_write <= \$977 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_w0_crc_start <= \$982 ;
+    ch1_cfg_crc0_start_w0_crc_start <= \$978 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_write <= \$983 ;
+    ch1_cfg_crc1_config_write <= \$979 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_poly <= \$984 ;
+    ch1_cfg_crc1_w1_crc_poly <= \$980 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$985 ;
+    ch1_cfg_crc1_w1_crc_width <= \$981 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_inverted <= \$986 ;
+    ch1_cfg_crc1_w1_crc_inverted <= \$982 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_write <= \$987 ;
+    ch1_cfg_crc1_start_config_write <= \$983 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_w1_crc_start <= \$988 ;
+    ch1_cfg_crc1_start_w1_crc_start <= \$984 ;
   always @(posedge clk)
-    ch1_cfg_ssi_config_write <= \$989 ;
+    ch1_cfg_ssi_config_write <= \$985 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi <= \$990 ;
+    ch1_cfg_ssi_ssi <= \$986 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error <= \$991 ;
+    ch1_cfg_ssi_ssi_error <= \$987 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error_low <= \$992 ;
+    ch1_cfg_ssi_ssi_error_low <= \$988 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_double <= \$993 ;
+    ch1_cfg_ssi_ssi_double <= \$989 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_delay <= \$994 ;
+    ch1_cfg_ssi_ssi_delay <= \$990 ;
   always @(posedge clk)
-    ch1_cfg_w2_config_write <= \$995 ;
+    ch1_cfg_w2_config_write <= \$991 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_config_write <= \$996 ;
+    ch1_cfg_w2_crc_config_write <= \$992 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_start_config_write <= \$997 ;
+    ch1_cfg_w2_crc_start_config_write <= \$993 ;
   always @(posedge clk)
-    ch1_cfg_w3_config_write <= \$998 ;
+    ch1_cfg_w3_config_write <= \$994 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_config_write <= \$999 ;
+    ch1_cfg_w3_crc_config_write <= \$995 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_start_config_write <= \$1000 ;
+    ch1_cfg_w3_crc_start_config_write <= \$996 ;
   always @(posedge clk)
-    ch1_cfg_w4_config_write <= \$1001 ;
+    ch1_cfg_w4_config_write <= \$997 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_config_write <= \$1002 ;
+    ch1_cfg_w4_crc_config_write <= \$998 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_start_config_write <= \$1003 ;
+    ch1_cfg_w4_crc_start_config_write <= \$999 ;
   always @(posedge clk)
-    ch1_cfg_w5_config_write <= \$1004 ;
+    ch1_cfg_w5_config_write <= \$1000 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_config_write <= \$1005 ;
+    ch1_cfg_w5_crc_config_write <= \$1001 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_start_config_write <= \$1006 ;
+    ch1_cfg_w5_crc_start_config_write <= \$1002 ;
   always @(posedge clk)
-    ch1_cfg_w6_config_write <= \$1007 ;
+    ch1_cfg_w6_config_write <= \$1003 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_config_write <= \$1008 ;
+    ch1_cfg_w6_crc_config_write <= \$1004 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_start_config_write <= \$1009 ;
+    ch1_cfg_w6_crc_start_config_write <= \$1005 ;
   always @(posedge clk)
-    ch1_cfg_w7_config_write <= \$1010 ;
+    ch1_cfg_w7_config_write <= \$1006 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_config_write <= \$1011 ;
+    ch1_cfg_w7_crc_config_write <= \$1007 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_start_config_write <= \$1012 ;
+    ch1_cfg_w7_crc_start_config_write <= \$1008 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$1013 ;
+    ch1_ca_request_config_write <= \$1009 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$1014 ;
+    ch1_ca_request_slave_id <= \$1010 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$1015 ;
+    ch1_ca_request_address <= \$1011 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$1016 ;
+    ch1_ca_request_count <= \$1012 ;
   always @(posedge clk)
-    \ch1_ca_request_write$446  <= \$1017 ;
+    \ch1_ca_request_write$446  <= \$1013 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$1018 ;
+    ch1_ca_ctrl_start <= \$1014 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$1019 ;
+    ch1_ca_ctrl_abort <= \$1015 ;
   always @(posedge clk)
-    ch1_config_written <= \$1020 ;
+    ch1_config_written <= \$1016 ;
   always @(posedge clk)
-    ch1_config_read_index <= \$1021 ;
+    ch1_config_read_index <= \$1017 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$1022 ;
+    ch1_read_select_100 <= \$1018 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$1023 ;
+    ch1_read_select_101 <= \$1019 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$1024 ;
+    ch1_read_select_102 <= \$1020 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$1025 ;
+    ch1_read_select_104 <= \$1021 ;
   always @(posedge clk)
-    ch1_read_select_106 <= \$1026 ;
+    ch1_read_select_106 <= \$1022 ;
   always @(posedge clk)
-    ch1_read_select_107 <= \$1027 ;
+    ch1_read_select_107 <= \$1023 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$1028 ;
+    ch1_read_select_110 <= \$1024 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$1029 ;
+    ch1_read_select_111 <= \$1025 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$1030 ;
+    ch1_read_select_112 <= \$1026 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$1031 ;
+    ch1_read_select_113 <= \$1027 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$1032 ;
+    ch1_read_select_114 <= \$1028 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$1033 ;
+    ch1_read_select_115 <= \$1029 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$1034 ;
+    ch1_read_select_116 <= \$1030 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$1035 ;
+    ch1_read_select_117 <= \$1031 ;
   always @(posedge clk)
-    ch1_read_select_125 <= \$1036 ;
+    ch1_read_select_125 <= \$1032 ;
   always @(posedge clk)
-    ch1_read_select_126 <= \$1037 ;
+    ch1_read_select_126 <= \$1033 ;
   always @(posedge clk)
-    ch1_read_select_127 <= \$1038 ;
+    ch1_read_select_127 <= \$1034 ;
   always @(posedge clk)
-    ch1_read_select_128 <= \$1039 ;
+    ch1_read_select_128 <= \$1035 ;
   always @(posedge clk)
-    ch1_read_select_129 <= \$1040 ;
+    ch1_read_select_129 <= \$1036 ;
   always @(posedge clk)
-    ch1_read_select_12a <= \$1041 ;
+    ch1_read_select_12a <= \$1037 ;
   always @(posedge clk)
-    ch1_read_select_12c <= \$1042 ;
+    ch1_read_select_12c <= \$1038 ;
   always @(posedge clk)
-    ch1_read_select_12d <= \$1043 ;
+    ch1_read_select_12d <= \$1039 ;
   always @(posedge clk)
-    ch1_read_select_12e <= \$1044 ;
+    ch1_read_select_12e <= \$1040 ;
   always @(posedge clk)
-    ch1_read_select_130 <= \$1045 ;
+    ch1_read_select_130 <= \$1041 ;
   always @(posedge clk)
-    ch1_read_select_131 <= \$1046 ;
+    ch1_read_select_131 <= \$1042 ;
   always @(posedge clk)
-    ch1_read_select_132 <= \$1047 ;
+    ch1_read_select_132 <= \$1043 ;
   always @(posedge clk)
-    ch1_read_select_134 <= \$1048 ;
+    ch1_read_select_134 <= \$1044 ;
   always @(posedge clk)
-    ch1_read_select_135 <= \$1049 ;
+    ch1_read_select_135 <= \$1045 ;
   always @(posedge clk)
-    ch1_read_select_136 <= \$1050 ;
+    ch1_read_select_136 <= \$1046 ;
   always @(posedge clk)
-    ch1_read_select_138 <= \$1051 ;
+    ch1_read_select_138 <= \$1047 ;
   always @(posedge clk)
-    ch1_read_select_139 <= \$1052 ;
+    ch1_read_select_139 <= \$1048 ;
   always @(posedge clk)
-    ch1_read_select_13a <= \$1053 ;
+    ch1_read_select_13a <= \$1049 ;
   always @(posedge clk)
-    ch1_read_select_13c <= \$1054 ;
+    ch1_read_select_13c <= \$1050 ;
   always @(posedge clk)
-    ch1_read_select_13d <= \$1055 ;
+    ch1_read_select_13d <= \$1051 ;
   always @(posedge clk)
-    ch1_read_select_13e <= \$1056 ;
+    ch1_read_select_13e <= \$1052 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$1057 ;
+    ch1_read_select_141 <= \$1053 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$1058 ;
+    ch1_read_select_142 <= \$1054 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$1059 ;
+    ch1_read_select_143 <= \$1055 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$1060 ;
+    ch1_read_select_144 <= \$1056 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$1061 ;
+    ch1_read_select_145 <= \$1057 ;
   always @(posedge clk)
-    ch1_read_select_170 <= \$1062 ;
+    ch1_read_select_170 <= \$1058 ;
   always @(posedge clk)
-    ch1_read_select_171 <= \$1063 ;
+    ch1_read_select_171 <= \$1059 ;
   always @(posedge clk)
-    ch1_read_select_172 <= \$1064 ;
+    ch1_read_select_172 <= \$1060 ;
   always @(posedge clk)
-    ch1_read_select_173 <= \$1065 ;
+    ch1_read_select_173 <= \$1061 ;
   always @(posedge clk)
-    ch1_read_select_174 <= \$1066 ;
+    ch1_read_select_174 <= \$1062 ;
   always @(posedge clk)
-    ch1_read_select_175 <= \$1067 ;
+    ch1_read_select_175 <= \$1063 ;
   always @(posedge clk)
-    ch1_read_select_176 <= \$1068 ;
+    ch1_read_select_176 <= \$1064 ;
   always @(posedge clk)
-    ch1_read_select_177 <= \$1069 ;
+    ch1_read_select_177 <= \$1065 ;
   always @(posedge clk)
-    ch1_read_select_178 <= \$1070 ;
+    ch1_read_select_178 <= \$1066 ;
   always @(posedge clk)
-    ch1_read_select_179 <= \$1071 ;
+    ch1_read_select_179 <= \$1067 ;
   always @(posedge clk)
-    ch1_read_select_17a <= \$1072 ;
+    ch1_read_select_17a <= \$1068 ;
   always @(posedge clk)
-    ch1_read_select_17b <= \$1073 ;
+    ch1_read_select_17b <= \$1069 ;
   always @(posedge clk)
-    ch1_read_select_17c <= \$1074 ;
+    ch1_read_select_17c <= \$1070 ;
   always @(posedge clk)
-    ch1_read_select_17d <= \$1075 ;
+    ch1_read_select_17d <= \$1071 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$1076 ;
+    ch1_result_status_status_snapshot <= \$1072 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$1077 ;
+    ch1_result_status_cds_snapshot <= \$1073 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$1078 ;
+    ch1_result_status_w0_ne_snapshot <= \$1074 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$1079 ;
+    ch1_result_status_w0_nw_snapshot <= \$1075 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$1080 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$1076 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$1081 ;
+    ch1_result_status_w1_ne_snapshot <= \$1077 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$1082 ;
+    ch1_result_status_w1_nw_snapshot <= \$1078 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$1083 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$1079 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$1084 ;
+    ch1_result_status_lc_repeat_snapshot <= \$1080 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$1085 ;
+    ch1_result_status_lc_skip_snapshot <= \$1081 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$1086 ;
+    ch1_result_status_lc_zero_snapshot <= \$1082 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$1087 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$1083 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$1088 ;
+    ch1_result_status_lc_snapshot <= \$1084 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$1089 ;
+    ch1_result_seq_seq_snapshot <= \$1085 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$1090 ;
+    ch1_result_seq_line_delay_snapshot <= \$1086 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$1091 ;
+    ch1_result_w0_lo_data_snapshot <= \$1087 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$1092 ;
+    ch1_result_w0_hi_data_snapshot <= \$1088 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$1093 ;
+    ch1_result_w1_lo_data_snapshot <= \$1089 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$1094 ;
+    ch1_result_w1_hi_data_snapshot <= \$1090 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$1095 ;
+    ch1_result_timestamp_time_snapshot <= \$1091 ;
   always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$1096 ;
+    ch1_result_line_noise_events_snapshot <= \$1092 ;
   always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$1097 ;
+    ch1_result_line_delay_settled_snapshot <= \$1093 ;
   always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$1098 ;
+    ch1_result_line_delay_spread_snapshot <= \$1094 ;
   always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$1099 ;
+    ch1_result_line_settled_delay_snapshot <= \$1095 ;
   always @(posedge clk)
-    ch1_window0_read <= \$1100 ;
+    ch1_window0_read <= \$1096 ;
   always @(posedge clk)
-    ch1_window1_read <= \$1101 ;
+    ch1_window1_read <= \$1097 ;
   always @(posedge clk)
-    ch1_window2_read <= \$1102 ;
+    ch1_window2_read <= \$1098 ;
   always @(posedge clk)
-    ch1_read_data <= \$1103 ;
+    ch1_read_data <= \$1099 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$630  = 32'd0;
-    casez (ch0_config_read_index)
-      4'h0:
-          \$630  = 32'd0;
-      4'h1:
-          \$630  = 32'd0;
-      4'h2:
-          \$630  = 32'd0;
-      4'h3:
-          \$630  = 32'd0;
-      4'h4:
-          \$630  = 32'd0;
-      4'h5:
-          \$630  = 32'd0;
-      4'h6:
-          \$630  = 32'd0;
-      4'h7:
-          \$630  = 32'd0;
-      4'h8:
-          \$630  = 32'd0;
-      4'h9:
-          \$630  = 32'd0;
-      4'ha:
-          \$630  = 32'd0;
-      4'hb:
-          \$630  = 32'd0;
-      4'hc:
-          \$630  = 32'd0;
-      4'hd:
-          \$630  = 32'd0;
-      4'he:
-          \$630  = 32'd0;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$632  = 32'd0;
-    casez (ch0_config_read_index)
-      4'h0:
-          \$632  = 32'd0;
-      4'h1:
-          \$632  = 32'd0;
-      4'h2:
-          \$632  = 32'd0;
-      4'h3:
-          \$632  = 32'd0;
-      4'h4:
-          \$632  = 32'd0;
-      4'h5:
-          \$632  = 32'd0;
-      4'h6:
-          \$632  = 32'd0;
-      4'h7:
-          \$632  = 32'd0;
-      4'h8:
-          \$632  = 32'd0;
-      4'h9:
-          \$632  = 32'd0;
-      4'ha:
-          \$632  = 32'd0;
-      4'hb:
-          \$632  = 32'd0;
-      4'hc:
-          \$632  = 32'd0;
-      4'hd:
-          \$632  = 32'd0;
-      4'he:
-          \$632  = 32'd0;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$733  = 32'd0;
-    casez (ch1_config_read_index)
-      4'h0:
-          \$733  = 32'd0;
-      4'h1:
-          \$733  = 32'd0;
-      4'h2:
-          \$733  = 32'd0;
-      4'h3:
-          \$733  = 32'd0;
-      4'h4:
-          \$733  = 32'd0;
-      4'h5:
-          \$733  = 32'd0;
-      4'h6:
-          \$733  = 32'd0;
-      4'h7:
-          \$733  = 32'd0;
-      4'h8:
-          \$733  = 32'd0;
-      4'h9:
-          \$733  = 32'd0;
-      4'ha:
-          \$733  = 32'd0;
-      4'hb:
-          \$733  = 32'd0;
-      4'hc:
-          \$733  = 32'd0;
-      4'hd:
-          \$733  = 32'd0;
-      4'he:
-          \$733  = 32'd0;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$735  = 32'd0;
-    casez (ch1_config_read_index)
-      4'h0:
-          \$735  = 32'd0;
-      4'h1:
-          \$735  = 32'd0;
-      4'h2:
-          \$735  = 32'd0;
-      4'h3:
-          \$735  = 32'd0;
-      4'h4:
-          \$735  = 32'd0;
-      4'h5:
-          \$735  = 32'd0;
-      4'h6:
-          \$735  = 32'd0;
-      4'h7:
-          \$735  = 32'd0;
-      4'h8:
-          \$735  = 32'd0;
-      4'h9:
-          \$735  = 32'd0;
-      4'ha:
-          \$735  = 32'd0;
-      4'hb:
-          \$735  = 32'd0;
-      4'hc:
-          \$735  = 32'd0;
-      4'hd:
-          \$735  = 32'd0;
-      4'he:
-          \$735  = 32'd0;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$744  = bus__w_en;
+    \$740  = bus__w_en;
     if (rst) begin
-      \$744  = 1'h0;
+      \$740  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$745  = write_addr;
+    \$741  = write_addr;
     if (bus__w_en) begin
-      \$745  = bus__w_addr;
+      \$741  = bus__w_addr;
     end
     if (rst) begin
-      \$745  = 11'h000;
+      \$741  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$746  = write_data;
+    \$742  = write_data;
     if (bus__w_en) begin
-      \$746  = bus__w_data;
+      \$742  = bus__w_data;
     end
     if (rst) begin
-      \$746  = 32'd0;
+      \$742  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$747  = write_strb;
+    \$743  = write_strb;
     if (bus__w_en) begin
-      \$747  = bus__w_strb;
+      \$743  = bus__w_strb;
     end
     if (rst) begin
-      \$747  = 4'h0;
+      \$743  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$748  = config_write_data;
+    \$744  = config_write_data;
     if (write_en) begin
-      \$748  = write_data;
+      \$744  = write_data;
     end
     if (rst) begin
-      \$748  = 32'd0;
+      \$744  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$749  = config_write_strb;
+    \$745  = config_write_strb;
     if (write_en) begin
-      \$749  = write_strb;
+      \$745  = write_strb;
     end
     if (rst) begin
-      \$749  = 4'h0;
+      \$745  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$750  = \$2 ;
+    \$746  = \$2 ;
+    if (rst) begin
+      \$746  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$747  = g_read_select_0;
+    if (bus__r_en) begin
+      \$747  = \$3 ;
+    end
+    if (rst) begin
+      \$747  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$748  = g_read_select_1;
+    if (bus__r_en) begin
+      \$748  = \$4 ;
+    end
+    if (rst) begin
+      \$748  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$749  = g_read_select_2;
+    if (bus__r_en) begin
+      \$749  = \$5 ;
+    end
+    if (rst) begin
+      \$749  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$750  = g_read_select_3;
+    if (bus__r_en) begin
+      \$750  = \$6 ;
+    end
     if (rst) begin
       \$750  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$751  = g_read_select_0;
+    \$751  = g_read_select_4;
     if (bus__r_en) begin
-      \$751  = \$3 ;
+      \$751  = \$7 ;
     end
     if (rst) begin
       \$751  = 1'h0;
@@ -6063,80 +5953,86 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$752  = g_read_select_1;
-    if (bus__r_en) begin
-      \$752  = \$4 ;
+    \$752  = g_read_data;
+    if (bus__r_load) begin
+      \$752  = \$17 ;
     end
     if (rst) begin
-      \$752  = 1'h0;
+      \$752  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$753  = g_read_select_2;
-    if (bus__r_en) begin
-      \$753  = \$5 ;
-    end
+    \$753  = \$19 ;
     if (rst) begin
       \$753  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$754  = g_read_select_3;
-    if (bus__r_en) begin
-      \$754  = \$6 ;
-    end
+    \$754  = \$21 ;
     if (rst) begin
       \$754  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$755  = g_read_select_4;
-    if (bus__r_en) begin
-      \$755  = \$7 ;
-    end
+    \$755  = \$23 ;
     if (rst) begin
       \$755  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$756  = g_read_data;
-    if (bus__r_load) begin
-      \$756  = \$17 ;
+    \$756  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$756  = write_data[8];
     end
     if (rst) begin
-      \$756  = 32'd0;
+      \$756  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$757  = \$19 ;
+    \$757  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$757  = write_data[9];
+    end
     if (rst) begin
       \$757  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$758  = \$21 ;
+    \$758  = ch0_irq_status_done;
+    if (ch0__frame_done) begin
+      \$758  = 1'h1;
+    end else if (\$27 ) begin
+      \$758  = 1'h0;
+    end
     if (rst) begin
       \$758  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$759  = \$23 ;
+    \$759  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$759  = 1'h1;
+    end else if (\$29 ) begin
+      \$759  = 1'h0;
+    end
     if (rst) begin
       \$759  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$760  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$760  = write_data[8];
+    \$760  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$760  = 1'h1;
+    end else if (\$31 ) begin
+      \$760  = 1'h0;
     end
     if (rst) begin
       \$760  = 1'h0;
@@ -6144,21 +6040,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$761  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$761  = write_data[9];
-    end
+    \$761  = ch0_irq_enable_write;
     if (rst) begin
       \$761  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$762  = ch0_irq_status_done;
-    if (ch0__frame_done) begin
-      \$762  = 1'h1;
-    end else if (\$27 ) begin
-      \$762  = 1'h0;
+    \$762  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$762  = config_write_data[0];
     end
     if (rst) begin
       \$762  = 1'h0;
@@ -6166,11 +6057,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$763  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$763  = 1'h1;
-    end else if (\$29 ) begin
-      \$763  = 1'h0;
+    \$763  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$763  = config_write_data[1];
     end
     if (rst) begin
       \$763  = 1'h0;
@@ -6178,11 +6067,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$764  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$764  = 1'h1;
-    end else if (\$31 ) begin
-      \$764  = 1'h0;
+    \$764  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$764  = config_write_data[2];
     end
     if (rst) begin
       \$764  = 1'h0;
@@ -6190,91 +6077,100 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$765  = ch0_irq_enable_write;
+    \$765  = ch0_cfg_ma_write;
     if (rst) begin
       \$765  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$766  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$766  = config_write_data[0];
+    \$766  = ch0_cfg_ma_ma_half_period;
+    if (\$35 ) begin
+      \$766 [7:0] = config_write_data[7:0];
+    end
+    if (\$36 ) begin
+      \$766 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$766  = 1'h0;
+      \$766  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$767  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$767  = config_write_data[1];
+    \$767  = ch0_cfg_ma_delay_limit;
+    if (\$37 ) begin
+      \$767 [7:0] = config_write_data[23:16];
+    end
+    if (\$38 ) begin
+      \$767 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$767  = 1'h0;
+      \$767  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$768  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$768  = config_write_data[2];
-    end
+    \$768  = ch0_cfg_period_write;
     if (rst) begin
       \$768  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$769  = ch0_cfg_ma_write;
+    \$769  = ch0_cfg_period_request_period;
+    if (\$39 ) begin
+      \$769 [7:0] = config_write_data[7:0];
+    end
+    if (\$40 ) begin
+      \$769 [15:8] = config_write_data[15:8];
+    end
+    if (\$41 ) begin
+      \$769 [23:16] = config_write_data[23:16];
+    end
     if (rst) begin
-      \$769  = 1'h0;
+      \$769  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$770  = ch0_cfg_ma_ma_half_period;
-    if (\$35 ) begin
-      \$770 [7:0] = config_write_data[7:0];
-    end
-    if (\$36 ) begin
-      \$770 [15:8] = config_write_data[15:8];
-    end
+    \$770  = ch0_cfg_break_write;
     if (rst) begin
-      \$770  = 16'h0000;
+      \$770  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$771  = ch0_cfg_ma_delay_limit;
-    if (\$37 ) begin
-      \$771 [7:0] = config_write_data[23:16];
+    \$771  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
+      \$771 [7:0] = config_write_data[7:0];
     end
-    if (\$38 ) begin
-      \$771 [11:8] = config_write_data[27:24];
+    if (\$43 ) begin
+      \$771 [15:8] = config_write_data[15:8];
+    end
+    if (\$44 ) begin
+      \$771 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$771  = 12'h000;
+      \$771  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$772  = ch0_cfg_period_write;
+    \$772  = ch0_cfg_ack_write;
     if (rst) begin
       \$772  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$773  = ch0_cfg_period_request_period;
-    if (\$39 ) begin
+    \$773  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
       \$773 [7:0] = config_write_data[7:0];
     end
-    if (\$40 ) begin
+    if (\$46 ) begin
       \$773 [15:8] = config_write_data[15:8];
     end
-    if (\$41 ) begin
+    if (\$47 ) begin
       \$773 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -6283,21 +6179,21 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$774  = ch0_cfg_break_write;
+    \$774  = ch0_cfg_timeout_write;
     if (rst) begin
       \$774  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$775  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
+    \$775  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
       \$775 [7:0] = config_write_data[7:0];
     end
-    if (\$43 ) begin
+    if (\$49 ) begin
       \$775 [15:8] = config_write_data[15:8];
     end
-    if (\$44 ) begin
+    if (\$50 ) begin
       \$775 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -6306,72 +6202,66 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$776  = ch0_cfg_ack_write;
+    \$776  = ch0_cfg_words_write;
     if (rst) begin
       \$776  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$777  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
-      \$777 [7:0] = config_write_data[7:0];
-    end
-    if (\$46 ) begin
-      \$777 [15:8] = config_write_data[15:8];
-    end
-    if (\$47 ) begin
-      \$777 [23:16] = config_write_data[23:16];
+    \$777  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$777  = config_write_data[5:0];
     end
     if (rst) begin
-      \$777  = 24'h000000;
+      \$777  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$778  = ch0_cfg_timeout_write;
+    \$778  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$778  = config_write_data[6];
+    end
     if (rst) begin
       \$778  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$779  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
-      \$779 [7:0] = config_write_data[7:0];
-    end
-    if (\$49 ) begin
-      \$779 [15:8] = config_write_data[15:8];
-    end
-    if (\$50 ) begin
-      \$779 [23:16] = config_write_data[23:16];
+    \$779  = ch0_cfg_words_w0_lc;
+    if (\$53 ) begin
+      \$779  = config_write_data[7];
     end
     if (rst) begin
-      \$779  = 24'h000000;
+      \$779  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$780  = ch0_cfg_words_write;
+    \$780  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$780  = config_write_data[9:8];
+    end
     if (rst) begin
-      \$780  = 1'h0;
+      \$780  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$781  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$781  = config_write_data[5:0];
+    \$781  = ch0_cfg_words_w0_gray;
+    if (\$55 ) begin
+      \$781  = config_write_data[10];
     end
     if (rst) begin
-      \$781  = 6'h00;
+      \$781  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$782  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$782  = config_write_data[6];
+    \$782  = ch0_cfg_words_w0_signed;
+    if (\$56 ) begin
+      \$782  = config_write_data[11];
     end
     if (rst) begin
       \$782  = 1'h0;
@@ -6379,29 +6269,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$783  = ch0_cfg_words_w0_lc;
-    if (\$53 ) begin
-      \$783  = config_write_data[7];
+    \$783  = ch0_cfg_words_w1_data_bits;
+    if (\$57 ) begin
+      \$783  = config_write_data[21:16];
     end
     if (rst) begin
-      \$783  = 1'h0;
+      \$783  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$784  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$784  = config_write_data[9:8];
+    \$784  = ch0_cfg_words_w1_nenw;
+    if (\$58 ) begin
+      \$784  = config_write_data[22];
     end
     if (rst) begin
-      \$784  = 2'h0;
+      \$784  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$785  = ch0_cfg_words_w0_gray;
-    if (\$55 ) begin
-      \$785  = config_write_data[10];
+    \$785  = ch0_cfg_words_w1_lc;
+    if (\$59 ) begin
+      \$785  = config_write_data[23];
     end
     if (rst) begin
       \$785  = 1'h0;
@@ -6409,29 +6299,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$786  = ch0_cfg_words_w0_signed;
-    if (\$56 ) begin
-      \$786  = config_write_data[11];
+    \$786  = ch0_cfg_words_w1_crc;
+    if (\$60 ) begin
+      \$786  = config_write_data[25:24];
     end
     if (rst) begin
-      \$786  = 1'h0;
+      \$786  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$787  = ch0_cfg_words_w1_data_bits;
-    if (\$57 ) begin
-      \$787  = config_write_data[21:16];
+    \$787  = ch0_cfg_words_w1_gray;
+    if (\$61 ) begin
+      \$787  = config_write_data[26];
     end
     if (rst) begin
-      \$787  = 6'h00;
+      \$787  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$788  = ch0_cfg_words_w1_nenw;
-    if (\$58 ) begin
-      \$788  = config_write_data[22];
+    \$788  = ch0_cfg_words_w1_signed;
+    if (\$62 ) begin
+      \$788  = config_write_data[27];
     end
     if (rst) begin
       \$788  = 1'h0;
@@ -6439,9 +6329,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$789  = ch0_cfg_words_w1_lc;
-    if (\$59 ) begin
-      \$789  = config_write_data[23];
+    \$789  = ch0_cfg_words_w1_enable;
+    if (\$63 ) begin
+      \$789  = config_write_data[31];
     end
     if (rst) begin
       \$789  = 1'h0;
@@ -6449,19 +6339,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$790  = ch0_cfg_words_w1_crc;
-    if (\$60 ) begin
-      \$790  = config_write_data[25:24];
-    end
+    \$790  = ch0_cfg_checks_write;
     if (rst) begin
-      \$790  = 2'h0;
+      \$790  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$791  = ch0_cfg_words_w1_gray;
-    if (\$61 ) begin
-      \$791  = config_write_data[26];
+    \$791  = ch0_cfg_checks_end_check;
+    if (\$64 ) begin
+      \$791  = config_write_data[0];
     end
     if (rst) begin
       \$791  = 1'h0;
@@ -6469,9 +6356,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$792  = ch0_cfg_words_w1_signed;
-    if (\$62 ) begin
-      \$792  = config_write_data[27];
+    \$792  = ch0_cfg_checks_spw_check;
+    if (\$65 ) begin
+      \$792  = config_write_data[1];
     end
     if (rst) begin
       \$792  = 1'h0;
@@ -6479,115 +6366,118 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$793  = ch0_cfg_words_w1_enable;
-    if (\$63 ) begin
-      \$793  = config_write_data[31];
-    end
-    if (rst) begin
-      \$793  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$794  = ch0_cfg_checks_write;
-    if (rst) begin
-      \$794  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$795  = ch0_cfg_checks_end_check;
-    if (\$64 ) begin
-      \$795  = config_write_data[0];
-    end
-    if (rst) begin
-      \$795  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$796  = ch0_cfg_checks_spw_check;
-    if (\$65 ) begin
-      \$796  = config_write_data[1];
-    end
-    if (rst) begin
-      \$796  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$797  = ch0_cfg_checks_spw_tolerance;
+    \$793  = ch0_cfg_checks_spw_tolerance;
     if (\$66 ) begin
-      \$797  = config_write_data[15:8];
+      \$793  = config_write_data[15:8];
     end
     if (rst) begin
-      \$797  = 8'h00;
+      \$793  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$798  = ch0_cfg_checks_noise_limit;
+    \$794  = ch0_cfg_checks_noise_limit;
     if (\$67 ) begin
-      \$798  = config_write_data[19:16];
+      \$794  = config_write_data[19:16];
     end
     if (rst) begin
-      \$798  = 4'h0;
+      \$794  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$799  = ch0_cfg_checks_delay_tolerance;
+    \$795  = ch0_cfg_checks_delay_tolerance;
     if (\$68 ) begin
-      \$799  = config_write_data[23:20];
+      \$795  = config_write_data[23:20];
     end
     if (rst) begin
-      \$799  = 4'h0;
+      \$795  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$800  = ch0_cfg_checks_confirm_frames;
+    \$796  = ch0_cfg_checks_confirm_frames;
     if (\$69 ) begin
-      \$800  = config_write_data[27:24];
+      \$796  = config_write_data[27:24];
     end
     if (rst) begin
-      \$800  = 4'h0;
+      \$796  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$801  = ch0_cfg_quiet_write;
+    \$797  = ch0_cfg_quiet_write;
     if (rst) begin
-      \$801  = 1'h0;
+      \$797  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$802  = ch0_cfg_quiet_quiet_time;
+    \$798  = ch0_cfg_quiet_quiet_time;
     if (\$70 ) begin
-      \$802 [7:0] = config_write_data[7:0];
+      \$798 [7:0] = config_write_data[7:0];
     end
     if (\$71 ) begin
-      \$802 [11:8] = config_write_data[11:8];
+      \$798 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$802  = 12'h000;
+      \$798  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$803  = ch0_cfg_crc0_write;
+    \$799  = ch0_cfg_crc0_write;
+    if (rst) begin
+      \$799  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$800  = ch0_cfg_crc0_w0_crc_poly;
+    if (\$72 ) begin
+      \$800 [7:0] = config_write_data[7:0];
+    end
+    if (\$73 ) begin
+      \$800 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$800  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$801  = ch0_cfg_crc0_w0_crc_width;
+    if (\$74 ) begin
+      \$801  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$801  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$802  = ch0_cfg_crc0_w0_crc_inverted;
+    if (\$75 ) begin
+      \$802  = config_write_data[24];
+    end
+    if (rst) begin
+      \$802  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$803  = ch0_cfg_crc0_start_write;
     if (rst) begin
       \$803  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$804  = ch0_cfg_crc0_w0_crc_poly;
-    if (\$72 ) begin
+    \$804  = ch0_cfg_crc0_start_w0_crc_start;
+    if (\$76 ) begin
       \$804 [7:0] = config_write_data[7:0];
     end
-    if (\$73 ) begin
+    if (\$77 ) begin
       \$804 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
@@ -6596,58 +6486,58 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$805  = ch0_cfg_crc0_w0_crc_width;
-    if (\$74 ) begin
-      \$805  = config_write_data[20:16];
-    end
+    \$805  = ch0_cfg_crc1_write;
     if (rst) begin
-      \$805  = 5'h00;
+      \$805  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$806  = ch0_cfg_crc0_w0_crc_inverted;
-    if (\$75 ) begin
-      \$806  = config_write_data[24];
+    \$806  = ch0_cfg_crc1_w1_crc_poly;
+    if (\$78 ) begin
+      \$806 [7:0] = config_write_data[7:0];
+    end
+    if (\$79 ) begin
+      \$806 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$806  = 1'h0;
+      \$806  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$807  = ch0_cfg_crc0_start_write;
+    \$807  = ch0_cfg_crc1_w1_crc_width;
+    if (\$80 ) begin
+      \$807  = config_write_data[20:16];
+    end
     if (rst) begin
-      \$807  = 1'h0;
+      \$807  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$808  = ch0_cfg_crc0_start_w0_crc_start;
-    if (\$76 ) begin
-      \$808 [7:0] = config_write_data[7:0];
-    end
-    if (\$77 ) begin
-      \$808 [15:8] = config_write_data[15:8];
+    \$808  = ch0_cfg_crc1_w1_crc_inverted;
+    if (\$81 ) begin
+      \$808  = config_write_data[24];
     end
     if (rst) begin
-      \$808  = 16'h0000;
+      \$808  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$809  = ch0_cfg_crc1_write;
+    \$809  = ch0_cfg_crc1_start_write;
     if (rst) begin
       \$809  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$810  = ch0_cfg_crc1_w1_crc_poly;
-    if (\$78 ) begin
+    \$810  = ch0_cfg_crc1_start_w1_crc_start;
+    if (\$82 ) begin
       \$810 [7:0] = config_write_data[7:0];
     end
-    if (\$79 ) begin
+    if (\$83 ) begin
       \$810 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
@@ -6656,19 +6546,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$811  = ch0_cfg_crc1_w1_crc_width;
-    if (\$80 ) begin
-      \$811  = config_write_data[20:16];
-    end
+    \$811  = ch0_cfg_ssi_write;
     if (rst) begin
-      \$811  = 5'h00;
+      \$811  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$812  = ch0_cfg_crc1_w1_crc_inverted;
-    if (\$81 ) begin
-      \$812  = config_write_data[24];
+    \$812  = ch0_cfg_ssi_ssi;
+    if (\$84 ) begin
+      \$812  = config_write_data[0];
     end
     if (rst) begin
       \$812  = 1'h0;
@@ -6676,303 +6563,306 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$813  = ch0_cfg_crc1_start_write;
+    \$813  = ch0_cfg_ssi_ssi_error;
+    if (\$85 ) begin
+      \$813  = config_write_data[1];
+    end
     if (rst) begin
       \$813  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$814  = ch0_cfg_crc1_start_w1_crc_start;
-    if (\$82 ) begin
-      \$814 [7:0] = config_write_data[7:0];
-    end
-    if (\$83 ) begin
-      \$814 [15:8] = config_write_data[15:8];
+    \$814  = ch0_cfg_ssi_ssi_error_low;
+    if (\$86 ) begin
+      \$814  = config_write_data[2];
     end
     if (rst) begin
-      \$814  = 16'h0000;
+      \$814  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$815  = ch0_cfg_ssi_write;
+    \$815  = ch0_cfg_ssi_ssi_double;
+    if (\$87 ) begin
+      \$815  = config_write_data[3];
+    end
     if (rst) begin
       \$815  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$816  = ch0_cfg_ssi_ssi;
-    if (\$84 ) begin
-      \$816  = config_write_data[0];
+    \$816  = ch0_cfg_ssi_ssi_delay;
+    if (\$88 ) begin
+      \$816 [7:0] = config_write_data[23:16];
+    end
+    if (\$89 ) begin
+      \$816 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$816  = 1'h0;
+      \$816  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$817  = ch0_cfg_ssi_ssi_error;
-    if (\$85 ) begin
-      \$817  = config_write_data[1];
-    end
+    \$817  = ch0_cfg_w2_write;
     if (rst) begin
       \$817  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$818  = ch0_cfg_ssi_ssi_error_low;
-    if (\$86 ) begin
-      \$818  = config_write_data[2];
-    end
+    \$818  = ch0_cfg_w2_crc_write;
     if (rst) begin
       \$818  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$819  = ch0_cfg_ssi_ssi_double;
-    if (\$87 ) begin
-      \$819  = config_write_data[3];
-    end
+    \$819  = ch0_cfg_w2_crc_start_write;
     if (rst) begin
       \$819  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$820  = ch0_cfg_ssi_ssi_delay;
-    if (\$88 ) begin
-      \$820 [7:0] = config_write_data[23:16];
-    end
-    if (\$89 ) begin
-      \$820 [11:8] = config_write_data[27:24];
-    end
+    \$820  = ch0_cfg_w3_write;
     if (rst) begin
-      \$820  = 12'h000;
+      \$820  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$821  = ch0_cfg_w2_write;
+    \$821  = ch0_cfg_w3_crc_write;
     if (rst) begin
       \$821  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$822  = ch0_cfg_w2_crc_write;
+    \$822  = ch0_cfg_w3_crc_start_write;
     if (rst) begin
       \$822  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$823  = ch0_cfg_w2_crc_start_write;
+    \$823  = ch0_cfg_w4_write;
     if (rst) begin
       \$823  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$824  = ch0_cfg_w3_write;
+    \$824  = ch0_cfg_w4_crc_write;
     if (rst) begin
       \$824  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$825  = ch0_cfg_w3_crc_write;
+    \$825  = ch0_cfg_w4_crc_start_write;
     if (rst) begin
       \$825  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$826  = ch0_cfg_w3_crc_start_write;
+    \$826  = ch0_cfg_w5_write;
     if (rst) begin
       \$826  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$827  = ch0_cfg_w4_write;
+    \$827  = ch0_cfg_w5_crc_write;
     if (rst) begin
       \$827  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$828  = ch0_cfg_w4_crc_write;
+    \$828  = ch0_cfg_w5_crc_start_write;
     if (rst) begin
       \$828  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$829  = ch0_cfg_w4_crc_start_write;
+    \$829  = ch0_cfg_w6_write;
     if (rst) begin
       \$829  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$830  = ch0_cfg_w5_write;
+    \$830  = ch0_cfg_w6_crc_write;
     if (rst) begin
       \$830  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$831  = ch0_cfg_w5_crc_write;
+    \$831  = ch0_cfg_w6_crc_start_write;
     if (rst) begin
       \$831  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$832  = ch0_cfg_w5_crc_start_write;
+    \$832  = ch0_cfg_w7_write;
     if (rst) begin
       \$832  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$833  = ch0_cfg_w6_write;
+    \$833  = ch0_cfg_w7_crc_write;
     if (rst) begin
       \$833  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$834  = ch0_cfg_w6_crc_write;
+    \$834  = ch0_cfg_w7_crc_start_write;
     if (rst) begin
       \$834  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$835  = ch0_cfg_w6_crc_start_write;
+    \$835  = ch0_ca_request_write;
     if (rst) begin
       \$835  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$836  = ch0_cfg_w7_write;
+    \$836  = ch0_ca_request_slave_id;
+    if (\$90 ) begin
+      \$836  = config_write_data[2:0];
+    end
     if (rst) begin
-      \$836  = 1'h0;
+      \$836  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$837  = ch0_cfg_w7_crc_write;
+    \$837  = ch0_ca_request_address;
+    if (\$91 ) begin
+      \$837  = config_write_data[14:8];
+    end
     if (rst) begin
-      \$837  = 1'h0;
+      \$837  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$838  = ch0_cfg_w7_crc_start_write;
+    \$838  = ch0_ca_request_count;
+    if (\$92 ) begin
+      \$838  = config_write_data[22:16];
+    end
     if (rst) begin
-      \$838  = 1'h0;
+      \$838  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$839  = ch0_ca_request_write;
+    \$839  = \ch0_ca_request_write$149 ;
+    if (\$93 ) begin
+      \$839  = config_write_data[24];
+    end
     if (rst) begin
       \$839  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$840  = ch0_ca_request_slave_id;
-    if (\$90 ) begin
-      \$840  = config_write_data[2:0];
-    end
+    \$840  = \$95 ;
     if (rst) begin
-      \$840  = 3'h0;
+      \$840  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$841  = ch0_ca_request_address;
-    if (\$91 ) begin
-      \$841  = config_write_data[14:8];
-    end
+    \$841  = \$97 ;
     if (rst) begin
-      \$841  = 7'h00;
+      \$841  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$842  = ch0_ca_request_count;
-    if (\$92 ) begin
-      \$842  = config_write_data[22:16];
+    \$842  = config_memory0_write_data;
+    if (write_en) begin
+      \$842  = \$102 ;
     end
     if (rst) begin
-      \$842  = 7'h00;
+      \$842  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$843  = \ch0_ca_request_write$149 ;
-    if (\$93 ) begin
-      \$843  = config_write_data[24];
-    end
+    \$843  = \$103 ;
     if (rst) begin
-      \$843  = 1'h0;
+      \$843  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$844  = \$95 ;
+    \$844  = ch0_config_read_index;
+    if (ch0_config_read) begin
+      \$844  = config_memory0_read_index;
+    end
     if (rst) begin
-      \$844  = 1'h0;
+      \$844  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$845  = \$97 ;
+    \$845  = ch0_read_select_80;
+    if (bus__r_en) begin
+      \$845  = \$104 ;
+    end
     if (rst) begin
       \$845  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$846  = config_memory0_write_data;
-    if (write_en) begin
-      \$846  = \$102 ;
-    end
-    if (rst) begin
-      \$846  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$847  = \$103 ;
-    if (rst) begin
-      \$847  = 15'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$848  = ch0_config_read_index;
-    if (ch0_config_read) begin
-      \$848  = config_memory0_read_index;
-    end
-    if (rst) begin
-      \$848  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$849  = ch0_read_select_80;
+    \$846  = ch0_read_select_81;
     if (bus__r_en) begin
-      \$849  = \$104 ;
+      \$846  = \$105 ;
+    end
+    if (rst) begin
+      \$846  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$847  = ch0_read_select_82;
+    if (bus__r_en) begin
+      \$847  = \$106 ;
+    end
+    if (rst) begin
+      \$847  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$848  = ch0_read_select_84;
+    if (bus__r_en) begin
+      \$848  = \$107 ;
+    end
+    if (rst) begin
+      \$848  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$849  = ch0_read_select_86;
+    if (bus__r_en) begin
+      \$849  = \$108 ;
     end
     if (rst) begin
       \$849  = 1'h0;
@@ -6980,9 +6870,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$850  = ch0_read_select_81;
+    \$850  = ch0_read_select_87;
     if (bus__r_en) begin
-      \$850  = \$105 ;
+      \$850  = \$109 ;
     end
     if (rst) begin
       \$850  = 1'h0;
@@ -6990,9 +6880,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$851  = ch0_read_select_82;
+    \$851  = ch0_read_select_90;
     if (bus__r_en) begin
-      \$851  = \$106 ;
+      \$851  = \$110 ;
     end
     if (rst) begin
       \$851  = 1'h0;
@@ -7000,9 +6890,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$852  = ch0_read_select_84;
+    \$852  = ch0_read_select_91;
     if (bus__r_en) begin
-      \$852  = \$107 ;
+      \$852  = \$111 ;
     end
     if (rst) begin
       \$852  = 1'h0;
@@ -7010,9 +6900,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$853  = ch0_read_select_86;
+    \$853  = ch0_read_select_92;
     if (bus__r_en) begin
-      \$853  = \$108 ;
+      \$853  = \$112 ;
     end
     if (rst) begin
       \$853  = 1'h0;
@@ -7020,9 +6910,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$854  = ch0_read_select_87;
+    \$854  = ch0_read_select_93;
     if (bus__r_en) begin
-      \$854  = \$109 ;
+      \$854  = \$113 ;
     end
     if (rst) begin
       \$854  = 1'h0;
@@ -7030,9 +6920,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$855  = ch0_read_select_90;
+    \$855  = ch0_read_select_94;
     if (bus__r_en) begin
-      \$855  = \$110 ;
+      \$855  = \$114 ;
     end
     if (rst) begin
       \$855  = 1'h0;
@@ -7040,9 +6930,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$856  = ch0_read_select_91;
+    \$856  = ch0_read_select_95;
     if (bus__r_en) begin
-      \$856  = \$111 ;
+      \$856  = \$115 ;
     end
     if (rst) begin
       \$856  = 1'h0;
@@ -7050,9 +6940,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$857  = ch0_read_select_92;
+    \$857  = ch0_read_select_96;
     if (bus__r_en) begin
-      \$857  = \$112 ;
+      \$857  = \$116 ;
     end
     if (rst) begin
       \$857  = 1'h0;
@@ -7060,9 +6950,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$858  = ch0_read_select_93;
+    \$858  = ch0_read_select_97;
     if (bus__r_en) begin
-      \$858  = \$113 ;
+      \$858  = \$117 ;
     end
     if (rst) begin
       \$858  = 1'h0;
@@ -7070,9 +6960,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$859  = ch0_read_select_94;
+    \$859  = ch0_read_select_a5;
     if (bus__r_en) begin
-      \$859  = \$114 ;
+      \$859  = \$118 ;
     end
     if (rst) begin
       \$859  = 1'h0;
@@ -7080,9 +6970,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$860  = ch0_read_select_95;
+    \$860  = ch0_read_select_a6;
     if (bus__r_en) begin
-      \$860  = \$115 ;
+      \$860  = \$119 ;
     end
     if (rst) begin
       \$860  = 1'h0;
@@ -7090,9 +6980,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$861  = ch0_read_select_96;
+    \$861  = ch0_read_select_a7;
     if (bus__r_en) begin
-      \$861  = \$116 ;
+      \$861  = \$120 ;
     end
     if (rst) begin
       \$861  = 1'h0;
@@ -7100,9 +6990,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$862  = ch0_read_select_97;
+    \$862  = ch0_read_select_a8;
     if (bus__r_en) begin
-      \$862  = \$117 ;
+      \$862  = \$121 ;
     end
     if (rst) begin
       \$862  = 1'h0;
@@ -7110,9 +7000,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$863  = ch0_read_select_a5;
+    \$863  = ch0_read_select_a9;
     if (bus__r_en) begin
-      \$863  = \$118 ;
+      \$863  = \$122 ;
     end
     if (rst) begin
       \$863  = 1'h0;
@@ -7120,9 +7010,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$864  = ch0_read_select_a6;
+    \$864  = ch0_read_select_aa;
     if (bus__r_en) begin
-      \$864  = \$119 ;
+      \$864  = \$123 ;
     end
     if (rst) begin
       \$864  = 1'h0;
@@ -7130,9 +7020,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$865  = ch0_read_select_a7;
+    \$865  = ch0_read_select_ac;
     if (bus__r_en) begin
-      \$865  = \$120 ;
+      \$865  = \$124 ;
     end
     if (rst) begin
       \$865  = 1'h0;
@@ -7140,9 +7030,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$866  = ch0_read_select_a8;
+    \$866  = ch0_read_select_ad;
     if (bus__r_en) begin
-      \$866  = \$121 ;
+      \$866  = \$125 ;
     end
     if (rst) begin
       \$866  = 1'h0;
@@ -7150,9 +7040,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$867  = ch0_read_select_a9;
+    \$867  = ch0_read_select_ae;
     if (bus__r_en) begin
-      \$867  = \$122 ;
+      \$867  = \$126 ;
     end
     if (rst) begin
       \$867  = 1'h0;
@@ -7160,9 +7050,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$868  = ch0_read_select_aa;
+    \$868  = ch0_read_select_b0;
     if (bus__r_en) begin
-      \$868  = \$123 ;
+      \$868  = \$127 ;
     end
     if (rst) begin
       \$868  = 1'h0;
@@ -7170,9 +7060,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$869  = ch0_read_select_ac;
+    \$869  = ch0_read_select_b1;
     if (bus__r_en) begin
-      \$869  = \$124 ;
+      \$869  = \$128 ;
     end
     if (rst) begin
       \$869  = 1'h0;
@@ -7180,9 +7070,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$870  = ch0_read_select_ad;
+    \$870  = ch0_read_select_b2;
     if (bus__r_en) begin
-      \$870  = \$125 ;
+      \$870  = \$129 ;
     end
     if (rst) begin
       \$870  = 1'h0;
@@ -7190,9 +7080,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$871  = ch0_read_select_ae;
+    \$871  = ch0_read_select_b4;
     if (bus__r_en) begin
-      \$871  = \$126 ;
+      \$871  = \$130 ;
     end
     if (rst) begin
       \$871  = 1'h0;
@@ -7200,9 +7090,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$872  = ch0_read_select_b0;
+    \$872  = ch0_read_select_b5;
     if (bus__r_en) begin
-      \$872  = \$127 ;
+      \$872  = \$131 ;
     end
     if (rst) begin
       \$872  = 1'h0;
@@ -7210,9 +7100,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$873  = ch0_read_select_b1;
+    \$873  = ch0_read_select_b6;
     if (bus__r_en) begin
-      \$873  = \$128 ;
+      \$873  = \$132 ;
     end
     if (rst) begin
       \$873  = 1'h0;
@@ -7220,9 +7110,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$874  = ch0_read_select_b2;
+    \$874  = ch0_read_select_b8;
     if (bus__r_en) begin
-      \$874  = \$129 ;
+      \$874  = \$133 ;
     end
     if (rst) begin
       \$874  = 1'h0;
@@ -7230,9 +7120,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$875  = ch0_read_select_b4;
+    \$875  = ch0_read_select_b9;
     if (bus__r_en) begin
-      \$875  = \$130 ;
+      \$875  = \$134 ;
     end
     if (rst) begin
       \$875  = 1'h0;
@@ -7240,9 +7130,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$876  = ch0_read_select_b5;
+    \$876  = ch0_read_select_ba;
     if (bus__r_en) begin
-      \$876  = \$131 ;
+      \$876  = \$135 ;
     end
     if (rst) begin
       \$876  = 1'h0;
@@ -7250,9 +7140,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$877  = ch0_read_select_b6;
+    \$877  = ch0_read_select_bc;
     if (bus__r_en) begin
-      \$877  = \$132 ;
+      \$877  = \$136 ;
     end
     if (rst) begin
       \$877  = 1'h0;
@@ -7260,9 +7150,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$878  = ch0_read_select_b8;
+    \$878  = ch0_read_select_bd;
     if (bus__r_en) begin
-      \$878  = \$133 ;
+      \$878  = \$137 ;
     end
     if (rst) begin
       \$878  = 1'h0;
@@ -7270,9 +7160,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$879  = ch0_read_select_b9;
+    \$879  = ch0_read_select_be;
     if (bus__r_en) begin
-      \$879  = \$134 ;
+      \$879  = \$138 ;
     end
     if (rst) begin
       \$879  = 1'h0;
@@ -7280,9 +7170,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$880  = ch0_read_select_ba;
+    \$880  = ch0_read_select_c1;
     if (bus__r_en) begin
-      \$880  = \$135 ;
+      \$880  = \$139 ;
     end
     if (rst) begin
       \$880  = 1'h0;
@@ -7290,9 +7180,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$881  = ch0_read_select_bc;
+    \$881  = ch0_read_select_c2;
     if (bus__r_en) begin
-      \$881  = \$136 ;
+      \$881  = \$140 ;
     end
     if (rst) begin
       \$881  = 1'h0;
@@ -7300,9 +7190,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$882  = ch0_read_select_bd;
+    \$882  = ch0_read_select_c3;
     if (bus__r_en) begin
-      \$882  = \$137 ;
+      \$882  = \$141 ;
     end
     if (rst) begin
       \$882  = 1'h0;
@@ -7310,9 +7200,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$883  = ch0_read_select_be;
+    \$883  = ch0_read_select_c4;
     if (bus__r_en) begin
-      \$883  = \$138 ;
+      \$883  = \$142 ;
     end
     if (rst) begin
       \$883  = 1'h0;
@@ -7320,9 +7210,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$884  = ch0_read_select_c1;
+    \$884  = ch0_read_select_c5;
     if (bus__r_en) begin
-      \$884  = \$139 ;
+      \$884  = \$143 ;
     end
     if (rst) begin
       \$884  = 1'h0;
@@ -7330,9 +7220,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$885  = ch0_read_select_c2;
+    \$885  = ch0_read_select_f0;
     if (bus__r_en) begin
-      \$885  = \$140 ;
+      \$885  = \$144 ;
     end
     if (rst) begin
       \$885  = 1'h0;
@@ -7340,9 +7230,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$886  = ch0_read_select_c3;
+    \$886  = ch0_read_select_f1;
     if (bus__r_en) begin
-      \$886  = \$141 ;
+      \$886  = \$145 ;
     end
     if (rst) begin
       \$886  = 1'h0;
@@ -7350,9 +7240,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$887  = ch0_read_select_c4;
+    \$887  = ch0_read_select_f2;
     if (bus__r_en) begin
-      \$887  = \$142 ;
+      \$887  = \$146 ;
     end
     if (rst) begin
       \$887  = 1'h0;
@@ -7360,9 +7250,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$888  = ch0_read_select_c5;
+    \$888  = ch0_read_select_f3;
     if (bus__r_en) begin
-      \$888  = \$143 ;
+      \$888  = \$147 ;
     end
     if (rst) begin
       \$888  = 1'h0;
@@ -7370,9 +7260,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$889  = ch0_read_select_f0;
+    \$889  = ch0_read_select_f4;
     if (bus__r_en) begin
-      \$889  = \$144 ;
+      \$889  = \$148 ;
     end
     if (rst) begin
       \$889  = 1'h0;
@@ -7380,9 +7270,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$890  = ch0_read_select_f1;
+    \$890  = ch0_read_select_f5;
     if (bus__r_en) begin
-      \$890  = \$145 ;
+      \$890  = \$149 ;
     end
     if (rst) begin
       \$890  = 1'h0;
@@ -7390,9 +7280,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$891  = ch0_read_select_f2;
+    \$891  = ch0_read_select_f6;
     if (bus__r_en) begin
-      \$891  = \$146 ;
+      \$891  = \$150 ;
     end
     if (rst) begin
       \$891  = 1'h0;
@@ -7400,9 +7290,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$892  = ch0_read_select_f3;
+    \$892  = ch0_read_select_f7;
     if (bus__r_en) begin
-      \$892  = \$147 ;
+      \$892  = \$151 ;
     end
     if (rst) begin
       \$892  = 1'h0;
@@ -7410,9 +7300,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$893  = ch0_read_select_f4;
+    \$893  = ch0_read_select_f8;
     if (bus__r_en) begin
-      \$893  = \$148 ;
+      \$893  = \$152 ;
     end
     if (rst) begin
       \$893  = 1'h0;
@@ -7420,9 +7310,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$894  = ch0_read_select_f5;
+    \$894  = ch0_read_select_f9;
     if (bus__r_en) begin
-      \$894  = \$149 ;
+      \$894  = \$153 ;
     end
     if (rst) begin
       \$894  = 1'h0;
@@ -7430,9 +7320,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$895  = ch0_read_select_f6;
+    \$895  = ch0_read_select_fa;
     if (bus__r_en) begin
-      \$895  = \$150 ;
+      \$895  = \$154 ;
     end
     if (rst) begin
       \$895  = 1'h0;
@@ -7440,9 +7330,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$896  = ch0_read_select_f7;
+    \$896  = ch0_read_select_fb;
     if (bus__r_en) begin
-      \$896  = \$151 ;
+      \$896  = \$155 ;
     end
     if (rst) begin
       \$896  = 1'h0;
@@ -7450,9 +7340,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$897  = ch0_read_select_f8;
+    \$897  = ch0_read_select_fc;
     if (bus__r_en) begin
-      \$897  = \$152 ;
+      \$897  = \$156 ;
     end
     if (rst) begin
       \$897  = 1'h0;
@@ -7460,9 +7350,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$898  = ch0_read_select_f9;
+    \$898  = ch0_read_select_fd;
     if (bus__r_en) begin
-      \$898  = \$153 ;
+      \$898  = \$157 ;
     end
     if (rst) begin
       \$898  = 1'h0;
@@ -7470,19 +7360,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$899  = ch0_read_select_fa;
-    if (bus__r_en) begin
-      \$899  = \$154 ;
+    \$899  = ch0_result_status_status_snapshot;
+    if (\$158 ) begin
+      \$899  = \port$7212$0 [3:0];
     end
     if (rst) begin
-      \$899  = 1'h0;
+      \$899  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$900  = ch0_read_select_fb;
-    if (bus__r_en) begin
-      \$900  = \$155 ;
+    \$900  = ch0_result_status_cds_snapshot;
+    if (\$158 ) begin
+      \$900  = \port$7212$0 [49];
     end
     if (rst) begin
       \$900  = 1'h0;
@@ -7490,9 +7380,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$901  = ch0_read_select_fc;
-    if (bus__r_en) begin
-      \$901  = \$156 ;
+    \$901  = ch0_result_status_w0_ne_snapshot;
+    if (\$158 ) begin
+      \$901  = \port$7212$0 [131];
     end
     if (rst) begin
       \$901  = 1'h0;
@@ -7500,9 +7390,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$902  = ch0_read_select_fd;
-    if (bus__r_en) begin
-      \$902  = \$157 ;
+    \$902  = ch0_result_status_w0_nw_snapshot;
+    if (\$158 ) begin
+      \$902  = \port$7212$0 [132];
     end
     if (rst) begin
       \$902  = 1'h0;
@@ -7510,19 +7400,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$903  = ch0_result_status_status_snapshot;
+    \$903  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$158 ) begin
-      \$903  = \port$7280$0 [3:0];
+      \$903  = \port$7212$0 [133];
     end
     if (rst) begin
-      \$903  = 4'h0;
+      \$903  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$904  = ch0_result_status_cds_snapshot;
+    \$904  = ch0_result_status_w1_ne_snapshot;
     if (\$158 ) begin
-      \$904  = \port$7280$0 [49];
+      \$904  = \port$7212$0 [174];
     end
     if (rst) begin
       \$904  = 1'h0;
@@ -7530,9 +7420,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$905  = ch0_result_status_w0_ne_snapshot;
+    \$905  = ch0_result_status_w1_nw_snapshot;
     if (\$158 ) begin
-      \$905  = \port$7280$0 [131];
+      \$905  = \port$7212$0 [175];
     end
     if (rst) begin
       \$905  = 1'h0;
@@ -7540,9 +7430,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$906  = ch0_result_status_w0_nw_snapshot;
+    \$906  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$158 ) begin
-      \$906  = \port$7280$0 [132];
+      \$906  = \port$7212$0 [176];
     end
     if (rst) begin
       \$906  = 1'h0;
@@ -7550,9 +7440,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$907  = ch0_result_status_w0_crc_ok_snapshot;
+    \$907  = ch0_result_status_lc_repeat_snapshot;
     if (\$158 ) begin
-      \$907  = \port$7280$0 [133];
+      \$907  = \port$7212$0 [183];
     end
     if (rst) begin
       \$907  = 1'h0;
@@ -7560,9 +7450,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$908  = ch0_result_status_w1_ne_snapshot;
+    \$908  = ch0_result_status_lc_skip_snapshot;
     if (\$158 ) begin
-      \$908  = \port$7280$0 [174];
+      \$908  = \port$7212$0 [184];
     end
     if (rst) begin
       \$908  = 1'h0;
@@ -7570,9 +7460,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$909  = ch0_result_status_w1_nw_snapshot;
+    \$909  = ch0_result_status_lc_zero_snapshot;
     if (\$158 ) begin
-      \$909  = \port$7280$0 [175];
+      \$909  = \port$7212$0 [185];
     end
     if (rst) begin
       \$909  = 1'h0;
@@ -7580,9 +7470,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$910  = ch0_result_status_w1_crc_ok_snapshot;
+    \$910  = ch0_result_status_spw_mismatch_snapshot;
     if (\$158 ) begin
-      \$910  = \port$7280$0 [176];
+      \$910  = \port$7212$0 [186];
     end
     if (rst) begin
       \$910  = 1'h0;
@@ -7590,79 +7480,79 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$911  = ch0_result_status_lc_repeat_snapshot;
+    \$911  = ch0_result_status_lc_snapshot;
     if (\$158 ) begin
-      \$911  = \port$7280$0 [183];
+      \$911  = \port$7212$0 [182:177];
     end
     if (rst) begin
-      \$911  = 1'h0;
+      \$911  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$912  = ch0_result_status_lc_skip_snapshot;
+    \$912  = ch0_result_seq_seq_snapshot;
     if (\$158 ) begin
-      \$912  = \port$7280$0 [184];
+      \$912  = ch0__done_count;
     end
     if (rst) begin
-      \$912  = 1'h0;
+      \$912  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$913  = ch0_result_status_lc_zero_snapshot;
+    \$913  = ch0_result_seq_line_delay_snapshot;
     if (\$158 ) begin
-      \$913  = \port$7280$0 [185];
+      \$913  = \port$7212$0 [48:36];
     end
     if (rst) begin
-      \$913  = 1'h0;
+      \$913  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$914  = ch0_result_status_spw_mismatch_snapshot;
+    \$914  = ch0_result_w0_lo_data_snapshot;
     if (\$158 ) begin
-      \$914  = \port$7280$0 [186];
+      \$914  = \port$7212$0 [107:76];
     end
     if (rst) begin
-      \$914  = 1'h0;
+      \$914  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$915  = ch0_result_status_lc_snapshot;
+    \$915  = ch0_result_w0_hi_data_snapshot;
     if (\$158 ) begin
-      \$915  = \port$7280$0 [182:177];
+      \$915  = \port$7212$0 [130:108];
     end
     if (rst) begin
-      \$915  = 6'h00;
+      \$915  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$916  = ch0_result_seq_seq_snapshot;
+    \$916  = ch0_result_w1_lo_data_snapshot;
     if (\$158 ) begin
-      \$916  = ch0__done_count;
+      \$916  = \port$7212$0 [165:134];
     end
     if (rst) begin
-      \$916  = 16'h0000;
+      \$916  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$917  = ch0_result_seq_line_delay_snapshot;
+    \$917  = ch0_result_w1_hi_data_snapshot;
     if (\$158 ) begin
-      \$917  = \port$7280$0 [48:36];
+      \$917  = \port$7212$0 [173:166];
     end
     if (rst) begin
-      \$917  = 13'h0000;
+      \$917  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$918  = ch0_result_w0_lo_data_snapshot;
+    \$918  = ch0_result_timestamp_time_snapshot;
     if (\$158 ) begin
-      \$918  = \port$7280$0 [107:76];
+      \$918  = \port$7212$0 [35:4];
     end
     if (rst) begin
       \$918  = 32'd0;
@@ -7670,29 +7560,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$919  = ch0_result_w0_hi_data_snapshot;
+    \$919  = ch0_result_line_noise_events_snapshot;
     if (\$158 ) begin
-      \$919  = \port$7280$0 [130:108];
+      \$919  = \port$7212$0 [53:50];
     end
     if (rst) begin
-      \$919  = 23'h000000;
+      \$919  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$920  = ch0_result_w1_lo_data_snapshot;
+    \$920  = ch0_result_line_delay_settled_snapshot;
     if (\$158 ) begin
-      \$920  = \port$7280$0 [165:134];
+      \$920  = \port$7212$0 [54];
     end
     if (rst) begin
-      \$920  = 32'd0;
+      \$920  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$921  = ch0_result_w1_hi_data_snapshot;
+    \$921  = ch0_result_line_delay_spread_snapshot;
     if (\$158 ) begin
-      \$921  = \port$7280$0 [173:166];
+      \$921  = \port$7212$0 [75:68];
     end
     if (rst) begin
       \$921  = 8'h00;
@@ -7700,29 +7590,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$922  = ch0_result_timestamp_time_snapshot;
+    \$922  = ch0_result_line_settled_delay_snapshot;
     if (\$158 ) begin
-      \$922  = \port$7280$0 [35:4];
+      \$922  = \port$7212$0 [67:55];
     end
     if (rst) begin
-      \$922  = 32'd0;
+      \$922  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$923  = ch0_result_line_noise_events_snapshot;
-    if (\$158 ) begin
-      \$923  = \port$7280$0 [53:50];
+    \$923  = ch0_window0_read;
+    if (bus__r_en) begin
+      \$923  = \$160 ;
     end
     if (rst) begin
-      \$923  = 4'h0;
+      \$923  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$924  = ch0_result_line_delay_settled_snapshot;
-    if (\$158 ) begin
-      \$924  = \port$7280$0 [54];
+    \$924  = ch0_window1_read;
+    if (bus__r_en) begin
+      \$924  = \$162 ;
     end
     if (rst) begin
       \$924  = 1'h0;
@@ -7730,90 +7620,96 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$925  = ch0_result_line_delay_spread_snapshot;
-    if (\$158 ) begin
-      \$925  = \port$7280$0 [75:68];
-    end
-    if (rst) begin
-      \$925  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$926  = ch0_result_line_settled_delay_snapshot;
-    if (\$158 ) begin
-      \$926  = \port$7280$0 [67:55];
-    end
-    if (rst) begin
-      \$926  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$927  = ch0_window0_read;
+    \$925  = ch0_window2_read;
     if (bus__r_en) begin
-      \$927  = \$160 ;
+      \$925  = ch0_config_read;
     end
+    if (rst) begin
+      \$925  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$926  = ch0_read_data;
+    if (bus__r_load) begin
+      \$926  = \$276 ;
+    end
+    if (rst) begin
+      \$926  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$927  = \$278 ;
     if (rst) begin
       \$927  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$928  = ch0_window1_read;
-    if (bus__r_en) begin
-      \$928  = \$162 ;
-    end
+    \$928  = \$280 ;
     if (rst) begin
       \$928  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$929  = ch0_window2_read;
-    if (bus__r_en) begin
-      \$929  = ch0_config_read;
-    end
+    \$929  = \$282 ;
     if (rst) begin
       \$929  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$930  = ch0_read_data;
-    if (bus__r_load) begin
-      \$930  = \$276 ;
+    \$930  = ch1_ctrl_periodic;
+    if (\$283 ) begin
+      \$930  = write_data[8];
     end
     if (rst) begin
-      \$930  = 32'd0;
+      \$930  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$931  = \$278 ;
+    \$931  = ch1_ctrl_trigger_enable;
+    if (\$284 ) begin
+      \$931  = write_data[9];
+    end
     if (rst) begin
       \$931  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$932  = \$280 ;
+    \$932  = ch1_irq_status_done;
+    if (ch1__frame_done) begin
+      \$932  = 1'h1;
+    end else if (\$286 ) begin
+      \$932  = 1'h0;
+    end
     if (rst) begin
       \$932  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$933  = \$282 ;
+    \$933  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$933  = 1'h1;
+    end else if (\$288 ) begin
+      \$933  = 1'h0;
+    end
     if (rst) begin
       \$933  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$934  = ch1_ctrl_periodic;
-    if (\$283 ) begin
-      \$934  = write_data[8];
+    \$934  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$934  = 1'h1;
+    end else if (\$290 ) begin
+      \$934  = 1'h0;
     end
     if (rst) begin
       \$934  = 1'h0;
@@ -7821,21 +7717,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$935  = ch1_ctrl_trigger_enable;
-    if (\$284 ) begin
-      \$935  = write_data[9];
-    end
+    \$935  = ch1_irq_enable_write;
     if (rst) begin
       \$935  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$936  = ch1_irq_status_done;
-    if (ch1__frame_done) begin
-      \$936  = 1'h1;
-    end else if (\$286 ) begin
-      \$936  = 1'h0;
+    \$936  = ch1_irq_enable_done;
+    if (\$291 ) begin
+      \$936  = config_write_data[0];
     end
     if (rst) begin
       \$936  = 1'h0;
@@ -7843,11 +7734,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$937  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$937  = 1'h1;
-    end else if (\$288 ) begin
-      \$937  = 1'h0;
+    \$937  = ch1_irq_enable_error;
+    if (\$292 ) begin
+      \$937  = config_write_data[1];
     end
     if (rst) begin
       \$937  = 1'h0;
@@ -7855,11 +7744,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$938  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$938  = 1'h1;
-    end else if (\$290 ) begin
-      \$938  = 1'h0;
+    \$938  = ch1_irq_enable_access_done;
+    if (\$293 ) begin
+      \$938  = config_write_data[2];
     end
     if (rst) begin
       \$938  = 1'h0;
@@ -7867,91 +7754,100 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$939  = ch1_irq_enable_write;
+    \$939  = ch1_cfg_ma_write;
     if (rst) begin
       \$939  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$940  = ch1_irq_enable_done;
-    if (\$291 ) begin
-      \$940  = config_write_data[0];
+    \$940  = ch1_cfg_ma_ma_half_period;
+    if (\$294 ) begin
+      \$940 [7:0] = config_write_data[7:0];
+    end
+    if (\$295 ) begin
+      \$940 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$940  = 1'h0;
+      \$940  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$941  = ch1_irq_enable_error;
-    if (\$292 ) begin
-      \$941  = config_write_data[1];
+    \$941  = ch1_cfg_ma_delay_limit;
+    if (\$296 ) begin
+      \$941 [7:0] = config_write_data[23:16];
+    end
+    if (\$297 ) begin
+      \$941 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$941  = 1'h0;
+      \$941  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$942  = ch1_irq_enable_access_done;
-    if (\$293 ) begin
-      \$942  = config_write_data[2];
-    end
+    \$942  = ch1_cfg_period_write;
     if (rst) begin
       \$942  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$943  = ch1_cfg_ma_write;
+    \$943  = ch1_cfg_period_request_period;
+    if (\$298 ) begin
+      \$943 [7:0] = config_write_data[7:0];
+    end
+    if (\$299 ) begin
+      \$943 [15:8] = config_write_data[15:8];
+    end
+    if (\$300 ) begin
+      \$943 [23:16] = config_write_data[23:16];
+    end
     if (rst) begin
-      \$943  = 1'h0;
+      \$943  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$944  = ch1_cfg_ma_ma_half_period;
-    if (\$294 ) begin
-      \$944 [7:0] = config_write_data[7:0];
-    end
-    if (\$295 ) begin
-      \$944 [15:8] = config_write_data[15:8];
-    end
+    \$944  = ch1_cfg_break_write;
     if (rst) begin
-      \$944  = 16'h0000;
+      \$944  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$945  = ch1_cfg_ma_delay_limit;
-    if (\$296 ) begin
-      \$945 [7:0] = config_write_data[23:16];
+    \$945  = ch1_cfg_break_break_time;
+    if (\$301 ) begin
+      \$945 [7:0] = config_write_data[7:0];
     end
-    if (\$297 ) begin
-      \$945 [11:8] = config_write_data[27:24];
+    if (\$302 ) begin
+      \$945 [15:8] = config_write_data[15:8];
+    end
+    if (\$303 ) begin
+      \$945 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$945  = 12'h000;
+      \$945  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$946  = ch1_cfg_period_write;
+    \$946  = ch1_cfg_ack_write;
     if (rst) begin
       \$946  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$947  = ch1_cfg_period_request_period;
-    if (\$298 ) begin
+    \$947  = ch1_cfg_ack_ack_limit;
+    if (\$304 ) begin
       \$947 [7:0] = config_write_data[7:0];
     end
-    if (\$299 ) begin
+    if (\$305 ) begin
       \$947 [15:8] = config_write_data[15:8];
     end
-    if (\$300 ) begin
+    if (\$306 ) begin
       \$947 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -7960,21 +7856,21 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$948  = ch1_cfg_break_write;
+    \$948  = ch1_cfg_timeout_write;
     if (rst) begin
       \$948  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$949  = ch1_cfg_break_break_time;
-    if (\$301 ) begin
+    \$949  = ch1_cfg_timeout_timeout_limit;
+    if (\$307 ) begin
       \$949 [7:0] = config_write_data[7:0];
     end
-    if (\$302 ) begin
+    if (\$308 ) begin
       \$949 [15:8] = config_write_data[15:8];
     end
-    if (\$303 ) begin
+    if (\$309 ) begin
       \$949 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -7983,72 +7879,66 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$950  = ch1_cfg_ack_write;
+    \$950  = ch1_cfg_words_write;
     if (rst) begin
       \$950  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$951  = ch1_cfg_ack_ack_limit;
-    if (\$304 ) begin
-      \$951 [7:0] = config_write_data[7:0];
-    end
-    if (\$305 ) begin
-      \$951 [15:8] = config_write_data[15:8];
-    end
-    if (\$306 ) begin
-      \$951 [23:16] = config_write_data[23:16];
+    \$951  = ch1_cfg_words_w0_data_bits;
+    if (\$310 ) begin
+      \$951  = config_write_data[5:0];
     end
     if (rst) begin
-      \$951  = 24'h000000;
+      \$951  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$952  = ch1_cfg_timeout_write;
+    \$952  = ch1_cfg_words_w0_nenw;
+    if (\$311 ) begin
+      \$952  = config_write_data[6];
+    end
     if (rst) begin
       \$952  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$953  = ch1_cfg_timeout_timeout_limit;
-    if (\$307 ) begin
-      \$953 [7:0] = config_write_data[7:0];
-    end
-    if (\$308 ) begin
-      \$953 [15:8] = config_write_data[15:8];
-    end
-    if (\$309 ) begin
-      \$953 [23:16] = config_write_data[23:16];
+    \$953  = ch1_cfg_words_w0_lc;
+    if (\$312 ) begin
+      \$953  = config_write_data[7];
     end
     if (rst) begin
-      \$953  = 24'h000000;
+      \$953  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$954  = ch1_cfg_words_write;
+    \$954  = ch1_cfg_words_w0_crc;
+    if (\$313 ) begin
+      \$954  = config_write_data[9:8];
+    end
     if (rst) begin
-      \$954  = 1'h0;
+      \$954  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$955  = ch1_cfg_words_w0_data_bits;
-    if (\$310 ) begin
-      \$955  = config_write_data[5:0];
+    \$955  = ch1_cfg_words_w0_gray;
+    if (\$314 ) begin
+      \$955  = config_write_data[10];
     end
     if (rst) begin
-      \$955  = 6'h00;
+      \$955  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$956  = ch1_cfg_words_w0_nenw;
-    if (\$311 ) begin
-      \$956  = config_write_data[6];
+    \$956  = ch1_cfg_words_w0_signed;
+    if (\$315 ) begin
+      \$956  = config_write_data[11];
     end
     if (rst) begin
       \$956  = 1'h0;
@@ -8056,29 +7946,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$957  = ch1_cfg_words_w0_lc;
-    if (\$312 ) begin
-      \$957  = config_write_data[7];
+    \$957  = ch1_cfg_words_w1_data_bits;
+    if (\$316 ) begin
+      \$957  = config_write_data[21:16];
     end
     if (rst) begin
-      \$957  = 1'h0;
+      \$957  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$958  = ch1_cfg_words_w0_crc;
-    if (\$313 ) begin
-      \$958  = config_write_data[9:8];
+    \$958  = ch1_cfg_words_w1_nenw;
+    if (\$317 ) begin
+      \$958  = config_write_data[22];
     end
     if (rst) begin
-      \$958  = 2'h0;
+      \$958  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$959  = ch1_cfg_words_w0_gray;
-    if (\$314 ) begin
-      \$959  = config_write_data[10];
+    \$959  = ch1_cfg_words_w1_lc;
+    if (\$318 ) begin
+      \$959  = config_write_data[23];
     end
     if (rst) begin
       \$959  = 1'h0;
@@ -8086,29 +7976,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$960  = ch1_cfg_words_w0_signed;
-    if (\$315 ) begin
-      \$960  = config_write_data[11];
+    \$960  = ch1_cfg_words_w1_crc;
+    if (\$319 ) begin
+      \$960  = config_write_data[25:24];
     end
     if (rst) begin
-      \$960  = 1'h0;
+      \$960  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$961  = ch1_cfg_words_w1_data_bits;
-    if (\$316 ) begin
-      \$961  = config_write_data[21:16];
+    \$961  = ch1_cfg_words_w1_gray;
+    if (\$320 ) begin
+      \$961  = config_write_data[26];
     end
     if (rst) begin
-      \$961  = 6'h00;
+      \$961  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$962  = ch1_cfg_words_w1_nenw;
-    if (\$317 ) begin
-      \$962  = config_write_data[22];
+    \$962  = ch1_cfg_words_w1_signed;
+    if (\$321 ) begin
+      \$962  = config_write_data[27];
     end
     if (rst) begin
       \$962  = 1'h0;
@@ -8116,9 +8006,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$963  = ch1_cfg_words_w1_lc;
-    if (\$318 ) begin
-      \$963  = config_write_data[23];
+    \$963  = ch1_cfg_words_w1_enable;
+    if (\$322 ) begin
+      \$963  = config_write_data[31];
     end
     if (rst) begin
       \$963  = 1'h0;
@@ -8126,19 +8016,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$964  = ch1_cfg_words_w1_crc;
-    if (\$319 ) begin
-      \$964  = config_write_data[25:24];
-    end
+    \$964  = ch1_cfg_checks_write;
     if (rst) begin
-      \$964  = 2'h0;
+      \$964  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$965  = ch1_cfg_words_w1_gray;
-    if (\$320 ) begin
-      \$965  = config_write_data[26];
+    \$965  = ch1_cfg_checks_end_check;
+    if (\$323 ) begin
+      \$965  = config_write_data[0];
     end
     if (rst) begin
       \$965  = 1'h0;
@@ -8146,9 +8033,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$966  = ch1_cfg_words_w1_signed;
-    if (\$321 ) begin
-      \$966  = config_write_data[27];
+    \$966  = ch1_cfg_checks_spw_check;
+    if (\$324 ) begin
+      \$966  = config_write_data[1];
     end
     if (rst) begin
       \$966  = 1'h0;
@@ -8156,115 +8043,118 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$967  = ch1_cfg_words_w1_enable;
-    if (\$322 ) begin
-      \$967  = config_write_data[31];
-    end
-    if (rst) begin
-      \$967  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$968  = ch1_cfg_checks_write;
-    if (rst) begin
-      \$968  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$969  = ch1_cfg_checks_end_check;
-    if (\$323 ) begin
-      \$969  = config_write_data[0];
-    end
-    if (rst) begin
-      \$969  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$970  = ch1_cfg_checks_spw_check;
-    if (\$324 ) begin
-      \$970  = config_write_data[1];
-    end
-    if (rst) begin
-      \$970  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$971  = ch1_cfg_checks_spw_tolerance;
+    \$967  = ch1_cfg_checks_spw_tolerance;
     if (\$325 ) begin
-      \$971  = config_write_data[15:8];
+      \$967  = config_write_data[15:8];
     end
     if (rst) begin
-      \$971  = 8'h00;
+      \$967  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$972  = ch1_cfg_checks_noise_limit;
+    \$968  = ch1_cfg_checks_noise_limit;
     if (\$326 ) begin
-      \$972  = config_write_data[19:16];
+      \$968  = config_write_data[19:16];
     end
     if (rst) begin
-      \$972  = 4'h0;
+      \$968  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$973  = ch1_cfg_checks_delay_tolerance;
+    \$969  = ch1_cfg_checks_delay_tolerance;
     if (\$327 ) begin
-      \$973  = config_write_data[23:20];
+      \$969  = config_write_data[23:20];
     end
     if (rst) begin
-      \$973  = 4'h0;
+      \$969  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$974  = ch1_cfg_checks_confirm_frames;
+    \$970  = ch1_cfg_checks_confirm_frames;
     if (\$328 ) begin
-      \$974  = config_write_data[27:24];
+      \$970  = config_write_data[27:24];
     end
     if (rst) begin
-      \$974  = 4'h0;
+      \$970  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$975  = ch1_cfg_quiet_write;
+    \$971  = ch1_cfg_quiet_write;
     if (rst) begin
-      \$975  = 1'h0;
+      \$971  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$976  = ch1_cfg_quiet_quiet_time;
+    \$972  = ch1_cfg_quiet_quiet_time;
     if (\$329 ) begin
-      \$976 [7:0] = config_write_data[7:0];
+      \$972 [7:0] = config_write_data[7:0];
     end
     if (\$330 ) begin
-      \$976 [11:8] = config_write_data[11:8];
+      \$972 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$976  = 12'h000;
+      \$972  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$977  = ch1_cfg_crc0_write;
+    \$973  = ch1_cfg_crc0_write;
+    if (rst) begin
+      \$973  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$974  = ch1_cfg_crc0_w0_crc_poly;
+    if (\$331 ) begin
+      \$974 [7:0] = config_write_data[7:0];
+    end
+    if (\$332 ) begin
+      \$974 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$974  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$975  = ch1_cfg_crc0_w0_crc_width;
+    if (\$333 ) begin
+      \$975  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$975  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$976  = ch1_cfg_crc0_w0_crc_inverted;
+    if (\$334 ) begin
+      \$976  = config_write_data[24];
+    end
+    if (rst) begin
+      \$976  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$977  = ch1_cfg_crc0_start_write;
     if (rst) begin
       \$977  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$978  = ch1_cfg_crc0_w0_crc_poly;
-    if (\$331 ) begin
+    \$978  = ch1_cfg_crc0_start_w0_crc_start;
+    if (\$335 ) begin
       \$978 [7:0] = config_write_data[7:0];
     end
-    if (\$332 ) begin
+    if (\$336 ) begin
       \$978 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
@@ -8273,58 +8163,58 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$979  = ch1_cfg_crc0_w0_crc_width;
-    if (\$333 ) begin
-      \$979  = config_write_data[20:16];
-    end
+    \$979  = ch1_cfg_crc1_write;
     if (rst) begin
-      \$979  = 5'h00;
+      \$979  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$980  = ch1_cfg_crc0_w0_crc_inverted;
-    if (\$334 ) begin
-      \$980  = config_write_data[24];
+    \$980  = ch1_cfg_crc1_w1_crc_poly;
+    if (\$337 ) begin
+      \$980 [7:0] = config_write_data[7:0];
+    end
+    if (\$338 ) begin
+      \$980 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$980  = 1'h0;
+      \$980  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$981  = ch1_cfg_crc0_start_write;
+    \$981  = ch1_cfg_crc1_w1_crc_width;
+    if (\$339 ) begin
+      \$981  = config_write_data[20:16];
+    end
     if (rst) begin
-      \$981  = 1'h0;
+      \$981  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$982  = ch1_cfg_crc0_start_w0_crc_start;
-    if (\$335 ) begin
-      \$982 [7:0] = config_write_data[7:0];
-    end
-    if (\$336 ) begin
-      \$982 [15:8] = config_write_data[15:8];
+    \$982  = ch1_cfg_crc1_w1_crc_inverted;
+    if (\$340 ) begin
+      \$982  = config_write_data[24];
     end
     if (rst) begin
-      \$982  = 16'h0000;
+      \$982  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$983  = ch1_cfg_crc1_write;
+    \$983  = ch1_cfg_crc1_start_write;
     if (rst) begin
       \$983  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$984  = ch1_cfg_crc1_w1_crc_poly;
-    if (\$337 ) begin
+    \$984  = ch1_cfg_crc1_start_w1_crc_start;
+    if (\$341 ) begin
       \$984 [7:0] = config_write_data[7:0];
     end
-    if (\$338 ) begin
+    if (\$342 ) begin
       \$984 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
@@ -8333,19 +8223,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$985  = ch1_cfg_crc1_w1_crc_width;
-    if (\$339 ) begin
-      \$985  = config_write_data[20:16];
-    end
+    \$985  = ch1_cfg_ssi_write;
     if (rst) begin
-      \$985  = 5'h00;
+      \$985  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$986  = ch1_cfg_crc1_w1_crc_inverted;
-    if (\$340 ) begin
-      \$986  = config_write_data[24];
+    \$986  = ch1_cfg_ssi_ssi;
+    if (\$343 ) begin
+      \$986  = config_write_data[0];
     end
     if (rst) begin
       \$986  = 1'h0;
@@ -8353,293 +8240,296 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$987  = ch1_cfg_crc1_start_write;
+    \$987  = ch1_cfg_ssi_ssi_error;
+    if (\$344 ) begin
+      \$987  = config_write_data[1];
+    end
     if (rst) begin
       \$987  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$988  = ch1_cfg_crc1_start_w1_crc_start;
-    if (\$341 ) begin
-      \$988 [7:0] = config_write_data[7:0];
-    end
-    if (\$342 ) begin
-      \$988 [15:8] = config_write_data[15:8];
+    \$988  = ch1_cfg_ssi_ssi_error_low;
+    if (\$345 ) begin
+      \$988  = config_write_data[2];
     end
     if (rst) begin
-      \$988  = 16'h0000;
+      \$988  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$989  = ch1_cfg_ssi_write;
+    \$989  = ch1_cfg_ssi_ssi_double;
+    if (\$346 ) begin
+      \$989  = config_write_data[3];
+    end
     if (rst) begin
       \$989  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$990  = ch1_cfg_ssi_ssi;
-    if (\$343 ) begin
-      \$990  = config_write_data[0];
+    \$990  = ch1_cfg_ssi_ssi_delay;
+    if (\$347 ) begin
+      \$990 [7:0] = config_write_data[23:16];
+    end
+    if (\$348 ) begin
+      \$990 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$990  = 1'h0;
+      \$990  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$991  = ch1_cfg_ssi_ssi_error;
-    if (\$344 ) begin
-      \$991  = config_write_data[1];
-    end
+    \$991  = ch1_cfg_w2_write;
     if (rst) begin
       \$991  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$992  = ch1_cfg_ssi_ssi_error_low;
-    if (\$345 ) begin
-      \$992  = config_write_data[2];
-    end
+    \$992  = ch1_cfg_w2_crc_write;
     if (rst) begin
       \$992  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$993  = ch1_cfg_ssi_ssi_double;
-    if (\$346 ) begin
-      \$993  = config_write_data[3];
-    end
+    \$993  = ch1_cfg_w2_crc_start_write;
     if (rst) begin
       \$993  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$994  = ch1_cfg_ssi_ssi_delay;
-    if (\$347 ) begin
-      \$994 [7:0] = config_write_data[23:16];
-    end
-    if (\$348 ) begin
-      \$994 [11:8] = config_write_data[27:24];
-    end
+    \$994  = ch1_cfg_w3_write;
     if (rst) begin
-      \$994  = 12'h000;
+      \$994  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$995  = ch1_cfg_w2_write;
+    \$995  = ch1_cfg_w3_crc_write;
     if (rst) begin
       \$995  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$996  = ch1_cfg_w2_crc_write;
+    \$996  = ch1_cfg_w3_crc_start_write;
     if (rst) begin
       \$996  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$997  = ch1_cfg_w2_crc_start_write;
+    \$997  = ch1_cfg_w4_write;
     if (rst) begin
       \$997  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$998  = ch1_cfg_w3_write;
+    \$998  = ch1_cfg_w4_crc_write;
     if (rst) begin
       \$998  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$999  = ch1_cfg_w3_crc_write;
+    \$999  = ch1_cfg_w4_crc_start_write;
     if (rst) begin
       \$999  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1000  = ch1_cfg_w3_crc_start_write;
+    \$1000  = ch1_cfg_w5_write;
     if (rst) begin
       \$1000  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1001  = ch1_cfg_w4_write;
+    \$1001  = ch1_cfg_w5_crc_write;
     if (rst) begin
       \$1001  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1002  = ch1_cfg_w4_crc_write;
+    \$1002  = ch1_cfg_w5_crc_start_write;
     if (rst) begin
       \$1002  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1003  = ch1_cfg_w4_crc_start_write;
+    \$1003  = ch1_cfg_w6_write;
     if (rst) begin
       \$1003  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1004  = ch1_cfg_w5_write;
+    \$1004  = ch1_cfg_w6_crc_write;
     if (rst) begin
       \$1004  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1005  = ch1_cfg_w5_crc_write;
+    \$1005  = ch1_cfg_w6_crc_start_write;
     if (rst) begin
       \$1005  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1006  = ch1_cfg_w5_crc_start_write;
+    \$1006  = ch1_cfg_w7_write;
     if (rst) begin
       \$1006  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1007  = ch1_cfg_w6_write;
+    \$1007  = ch1_cfg_w7_crc_write;
     if (rst) begin
       \$1007  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1008  = ch1_cfg_w6_crc_write;
+    \$1008  = ch1_cfg_w7_crc_start_write;
     if (rst) begin
       \$1008  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1009  = ch1_cfg_w6_crc_start_write;
+    \$1009  = ch1_ca_request_write;
     if (rst) begin
       \$1009  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1010  = ch1_cfg_w7_write;
+    \$1010  = ch1_ca_request_slave_id;
+    if (\$349 ) begin
+      \$1010  = config_write_data[2:0];
+    end
     if (rst) begin
-      \$1010  = 1'h0;
+      \$1010  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1011  = ch1_cfg_w7_crc_write;
+    \$1011  = ch1_ca_request_address;
+    if (\$350 ) begin
+      \$1011  = config_write_data[14:8];
+    end
     if (rst) begin
-      \$1011  = 1'h0;
+      \$1011  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1012  = ch1_cfg_w7_crc_start_write;
+    \$1012  = ch1_ca_request_count;
+    if (\$351 ) begin
+      \$1012  = config_write_data[22:16];
+    end
     if (rst) begin
-      \$1012  = 1'h0;
+      \$1012  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1013  = ch1_ca_request_write;
+    \$1013  = \ch1_ca_request_write$446 ;
+    if (\$352 ) begin
+      \$1013  = config_write_data[24];
+    end
     if (rst) begin
       \$1013  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1014  = ch1_ca_request_slave_id;
-    if (\$349 ) begin
-      \$1014  = config_write_data[2:0];
-    end
+    \$1014  = \$354 ;
     if (rst) begin
-      \$1014  = 3'h0;
+      \$1014  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1015  = ch1_ca_request_address;
-    if (\$350 ) begin
-      \$1015  = config_write_data[14:8];
-    end
+    \$1015  = \$356 ;
     if (rst) begin
-      \$1015  = 7'h00;
+      \$1015  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1016  = ch1_ca_request_count;
-    if (\$351 ) begin
-      \$1016  = config_write_data[22:16];
-    end
+    \$1016  = \$357 ;
     if (rst) begin
-      \$1016  = 7'h00;
+      \$1016  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1017  = \ch1_ca_request_write$446 ;
-    if (\$352 ) begin
-      \$1017  = config_write_data[24];
+    \$1017  = ch1_config_read_index;
+    if (ch1_config_read) begin
+      \$1017  = config_memory0_read_index;
     end
     if (rst) begin
-      \$1017  = 1'h0;
+      \$1017  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1018  = \$354 ;
+    \$1018  = ch1_read_select_100;
+    if (bus__r_en) begin
+      \$1018  = \$358 ;
+    end
     if (rst) begin
       \$1018  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1019  = \$356 ;
+    \$1019  = ch1_read_select_101;
+    if (bus__r_en) begin
+      \$1019  = \$359 ;
+    end
     if (rst) begin
       \$1019  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1020  = \$357 ;
-    if (rst) begin
-      \$1020  = 15'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1021  = ch1_config_read_index;
-    if (ch1_config_read) begin
-      \$1021  = config_memory0_read_index;
-    end
-    if (rst) begin
-      \$1021  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1022  = ch1_read_select_100;
+    \$1020  = ch1_read_select_102;
     if (bus__r_en) begin
-      \$1022  = \$358 ;
+      \$1020  = \$360 ;
+    end
+    if (rst) begin
+      \$1020  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1021  = ch1_read_select_104;
+    if (bus__r_en) begin
+      \$1021  = \$361 ;
+    end
+    if (rst) begin
+      \$1021  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1022  = ch1_read_select_106;
+    if (bus__r_en) begin
+      \$1022  = \$362 ;
     end
     if (rst) begin
       \$1022  = 1'h0;
@@ -8647,9 +8537,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1023  = ch1_read_select_101;
+    \$1023  = ch1_read_select_107;
     if (bus__r_en) begin
-      \$1023  = \$359 ;
+      \$1023  = \$363 ;
     end
     if (rst) begin
       \$1023  = 1'h0;
@@ -8657,9 +8547,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1024  = ch1_read_select_102;
+    \$1024  = ch1_read_select_110;
     if (bus__r_en) begin
-      \$1024  = \$360 ;
+      \$1024  = \$364 ;
     end
     if (rst) begin
       \$1024  = 1'h0;
@@ -8667,9 +8557,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1025  = ch1_read_select_104;
+    \$1025  = ch1_read_select_111;
     if (bus__r_en) begin
-      \$1025  = \$361 ;
+      \$1025  = \$365 ;
     end
     if (rst) begin
       \$1025  = 1'h0;
@@ -8677,9 +8567,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1026  = ch1_read_select_106;
+    \$1026  = ch1_read_select_112;
     if (bus__r_en) begin
-      \$1026  = \$362 ;
+      \$1026  = \$366 ;
     end
     if (rst) begin
       \$1026  = 1'h0;
@@ -8687,9 +8577,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1027  = ch1_read_select_107;
+    \$1027  = ch1_read_select_113;
     if (bus__r_en) begin
-      \$1027  = \$363 ;
+      \$1027  = \$367 ;
     end
     if (rst) begin
       \$1027  = 1'h0;
@@ -8697,9 +8587,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1028  = ch1_read_select_110;
+    \$1028  = ch1_read_select_114;
     if (bus__r_en) begin
-      \$1028  = \$364 ;
+      \$1028  = \$368 ;
     end
     if (rst) begin
       \$1028  = 1'h0;
@@ -8707,9 +8597,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1029  = ch1_read_select_111;
+    \$1029  = ch1_read_select_115;
     if (bus__r_en) begin
-      \$1029  = \$365 ;
+      \$1029  = \$369 ;
     end
     if (rst) begin
       \$1029  = 1'h0;
@@ -8717,9 +8607,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1030  = ch1_read_select_112;
+    \$1030  = ch1_read_select_116;
     if (bus__r_en) begin
-      \$1030  = \$366 ;
+      \$1030  = \$370 ;
     end
     if (rst) begin
       \$1030  = 1'h0;
@@ -8727,9 +8617,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1031  = ch1_read_select_113;
+    \$1031  = ch1_read_select_117;
     if (bus__r_en) begin
-      \$1031  = \$367 ;
+      \$1031  = \$371 ;
     end
     if (rst) begin
       \$1031  = 1'h0;
@@ -8737,9 +8627,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1032  = ch1_read_select_114;
+    \$1032  = ch1_read_select_125;
     if (bus__r_en) begin
-      \$1032  = \$368 ;
+      \$1032  = \$372 ;
     end
     if (rst) begin
       \$1032  = 1'h0;
@@ -8747,9 +8637,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1033  = ch1_read_select_115;
+    \$1033  = ch1_read_select_126;
     if (bus__r_en) begin
-      \$1033  = \$369 ;
+      \$1033  = \$373 ;
     end
     if (rst) begin
       \$1033  = 1'h0;
@@ -8757,9 +8647,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1034  = ch1_read_select_116;
+    \$1034  = ch1_read_select_127;
     if (bus__r_en) begin
-      \$1034  = \$370 ;
+      \$1034  = \$374 ;
     end
     if (rst) begin
       \$1034  = 1'h0;
@@ -8767,9 +8657,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1035  = ch1_read_select_117;
+    \$1035  = ch1_read_select_128;
     if (bus__r_en) begin
-      \$1035  = \$371 ;
+      \$1035  = \$375 ;
     end
     if (rst) begin
       \$1035  = 1'h0;
@@ -8777,9 +8667,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1036  = ch1_read_select_125;
+    \$1036  = ch1_read_select_129;
     if (bus__r_en) begin
-      \$1036  = \$372 ;
+      \$1036  = \$376 ;
     end
     if (rst) begin
       \$1036  = 1'h0;
@@ -8787,9 +8677,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1037  = ch1_read_select_126;
+    \$1037  = ch1_read_select_12a;
     if (bus__r_en) begin
-      \$1037  = \$373 ;
+      \$1037  = \$377 ;
     end
     if (rst) begin
       \$1037  = 1'h0;
@@ -8797,9 +8687,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1038  = ch1_read_select_127;
+    \$1038  = ch1_read_select_12c;
     if (bus__r_en) begin
-      \$1038  = \$374 ;
+      \$1038  = \$378 ;
     end
     if (rst) begin
       \$1038  = 1'h0;
@@ -8807,9 +8697,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1039  = ch1_read_select_128;
+    \$1039  = ch1_read_select_12d;
     if (bus__r_en) begin
-      \$1039  = \$375 ;
+      \$1039  = \$379 ;
     end
     if (rst) begin
       \$1039  = 1'h0;
@@ -8817,9 +8707,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1040  = ch1_read_select_129;
+    \$1040  = ch1_read_select_12e;
     if (bus__r_en) begin
-      \$1040  = \$376 ;
+      \$1040  = \$380 ;
     end
     if (rst) begin
       \$1040  = 1'h0;
@@ -8827,9 +8717,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1041  = ch1_read_select_12a;
+    \$1041  = ch1_read_select_130;
     if (bus__r_en) begin
-      \$1041  = \$377 ;
+      \$1041  = \$381 ;
     end
     if (rst) begin
       \$1041  = 1'h0;
@@ -8837,9 +8727,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1042  = ch1_read_select_12c;
+    \$1042  = ch1_read_select_131;
     if (bus__r_en) begin
-      \$1042  = \$378 ;
+      \$1042  = \$382 ;
     end
     if (rst) begin
       \$1042  = 1'h0;
@@ -8847,9 +8737,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1043  = ch1_read_select_12d;
+    \$1043  = ch1_read_select_132;
     if (bus__r_en) begin
-      \$1043  = \$379 ;
+      \$1043  = \$383 ;
     end
     if (rst) begin
       \$1043  = 1'h0;
@@ -8857,9 +8747,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1044  = ch1_read_select_12e;
+    \$1044  = ch1_read_select_134;
     if (bus__r_en) begin
-      \$1044  = \$380 ;
+      \$1044  = \$384 ;
     end
     if (rst) begin
       \$1044  = 1'h0;
@@ -8867,9 +8757,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1045  = ch1_read_select_130;
+    \$1045  = ch1_read_select_135;
     if (bus__r_en) begin
-      \$1045  = \$381 ;
+      \$1045  = \$385 ;
     end
     if (rst) begin
       \$1045  = 1'h0;
@@ -8877,9 +8767,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1046  = ch1_read_select_131;
+    \$1046  = ch1_read_select_136;
     if (bus__r_en) begin
-      \$1046  = \$382 ;
+      \$1046  = \$386 ;
     end
     if (rst) begin
       \$1046  = 1'h0;
@@ -8887,9 +8777,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1047  = ch1_read_select_132;
+    \$1047  = ch1_read_select_138;
     if (bus__r_en) begin
-      \$1047  = \$383 ;
+      \$1047  = \$387 ;
     end
     if (rst) begin
       \$1047  = 1'h0;
@@ -8897,9 +8787,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1048  = ch1_read_select_134;
+    \$1048  = ch1_read_select_139;
     if (bus__r_en) begin
-      \$1048  = \$384 ;
+      \$1048  = \$388 ;
     end
     if (rst) begin
       \$1048  = 1'h0;
@@ -8907,9 +8797,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1049  = ch1_read_select_135;
+    \$1049  = ch1_read_select_13a;
     if (bus__r_en) begin
-      \$1049  = \$385 ;
+      \$1049  = \$389 ;
     end
     if (rst) begin
       \$1049  = 1'h0;
@@ -8917,9 +8807,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1050  = ch1_read_select_136;
+    \$1050  = ch1_read_select_13c;
     if (bus__r_en) begin
-      \$1050  = \$386 ;
+      \$1050  = \$390 ;
     end
     if (rst) begin
       \$1050  = 1'h0;
@@ -8927,9 +8817,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1051  = ch1_read_select_138;
+    \$1051  = ch1_read_select_13d;
     if (bus__r_en) begin
-      \$1051  = \$387 ;
+      \$1051  = \$391 ;
     end
     if (rst) begin
       \$1051  = 1'h0;
@@ -8937,9 +8827,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1052  = ch1_read_select_139;
+    \$1052  = ch1_read_select_13e;
     if (bus__r_en) begin
-      \$1052  = \$388 ;
+      \$1052  = \$392 ;
     end
     if (rst) begin
       \$1052  = 1'h0;
@@ -8947,9 +8837,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1053  = ch1_read_select_13a;
+    \$1053  = ch1_read_select_141;
     if (bus__r_en) begin
-      \$1053  = \$389 ;
+      \$1053  = \$393 ;
     end
     if (rst) begin
       \$1053  = 1'h0;
@@ -8957,9 +8847,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1054  = ch1_read_select_13c;
+    \$1054  = ch1_read_select_142;
     if (bus__r_en) begin
-      \$1054  = \$390 ;
+      \$1054  = \$394 ;
     end
     if (rst) begin
       \$1054  = 1'h0;
@@ -8967,9 +8857,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1055  = ch1_read_select_13d;
+    \$1055  = ch1_read_select_143;
     if (bus__r_en) begin
-      \$1055  = \$391 ;
+      \$1055  = \$395 ;
     end
     if (rst) begin
       \$1055  = 1'h0;
@@ -8977,9 +8867,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1056  = ch1_read_select_13e;
+    \$1056  = ch1_read_select_144;
     if (bus__r_en) begin
-      \$1056  = \$392 ;
+      \$1056  = \$396 ;
     end
     if (rst) begin
       \$1056  = 1'h0;
@@ -8987,9 +8877,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1057  = ch1_read_select_141;
+    \$1057  = ch1_read_select_145;
     if (bus__r_en) begin
-      \$1057  = \$393 ;
+      \$1057  = \$397 ;
     end
     if (rst) begin
       \$1057  = 1'h0;
@@ -8997,9 +8887,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1058  = ch1_read_select_142;
+    \$1058  = ch1_read_select_170;
     if (bus__r_en) begin
-      \$1058  = \$394 ;
+      \$1058  = \$398 ;
     end
     if (rst) begin
       \$1058  = 1'h0;
@@ -9007,9 +8897,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1059  = ch1_read_select_143;
+    \$1059  = ch1_read_select_171;
     if (bus__r_en) begin
-      \$1059  = \$395 ;
+      \$1059  = \$399 ;
     end
     if (rst) begin
       \$1059  = 1'h0;
@@ -9017,9 +8907,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1060  = ch1_read_select_144;
+    \$1060  = ch1_read_select_172;
     if (bus__r_en) begin
-      \$1060  = \$396 ;
+      \$1060  = \$400 ;
     end
     if (rst) begin
       \$1060  = 1'h0;
@@ -9027,9 +8917,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1061  = ch1_read_select_145;
+    \$1061  = ch1_read_select_173;
     if (bus__r_en) begin
-      \$1061  = \$397 ;
+      \$1061  = \$401 ;
     end
     if (rst) begin
       \$1061  = 1'h0;
@@ -9037,9 +8927,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1062  = ch1_read_select_170;
+    \$1062  = ch1_read_select_174;
     if (bus__r_en) begin
-      \$1062  = \$398 ;
+      \$1062  = \$402 ;
     end
     if (rst) begin
       \$1062  = 1'h0;
@@ -9047,9 +8937,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1063  = ch1_read_select_171;
+    \$1063  = ch1_read_select_175;
     if (bus__r_en) begin
-      \$1063  = \$399 ;
+      \$1063  = \$403 ;
     end
     if (rst) begin
       \$1063  = 1'h0;
@@ -9057,9 +8947,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1064  = ch1_read_select_172;
+    \$1064  = ch1_read_select_176;
     if (bus__r_en) begin
-      \$1064  = \$400 ;
+      \$1064  = \$404 ;
     end
     if (rst) begin
       \$1064  = 1'h0;
@@ -9067,9 +8957,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1065  = ch1_read_select_173;
+    \$1065  = ch1_read_select_177;
     if (bus__r_en) begin
-      \$1065  = \$401 ;
+      \$1065  = \$405 ;
     end
     if (rst) begin
       \$1065  = 1'h0;
@@ -9077,9 +8967,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1066  = ch1_read_select_174;
+    \$1066  = ch1_read_select_178;
     if (bus__r_en) begin
-      \$1066  = \$402 ;
+      \$1066  = \$406 ;
     end
     if (rst) begin
       \$1066  = 1'h0;
@@ -9087,9 +8977,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1067  = ch1_read_select_175;
+    \$1067  = ch1_read_select_179;
     if (bus__r_en) begin
-      \$1067  = \$403 ;
+      \$1067  = \$407 ;
     end
     if (rst) begin
       \$1067  = 1'h0;
@@ -9097,9 +8987,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1068  = ch1_read_select_176;
+    \$1068  = ch1_read_select_17a;
     if (bus__r_en) begin
-      \$1068  = \$404 ;
+      \$1068  = \$408 ;
     end
     if (rst) begin
       \$1068  = 1'h0;
@@ -9107,9 +8997,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1069  = ch1_read_select_177;
+    \$1069  = ch1_read_select_17b;
     if (bus__r_en) begin
-      \$1069  = \$405 ;
+      \$1069  = \$409 ;
     end
     if (rst) begin
       \$1069  = 1'h0;
@@ -9117,9 +9007,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1070  = ch1_read_select_178;
+    \$1070  = ch1_read_select_17c;
     if (bus__r_en) begin
-      \$1070  = \$406 ;
+      \$1070  = \$410 ;
     end
     if (rst) begin
       \$1070  = 1'h0;
@@ -9127,9 +9017,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1071  = ch1_read_select_179;
+    \$1071  = ch1_read_select_17d;
     if (bus__r_en) begin
-      \$1071  = \$407 ;
+      \$1071  = \$411 ;
     end
     if (rst) begin
       \$1071  = 1'h0;
@@ -9137,19 +9027,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1072  = ch1_read_select_17a;
-    if (bus__r_en) begin
-      \$1072  = \$408 ;
+    \$1072  = ch1_result_status_status_snapshot;
+    if (\$412 ) begin
+      \$1072  = \port$7743$0 [3:0];
     end
     if (rst) begin
-      \$1072  = 1'h0;
+      \$1072  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1073  = ch1_read_select_17b;
-    if (bus__r_en) begin
-      \$1073  = \$409 ;
+    \$1073  = ch1_result_status_cds_snapshot;
+    if (\$412 ) begin
+      \$1073  = \port$7743$0 [49];
     end
     if (rst) begin
       \$1073  = 1'h0;
@@ -9157,9 +9047,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1074  = ch1_read_select_17c;
-    if (bus__r_en) begin
-      \$1074  = \$410 ;
+    \$1074  = ch1_result_status_w0_ne_snapshot;
+    if (\$412 ) begin
+      \$1074  = \port$7743$0 [131];
     end
     if (rst) begin
       \$1074  = 1'h0;
@@ -9167,9 +9057,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1075  = ch1_read_select_17d;
-    if (bus__r_en) begin
-      \$1075  = \$411 ;
+    \$1075  = ch1_result_status_w0_nw_snapshot;
+    if (\$412 ) begin
+      \$1075  = \port$7743$0 [132];
     end
     if (rst) begin
       \$1075  = 1'h0;
@@ -9177,19 +9067,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1076  = ch1_result_status_status_snapshot;
+    \$1076  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$412 ) begin
-      \$1076  = \port$7811$0 [3:0];
+      \$1076  = \port$7743$0 [133];
     end
     if (rst) begin
-      \$1076  = 4'h0;
+      \$1076  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1077  = ch1_result_status_cds_snapshot;
+    \$1077  = ch1_result_status_w1_ne_snapshot;
     if (\$412 ) begin
-      \$1077  = \port$7811$0 [49];
+      \$1077  = \port$7743$0 [174];
     end
     if (rst) begin
       \$1077  = 1'h0;
@@ -9197,9 +9087,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1078  = ch1_result_status_w0_ne_snapshot;
+    \$1078  = ch1_result_status_w1_nw_snapshot;
     if (\$412 ) begin
-      \$1078  = \port$7811$0 [131];
+      \$1078  = \port$7743$0 [175];
     end
     if (rst) begin
       \$1078  = 1'h0;
@@ -9207,9 +9097,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1079  = ch1_result_status_w0_nw_snapshot;
+    \$1079  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$412 ) begin
-      \$1079  = \port$7811$0 [132];
+      \$1079  = \port$7743$0 [176];
     end
     if (rst) begin
       \$1079  = 1'h0;
@@ -9217,9 +9107,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1080  = ch1_result_status_w0_crc_ok_snapshot;
+    \$1080  = ch1_result_status_lc_repeat_snapshot;
     if (\$412 ) begin
-      \$1080  = \port$7811$0 [133];
+      \$1080  = \port$7743$0 [183];
     end
     if (rst) begin
       \$1080  = 1'h0;
@@ -9227,9 +9117,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1081  = ch1_result_status_w1_ne_snapshot;
+    \$1081  = ch1_result_status_lc_skip_snapshot;
     if (\$412 ) begin
-      \$1081  = \port$7811$0 [174];
+      \$1081  = \port$7743$0 [184];
     end
     if (rst) begin
       \$1081  = 1'h0;
@@ -9237,9 +9127,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1082  = ch1_result_status_w1_nw_snapshot;
+    \$1082  = ch1_result_status_lc_zero_snapshot;
     if (\$412 ) begin
-      \$1082  = \port$7811$0 [175];
+      \$1082  = \port$7743$0 [185];
     end
     if (rst) begin
       \$1082  = 1'h0;
@@ -9247,9 +9137,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1083  = ch1_result_status_w1_crc_ok_snapshot;
+    \$1083  = ch1_result_status_spw_mismatch_snapshot;
     if (\$412 ) begin
-      \$1083  = \port$7811$0 [176];
+      \$1083  = \port$7743$0 [186];
     end
     if (rst) begin
       \$1083  = 1'h0;
@@ -9257,79 +9147,79 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1084  = ch1_result_status_lc_repeat_snapshot;
+    \$1084  = ch1_result_status_lc_snapshot;
     if (\$412 ) begin
-      \$1084  = \port$7811$0 [183];
+      \$1084  = \port$7743$0 [182:177];
     end
     if (rst) begin
-      \$1084  = 1'h0;
+      \$1084  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1085  = ch1_result_status_lc_skip_snapshot;
+    \$1085  = ch1_result_seq_seq_snapshot;
     if (\$412 ) begin
-      \$1085  = \port$7811$0 [184];
+      \$1085  = ch1__done_count;
     end
     if (rst) begin
-      \$1085  = 1'h0;
+      \$1085  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1086  = ch1_result_status_lc_zero_snapshot;
+    \$1086  = ch1_result_seq_line_delay_snapshot;
     if (\$412 ) begin
-      \$1086  = \port$7811$0 [185];
+      \$1086  = \port$7743$0 [48:36];
     end
     if (rst) begin
-      \$1086  = 1'h0;
+      \$1086  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1087  = ch1_result_status_spw_mismatch_snapshot;
+    \$1087  = ch1_result_w0_lo_data_snapshot;
     if (\$412 ) begin
-      \$1087  = \port$7811$0 [186];
+      \$1087  = \port$7743$0 [107:76];
     end
     if (rst) begin
-      \$1087  = 1'h0;
+      \$1087  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1088  = ch1_result_status_lc_snapshot;
+    \$1088  = ch1_result_w0_hi_data_snapshot;
     if (\$412 ) begin
-      \$1088  = \port$7811$0 [182:177];
+      \$1088  = \port$7743$0 [130:108];
     end
     if (rst) begin
-      \$1088  = 6'h00;
+      \$1088  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1089  = ch1_result_seq_seq_snapshot;
+    \$1089  = ch1_result_w1_lo_data_snapshot;
     if (\$412 ) begin
-      \$1089  = ch1__done_count;
+      \$1089  = \port$7743$0 [165:134];
     end
     if (rst) begin
-      \$1089  = 16'h0000;
+      \$1089  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1090  = ch1_result_seq_line_delay_snapshot;
+    \$1090  = ch1_result_w1_hi_data_snapshot;
     if (\$412 ) begin
-      \$1090  = \port$7811$0 [48:36];
+      \$1090  = \port$7743$0 [173:166];
     end
     if (rst) begin
-      \$1090  = 13'h0000;
+      \$1090  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1091  = ch1_result_w0_lo_data_snapshot;
+    \$1091  = ch1_result_timestamp_time_snapshot;
     if (\$412 ) begin
-      \$1091  = \port$7811$0 [107:76];
+      \$1091  = \port$7743$0 [35:4];
     end
     if (rst) begin
       \$1091  = 32'd0;
@@ -9337,29 +9227,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1092  = ch1_result_w0_hi_data_snapshot;
+    \$1092  = ch1_result_line_noise_events_snapshot;
     if (\$412 ) begin
-      \$1092  = \port$7811$0 [130:108];
+      \$1092  = \port$7743$0 [53:50];
     end
     if (rst) begin
-      \$1092  = 23'h000000;
+      \$1092  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1093  = ch1_result_w1_lo_data_snapshot;
+    \$1093  = ch1_result_line_delay_settled_snapshot;
     if (\$412 ) begin
-      \$1093  = \port$7811$0 [165:134];
+      \$1093  = \port$7743$0 [54];
     end
     if (rst) begin
-      \$1093  = 32'd0;
+      \$1093  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1094  = ch1_result_w1_hi_data_snapshot;
+    \$1094  = ch1_result_line_delay_spread_snapshot;
     if (\$412 ) begin
-      \$1094  = \port$7811$0 [173:166];
+      \$1094  = \port$7743$0 [75:68];
     end
     if (rst) begin
       \$1094  = 8'h00;
@@ -9367,29 +9257,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1095  = ch1_result_timestamp_time_snapshot;
+    \$1095  = ch1_result_line_settled_delay_snapshot;
     if (\$412 ) begin
-      \$1095  = \port$7811$0 [35:4];
+      \$1095  = \port$7743$0 [67:55];
     end
     if (rst) begin
-      \$1095  = 32'd0;
+      \$1095  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1096  = ch1_result_line_noise_events_snapshot;
-    if (\$412 ) begin
-      \$1096  = \port$7811$0 [53:50];
+    \$1096  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$1096  = \$414 ;
     end
     if (rst) begin
-      \$1096  = 4'h0;
+      \$1096  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1097  = ch1_result_line_delay_settled_snapshot;
-    if (\$412 ) begin
-      \$1097  = \port$7811$0 [54];
+    \$1097  = ch1_window1_read;
+    if (bus__r_en) begin
+      \$1097  = \$416 ;
     end
     if (rst) begin
       \$1097  = 1'h0;
@@ -9397,62 +9287,22 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1098  = ch1_result_line_delay_spread_snapshot;
-    if (\$412 ) begin
-      \$1098  = \port$7811$0 [75:68];
-    end
-    if (rst) begin
-      \$1098  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1099  = ch1_result_line_settled_delay_snapshot;
-    if (\$412 ) begin
-      \$1099  = \port$7811$0 [67:55];
-    end
-    if (rst) begin
-      \$1099  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1100  = ch1_window0_read;
+    \$1098  = ch1_window2_read;
     if (bus__r_en) begin
-      \$1100  = \$414 ;
+      \$1098  = ch1_config_read;
     end
     if (rst) begin
-      \$1100  = 1'h0;
+      \$1098  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1101  = ch1_window1_read;
-    if (bus__r_en) begin
-      \$1101  = \$416 ;
-    end
-    if (rst) begin
-      \$1101  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1102  = ch1_window2_read;
-    if (bus__r_en) begin
-      \$1102  = ch1_config_read;
-    end
-    if (rst) begin
-      \$1102  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1103  = ch1_read_data;
+    \$1099  = ch1_read_data;
     if (bus__r_load) begin
-      \$1103  = \$530 ;
+      \$1099  = \$530 ;
     end
     if (rst) begin
-      \$1103  = 32'd0;
+      \$1099  = 32'd0;
     end
   end
   always @* begin
@@ -9602,27 +9452,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$7280$0 [3:0];
-  assign ch0__cds = \port$7280$0 [49];
-  assign ch0__word0_ne = \port$7280$0 [131];
-  assign ch0__word0_nw = \port$7280$0 [132];
-  assign ch0__word0_crc_ok = \port$7280$0 [133];
-  assign ch0__word1_ne = \port$7280$0 [174];
-  assign ch0__word1_nw = \port$7280$0 [175];
-  assign ch0__word1_crc_ok = \port$7280$0 [176];
-  assign ch0__lc_repeat = \port$7280$0 [183];
-  assign ch0__lc_skip = \port$7280$0 [184];
-  assign ch0__lc_zero = \port$7280$0 [185];
-  assign ch0__spw_mismatch = \port$7280$0 [186];
-  assign ch0__lc = \port$7280$0 [182:177];
-  assign ch0__line_delay = \port$7280$0 [48:36];
-  assign ch0__word0_position = \port$7280$0 [130:76];
-  assign ch0__word1_position = \port$7280$0 [173:134];
-  assign ch0__timestamp = \port$7280$0 [35:4];
-  assign ch0__noise_events = \port$7280$0 [53:50];
-  assign ch0__delay_settled = \port$7280$0 [54];
-  assign ch0__delay_spread = \port$7280$0 [75:68];
-  assign ch0__settled_delay = \port$7280$0 [67:55];
+  assign ch0__status = \port$7212$0 [3:0];
+  assign ch0__cds = \port$7212$0 [49];
+  assign ch0__word0_ne = \port$7212$0 [131];
+  assign ch0__word0_nw = \port$7212$0 [132];
+  assign ch0__word0_crc_ok = \port$7212$0 [133];
+  assign ch0__word1_ne = \port$7212$0 [174];
+  assign ch0__word1_nw = \port$7212$0 [175];
+  assign ch0__word1_crc_ok = \port$7212$0 [176];
+  assign ch0__lc_repeat = \port$7212$0 [183];
+  assign ch0__lc_skip = \port$7212$0 [184];
+  assign ch0__lc_zero = \port$7212$0 [185];
+  assign ch0__spw_mismatch = \port$7212$0 [186];
+  assign ch0__lc = \port$7212$0 [182:177];
+  assign ch0__line_delay = \port$7212$0 [48:36];
+  assign ch0__word0_position = \port$7212$0 [130:76];
+  assign ch0__word1_position = \port$7212$0 [173:134];
+  assign ch0__timestamp = \port$7212$0 [35:4];
+  assign ch0__noise_events = \port$7212$0 [53:50];
+  assign ch0__delay_settled = \port$7212$0 [54];
+  assign ch0__delay_spread = \port$7212$0 [75:68];
+  assign ch0__settled_delay = \port$7212$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9643,13 +9493,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$7368$0 [2:0];
-  assign ch0__ca_bytes_done = \port$7368$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$7291$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$7291$0 [31:16];
-  assign ch0__count_ca_refused = \port$7291$0 [47:32];
-  assign ch0__count_ca_aborted = \port$7291$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$7291$0 [79:64];
+  assign ch0__ca_status = \port$7300$0 [2:0];
+  assign ch0__ca_bytes_done = \port$7300$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$7223$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$7223$0 [31:16];
+  assign ch0__count_ca_refused = \port$7223$0 [47:32];
+  assign ch0__count_ca_aborted = \port$7223$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$7223$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9674,27 +9524,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__word5_position = 63'h0000000000000000;
   assign ch0__word6_position = 63'h0000000000000000;
   assign ch0__word7_position = 63'h0000000000000000;
-  assign ch1__status = \port$7811$0 [3:0];
-  assign ch1__cds = \port$7811$0 [49];
-  assign ch1__word0_ne = \port$7811$0 [131];
-  assign ch1__word0_nw = \port$7811$0 [132];
-  assign ch1__word0_crc_ok = \port$7811$0 [133];
-  assign ch1__word1_ne = \port$7811$0 [174];
-  assign ch1__word1_nw = \port$7811$0 [175];
-  assign ch1__word1_crc_ok = \port$7811$0 [176];
-  assign ch1__lc_repeat = \port$7811$0 [183];
-  assign ch1__lc_skip = \port$7811$0 [184];
-  assign ch1__lc_zero = \port$7811$0 [185];
-  assign ch1__spw_mismatch = \port$7811$0 [186];
-  assign ch1__lc = \port$7811$0 [182:177];
-  assign ch1__line_delay = \port$7811$0 [48:36];
-  assign ch1__word0_position = \port$7811$0 [130:76];
-  assign ch1__word1_position = \port$7811$0 [173:134];
-  assign ch1__timestamp = \port$7811$0 [35:4];
-  assign ch1__noise_events = \port$7811$0 [53:50];
-  assign ch1__delay_settled = \port$7811$0 [54];
-  assign ch1__delay_spread = \port$7811$0 [75:68];
-  assign ch1__settled_delay = \port$7811$0 [67:55];
+  assign ch1__status = \port$7743$0 [3:0];
+  assign ch1__cds = \port$7743$0 [49];
+  assign ch1__word0_ne = \port$7743$0 [131];
+  assign ch1__word0_nw = \port$7743$0 [132];
+  assign ch1__word0_crc_ok = \port$7743$0 [133];
+  assign ch1__word1_ne = \port$7743$0 [174];
+  assign ch1__word1_nw = \port$7743$0 [175];
+  assign ch1__word1_crc_ok = \port$7743$0 [176];
+  assign ch1__lc_repeat = \port$7743$0 [183];
+  assign ch1__lc_skip = \port$7743$0 [184];
+  assign ch1__lc_zero = \port$7743$0 [185];
+  assign ch1__spw_mismatch = \port$7743$0 [186];
+  assign ch1__lc = \port$7743$0 [182:177];
+  assign ch1__line_delay = \port$7743$0 [48:36];
+  assign ch1__word0_position = \port$7743$0 [130:76];
+  assign ch1__word1_position = \port$7743$0 [173:134];
+  assign ch1__timestamp = \port$7743$0 [35:4];
+  assign ch1__noise_events = \port$7743$0 [53:50];
+  assign ch1__delay_settled = \port$7743$0 [54];
+  assign ch1__delay_spread = \port$7743$0 [75:68];
+  assign ch1__settled_delay = \port$7743$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9715,13 +9565,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$7899$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7899$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7822$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7822$0 [31:16];
-  assign ch1__count_ca_refused = \port$7822$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7822$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7822$0 [79:64];
+  assign ch1__ca_status = \port$7831$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7831$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7754$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7754$0 [31:16];
+  assign ch1__count_ca_refused = \port$7754$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7754$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7754$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9989,7 +9839,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__ca_wbuf_addr = write_addr[3:0];
   assign ch1__ca_wbuf_data = write_data;
   assign ch1__ca_rbuf_addr = bus__w_addr[3:0];
-  assign \wr__addr$940  = { \$715 , \$714 , \$713 , \$712  };
+  assign \wr__addr$940  = { \$713 , \$712 , \$711 , \$710  };
   assign \wr__data$941  = config_memory0_write_data;
   assign \rd__addr$943  = ch1_config_read_index;
   assign irq = { ch1_irq, ch0_irq };
@@ -9997,12 +9847,12 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
+  assign \$632  = \$631 ;
   assign \$634  = \$633 ;
   assign \$636  = \$635 ;
-  assign \$638  = \$637 ;
+  assign \$733  = \$732 ;
+  assign \$735  = \$734 ;
   assign \$737  = \$736 ;
-  assign \$739  = \$738 ;
-  assign \$741  = \$740 ;
   assign \$164  = \$163 ;
   assign \$171  = 32'd0;
   assign \$172  = \$170 ;
@@ -10078,6 +9928,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$268  = \$244 ;
   assign \$269  = 32'd0;
   assign \$270  = \$244 ;
+  assign ch0_config_read_data = \$630 ;
   assign \$418  = \$417 ;
   assign \$425  = 32'd0;
   assign \$426  = \$424 ;
@@ -10153,8 +10004,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$522  = \$498 ;
   assign \$523  = 32'd0;
   assign \$524  = \$498 ;
+  assign ch1_config_read_data = \$731 ;
   assign g_irq = 1'h0;
-  assign \$742  = g_read_data;
+  assign \$738  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -10275,7 +10127,7 @@ endmodule
 module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7280$0 , \port$7291$0 , regs__ca_done, \port$7368$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7212$0 , \port$7223$0 , regs__ca_done, \port$7300$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -10459,12 +10311,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7280$0 ;
-  wire [186:0] \port$7280$0 ;
-  output [79:0] \port$7291$0 ;
-  wire [79:0] \port$7291$0 ;
-  output [9:0] \port$7368$0 ;
-  wire [9:0] \port$7368$0 ;
+  output [186:0] \port$7212$0 ;
+  wire [186:0] \port$7212$0 ;
+  output [79:0] \port$7223$0 ;
+  wire [79:0] \port$7223$0 ;
+  output [9:0] \port$7300$0 ;
+  wire [9:0] \port$7300$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10953,9 +10805,9 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$7280$0  = \$20 ;
-  assign \port$7291$0  = \$21 ;
-  assign \port$7368$0  = \$22 ;
+  assign \port$7212$0  = \$20 ;
+  assign \port$7223$0  = \$21 ;
+  assign \port$7300$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -12032,7 +11884,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6937$272 (cycle[274:272]),
+    .\port$6869$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -12092,7 +11944,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6937$199 (cycle[199]),
+    .\port$6869$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -12143,7 +11995,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6937$259 (cycle[271:259]),
+    .\port$6869$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -12167,7 +12019,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6925$0 (\bit ),
+    .\port$6857$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -12235,7 +12087,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2940$0 (\$28 ),
+    .\port$2872$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -16319,7 +16171,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6937$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6869$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -17012,8 +16864,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6937$272 ;
-  wire [2:0] \port$6937$272 ;
+  input [2:0] \port$6869$272 ;
+  wire [2:0] \port$6869$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -17299,7 +17151,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6937$272 [0];
+  assign error_bit = ssi & \port$6869$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -17353,7 +17205,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6937$272 [2];
+  assign \$48  = ssi & \port$6869$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -17640,15 +17492,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6937$272 [0];
+  assign \$335  = ssi & \port$6869$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6937$272 [0];
-  assign \$343  = ~ \port$6937$272 [1];
+  assign \$342  = ssi & \port$6869$272 [0];
+  assign \$343  = ~ \port$6869$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -18280,7 +18132,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$6937$272 [0];
+  assign ssi_error = \port$6869$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -18289,8 +18141,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6937$272 [2];
-  assign ssi_error_low = \port$6937$272 [1];
+  assign ssi_double = \port$6869$272 [2];
+  assign ssi_error_low = \port$6869$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -19947,7 +19799,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6937$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6869$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -19999,8 +19851,8 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6937$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6937$199 ;
-  wire \port$6937$199 ;
+  input \port$6869$199 ;
+  wire \port$6869$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20054,7 +19906,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6937$199 , ssi, ssi_e
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6937$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6869$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -20164,7 +20016,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6937$199 , ssi, ssi_e
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6937$199 , 1'h1 };
+  assign enables = { \port$6869$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22305,7 +22157,7 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6937$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6869$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -22439,8 +22291,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6937$259 ;
-  wire [12:0] \port$6937$259 ;
+  input [12:0] \port$6869$259 ;
+  wire [12:0] \port$6869$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -22465,7 +22317,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6937$259 [12:1] + 1'h1;
+  assign \$11  = \port$6869$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -22590,7 +22442,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6937$259 [0]),
+    .clear_high(\port$6869$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -22733,7 +22585,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6937$259 [0]) begin
+            if (\port$6869$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -22818,7 +22670,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6937$259 [0]) begin
+            if (\port$6869$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -22857,7 +22709,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6937$259 [12:1] };
+            \$85  = { 1'h0, \port$6869$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -23242,11 +23094,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6937$259 [12:1] };
-  assign fixed = \port$6937$259 [0];
+  assign fixed_delay = { 1'h0, \port$6869$259 [12:1] };
+  assign fixed = \port$6869$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6937$259 [0];
+  assign clear_high = \port$6869$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -23653,7 +23505,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6925$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6857$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -23695,8 +23547,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6925$0 ;
-  wire \port$6925$0 ;
+  input \port$6857$0 ;
+  wire \port$6857$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -23710,9 +23562,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6925$0  };
-  assign \$2  = { lc[4:0], \port$6925$0  } == last;
-  assign \$3  = { lc[4:0], \port$6925$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6857$0  };
+  assign \$2  = { lc[4:0], \port$6857$0  } == last;
+  assign \$3  = { lc[4:0], \port$6857$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -23822,7 +23674,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6925$0  };
+  assign lc_next = { lc[4:0], \port$6857$0  };
   assign zero = is_zero;
 endmodule
 
@@ -24386,7 +24238,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2940$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2872$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -24564,8 +24416,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2940$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$2940$0 ;
-  wire \port$2940$0 ;
+  output \port$2872$0 ;
+  wire \port$2872$0 ;
   output report;
   wire report;
   input report_frame;
@@ -24683,7 +24535,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2940$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2940$0  = \$2 ;
+  assign \port$2872$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -24740,7 +24592,7 @@ endmodule
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7811$0 , \port$7822$0 , regs__ca_done, \port$7899$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7743$0 , \port$7754$0 , regs__ca_done, \port$7831$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -24924,12 +24776,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7811$0 ;
-  wire [186:0] \port$7811$0 ;
-  output [79:0] \port$7822$0 ;
-  wire [79:0] \port$7822$0 ;
-  output [9:0] \port$7899$0 ;
-  wire [9:0] \port$7899$0 ;
+  output [186:0] \port$7743$0 ;
+  wire [186:0] \port$7743$0 ;
+  output [79:0] \port$7754$0 ;
+  wire [79:0] \port$7754$0 ;
+  output [9:0] \port$7831$0 ;
+  wire [9:0] \port$7831$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -25418,9 +25270,9 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$7811$0  = \$20 ;
-  assign \port$7822$0  = \$21 ;
-  assign \port$7899$0  = \$22 ;
+  assign \port$7743$0  = \$20 ;
+  assign \port$7754$0  = \$21 ;
+  assign \port$7831$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -26497,7 +26349,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7468$272 (cycle[274:272]),
+    .\port$7400$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -26557,7 +26409,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$7468$199 (cycle[199]),
+    .\port$7400$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -26608,7 +26460,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7468$259 (cycle[271:259]),
+    .\port$7400$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -26632,7 +26484,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7456$0 (\bit ),
+    .\port$7388$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -26700,7 +26552,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5353$0 (\$28 ),
+    .\port$5285$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -30784,7 +30636,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$7468$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$7400$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -31477,8 +31329,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7468$272 ;
-  wire [2:0] \port$7468$272 ;
+  input [2:0] \port$7400$272 ;
+  wire [2:0] \port$7400$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -31764,7 +31616,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$7468$272 [0];
+  assign error_bit = ssi & \port$7400$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -31818,7 +31670,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$7468$272 [2];
+  assign \$48  = ssi & \port$7400$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -32105,15 +31957,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$7468$272 [0];
+  assign \$335  = ssi & \port$7400$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$7468$272 [0];
-  assign \$343  = ~ \port$7468$272 [1];
+  assign \$342  = ssi & \port$7400$272 [0];
+  assign \$343  = ~ \port$7400$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -32745,7 +32597,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$7468$272 [0];
+  assign ssi_error = \port$7400$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -32754,8 +32606,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$7468$272 [2];
-  assign ssi_error_low = \port$7468$272 [1];
+  assign ssi_double = \port$7400$272 [2];
+  assign ssi_error_low = \port$7400$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -34412,7 +34264,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7468$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7400$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -34464,8 +34316,8 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7468$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$7468$199 ;
-  wire \port$7468$199 ;
+  input \port$7400$199 ;
+  wire \port$7400$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -34519,7 +34371,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7468$199 , ssi, ssi_e
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$7468$199  ? word1_len : 8'h00;
+  assign \$11  = \port$7400$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -34629,7 +34481,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7468$199 , ssi, ssi_e
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$7468$199 , 1'h1 };
+  assign enables = { \port$7400$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -36770,7 +36622,7 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7468$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7400$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -36904,8 +36756,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7468$259 ;
-  wire [12:0] \port$7468$259 ;
+  input [12:0] \port$7400$259 ;
+  wire [12:0] \port$7400$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -36930,7 +36782,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7468$259 [12:1] + 1'h1;
+  assign \$11  = \port$7400$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -37055,7 +36907,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7468$259 [0]),
+    .clear_high(\port$7400$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -37198,7 +37050,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7468$259 [0]) begin
+            if (\port$7400$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -37283,7 +37135,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7468$259 [0]) begin
+            if (\port$7400$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -37322,7 +37174,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7468$259 [12:1] };
+            \$85  = { 1'h0, \port$7400$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -37707,11 +37559,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7468$259 [12:1] };
-  assign fixed = \port$7468$259 [0];
+  assign fixed_delay = { 1'h0, \port$7400$259 [12:1] };
+  assign fixed = \port$7400$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7468$259 [0];
+  assign clear_high = \port$7400$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -38118,7 +37970,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7456$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7388$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -38160,8 +38012,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7456$0 ;
-  wire \port$7456$0 ;
+  input \port$7388$0 ;
+  wire \port$7388$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -38175,9 +38027,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7456$0  };
-  assign \$2  = { lc[4:0], \port$7456$0  } == last;
-  assign \$3  = { lc[4:0], \port$7456$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7388$0  };
+  assign \$2  = { lc[4:0], \port$7388$0  } == last;
+  assign \$3  = { lc[4:0], \port$7388$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -38287,7 +38139,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7456$0  };
+  assign lc_next = { lc[4:0], \port$7388$0  };
   assign zero = is_zero;
 endmodule
 
@@ -38851,7 +38703,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5353$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5285$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -39029,8 +38881,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5353$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$5353$0 ;
-  wire \port$5353$0 ;
+  output \port$5285$0 ;
+  wire \port$5285$0 ;
   output report;
   wire report;
   input report_frame;
@@ -39148,7 +39000,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5353$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5353$0  = \$2 ;
+  assign \port$5285$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -367,9 +367,15 @@ class RegisterBank(wiring.Component):
         rd = memory.read_port(domain="comb")
         m.d.comb += rd.addr.eq(index)
         value = Signal(DATA_WIDTH, name=f"{prefix}_config_read_data")
-        m.d.comb += value.eq(Mux(written.bit_select(index, 1), rd.data,
-                                 Array(C(r, DATA_WIDTH) for r in reset)[index])
-                             | Array(C(c, DATA_WIDTH) for c in const)[index])
+        # The register's constants by compares with the index, not an Array (a case block in
+        # the Verilog, which Icarus runs only once an input changes: README Notes).
+        unwritten, fixed = 0, 0
+        for k in range(count):
+            if reset[k]:
+                unwritten = unwritten | Mux(index == k, reset[k], 0)
+            if const[k]:
+                fixed = fixed | Mux(index == k, const[k], 0)
+        m.d.comb += value.eq(Mux(written.bit_select(index, 1), rd.data, unwritten) | fixed)
         windows.append((hit, value))
 
     def _shadow_common(self, m, registers, shadowed, absent, mask, reset):
