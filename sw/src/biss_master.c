@@ -360,7 +360,15 @@ biss_err_t biss_crc_named(biss_word_format_t *w, unsigned width)
     return BISS_OK;
 }
 
-/* A word's custom CRC registers (cfg_crcN, cfg_crcN_start): 0 when the word has another. */
+/* A word's custom CRC registers (cfg_crcN, cfg_crcN_start, and a chain word's cfg_wW_crc,
+ * cfg_wW_crc_start, whose fields sit where word 0's do: a compile error otherwise): 0 when
+ * the word has another CRC. */
+typedef char chain_crc_layout_agrees[
+    (CH(CFG_CRC0__W0_CRC_POLY_bm) == CH(CFG_W2_CRC__CRC_POLY_bm)
+     && CH(CFG_CRC0__W0_CRC_WIDTH_bm) == CH(CFG_W2_CRC__CRC_WIDTH_bm)
+     && CH(CFG_CRC0__W0_CRC_INVERTED_bm) == CH(CFG_W2_CRC__CRC_INVERTED_bm)
+     && CH(CFG_CRC0_START__W0_CRC_START_bm) == CH(CFG_W2_CRC_START__CRC_START_bm)) ? 1 : -1];
+
 static uint32_t crc_reg(const biss_word_format_t *w)
 {
     if (w->crc != BISS_CRC_CUSTOM)
@@ -372,20 +380,6 @@ static uint32_t crc_reg(const biss_word_format_t *w)
 static uint32_t crc_start_reg(const biss_word_format_t *w)
 {
     return w->crc == BISS_CRC_CUSTOM ? PUT(w->crc_start, CH(CFG_CRC0_START__W0_CRC_START)) : 0;
-}
-
-/* A chain word's custom CRC registers (cfg_wW_crc, cfg_wW_crc_start): 0 with another CRC. */
-static uint32_t chain_crc_reg(const biss_word_format_t *w)
-{
-    if (w->crc != BISS_CRC_CUSTOM)
-        return 0;
-    return PUT(w->crc_poly, CH(CFG_W2_CRC__CRC_POLY)) | PUT(w->crc_width, CH(CFG_W2_CRC__CRC_WIDTH))
-         | PUT(w->crc_inverted, CH(CFG_W2_CRC__CRC_INVERTED));
-}
-
-static uint32_t chain_crc_start_reg(const biss_word_format_t *w)
-{
-    return w->crc == BISS_CRC_CUSTOM ? PUT(w->crc_start, CH(CFG_W2_CRC_START__CRC_START)) : 0;
 }
 
 static bool time_fits(const biss_channel_t *ch, uint32_t value, uint32_t field_max)
@@ -491,8 +485,8 @@ biss_err_t biss_configure(biss_channel_t *ch, const biss_config_t *cfg)
     for (i = 0; i + 2u < ch->words && i < BISS_CHAIN_WORDS; i++) {
         const biss_word_format_t *w = &cfg->chain[i];
         bool on = i < cfg->chain_words;
-        ch_wr(ch, chain_regs[i].crc, on ? chain_crc_reg(w) : 0);
-        ch_wr(ch, chain_regs[i].crc_start, on ? chain_crc_start_reg(w) : 0);
+        ch_wr(ch, chain_regs[i].crc, on ? crc_reg(w) : 0);
+        ch_wr(ch, chain_regs[i].crc_start, on ? crc_start_reg(w) : 0);
     }
     ch_wr(ch, CHANNEL_OFF(cfg_words), words);
     /* Every chain word the build has: the enabled ones in order after word 1, the others
