@@ -170,6 +170,8 @@ class RegisterBank(wiring.Component):
         # The configuration read-back memories' logic shared by blocks of one layout and one
         # set of absent signals (every channel of a top of one core build): ``_shadow``.
         self._shadow_shared = {}
+        # Block-relative word addresses: the bits below the channel stride.
+        self._block_bits = (rm.channel_stride // 4 - 1).bit_length()
         partials = []                  # each block's registered share of the read data
         irqs = []
         for port, base, registers, prefix, absent in blocks:
@@ -342,8 +344,7 @@ class RegisterBank(wiring.Component):
         mask, reset, const = zip(*(self._shadow_constants(reg, absent) for reg in shadowed))
         data, r_index, r_shadow = self._shadow_common(m, registers, shadowed, absent, mask,
                                                       reset)
-        # Block-relative word addresses: the bits below the channel stride.
-        low = (self.regmap.channel_stride // 4 - 1).bit_length()
+        low = self._block_bits
         bus = self.bus
         writes = Cat(shadow_writes[reg.path] for reg in shadowed)
         written = Signal(count, name=f"{prefix}_config_written")
@@ -387,7 +388,7 @@ class RegisterBank(wiring.Component):
         key = (tuple(reg.path for reg in registers), frozenset(absent))
         if key in self._shadow_shared:
             return self._shadow_shared[key]
-        low = (self.regmap.channel_stride // 4 - 1).bit_length()
+        low = self._block_bits
         n = len(self._shadow_shared)
         words = [reg.offset // 4 for reg in shadowed]
         w_mask = Signal(DATA_WIDTH, name=f"config_memory{n}_write_mask")
