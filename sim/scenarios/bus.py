@@ -1273,7 +1273,7 @@ async def uart_host_tool_unplugged_encoder(dut):
 
 
 # -- A chain behind the bus (issue 26): the axil_chain top -----------------------------------
-# One channel whose core decodes four words of up to 40, 32, 24 and 16 bits
+# One channel whose core decodes four words of up to 40, 32, 64 and 16 bits
 # (master_contract.CHAIN_BUS_DATA_BITS; sim/shared/runner.py builds it): words 0 and 1 in
 # cfg_words / result, words 2 and 3 in cfg_w2, cfg_w3 and chain.* (docs/registers.md).
 
@@ -1285,7 +1285,7 @@ CHAIN_4 = frames.FrameFormat("chain_4", (*CHAIN_3.words,
                              chain=True)
 #: The chain top's words and the longest field of each, as docs/registers.md's caps name them.
 CHAIN_CAPS = {"caps": {"words": 4, "data_bits_w0": 40, "data_bits_w1": 32},
-              "caps_chain": {"data_bits_a": 24, "data_bits_b": 16, "data_bits_c": 0,
+              "caps_chain": {"data_bits_a": 64, "data_bits_b": 16, "data_bits_c": 0,
                              "data_bits_d": 0},
               "caps_chain2": {"data_bits_a": 0, "data_bits_b": 0}}
 
@@ -1304,7 +1304,7 @@ def fault_once(enc, make):
 @only_on_buses("axil_chain")
 async def chain_words_through_the_registers(dut):
     """A chain of four slaves set up and read through the register map alone: the caps name
-    four words (40, 32, 24, 16 bits); cfg_words, cfg_w2 and cfg_w3 (custom CRCs in cfg_crc1,
+    four words (40, 32, 64, 16 bits); cfg_words, cfg_w2 and cfg_w3 (custom CRCs in cfg_crc1,
     cfg_w2_crc, cfg_w2_crc_start) set the frame; frames at 5 MHz over 20 m read back every
     word's data, nE, nW and crc_ok as each slave sent it (word 3 signed, sign-extended to 16
     bits). Then a CRC bit of word 2, of word 3, of words 0 and 3 flipped: status
@@ -1370,6 +1370,53 @@ async def chain_fewer_words_and_a_gap(dut):
     await Timer(20, "us")
     assert len(tb.channels[0].encoder.records) == frames_before, "MA pulsed on a bad config"
     await tb.write_fields("cfg_w3", 0, enable=0)
+    await tb.write_fields("cfg_w2", 0, **cfg_w2)
+    await tb.encoders_ready()
+    tb.check_result(0, await tb.request(0))
+
+
+#: Word 2 as long as a word can be (64 data bits), after a 26-bit and a 12-bit slave: Gray
+#: with CRC-16 and nE/nW, then two's complement with iC-MB4's CRC-8 (0x12F) and no nE/nW.
+CHAIN_64 = tuple(frames.FrameFormat(name, (frames.WordFormat(26), frames.WordFormat(12),
+                                           word), chain=True)
+                 for name, word in (
+                     ("chain_64_gray", frames.WordFormat(64, crc=frames.CRC16, gray=True)),
+                     ("chain_64_signed", frames.WordFormat(
+                         64, nenw=False, signed=True,
+                         crc=frames.CustomCrc(8, 0x2F, 0x00, True)))))
+
+
+@cocotb.test()
+@only_on_buses("axil_chain")
+async def chain_word_of_64_bits(dut):
+    """A 64-bit slave behind the bus: cfg_w2.data_bits 64 (its field's top bit), the position
+    read from chain.w2_lo and chain.w2_hi (all 32 bits of it), Gray-decoded over the whole
+    word, then as two's complement (no sign extension left to do at 64 bits); every frame as
+    sent, positions with bit 63 set among them. Then 65 written (a length the core cannot
+    read): state.config_error, the request ends BAD_CONFIG and MA stays quiet; 64 again
+    reads frames."""
+    tb = BusTestbench(dut, seed=2605)
+    await tb.start([Encoder(CHAIN_64[0], Cable(length_m=10))])
+    top_set = 0
+    for fmt in CHAIN_64:
+        tb.channels[0].set_format(fmt)
+        await tb.configure(0, fmt, 5e6)
+        assert (await tb.read_fields("cfg_w2", 0))["data_bits"] == 64
+        await tb.encoders_ready()
+        for _ in range(6):
+            res = await tb.request(0)
+            tb.check_result(0, res)
+            top_set += res["word2"] >> 63
+    assert top_set, "no position with bit 63 set: the test did not reach the top bit"
+    cfg_w2 = await tb.read_fields("cfg_w2", 0)
+    await tb.write_fields("cfg_w2", 0, **{**cfg_w2, "data_bits": 65})
+    await ClockCycles(dut.clk, 4)
+    assert (await tb.read_fields("state", 0))["config_error"] == 1
+    frames_before = len(tb.channels[0].encoder.records)
+    res = await tb.request(0)
+    assert res["status"] == STATUS["BAD_CONFIG"], res["status"]
+    await Timer(20, "us")
+    assert len(tb.channels[0].encoder.records) == frames_before, "MA pulsed on a bad config"
     await tb.write_fields("cfg_w2", 0, **cfg_w2)
     await tb.encoders_ready()
     tb.check_result(0, await tb.request(0))

@@ -1,6 +1,6 @@
 """cocotb scenarios of the C driver (sw/) reading a chain of slaves (words 2..7 of the register
 map) on the ``axil_chain`` bus top: an AXI4-Lite top (module biss_master_axil) of one channel
-whose core decodes four words of up to master_contract.CHAIN_BUS_DATA_BITS = 40, 32, 24, 16
+whose core decodes four words of up to master_contract.CHAIN_BUS_DATA_BITS = 40, 32, 64, 16
 bits (sim/shared/runner.py builds it).
 
 As in sim/scenarios/driver.py the driver, ``libbissmaster.so`` (path in ``BISS_DRIVER_LIB``),
@@ -31,7 +31,7 @@ MA_HZ = 10_000_000
 #: The chain of four slaves (issue 26): a RESOLUTE-like 26-bit word with CRC-6; a 17-bit
 #: sensor with a CRC-8 of its own (x^8 + x^5 + x^3 + x^2 + x + 1, start 0xA5, sent
 #: inverted); a 12-bit signed sensor without nE/nW with a CRC-4 (x^4 + x + 1, start 0x9, sent
-#: plain; sign-extended to the build's 24 bits); a 16-bit Gray-coded sensor with CRC-16.
+#: plain; sign-extended to the build's 64 bits); a 16-bit Gray-coded sensor with CRC-16.
 CHAIN_4 = frames.FrameFormat("chain_4", (
     frames.WordFormat(26),
     frames.WordFormat(17, crc=frames.CustomCrc(8, 0x2F, 0xA5, True)),
@@ -233,17 +233,17 @@ async def driver_chain_of_four(dut):
 @cocotb.test()
 async def driver_chain_of_three_on_a_four_word_build(dut):
     """Three slaves (issue 26's chain of three) on the four-word build: biss_channel_init reads
-    words 4 and the caps of words 2..7 (24, 16, 0, 0, 0, 0); configured for one chain word,
+    words 4 and the caps of words 2..7 (64, 16, 0, 0, 0, 0); configured for one chain word,
     cfg_w2 holds word 2 and cfg_w3 reads 0 (disabled); biss_read_result reads words 0..2 only
     (chain_words 1, the chain[] entries beyond 0), each as its slave sent it."""
     fmt = CHAIN_3
     tb, drv, ch = await setup(dut, seed=2612, fmt=fmt)
-    assert ch.words == 4 and tuple(ch.chain_data_bits) == (24, 16, 0, 0, 0, 0)
+    assert ch.words == 4 and tuple(ch.chain_data_bits) == (64, 16, 0, 0, 0, 0)
     # The map's view of the build, from the test side: caps.words and caps_chain.
     assert (await tb.read_fields("caps", 0))["words"] == len(CHAIN_BUS_DATA_BITS)
     caps = await tb.read_fields("caps_chain", 0)
     assert (caps["data_bits_a"], caps["data_bits_b"], caps["data_bits_c"],
-            caps["data_bits_d"]) == (24, 16, 0, 0)
+            caps["data_bits_d"]) == (64, 16, 0, 0)
     cfg = await chain_config(drv, fmt)
     assert cfg.chain_words == 1
     await drv.check("biss_configure", byref(ch), byref(cfg))
@@ -260,12 +260,49 @@ async def driver_chain_of_three_on_a_four_word_build(dut):
                                         for i in range(1, CHAIN_WORDS))
 
 
+#: Word 2 of 64 data bits (the build's word 2 is 64): Gray with CRC-16, then two's complement
+#: with a CRC-8 of its own and no nE/nW.
+CHAIN_64 = tuple(frames.FrameFormat(name, (frames.WordFormat(26), frames.WordFormat(12), word),
+                                    chain=True)
+                 for name, word in (
+                     ("chain_64_gray", frames.WordFormat(64, gray=True, crc=frames.CRC16)),
+                     ("chain_64_signed", frames.WordFormat(
+                         64, nenw=False, signed=True,
+                         crc=frames.CustomCrc(8, 0x2F, 0x00, True)))))
+
+
+@cocotb.test()
+async def driver_chain_word_of_64_bits(dut):
+    """A 64-bit chain word through the driver: biss_configure writes data_bits 64 (its
+    field's top bit), biss_read_result joins chain.w2_lo and all 32 bits of chain.w2_hi;
+    every word as sent, Gray-decoded, then as two's complement (biss_signed_data of a
+    64-bit word is the word itself); positions with bit 63 set among them."""
+    tb, drv, ch = await setup(dut, seed=2615, fmt=CHAIN_64[0])
+    top_set = 0
+    for fmt in CHAIN_64:
+        tb.channels[0].set_format(fmt)
+        tb.channels[0].source.chain_positions_at = lambda t, fmt=fmt: [
+            tb.rng.getrandbits(w.data_bits) for w in fmt.words]
+        cfg = await chain_config(drv, fmt)
+        await drv.check("biss_configure", byref(ch), byref(cfg))
+        await check_chain_registers(tb, fmt)
+        await tb.encoders_ready()
+        for _ in range(5):
+            res = await sample(drv, ch)
+            check_frame(tb, fmt, res)
+            top_set += res["word2"] >> 63
+            if fmt.words[2].signed:
+                got = drv.lib.biss_signed_data(byref(ch), 2, res["word2"])
+                assert got == res["word2"] - (res["word2"] >> 63 << 64), (got, res["word2"])
+    assert top_set, "no position with bit 63 set: the test did not reach the top bit"
+
+
 @cocotb.test()
 async def driver_chain_refuses_bad_settings(dut):
     """Chain settings the build cannot run, each refused by biss_config_check / biss_configure
     with its code before anything is written (the chain registers keep the good
     configuration, config_error stays 0): word 5 on the four-word build, word 4 too, word 2
-    of 25 bits (the build's word 2 is 24), word 3 of 17 bits, chain words without word 1,
+    of 65 bits (the build's word 2 is 64), word 3 of 17 bits, chain words without word 1,
     an LC in two words, a custom CRC of width 0 in word 3; then the good one is accepted."""
     fmt = CHAIN_4
     tb, drv, ch = await setup(dut, seed=2613, fmt=fmt)

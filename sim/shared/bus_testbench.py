@@ -130,18 +130,25 @@ class Channel:
         fmt = spec.fmt
         self.tb, self.n, self.fmt, self.spec = tb, n, fmt, spec
         self.sign_of_life = frames.SignOfLife()
-        self.position = spec.position or (lambda t: tb.rng.getrandbits(fmt.words[0].data_bits))
-        # A chain: every slave its own random position (word 0's from ``position``).
-        chain = (lambda t: [self.position(t)] + [tb.rng.getrandbits(w.data_bits)
-                                                 for w in fmt.words[1:]]) if fmt.is_chain else None
-        self.source = frames.EncoderFrameSource(fmt, lambda t: self.position(t),
-                                                sign_of_life=self.sign_of_life,
-                                                chain_positions_at=chain)
+        self.position = spec.position or (
+            lambda t: tb.rng.getrandbits(self.fmt.words[0].data_bits))
+        self.set_format(fmt)
         self.sent = {}          # expected timestamp -> frame bits
         extra = {} if spec.min_cycle_s is None else {"min_cycle_s": spec.min_cycle_s}
         self.encoder = BissEncoder(getattr(tb.dut, f"ch{n}_ma"), getattr(tb.dut, f"ch{n}_slo"),
                                    cable=spec.cable, respond=self._respond, rng=tb.rng,
                                    timeout_s=spec.timeout_s, control=spec.control, **extra)
+
+    def set_format(self, fmt):
+        """Frames of ``fmt`` from the next request on (the same encoder, cable and sign of
+        life). A chain: every slave its own random position (word 0's from ``position``)."""
+        rng = self.tb.rng
+        chain = (lambda t: [self.position(t)] + [rng.getrandbits(w.data_bits)
+                                                 for w in fmt.words[1:]]) if fmt.is_chain else None
+        self.fmt = fmt
+        self.source = frames.EncoderFrameSource(fmt, lambda t: self.position(t),
+                                                sign_of_life=self.sign_of_life,
+                                                chain_positions_at=chain)
 
     def _respond(self, t_latch):
         values = self.source.values_at(t_latch)

@@ -66,10 +66,8 @@ CHANNEL_GLUE = ("trigger_enable", "frame_done", "frame_error", "done_count", "re
                 *(f"cap_data_bits_w{w}" for w in range(MAX_WORDS)), "cap_words",
                 "cap_timer_width", "cap_counters", "cap_timestamp", "cap_register_access",
                 "cap_ssi")
-#: Longest data word the register map holds (6-bit lengths; a 64-bit word needs 7).
-MAP_DATA_BITS_MAX = DATA_BITS_MAX - 1
 #: A core with every port the register map can name: eight words, counters in memory.
-FULL_PARAMS = MasterParams(max_data_bits=(MAP_DATA_BITS_MAX,) * MAX_WORDS,
+FULL_PARAMS = MasterParams(max_data_bits=(DATA_BITS_MAX,) * MAX_WORDS,
                            word_crcs=((Crc.CRC6, Crc.CRC16),) * MAX_WORDS, counter_ram=True)
 #: Pulses of the bank taken into a flip-flop beside the core, so they reach it one clock
 #: later: the bank's pulse register sits by the bank, and with several channels the route from
@@ -86,6 +84,19 @@ COUNT_BITS = COUNTER_HALF_BITS
 GLOBAL_SIGNALS = ("channels", "trigger", "irq_pending")
 
 
+#: The words' length settings: a map field may be wider than the core's port (BusChannel).
+_LENGTHS = frozenset(f"cfg_w{w}_data_bits" for w in range(MAX_WORDS))
+
+
+def _needed_bits(name, port, params):
+    """Bits of the map's field that the core's port ``name`` needs: a word's length needs
+    those of the build's longest length for that word (the port may be a bit wider, all words
+    sharing one layout); any other port all of its bits."""
+    if name in _LENGTHS:
+        return params.max_data_bits[int(name[len("cfg_w")])].bit_length()
+    return Shape.cast(port.shape).width
+
+
 class BusChannel(wiring.Component):
     """One channel: a :class:`BissMaster` and the few signals the register map asks beyond the
     core's ports.
@@ -100,9 +111,12 @@ class BusChannel(wiring.Component):
     and the build's capabilities. A signal that only other builds of the core have
     (``word1_position`` in a one-word build, ``word2_position`` .. ``word7_position`` in a
     build of fewer words, the ``ca_*`` ports of the register-access engine in a build
-    without it) reads 0 and its configuration is not stored. The map holds words of up to
-    :data:`MAP_DATA_BITS_MAX` data bits (word 0 up to 55, word 1 up to 40); a wider word is
-    refused.
+    without it) reads 0 and its configuration is not stored. A core port wider than the map's
+    field is refused (the map holds word 0 up to 55 data bits, word 1 up to 40, words 2..7 up
+    to 64). A word's length field wider than the core's ``cfg_w<W>_data_bits`` port (7 bits
+    for a core whose words are all shorter than 64 bits, which has a 6-bit port) reaches the
+    core as 0 when its top bit is set: a length the build cannot read is then an enabled word
+    of length 0, ``BAD_CONFIG``, never a length cut to its low bits.
 
     Parameters
     ----------
@@ -128,10 +142,6 @@ class BusChannel(wiring.Component):
     """
 
     def __init__(self, params, regs, status=False):
-        if max(params.max_data_bits) > MAP_DATA_BITS_MAX:
-            raise ValueError(f"the register map holds words of up to {MAP_DATA_BITS_MAX} data "
-                             f"bits; this build has max_data_bits {params.max_data_bits} (a "
-                             f"64-bit word: build the core on its own, docs/frames.md)")
         if params.counters:
             if params.counter_width > COUNT_BITS:
                 raise ValueError(f"the register map holds {COUNT_BITS}-bit counts; this build's "
@@ -157,8 +167,14 @@ class BusChannel(wiring.Component):
             if name not in full:
                 raise ValueError(f"the register map names {name!r}, which is neither a port "
                                  f"of biss_master nor a signal of the bus channel")
-            if name in core and Shape.cast(core[name].shape).width > Shape.cast(member.shape).width:
-                raise ValueError(f"the register map holds {Shape.cast(member.shape).width} bits of {name}; "
+            held = Shape.cast(member.shape).width
+            if name in _LENGTHS and name in core and _needed_bits(name, core[name], params) > held:
+                w = int(name[len("cfg_w")])
+                raise ValueError(f"the register map holds word {w} lengths of up to "
+                                 f"{2**held - 1} data bits ({name}); this build's word {w} has "
+                                 f"up to {params.max_data_bits[w]}")
+            if name in core and _needed_bits(name, core[name], params) > held:
+                raise ValueError(f"the register map holds {held} bits of {name}; "
                                  f"this build's port has {Shape.cast(core[name].shape).width}")
         super().__init__({
             "regs": In(regs),
@@ -221,7 +237,13 @@ class BusChannel(wiring.Component):
                 m.d.sync += getattr(core, name).eq(signal)
             elif hasattr(core, name):
                 port = getattr(core, name)
-                m.d.comb += port.eq(signal) if member.flow == In else signal.eq(port)
+                if member.flow != In:
+                    m.d.comb += signal.eq(port)
+                elif name in _LENGTHS and len(signal) > len(port):
+                    # A length the port cannot hold: 0, so an enabled word is BAD_CONFIG.
+                    m.d.comb += port.eq(Mux(signal[len(port):].any(), 0, signal))
+                else:
+                    m.d.comb += port.eq(signal)
 
         # Every ended cycle counted, so a host sees a lost result.
         with m.If(ended):

@@ -156,11 +156,11 @@ CHANNEL.update({
        for k, half in enumerate(("lo", "hi"))},
 })
 FIELDS.update({
-    "caps_chain": {f"data_bits_{x}": (8 * k, 6) for k, x in enumerate("abcd")},
-    "caps_chain2": {f"data_bits_{x}": (8 * k, 6) for k, x in enumerate("ab")},
+    "caps_chain": {f"data_bits_{x}": (8 * k, 7) for k, x in enumerate("abcd")},
+    "caps_chain2": {f"data_bits_{x}": (8 * k, 7) for k, x in enumerate("ab")},
     **{f"count_chain{n}": {"crc_a": (0, 16), "crc_b": (16, 16)} for n in ("", "2", "3")},
-    **{f"cfg_w{w}": {"data_bits": (0, 6), "nenw": (6, 1), "lc": (7, 1), "crc": (8, 2),
-                     "gray": (10, 1), "is_signed": (11, 1), "enable": (31, 1)}
+    **{f"cfg_w{w}": {"data_bits": (0, 7), "nenw": (8, 1), "lc": (9, 1), "crc": (10, 2),
+                     "gray": (12, 1), "is_signed": (13, 1), "enable": (31, 1)}
        for w in CHAIN_WORDS},
     **{f"cfg_w{w}_crc": {"crc_poly": (0, 16), "crc_width": (16, 5), "crc_inverted": (24, 1)}
        for w in CHAIN_WORDS},
@@ -169,7 +169,7 @@ FIELDS.update({
     "chain.flags": {f"w{w}_{flag}": (4 * (w - 2) + k, 1) for w in CHAIN_WORDS
                     for k, flag in enumerate(("ne", "nw", "crc_ok"))},
     **{f"chain.w{w}_lo": {"data": (0, 32)} for w in CHAIN_WORDS},
-    **{f"chain.w{w}_hi": {"data": (0, 31)} for w in CHAIN_WORDS},
+    **{f"chain.w{w}_hi": {"data": (0, 32)} for w in CHAIN_WORDS},
 })
 #: Each chain word's settings registers (one READ_BURST each).
 CHAIN_CONFIG_RUNS = tuple((f"cfg_w{w}", f"cfg_w{w}_crc", f"cfg_w{w}_crc_start")

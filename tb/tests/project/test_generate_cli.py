@@ -63,21 +63,30 @@ def test_nine_words_is_a_usage_error(capsys):
     assert "max_data_bits must name 1 to 8 words" in capsys.readouterr().err
 
 
-def test_a_64_bit_word_has_no_bus_top(capsys):
-    """The register map holds words of up to 63 data bits (6-bit lengths): a bus top of the
-    chain preset (a 64-bit word 0) is a usage error, not a register map that silently drops
-    a length bit."""
+def test_a_64_bit_word_0_has_no_bus_top(capsys):
+    """The register map holds word 0 up to 55 data bits (a 6-bit length): a bus top of the
+    chain preset (a 64-bit word 0) is a usage error naming the word and both lengths, not a
+    register map that silently drops a length bit or the position's top bits; so is a word 0
+    of 63 bits, whose length fits but whose position does not."""
     with pytest.raises(SystemExit) as e:
         main(["--top", "axil", "--preset", "chain", "-o", "/dev/null"])
     assert e.value.code == 2
-    assert "the register map holds words of up to 63 data bits" in capsys.readouterr().err
+    assert ("the register map holds word 0 lengths of up to 63 data bits (cfg_w0_data_bits); "
+            "this build's word 0 has up to 64" in capsys.readouterr().err)
+    with pytest.raises(SystemExit) as e:
+        main(["--top", "axil", "--max-data-bits", "63,40", "-o", "/dev/null"])
+    assert e.value.code == 2
+    assert ("the register map holds 55 bits of word0_position; this build's port has 63"
+            in capsys.readouterr().err)
 
 
-def test_a_chain_has_a_bus_top(tmp_path):
+def test_a_chain_of_64_bit_words_has_a_bus_top(tmp_path):
+    """Words 2..7 may be 64 bits behind the bus: 7-bit lengths, 32-bit chain.wW_hi."""
     out = tmp_path / "c.v"
-    main(["--top", "axil", "--preset", "chain", "--max-data-bits", "55,40,63", "--channels", "1",
-          "-o", str(out)])
-    assert "module biss_master_axil(" in out.read_text()
+    main(["--top", "axil", "--preset", "chain", "--max-data-bits", "55,40,64,64",
+          "--word-crcs", "6+16,6+16,6+16,6+16", "--channels", "1", "-o", str(out)])
+    text = out.read_text()
+    assert "module biss_master_axil(" in text
 
 
 def test_core_top_is_the_default_and_names_biss_master(tmp_path):

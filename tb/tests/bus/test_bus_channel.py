@@ -1,0 +1,70 @@
+"""BusChannel's glue between the register map and one core, on Amaranth's simulator: a word's
+length field is 7 bits in the map (words 2..7: 1..64 data bits, docs/registers.md), and a core
+whose words are all shorter than 64 bits has a 6-bit length port. A length that port cannot
+hold must reach the core as 0 (an enabled word of length 0: BAD_CONFIG, docs/bus.md, Chains),
+never cut to its low six bits (88 = 0b1011000 would read as 24, a valid length).
+
+The core's own verdict on its configuration (``config_error``, state.config_error in the map)
+is what is observed: the test side knows the legal lengths from the build it asks for.
+"""
+
+import pytest
+from amaranth.hdl import ClockDomain, Module
+from amaranth.sim import Simulator
+
+from bissmaster.bus import regmap
+from bissmaster.bus.bus_top import BusChannel
+from bissmaster.bus.register_bank import block_signature
+from bissmaster.params import Crc, MasterParams
+
+#: A four-word build whose words are all shorter than 64 bits (the synth configuration
+#: chain-4's lengths): word 2 holds up to 24 data bits.
+WORD2_MAX = 24
+PARAMS = MasterParams(max_data_bits=(40, 32, WORD2_MAX, 16),
+                      word_crcs=((Crc.CRC6, Crc.CRC16),) * 4, register_access=False, ssi=False)
+
+
+def config_errors(lengths):
+    """``config_error`` after each of ``lengths`` is written to cfg_w2.data_bits (word 2
+    enabled, CRC-6, words 0 and 1 valid, word 3 disabled)."""
+    top = Module()
+    top.domains.sync = ClockDomain()
+    the_map = regmap.load()
+    top.submodules.dut = dut = BusChannel(PARAMS, block_signature(the_map, the_map.channel))
+    regs = dut.regs
+    seen = []
+
+    async def bench(ctx):
+        for name, value in (("cfg_ma_half_period", 10), ("cfg_w0_data_bits", 26),
+                            ("cfg_w0_nenw", 1), ("cfg_w0_crc", 1), ("cfg_w1_enable", 1),
+                            ("cfg_w1_data_bits", 12), ("cfg_w1_nenw", 1), ("cfg_w1_crc", 1),
+                            ("cfg_w2_enable", 1), ("cfg_w2_nenw", 1), ("cfg_w2_crc", 1)):
+            ctx.set(getattr(regs, name), value)
+        for length in lengths:
+            ctx.set(regs.cfg_w2_data_bits, length)
+            await ctx.tick().repeat(4)
+            seen.append(ctx.get(regs.config_error))
+
+    sim = Simulator(top)
+    sim.add_clock(1e-8)
+    sim.add_testbench(bench)
+    sim.run()
+    return seen
+
+
+def test_the_port_is_narrower_than_the_field():
+    """The premise: the map's field holds 64, this build's port does not."""
+    the_map = regmap.load()
+    sig = block_signature(the_map, the_map.channel)
+    dut = BusChannel(PARAMS, sig)
+    assert len(dut.regs.cfg_w2_data_bits) == 7
+    assert WORD2_MAX < 64
+
+
+@pytest.mark.parametrize("lengths, errors", [
+    ((WORD2_MAX, 1, WORD2_MAX + 1, 0), (0, 0, 1, 1)),           # in range; too long; zero
+    ((64, WORD2_MAX, 64 + WORD2_MAX, 1, 64 + 1), (1, 0, 1, 0, 1)),  # the top bit set: never cut
+    ((127, WORD2_MAX), (1, 0)),
+])
+def test_a_length_the_core_cannot_hold_is_bad_config(lengths, errors):
+    assert tuple(config_errors(lengths)) == errors
