@@ -940,5 +940,13 @@ def test_docs_bench_md_gives_every_exit_code_command_and_column():
     csv_text = text.split("**The CSV of `log`**", 1)[1].split("\n\n", 1)[0]
     for column in cli.CSV_COLUMNS:
         assert f"`{column}`" in csv_text, column
-    for column in cli.Table(io.StringIO(), False, CLOCK_HZ, True).header().split():
+    for column in cli.Table(io.StringIO(), False, CLOCK_HZ, True, (2,)).header().split():
         assert f"`{column}`" in text, column
+    chain = text.split("### Chains (words 2..7)", 1)[1].split("\n### ", 1)[0]
+    for column in cli.chain_csv_columns((2,)):
+        assert f"`{column}`" in chain, column
+    for name in ("w2_data_bits",) + tuple(f"`wW_{f}`" for f in (
+            "data_bits", "nenw", "lc", "crc", "gray", "is_signed", "enable", "crc_poly",
+            "crc_width", "crc_inverted", "crc_start")):
+        assert name in chain, name
+    assert "8 tries" in chain and "`crc_word2`" in chain
