@@ -254,6 +254,7 @@ class Board:
         self.now, self.sleep = now, sleep
         self.channels = None
         self._caps = {}
+        self._word_caps = {}
 
     # -- Registers ----------------------------------------------------------------------------
     def read(self, register, ch=None):
@@ -333,8 +334,7 @@ class Board:
     def word_caps(self, ch):
         """``{word: longest data field}`` of every word the build has: caps.data_bits_w0 /
         _w1, and caps_chain / caps_chain2 (each read once) for the chain words."""
-        key = ("words", ch)
-        if key not in self._caps:
+        if ch not in self._word_caps:
             caps = self.caps(ch)
             bits = {0: caps["data_bits_w0"], 1: caps["data_bits_w1"]}
             read = {}
@@ -343,8 +343,8 @@ class Board:
                 if register not in read:
                     read[register] = self.read_fields(register, ch)
                 bits[w] = read[register][name]
-            self._caps[key] = bits
-        return self._caps[key]
+            self._word_caps[ch] = bits
+        return self._word_caps[ch]
 
     def frame(self, ch):
         """The :class:`Frame` channel ``ch`` is configured for (cfg_words, each chain word's
