@@ -8,7 +8,11 @@ sticky, cleared by writing 1; the configuration registers stored, ``state.config
 the MA half period is below 2; ``result.status`` taking the snapshot of the result block;
 the counters; the register-access engine answering from an encoder's register file
 (``encoder_model.control.RegisterFile``) with ``ca.state``, ``ca.rbuf`` and
-``irq_status.access_done``.
+``irq_status.access_done``. A chain build (``chain_bits``: words 2..7 and their longest data
+fields) has ``caps.words``, ``caps_chain*``, the settings of the words it has (others read 0,
+writes ignored), ``count_chain*`` and the live ``chain.*`` results with ``chain.updates``
+counting every ended cycle; ``tears[ch]`` cycles end in the middle of a result read (at
+``chain.flags``), as when frames end faster than the host reads.
 
 Addresses and fields come from the SystemRDL source through the test side's own reader
 (sim/shared/regspec.py), never from the host code under test. A cycle ends the moment it is
@@ -26,19 +30,35 @@ MAP = regspec.load()
 ID = 0x42695353
 FRAME = ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH", "SIGN_OF_LIFE",
          "SPW_MISMATCH")
+CHAIN_WORDS = range(2, 8)
+
+
+def _per_chain_word(paths):
+    """{word: (path, field)}: the fields of ``paths`` (low field first) dealt to words 2..7."""
+    slots = [(path, f.name) for path in paths
+             for f in sorted(MAP.channel[path].fields.values(), key=lambda f: f.lsb)]
+    return dict(zip(CHAIN_WORDS, slots))
+
+
+#: Each chain word's caps field and CRC count field, from the RDL.
+CHAIN_CAPS = _per_chain_word(("caps_chain", "caps_chain2"))
+CHAIN_COUNTS = _per_chain_word(("count_chain", "count_chain2", "count_chain3"))
 
 
 @dataclass
 class FakeEncoder:
     """What a channel's cycles report. ``positions``: position of cycle n (n from 0);
     ``statuses``: status name of cycle n (default OK); ``line_delay`` in clocks; ``word1``:
-    word 1 of cycle n (two-word configurations). ``registers``: an encoder register file for
-    the register-access engine (None: NO_ANSWER); ``access_status``: a forced ca status name
-    for every access."""
+    word 1 of cycle n (two-word configurations). ``chain``: chain word w's data of cycle n,
+    ``chain(w, n)``; ``chain_bad``: the chain words whose CRC fails in cycle n, ``chain_bad(n)``.
+    ``registers``: an encoder register file for the register-access engine (None:
+    NO_ANSWER); ``access_status``: a forced ca status name for every access."""
     positions: object = lambda n: 1000 + 7 * n
     statuses: object = lambda n: "OK"
     line_delay: int = 37
     word1: object = None
+    chain: object = lambda w, n: 100 * w + n
+    chain_bad: object = lambda n: ()
     registers: RegisterFile | None = None
     access_status: str | None = None
     cycles: int = 0
@@ -48,7 +68,7 @@ class FakeEncoder:
 class RegisterModel:
     """The register map's behaviour, as the mapping MemoryBridge reads (``get``) and writes."""
 
-    def __init__(self, channels=2, encoders=None, caps=None):
+    def __init__(self, channels=2, encoders=None, caps=None, chain_bits=None):
         self.n = channels
         self.encoders = encoders or {}
         self.words = {}                     # stored registers by address
@@ -59,13 +79,19 @@ class RegisterModel:
         self.wbuf = {ch: bytearray(64) for ch in range(channels)}
         self.caps = {"data_bits_w0": 55, "data_bits_w1": 40, "timer_width": 24, "counters": 1,
                      "timestamp": 1, "register_access": 1, **(caps or {})}
+        self.chain_bits = dict(chain_bits or {})      # {word: longest data field} built
+        if chain_bits:
+            self.caps["words"] = 2 + len(self.chain_bits)
+        self.updates = {ch: 0 for ch in range(channels)}
+        self.tears = {ch: 0 for ch in range(channels)}
         self.time = 0
         self.log = []                       # (kind, register path, channel)
 
     # -- Helpers -----------------------------------------------------------------------------
     @staticmethod
     def _empty_result():
-        return {"status": {}, "seq": {}, "w0": 0, "w1": 0, "time": 0, "line": {}}
+        return {"status": {}, "seq": {}, "w0": 0, "w1": 0, "time": 0, "line": {}, "chain": {},
+                "flags": {}}
 
     def where(self, address):
         """(path, channel or None, index) of a byte address, or None if unmapped."""
@@ -100,6 +126,17 @@ class RegisterModel:
             out.update(self.fields(path, ch, self.stored(path, ch)))
         return out
 
+    def chain_cfg(self, ch, w):
+        """Chain word ``w``'s settings (cfg_wW, _crc, _crc_start fields) as stored."""
+        out = {}
+        for end in ("", "_crc", "_crc_start"):
+            path = f"cfg_w{w}{end}"
+            out.update(self.fields(path, ch, self.stored(path, ch)))
+        return out
+
+    def chain_enabled(self, ch):
+        return sorted(w for w in self.chain_bits if self.chain_cfg(ch, w)["enable"])
+
     def ctrl(self, ch):
         return self.fields("ctrl", ch, self.stored("ctrl", ch))
 
@@ -119,6 +156,25 @@ class RegisterModel:
             return self.pack("state", busy=0, config_error=int(self.config_error(ch)))
         if path == "caps":
             return self.pack("caps", **self.caps)
+        if path in ("caps_chain", "caps_chain2"):
+            return self.pack(path, **{name: self.chain_bits.get(w, 0)
+                                      for w, (p, name) in CHAIN_CAPS.items() if p == path})
+        if path.startswith("count_chain"):
+            return self.pack(path, **{name: self.counters[ch].get(f"crc_word{w}", 0)
+                                      for w, (p, name) in CHAIN_COUNTS.items() if p == path})
+        if path.startswith("chain."):
+            live = self.live[ch]
+            if path == "chain.flags" and self.tears[ch]:
+                self.tears[ch] -= 1
+                self.cycle(ch)              # a frame ends in the middle of the host's reads
+            if path == "chain.updates":
+                return self.pack(path, updates=self.updates[ch] & 0xFFFF)
+            if path == "chain.flags":
+                return self.pack(path, **live["flags"])
+            w, half = int(path[len("chain.w")]), path[-2:]
+            lo = MAP.channel[f"chain.w{w}_lo"].fields["data"]
+            data = live["chain"].get(w, 0)
+            return (data & ((1 << lo.width) - 1)) if half == "lo" else data >> lo.width
         if path.startswith("result."):
             if path == "result.status":
                 if self.ctrl(ch)["periodic"]:
@@ -165,6 +221,9 @@ class RegisterModel:
             if self.fields("ca.ctrl", ch, value)["start"]:
                 self.access(ch)
             return
+        if path.startswith("cfg_w") and path[5].isdigit() and \
+                int(path[5]) not in self.chain_bits:
+            return                          # a chain word the build lacks: not stored
         self.words[address] = value
         if path == "ctrl":
             f = self.fields("ctrl", ch, value)
@@ -204,22 +263,47 @@ class RegisterModel:
             live["w1"] = self._word(1, cfg, enc.word1(n)) if (two and enc.word1) else 0
             live["seq"]["line_delay"] = enc.line_delay
             live["time"] = self.time
+            status = self._chain_cycle(ch, enc, n, status, st)
+            st["status"] = STATUS[status]
         counter = {"CRC_ERROR_WORD0": "crc_word0", "CRC_ERROR_BOTH": "crc_word0",
                    "NO_ACK": "no_ack", "SLO_STUCK_LOW": "slo_stuck_low",
                    "NO_START": "no_start"}.get(status)
         if counter:
             self.count(ch, counter)
         live["status"] = st
+        self.updates[ch] += 1
         self._irq(ch, done=1, error=int(status != "OK"))
+
+    def _chain_cycle(self, ch, enc, n, status, st):
+        """The enabled chain words of cycle ``n``: data, flags, CRC counts; the status with
+        their CRC verdicts (docs/driver.md: a bad later word is CRC_ERROR_WORD1, with word 0
+        bad CRC_ERROR_BOTH)."""
+        live = self.live[ch]
+        live["chain"], live["flags"] = {}, {}
+        bad = set(enc.chain_bad(n))
+        for w in self.chain_enabled(ch):
+            cfg = self.chain_cfg(ch, w)
+            live["chain"][w] = self._field(enc.chain(w, n), cfg["data_bits"], cfg["is_signed"],
+                                           self.chain_bits[w])
+            live["flags"].update({f"w{w}_ne": 1, f"w{w}_nw": 1, f"w{w}_crc_ok": int(w not in bad)})
+            if w in bad:
+                self.count(ch, f"crc_word{w}")
+        if bad & set(live["chain"]) and status in ("OK", "CRC_ERROR_WORD0"):
+            status = "CRC_ERROR_BOTH" if status == "CRC_ERROR_WORD0" else "CRC_ERROR_WORD1"
+        return status
 
     def _word(self, w, cfg, value):
         """Word ``w``'s register bits for a field of ``value`` (its low cfg_wN_data_bits bits):
         zeros above the field, or with ``cfg_wN_signed`` copies of its top bit up to the
         register's width, caps.data_bits_wN (docs/ports.md, word0_position)."""
-        bits = cfg[f"w{w}_data_bits"]
+        return self._field(value, cfg[f"w{w}_data_bits"], cfg.get(f"w{w}_signed"),
+                           self.caps[f"data_bits_w{w}"])
+
+    @staticmethod
+    def _field(value, bits, signed, width):
+        """The low ``bits`` of ``value``, sign-extended to ``width`` bits when ``signed``."""
         data = value & ((1 << bits) - 1)
-        width = self.caps[f"data_bits_w{w}"]
-        if cfg.get(f"w{w}_signed") and 0 < bits < width and data >> (bits - 1):
+        if signed and 0 < bits < width and data >> (bits - 1):
             data |= ((1 << width) - 1) ^ ((1 << bits) - 1)
         return data
 
@@ -227,7 +311,7 @@ class RegisterModel:
         """One register access of ``ca.request``, ended at once."""
         enc = self.encoders.setdefault(ch, FakeEncoder())
         req = self.fields("ca.request", ch, self.stored("ca.request", ch))
-        enc.accesses.append(dict(req, cfg=self.cfg(ch)))
+        enc.accesses.append(dict(req, cfg=self.cfg(ch), chain=self.chain_enabled(ch)))
         done = 0
         if not 1 <= req["count"] <= 64 or req["address"] + req["count"] - 1 > 0x7F:
             status = "BAD_REQUEST"
@@ -261,12 +345,28 @@ class RegisterModel:
 
     def config_error(self, ch):
         """The rules of docs/ports.md this model keeps: an MA half period of 2 or more, and a
-        custom CRC (code 3) of 1..16 bits on word 0 and on word 1 when enabled."""
+        custom CRC (code 3) of 1..16 bits on word 0 and on word 1 when enabled; the enabled
+        words are words 0..N-1 with no gap (docs/bus.md, Chains), each chain word in the frame
+        with 1..its caps data bits and a valid custom CRC."""
         cfg = self.cfg(ch)
         words = (0, 1) if cfg["w1_enable"] else (0,)
-        return cfg["ma_half_period"] < 2 or any(
+        chain = self.chain_enabled(ch)
+        gap = chain != list(range(2, 2 + len(chain))) or (chain and not cfg["w1_enable"])
+        return cfg["ma_half_period"] < 2 or bool(gap) or any(
             cfg[f"w{w}_crc"] == self.CUSTOM_CODE and cfg[f"w{w}_crc_width"] not in
-            self.CUSTOM_WIDTHS for w in words)
+            self.CUSTOM_WIDTHS for w in words) or any(
+            not 1 <= c["data_bits"] <= self.chain_bits[w] or
+            (c["crc"] == self.CUSTOM_CODE and c["crc_width"] not in self.CUSTOM_WIDTHS)
+            for w in chain for c in [self.chain_cfg(ch, w)])
+
+    def configure_chain(self, ch, w, **values):
+        """Set chain word ``w``'s settings (fields of cfg_wW, _crc, _crc_start) directly."""
+        for end in ("", "_crc", "_crc_start"):
+            path = f"cfg_w{w}{end}"
+            a = MAP.address(path, ch)
+            for k, v in values.items():
+                if k in MAP.channel[path].fields:
+                    self.words[a] = MAP.channel[path].fields[k].put(self.words.get(a, 0), v)
 
     def configure(self, ch, **values):
         """Set configuration (and ctrl) fields directly: the test's own setup."""

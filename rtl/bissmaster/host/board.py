@@ -12,14 +12,16 @@ which is the transport's when it has one (``MemoryBridge``'s virtual time; a sim
 against the software model and in a simulation.
 """
 
+import re
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from . import regmap
 from .link import LinkError
 
 __all__ = ["BoardError", "NoBoardError", "NotTheCoreError", "CapabilityError",
-           "EncoderSilentError", "AccessError", "Result", "Board"]
+           "EncoderSilentError", "AccessError", "TornReadError", "Result", "ChainWord", "Frame",
+           "Board"]
 
 
 # -- Errors -----------------------------------------------------------------------------------
@@ -53,6 +55,58 @@ class AccessError(BoardError):
         self.status = status
 
 
+class TornReadError(BoardError):
+    """Every try of a chain read (:data:`READ_TRIES`) saw ``chain.updates`` change: a frame
+    ended during each, so no try was of one frame."""
+
+
+# -- Chain words (words 2..7) -----------------------------------------------------------------
+
+#: Tries of a chain read before :class:`TornReadError` (the C driver's BISS_READ_RETRIES).
+READ_TRIES = 8
+
+
+def _per_chain_word(registers):
+    """``{word: (register, field)}``: the fields of ``registers`` (two words to a register,
+    low field first) dealt to words 2..7 in order (caps_chain*, count_chain*)."""
+    slots = [(register, name) for register in registers
+             for name, _ in sorted(regmap.FIELDS[register].items(), key=lambda f: f[1][0])]
+    return dict(zip(regmap.CHAIN_WORDS, slots))
+
+
+#: Where each chain word's longest data field (caps) and CRC count are.
+CHAIN_CAPS = _per_chain_word(("caps_chain", "caps_chain2"))
+CHAIN_COUNTS = _per_chain_word(regmap.CHAIN_COUNTER_REGISTERS)
+
+
+def chain_settings(word):
+    """``{setting: (register, field)}`` of chain word ``word``: its settings are named
+    ``wW_<field>`` after the fields of cfg_wW, cfg_wW_crc and cfg_wW_crc_start
+    (``w2_data_bits``, ``w2_enable``, ``w2_crc_poly``, ...)."""
+    return {f"w{word}_{name}": (register, name)
+            for register in regmap.CHAIN_CONFIG_RUNS[word - regmap.CHAIN_WORDS[0]]
+            for name in regmap.FIELDS[register]}
+
+
+def setting_register(name):
+    """``(register, field)`` of a configuration setting: a field of the configuration
+    registers (``w0_data_bits``, or its port name ``cfg_w0_data_bits``: regmap.config_field),
+    or a chain word's (``w2_data_bits``, :func:`chain_settings`). KeyError if none."""
+    bare = name[4:] if name.startswith("cfg_") else name
+    m = re.fullmatch(r"w(\d+)_\w+", bare)
+    if m and int(m.group(1)) in regmap.CHAIN_WORDS:
+        found = chain_settings(int(m.group(1))).get(bare)
+        if found:
+            return found
+    try:
+        return regmap.config_field(name)
+    except KeyError as e:
+        first, last = regmap.CHAIN_WORDS[0], regmap.CHAIN_WORDS[-1]
+        chain = ", ".join(f"w{first}..{last}_" + n.split("_", 1)[1]
+                          for n in chain_settings(first))
+        raise KeyError(f"{e.args[0]}; chain words: {chain}") from None
+
+
 # -- Results ----------------------------------------------------------------------------------
 
 #: Statuses of the host's own, beside the core's: a triggered cycle whose ``done`` did not come
@@ -64,7 +118,8 @@ class Result:
     """One result of a channel (the result block, one snapshot), and when the host took it.
 
     ``status`` is the status's name, or one of :data:`NO_RESULT`. The frame fields (positions, nE/nW, CRC verdicts, LC, line delay) are new
-    only when :attr:`frame` is true; otherwise they are the last decoded frame's.
+    only when :attr:`frame` is true; otherwise they are the last decoded frame's. ``chain``:
+    the enabled chain words read, ``{word: ChainWord}`` (read with the snapshot as one frame).
     """
     channel: int
     time_s: float
@@ -82,6 +137,7 @@ class Result:
     cds: int = 0
     line_delay: int = 0
     timestamp: int = 0
+    chain: dict = field(default_factory=dict)
 
     @property
     def frame(self):
@@ -90,6 +146,25 @@ class Result:
     @property
     def encoder_silent(self):
         return self.status in regmap.NO_ENCODER_STATUSES or self.status in NO_RESULT
+
+
+@dataclass
+class ChainWord:
+    """One chain word's result (``chain.wW_lo/_hi`` and its ``chain.flags``)."""
+    data: int
+    ne: int
+    nw: int
+    crc_ok: int
+
+
+@dataclass(frozen=True)
+class Frame:
+    """A channel's configured frame as the tool reads it: ``two_words`` (word 1 enabled),
+    ``chain`` (the enabled chain words, in order) and ``signed``: ``{word: bits}``, the width
+    a two's-complement word is sign-extended from (its register's, from caps), 0 if unsigned."""
+    two_words: bool
+    chain: tuple = ()
+    signed: dict = field(default_factory=dict)
 
 
 def signed_data(data, bits):
@@ -117,6 +192,31 @@ def decode_result(channel, words, time_s, two_words):
         word1=word1 if two_words else None, w1_ne=st["w1_ne"], w1_nw=st["w1_nw"],
         w1_crc_ok=st["w1_crc_ok"], lc=st["lc"], cds=st["cds"], line_delay=seq["line_delay"],
         timestamp=w["result.timestamp"])
+
+
+def chain_result_registers(chain):
+    """The chain result registers to read for the chain words ``chain``, in address order:
+    chain.flags and every word's lo / hi up to the last of ``chain`` (one burst)."""
+    if not chain:
+        return ()
+    return ("chain.flags",) + tuple(f"chain.w{w}_{half}" for w in
+                                    range(regmap.CHAIN_WORDS[0], max(chain) + 1)
+                                    for half in ("lo", "hi"))
+
+
+def decode_chain(words, chain):
+    """``{word: ChainWord}`` of the chain words ``chain`` from the words of
+    :func:`chain_result_registers`."""
+    w = dict(zip(chain_result_registers(chain), words))
+    flags = regmap.get("chain.flags", w["chain.flags"])
+    out = {}
+    for word in chain:
+        lo_reg, hi_reg = f"chain.w{word}_lo", f"chain.w{word}_hi"
+        lo_width = regmap.FIELDS[lo_reg]["data"][1]
+        data = (regmap.get(lo_reg, w[lo_reg], "data")
+                | regmap.get(hi_reg, w[hi_reg], "data") << lo_width)
+        out[word] = ChainWord(data, *(flags[f"w{word}_{k}"] for k in ("ne", "nw", "crc_ok")))
+    return out
 
 
 # -- The board --------------------------------------------------------------------------------
@@ -154,6 +254,7 @@ class Board:
         self.now, self.sleep = now, sleep
         self.channels = None
         self._caps = {}
+        self._word_caps = {}
 
     # -- Registers ----------------------------------------------------------------------------
     def read(self, register, ch=None):
@@ -220,26 +321,72 @@ class Board:
             self._caps[ch] = self.read_fields("caps", ch)
         return self._caps[ch]
 
+    def words(self, ch):
+        """``caps.words``: the data words channel ``ch``'s build decodes, 1..8 (a map without
+        the field, reading 0, counts as 1 or 2 from ``caps.data_bits_w1``, as the C driver)."""
+        caps = self.caps(ch)
+        return caps["words"] or (2 if caps["data_bits_w1"] else 1)
+
+    def chain_words(self, ch):
+        """The chain words (2..7) channel ``ch``'s build has."""
+        return tuple(w for w in regmap.CHAIN_WORDS if w < self.words(ch))
+
+    def word_caps(self, ch):
+        """``{word: longest data field}`` of every word the build has: caps.data_bits_w0 /
+        _w1, and caps_chain / caps_chain2 (each read once) for the chain words."""
+        if ch not in self._word_caps:
+            caps = self.caps(ch)
+            bits = {0: caps["data_bits_w0"], 1: caps["data_bits_w1"]}
+            read = {}
+            for w in self.chain_words(ch):
+                register, name = CHAIN_CAPS[w]
+                if register not in read:
+                    read[register] = self.read_fields(register, ch)
+                bits[w] = read[register][name]
+            self._word_caps[ch] = bits
+        return self._word_caps[ch]
+
+    def frame(self, ch):
+        """The :class:`Frame` channel ``ch`` is configured for (cfg_words, each chain word's
+        cfg_wW)."""
+        cfg = self.read_fields("cfg_words", ch)
+        enabled = {0: 1, 1: cfg["w1_enable"]}
+        signed = {0: cfg["w0_signed"], 1: cfg["w1_signed"]}
+        for w in self.chain_words(ch):
+            word = self.read_fields(f"cfg_w{w}", ch)
+            enabled[w], signed[w] = word["enable"], word["is_signed"]
+        caps = self.word_caps(ch)
+        return Frame(two_words=bool(enabled[1]),
+                     chain=tuple(w for w in self.chain_words(ch) if enabled[w]),
+                     signed={w: caps[w] if signed[w] else 0 for w in enabled})
+
     # -- Configuration ------------------------------------------------------------------------
     def config(self, ch):
-        """Every configuration field of channel ``ch``, ``{field: value}``."""
+        """Every configuration field of channel ``ch``, ``{field: value}``: the configuration
+        registers' and those of each chain word the build has (``wW_<field>``)."""
         settings = {}
         for run in regmap.CONFIG_RUNS:
             for register, word in zip(run, self.read_block(run, ch)):
                 settings.update(regmap.get(register, word))
+        for w in self.chain_words(ch):
+            run = regmap.CHAIN_CONFIG_RUNS[w - regmap.CHAIN_WORDS[0]]
+            for register, word in zip(run, self.read_block(run, ch)):
+                settings.update({f"w{w}_{k}": v for k, v in regmap.get(register, word).items()})
         return settings
 
     def configure(self, ch, settings):
-        """Write configuration fields (``{field or cfg_port: value}``): each register touched is
-        read, changed and written once. Returns ``state.config_error`` afterwards."""
+        """Write configuration fields (``{field or cfg_port: value}``, a chain word's as
+        ``wW_<field>``): each register touched is read, changed and written once. Returns
+        ``state.config_error`` afterwards."""
         by_register = {}
         for name, value in settings.items():
-            register, field = regmap.config_field(name)
+            register, field = setting_register(name)
             by_register.setdefault(register, {})[field] = value
-        for register in regmap.CONFIG_REGISTERS:        # check every value before writing
+        registers = regmap.CONFIG_REGISTERS + sum(regmap.CHAIN_CONFIG_RUNS, ())
+        for register in registers:                      # check every value before writing
             if register in by_register:
                 regmap.put(register, 0, **by_register[register])
-        for register in regmap.CONFIG_REGISTERS:
+        for register in registers:
             if register in by_register:
                 fields = by_register[register]
                 if len(fields) == len(regmap.FIELDS[register]):
@@ -249,21 +396,50 @@ class Board:
         return self.read_fields("state", ch)["config_error"]
 
     # -- Results and counters -----------------------------------------------------------------
-    def result(self, ch, two_words=None):
-        """The last result of channel ``ch`` (one READ_BURST of the result block: its first
-        register takes the snapshot)."""
-        if two_words is None:
-            two_words = bool(self.read_fields("cfg_words", ch)["w1_enable"])
-        words = self.read_block(regmap.RESULT_REGISTERS, ch)
-        return decode_result(ch, words, self.now(), two_words)
+    def result(self, ch, frame=None):
+        """The last result of channel ``ch`` for its :class:`Frame` (default: read from its
+        configuration). One READ_BURST of the result block (its first register takes the
+        snapshot); with chain words, the consistency rule of docs/bus.md ("Chains"), as the C
+        driver's ``biss_read_result``: ``chain.updates``, the result block, the chain words
+        (one burst), ``chain.updates`` again; equal counts mean one frame, else the set is
+        read again (the second count the next try's first), :data:`READ_TRIES` tries in all,
+        then :class:`TornReadError`."""
+        if frame is None:
+            frame = self.frame(ch)
+        if not frame.chain:
+            words = self.read_block(regmap.RESULT_REGISTERS, ch)
+            return decode_result(ch, words, self.now(), frame.two_words)
+        chain_registers = chain_result_registers(frame.chain)
+        before = self.read_fields("chain.updates", ch)["updates"]
+        for _ in range(READ_TRIES):
+            words = self.read_block(regmap.RESULT_REGISTERS, ch)
+            chain = self.read_block(chain_registers, ch)
+            after = self.read_fields("chain.updates", ch)["updates"]
+            if after == before:
+                r = decode_result(ch, words, self.now(), frame.two_words)
+                r.chain = decode_chain(chain, frame.chain)
+                return r
+            before = after
+        raise TornReadError(f"channel {ch}: chain.updates changed during each of {READ_TRIES} "
+                            f"reads of the result and chain words: a frame ended within "
+                            f"every read, none was of one frame")
 
     def counters(self, ch):
-        """The data channel's 13 error counters and the register-access engine's 5, by name
-        (the engine's as ``ca_<name>``)."""
+        """The data channel's 13 error counters, each chain word's CRC count the build has
+        (``crc_word2`` ..) and the register-access engine's 5, by name (the engine's as
+        ``ca_<name>``)."""
         out = {}
         for register, word in zip(regmap.COUNTER_REGISTERS,
                                   self.read_block(regmap.COUNTER_REGISTERS, ch)):
             out.update(regmap.get(register, word))
+        chain = self.chain_words(ch)
+        if chain:
+            registers = tuple(r for r in regmap.CHAIN_COUNTER_REGISTERS
+                              if r in {CHAIN_COUNTS[w][0] for w in chain})
+            counts = dict(zip(registers, self.read_block(registers, ch)))
+            for w in chain:
+                register, name = CHAIN_COUNTS[w]
+                out[f"crc_word{w}"] = regmap.get(register, counts[register], name)
         for register, word in zip(regmap.CA_COUNTER_REGISTERS,
                                   self.read_block(regmap.CA_COUNTER_REGISTERS, ch)):
             out.update({f"ca_{k}": v for k, v in regmap.get(register, word).items()})
@@ -273,20 +449,20 @@ class Board:
         self.update("ctrl", ch, clear_counters=1)
 
     # -- Requesting cycles --------------------------------------------------------------------
-    def trigger_and_read(self, channels, timeout_s, two_words, seqs):
+    def trigger_and_read(self, channels, timeout_s, frames, seqs):
         """One cycle on every channel of ``channels`` at once (``trigger.start``; each must have
         ``ctrl.trigger_enable`` set) and its result. A cycle has ended when ``result.seq``
         (every ended cycle counts) differs from ``seqs[ch]``, the last one seen: the result
         block is read (one burst, one snapshot) until it does, up to ``timeout_s`` (then the
         result is TIMEOUT). Two accesses per channel and sample when the cycle is over by the
-        time its result is asked for, as on a serial line it is. ``two_words``: {channel:
-        bool}; ``seqs`` is updated."""
+        time its result is asked for, as on a serial line it is (with chain words, the reads of
+        :meth:`result`). ``frames``: {channel: Frame}; ``seqs`` is updated."""
         self.write_fields("trigger", start=1)
         deadline = self.now() + timeout_s
         results = []
         for ch in channels:
             while True:
-                r = self.result(ch, two_words[ch])
+                r = self.result(ch, frames[ch])
                 if r.seq != seqs[ch]:
                     seqs[ch] = r.seq
                     break

@@ -22,12 +22,14 @@ import argparse
 import contextlib
 import csv
 import os
+import re
 import sys
 from dataclasses import fields as dataclass_fields
 
 from . import presets, regmap
 from .board import (AccessError, Board, BoardError, CapabilityError, EncoderSilentError,
-                    NoBoardError, NotTheCoreError, Result, signed_data)
+                    NoBoardError, NotTheCoreError, Result, TornReadError, chain_settings,
+                    setting_register, signed_data)
 from .link import Link, LinkError, SerialTransport
 
 #: Exit codes, by what went wrong (docs/bench.md, "Exit codes").
@@ -44,8 +46,9 @@ EXIT_CODES = {
 
 EPILOG = """exit codes:
   0    done; every sample OK
-  2    bad argument, or something this build cannot do (a channel it lacks, no
-       register-access engine, a configuration the core refuses)
+  2    bad argument, or something this build cannot do (a channel or word it lacks,
+       a word longer than it reads, no register-access engine, a configuration the
+       core refuses); a chain read torn on every try (frames end faster than read)
   3    the port is missing or cannot be opened (or pyserial is not installed)
   4    the board does not answer (PING unanswered), or is not a BiSS master
   5    garbled link: answers damaged after every retry, or refused by the bridge
@@ -135,6 +138,10 @@ def _crc_choice(word):
         except ValueError as e:
             raise argparse.ArgumentTypeError(str(e)) from None
     return parse
+
+
+#: Every word the map has: 0, 1 and the chain words 2..7 (--wN-crc; a build has caps.words).
+WORDS = (0, 1, *regmap.CHAIN_WORDS)
 
 
 def build_parser():
@@ -235,7 +242,7 @@ def build_parser():
     p.add_argument("--set", type=_setting, action="append", default=[], metavar="NAME=VALUE",
                    help="a configuration field (cfg_* of docs/registers.md), or periodic / "
                         "trigger_enable of ctrl; repeatable")
-    for w in (0, 1):
+    for w in WORDS:
         p.add_argument(f"--w{w}-crc", type=_crc_choice(w), metavar="CRC",
                        help=f"word {w}'s CRC: {presets.CRC_SYNTAX}; after --preset, before "
                             f"--set")
@@ -280,17 +287,14 @@ def sample(board, args, on_sample, keep=True):
     (with ``keep``; else an empty list, for a run without end) and ``{status: number}``. The
     channels are left as they were (trigger_enable, periodic, cfg_period), also on Ctrl-C."""
     chans = args.channel
-    two_words, signed, ctrl_before, period_before = {}, {}, {}, {}
+    frames, ctrl_before, period_before = {}, {}, {}
     for ch in chans:
         if board.read_fields("state", ch)["config_error"]:
             raise UsageError(f"channel {ch} is not configured (state.config_error 1): e.g. "
                              f"bissmaster config --preset resolute_c_26 --ma-hz 1e6")
-        words = board.read_fields("cfg_words", ch)
-        two_words[ch] = bool(words["w1_enable"])
-        # A signed word (cfg_words.wN_signed): the core sign-extends it to its register's
-        # width, caps.data_bits_wN; shown as the negative number it is (0: unsigned).
-        signed[ch] = [board.caps(ch)[f"data_bits_w{w}"] if words.get(f"w{w}_signed") else 0
-                      for w in (0, 1)]
+        # A signed word (cfg_words.wN_signed, cfg_wW.is_signed): the core sign-extends it to
+        # its register's width (caps); shown as the negative number it is (Frame.signed).
+        frames[ch] = board.frame(ch)
         ctrl_before[ch] = board.read_fields("ctrl", ch)
         if args.free_run is None and ctrl_before[ch]["periodic"]:
             raise UsageError(f"channel {ch} runs periodic requests (ctrl.periodic 1): read it "
@@ -299,7 +303,7 @@ def sample(board, args, on_sample, keep=True):
     last_seq = {}
     try:
         for ch in chans:
-            last_seq[ch] = board.result(ch, two_words[ch]).seq   # (result.status first)
+            last_seq[ch] = board.result(ch, frames[ch]).seq      # (result.status first)
             if args.free_run is None:
                 board.update("ctrl", ch, trigger_enable=1)
             else:
@@ -318,9 +322,9 @@ def sample(board, args, on_sample, keep=True):
                 board.sleep(wait)
             t = board.now()
             if args.free_run is None:
-                results = board.trigger_and_read(chans, args.cycle_timeout, two_words, last_seq)
+                results = board.trigger_and_read(chans, args.cycle_timeout, frames, last_seq)
             else:
-                results = [board.result(ch, two_words[ch]) for ch in chans]
+                results = [board.result(ch, frames[ch]) for ch in chans]
                 for r in results:
                     if r.seq == last_seq[r.channel]:
                         r.status = "NO_NEW_RESULT"      # no cycle ended since the last sample
@@ -328,10 +332,12 @@ def sample(board, args, on_sample, keep=True):
             for r in results:
                 r.time_s = t - start
                 if r.frame:
-                    bits0, bits1 = signed[r.channel]
-                    r.position = signed_data(r.position, bits0)
+                    signed = frames[r.channel].signed
+                    r.position = signed_data(r.position, signed[0])
                     if r.word1 is not None:
-                        r.word1 = signed_data(r.word1, bits1)
+                        r.word1 = signed_data(r.word1, signed[1])
+                    for w, word in r.chain.items():
+                        word.data = signed_data(word.data, signed[w])
                 counts[r.status] = counts.get(r.status, 0) + 1
             if keep:
                 taken += results
@@ -383,8 +389,9 @@ class Table:
     """The rows of ``read``: one per channel, rewritten in place on a terminal (carriage return,
     ANSI cursor up, erase line), one line per result otherwise."""
 
-    def __init__(self, out, tty, clock_hz, two_words):
+    def __init__(self, out, tty, clock_hz, two_words, chain=()):
         self.out, self.tty, self.clock_hz, self.two_words = out, tty, clock_hz, two_words
+        self.chain = chain          # the chain words shown: the enabled ones of any channel
         self.lines_drawn = 0
         self.bad = 0
 
@@ -392,6 +399,8 @@ class Table:
         cols = f"{'time_s':>9} {'ch':>2} {'seq':>5} {'status':<15} {'position':>17} nE nW crc"
         if self.two_words:
             cols += f" {'word1':>13} nE1 nW1 crc1 {'lc':>2}"
+        for w in self.chain:
+            cols += f" {f'word{w}':>13} nE{w} nW{w} crc{w}"
         return cols + f" {'delay':>5} {'delay_ns':>8}"
 
     def row(self, r):
@@ -407,6 +416,10 @@ class Table:
                      f"{r.w1_nw if w1 else dash:>3} "
                      f"{('ok' if r.w1_crc_ok else 'bad') if w1 else dash:>4} "
                      f"{r.lc if w1 else dash:>2}")
+        for w in self.chain:
+            c = r.chain.get(w) if frame else None
+            text += (f" {c.data if c else dash:>13} {c.ne if c else dash:>3} "
+                     f"{c.nw if c else dash:>3} {('ok' if c.crc_ok else 'bad') if c else dash:>4}")
         delay = frame or r.status == "DELAY_RANGE"
         text += (f" {r.line_delay if delay else dash:>5} "
                  f"{f'{_ns(r.line_delay, self.clock_hz):.1f}' if delay else dash:>8}")
@@ -431,9 +444,15 @@ class Table:
         self.lines_drawn = len(lines)
 
 
+def _shown_chain(frames):
+    """The chain words any of ``frames`` has enabled, in order: the chain columns shown."""
+    return tuple(sorted({w for f in frames.values() for w in f.chain}))
+
+
 def cmd_read(board, args, out, err):
-    two = any(board.read_fields("cfg_words", ch)["w1_enable"] for ch in args.channel)
-    table = Table(out, _isatty(out), args.clock_hz, two)
+    frames = {ch: board.frame(ch) for ch in args.channel}
+    table = Table(out, _isatty(out), args.clock_hz,
+                  any(f.two_words for f in frames.values()), _shown_chain(frames))
     _, counts = sample(board, args, table.show, keep=False)
     return verdict(counts, err)
 
@@ -450,23 +469,34 @@ CSV_COLUMNS = ("time_s", "channel", "seq", "status", "position", "ne", "nw", "cr
                "w1_ne", "w1_nw", "w1_crc_ok", "lc", "line_delay", "line_delay_ns", "timestamp")
 
 
-def csv_row(r, clock_hz):
-    """A result as a CSV row (dict of :data:`CSV_COLUMNS`); frame fields empty without a
-    frame, word 1's empty in a one-word configuration."""
+def chain_csv_columns(chain):
+    """The CSV columns of the chain words ``chain``, after :data:`CSV_COLUMNS`: per word
+    ``wordW``, ``wW_ne``, ``wW_nw``, ``wW_crc_ok``."""
+    return tuple(c for w in chain
+                 for c in (f"word{w}", f"w{w}_ne", f"w{w}_nw", f"w{w}_crc_ok"))
+
+
+def csv_row(r, clock_hz, columns=CSV_COLUMNS):
+    """A result as a CSV row (dict of ``columns``: :data:`CSV_COLUMNS` and any
+    :func:`chain_csv_columns`); frame fields empty without a frame, word 1's empty in a
+    one-word configuration, a chain word's when the channel has it disabled."""
     row = {"time_s": f"{r.time_s:.6f}", "channel": r.channel, "seq": r.seq, "status": r.status,
            "timestamp": r.timestamp}
     if r.frame:
         row.update(position=r.position, ne=r.ne, nw=r.nw, crc_ok=r.crc_ok, lc=r.lc)
         if r.word1 is not None:
             row.update(word1=r.word1, w1_ne=r.w1_ne, w1_nw=r.w1_nw, w1_crc_ok=r.w1_crc_ok)
+        for w, c in r.chain.items():
+            row.update({f"word{w}": c.data, f"w{w}_ne": c.ne, f"w{w}_nw": c.nw,
+                        f"w{w}_crc_ok": c.crc_ok})
     if r.frame or r.status == "DELAY_RANGE":
         row.update(line_delay=r.line_delay, line_delay_ns=f"{_ns(r.line_delay, clock_hz):.1f}")
-    return {c: row.get(c, "") for c in CSV_COLUMNS}
+    return {c: row.get(c, "") for c in columns}
 
 
 def read_csv(path):
     """Results back from a `log` CSV."""
-    names = {f.name for f in dataclass_fields(Result)}
+    names = {f.name for f in dataclass_fields(Result)} - {"chain"}
     results = []
     with open(path, newline="") as f:
         reader = csv.DictReader(f)
@@ -484,14 +514,16 @@ def read_csv(path):
 
 
 def cmd_log(board, args, out, err):
+    frames = {ch: board.frame(ch) for ch in args.channel}
+    columns = CSV_COLUMNS + chain_csv_columns(_shown_chain(frames))
     f = out if args.output == "-" else _open_output(args.output, "w", newline="")
     try:
-        writer = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
+        writer = csv.DictWriter(f, fieldnames=columns)
         writer.writeheader()
 
         def on_sample(index, results):
             for r in results:
-                writer.writerow(csv_row(r, args.clock_hz))
+                writer.writerow(csv_row(r, args.clock_hz, columns))
             f.flush()
         _, counts = sample(board, args, on_sample, keep=False)
     finally:
@@ -587,6 +619,7 @@ def cmd_identify(board, args, out, err):
                "w1_enable": int(words == 2), "spw_check": 0, "end_check": 0}
     if words == 2:
         longest.update(w1_data_bits=caps["data_bits_w1"], w1_nenw=1, w1_lc=0, w1_crc=0)
+    longest.update({f"w{w}_enable": 0 for w in board.chain_words(ch)})    # no chain words
     try:
         if args.ma_hz:
             longest["ma_half_period"] = presets.half_period(args.clock_hz, args.ma_hz)
@@ -717,25 +750,25 @@ def cmd_config(board, args, out, err):
             settings = presets.config(args.preset, args.clock_hz, args.ma_hz)
         except (KeyError, ValueError) as e:
             raise UsageError(str(e.args[0])) from None
-        caps = board.caps(ch)
-        for w in (0, 1):
-            if settings["w1_enable"] or w == 0:
-                if settings[f"w{w}_data_bits"] > caps[f"data_bits_w{w}"]:
-                    raise CapabilityError(
-                        f"preset {args.preset}: word {w} has {settings[f'w{w}_data_bits']} bits, "
-                        f"channel {ch} reads up to {caps[f'data_bits_w{w}']}")
-    for crc in (args.w0_crc, args.w1_crc):
-        settings.update(crc or {})
+        # A preset is one encoder's frame (words 0 and 1): the build's chain words off.
+        settings.update({name: 0 for w in board.chain_words(ch) for name in chain_settings(w)})
+        check_words(board, ch, settings, f"preset {args.preset}")
+    for w in WORDS:
+        crc = getattr(args, f"w{w}_crc") or {}
+        check_words(board, ch, crc, f"--w{w}-crc")
+        settings.update(crc)
     for name, value in args.set:
         if name in CTRL_SETTINGS:
             ctrl[name] = value
             continue
         try:
-            register, field = regmap.config_field(name)
+            register, field = setting_register(name)
             regmap.put(register, 0, **{field: value})
         except (KeyError, ValueError) as e:
             raise UsageError(f"--set {name}={value}: {e.args[0]}") from None
-        settings[field] = value
+        bare = name[4:] if name.startswith("cfg_") else name
+        check_words(board, ch, {bare: value}, f"--set {name}={value}")
+        settings[bare] = value
     if settings or ctrl:
         if settings:
             refused = board.configure(ch, settings)
@@ -746,12 +779,43 @@ def cmd_config(board, args, out, err):
                 raise UsageError(str(e)) from None
         print(f"channel {ch}: " + ", ".join(f"{k}={v}" for k, v in {**settings, **ctrl}.items()),
               file=out)
-    show_config(board, ch, args.clock_hz, out)
+    cfg = show_config(board, ch, args.clock_hz, out)
     if settings and refused:
         print(f"bissmaster: channel {ch}: the core refuses this configuration "
-              f"(state.config_error 1): a request now ends BAD_CONFIG", file=err)
+              f"(state.config_error 1): a request now ends BAD_CONFIG"
+              + chain_gap(cfg, board.chain_words(ch)), file=err)
         return EXIT_CODES["bad argument"]
     return EXIT_CODES["ok"]
+
+
+def check_words(board, ch, settings, what):
+    """Refuse (CapabilityError, exit 2) settings ``{name: value}`` of a chain word channel
+    ``ch``'s build lacks (caps.words), and a word's ``wN_data_bits`` above what the build reads
+    for it (caps.data_bits_w0 / _w1, caps_chain / caps_chain2). ``what`` names their origin."""
+    caps = board.word_caps(ch)
+    for name, value in settings.items():
+        m = re.match(r"w(\d+)_", name)
+        if not m:
+            continue
+        w = int(m.group(1))
+        if w not in caps:
+            n = board.words(ch)
+            raise CapabilityError(f"{what}: channel {ch} has no word {w}: its build decodes "
+                                  f"words 0..{n - 1} (caps.words {n})")
+        if name == f"w{w}_data_bits" and value > caps[w]:
+            raise CapabilityError(f"{what}: word {w} has {value} bits, channel {ch} reads up "
+                                  f"to {caps[w]}")
+
+
+def chain_gap(cfg, chain_words):
+    """Why a chain configuration is refused, if it is a gap (docs/bus.md, Chains: the words
+    in the frame are words 0..N-1, word 1 by cfg_words.w1_enable): a clause, or ""."""
+    enabled = [1, cfg["w1_enable"], *(cfg[f"w{w}_enable"] for w in chain_words)]
+    for w in range(2, len(enabled)):
+        if enabled[w] and not enabled[w - 1]:
+            return (f"; word {w} is enabled without word {w - 1}: a chain is words 0..N-1 "
+                    f"with no gap")
+    return ""
 
 
 def show_config(board, ch, clock_hz, out):
@@ -760,8 +824,12 @@ def show_config(board, ch, clock_hz, out):
     ctrl = board.read_fields("ctrl", ch)
     cfg = board.config(ch)
     yes = {0: "no", 1: "yes"}
-    print(f"channel {ch}: caps: word 0 up to {caps['data_bits_w0']} bits, word 1 up to "
-          f"{caps['data_bits_w1']}, timers {caps['timer_width']} bits, counters "
+    chain = board.chain_words(ch)
+    lengths = board.word_caps(ch)
+    print(f"channel {ch}: caps: {board.words(ch)} word(s), word 0 up to {caps['data_bits_w0']} "
+          f"bits, word 1 up to {caps['data_bits_w1']}"
+          + "".join(f", word {w} up to {lengths[w]}" for w in chain)
+          + f", timers {caps['timer_width']} bits, counters "
           f"{yes[caps['counters']]}, timestamp {yes[caps['timestamp']]}, register access "
           f"{yes[caps['register_access']]}, SSI {yes[caps['ssi']]}", file=out)
     print(f"channel {ch}: state: busy {state['busy']}, config_error {state['config_error']}; "
@@ -777,10 +845,9 @@ def show_config(board, ch, clock_hz, out):
                           f"{cfg['request_period'] / clock_hz * 1e6:.1f} us",
         "break_time": "default (40 us)", "ack_limit": "default (40 us)",
         "timeout_limit": "default (80 us)",
-        "w0_crc": regmap.CRC_NAMES.get(cfg["w0_crc"], "invalid"),
-        "w1_crc": regmap.CRC_NAMES.get(cfg["w1_crc"], "invalid"),
     }
-    for w in (0, 1):
+    for w in (0, 1, *chain):
+        notes[f"w{w}_crc"] = regmap.CRC_NAMES.get(cfg[f"w{w}_crc"], "invalid")
         if cfg[f"w{w}_crc"] == regmap.CRC_CODES["custom"]:
             notes[f"w{w}_crc"] = (f"custom: {cfg[f'w{w}_crc_width']} bits, polynomial "
                                   f"0x{cfg[f'w{w}_crc_poly']:X}, start 0x{cfg[f'w{w}_crc_start']:X}, "
@@ -788,9 +855,11 @@ def show_config(board, ch, clock_hz, out):
     for key in ("break_time", "ack_limit", "timeout_limit"):
         if cfg[key]:
             notes[key] = f"{cfg[key] / clock_hz * 1e6:.1f} us"
-    for register in regmap.CONFIG_REGISTERS:
-        for name in regmap.FIELDS[register]:
-            print(f"  {name:<15} {cfg[name]:>8}  {notes.get(name, '')}".rstrip(), file=out)
+    names = [name for register in regmap.CONFIG_REGISTERS for name in regmap.FIELDS[register]]
+    names += [name for w in chain for name in chain_settings(w)]
+    for name in names:
+        print(f"  {name:<15} {cfg[name]:>8}  {notes.get(name, '')}".rstrip(), file=out)
+    return cfg
 
 
 # -- main -------------------------------------------------------------------------------------
@@ -835,6 +904,9 @@ def main(argv=None, *, transport=None, stdout=None, stderr=None):
         return fail("no encoder", e)
     except (AccessError, EncoderErrors) as e:
         return fail("encoder errors", e)
+    except TornReadError as e:
+        return fail("bad argument", f"{e}: frames end faster than the tool reads them; sample "
+                    f"triggered (without --free-run) or with a longer --free-run PERIOD_US")
     except BoardError as e:
         return fail("bad argument", e)
     except OSError as e:                # the port failed while in use (unplugged)

@@ -143,8 +143,8 @@ FIELDS = {
 #: Words 2..7 of a chain (docs/bus.md, "Chains"): per word the same three settings registers
 #: (16 bytes apart from 0x0A0), a CRC count and two result registers; capabilities and counts
 #: two words to a register. Their fields have the same names in every word, so they are not
-#: among CONFIG_REGISTERS (whose field names are the tool's settings names): the tool sets up
-#: and shows words 0 and 1.
+#: among CONFIG_REGISTERS (whose field names are the tool's settings names): the tool names a
+#: chain word's settings ``wW_<field>`` (board.chain_settings).
 CHAIN_WORDS = range(2, 8)
 CHANNEL.update({
     "caps_chain": 0x018, "caps_chain2": 0x01C,

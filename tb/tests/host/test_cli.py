@@ -586,6 +586,209 @@ def test_list_presets_needs_no_board():
     assert "resolute_fs_rsh  word 0 36 bits nE nW CRC6, word 1 28 bits nE nW LC CRC16" in out
 
 
+# -- Chain words (words 2..7) -----------------------------------------------------------------
+
+def chain_board(**encoder):
+    """Channel 0 of a four-word build (chain words 2 and 3, up to 24 and 16 bits) set up for a
+    chain of four slaves: word 0 26 bits, word 1 17 bits, word 2 20 bits two's complement (the
+    fake sign-extends it to 24), word 3 12 bits; nE/nW and CRC-6 each. Word 2 of cycle n is
+    n - 1 (-1, 0, 1, ...), word 3 0xABC + n."""
+    model = RegisterModel(chain_bits={2: 24, 3: 16})
+    for ch in (0, 1):
+        model.configure(ch, ma_half_period=50, w0_data_bits=26, w0_nenw=1, w0_crc=1)
+    model.configure(0, w1_enable=1, w1_data_bits=17, w1_nenw=1, w1_crc=1)
+    model.configure_chain(0, 2, enable=1, data_bits=20, nenw=1, crc=1, is_signed=1)
+    model.configure_chain(0, 3, enable=1, data_bits=12, nenw=1, crc=1)
+    model.encoders[0] = FakeEncoder(positions=lambda n: 1000 + n, word1=lambda n: 50 + n,
+                                    chain=lambda w, n: {2: (n - 1) % 2**20, 3: 0xABC + n}[w],
+                                    **encoder)
+    return FakeBridge(model)
+
+
+def reads(model, *paths):
+    return [e[1] for e in model.log if e[0] == "r" and e[1] in paths]
+
+
+def test_read_shows_each_chain_word_with_its_verdicts():
+    bridge = chain_board()
+    model = bridge.model
+    code, out, err = run(["read", "--count", "3"], bridge)
+    assert code == EXIT["ok"], err
+    header, *rows = out.splitlines()
+    assert header.split() == ["time_s", "ch", "seq", "status", "position", "nE", "nW", "crc",
+                              "word1", "nE1", "nW1", "crc1", "lc", "word2", "nE2", "nW2",
+                              "crc2", "word3", "nE3", "nW3", "crc3", "delay", "delay_ns"]
+    rows = [r.split() for r in rows]
+    assert [r[4] for r in rows] == ["1000", "1001", "1002"]
+    assert [r[8] for r in rows] == ["50", "51", "52"]
+    assert [r[13:21] for r in rows] == [
+        ["-1", "1", "1", "ok", "2748", "1", "1", "ok"],             # 0xABC
+        ["0", "1", "1", "ok", "2749", "1", "1", "ok"],
+        ["1", "1", "1", "ok", "2750", "1", "1", "ok"]]
+    # The read rule (docs/bus.md, Chains): chain.updates, the result block (status first),
+    # chain.flags and the words, chain.updates again; once per read when no frame ends.
+    one = ["chain.updates", "result.status", "chain.flags", "chain.updates"]
+    assert reads(model, *one) == one * 4                            # the first seq, 3 samples
+    assert reads(model, "chain.w4_lo") == [], "only the words up to the last enabled one"
+
+
+def test_a_chain_read_torn_by_new_frames_is_read_again():
+    """Frames end during the second sample's reads, three times (at chain.flags, after the
+    snapshot): the tool reads the set again, the snapshot too, until chain.updates agrees: the
+    row is of one frame (cycle 4: every word of it), not the snapshot of cycle 1 with cycle
+    2's chain words."""
+    holder = {}
+
+    def statuses(n):
+        if n == 1:
+            holder["model"].tears[0] = 3
+        return "OK"
+    bridge = chain_board(statuses=statuses)
+    holder["model"] = model = bridge.model
+    code, out, err = run(["read", "--count", "3"], bridge)
+    assert code == EXIT["ok"], err
+    rows = [r.split() for r in out.splitlines()[1:]]
+    assert [(r[2], r[4], r[8], r[13], r[17]) for r in rows] == [
+        ("1", "1000", "50", "-1", str(0xABC)),
+        ("5", "1004", "54", "3", str(0xABC + 4)),                   # after three tries torn
+        ("6", "1005", "55", "4", str(0xABC + 5))]
+    # The second sample's four tries: chain.updates read 5 times (the second count of a try
+    # the next one's first), the snapshot 4 times.
+    sample2 = model.log.index(("w", "trigger", None), model.log.index(("w", "trigger", None)) + 1)
+    sample3 = model.log.index(("w", "trigger", None), sample2 + 1)
+    window = [e[1] for e in model.log[sample2:sample3] if e[0] == "r"]
+    assert window.count("chain.updates") == 5 and window.count("result.status") == 4
+
+
+@pytest.mark.parametrize("tears, code", [(7, "ok"), (8, "bad argument")])
+def test_a_chain_read_torn_every_time_is_an_error(tears, code):
+    """Eight tries (the C driver's BISS_READ_RETRIES): seven torn ones still end with a read
+    of one frame; eight end the run with exit 2, the channel left as it was."""
+    holder = {}
+
+    def statuses(n):
+        if n == 1:
+            holder["model"].tears[0] = tears
+        return "OK"
+    bridge = chain_board(statuses=statuses)
+    holder["model"] = model = bridge.model
+    code_, out, err = run(["read", "--count", "2"], bridge)
+    assert code_ == EXIT[code], err
+    rows = out.splitlines()[1:]
+    if code == "ok":
+        assert len(rows) == 2 and rows[1].split()[2] == str(2 + tears)
+    else:
+        assert len(rows) == 1
+        assert "chain.updates changed during each of 8 reads" in err
+        assert "frames end faster than the tool reads them" in err
+        assert ctrl(model)["trigger_enable"] == 0
+
+
+def test_log_has_chain_columns_only_with_chain_words(tmp_path):
+    """Columns per enabled chain word after the usual ones; a CRC error of word 3 is
+    CRC_ERROR_WORD1 (word 0 good, a later word bad) with w3_crc_ok 0 (exit 7). A channel
+    without chain words on the same build writes the usual columns, unchanged."""
+    bridge = chain_board(chain_bad=lambda n: (3,) if n == 1 else ())
+    path = tmp_path / "chain.csv"
+    code, out, err = run(["log", "--count", "2", "-o", str(path)], bridge)
+    assert code == EXIT["encoder errors"] and "CRC_ERROR_WORD1 1" in err
+    rows = list(csv.DictReader(path.open()))
+    assert list(rows[0]) == list(cli.CSV_COLUMNS) + [
+        "word2", "w2_ne", "w2_nw", "w2_crc_ok", "word3", "w3_ne", "w3_nw", "w3_crc_ok"]
+    assert [(r["status"], r["word2"], r["w2_crc_ok"], r["word3"], r["w3_crc_ok"]) for r in rows] \
+        == [("OK", "-1", "1", str(0xABC), "1"), ("CRC_ERROR_WORD1", "0", "1", str(0xABD), "0")]
+    assert rows[1]["w3_ne"] == rows[1]["w3_nw"] == "1"
+    code, out, err = run(["log", "--count", "1", "-c", "1"], bridge)
+    assert code == EXIT["ok"], err
+    assert out.splitlines()[0].split(",") == list(cli.CSV_COLUMNS)
+    code, out, err = run(["log", "--count", "1", "-c", "0,1"], bridge)
+    by_channel = {r["channel"]: r for r in csv.DictReader(io.StringIO(out))}
+    assert by_channel["0"]["word3"] == str(0xABC + 2) and by_channel["1"]["word3"] == ""
+    code, _, err = run(["plot", "--input", str(path), "-o", str(tmp_path / "c.png")])
+    assert code == EXIT["ok"], err
+
+
+def test_counters_name_the_chain_words_crc_counts():
+    bridge = chain_board()
+    bridge.model.counters[0] = {"crc_word2": 4, "crc_word3": 65535, "crc_word0": 1}
+    code, out, err = run(["counters"], bridge)
+    assert code == EXIT["ok"], err
+    values = {line.split()[0]: int(line.split()[1]) for line in out.splitlines()[1:]}
+    assert len(values) == 16 + 2 + 5
+    assert (values["crc_word0"], values["crc_word2"], values["crc_word3"]) == (1, 4, 65535)
+    assert "crc_word4" not in values
+    assert reads(bridge.model, "count_chain2") == [], "only the counts of words built"
+
+
+def test_config_sets_up_and_shows_chain_words():
+    bridge = chain_board()
+    model = bridge.model
+    code, out, err = run(["config"], bridge)
+    assert code == EXIT["ok"], err
+    assert "caps: 4 word(s), word 0 up to 55 bits, word 1 up to 40, word 2 up to 24, " \
+           "word 3 up to 16," in out
+    assert "\n  w2_data_bits          20\n" in out and "\n  w2_is_signed           1\n" in out
+    assert "\n  w3_crc                 1  crc6\n" in out and "w4_" not in out
+    code, out, err = run(["config", "--set", "w2_data_bits=24", "--set", "cfg_w3_gray=1",
+                          "--w3-crc", "custom:8,0x07,0xFF,plain", "--set", "w2_is_signed=0"],
+                         bridge)
+    assert code == EXIT["ok"], err
+    assert (model.chain_cfg(0, 2)["data_bits"], model.chain_cfg(0, 2)["is_signed"]) == (24, 0)
+    w3 = model.chain_cfg(0, 3)
+    assert (w3["gray"], w3["crc"], w3["crc_width"], w3["crc_poly"], w3["crc_start"],
+            w3["crc_inverted"], w3["data_bits"]) == (1, 3, 8, 0x07, 0xFF, 0, 12)
+    assert "w3_crc                 3  custom: 8 bits, polynomial 0x7, start 0xFF, sent plain" in out
+    # A preset is one encoder: the chain words off; then added back by --set after it.
+    code, out, err = run(["config", "--preset", "resolute_c_26"], bridge)
+    assert code == EXIT["ok"], err
+    assert model.chain_enabled(0) == [] and model.chain_cfg(0, 3)["crc"] == 0
+    code, out, err = run(["config", "--preset", "resolute_fs_rsh", "--set", "w2_enable=1",
+                          "--set", "w2_data_bits=16", "--set", "w2_nenw=1", "--w2-crc", "crc6"],
+                         bridge)
+    assert code == EXIT["ok"], err
+    assert model.chain_enabled(0) == [2] and not model.config_error(0)
+    code, out, err = run(["read", "--count", "1"], bridge)
+    assert code == EXIT["ok"], err
+    assert out.splitlines()[0].split()[13:17] == ["word2", "nE2", "nW2", "crc2"]
+    assert "word3" not in out
+
+
+def test_config_refuses_chain_words_the_build_lacks_or_cannot_read():
+    bridge = chain_board()
+    model = bridge.model
+    before = {w: model.chain_cfg(0, w) for w in (2, 3)}
+    for argv, text in (
+            (["--set", "w4_data_bits=8"], "--set w4_data_bits=8: channel 0 has no word 4: its "
+                                          "build decodes words 0..3 (caps.words 4)"),
+            (["--w5-crc", "crc6"], "--w5-crc: channel 0 has no word 5"),
+            (["--set", "w2_data_bits=25"], "word 2 has 25 bits, channel 0 reads up to 24"),
+            (["--set", "w3_data_bits=17"], "word 3 has 17 bits, channel 0 reads up to 16"),
+            (["--set", "w0_data_bits=56"], "word 0 has 56 bits, channel 0 reads up to 55"),
+            (["--set", "w2_signed=1"], "no configuration field 'w2_signed'"),
+            (["--w2-crc", "custom:17,1"], "1..16")):
+        code, _, err = run(["config", *argv], bridge)
+        assert code == EXIT["bad argument"], (argv, err)
+        assert text in err, (argv, err)
+    assert {w: model.chain_cfg(0, w) for w in (2, 3)} == before, "nothing written"
+    assert not [e for e in model.log if e[0] == "w" and e[1].startswith("cfg_")]
+    # A build of two words has no chain word.
+    code, _, err = run(["config", "--set", "w2_enable=1"], biss_c_board())
+    assert code == EXIT["bad argument"] and "channel 0 has no word 2" in err
+    # A gap (word 3 without word 2): the core refuses it, the tool says why.
+    code, _, err = run(["config", "--set", "w2_enable=0"], bridge)
+    assert code == EXIT["bad argument"]
+    assert "refuses" in err and "word 3 is enabled without word 2" in err
+
+
+def test_identify_leaves_the_chain_words_out_while_it_reads():
+    bridge = chain_board(registers=RegisterFile.bp3(Bp3Eds(DL_POS), eds_bank=1))
+    code, out, err = run(["identify", "--eds-offset", "0"], bridge)
+    assert code == EXIT["ok"], err
+    accesses = bridge.model.encoders[0].accesses
+    assert accesses and all(a["chain"] == [] for a in accesses)
+    assert bridge.model.chain_enabled(0) == [2, 3], "put back afterwards"
+
+
 # -- Failures and their exit codes ----------------------------------------------------------
 
 def test_no_port_and_the_port_from_the_environment(monkeypatch):
@@ -737,5 +940,13 @@ def test_docs_bench_md_gives_every_exit_code_command_and_column():
     csv_text = text.split("**The CSV of `log`**", 1)[1].split("\n\n", 1)[0]
     for column in cli.CSV_COLUMNS:
         assert f"`{column}`" in csv_text, column
-    for column in cli.Table(io.StringIO(), False, CLOCK_HZ, True).header().split():
+    for column in cli.Table(io.StringIO(), False, CLOCK_HZ, True, (2,)).header().split():
         assert f"`{column}`" in text, column
+    chain = text.split("### Chains (words 2..7)", 1)[1].split("\n### ", 1)[0]
+    for column in cli.chain_csv_columns((2,)):
+        assert f"`{column}`" in chain, column
+    for name in ("w2_data_bits",) + tuple(f"`wW_{f}`" for f in (
+            "data_bits", "nenw", "lc", "crc", "gray", "is_signed", "enable", "crc_poly",
+            "crc_width", "crc_inverted", "crc_start")):
+        assert name in chain, name
+    assert "8 tries" in chain and "`crc_word2`" in chain
