@@ -93,9 +93,12 @@ def setting_register(name):
     registers (``w0_data_bits``, or its port name ``cfg_w0_data_bits``: regmap.config_field),
     or a chain word's (``w2_data_bits``, :func:`chain_settings`). KeyError if none."""
     bare = name[4:] if name.startswith("cfg_") else name
-    m = re.fullmatch(r"w(\d+)_\w+", bare)
+    m = re.fullmatch(r"w(\d+)_(\w+)", bare)
     if m and int(m.group(1)) in regmap.CHAIN_WORDS:
-        found = chain_settings(int(m.group(1))).get(bare)
+        # ``wW_signed`` as words 0 and 1 name it (the field is is_signed: SystemRDL
+        # reserves ``signed``).
+        field_name = "is_signed" if m.group(2) == "signed" else m.group(2)
+        found = chain_settings(int(m.group(1))).get(f"w{m.group(1)}_{field_name}")
         if found:
             return found
     try:

@@ -400,7 +400,8 @@ class Table:
         if self.two_words:
             cols += f" {'word1':>13} nE1 nW1 crc1 {'lc':>2}"
         for w in self.chain:
-            cols += f" {f'word{w}':>13} nE{w} nW{w} crc{w}"
+            # 20 columns: a 64-bit word in decimal, with its sign.
+            cols += f" {f'word{w}':>20} nE{w} nW{w} crc{w}"
         return cols + f" {'delay':>5} {'delay_ns':>8}"
 
     def row(self, r):
@@ -418,7 +419,7 @@ class Table:
                      f"{r.lc if w1 else dash:>2}")
         for w in self.chain:
             c = r.chain.get(w) if frame else None
-            text += (f" {c.data if c else dash:>13} {c.ne if c else dash:>3} "
+            text += (f" {c.data if c else dash:>20} {c.ne if c else dash:>3} "
                      f"{c.nw if c else dash:>3} {('ok' if c.crc_ok else 'bad') if c else dash:>4}")
         delay = frame or r.status == "DELAY_RANGE"
         text += (f" {r.line_delay if delay else dash:>5} "

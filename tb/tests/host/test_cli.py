@@ -734,6 +734,10 @@ def test_config_sets_up_and_shows_chain_words():
                          bridge)
     assert code == EXIT["ok"], err
     assert (model.chain_cfg(0, 2)["data_bits"], model.chain_cfg(0, 2)["is_signed"]) == (24, 0)
+    # wW_signed, as words 0 and 1 name it, sets the same field.
+    code, _, err = run(["config", "--set", "w2_signed=1"], bridge)
+    assert code == EXIT["ok"], err
+    assert model.chain_cfg(0, 2)["is_signed"] == 1
     w3 = model.chain_cfg(0, 3)
     assert (w3["gray"], w3["crc"], w3["crc_width"], w3["crc_poly"], w3["crc_start"],
             w3["crc_inverted"], w3["data_bits"]) == (1, 3, 8, 0x07, 0xFF, 0, 12)
@@ -764,7 +768,7 @@ def test_config_refuses_chain_words_the_build_lacks_or_cannot_read():
             (["--set", "w2_data_bits=25"], "word 2 has 25 bits, channel 0 reads up to 24"),
             (["--set", "w3_data_bits=17"], "word 3 has 17 bits, channel 0 reads up to 16"),
             (["--set", "w0_data_bits=56"], "word 0 has 56 bits, channel 0 reads up to 55"),
-            (["--set", "w2_signed=1"], "no configuration field 'w2_signed'"),
+            (["--set", "w2_sign=1"], "no configuration field 'w2_sign'"),
             (["--w2-crc", "custom:17,1"], "1..16")):
         code, _, err = run(["config", *argv], bridge)
         assert code == EXIT["bad argument"], (argv, err)
