@@ -266,6 +266,12 @@ def _parser():
                       help="1: the data channel's counters in one memory behind a read port "
                            "(count_addr, count_en, count_data) instead of a count_* port each; "
                            "the bus tops always build them so (default: %(default)s)")
+    core.add_argument("--chain-memory", type=int, choices=(0, 1),
+                      default=int(defaults.chain_memory),
+                      help="1: the data of words 2.. in one memory behind a read port "
+                           "(chain_addr, chain_en, chain_data) instead of a word<N>_position "
+                           "port each; no change with one or two words; the bus tops always "
+                           "build them so (default: %(default)s)")
     core.add_argument("--timestamp-width", type=int, default=defaults.timestamp_width,
                       metavar="BITS",
                       help="width of the time base behind `timestamp`, 0: no timestamp "
@@ -325,6 +331,7 @@ def _params(ap, args):
                             max_line_delay=args.max_line_delay, timer_width=args.timer_width,
                             counter_width=args.counter_width,
                             counter_ram=bool(args.counter_ram),
+                            chain_memory=bool(args.chain_memory),
                             timestamp_width=args.timestamp_width,
                             time_input=bool(args.time_input),
                             custom_crc=bool(args.custom_crc),

@@ -10,7 +10,7 @@ from amaranth.hdl import C
 from amaranth.lib import data
 
 from . import protocol
-from .params import (CRC_SETTINGS, DELAY_SPREAD_WIDTH, FAULTS, HALF_PERIOD_WIDTH, LINE_CHECK_WIDTH,
+from .params import (CHAIN_FIRST_WORD, CRC_SETTINGS, DELAY_SPREAD_WIDTH, FAULTS, HALF_PERIOD_WIDTH, LINE_CHECK_WIDTH,
                      QUIET_WIDTH, AccessStatus, Status, word_config,
                      counter_settle, counter_words)
 
@@ -86,9 +86,11 @@ def config_custom_crcs(cfg, params):
     return [cfg[f"w{w}_crc"] for w in range(params.words)]
 
 
-def word_result_layout(bits):
-    """One decoded word: its data field (right-justified), nE, nW and its CRC verdict."""
-    return data.StructLayout({"position": bits, "ne": 1, "nw": 1, "crc_ok": 1})
+def word_result_layout(bits, position=True):
+    """One decoded word: its data field (right-justified), nE, nW and its CRC verdict; without
+    ``position`` the flags only (a word whose data is in the chain memory)."""
+    return data.StructLayout({**({"position": bits} if position else {}),
+                              "ne": 1, "nw": 1, "crc_ok": 1})
 
 
 def result_layout(params):
@@ -104,7 +106,8 @@ def result_layout(params):
                     "noise_events": LINE_CHECK_WIDTH, "delay_settled": 1,
                     "settled_delay": params.delay_width, "delay_spread": DELAY_SPREAD_WIDTH})
     for w, bits in enumerate(params.max_data_bits):
-        members[f"word{w}"] = word_result_layout(bits)
+        members[f"word{w}"] = word_result_layout(
+            bits, position=not (params.chain_words_in_memory and w >= CHAIN_FIRST_WORD))
     members.update({"lc": protocol.LC_BITS, "lc_repeat": 1, "lc_skip": 1, "lc_zero": 1})
     if params.words >= 2:
         members["spw_mismatch"] = 1

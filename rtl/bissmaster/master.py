@@ -8,6 +8,7 @@ from amaranth.lib.wiring import In, Out
 
 from .core.confirmation import Confirmation
 from .core.configuration import Configuration
+from .core.chain_results import CHAIN_ADDR_BITS, ChainResults
 from .core.counter_ram import CounterRam
 from .core.counters import CounterBank
 from .core.cycle_controller import CycleController
@@ -23,8 +24,9 @@ from .core.line_noise import LineNoise
 from .core.ma_clock import MaClock
 from .core.ma_stop import MaStop
 from . import protocol
-from .params import (DELAY_SPREAD_WIDTH, HALF_PERIOD_WIDTH, LINE_CHECK_WIDTH, AccessStatus,
-                     MasterParams, Status, word_config)
+from .params import (CHAIN_FIRST_WORD, CHAIN_MEMORY_WORD_BITS, DELAY_SPREAD_WIDTH,
+                     HALF_PERIOD_WIDTH, LINE_CHECK_WIDTH, AccessStatus, MasterParams, Status,
+                     word_config)
 from .control.register_access import RegisterAccess
 from .core.request_scheduler import RequestScheduler
 from .core.results import ResultRegisters
@@ -126,6 +128,10 @@ class BissMaster(wiring.Component):
             **{f"count_{name}": Out(p.counter_width) for name in counter_ports(p)},
             **({"count_addr": In(COUNT_ADDR_BITS), "count_en": In(1), "count_data": Out(32),
                 "count_busy": Out(1)} if p.counter_ram else {}),
+            # Words 2.. in the chain memory
+            **({"chain_addr": In(CHAIN_ADDR_BITS),
+                "chain_en": In(1), "chain_data": Out(CHAIN_MEMORY_WORD_BITS)}
+               if p.chain_words_in_memory else {}),
         }
 
     @property
@@ -183,6 +189,9 @@ class BissMaster(wiring.Component):
                                                                 p.counter_width)
         if cdm:
             m.submodules.register_access = access = RegisterAccess(p.start_wait_frames)
+        if p.chain_words_in_memory:
+            m.submodules.chain_results = chain_results = ChainResults(
+                p.words, max(p.max_data_bits[CHAIN_FIRST_WORD:]))
 
         cycle = config.cycle
         words = config_words(cycle, p)
@@ -195,6 +204,7 @@ class BissMaster(wiring.Component):
             time_base=time_base if p.timestamped else None,
             counters=counters if counter_ports(p) else None,
             counter_ram=counter_ram if p.counter_ram else None,
+            chain_results=chain_results if p.chain_words_in_memory else None,
             access=access if cdm else None, cycle=cycle, words=words)
 
     def _connect_inputs(self, m, b):
@@ -397,14 +407,29 @@ class BissMaster(wiring.Component):
         ]
         for w in range(p.words):
             word = frame[f"word{w}"]
+            if hasattr(b.decoder, f"data{w}"):
+                m.d.comb += word.position.eq(getattr(b.decoder, f"data{w}"))
             m.d.comb += [
-                word.position.eq(getattr(b.decoder, f"data{w}")),
                 word.ne.eq(b.decoder.ne[w]),
                 word.nw.eq(b.decoder.nw[w]),
                 word.crc_ok.eq(b.verdict.word_crc_ok[w]),
             ]
         if two:
             m.d.comb += frame.spw_mismatch.eq(b.verdict.spw_mismatch)
+        if b.chain_results is not None:
+            # Words 2..: written by the decoder as each ends, published with the frame's
+            # other fields (the result registers' report_frame), read through their port.
+            chain = b.chain_results
+            m.d.comb += [
+                chain.data.eq(b.decoder.chain_data),
+                chain.index.eq(b.decoder.chain_index),
+                chain.word_end.eq(b.decoder.chain_end),
+                chain.publish.eq(b.controller.report_frame),
+                chain.words_published.eq(b.config.word_count),
+                chain.read_addr.eq(self.chain_addr),
+                chain.read_en.eq(self.chain_en),
+                self.chain_data.eq(chain.read_data),
+            ]
         if p.timestamped:
             m.d.comb += [b.time_base.first_rise.eq(b.ma_clock.first_rise),
                          frame.timestamp.eq(b.time_base.first_rise_time)]

@@ -106,6 +106,11 @@ WORD_BITS_MAX = DATA_BITS_MAX + protocol.NE_NW_BITS + protocol.LC_BITS + protoco
 WORD_INDEX_WIDTH = WORD_BITS_MAX.bit_length()
 #: Most data words one frame can have (a chain of up to 8 one-word slaves, as iC-MB4 reads).
 MAX_WORDS = 8
+#: The first word after a Safety encoder's CPW and SPW: words from here on are a chain's
+#: further slaves (their own registers behind the bus; in memory with ``chain_memory``).
+CHAIN_FIRST_WORD = 2
+#: Bits of one word of the chain memory (a chain word's data is two of them, low first).
+CHAIN_MEMORY_WORD_BITS = 32
 
 
 def frame_length_width(words):
@@ -200,6 +205,13 @@ class MasterParams:
         ``count_en``, ``count_data``; docs/ports.md, Counters), and a count lands a few clocks
         after its event instead of one. Needs ``counter_width`` 1..16. The bus tops always
         build their cores this way.
+    chain_memory : bool
+        Keep the data of words 2..7 (a chain's further slaves) in one memory instead of
+        flip-flops (issue 27): the decoder shifts them through one register and writes each
+        word as it ends, and the ``word<N>_position`` ports of those words give way to one
+        read port (``chain_addr``, ``chain_en``, ``chain_data``; docs/ports.md, Chains).
+        Nothing changes in a build of one or two words. The bus tops build their chain cores
+        this way.
     timestamp_width : int
         Width of the free-running time base behind the ``timestamp`` output; 0 builds neither.
     time_input : bool
@@ -234,6 +246,7 @@ class MasterParams:
     timer_width: int = 24
     counter_width: int = 16
     counter_ram: bool = False
+    chain_memory: bool = False
     timestamp_width: int = 32
     time_input: bool = False
     custom_crc: bool = True
@@ -273,6 +286,8 @@ class MasterParams:
                              f"not {self.counter_width!r}")
         if not isinstance(self.counter_ram, bool):
             raise ValueError(f"counter_ram must be a bool, not {self.counter_ram!r}")
+        if not isinstance(self.chain_memory, bool):
+            raise ValueError(f"chain_memory must be a bool, not {self.chain_memory!r}")
         if self.counter_ram and not 1 <= self.counter_width <= COUNTER_HALF_BITS:
             raise ValueError(f"counter_ram needs counter_width 1..{COUNTER_HALF_BITS} (two counts "
                              f"per {COUNTER_WORD_BITS}-bit word), not {self.counter_width}")
@@ -309,6 +324,12 @@ class MasterParams:
     @property
     def words(self):
         return len(self.max_data_bits)
+
+    @property
+    def chain_words_in_memory(self):
+        """Words 2..7 of this build are kept in the chain memory (``chain_memory`` in a build
+        of more than two words)."""
+        return self.chain_memory and self.words > CHAIN_FIRST_WORD
 
     @property
     def cycle_timer_width(self):
@@ -364,6 +385,8 @@ class MasterParams:
             + (" in memory (count_addr, count_data)" if self.counter_ram else ""),
             f"timestamp_width = {self.timestamp_width}" + ("" if self.timestamped else " (no timestamp)")
             + (" of the input time_now" if self.time_input else ""),
+            *(["chain_memory    = on (words 2.. in memory: chain_addr, chain_data)"]
+              if self.chain_words_in_memory else []),
             *(["ssi             = on (cfg_ssi*)"] if self.ssi else []),
             *([f"register_access = on, start wait {self.start_wait_frames} frames"]
               if self.register_access else []),

@@ -184,6 +184,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire ch0__cfg_w7_lc;
   wire ch0__cfg_w7_nenw;
   wire ch0__cfg_w7_signed;
+  wire [3:0] ch0__chain_addr;
+  wire [31:0] ch0__chain_data;
+  wire ch0__chain_en;
   wire ch0__clear_counters;
   wire ch0__config_error;
   wire [2:0] ch0__count_addr;
@@ -230,27 +233,21 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire ch0__word2_crc_ok;
   wire ch0__word2_ne;
   wire ch0__word2_nw;
-  wire [63:0] ch0__word2_position;
   wire ch0__word3_crc_ok;
   wire ch0__word3_ne;
   wire ch0__word3_nw;
-  wire [63:0] ch0__word3_position;
   wire ch0__word4_crc_ok;
   wire ch0__word4_ne;
   wire ch0__word4_nw;
-  wire [63:0] ch0__word4_position;
   wire ch0__word5_crc_ok;
   wire ch0__word5_ne;
   wire ch0__word5_nw;
-  wire [63:0] ch0__word5_position;
   wire ch0__word6_crc_ok;
   wire ch0__word6_ne;
   wire ch0__word6_nw;
-  wire [63:0] ch0__word6_position;
   wire ch0__word7_crc_ok;
   wire ch0__word7_ne;
   wire ch0__word7_nw;
-  wire [63:0] ch0__word7_position;
   output ch0_ma;
   wire ch0_ma;
   input ch0_slo;
@@ -393,6 +390,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire ch1__cfg_w7_lc;
   wire ch1__cfg_w7_nenw;
   wire ch1__cfg_w7_signed;
+  wire [3:0] ch1__chain_addr;
+  wire [31:0] ch1__chain_data;
+  wire ch1__chain_en;
   wire ch1__clear_counters;
   wire ch1__config_error;
   wire [2:0] ch1__count_addr;
@@ -439,27 +439,21 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire ch1__word2_crc_ok;
   wire ch1__word2_ne;
   wire ch1__word2_nw;
-  wire [63:0] ch1__word2_position;
   wire ch1__word3_crc_ok;
   wire ch1__word3_ne;
   wire ch1__word3_nw;
-  wire [63:0] ch1__word3_position;
   wire ch1__word4_crc_ok;
   wire ch1__word4_ne;
   wire ch1__word4_nw;
-  wire [63:0] ch1__word4_position;
   wire ch1__word5_crc_ok;
   wire ch1__word5_ne;
   wire ch1__word5_nw;
-  wire [63:0] ch1__word5_position;
   wire ch1__word6_crc_ok;
   wire ch1__word6_ne;
   wire ch1__word6_nw;
-  wire [63:0] ch1__word6_position;
   wire ch1__word7_crc_ok;
   wire ch1__word7_ne;
   wire ch1__word7_nw;
-  wire [63:0] ch1__word7_position;
   output ch1_ma;
   wire ch1_ma;
   input ch1_slo;
@@ -471,285 +465,291 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$862 ;
+  wire [1:0] \irq$850 ;
   wire ma;
-  wire \ma$858 ;
+  wire \ma$846 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$447 ;
+  wire \regs__abort_cycle$441 ;
   wire regs__busy;
-  wire \regs__busy$450 ;
+  wire \regs__busy$444 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$451 ;
+  wire \regs__ca_abort$445 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$453 ;
+  wire [6:0] \regs__ca_address$447 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$456 ;
+  wire \regs__ca_busy$450 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$458 ;
+  wire [6:0] \regs__ca_bytes_done$452 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$459 ;
+  wire [6:0] \regs__ca_count$453 ;
   wire regs__ca_done;
-  wire \regs__ca_done$462 ;
+  wire \regs__ca_done$456 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$463 ;
+  wire [3:0] \regs__ca_rbuf_addr$457 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$466 ;
+  wire [31:0] \regs__ca_rbuf_data$460 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$467 ;
+  wire \regs__ca_rbuf_en$461 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$469 ;
+  wire [2:0] \regs__ca_slave_id$463 ;
   wire regs__ca_start;
-  wire \regs__ca_start$471 ;
+  wire \regs__ca_start$465 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$474 ;
+  wire [2:0] \regs__ca_status$468 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$475 ;
+  wire [3:0] \regs__ca_wbuf_addr$469 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$477 ;
+  wire [31:0] \regs__ca_wbuf_data$471 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$479 ;
+  wire [3:0] \regs__ca_wbuf_en$473 ;
   wire regs__ca_write;
-  wire \regs__ca_write$481 ;
+  wire \regs__ca_write$475 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$484 ;
+  wire \regs__cap_counters$478 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$486 ;
+  wire [5:0] \regs__cap_data_bits_w0$480 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$488 ;
+  wire [5:0] \regs__cap_data_bits_w1$482 ;
   wire [6:0] regs__cap_data_bits_w2;
-  wire [6:0] \regs__cap_data_bits_w2$490 ;
+  wire [6:0] \regs__cap_data_bits_w2$484 ;
   wire [6:0] regs__cap_data_bits_w3;
-  wire [6:0] \regs__cap_data_bits_w3$492 ;
+  wire [6:0] \regs__cap_data_bits_w3$486 ;
   wire [6:0] regs__cap_data_bits_w4;
-  wire [6:0] \regs__cap_data_bits_w4$494 ;
+  wire [6:0] \regs__cap_data_bits_w4$488 ;
   wire [6:0] regs__cap_data_bits_w5;
-  wire [6:0] \regs__cap_data_bits_w5$496 ;
+  wire [6:0] \regs__cap_data_bits_w5$490 ;
   wire [6:0] regs__cap_data_bits_w6;
-  wire [6:0] \regs__cap_data_bits_w6$498 ;
+  wire [6:0] \regs__cap_data_bits_w6$492 ;
   wire [6:0] regs__cap_data_bits_w7;
-  wire [6:0] \regs__cap_data_bits_w7$500 ;
+  wire [6:0] \regs__cap_data_bits_w7$494 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$502 ;
+  wire \regs__cap_register_access$496 ;
   wire regs__cap_ssi;
-  wire \regs__cap_ssi$504 ;
+  wire \regs__cap_ssi$498 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$506 ;
+  wire [5:0] \regs__cap_timer_width$500 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$508 ;
+  wire \regs__cap_timestamp$502 ;
   wire [3:0] regs__cap_words;
-  wire [3:0] \regs__cap_words$510 ;
+  wire [3:0] \regs__cap_words$504 ;
   wire regs__cds;
-  wire \regs__cds$512 ;
+  wire \regs__cds$506 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$513 ;
+  wire [23:0] \regs__cfg_ack_limit$507 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$515 ;
+  wire [23:0] \regs__cfg_break_time$509 ;
   wire [3:0] regs__cfg_confirm_frames;
-  wire [3:0] \regs__cfg_confirm_frames$517 ;
+  wire [3:0] \regs__cfg_confirm_frames$511 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$519 ;
+  wire [11:0] \regs__cfg_delay_limit$513 ;
   wire [3:0] regs__cfg_delay_tolerance;
-  wire [3:0] \regs__cfg_delay_tolerance$521 ;
+  wire [3:0] \regs__cfg_delay_tolerance$515 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$523 ;
+  wire \regs__cfg_end_check$517 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$525 ;
+  wire [15:0] \regs__cfg_ma_half_period$519 ;
   wire [3:0] regs__cfg_noise_limit;
-  wire [3:0] \regs__cfg_noise_limit$527 ;
+  wire [3:0] \regs__cfg_noise_limit$521 ;
   wire [11:0] regs__cfg_quiet_time;
-  wire [11:0] \regs__cfg_quiet_time$529 ;
+  wire [11:0] \regs__cfg_quiet_time$523 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$531 ;
+  wire [23:0] \regs__cfg_request_period$525 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$533 ;
+  wire \regs__cfg_spw_check$527 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$535 ;
+  wire [7:0] \regs__cfg_spw_tolerance$529 ;
   wire regs__cfg_ssi;
-  wire \regs__cfg_ssi$537 ;
+  wire \regs__cfg_ssi$531 ;
   wire [11:0] regs__cfg_ssi_delay;
-  wire [11:0] \regs__cfg_ssi_delay$539 ;
+  wire [11:0] \regs__cfg_ssi_delay$533 ;
   wire regs__cfg_ssi_double;
-  wire \regs__cfg_ssi_double$541 ;
+  wire \regs__cfg_ssi_double$535 ;
   wire regs__cfg_ssi_error;
-  wire \regs__cfg_ssi_error$543 ;
+  wire \regs__cfg_ssi_error$537 ;
   wire regs__cfg_ssi_error_low;
-  wire \regs__cfg_ssi_error_low$545 ;
+  wire \regs__cfg_ssi_error_low$539 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$547 ;
+  wire [23:0] \regs__cfg_timeout_limit$541 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$549 ;
+  wire [1:0] \regs__cfg_w0_crc$543 ;
   wire regs__cfg_w0_crc_inverted;
-  wire \regs__cfg_w0_crc_inverted$551 ;
+  wire \regs__cfg_w0_crc_inverted$545 ;
   wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] \regs__cfg_w0_crc_poly$553 ;
+  wire [15:0] \regs__cfg_w0_crc_poly$547 ;
   wire [15:0] regs__cfg_w0_crc_start;
-  wire [15:0] \regs__cfg_w0_crc_start$555 ;
+  wire [15:0] \regs__cfg_w0_crc_start$549 ;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [4:0] \regs__cfg_w0_crc_width$557 ;
+  wire [4:0] \regs__cfg_w0_crc_width$551 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$559 ;
+  wire [5:0] \regs__cfg_w0_data_bits$553 ;
   wire regs__cfg_w0_gray;
-  wire \regs__cfg_w0_gray$561 ;
+  wire \regs__cfg_w0_gray$555 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$563 ;
+  wire \regs__cfg_w0_lc$557 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$565 ;
+  wire \regs__cfg_w0_nenw$559 ;
   wire regs__cfg_w0_signed;
-  wire \regs__cfg_w0_signed$567 ;
+  wire \regs__cfg_w0_signed$561 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$569 ;
+  wire [1:0] \regs__cfg_w1_crc$563 ;
   wire regs__cfg_w1_crc_inverted;
-  wire \regs__cfg_w1_crc_inverted$571 ;
+  wire \regs__cfg_w1_crc_inverted$565 ;
   wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] \regs__cfg_w1_crc_poly$573 ;
+  wire [15:0] \regs__cfg_w1_crc_poly$567 ;
   wire [15:0] regs__cfg_w1_crc_start;
-  wire [15:0] \regs__cfg_w1_crc_start$575 ;
+  wire [15:0] \regs__cfg_w1_crc_start$569 ;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [4:0] \regs__cfg_w1_crc_width$577 ;
+  wire [4:0] \regs__cfg_w1_crc_width$571 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$579 ;
+  wire [5:0] \regs__cfg_w1_data_bits$573 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$581 ;
+  wire \regs__cfg_w1_enable$575 ;
   wire regs__cfg_w1_gray;
-  wire \regs__cfg_w1_gray$583 ;
+  wire \regs__cfg_w1_gray$577 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$585 ;
+  wire \regs__cfg_w1_lc$579 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$587 ;
+  wire \regs__cfg_w1_nenw$581 ;
   wire regs__cfg_w1_signed;
-  wire \regs__cfg_w1_signed$589 ;
+  wire \regs__cfg_w1_signed$583 ;
   wire [1:0] regs__cfg_w2_crc;
-  wire [1:0] \regs__cfg_w2_crc$591 ;
+  wire [1:0] \regs__cfg_w2_crc$585 ;
   wire regs__cfg_w2_crc_inverted;
-  wire \regs__cfg_w2_crc_inverted$593 ;
+  wire \regs__cfg_w2_crc_inverted$587 ;
   wire [15:0] regs__cfg_w2_crc_poly;
-  wire [15:0] \regs__cfg_w2_crc_poly$595 ;
+  wire [15:0] \regs__cfg_w2_crc_poly$589 ;
   wire [15:0] regs__cfg_w2_crc_start;
-  wire [15:0] \regs__cfg_w2_crc_start$597 ;
+  wire [15:0] \regs__cfg_w2_crc_start$591 ;
   wire [4:0] regs__cfg_w2_crc_width;
-  wire [4:0] \regs__cfg_w2_crc_width$599 ;
+  wire [4:0] \regs__cfg_w2_crc_width$593 ;
   wire [6:0] regs__cfg_w2_data_bits;
-  wire [6:0] \regs__cfg_w2_data_bits$601 ;
+  wire [6:0] \regs__cfg_w2_data_bits$595 ;
   wire regs__cfg_w2_enable;
-  wire \regs__cfg_w2_enable$603 ;
+  wire \regs__cfg_w2_enable$597 ;
   wire regs__cfg_w2_gray;
-  wire \regs__cfg_w2_gray$605 ;
+  wire \regs__cfg_w2_gray$599 ;
   wire regs__cfg_w2_lc;
-  wire \regs__cfg_w2_lc$607 ;
+  wire \regs__cfg_w2_lc$601 ;
   wire regs__cfg_w2_nenw;
-  wire \regs__cfg_w2_nenw$609 ;
+  wire \regs__cfg_w2_nenw$603 ;
   wire regs__cfg_w2_signed;
-  wire \regs__cfg_w2_signed$611 ;
+  wire \regs__cfg_w2_signed$605 ;
   wire [1:0] regs__cfg_w3_crc;
-  wire [1:0] \regs__cfg_w3_crc$613 ;
+  wire [1:0] \regs__cfg_w3_crc$607 ;
   wire regs__cfg_w3_crc_inverted;
-  wire \regs__cfg_w3_crc_inverted$615 ;
+  wire \regs__cfg_w3_crc_inverted$609 ;
   wire [15:0] regs__cfg_w3_crc_poly;
-  wire [15:0] \regs__cfg_w3_crc_poly$617 ;
+  wire [15:0] \regs__cfg_w3_crc_poly$611 ;
   wire [15:0] regs__cfg_w3_crc_start;
-  wire [15:0] \regs__cfg_w3_crc_start$619 ;
+  wire [15:0] \regs__cfg_w3_crc_start$613 ;
   wire [4:0] regs__cfg_w3_crc_width;
-  wire [4:0] \regs__cfg_w3_crc_width$621 ;
+  wire [4:0] \regs__cfg_w3_crc_width$615 ;
   wire [6:0] regs__cfg_w3_data_bits;
-  wire [6:0] \regs__cfg_w3_data_bits$623 ;
+  wire [6:0] \regs__cfg_w3_data_bits$617 ;
   wire regs__cfg_w3_enable;
-  wire \regs__cfg_w3_enable$625 ;
+  wire \regs__cfg_w3_enable$619 ;
   wire regs__cfg_w3_gray;
-  wire \regs__cfg_w3_gray$627 ;
+  wire \regs__cfg_w3_gray$621 ;
   wire regs__cfg_w3_lc;
-  wire \regs__cfg_w3_lc$629 ;
+  wire \regs__cfg_w3_lc$623 ;
   wire regs__cfg_w3_nenw;
-  wire \regs__cfg_w3_nenw$631 ;
+  wire \regs__cfg_w3_nenw$625 ;
   wire regs__cfg_w3_signed;
-  wire \regs__cfg_w3_signed$633 ;
+  wire \regs__cfg_w3_signed$627 ;
   wire [1:0] regs__cfg_w4_crc;
-  wire [1:0] \regs__cfg_w4_crc$635 ;
+  wire [1:0] \regs__cfg_w4_crc$629 ;
   wire regs__cfg_w4_crc_inverted;
-  wire \regs__cfg_w4_crc_inverted$637 ;
+  wire \regs__cfg_w4_crc_inverted$631 ;
   wire [15:0] regs__cfg_w4_crc_poly;
-  wire [15:0] \regs__cfg_w4_crc_poly$639 ;
+  wire [15:0] \regs__cfg_w4_crc_poly$633 ;
   wire [15:0] regs__cfg_w4_crc_start;
-  wire [15:0] \regs__cfg_w4_crc_start$641 ;
+  wire [15:0] \regs__cfg_w4_crc_start$635 ;
   wire [4:0] regs__cfg_w4_crc_width;
-  wire [4:0] \regs__cfg_w4_crc_width$643 ;
+  wire [4:0] \regs__cfg_w4_crc_width$637 ;
   wire [6:0] regs__cfg_w4_data_bits;
-  wire [6:0] \regs__cfg_w4_data_bits$645 ;
+  wire [6:0] \regs__cfg_w4_data_bits$639 ;
   wire regs__cfg_w4_enable;
-  wire \regs__cfg_w4_enable$647 ;
+  wire \regs__cfg_w4_enable$641 ;
   wire regs__cfg_w4_gray;
-  wire \regs__cfg_w4_gray$649 ;
+  wire \regs__cfg_w4_gray$643 ;
   wire regs__cfg_w4_lc;
-  wire \regs__cfg_w4_lc$651 ;
+  wire \regs__cfg_w4_lc$645 ;
   wire regs__cfg_w4_nenw;
-  wire \regs__cfg_w4_nenw$653 ;
+  wire \regs__cfg_w4_nenw$647 ;
   wire regs__cfg_w4_signed;
-  wire \regs__cfg_w4_signed$655 ;
+  wire \regs__cfg_w4_signed$649 ;
   wire [1:0] regs__cfg_w5_crc;
-  wire [1:0] \regs__cfg_w5_crc$657 ;
+  wire [1:0] \regs__cfg_w5_crc$651 ;
   wire regs__cfg_w5_crc_inverted;
-  wire \regs__cfg_w5_crc_inverted$659 ;
+  wire \regs__cfg_w5_crc_inverted$653 ;
   wire [15:0] regs__cfg_w5_crc_poly;
-  wire [15:0] \regs__cfg_w5_crc_poly$661 ;
+  wire [15:0] \regs__cfg_w5_crc_poly$655 ;
   wire [15:0] regs__cfg_w5_crc_start;
-  wire [15:0] \regs__cfg_w5_crc_start$663 ;
+  wire [15:0] \regs__cfg_w5_crc_start$657 ;
   wire [4:0] regs__cfg_w5_crc_width;
-  wire [4:0] \regs__cfg_w5_crc_width$665 ;
+  wire [4:0] \regs__cfg_w5_crc_width$659 ;
   wire [6:0] regs__cfg_w5_data_bits;
-  wire [6:0] \regs__cfg_w5_data_bits$667 ;
+  wire [6:0] \regs__cfg_w5_data_bits$661 ;
   wire regs__cfg_w5_enable;
-  wire \regs__cfg_w5_enable$669 ;
+  wire \regs__cfg_w5_enable$663 ;
   wire regs__cfg_w5_gray;
-  wire \regs__cfg_w5_gray$671 ;
+  wire \regs__cfg_w5_gray$665 ;
   wire regs__cfg_w5_lc;
-  wire \regs__cfg_w5_lc$673 ;
+  wire \regs__cfg_w5_lc$667 ;
   wire regs__cfg_w5_nenw;
-  wire \regs__cfg_w5_nenw$675 ;
+  wire \regs__cfg_w5_nenw$669 ;
   wire regs__cfg_w5_signed;
-  wire \regs__cfg_w5_signed$677 ;
+  wire \regs__cfg_w5_signed$671 ;
   wire [1:0] regs__cfg_w6_crc;
-  wire [1:0] \regs__cfg_w6_crc$679 ;
+  wire [1:0] \regs__cfg_w6_crc$673 ;
   wire regs__cfg_w6_crc_inverted;
-  wire \regs__cfg_w6_crc_inverted$681 ;
+  wire \regs__cfg_w6_crc_inverted$675 ;
   wire [15:0] regs__cfg_w6_crc_poly;
-  wire [15:0] \regs__cfg_w6_crc_poly$683 ;
+  wire [15:0] \regs__cfg_w6_crc_poly$677 ;
   wire [15:0] regs__cfg_w6_crc_start;
-  wire [15:0] \regs__cfg_w6_crc_start$685 ;
+  wire [15:0] \regs__cfg_w6_crc_start$679 ;
   wire [4:0] regs__cfg_w6_crc_width;
-  wire [4:0] \regs__cfg_w6_crc_width$687 ;
+  wire [4:0] \regs__cfg_w6_crc_width$681 ;
   wire [6:0] regs__cfg_w6_data_bits;
-  wire [6:0] \regs__cfg_w6_data_bits$689 ;
+  wire [6:0] \regs__cfg_w6_data_bits$683 ;
   wire regs__cfg_w6_enable;
-  wire \regs__cfg_w6_enable$691 ;
+  wire \regs__cfg_w6_enable$685 ;
   wire regs__cfg_w6_gray;
-  wire \regs__cfg_w6_gray$693 ;
+  wire \regs__cfg_w6_gray$687 ;
   wire regs__cfg_w6_lc;
-  wire \regs__cfg_w6_lc$695 ;
+  wire \regs__cfg_w6_lc$689 ;
   wire regs__cfg_w6_nenw;
-  wire \regs__cfg_w6_nenw$697 ;
+  wire \regs__cfg_w6_nenw$691 ;
   wire regs__cfg_w6_signed;
-  wire \regs__cfg_w6_signed$699 ;
+  wire \regs__cfg_w6_signed$693 ;
   wire [1:0] regs__cfg_w7_crc;
-  wire [1:0] \regs__cfg_w7_crc$701 ;
+  wire [1:0] \regs__cfg_w7_crc$695 ;
   wire regs__cfg_w7_crc_inverted;
-  wire \regs__cfg_w7_crc_inverted$703 ;
+  wire \regs__cfg_w7_crc_inverted$697 ;
   wire [15:0] regs__cfg_w7_crc_poly;
-  wire [15:0] \regs__cfg_w7_crc_poly$705 ;
+  wire [15:0] \regs__cfg_w7_crc_poly$699 ;
   wire [15:0] regs__cfg_w7_crc_start;
-  wire [15:0] \regs__cfg_w7_crc_start$707 ;
+  wire [15:0] \regs__cfg_w7_crc_start$701 ;
   wire [4:0] regs__cfg_w7_crc_width;
-  wire [4:0] \regs__cfg_w7_crc_width$709 ;
+  wire [4:0] \regs__cfg_w7_crc_width$703 ;
   wire [6:0] regs__cfg_w7_data_bits;
-  wire [6:0] \regs__cfg_w7_data_bits$711 ;
+  wire [6:0] \regs__cfg_w7_data_bits$705 ;
   wire regs__cfg_w7_enable;
-  wire \regs__cfg_w7_enable$713 ;
+  wire \regs__cfg_w7_enable$707 ;
   wire regs__cfg_w7_gray;
-  wire \regs__cfg_w7_gray$715 ;
+  wire \regs__cfg_w7_gray$709 ;
   wire regs__cfg_w7_lc;
-  wire \regs__cfg_w7_lc$717 ;
+  wire \regs__cfg_w7_lc$711 ;
   wire regs__cfg_w7_nenw;
-  wire \regs__cfg_w7_nenw$719 ;
+  wire \regs__cfg_w7_nenw$713 ;
   wire regs__cfg_w7_signed;
-  wire \regs__cfg_w7_signed$721 ;
+  wire \regs__cfg_w7_signed$715 ;
+  wire [3:0] regs__chain_addr;
+  wire [3:0] \regs__chain_addr$717 ;
+  wire [31:0] regs__chain_data;
+  wire [31:0] \regs__chain_data$720 ;
+  wire regs__chain_en;
+  wire \regs__chain_en$721 ;
   wire regs__clear_counters;
   wire \regs__clear_counters$723 ;
   wire regs__config_error;
@@ -850,62 +850,50 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire \regs__word2_ne$812 ;
   wire regs__word2_nw;
   wire \regs__word2_nw$814 ;
-  wire [63:0] regs__word2_position;
-  wire [63:0] \regs__word2_position$816 ;
   wire regs__word3_crc_ok;
-  wire \regs__word3_crc_ok$818 ;
+  wire \regs__word3_crc_ok$816 ;
   wire regs__word3_ne;
-  wire \regs__word3_ne$820 ;
+  wire \regs__word3_ne$818 ;
   wire regs__word3_nw;
-  wire \regs__word3_nw$822 ;
-  wire [63:0] regs__word3_position;
-  wire [63:0] \regs__word3_position$824 ;
+  wire \regs__word3_nw$820 ;
   wire regs__word4_crc_ok;
-  wire \regs__word4_crc_ok$826 ;
+  wire \regs__word4_crc_ok$822 ;
   wire regs__word4_ne;
-  wire \regs__word4_ne$828 ;
+  wire \regs__word4_ne$824 ;
   wire regs__word4_nw;
-  wire \regs__word4_nw$830 ;
-  wire [63:0] regs__word4_position;
-  wire [63:0] \regs__word4_position$832 ;
+  wire \regs__word4_nw$826 ;
   wire regs__word5_crc_ok;
-  wire \regs__word5_crc_ok$834 ;
+  wire \regs__word5_crc_ok$828 ;
   wire regs__word5_ne;
-  wire \regs__word5_ne$836 ;
+  wire \regs__word5_ne$830 ;
   wire regs__word5_nw;
-  wire \regs__word5_nw$838 ;
-  wire [63:0] regs__word5_position;
-  wire [63:0] \regs__word5_position$840 ;
+  wire \regs__word5_nw$832 ;
   wire regs__word6_crc_ok;
-  wire \regs__word6_crc_ok$842 ;
+  wire \regs__word6_crc_ok$834 ;
   wire regs__word6_ne;
-  wire \regs__word6_ne$844 ;
+  wire \regs__word6_ne$836 ;
   wire regs__word6_nw;
-  wire \regs__word6_nw$846 ;
-  wire [63:0] regs__word6_position;
-  wire [63:0] \regs__word6_position$848 ;
+  wire \regs__word6_nw$838 ;
   wire regs__word7_crc_ok;
-  wire \regs__word7_crc_ok$850 ;
+  wire \regs__word7_crc_ok$840 ;
   wire regs__word7_ne;
-  wire \regs__word7_ne$852 ;
+  wire \regs__word7_ne$842 ;
   wire regs__word7_nw;
-  wire \regs__word7_nw$854 ;
-  wire [63:0] regs__word7_position;
-  wire [63:0] \regs__word7_position$856 ;
+  wire \regs__word7_nw$844 ;
   input rst;
   wire rst;
   wire slo;
-  wire \slo$859 ;
+  wire \slo$847 ;
   reg [31:0] time_now = 32'd0;
   (* init = 32'd0 *)
   wire [31:0] \time_now$32 ;
   (* init = 32'd0 *)
-  wire [31:0] \time_now$446 ;
+  wire [31:0] \time_now$440 ;
   input trigger;
   wire trigger;
   wire \trigger$28 ;
-  wire \trigger$443 ;
-  wire \trigger$857 ;
+  wire \trigger$437 ;
+  wire \trigger$845 ;
   reg trigger_in = 1'h0;
   wire uart__rx;
   wire uart__tx;
@@ -939,6 +927,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch0__ca_rbuf_en(regs__ca_rbuf_en),
     .ch0__ca_wbuf_addr(regs__ca_wbuf_addr),
     .ch0__ca_wbuf_en(regs__ca_wbuf_en),
+    .ch0__chain_en(regs__chain_en),
     .ch0__config_error(ch0__config_error),
     .ch0__count_data(ch0__count_data),
     .ch0__count_en(regs__count_en),
@@ -1001,8 +990,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$467 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$479 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$461 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$473 ),
+    .ch1__chain_en(\regs__chain_en$721 ),
     .ch1__config_error(ch1__config_error),
     .ch1__count_data(ch1__count_data),
     .ch1__count_en(\regs__count_en$753 ),
@@ -1010,52 +1000,52 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1__frame_done(ch1__frame_done),
     .ch1__frame_error(ch1__frame_error),
     .ch1__result_updates(ch1__result_updates),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$451 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$471 ),
-    .ch1_ca_request_address(\regs__ca_address$453 ),
-    .ch1_ca_request_count(\regs__ca_count$459 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$469 ),
-    .\ch1_ca_request_write$446 (\regs__ca_write$481 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$513 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$515 ),
-    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$517 ),
-    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$521 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$523 ),
-    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$527 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$533 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$535 ),
-    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$555 ),
-    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$551 ),
-    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$553 ),
-    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$557 ),
-    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$575 ),
-    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$571 ),
-    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$573 ),
-    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$577 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$519 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$525 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$531 ),
-    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$529 ),
-    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$537 ),
-    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$539 ),
-    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$541 ),
-    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$543 ),
-    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$545 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$547 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$549 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$559 ),
-    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$561 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$563 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$565 ),
-    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$567 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$569 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$579 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$581 ),
-    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$583 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$585 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$587 ),
-    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$589 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$447 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$445 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$465 ),
+    .ch1_ca_request_address(\regs__ca_address$447 ),
+    .ch1_ca_request_count(\regs__ca_count$453 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$463 ),
+    .\ch1_ca_request_write$430 (\regs__ca_write$475 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$507 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$509 ),
+    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$511 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$515 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$517 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$521 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$527 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$529 ),
+    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$549 ),
+    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$545 ),
+    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$547 ),
+    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$551 ),
+    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$569 ),
+    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$565 ),
+    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$567 ),
+    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$571 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$513 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$519 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$525 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$523 ),
+    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$531 ),
+    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$533 ),
+    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$535 ),
+    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$537 ),
+    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$539 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$541 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$543 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$553 ),
+    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$555 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$557 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$559 ),
+    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$561 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$563 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$573 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$575 ),
+    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$577 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$579 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$581 ),
+    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$583 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$441 ),
     .ch1_ctrl_clear_counters(\regs__clear_counters$723 ),
     .ch1_ctrl_periodic(\regs__periodic$777 ),
     .ch1_ctrl_start(\regs__start$785 ),
@@ -1063,12 +1053,12 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$7739$0 (\$10 ),
-    .\port$7750$0 (\$11 ),
-    .\port$7827$0 (\$12 ),
-    .\port$8270$0 (\$13 ),
-    .\port$8281$0 (\$14 ),
-    .\port$8358$0 (\$15 ),
+    .\port$7595$0 (\$10 ),
+    .\port$7606$0 (\$11 ),
+    .\port$7683$0 (\$12 ),
+    .\port$8126$0 (\$13 ),
+    .\port$8137$0 (\$14 ),
+    .\port$8214$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1141,9 +1131,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$7739$0 (\$10 ),
-    .\port$7750$0 (\$11 ),
-    .\port$7827$0 (\$12 ),
+    .\port$7595$0 (\$10 ),
+    .\port$7606$0 (\$11 ),
+    .\port$7683$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1163,65 +1153,65 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .\trigger$204 (\trigger$28 )
   );
   \biss_master_uart.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$451 ),
-    .ca_address(\regs__ca_address$453 ),
-    .ca_count(\regs__ca_count$459 ),
+    .ca_abort(\regs__ca_abort$445 ),
+    .ca_address(\regs__ca_address$447 ),
+    .ca_count(\regs__ca_count$453 ),
     .ca_rbuf_addr(bus__r_addr[3:0]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$467 ),
-    .ca_slave_id(\regs__ca_slave_id$469 ),
-    .ca_start(\regs__ca_start$471 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$461 ),
+    .ca_slave_id(\regs__ca_slave_id$463 ),
+    .ca_start(\regs__ca_start$465 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$479 ),
-    .ca_write(\regs__ca_write$481 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$513 ),
-    .cfg_break_time(\regs__cfg_break_time$515 ),
-    .cfg_confirm_frames(\regs__cfg_confirm_frames$517 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$519 ),
-    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$521 ),
-    .cfg_end_check(\regs__cfg_end_check$523 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$525 ),
-    .cfg_noise_limit(\regs__cfg_noise_limit$527 ),
-    .cfg_quiet_time(\regs__cfg_quiet_time$529 ),
-    .cfg_request_period(\regs__cfg_request_period$531 ),
-    .cfg_spw_check(\regs__cfg_spw_check$533 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$535 ),
-    .cfg_ssi(\regs__cfg_ssi$537 ),
-    .cfg_ssi_delay(\regs__cfg_ssi_delay$539 ),
-    .cfg_ssi_double(\regs__cfg_ssi_double$541 ),
-    .cfg_ssi_error(\regs__cfg_ssi_error$543 ),
-    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$545 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$547 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$549 ),
-    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$551 ),
-    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$553 ),
-    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$555 ),
-    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$557 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$559 ),
-    .cfg_w0_gray(\regs__cfg_w0_gray$561 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$563 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$565 ),
-    .cfg_w0_signed(\regs__cfg_w0_signed$567 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$569 ),
-    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$571 ),
-    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$573 ),
-    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$575 ),
-    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$577 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$579 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$581 ),
-    .cfg_w1_gray(\regs__cfg_w1_gray$583 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$585 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$587 ),
-    .cfg_w1_signed(\regs__cfg_w1_signed$589 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$473 ),
+    .ca_write(\regs__ca_write$475 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$507 ),
+    .cfg_break_time(\regs__cfg_break_time$509 ),
+    .cfg_confirm_frames(\regs__cfg_confirm_frames$511 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$513 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$515 ),
+    .cfg_end_check(\regs__cfg_end_check$517 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$519 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$521 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$523 ),
+    .cfg_request_period(\regs__cfg_request_period$525 ),
+    .cfg_spw_check(\regs__cfg_spw_check$527 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$529 ),
+    .cfg_ssi(\regs__cfg_ssi$531 ),
+    .cfg_ssi_delay(\regs__cfg_ssi_delay$533 ),
+    .cfg_ssi_double(\regs__cfg_ssi_double$535 ),
+    .cfg_ssi_error(\regs__cfg_ssi_error$537 ),
+    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$539 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$541 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$543 ),
+    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$545 ),
+    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$547 ),
+    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$549 ),
+    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$551 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$553 ),
+    .cfg_w0_gray(\regs__cfg_w0_gray$555 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$557 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$559 ),
+    .cfg_w0_signed(\regs__cfg_w0_signed$561 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$563 ),
+    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$565 ),
+    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$567 ),
+    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$569 ),
+    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$571 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$573 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$575 ),
+    .cfg_w1_gray(\regs__cfg_w1_gray$577 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$579 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$581 ),
+    .cfg_w1_signed(\regs__cfg_w1_signed$583 ),
     .clear_counters(\regs__clear_counters$723 ),
     .clk(clk),
     .count_en(\regs__count_en$753 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$777 ),
-    .\port$8270$0 (\$13 ),
-    .\port$8281$0 (\$14 ),
-    .\port$8358$0 (\$15 ),
-    .regs__abort_cycle(\regs__abort_cycle$447 ),
+    .\port$8126$0 (\$13 ),
+    .\port$8137$0 (\$14 ),
+    .\port$8214$0 (\$15 ),
+    .regs__abort_cycle(\regs__abort_cycle$441 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -1494,6 +1484,11 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign ch0__cfg_w7_nenw = 1'h0;
   assign regs__cfg_w7_signed = 1'h0;
   assign ch0__cfg_w7_signed = 1'h0;
+  assign regs__chain_addr = bus__r_addr[3:0];
+  assign ch0__chain_addr = bus__r_addr[3:0];
+  assign ch0__chain_data = 32'd0;
+  assign regs__chain_data = 32'd0;
+  assign ch0__chain_en = regs__chain_en;
   assign ch0__clear_counters = regs__clear_counters;
   assign regs__config_error = ch0__config_error;
   assign regs__count_addr = bus__r_addr[2:0];
@@ -1575,276 +1570,269 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign regs__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign regs__word2_nw = 1'h0;
-  assign ch0__word2_position = 64'h0000000000000000;
-  assign regs__word2_position = 64'h0000000000000000;
   assign ch0__word3_crc_ok = 1'h0;
   assign regs__word3_crc_ok = 1'h0;
   assign ch0__word3_ne = 1'h0;
   assign regs__word3_ne = 1'h0;
   assign ch0__word3_nw = 1'h0;
   assign regs__word3_nw = 1'h0;
-  assign ch0__word3_position = 64'h0000000000000000;
-  assign regs__word3_position = 64'h0000000000000000;
   assign ch0__word4_crc_ok = 1'h0;
   assign regs__word4_crc_ok = 1'h0;
   assign ch0__word4_ne = 1'h0;
   assign regs__word4_ne = 1'h0;
   assign ch0__word4_nw = 1'h0;
   assign regs__word4_nw = 1'h0;
-  assign ch0__word4_position = 64'h0000000000000000;
-  assign regs__word4_position = 64'h0000000000000000;
   assign ch0__word5_crc_ok = 1'h0;
   assign regs__word5_crc_ok = 1'h0;
   assign ch0__word5_ne = 1'h0;
   assign regs__word5_ne = 1'h0;
   assign ch0__word5_nw = 1'h0;
   assign regs__word5_nw = 1'h0;
-  assign ch0__word5_position = 64'h0000000000000000;
-  assign regs__word5_position = 64'h0000000000000000;
   assign ch0__word6_crc_ok = 1'h0;
   assign regs__word6_crc_ok = 1'h0;
   assign ch0__word6_ne = 1'h0;
   assign regs__word6_ne = 1'h0;
   assign ch0__word6_nw = 1'h0;
   assign regs__word6_nw = 1'h0;
-  assign ch0__word6_position = 64'h0000000000000000;
-  assign regs__word6_position = 64'h0000000000000000;
   assign ch0__word7_crc_ok = 1'h0;
   assign regs__word7_crc_ok = 1'h0;
   assign ch0__word7_ne = 1'h0;
   assign regs__word7_ne = 1'h0;
   assign ch0__word7_nw = 1'h0;
   assign regs__word7_nw = 1'h0;
-  assign ch0__word7_position = 64'h0000000000000000;
-  assign regs__word7_position = 64'h0000000000000000;
-  assign \trigger$443  = \trigger$28 ;
+  assign \trigger$437  = \trigger$28 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign \time_now$446  = time_now;
-  assign ch1__abort_cycle = \regs__abort_cycle$447 ;
-  assign \regs__busy$450  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$451 ;
-  assign ch1__ca_address = \regs__ca_address$453 ;
-  assign \regs__ca_busy$456  = ch1__ca_busy;
+  assign \time_now$440  = time_now;
+  assign ch1__abort_cycle = \regs__abort_cycle$441 ;
+  assign \regs__busy$444  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$445 ;
+  assign ch1__ca_address = \regs__ca_address$447 ;
+  assign \regs__ca_busy$450  = ch1__ca_busy;
   assign ch1__ca_bytes_done = \$15 [9:3];
-  assign \regs__ca_bytes_done$458  = \$15 [9:3];
-  assign ch1__ca_count = \regs__ca_count$459 ;
-  assign \regs__ca_done$462  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$463  = bus__r_addr[3:0];
+  assign \regs__ca_bytes_done$452  = \$15 [9:3];
+  assign ch1__ca_count = \regs__ca_count$453 ;
+  assign \regs__ca_done$456  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$457  = bus__r_addr[3:0];
   assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
-  assign \regs__ca_rbuf_data$466  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$467 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$469 ;
-  assign ch1__ca_start = \regs__ca_start$471 ;
+  assign \regs__ca_rbuf_data$460  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$461 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$463 ;
+  assign ch1__ca_start = \regs__ca_start$465 ;
   assign ch1__ca_status = \$15 [2:0];
-  assign \regs__ca_status$474  = \$15 [2:0];
-  assign \regs__ca_wbuf_addr$475  = regs__ca_wbuf_addr;
+  assign \regs__ca_status$468  = \$15 [2:0];
+  assign \regs__ca_wbuf_addr$469  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$477  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$471  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$479 ;
-  assign ch1__ca_write = \regs__ca_write$481 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$473 ;
+  assign ch1__ca_write = \regs__ca_write$475 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$484  = 1'h1;
+  assign \regs__cap_counters$478  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$486  = 6'h37;
+  assign \regs__cap_data_bits_w0$480  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$488  = 6'h28;
+  assign \regs__cap_data_bits_w1$482  = 6'h28;
   assign ch1__cap_data_bits_w2 = 7'h00;
-  assign \regs__cap_data_bits_w2$490  = 7'h00;
+  assign \regs__cap_data_bits_w2$484  = 7'h00;
   assign ch1__cap_data_bits_w3 = 7'h00;
-  assign \regs__cap_data_bits_w3$492  = 7'h00;
+  assign \regs__cap_data_bits_w3$486  = 7'h00;
   assign ch1__cap_data_bits_w4 = 7'h00;
-  assign \regs__cap_data_bits_w4$494  = 7'h00;
+  assign \regs__cap_data_bits_w4$488  = 7'h00;
   assign ch1__cap_data_bits_w5 = 7'h00;
-  assign \regs__cap_data_bits_w5$496  = 7'h00;
+  assign \regs__cap_data_bits_w5$490  = 7'h00;
   assign ch1__cap_data_bits_w6 = 7'h00;
-  assign \regs__cap_data_bits_w6$498  = 7'h00;
+  assign \regs__cap_data_bits_w6$492  = 7'h00;
   assign ch1__cap_data_bits_w7 = 7'h00;
-  assign \regs__cap_data_bits_w7$500  = 7'h00;
+  assign \regs__cap_data_bits_w7$494  = 7'h00;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$502  = 1'h1;
+  assign \regs__cap_register_access$496  = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign \regs__cap_ssi$504  = 1'h1;
+  assign \regs__cap_ssi$498  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$506  = 6'h18;
+  assign \regs__cap_timer_width$500  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$508  = 1'h1;
+  assign \regs__cap_timestamp$502  = 1'h1;
   assign ch1__cap_words = 4'h2;
-  assign \regs__cap_words$510  = 4'h2;
+  assign \regs__cap_words$504  = 4'h2;
   assign ch1__cds = \$13 [49];
-  assign \regs__cds$512  = \$13 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$513 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$515 ;
-  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$517 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$519 ;
-  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$521 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$523 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$525 ;
-  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$527 ;
-  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$529 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$531 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$533 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$535 ;
-  assign ch1__cfg_ssi = \regs__cfg_ssi$537 ;
-  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$539 ;
-  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$541 ;
-  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$543 ;
-  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$545 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$547 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$549 ;
-  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$551 ;
-  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$553 ;
-  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$555 ;
-  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$557 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$559 ;
-  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$561 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$563 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$565 ;
-  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$567 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$569 ;
-  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$571 ;
-  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$573 ;
-  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$575 ;
-  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$577 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$579 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$581 ;
-  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$583 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$585 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$587 ;
-  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$589 ;
-  assign \regs__cfg_w2_crc$591  = 2'h0;
+  assign \regs__cds$506  = \$13 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$507 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$509 ;
+  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$511 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$513 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$515 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$517 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$519 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$521 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$523 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$525 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$527 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$529 ;
+  assign ch1__cfg_ssi = \regs__cfg_ssi$531 ;
+  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$533 ;
+  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$535 ;
+  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$537 ;
+  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$539 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$541 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$543 ;
+  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$545 ;
+  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$547 ;
+  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$549 ;
+  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$551 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$553 ;
+  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$555 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$557 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$559 ;
+  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$561 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$563 ;
+  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$565 ;
+  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$567 ;
+  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$569 ;
+  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$571 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$573 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$575 ;
+  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$577 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$579 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$581 ;
+  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$583 ;
+  assign \regs__cfg_w2_crc$585  = 2'h0;
   assign ch1__cfg_w2_crc = 2'h0;
-  assign \regs__cfg_w2_crc_inverted$593  = 1'h0;
+  assign \regs__cfg_w2_crc_inverted$587  = 1'h0;
   assign ch1__cfg_w2_crc_inverted = 1'h0;
-  assign \regs__cfg_w2_crc_poly$595  = 16'h0000;
+  assign \regs__cfg_w2_crc_poly$589  = 16'h0000;
   assign ch1__cfg_w2_crc_poly = 16'h0000;
-  assign \regs__cfg_w2_crc_start$597  = 16'h0000;
+  assign \regs__cfg_w2_crc_start$591  = 16'h0000;
   assign ch1__cfg_w2_crc_start = 16'h0000;
-  assign \regs__cfg_w2_crc_width$599  = 5'h00;
+  assign \regs__cfg_w2_crc_width$593  = 5'h00;
   assign ch1__cfg_w2_crc_width = 5'h00;
-  assign \regs__cfg_w2_data_bits$601  = 7'h00;
+  assign \regs__cfg_w2_data_bits$595  = 7'h00;
   assign ch1__cfg_w2_data_bits = 7'h00;
-  assign \regs__cfg_w2_enable$603  = 1'h0;
+  assign \regs__cfg_w2_enable$597  = 1'h0;
   assign ch1__cfg_w2_enable = 1'h0;
-  assign \regs__cfg_w2_gray$605  = 1'h0;
+  assign \regs__cfg_w2_gray$599  = 1'h0;
   assign ch1__cfg_w2_gray = 1'h0;
-  assign \regs__cfg_w2_lc$607  = 1'h0;
+  assign \regs__cfg_w2_lc$601  = 1'h0;
   assign ch1__cfg_w2_lc = 1'h0;
-  assign \regs__cfg_w2_nenw$609  = 1'h0;
+  assign \regs__cfg_w2_nenw$603  = 1'h0;
   assign ch1__cfg_w2_nenw = 1'h0;
-  assign \regs__cfg_w2_signed$611  = 1'h0;
+  assign \regs__cfg_w2_signed$605  = 1'h0;
   assign ch1__cfg_w2_signed = 1'h0;
-  assign \regs__cfg_w3_crc$613  = 2'h0;
+  assign \regs__cfg_w3_crc$607  = 2'h0;
   assign ch1__cfg_w3_crc = 2'h0;
-  assign \regs__cfg_w3_crc_inverted$615  = 1'h0;
+  assign \regs__cfg_w3_crc_inverted$609  = 1'h0;
   assign ch1__cfg_w3_crc_inverted = 1'h0;
-  assign \regs__cfg_w3_crc_poly$617  = 16'h0000;
+  assign \regs__cfg_w3_crc_poly$611  = 16'h0000;
   assign ch1__cfg_w3_crc_poly = 16'h0000;
-  assign \regs__cfg_w3_crc_start$619  = 16'h0000;
+  assign \regs__cfg_w3_crc_start$613  = 16'h0000;
   assign ch1__cfg_w3_crc_start = 16'h0000;
-  assign \regs__cfg_w3_crc_width$621  = 5'h00;
+  assign \regs__cfg_w3_crc_width$615  = 5'h00;
   assign ch1__cfg_w3_crc_width = 5'h00;
-  assign \regs__cfg_w3_data_bits$623  = 7'h00;
+  assign \regs__cfg_w3_data_bits$617  = 7'h00;
   assign ch1__cfg_w3_data_bits = 7'h00;
-  assign \regs__cfg_w3_enable$625  = 1'h0;
+  assign \regs__cfg_w3_enable$619  = 1'h0;
   assign ch1__cfg_w3_enable = 1'h0;
-  assign \regs__cfg_w3_gray$627  = 1'h0;
+  assign \regs__cfg_w3_gray$621  = 1'h0;
   assign ch1__cfg_w3_gray = 1'h0;
-  assign \regs__cfg_w3_lc$629  = 1'h0;
+  assign \regs__cfg_w3_lc$623  = 1'h0;
   assign ch1__cfg_w3_lc = 1'h0;
-  assign \regs__cfg_w3_nenw$631  = 1'h0;
+  assign \regs__cfg_w3_nenw$625  = 1'h0;
   assign ch1__cfg_w3_nenw = 1'h0;
-  assign \regs__cfg_w3_signed$633  = 1'h0;
+  assign \regs__cfg_w3_signed$627  = 1'h0;
   assign ch1__cfg_w3_signed = 1'h0;
-  assign \regs__cfg_w4_crc$635  = 2'h0;
+  assign \regs__cfg_w4_crc$629  = 2'h0;
   assign ch1__cfg_w4_crc = 2'h0;
-  assign \regs__cfg_w4_crc_inverted$637  = 1'h0;
+  assign \regs__cfg_w4_crc_inverted$631  = 1'h0;
   assign ch1__cfg_w4_crc_inverted = 1'h0;
-  assign \regs__cfg_w4_crc_poly$639  = 16'h0000;
+  assign \regs__cfg_w4_crc_poly$633  = 16'h0000;
   assign ch1__cfg_w4_crc_poly = 16'h0000;
-  assign \regs__cfg_w4_crc_start$641  = 16'h0000;
+  assign \regs__cfg_w4_crc_start$635  = 16'h0000;
   assign ch1__cfg_w4_crc_start = 16'h0000;
-  assign \regs__cfg_w4_crc_width$643  = 5'h00;
+  assign \regs__cfg_w4_crc_width$637  = 5'h00;
   assign ch1__cfg_w4_crc_width = 5'h00;
-  assign \regs__cfg_w4_data_bits$645  = 7'h00;
+  assign \regs__cfg_w4_data_bits$639  = 7'h00;
   assign ch1__cfg_w4_data_bits = 7'h00;
-  assign \regs__cfg_w4_enable$647  = 1'h0;
+  assign \regs__cfg_w4_enable$641  = 1'h0;
   assign ch1__cfg_w4_enable = 1'h0;
-  assign \regs__cfg_w4_gray$649  = 1'h0;
+  assign \regs__cfg_w4_gray$643  = 1'h0;
   assign ch1__cfg_w4_gray = 1'h0;
-  assign \regs__cfg_w4_lc$651  = 1'h0;
+  assign \regs__cfg_w4_lc$645  = 1'h0;
   assign ch1__cfg_w4_lc = 1'h0;
-  assign \regs__cfg_w4_nenw$653  = 1'h0;
+  assign \regs__cfg_w4_nenw$647  = 1'h0;
   assign ch1__cfg_w4_nenw = 1'h0;
-  assign \regs__cfg_w4_signed$655  = 1'h0;
+  assign \regs__cfg_w4_signed$649  = 1'h0;
   assign ch1__cfg_w4_signed = 1'h0;
-  assign \regs__cfg_w5_crc$657  = 2'h0;
+  assign \regs__cfg_w5_crc$651  = 2'h0;
   assign ch1__cfg_w5_crc = 2'h0;
-  assign \regs__cfg_w5_crc_inverted$659  = 1'h0;
+  assign \regs__cfg_w5_crc_inverted$653  = 1'h0;
   assign ch1__cfg_w5_crc_inverted = 1'h0;
-  assign \regs__cfg_w5_crc_poly$661  = 16'h0000;
+  assign \regs__cfg_w5_crc_poly$655  = 16'h0000;
   assign ch1__cfg_w5_crc_poly = 16'h0000;
-  assign \regs__cfg_w5_crc_start$663  = 16'h0000;
+  assign \regs__cfg_w5_crc_start$657  = 16'h0000;
   assign ch1__cfg_w5_crc_start = 16'h0000;
-  assign \regs__cfg_w5_crc_width$665  = 5'h00;
+  assign \regs__cfg_w5_crc_width$659  = 5'h00;
   assign ch1__cfg_w5_crc_width = 5'h00;
-  assign \regs__cfg_w5_data_bits$667  = 7'h00;
+  assign \regs__cfg_w5_data_bits$661  = 7'h00;
   assign ch1__cfg_w5_data_bits = 7'h00;
-  assign \regs__cfg_w5_enable$669  = 1'h0;
+  assign \regs__cfg_w5_enable$663  = 1'h0;
   assign ch1__cfg_w5_enable = 1'h0;
-  assign \regs__cfg_w5_gray$671  = 1'h0;
+  assign \regs__cfg_w5_gray$665  = 1'h0;
   assign ch1__cfg_w5_gray = 1'h0;
-  assign \regs__cfg_w5_lc$673  = 1'h0;
+  assign \regs__cfg_w5_lc$667  = 1'h0;
   assign ch1__cfg_w5_lc = 1'h0;
-  assign \regs__cfg_w5_nenw$675  = 1'h0;
+  assign \regs__cfg_w5_nenw$669  = 1'h0;
   assign ch1__cfg_w5_nenw = 1'h0;
-  assign \regs__cfg_w5_signed$677  = 1'h0;
+  assign \regs__cfg_w5_signed$671  = 1'h0;
   assign ch1__cfg_w5_signed = 1'h0;
-  assign \regs__cfg_w6_crc$679  = 2'h0;
+  assign \regs__cfg_w6_crc$673  = 2'h0;
   assign ch1__cfg_w6_crc = 2'h0;
-  assign \regs__cfg_w6_crc_inverted$681  = 1'h0;
+  assign \regs__cfg_w6_crc_inverted$675  = 1'h0;
   assign ch1__cfg_w6_crc_inverted = 1'h0;
-  assign \regs__cfg_w6_crc_poly$683  = 16'h0000;
+  assign \regs__cfg_w6_crc_poly$677  = 16'h0000;
   assign ch1__cfg_w6_crc_poly = 16'h0000;
-  assign \regs__cfg_w6_crc_start$685  = 16'h0000;
+  assign \regs__cfg_w6_crc_start$679  = 16'h0000;
   assign ch1__cfg_w6_crc_start = 16'h0000;
-  assign \regs__cfg_w6_crc_width$687  = 5'h00;
+  assign \regs__cfg_w6_crc_width$681  = 5'h00;
   assign ch1__cfg_w6_crc_width = 5'h00;
-  assign \regs__cfg_w6_data_bits$689  = 7'h00;
+  assign \regs__cfg_w6_data_bits$683  = 7'h00;
   assign ch1__cfg_w6_data_bits = 7'h00;
-  assign \regs__cfg_w6_enable$691  = 1'h0;
+  assign \regs__cfg_w6_enable$685  = 1'h0;
   assign ch1__cfg_w6_enable = 1'h0;
-  assign \regs__cfg_w6_gray$693  = 1'h0;
+  assign \regs__cfg_w6_gray$687  = 1'h0;
   assign ch1__cfg_w6_gray = 1'h0;
-  assign \regs__cfg_w6_lc$695  = 1'h0;
+  assign \regs__cfg_w6_lc$689  = 1'h0;
   assign ch1__cfg_w6_lc = 1'h0;
-  assign \regs__cfg_w6_nenw$697  = 1'h0;
+  assign \regs__cfg_w6_nenw$691  = 1'h0;
   assign ch1__cfg_w6_nenw = 1'h0;
-  assign \regs__cfg_w6_signed$699  = 1'h0;
+  assign \regs__cfg_w6_signed$693  = 1'h0;
   assign ch1__cfg_w6_signed = 1'h0;
-  assign \regs__cfg_w7_crc$701  = 2'h0;
+  assign \regs__cfg_w7_crc$695  = 2'h0;
   assign ch1__cfg_w7_crc = 2'h0;
-  assign \regs__cfg_w7_crc_inverted$703  = 1'h0;
+  assign \regs__cfg_w7_crc_inverted$697  = 1'h0;
   assign ch1__cfg_w7_crc_inverted = 1'h0;
-  assign \regs__cfg_w7_crc_poly$705  = 16'h0000;
+  assign \regs__cfg_w7_crc_poly$699  = 16'h0000;
   assign ch1__cfg_w7_crc_poly = 16'h0000;
-  assign \regs__cfg_w7_crc_start$707  = 16'h0000;
+  assign \regs__cfg_w7_crc_start$701  = 16'h0000;
   assign ch1__cfg_w7_crc_start = 16'h0000;
-  assign \regs__cfg_w7_crc_width$709  = 5'h00;
+  assign \regs__cfg_w7_crc_width$703  = 5'h00;
   assign ch1__cfg_w7_crc_width = 5'h00;
-  assign \regs__cfg_w7_data_bits$711  = 7'h00;
+  assign \regs__cfg_w7_data_bits$705  = 7'h00;
   assign ch1__cfg_w7_data_bits = 7'h00;
-  assign \regs__cfg_w7_enable$713  = 1'h0;
+  assign \regs__cfg_w7_enable$707  = 1'h0;
   assign ch1__cfg_w7_enable = 1'h0;
-  assign \regs__cfg_w7_gray$715  = 1'h0;
+  assign \regs__cfg_w7_gray$709  = 1'h0;
   assign ch1__cfg_w7_gray = 1'h0;
-  assign \regs__cfg_w7_lc$717  = 1'h0;
+  assign \regs__cfg_w7_lc$711  = 1'h0;
   assign ch1__cfg_w7_lc = 1'h0;
-  assign \regs__cfg_w7_nenw$719  = 1'h0;
+  assign \regs__cfg_w7_nenw$713  = 1'h0;
   assign ch1__cfg_w7_nenw = 1'h0;
-  assign \regs__cfg_w7_signed$721  = 1'h0;
+  assign \regs__cfg_w7_signed$715  = 1'h0;
   assign ch1__cfg_w7_signed = 1'h0;
+  assign \regs__chain_addr$717  = bus__r_addr[3:0];
+  assign ch1__chain_addr = bus__r_addr[3:0];
+  assign ch1__chain_data = 32'd0;
+  assign \regs__chain_data$720  = 32'd0;
+  assign ch1__chain_en = \regs__chain_en$721 ;
   assign ch1__clear_counters = \regs__clear_counters$723 ;
   assign \regs__config_error$726  = ch1__config_error;
   assign \regs__count_addr$727  = bus__r_addr[2:0];
@@ -1926,177 +1914,66 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign \regs__word2_ne$812  = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign \regs__word2_nw$814  = 1'h0;
-  assign ch1__word2_position = 64'h0000000000000000;
-  assign \regs__word2_position$816  = 64'h0000000000000000;
   assign ch1__word3_crc_ok = 1'h0;
-  assign \regs__word3_crc_ok$818  = 1'h0;
+  assign \regs__word3_crc_ok$816  = 1'h0;
   assign ch1__word3_ne = 1'h0;
-  assign \regs__word3_ne$820  = 1'h0;
+  assign \regs__word3_ne$818  = 1'h0;
   assign ch1__word3_nw = 1'h0;
-  assign \regs__word3_nw$822  = 1'h0;
-  assign ch1__word3_position = 64'h0000000000000000;
-  assign \regs__word3_position$824  = 64'h0000000000000000;
+  assign \regs__word3_nw$820  = 1'h0;
   assign ch1__word4_crc_ok = 1'h0;
-  assign \regs__word4_crc_ok$826  = 1'h0;
+  assign \regs__word4_crc_ok$822  = 1'h0;
   assign ch1__word4_ne = 1'h0;
-  assign \regs__word4_ne$828  = 1'h0;
+  assign \regs__word4_ne$824  = 1'h0;
   assign ch1__word4_nw = 1'h0;
-  assign \regs__word4_nw$830  = 1'h0;
-  assign ch1__word4_position = 64'h0000000000000000;
-  assign \regs__word4_position$832  = 64'h0000000000000000;
+  assign \regs__word4_nw$826  = 1'h0;
   assign ch1__word5_crc_ok = 1'h0;
-  assign \regs__word5_crc_ok$834  = 1'h0;
+  assign \regs__word5_crc_ok$828  = 1'h0;
   assign ch1__word5_ne = 1'h0;
-  assign \regs__word5_ne$836  = 1'h0;
+  assign \regs__word5_ne$830  = 1'h0;
   assign ch1__word5_nw = 1'h0;
-  assign \regs__word5_nw$838  = 1'h0;
-  assign ch1__word5_position = 64'h0000000000000000;
-  assign \regs__word5_position$840  = 64'h0000000000000000;
+  assign \regs__word5_nw$832  = 1'h0;
   assign ch1__word6_crc_ok = 1'h0;
-  assign \regs__word6_crc_ok$842  = 1'h0;
+  assign \regs__word6_crc_ok$834  = 1'h0;
   assign ch1__word6_ne = 1'h0;
-  assign \regs__word6_ne$844  = 1'h0;
+  assign \regs__word6_ne$836  = 1'h0;
   assign ch1__word6_nw = 1'h0;
-  assign \regs__word6_nw$846  = 1'h0;
-  assign ch1__word6_position = 64'h0000000000000000;
-  assign \regs__word6_position$848  = 64'h0000000000000000;
+  assign \regs__word6_nw$838  = 1'h0;
   assign ch1__word7_crc_ok = 1'h0;
-  assign \regs__word7_crc_ok$850  = 1'h0;
+  assign \regs__word7_crc_ok$840  = 1'h0;
   assign ch1__word7_ne = 1'h0;
-  assign \regs__word7_ne$852  = 1'h0;
+  assign \regs__word7_ne$842  = 1'h0;
   assign ch1__word7_nw = 1'h0;
-  assign \regs__word7_nw$854  = 1'h0;
-  assign ch1__word7_position = 64'h0000000000000000;
-  assign \regs__word7_position$856  = 64'h0000000000000000;
-  assign \trigger$857  = \trigger$28 ;
-  assign \ma$858  = ch1_ma;
-  assign \slo$859  = ch1_slo;
+  assign \regs__word7_nw$844  = 1'h0;
+  assign \trigger$845  = \trigger$28 ;
+  assign \ma$846  = ch1_ma;
+  assign \slo$847  = ch1_slo;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$9 , \$8  };
-  assign \irq$862  = { \$9 , \$8  };
+  assign \irq$850  = { \$9 , \$8  };
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__count_en, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__count_data, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__count_data, ch1__ca_busy
-, ch1__ca_rbuf_data, bus__w_en, bus__r_en, bus__r_load, bus__w_addr, bus__w_data, bus__r_addr, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit
-, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly
-, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
-, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
-, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id
-, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$446 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7739$0 , \port$7750$0 , ch0__ca_done, \port$7827$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$8270$0 , \port$8281$0 , ch1__ca_done, \port$8358$0 , clk);
+module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__count_en, ch1__chain_en, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__count_data, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error
+, ch1__count_data, ch1__ca_busy, ch1__ca_rbuf_data, bus__w_en, bus__r_en, bus__r_load, bus__w_addr, bus__w_data, bus__r_addr, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time
+, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames
+, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start
+, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray
+, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double
+, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7595$0 , \port$7606$0 , ch0__ca_done, \port$7683$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$8126$0 , \port$8137$0 , ch1__ca_done, \port$8214$0 
+, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
   wire [31:0] \$100 ;
-  reg \$1000 ;
-  reg \$1001 ;
-  reg \$1002 ;
-  reg \$1003 ;
-  reg \$1004 ;
-  reg \$1005 ;
-  reg \$1006 ;
-  reg \$1007 ;
-  reg \$1008 ;
-  reg \$1009 ;
   wire [31:0] \$101 ;
-  reg [2:0] \$1010 ;
-  reg [6:0] \$1011 ;
-  reg [6:0] \$1012 ;
-  reg \$1013 ;
-  reg \$1014 ;
-  reg \$1015 ;
-  reg [14:0] \$1016 ;
-  reg [3:0] \$1017 ;
-  reg \$1018 ;
-  reg \$1019 ;
   wire [31:0] \$102 ;
-  reg \$1020 ;
-  reg \$1021 ;
-  reg \$1022 ;
-  reg \$1023 ;
-  reg \$1024 ;
-  reg \$1025 ;
-  reg \$1026 ;
-  reg \$1027 ;
-  reg \$1028 ;
-  reg \$1029 ;
   wire [14:0] \$103 ;
-  reg \$1030 ;
-  reg \$1031 ;
-  reg \$1032 ;
-  reg \$1033 ;
-  reg \$1034 ;
-  reg \$1035 ;
-  reg \$1036 ;
-  reg \$1037 ;
-  reg \$1038 ;
-  reg \$1039 ;
   wire \$104 ;
-  reg \$1040 ;
-  reg \$1041 ;
-  reg \$1042 ;
-  reg \$1043 ;
-  reg \$1044 ;
-  reg \$1045 ;
-  reg \$1046 ;
-  reg \$1047 ;
-  reg \$1048 ;
-  reg \$1049 ;
   wire \$105 ;
-  reg \$1050 ;
-  reg \$1051 ;
-  reg \$1052 ;
-  reg \$1053 ;
-  reg \$1054 ;
-  reg \$1055 ;
-  reg \$1056 ;
-  reg \$1057 ;
-  reg \$1058 ;
-  reg \$1059 ;
   wire \$106 ;
-  reg \$1060 ;
-  reg \$1061 ;
-  reg \$1062 ;
-  reg \$1063 ;
-  reg \$1064 ;
-  reg \$1065 ;
-  reg \$1066 ;
-  reg \$1067 ;
-  reg \$1068 ;
-  reg \$1069 ;
   wire \$107 ;
-  reg \$1070 ;
-  reg \$1071 ;
-  reg [3:0] \$1072 ;
-  reg \$1073 ;
-  reg \$1074 ;
-  reg \$1075 ;
-  reg \$1076 ;
-  reg \$1077 ;
-  reg \$1078 ;
-  reg \$1079 ;
   wire \$108 ;
-  reg \$1080 ;
-  reg \$1081 ;
-  reg \$1082 ;
-  reg \$1083 ;
-  reg [5:0] \$1084 ;
-  reg [15:0] \$1085 ;
-  reg [12:0] \$1086 ;
-  reg [31:0] \$1087 ;
-  reg [22:0] \$1088 ;
-  reg [31:0] \$1089 ;
   wire \$109 ;
-  reg [7:0] \$1090 ;
-  reg [31:0] \$1091 ;
-  reg [3:0] \$1092 ;
-  reg \$1093 ;
-  reg [7:0] \$1094 ;
-  reg [12:0] \$1095 ;
-  reg \$1096 ;
-  reg \$1097 ;
-  reg \$1098 ;
-  reg [31:0] \$1099 ;
   wire [31:0] \$11 ;
   wire \$110 ;
   wire \$111 ;
@@ -2147,15 +2024,15 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$152 ;
   wire \$153 ;
   wire \$154 ;
-  wire \$155 ;
-  wire \$156 ;
-  wire \$157 ;
-  wire \$158 ;
-  wire \$159 ;
+  wire [31:0] \$155 ;
+  wire [31:0] \$156 ;
+  wire [31:0] \$157 ;
+  wire [31:0] \$158 ;
+  wire [31:0] \$159 ;
   wire [31:0] \$16 ;
-  wire \$160 ;
-  wire \$161 ;
-  wire \$162 ;
+  wire [31:0] \$160 ;
+  wire [31:0] \$161 ;
+  wire [31:0] \$162 ;
   wire [31:0] \$163 ;
   wire [31:0] \$164 ;
   wire [31:0] \$165 ;
@@ -2249,39 +2126,39 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire [31:0] \$244 ;
   wire [31:0] \$245 ;
   wire [31:0] \$246 ;
-  wire [31:0] \$247 ;
-  wire [31:0] \$248 ;
-  wire [31:0] \$249 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
   wire \$25 ;
-  wire [31:0] \$250 ;
-  wire [31:0] \$251 ;
-  wire [31:0] \$252 ;
-  wire [31:0] \$253 ;
-  wire [31:0] \$254 ;
-  wire [31:0] \$255 ;
-  wire [31:0] \$256 ;
-  wire [31:0] \$257 ;
-  wire [31:0] \$258 ;
-  wire [31:0] \$259 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
   wire \$26 ;
-  wire [31:0] \$260 ;
-  wire [31:0] \$261 ;
-  wire [31:0] \$262 ;
-  wire [31:0] \$263 ;
-  wire [31:0] \$264 ;
-  wire [31:0] \$265 ;
-  wire [31:0] \$266 ;
-  wire [31:0] \$267 ;
-  wire [31:0] \$268 ;
-  wire [31:0] \$269 ;
+  wire \$260 ;
+  wire \$261 ;
+  wire \$262 ;
+  wire \$263 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire \$269 ;
   wire \$27 ;
-  wire [31:0] \$270 ;
-  wire [31:0] \$271 ;
-  wire [31:0] \$272 ;
-  wire [31:0] \$273 ;
-  wire [31:0] \$274 ;
-  wire [31:0] \$275 ;
-  wire [31:0] \$276 ;
+  wire \$270 ;
+  wire \$271 ;
+  wire \$272 ;
+  wire \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
   wire \$277 ;
   wire \$278 ;
   wire \$279 ;
@@ -2338,7 +2215,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$324 ;
   wire \$325 ;
   wire \$326 ;
-  wire \$327 ;
+  wire [14:0] \$327 ;
   wire \$328 ;
   wire \$329 ;
   wire \$33 ;
@@ -2371,7 +2248,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$354 ;
   wire \$355 ;
   wire \$356 ;
-  wire [14:0] \$357 ;
+  wire \$357 ;
   wire \$358 ;
   wire \$359 ;
   wire \$36 ;
@@ -2395,49 +2272,49 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$376 ;
   wire \$377 ;
   wire \$378 ;
-  wire \$379 ;
+  wire [31:0] \$379 ;
   wire \$38 ;
-  wire \$380 ;
-  wire \$381 ;
-  wire \$382 ;
-  wire \$383 ;
-  wire \$384 ;
-  wire \$385 ;
-  wire \$386 ;
-  wire \$387 ;
-  wire \$388 ;
-  wire \$389 ;
+  wire [31:0] \$380 ;
+  wire [31:0] \$381 ;
+  wire [31:0] \$382 ;
+  wire [31:0] \$383 ;
+  wire [31:0] \$384 ;
+  wire [31:0] \$385 ;
+  wire [31:0] \$386 ;
+  wire [31:0] \$387 ;
+  wire [31:0] \$388 ;
+  wire [31:0] \$389 ;
   wire \$39 ;
-  wire \$390 ;
-  wire \$391 ;
-  wire \$392 ;
-  wire \$393 ;
-  wire \$394 ;
-  wire \$395 ;
-  wire \$396 ;
-  wire \$397 ;
-  wire \$398 ;
-  wire \$399 ;
+  wire [31:0] \$390 ;
+  wire [31:0] \$391 ;
+  wire [31:0] \$392 ;
+  wire [31:0] \$393 ;
+  wire [31:0] \$394 ;
+  wire [31:0] \$395 ;
+  wire [31:0] \$396 ;
+  wire [31:0] \$397 ;
+  wire [31:0] \$398 ;
+  wire [31:0] \$399 ;
   wire \$4 ;
   wire \$40 ;
-  wire \$400 ;
-  wire \$401 ;
-  wire \$402 ;
-  wire \$403 ;
-  wire \$404 ;
-  wire \$405 ;
-  wire \$406 ;
-  wire \$407 ;
-  wire \$408 ;
-  wire \$409 ;
+  wire [31:0] \$400 ;
+  wire [31:0] \$401 ;
+  wire [31:0] \$402 ;
+  wire [31:0] \$403 ;
+  wire [31:0] \$404 ;
+  wire [31:0] \$405 ;
+  wire [31:0] \$406 ;
+  wire [31:0] \$407 ;
+  wire [31:0] \$408 ;
+  wire [31:0] \$409 ;
   wire \$41 ;
-  wire \$410 ;
-  wire \$411 ;
-  wire \$412 ;
-  wire \$413 ;
-  wire \$414 ;
-  wire \$415 ;
-  wire \$416 ;
+  wire [31:0] \$410 ;
+  wire [31:0] \$411 ;
+  wire [31:0] \$412 ;
+  wire [31:0] \$413 ;
+  wire [31:0] \$414 ;
+  wire [31:0] \$415 ;
+  wire [31:0] \$416 ;
   wire [31:0] \$417 ;
   wire [31:0] \$418 ;
   wire [31:0] \$419 ;
@@ -2498,73 +2375,73 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire [31:0] \$469 ;
   wire \$47 ;
   wire [31:0] \$470 ;
-  wire [31:0] \$471 ;
-  wire [31:0] \$472 ;
-  wire [31:0] \$473 ;
-  wire [31:0] \$474 ;
-  wire [31:0] \$475 ;
-  wire [31:0] \$476 ;
-  wire [31:0] \$477 ;
-  wire [31:0] \$478 ;
-  wire [31:0] \$479 ;
+  wire \$471 ;
+  wire \$472 ;
+  wire \$473 ;
+  wire \$474 ;
+  wire \$475 ;
+  wire \$476 ;
+  wire \$477 ;
+  wire \$478 ;
+  wire \$479 ;
   wire \$48 ;
-  wire [31:0] \$480 ;
-  wire [31:0] \$481 ;
-  wire [31:0] \$482 ;
-  wire [31:0] \$483 ;
-  wire [31:0] \$484 ;
-  wire [31:0] \$485 ;
-  wire [31:0] \$486 ;
-  wire [31:0] \$487 ;
-  wire [31:0] \$488 ;
-  wire [31:0] \$489 ;
+  wire \$480 ;
+  wire \$481 ;
+  wire \$482 ;
+  wire \$483 ;
+  wire \$484 ;
+  wire \$485 ;
+  wire \$486 ;
+  wire \$487 ;
+  wire \$488 ;
+  wire \$489 ;
   wire \$49 ;
-  wire [31:0] \$490 ;
-  wire [31:0] \$491 ;
-  wire [31:0] \$492 ;
-  wire [31:0] \$493 ;
-  wire [31:0] \$494 ;
-  wire [31:0] \$495 ;
-  wire [31:0] \$496 ;
-  wire [31:0] \$497 ;
-  wire [31:0] \$498 ;
-  wire [31:0] \$499 ;
+  wire \$490 ;
+  wire \$491 ;
+  wire \$492 ;
+  wire \$493 ;
+  wire \$494 ;
+  wire \$495 ;
+  wire \$496 ;
+  wire \$497 ;
+  wire \$498 ;
+  wire \$499 ;
   wire \$5 ;
   wire \$50 ;
-  wire [31:0] \$500 ;
-  wire [31:0] \$501 ;
-  wire [31:0] \$502 ;
-  wire [31:0] \$503 ;
-  wire [31:0] \$504 ;
-  wire [31:0] \$505 ;
-  wire [31:0] \$506 ;
-  wire [31:0] \$507 ;
-  wire [31:0] \$508 ;
-  wire [31:0] \$509 ;
+  wire \$500 ;
+  wire \$501 ;
+  wire \$502 ;
+  wire \$503 ;
+  wire \$504 ;
+  wire \$505 ;
+  wire \$506 ;
+  wire \$507 ;
+  wire \$508 ;
+  wire \$509 ;
   wire \$51 ;
-  wire [31:0] \$510 ;
-  wire [31:0] \$511 ;
-  wire [31:0] \$512 ;
-  wire [31:0] \$513 ;
-  wire [31:0] \$514 ;
-  wire [31:0] \$515 ;
-  wire [31:0] \$516 ;
-  wire [31:0] \$517 ;
-  wire [31:0] \$518 ;
-  wire [31:0] \$519 ;
+  wire \$510 ;
+  wire \$511 ;
+  wire \$512 ;
+  wire \$513 ;
+  wire \$514 ;
+  wire \$515 ;
+  wire \$516 ;
+  wire \$517 ;
+  wire \$518 ;
+  wire \$519 ;
   wire \$52 ;
-  wire [31:0] \$520 ;
-  wire [31:0] \$521 ;
-  wire [31:0] \$522 ;
-  wire [31:0] \$523 ;
-  wire [31:0] \$524 ;
-  wire [31:0] \$525 ;
-  wire [31:0] \$526 ;
-  wire [31:0] \$527 ;
-  wire [31:0] \$528 ;
-  wire [31:0] \$529 ;
+  wire \$520 ;
+  wire \$521 ;
+  wire \$522 ;
+  wire \$523 ;
+  wire \$524 ;
+  wire \$525 ;
+  wire \$526 ;
+  wire \$527 ;
+  wire \$528 ;
+  wire \$529 ;
   wire \$53 ;
-  wire [31:0] \$530 ;
+  wire \$530 ;
   wire \$531 ;
   wire \$532 ;
   wire \$533 ;
@@ -2580,25 +2457,25 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$542 ;
   wire \$543 ;
   wire \$544 ;
-  wire \$545 ;
-  wire \$546 ;
+  wire [14:0] \$545 ;
+  wire [14:0] \$546 ;
   wire \$547 ;
-  wire \$548 ;
-  wire \$549 ;
+  wire [14:0] \$548 ;
+  wire [14:0] \$549 ;
   wire \$55 ;
   wire \$550 ;
-  wire \$551 ;
-  wire \$552 ;
+  wire [14:0] \$551 ;
+  wire [14:0] \$552 ;
   wire \$553 ;
-  wire \$554 ;
-  wire \$555 ;
+  wire [14:0] \$554 ;
+  wire [14:0] \$555 ;
   wire \$556 ;
-  wire \$557 ;
+  wire [3:0] \$557 ;
   wire \$558 ;
   wire \$559 ;
   wire \$56 ;
   wire \$560 ;
-  wire \$561 ;
+  wire [31:0] \$561 ;
   wire \$562 ;
   wire \$563 ;
   wire \$564 ;
@@ -2657,50 +2534,50 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$611 ;
   wire \$612 ;
   wire \$613 ;
-  wire [14:0] \$614 ;
-  wire [14:0] \$615 ;
+  wire \$614 ;
+  wire \$615 ;
   wire \$616 ;
-  wire [14:0] \$617 ;
-  wire [14:0] \$618 ;
+  wire \$617 ;
+  wire \$618 ;
   wire \$619 ;
   wire \$62 ;
-  wire [14:0] \$620 ;
-  wire [14:0] \$621 ;
+  wire \$620 ;
+  wire \$621 ;
   wire \$622 ;
-  wire [14:0] \$623 ;
-  wire [14:0] \$624 ;
+  wire \$623 ;
+  wire \$624 ;
   wire \$625 ;
-  wire [3:0] \$626 ;
+  wire \$626 ;
   wire \$627 ;
   wire \$628 ;
   wire \$629 ;
   wire \$63 ;
-  wire [31:0] \$630 ;
+  wire \$630 ;
   wire \$631 ;
   wire \$632 ;
   wire \$633 ;
   wire \$634 ;
   wire \$635 ;
   wire \$636 ;
-  wire \$637 ;
-  wire \$638 ;
+  wire [14:0] \$637 ;
+  wire [14:0] \$638 ;
   wire \$639 ;
   wire \$64 ;
-  wire \$640 ;
-  wire \$641 ;
+  wire [14:0] \$640 ;
+  wire [14:0] \$641 ;
   wire \$642 ;
-  wire \$643 ;
-  wire \$644 ;
+  wire [14:0] \$643 ;
+  wire [14:0] \$644 ;
   wire \$645 ;
-  wire \$646 ;
-  wire \$647 ;
+  wire [14:0] \$646 ;
+  wire [14:0] \$647 ;
   wire \$648 ;
-  wire \$649 ;
+  wire [3:0] \$649 ;
   wire \$65 ;
   wire \$650 ;
   wire \$651 ;
   wire \$652 ;
-  wire \$653 ;
+  wire [31:0] \$653 ;
   wire \$654 ;
   wire \$655 ;
   wire \$656 ;
@@ -2708,101 +2585,101 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$658 ;
   wire \$659 ;
   wire \$66 ;
-  wire \$660 ;
-  wire \$661 ;
-  wire \$662 ;
-  wire \$663 ;
-  wire \$664 ;
-  wire \$665 ;
-  wire \$666 ;
-  wire \$667 ;
-  wire \$668 ;
-  wire \$669 ;
+  wire [31:0] \$660 ;
+  wire [31:0] \$661 ;
+  reg \$662 ;
+  reg [10:0] \$663 ;
+  reg [31:0] \$664 ;
+  reg [3:0] \$665 ;
+  reg [31:0] \$666 ;
+  reg [3:0] \$667 ;
+  reg \$668 ;
+  reg \$669 ;
   wire \$67 ;
-  wire \$670 ;
-  wire \$671 ;
-  wire \$672 ;
-  wire \$673 ;
-  wire \$674 ;
-  wire \$675 ;
-  wire \$676 ;
-  wire \$677 ;
-  wire \$678 ;
-  wire \$679 ;
+  reg \$670 ;
+  reg \$671 ;
+  reg \$672 ;
+  reg \$673 ;
+  reg [31:0] \$674 ;
+  reg \$675 ;
+  reg \$676 ;
+  reg \$677 ;
+  reg \$678 ;
+  reg \$679 ;
   wire \$68 ;
-  wire \$680 ;
-  wire \$681 ;
-  wire \$682 ;
-  wire \$683 ;
-  wire \$684 ;
-  wire \$685 ;
-  wire \$686 ;
-  wire \$687 ;
-  wire \$688 ;
-  wire \$689 ;
+  reg \$680 ;
+  reg \$681 ;
+  reg \$682 ;
+  reg \$683 ;
+  reg \$684 ;
+  reg \$685 ;
+  reg \$686 ;
+  reg \$687 ;
+  reg [15:0] \$688 ;
+  reg [11:0] \$689 ;
   wire \$69 ;
-  wire \$690 ;
-  wire \$691 ;
-  wire \$692 ;
-  wire \$693 ;
-  wire \$694 ;
-  wire \$695 ;
-  wire \$696 ;
-  wire \$697 ;
-  wire \$698 ;
-  wire \$699 ;
+  reg \$690 ;
+  reg [23:0] \$691 ;
+  reg \$692 ;
+  reg [23:0] \$693 ;
+  reg \$694 ;
+  reg [23:0] \$695 ;
+  reg \$696 ;
+  reg [23:0] \$697 ;
+  reg \$698 ;
+  reg [5:0] \$699 ;
   wire \$7 ;
   wire \$70 ;
-  wire \$700 ;
-  wire \$701 ;
-  wire \$702 ;
-  wire \$703 ;
-  wire \$704 ;
-  wire \$705 ;
-  wire \$706 ;
-  wire \$707 ;
-  wire \$708 ;
-  wire \$709 ;
+  reg \$700 ;
+  reg \$701 ;
+  reg [1:0] \$702 ;
+  reg \$703 ;
+  reg \$704 ;
+  reg [5:0] \$705 ;
+  reg \$706 ;
+  reg \$707 ;
+  reg [1:0] \$708 ;
+  reg \$709 ;
   wire \$71 ;
-  wire \$710 ;
-  wire \$711 ;
-  wire \$712 ;
-  wire \$713 ;
-  wire \$714 ;
-  wire [14:0] \$715 ;
-  wire [14:0] \$716 ;
-  wire \$717 ;
-  wire [14:0] \$718 ;
-  wire [14:0] \$719 ;
+  reg \$710 ;
+  reg \$711 ;
+  reg \$712 ;
+  reg \$713 ;
+  reg \$714 ;
+  reg [7:0] \$715 ;
+  reg [3:0] \$716 ;
+  reg [3:0] \$717 ;
+  reg [3:0] \$718 ;
+  reg \$719 ;
   wire \$72 ;
-  wire \$720 ;
-  wire [14:0] \$721 ;
-  wire [14:0] \$722 ;
-  wire \$723 ;
-  wire [14:0] \$724 ;
-  wire [14:0] \$725 ;
-  wire \$726 ;
-  wire [3:0] \$727 ;
-  wire \$728 ;
-  wire \$729 ;
+  reg [11:0] \$720 ;
+  reg \$721 ;
+  reg [15:0] \$722 ;
+  reg [4:0] \$723 ;
+  reg \$724 ;
+  reg \$725 ;
+  reg [15:0] \$726 ;
+  reg \$727 ;
+  reg [15:0] \$728 ;
+  reg [4:0] \$729 ;
   wire \$73 ;
-  wire \$730 ;
-  wire [31:0] \$731 ;
-  wire \$732 ;
-  wire \$733 ;
-  wire \$734 ;
-  wire \$735 ;
-  wire \$736 ;
-  wire \$737 ;
-  wire [31:0] \$738 ;
-  wire [31:0] \$739 ;
+  reg \$730 ;
+  reg \$731 ;
+  reg [15:0] \$732 ;
+  reg \$733 ;
+  reg \$734 ;
+  reg \$735 ;
+  reg \$736 ;
+  reg \$737 ;
+  reg [11:0] \$738 ;
+  reg \$739 ;
   wire \$74 ;
   reg \$740 ;
-  reg [10:0] \$741 ;
-  reg [31:0] \$742 ;
-  reg [3:0] \$743 ;
-  reg [31:0] \$744 ;
-  reg [3:0] \$745 ;
+  reg \$741 ;
+  reg \$742 ;
+  reg \$743 ;
+  reg \$744 ;
+  reg \$745 ;
   reg \$746 ;
   reg \$747 ;
   reg \$748 ;
@@ -2810,44 +2687,44 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$75 ;
   reg \$750 ;
   reg \$751 ;
-  reg [31:0] \$752 ;
+  reg \$752 ;
   reg \$753 ;
   reg \$754 ;
   reg \$755 ;
   reg \$756 ;
   reg \$757 ;
-  reg \$758 ;
-  reg \$759 ;
+  reg [2:0] \$758 ;
+  reg [6:0] \$759 ;
   wire \$76 ;
-  reg \$760 ;
+  reg [6:0] \$760 ;
   reg \$761 ;
   reg \$762 ;
   reg \$763 ;
-  reg \$764 ;
-  reg \$765 ;
-  reg [15:0] \$766 ;
-  reg [11:0] \$767 ;
+  reg [31:0] \$764 ;
+  reg [14:0] \$765 ;
+  reg [3:0] \$766 ;
+  reg \$767 ;
   reg \$768 ;
-  reg [23:0] \$769 ;
+  reg \$769 ;
   wire \$77 ;
   reg \$770 ;
-  reg [23:0] \$771 ;
+  reg \$771 ;
   reg \$772 ;
-  reg [23:0] \$773 ;
+  reg \$773 ;
   reg \$774 ;
-  reg [23:0] \$775 ;
+  reg \$775 ;
   reg \$776 ;
-  reg [5:0] \$777 ;
+  reg \$777 ;
   reg \$778 ;
   reg \$779 ;
   wire \$78 ;
-  reg [1:0] \$780 ;
+  reg \$780 ;
   reg \$781 ;
   reg \$782 ;
-  reg [5:0] \$783 ;
+  reg \$783 ;
   reg \$784 ;
   reg \$785 ;
-  reg [1:0] \$786 ;
+  reg \$786 ;
   reg \$787 ;
   reg \$788 ;
   reg \$789 ;
@@ -2855,64 +2732,64 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg \$790 ;
   reg \$791 ;
   reg \$792 ;
-  reg [7:0] \$793 ;
-  reg [3:0] \$794 ;
-  reg [3:0] \$795 ;
-  reg [3:0] \$796 ;
+  reg \$793 ;
+  reg \$794 ;
+  reg \$795 ;
+  reg \$796 ;
   reg \$797 ;
-  reg [11:0] \$798 ;
+  reg \$798 ;
   reg \$799 ;
   wire [31:0] \$8 ;
   wire \$80 ;
-  reg [15:0] \$800 ;
-  reg [4:0] \$801 ;
+  reg \$800 ;
+  reg \$801 ;
   reg \$802 ;
   reg \$803 ;
-  reg [15:0] \$804 ;
+  reg \$804 ;
   reg \$805 ;
-  reg [15:0] \$806 ;
-  reg [4:0] \$807 ;
+  reg \$806 ;
+  reg \$807 ;
   reg \$808 ;
-  reg \$809 ;
+  reg [3:0] \$809 ;
   wire \$81 ;
-  reg [15:0] \$810 ;
+  reg \$810 ;
   reg \$811 ;
   reg \$812 ;
   reg \$813 ;
   reg \$814 ;
   reg \$815 ;
-  reg [11:0] \$816 ;
+  reg \$816 ;
   reg \$817 ;
   reg \$818 ;
   reg \$819 ;
   wire \$82 ;
   reg \$820 ;
-  reg \$821 ;
-  reg \$822 ;
-  reg \$823 ;
-  reg \$824 ;
-  reg \$825 ;
-  reg \$826 ;
-  reg \$827 ;
-  reg \$828 ;
-  reg \$829 ;
+  reg [5:0] \$821 ;
+  reg [15:0] \$822 ;
+  reg [12:0] \$823 ;
+  reg [31:0] \$824 ;
+  reg [22:0] \$825 ;
+  reg [31:0] \$826 ;
+  reg [7:0] \$827 ;
+  reg [31:0] \$828 ;
+  reg [3:0] \$829 ;
   wire \$83 ;
   reg \$830 ;
-  reg \$831 ;
-  reg \$832 ;
+  reg [7:0] \$831 ;
+  reg [12:0] \$832 ;
   reg \$833 ;
   reg \$834 ;
   reg \$835 ;
-  reg [2:0] \$836 ;
-  reg [6:0] \$837 ;
-  reg [6:0] \$838 ;
+  reg \$836 ;
+  reg [31:0] \$837 ;
+  reg \$838 ;
   reg \$839 ;
   wire \$84 ;
   reg \$840 ;
   reg \$841 ;
-  reg [31:0] \$842 ;
-  reg [14:0] \$843 ;
-  reg [3:0] \$844 ;
+  reg \$842 ;
+  reg \$843 ;
+  reg \$844 ;
   reg \$845 ;
   reg \$846 ;
   reg \$847 ;
@@ -2920,63 +2797,63 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg \$849 ;
   wire \$85 ;
   reg \$850 ;
-  reg \$851 ;
-  reg \$852 ;
+  reg [15:0] \$851 ;
+  reg [11:0] \$852 ;
   reg \$853 ;
-  reg \$854 ;
+  reg [23:0] \$854 ;
   reg \$855 ;
-  reg \$856 ;
+  reg [23:0] \$856 ;
   reg \$857 ;
-  reg \$858 ;
+  reg [23:0] \$858 ;
   reg \$859 ;
   wire \$86 ;
-  reg \$860 ;
+  reg [23:0] \$860 ;
   reg \$861 ;
-  reg \$862 ;
+  reg [5:0] \$862 ;
   reg \$863 ;
   reg \$864 ;
-  reg \$865 ;
+  reg [1:0] \$865 ;
   reg \$866 ;
   reg \$867 ;
-  reg \$868 ;
+  reg [5:0] \$868 ;
   reg \$869 ;
   wire \$87 ;
   reg \$870 ;
-  reg \$871 ;
+  reg [1:0] \$871 ;
   reg \$872 ;
   reg \$873 ;
   reg \$874 ;
   reg \$875 ;
   reg \$876 ;
   reg \$877 ;
-  reg \$878 ;
-  reg \$879 ;
+  reg [7:0] \$878 ;
+  reg [3:0] \$879 ;
   wire \$88 ;
-  reg \$880 ;
-  reg \$881 ;
+  reg [3:0] \$880 ;
+  reg [3:0] \$881 ;
   reg \$882 ;
-  reg \$883 ;
+  reg [11:0] \$883 ;
   reg \$884 ;
-  reg \$885 ;
-  reg \$886 ;
+  reg [15:0] \$885 ;
+  reg [4:0] \$886 ;
   reg \$887 ;
   reg \$888 ;
-  reg \$889 ;
+  reg [15:0] \$889 ;
   wire \$89 ;
   reg \$890 ;
-  reg \$891 ;
-  reg \$892 ;
+  reg [15:0] \$891 ;
+  reg [4:0] \$892 ;
   reg \$893 ;
   reg \$894 ;
-  reg \$895 ;
+  reg [15:0] \$895 ;
   reg \$896 ;
   reg \$897 ;
   reg \$898 ;
-  reg [3:0] \$899 ;
+  reg \$899 ;
   wire [31:0] \$9 ;
   wire \$90 ;
   reg \$900 ;
-  reg \$901 ;
+  reg [11:0] \$901 ;
   reg \$902 ;
   reg \$903 ;
   reg \$904 ;
@@ -2987,25 +2864,25 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg \$909 ;
   wire \$91 ;
   reg \$910 ;
-  reg [5:0] \$911 ;
-  reg [15:0] \$912 ;
-  reg [12:0] \$913 ;
-  reg [31:0] \$914 ;
-  reg [22:0] \$915 ;
-  reg [31:0] \$916 ;
-  reg [7:0] \$917 ;
-  reg [31:0] \$918 ;
-  reg [3:0] \$919 ;
+  reg \$911 ;
+  reg \$912 ;
+  reg \$913 ;
+  reg \$914 ;
+  reg \$915 ;
+  reg \$916 ;
+  reg \$917 ;
+  reg \$918 ;
+  reg \$919 ;
   wire \$92 ;
   reg \$920 ;
-  reg [7:0] \$921 ;
-  reg [12:0] \$922 ;
-  reg \$923 ;
+  reg [2:0] \$921 ;
+  reg [6:0] \$922 ;
+  reg [6:0] \$923 ;
   reg \$924 ;
   reg \$925 ;
-  reg [31:0] \$926 ;
-  reg \$927 ;
-  reg \$928 ;
+  reg \$926 ;
+  reg [14:0] \$927 ;
+  reg [3:0] \$928 ;
   reg \$929 ;
   wire \$93 ;
   reg \$930 ;
@@ -3019,71 +2896,71 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg \$938 ;
   reg \$939 ;
   wire \$94 ;
-  reg [15:0] \$940 ;
-  reg [11:0] \$941 ;
+  reg \$940 ;
+  reg \$941 ;
   reg \$942 ;
-  reg [23:0] \$943 ;
+  reg \$943 ;
   reg \$944 ;
-  reg [23:0] \$945 ;
+  reg \$945 ;
   reg \$946 ;
-  reg [23:0] \$947 ;
+  reg \$947 ;
   reg \$948 ;
-  reg [23:0] \$949 ;
+  reg \$949 ;
   wire \$95 ;
   reg \$950 ;
-  reg [5:0] \$951 ;
+  reg \$951 ;
   reg \$952 ;
   reg \$953 ;
-  reg [1:0] \$954 ;
+  reg \$954 ;
   reg \$955 ;
   reg \$956 ;
-  reg [5:0] \$957 ;
+  reg \$957 ;
   reg \$958 ;
   reg \$959 ;
   wire \$96 ;
-  reg [1:0] \$960 ;
+  reg \$960 ;
   reg \$961 ;
   reg \$962 ;
   reg \$963 ;
   reg \$964 ;
   reg \$965 ;
   reg \$966 ;
-  reg [7:0] \$967 ;
-  reg [3:0] \$968 ;
-  reg [3:0] \$969 ;
+  reg \$967 ;
+  reg \$968 ;
+  reg \$969 ;
   wire \$97 ;
-  reg [3:0] \$970 ;
-  reg \$971 ;
-  reg [11:0] \$972 ;
+  reg \$970 ;
+  reg [3:0] \$971 ;
+  reg \$972 ;
   reg \$973 ;
-  reg [15:0] \$974 ;
-  reg [4:0] \$975 ;
+  reg \$974 ;
+  reg \$975 ;
   reg \$976 ;
   reg \$977 ;
-  reg [15:0] \$978 ;
+  reg \$978 ;
   reg \$979 ;
   wire [31:0] \$98 ;
-  reg [15:0] \$980 ;
-  reg [4:0] \$981 ;
+  reg \$980 ;
+  reg \$981 ;
   reg \$982 ;
-  reg \$983 ;
+  reg [5:0] \$983 ;
   reg [15:0] \$984 ;
-  reg \$985 ;
-  reg \$986 ;
-  reg \$987 ;
-  reg \$988 ;
-  reg \$989 ;
+  reg [12:0] \$985 ;
+  reg [31:0] \$986 ;
+  reg [22:0] \$987 ;
+  reg [31:0] \$988 ;
+  reg [7:0] \$989 ;
   wire [31:0] \$99 ;
-  reg [11:0] \$990 ;
-  reg \$991 ;
+  reg [31:0] \$990 ;
+  reg [3:0] \$991 ;
   reg \$992 ;
-  reg \$993 ;
-  reg \$994 ;
+  reg [7:0] \$993 ;
+  reg [12:0] \$994 ;
   reg \$995 ;
   reg \$996 ;
   reg \$997 ;
   reg \$998 ;
-  reg \$999 ;
+  reg [31:0] \$999 ;
   input [10:0] bus__r_addr;
   wire [10:0] bus__r_addr;
   output [31:0] bus__r_data;
@@ -3291,6 +3168,10 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire ch0__cfg_w7_lc;
   wire ch0__cfg_w7_nenw;
   wire ch0__cfg_w7_signed;
+  wire [3:0] ch0__chain_addr;
+  wire [31:0] ch0__chain_data;
+  output ch0__chain_en;
+  wire ch0__chain_en;
   (* init = 1'h0 *)
   wire ch0__clear_counters;
   input ch0__config_error;
@@ -3348,27 +3229,21 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire ch0__word2_crc_ok;
   wire ch0__word2_ne;
   wire ch0__word2_nw;
-  wire [63:0] ch0__word2_position;
   wire ch0__word3_crc_ok;
   wire ch0__word3_ne;
   wire ch0__word3_nw;
-  wire [63:0] ch0__word3_position;
   wire ch0__word4_crc_ok;
   wire ch0__word4_ne;
   wire ch0__word4_nw;
-  wire [63:0] ch0__word4_position;
   wire ch0__word5_crc_ok;
   wire ch0__word5_ne;
   wire ch0__word5_nw;
-  wire [63:0] ch0__word5_position;
   wire ch0__word6_crc_ok;
   wire ch0__word6_ne;
   wire ch0__word6_nw;
-  wire [63:0] ch0__word6_position;
   wire ch0__word7_crc_ok;
   wire ch0__word7_ne;
   wire ch0__word7_nw;
-  wire [63:0] ch0__word7_position;
   wire ch0_ca_count_crc4_answer_write;
   wire ch0_ca_count_data_fault_write;
   wire ch0_ca_count_refused_aborted_write;
@@ -3533,18 +3408,6 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire ch0_cfg_words_write;
   wire ch0_chain_flags_write;
   wire ch0_chain_updates_write;
-  wire ch0_chain_w2_hi_write;
-  wire ch0_chain_w2_lo_write;
-  wire ch0_chain_w3_hi_write;
-  wire ch0_chain_w3_lo_write;
-  wire ch0_chain_w4_hi_write;
-  wire ch0_chain_w4_lo_write;
-  wire ch0_chain_w5_hi_write;
-  wire ch0_chain_w5_lo_write;
-  wire ch0_chain_w6_hi_write;
-  wire ch0_chain_w6_lo_write;
-  wire ch0_chain_w7_hi_write;
-  wire ch0_chain_w7_lo_write;
   wire ch0_config_read;
   wire [31:0] ch0_config_read_data;
   reg [3:0] ch0_config_read_index = 4'h0;
@@ -3615,18 +3478,6 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg ch0_read_select_c3 = 1'h0;
   reg ch0_read_select_c4 = 1'h0;
   reg ch0_read_select_c5 = 1'h0;
-  reg ch0_read_select_f0 = 1'h0;
-  reg ch0_read_select_f1 = 1'h0;
-  reg ch0_read_select_f2 = 1'h0;
-  reg ch0_read_select_f3 = 1'h0;
-  reg ch0_read_select_f4 = 1'h0;
-  reg ch0_read_select_f5 = 1'h0;
-  reg ch0_read_select_f6 = 1'h0;
-  reg ch0_read_select_f7 = 1'h0;
-  reg ch0_read_select_f8 = 1'h0;
-  reg ch0_read_select_f9 = 1'h0;
-  reg ch0_read_select_fa = 1'h0;
-  reg ch0_read_select_fb = 1'h0;
   reg ch0_read_select_fc = 1'h0;
   reg ch0_read_select_fd = 1'h0;
   reg ch0_result_line_delay_settled_snapshot = 1'h0;
@@ -3665,6 +3516,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg ch0_window0_read = 1'h0;
   reg ch0_window1_read = 1'h0;
   reg ch0_window2_read = 1'h0;
+  reg ch0_window3_read = 1'h0;
   (* init = 1'h0 *)
   wire ch1__abort_cycle;
   input ch1__busy;
@@ -3856,6 +3708,10 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire ch1__cfg_w7_lc;
   wire ch1__cfg_w7_nenw;
   wire ch1__cfg_w7_signed;
+  wire [3:0] ch1__chain_addr;
+  wire [31:0] ch1__chain_data;
+  output ch1__chain_en;
+  wire ch1__chain_en;
   (* init = 1'h0 *)
   wire ch1__clear_counters;
   input ch1__config_error;
@@ -3913,27 +3769,21 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire ch1__word2_crc_ok;
   wire ch1__word2_ne;
   wire ch1__word2_nw;
-  wire [63:0] ch1__word2_position;
   wire ch1__word3_crc_ok;
   wire ch1__word3_ne;
   wire ch1__word3_nw;
-  wire [63:0] ch1__word3_position;
   wire ch1__word4_crc_ok;
   wire ch1__word4_ne;
   wire ch1__word4_nw;
-  wire [63:0] ch1__word4_position;
   wire ch1__word5_crc_ok;
   wire ch1__word5_ne;
   wire ch1__word5_nw;
-  wire [63:0] ch1__word5_position;
   wire ch1__word6_crc_ok;
   wire ch1__word6_ne;
   wire ch1__word6_nw;
-  wire [63:0] ch1__word6_position;
   wire ch1__word7_crc_ok;
   wire ch1__word7_ne;
   wire ch1__word7_nw;
-  wire [63:0] ch1__word7_position;
   wire ch1_ca_count_crc4_answer_write;
   wire ch1_ca_count_data_fault_write;
   wire ch1_ca_count_refused_aborted_write;
@@ -3950,8 +3800,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$446 ;
-  reg \ch1_ca_request_write$446  = 1'h0;
+  output \ch1_ca_request_write$430 ;
+  reg \ch1_ca_request_write$430  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_chain2_write;
   wire ch1_caps_chain_write;
@@ -4098,18 +3948,6 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire ch1_cfg_words_write;
   wire ch1_chain_flags_write;
   wire ch1_chain_updates_write;
-  wire ch1_chain_w2_hi_write;
-  wire ch1_chain_w2_lo_write;
-  wire ch1_chain_w3_hi_write;
-  wire ch1_chain_w3_lo_write;
-  wire ch1_chain_w4_hi_write;
-  wire ch1_chain_w4_lo_write;
-  wire ch1_chain_w5_hi_write;
-  wire ch1_chain_w5_lo_write;
-  wire ch1_chain_w6_hi_write;
-  wire ch1_chain_w6_lo_write;
-  wire ch1_chain_w7_hi_write;
-  wire ch1_chain_w7_lo_write;
   wire ch1_config_read;
   wire [31:0] ch1_config_read_data;
   reg [3:0] ch1_config_read_index = 4'h0;
@@ -4180,18 +4018,6 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg ch1_read_select_143 = 1'h0;
   reg ch1_read_select_144 = 1'h0;
   reg ch1_read_select_145 = 1'h0;
-  reg ch1_read_select_170 = 1'h0;
-  reg ch1_read_select_171 = 1'h0;
-  reg ch1_read_select_172 = 1'h0;
-  reg ch1_read_select_173 = 1'h0;
-  reg ch1_read_select_174 = 1'h0;
-  reg ch1_read_select_175 = 1'h0;
-  reg ch1_read_select_176 = 1'h0;
-  reg ch1_read_select_177 = 1'h0;
-  reg ch1_read_select_178 = 1'h0;
-  reg ch1_read_select_179 = 1'h0;
-  reg ch1_read_select_17a = 1'h0;
-  reg ch1_read_select_17b = 1'h0;
   reg ch1_read_select_17c = 1'h0;
   reg ch1_read_select_17d = 1'h0;
   reg ch1_result_line_delay_settled_snapshot = 1'h0;
@@ -4230,6 +4056,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg ch1_window0_read = 1'h0;
   reg ch1_window1_read = 1'h0;
   reg ch1_window2_read = 1'h0;
+  reg ch1_window3_read = 1'h0;
   input clk;
   wire clk;
   reg config_memory0_read_hit;
@@ -4258,34 +4085,34 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$7739$0 ;
-  wire [186:0] \port$7739$0 ;
-  input [79:0] \port$7750$0 ;
-  wire [79:0] \port$7750$0 ;
-  input [9:0] \port$7827$0 ;
-  wire [9:0] \port$7827$0 ;
-  input [186:0] \port$8270$0 ;
-  wire [186:0] \port$8270$0 ;
-  input [79:0] \port$8281$0 ;
-  wire [79:0] \port$8281$0 ;
-  input [9:0] \port$8358$0 ;
-  wire [9:0] \port$8358$0 ;
+  input [186:0] \port$7595$0 ;
+  wire [186:0] \port$7595$0 ;
+  input [79:0] \port$7606$0 ;
+  wire [79:0] \port$7606$0 ;
+  input [9:0] \port$7683$0 ;
+  wire [9:0] \port$7683$0 ;
+  input [186:0] \port$8126$0 ;
+  wire [186:0] \port$8126$0 ;
+  input [79:0] \port$8137$0 ;
+  wire [79:0] \port$8137$0 ;
+  input [9:0] \port$8214$0 ;
+  wire [9:0] \port$8214$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
-  wire [3:0] \rd__addr$943 ;
+  wire [3:0] \rd__addr$891 ;
   wire [31:0] rd__data;
-  wire [31:0] \rd__data$944 ;
+  wire [31:0] \rd__data$892 ;
   input rst;
   wire rst;
   wire [3:0] wr__addr;
-  wire [3:0] \wr__addr$940 ;
+  wire [3:0] \wr__addr$888 ;
   (* init = 32'd0 *)
   wire [31:0] wr__data;
   (* init = 32'd0 *)
-  wire [31:0] \wr__data$941 ;
+  wire [31:0] \wr__data$889 ;
   wire [3:0] wr__en;
-  wire [3:0] \wr__en$942 ;
+  wire [3:0] \wr__en$890 ;
   reg [10:0] write_addr = 11'h000;
   output [31:0] write_data;
   reg [31:0] write_data = 32'd0;
@@ -4311,13 +4138,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @(posedge clk) begin
     if (wr__en[0])
-      ch0_config_memory[{ \$612 , \$611 , \$610 , \$609  }][7:0] <= config_memory0_write_data[7:0];
+      ch0_config_memory[{ \$543 , \$542 , \$541 , \$540  }][7:0] <= config_memory0_write_data[7:0];
     if (wr__en[1])
-      ch0_config_memory[{ \$612 , \$611 , \$610 , \$609  }][15:8] <= config_memory0_write_data[15:8];
+      ch0_config_memory[{ \$543 , \$542 , \$541 , \$540  }][15:8] <= config_memory0_write_data[15:8];
     if (wr__en[2])
-      ch0_config_memory[{ \$612 , \$611 , \$610 , \$609  }][23:16] <= config_memory0_write_data[23:16];
+      ch0_config_memory[{ \$543 , \$542 , \$541 , \$540  }][23:16] <= config_memory0_write_data[23:16];
     if (wr__en[3])
-      ch0_config_memory[{ \$612 , \$611 , \$610 , \$609  }][31:24] <= config_memory0_write_data[31:24];
+      ch0_config_memory[{ \$543 , \$542 , \$541 , \$540  }][31:24] <= config_memory0_write_data[31:24];
   end
   assign rd__data = ch0_config_memory[ch0_config_read_index];
   reg [31:0] ch1_config_memory [14:0];
@@ -4339,16 +4166,16 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     ch1_config_memory[14] = 32'd0;
   end
   always @(posedge clk) begin
-    if (\wr__en$942 [0])
-      ch1_config_memory[{ \$713 , \$712 , \$711 , \$710  }][7:0] <= config_memory0_write_data[7:0];
-    if (\wr__en$942 [1])
-      ch1_config_memory[{ \$713 , \$712 , \$711 , \$710  }][15:8] <= config_memory0_write_data[15:8];
-    if (\wr__en$942 [2])
-      ch1_config_memory[{ \$713 , \$712 , \$711 , \$710  }][23:16] <= config_memory0_write_data[23:16];
-    if (\wr__en$942 [3])
-      ch1_config_memory[{ \$713 , \$712 , \$711 , \$710  }][31:24] <= config_memory0_write_data[31:24];
+    if (\wr__en$890 [0])
+      ch1_config_memory[{ \$635 , \$634 , \$633 , \$632  }][7:0] <= config_memory0_write_data[7:0];
+    if (\wr__en$890 [1])
+      ch1_config_memory[{ \$635 , \$634 , \$633 , \$632  }][15:8] <= config_memory0_write_data[15:8];
+    if (\wr__en$890 [2])
+      ch1_config_memory[{ \$635 , \$634 , \$633 , \$632  }][23:16] <= config_memory0_write_data[23:16];
+    if (\wr__en$890 [3])
+      ch1_config_memory[{ \$635 , \$634 , \$633 , \$632  }][31:24] <= config_memory0_write_data[31:24];
   end
-  assign \rd__data$944  = ch1_config_memory[ch1_config_read_index];
+  assign \rd__data$892  = ch1_config_memory[ch1_config_read_index];
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__r_addr;
@@ -4489,1706 +4316,2317 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$141  = bus__r_addr == 8'hc3;
   assign \$142  = bus__r_addr == 8'hc4;
   assign \$143  = bus__r_addr == 8'hc5;
-  assign \$144  = bus__r_addr == 8'hf0;
-  assign \$145  = bus__r_addr == 8'hf1;
-  assign \$146  = bus__r_addr == 8'hf2;
-  assign \$147  = bus__r_addr == 8'hf3;
-  assign \$148  = bus__r_addr == 8'hf4;
-  assign \$149  = bus__r_addr == 8'hf5;
-  assign \$150  = bus__r_addr == 8'hf6;
-  assign \$151  = bus__r_addr == 8'hf7;
-  assign \$152  = bus__r_addr == 8'hf8;
-  assign \$153  = bus__r_addr == 8'hf9;
-  assign \$154  = bus__r_addr == 8'hfa;
-  assign \$155  = bus__r_addr == 8'hfb;
-  assign \$156  = bus__r_addr == 8'hfc;
-  assign \$157  = bus__r_addr == 8'hfd;
-  assign \$158  = ch0_read_select_90 & bus__r_load;
-  assign \$159  = bus__r_addr[10:3] == 5'h13;
-  assign \$160  = bus__r_en & \$159 ;
-  assign \$161  = bus__r_addr[10:4] == 4'he;
-  assign \$162  = bus__r_en & \$161 ;
-  assign \$163  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$165  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$166  = \$164  | \$165 ;
-  assign \$167  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
+  assign \$144  = bus__r_addr == 8'hfc;
+  assign \$145  = bus__r_addr == 8'hfd;
+  assign \$146  = ch0_read_select_90 & bus__r_load;
+  assign \$147  = bus__r_addr[10:3] == 5'h13;
+  assign \$148  = bus__r_en & \$147 ;
+  assign \$149  = bus__r_addr[10:4] == 4'hf;
+  assign \$150  = bus__r_en & \$149 ;
+  assign \$151  = bus__r_addr[3:0] < 4'hc;
+  assign \$152  = \$150  & \$151 ;
+  assign \$153  = bus__r_addr[10:4] == 4'he;
+  assign \$154  = bus__r_en & \$153 ;
+  assign \$155  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$157  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$158  = \$156  | \$157 ;
+  assign \$159  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
+  assign \$160  = \$158  | \$159 ;
+  assign \$161  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$162  = \$160  | \$161 ;
+  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$7595$0 [182:177], 4'h0, \port$7595$0 [186:183], 1'h0, \port$7595$0 [176:174], 1'h0, \port$7595$0 [133:131], 3'h0, \port$7595$0 [49], \port$7595$0 [3:0] } : 32'd0;
   assign \$168  = \$166  | \$167 ;
-  assign \$169  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$169  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$170  = \$168  | \$169 ;
-  assign \$175  = ch0_read_select_90 ? { 2'h0, \port$7739$0 [182:177], 4'h0, \port$7739$0 [186:183], 1'h0, \port$7739$0 [176:174], 1'h0, \port$7739$0 [133:131], 3'h0, \port$7739$0 [49], \port$7739$0 [3:0] } : 32'd0;
+  assign \$171  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$172  = \$170  | \$171 ;
+  assign \$173  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$174  = \$172  | \$173 ;
+  assign \$175  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$177  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$179  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
   assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$181  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
-  assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$186  = \$184  | \$185 ;
-  assign \$187  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
-  assign \$188  = \$186  | \$187 ;
-  assign \$189  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
-  assign \$190  = \$188  | \$189 ;
-  assign \$235  = ch0_read_select_c2 ? { 17'h00000, \port$7827$0 [9:3], 1'h0, \port$7827$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$236  = \$234  | \$235 ;
-  assign \$237  = ch0_read_select_c3 ? \port$7750$0 [31:0] : 32'd0;
+  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$7683$0 [9:3], 1'h0, \port$7683$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$228  = \$226  | \$227 ;
+  assign \$229  = ch0_read_select_c3 ? \port$7606$0 [31:0] : 32'd0;
+  assign \$230  = \$228  | \$229 ;
+  assign \$231  = ch0_read_select_c4 ? \port$7606$0 [63:32] : 32'd0;
+  assign \$232  = \$230  | \$231 ;
+  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$7606$0 [79:64] } : 32'd0;
+  assign \$234  = \$232  | \$233 ;
+  assign \$237  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$238  = \$236  | \$237 ;
-  assign \$239  = ch0_read_select_c4 ? \port$7750$0 [63:32] : 32'd0;
+  assign \$239  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$240  = \$238  | \$239 ;
-  assign \$241  = ch0_read_select_c5 ? { 16'h0000, \port$7750$0 [79:64] } : 32'd0;
-  assign \$242  = \$240  | \$241 ;
-  assign \$243  = ch0_read_select_f0 ? { 16'h0000, ch0__result_updates } : 32'd0;
+  assign \$243  = ch0_window2_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$244  = \$242  | \$243 ;
-  assign \$271  = ch0_window0_read ? ch0__count_data : 32'd0;
-  assign \$272  = \$270  | \$271 ;
-  assign \$273  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$274  = \$272  | \$273 ;
-  assign \$275  = ch0_window2_read ? ch0_config_read_data : 32'd0;
-  assign \$276  = \$274  | \$275 ;
-  assign \$277  = write_data[0] & write_strb[0];
-  assign \$278  = ch1_ctrl_write ? \$277  : 1'h0;
-  assign \$279  = write_data[1] & write_strb[0];
-  assign \$280  = ch1_ctrl_write ? \$279  : 1'h0;
-  assign \$281  = write_data[2] & write_strb[0];
-  assign \$282  = ch1_ctrl_write ? \$281  : 1'h0;
-  assign \$283  = ch1_ctrl_write & write_strb[1];
-  assign \$284  = ch1_ctrl_write & write_strb[1];
-  assign \$285  = write_data[0] & write_strb[0];
-  assign \$286  = ch1_irq_status_write ? \$285  : 1'h0;
-  assign \$287  = write_data[1] & write_strb[0];
-  assign \$288  = ch1_irq_status_write ? \$287  : 1'h0;
-  assign \$289  = write_data[2] & write_strb[0];
-  assign \$290  = ch1_irq_status_write ? \$289  : 1'h0;
-  assign \$291  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$292  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$293  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$294  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$295  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$296  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$297  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$298  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$299  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$300  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$301  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$302  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$303  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$304  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$305  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$306  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$307  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$308  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$309  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$310  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$311  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$312  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$313  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$314  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$315  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$316  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$317  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$318  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$319  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$320  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$321  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$322  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$323  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$324  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$325  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$326  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$327  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$328  = ch1_cfg_checks_config_write & config_write_strb[3];
-  assign \$329  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$330  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$331  = ch1_cfg_crc0_config_write & config_write_strb[0];
-  assign \$332  = ch1_cfg_crc0_config_write & config_write_strb[1];
-  assign \$333  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$334  = ch1_cfg_crc0_config_write & config_write_strb[3];
-  assign \$335  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$336  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$337  = ch1_cfg_crc1_config_write & config_write_strb[0];
-  assign \$338  = ch1_cfg_crc1_config_write & config_write_strb[1];
-  assign \$339  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$340  = ch1_cfg_crc1_config_write & config_write_strb[3];
-  assign \$341  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$342  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$343  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$344  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$345  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$346  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$347  = ch1_cfg_ssi_config_write & config_write_strb[2];
-  assign \$348  = ch1_cfg_ssi_config_write & config_write_strb[3];
-  assign \$349  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$350  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$351  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$352  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$353  = write_data[0] & write_strb[0];
-  assign \$354  = ch1_ca_ctrl_write ? \$353  : 1'h0;
-  assign \$355  = write_data[1] & write_strb[0];
-  assign \$356  = ch1_ca_ctrl_write ? \$355  : 1'h0;
-  assign \$357  = ch1_config_written | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
-  assign \$358  = bus__r_addr == 9'h100;
-  assign \$359  = bus__r_addr == 9'h101;
-  assign \$360  = bus__r_addr == 9'h102;
-  assign \$361  = bus__r_addr == 9'h104;
-  assign \$362  = bus__r_addr == 9'h106;
-  assign \$363  = bus__r_addr == 9'h107;
-  assign \$364  = bus__r_addr == 9'h110;
-  assign \$365  = bus__r_addr == 9'h111;
-  assign \$366  = bus__r_addr == 9'h112;
-  assign \$367  = bus__r_addr == 9'h113;
-  assign \$368  = bus__r_addr == 9'h114;
-  assign \$369  = bus__r_addr == 9'h115;
-  assign \$370  = bus__r_addr == 9'h116;
-  assign \$371  = bus__r_addr == 9'h117;
-  assign \$372  = bus__r_addr == 9'h125;
-  assign \$373  = bus__r_addr == 9'h126;
-  assign \$374  = bus__r_addr == 9'h127;
-  assign \$375  = bus__r_addr == 9'h128;
-  assign \$376  = bus__r_addr == 9'h129;
-  assign \$377  = bus__r_addr == 9'h12a;
-  assign \$378  = bus__r_addr == 9'h12c;
-  assign \$379  = bus__r_addr == 9'h12d;
-  assign \$380  = bus__r_addr == 9'h12e;
-  assign \$381  = bus__r_addr == 9'h130;
-  assign \$382  = bus__r_addr == 9'h131;
-  assign \$383  = bus__r_addr == 9'h132;
-  assign \$384  = bus__r_addr == 9'h134;
-  assign \$385  = bus__r_addr == 9'h135;
-  assign \$386  = bus__r_addr == 9'h136;
-  assign \$387  = bus__r_addr == 9'h138;
-  assign \$388  = bus__r_addr == 9'h139;
-  assign \$389  = bus__r_addr == 9'h13a;
-  assign \$390  = bus__r_addr == 9'h13c;
-  assign \$391  = bus__r_addr == 9'h13d;
-  assign \$392  = bus__r_addr == 9'h13e;
-  assign \$393  = bus__r_addr == 9'h141;
-  assign \$394  = bus__r_addr == 9'h142;
-  assign \$395  = bus__r_addr == 9'h143;
-  assign \$396  = bus__r_addr == 9'h144;
-  assign \$397  = bus__r_addr == 9'h145;
-  assign \$398  = bus__r_addr == 9'h170;
-  assign \$399  = bus__r_addr == 9'h171;
-  assign \$400  = bus__r_addr == 9'h172;
-  assign \$401  = bus__r_addr == 9'h173;
-  assign \$402  = bus__r_addr == 9'h174;
-  assign \$403  = bus__r_addr == 9'h175;
-  assign \$404  = bus__r_addr == 9'h176;
-  assign \$405  = bus__r_addr == 9'h177;
-  assign \$406  = bus__r_addr == 9'h178;
-  assign \$407  = bus__r_addr == 9'h179;
-  assign \$408  = bus__r_addr == 9'h17a;
-  assign \$409  = bus__r_addr == 9'h17b;
-  assign \$410  = bus__r_addr == 9'h17c;
-  assign \$411  = bus__r_addr == 9'h17d;
-  assign \$412  = ch1_read_select_110 & bus__r_load;
-  assign \$413  = bus__r_addr[10:3] == 6'h23;
-  assign \$414  = bus__r_en & \$413 ;
-  assign \$415  = bus__r_addr[10:4] == 5'h16;
-  assign \$416  = bus__r_en & \$415 ;
-  assign \$417  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$419  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$420  = \$418  | \$419 ;
-  assign \$421  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
-  assign \$422  = \$420  | \$421 ;
-  assign \$423  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
-  assign \$424  = \$422  | \$423 ;
-  assign \$429  = ch1_read_select_110 ? { 2'h0, \port$8270$0 [182:177], 4'h0, \port$8270$0 [186:183], 1'h0, \port$8270$0 [176:174], 1'h0, \port$8270$0 [133:131], 3'h0, \port$8270$0 [49], \port$8270$0 [3:0] } : 32'd0;
-  assign \$430  = \$428  | \$429 ;
-  assign \$431  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
-  assign \$432  = \$430  | \$431 ;
-  assign \$433  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
-  assign \$434  = \$432  | \$433 ;
-  assign \$435  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$436  = \$434  | \$435 ;
-  assign \$437  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
-  assign \$438  = \$436  | \$437 ;
-  assign \$439  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$440  = \$438  | \$439 ;
-  assign \$441  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
-  assign \$442  = \$440  | \$441 ;
-  assign \$443  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
-  assign \$444  = \$442  | \$443 ;
-  assign \$489  = ch1_read_select_142 ? { 17'h00000, \port$8358$0 [9:3], 1'h0, \port$8358$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
-  assign \$490  = \$488  | \$489 ;
-  assign \$491  = ch1_read_select_143 ? \port$8281$0 [31:0] : 32'd0;
-  assign \$492  = \$490  | \$491 ;
-  assign \$493  = ch1_read_select_144 ? \port$8281$0 [63:32] : 32'd0;
-  assign \$494  = \$492  | \$493 ;
-  assign \$495  = ch1_read_select_145 ? { 16'h0000, \port$8281$0 [79:64] } : 32'd0;
-  assign \$496  = \$494  | \$495 ;
-  assign \$497  = ch1_read_select_170 ? { 16'h0000, ch1__result_updates } : 32'd0;
-  assign \$498  = \$496  | \$497 ;
-  assign \$525  = ch1_window0_read ? ch1__count_data : 32'd0;
-  assign \$526  = \$524  | \$525 ;
-  assign \$527  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
-  assign \$528  = \$526  | \$527 ;
-  assign \$529  = ch1_window2_read ? ch1_config_read_data : 32'd0;
-  assign \$530  = \$528  | \$529 ;
-  assign \$531  = ! write_addr;
-  assign g_id_write = write_en & \$531 ;
-  assign \$532  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$532 ;
-  assign \$533  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$533 ;
-  assign \$534  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$534 ;
-  assign \$535  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$535 ;
-  assign \$536  = bus__r_addr[10:3] == 5'h13;
-  assign ch0__count_en = bus__r_en & \$536 ;
-  assign \$537  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$537 ;
-  assign \$538  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$538 ;
-  assign \$539  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$539 ;
-  assign \$540  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$540 ;
-  assign \$541  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$541 ;
-  assign \$542  = write_addr == 8'h86;
-  assign ch0_caps_chain_write = write_en & \$542 ;
-  assign \$543  = write_addr == 8'h87;
-  assign ch0_caps_chain2_write = write_en & \$543 ;
-  assign \$544  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$544 ;
-  assign \$545  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$545 ;
-  assign \$546  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$546 ;
-  assign \$547  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$547 ;
-  assign \$548  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$548 ;
-  assign \$549  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$549 ;
-  assign \$550  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$550 ;
-  assign \$551  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$551 ;
-  assign \$552  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$552 ;
-  assign \$553  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$553 ;
-  assign \$554  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$554 ;
-  assign \$555  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$555 ;
-  assign \$556  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$556 ;
-  assign \$557  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$557 ;
-  assign \$558  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$558 ;
-  assign \$559  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$559 ;
-  assign \$560  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$560 ;
-  assign \$561  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$561 ;
-  assign \$562  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$562 ;
-  assign \$563  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$563 ;
-  assign \$564  = write_addr == 8'ha4;
-  assign ch0_cfg_ssi_write = write_en & \$564 ;
-  assign \$565  = write_addr == 8'ha5;
-  assign ch0_count_chain_write = write_en & \$565 ;
-  assign \$566  = write_addr == 8'ha6;
-  assign ch0_count_chain2_write = write_en & \$566 ;
-  assign \$567  = write_addr == 8'ha7;
-  assign ch0_count_chain3_write = write_en & \$567 ;
-  assign \$568  = write_addr == 8'ha8;
-  assign ch0_cfg_w2_write = write_en & \$568 ;
-  assign \$569  = write_addr == 8'ha9;
-  assign ch0_cfg_w2_crc_write = write_en & \$569 ;
-  assign \$570  = write_addr == 8'haa;
-  assign ch0_cfg_w2_crc_start_write = write_en & \$570 ;
-  assign \$571  = write_addr == 8'hac;
-  assign ch0_cfg_w3_write = write_en & \$571 ;
-  assign \$572  = write_addr == 8'had;
-  assign ch0_cfg_w3_crc_write = write_en & \$572 ;
-  assign \$573  = write_addr == 8'hae;
-  assign ch0_cfg_w3_crc_start_write = write_en & \$573 ;
-  assign \$574  = write_addr == 8'hb0;
-  assign ch0_cfg_w4_write = write_en & \$574 ;
-  assign \$575  = write_addr == 8'hb1;
-  assign ch0_cfg_w4_crc_write = write_en & \$575 ;
-  assign \$576  = write_addr == 8'hb2;
-  assign ch0_cfg_w4_crc_start_write = write_en & \$576 ;
-  assign \$577  = write_addr == 8'hb4;
-  assign ch0_cfg_w5_write = write_en & \$577 ;
-  assign \$578  = write_addr == 8'hb5;
-  assign ch0_cfg_w5_crc_write = write_en & \$578 ;
-  assign \$579  = write_addr == 8'hb6;
-  assign ch0_cfg_w5_crc_start_write = write_en & \$579 ;
-  assign \$580  = write_addr == 8'hb8;
-  assign ch0_cfg_w6_write = write_en & \$580 ;
-  assign \$581  = write_addr == 8'hb9;
-  assign ch0_cfg_w6_crc_write = write_en & \$581 ;
-  assign \$582  = write_addr == 8'hba;
-  assign ch0_cfg_w6_crc_start_write = write_en & \$582 ;
-  assign \$583  = write_addr == 8'hbc;
-  assign ch0_cfg_w7_write = write_en & \$583 ;
-  assign \$584  = write_addr == 8'hbd;
-  assign ch0_cfg_w7_crc_write = write_en & \$584 ;
-  assign \$585  = write_addr == 8'hbe;
-  assign ch0_cfg_w7_crc_start_write = write_en & \$585 ;
-  assign \$586  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$586 ;
-  assign \$587  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$587 ;
-  assign \$588  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$588 ;
-  assign \$589  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$589 ;
-  assign \$590  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$590 ;
-  assign \$591  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$591 ;
-  assign \$592  = write_addr[10:4] == 4'hd;
-  assign \$593  = write_en & \$592 ;
-  assign ch0__ca_wbuf_en = \$593  ? write_strb : 4'h0;
-  assign \$594  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$594 ;
-  assign \$595  = write_addr == 8'hf0;
-  assign ch0_chain_updates_write = write_en & \$595 ;
-  assign \$596  = write_addr == 8'hf1;
-  assign ch0_chain_flags_write = write_en & \$596 ;
-  assign \$597  = write_addr == 8'hf2;
-  assign ch0_chain_w2_lo_write = write_en & \$597 ;
-  assign \$598  = write_addr == 8'hf3;
-  assign ch0_chain_w2_hi_write = write_en & \$598 ;
-  assign \$599  = write_addr == 8'hf4;
-  assign ch0_chain_w3_lo_write = write_en & \$599 ;
-  assign \$600  = write_addr == 8'hf5;
-  assign ch0_chain_w3_hi_write = write_en & \$600 ;
-  assign \$601  = write_addr == 8'hf6;
-  assign ch0_chain_w4_lo_write = write_en & \$601 ;
-  assign \$602  = write_addr == 8'hf7;
-  assign ch0_chain_w4_hi_write = write_en & \$602 ;
-  assign \$603  = write_addr == 8'hf8;
-  assign ch0_chain_w5_lo_write = write_en & \$603 ;
-  assign \$604  = write_addr == 8'hf9;
-  assign ch0_chain_w5_hi_write = write_en & \$604 ;
-  assign \$605  = write_addr == 8'hfa;
-  assign ch0_chain_w6_lo_write = write_en & \$605 ;
-  assign \$606  = write_addr == 8'hfb;
-  assign ch0_chain_w6_hi_write = write_en & \$606 ;
-  assign \$607  = write_addr == 8'hfc;
-  assign ch0_chain_w7_lo_write = write_en & \$607 ;
-  assign \$608  = write_addr == 8'hfd;
-  assign ch0_chain_w7_hi_write = write_en & \$608 ;
-  assign \$609  = | { ch0_cfg_ssi_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write, ch0_cfg_checks_config_write, ch0_cfg_timeout_config_write, ch0_cfg_break_config_write, ch0_cfg_ma_config_write };
-  assign \$610  = | { ch0_ca_request_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write };
-  assign \$611  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write };
-  assign \$612  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write };
-  assign \$613  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
-  assign \$614  = ~ ch0_config_written;
-  assign \$615  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$614 ;
-  assign \$616  = | \$615 ;
-  assign \$617  = ~ ch0_config_written;
-  assign \$618  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$617 ;
-  assign \$619  = | \$618 ;
-  assign \$620  = ~ ch0_config_written;
-  assign \$621  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$620 ;
-  assign \$622  = | \$621 ;
-  assign \$623  = ~ ch0_config_written;
-  assign \$624  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$623 ;
-  assign \$625  = | \$624 ;
-  assign \$626  = config_write_strb | { \$625 , \$622 , \$619 , \$616  };
-  assign wr__en = \$613  ? \$626  : 4'h0;
-  assign \$627  = bus__r_addr[10:7] == 1'h1;
-  assign \$628  = bus__r_en & \$627 ;
-  assign ch0_config_read = \$628  & config_memory0_read_hit;
-  assign \$629  = ch0_config_written >> ch0_config_read_index;
-  assign \$630  = \$629  ? rd__data : 32'd0;
-  assign \$631  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$633  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$635  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$636 , \$634 , \$632  };
-  assign \$637  = bus__r_addr[10:3] == 6'h23;
-  assign ch1__count_en = bus__r_en & \$637 ;
-  assign \$638  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$638 ;
-  assign \$639  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$639 ;
-  assign \$640  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$640 ;
-  assign \$641  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$641 ;
-  assign \$642  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$642 ;
-  assign \$643  = write_addr == 9'h106;
-  assign ch1_caps_chain_write = write_en & \$643 ;
-  assign \$644  = write_addr == 9'h107;
-  assign ch1_caps_chain2_write = write_en & \$644 ;
-  assign \$645  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$645 ;
-  assign \$646  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$646 ;
-  assign \$647  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$647 ;
-  assign \$648  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$648 ;
-  assign \$649  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$649 ;
-  assign \$650  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$650 ;
-  assign \$651  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$651 ;
-  assign \$652  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$652 ;
-  assign \$653  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$653 ;
-  assign \$654  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$654 ;
-  assign \$655  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$655 ;
-  assign \$656  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$656 ;
-  assign \$657  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$657 ;
-  assign \$658  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$658 ;
-  assign \$659  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$659 ;
-  assign \$660  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$660 ;
-  assign \$661  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$661 ;
-  assign \$662  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$662 ;
-  assign \$663  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$663 ;
-  assign \$664  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$664 ;
-  assign \$665  = write_addr == 9'h124;
-  assign ch1_cfg_ssi_write = write_en & \$665 ;
-  assign \$666  = write_addr == 9'h125;
-  assign ch1_count_chain_write = write_en & \$666 ;
-  assign \$667  = write_addr == 9'h126;
-  assign ch1_count_chain2_write = write_en & \$667 ;
-  assign \$668  = write_addr == 9'h127;
-  assign ch1_count_chain3_write = write_en & \$668 ;
-  assign \$669  = write_addr == 9'h128;
-  assign ch1_cfg_w2_write = write_en & \$669 ;
-  assign \$670  = write_addr == 9'h129;
-  assign ch1_cfg_w2_crc_write = write_en & \$670 ;
-  assign \$671  = write_addr == 9'h12a;
-  assign ch1_cfg_w2_crc_start_write = write_en & \$671 ;
-  assign \$672  = write_addr == 9'h12c;
-  assign ch1_cfg_w3_write = write_en & \$672 ;
-  assign \$673  = write_addr == 9'h12d;
-  assign ch1_cfg_w3_crc_write = write_en & \$673 ;
-  assign \$674  = write_addr == 9'h12e;
-  assign ch1_cfg_w3_crc_start_write = write_en & \$674 ;
-  assign \$675  = write_addr == 9'h130;
-  assign ch1_cfg_w4_write = write_en & \$675 ;
-  assign \$676  = write_addr == 9'h131;
-  assign ch1_cfg_w4_crc_write = write_en & \$676 ;
-  assign \$677  = write_addr == 9'h132;
-  assign ch1_cfg_w4_crc_start_write = write_en & \$677 ;
-  assign \$678  = write_addr == 9'h134;
-  assign ch1_cfg_w5_write = write_en & \$678 ;
-  assign \$679  = write_addr == 9'h135;
-  assign ch1_cfg_w5_crc_write = write_en & \$679 ;
-  assign \$680  = write_addr == 9'h136;
-  assign ch1_cfg_w5_crc_start_write = write_en & \$680 ;
-  assign \$681  = write_addr == 9'h138;
-  assign ch1_cfg_w6_write = write_en & \$681 ;
-  assign \$682  = write_addr == 9'h139;
-  assign ch1_cfg_w6_crc_write = write_en & \$682 ;
-  assign \$683  = write_addr == 9'h13a;
-  assign ch1_cfg_w6_crc_start_write = write_en & \$683 ;
-  assign \$684  = write_addr == 9'h13c;
-  assign ch1_cfg_w7_write = write_en & \$684 ;
-  assign \$685  = write_addr == 9'h13d;
-  assign ch1_cfg_w7_crc_write = write_en & \$685 ;
-  assign \$686  = write_addr == 9'h13e;
-  assign ch1_cfg_w7_crc_start_write = write_en & \$686 ;
-  assign \$687  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$687 ;
-  assign \$688  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$688 ;
-  assign \$689  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$689 ;
-  assign \$690  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$690 ;
-  assign \$691  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$691 ;
-  assign \$692  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$692 ;
-  assign \$693  = write_addr[10:4] == 5'h15;
-  assign \$694  = write_en & \$693 ;
-  assign ch1__ca_wbuf_en = \$694  ? write_strb : 4'h0;
-  assign \$695  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$695 ;
-  assign \$696  = write_addr == 9'h170;
-  assign ch1_chain_updates_write = write_en & \$696 ;
-  assign \$697  = write_addr == 9'h171;
-  assign ch1_chain_flags_write = write_en & \$697 ;
-  assign \$698  = write_addr == 9'h172;
-  assign ch1_chain_w2_lo_write = write_en & \$698 ;
-  assign \$699  = write_addr == 9'h173;
-  assign ch1_chain_w2_hi_write = write_en & \$699 ;
-  assign \$700  = write_addr == 9'h174;
-  assign ch1_chain_w3_lo_write = write_en & \$700 ;
-  assign \$701  = write_addr == 9'h175;
-  assign ch1_chain_w3_hi_write = write_en & \$701 ;
-  assign \$702  = write_addr == 9'h176;
-  assign ch1_chain_w4_lo_write = write_en & \$702 ;
-  assign \$703  = write_addr == 9'h177;
-  assign ch1_chain_w4_hi_write = write_en & \$703 ;
-  assign \$704  = write_addr == 9'h178;
-  assign ch1_chain_w5_lo_write = write_en & \$704 ;
-  assign \$705  = write_addr == 9'h179;
-  assign ch1_chain_w5_hi_write = write_en & \$705 ;
-  assign \$706  = write_addr == 9'h17a;
-  assign ch1_chain_w6_lo_write = write_en & \$706 ;
-  assign \$707  = write_addr == 9'h17b;
-  assign ch1_chain_w6_hi_write = write_en & \$707 ;
-  assign \$708  = write_addr == 9'h17c;
-  assign ch1_chain_w7_lo_write = write_en & \$708 ;
-  assign \$709  = write_addr == 9'h17d;
-  assign ch1_chain_w7_hi_write = write_en & \$709 ;
-  assign \$710  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
-  assign \$711  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
-  assign \$712  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
-  assign \$713  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
-  assign \$714  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
-  assign \$715  = ~ ch1_config_written;
-  assign \$716  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$715 ;
-  assign \$717  = | \$716 ;
-  assign \$718  = ~ ch1_config_written;
-  assign \$719  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$718 ;
-  assign \$720  = | \$719 ;
-  assign \$721  = ~ ch1_config_written;
-  assign \$722  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$721 ;
-  assign \$723  = | \$722 ;
-  assign \$724  = ~ ch1_config_written;
-  assign \$725  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$724 ;
-  assign \$726  = | \$725 ;
-  assign \$727  = config_write_strb | { \$726 , \$723 , \$720 , \$717  };
-  assign \wr__en$942  = \$714  ? \$727  : 4'h0;
-  assign \$728  = bus__r_addr[10:7] == 2'h2;
-  assign \$729  = bus__r_en & \$728 ;
-  assign ch1_config_read = \$729  & config_memory0_read_hit;
-  assign \$730  = ch1_config_written >> ch1_config_read_index;
-  assign \$731  = \$730  ? \rd__data$944  : 32'd0;
-  assign \$732  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$734  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$736  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$737 , \$735 , \$733  };
-  assign \$739  = \$738  | ch0_read_data;
-  assign bus__r_data = \$739  | ch1_read_data;
-  always @(posedge clk)
-    write_en <= \$740 ;
-  always @(posedge clk)
-    write_addr <= \$741 ;
-  always @(posedge clk)
-    write_data <= \$742 ;
-  always @(posedge clk)
-    write_strb <= \$743 ;
-  always @(posedge clk)
-    config_write_data <= \$744 ;
-  always @(posedge clk)
-    config_write_strb <= \$745 ;
-  always @(posedge clk)
-    g_trigger_start <= \$746 ;
-  always @(posedge clk)
-    g_read_select_0 <= \$747 ;
-  always @(posedge clk)
-    g_read_select_1 <= \$748 ;
-  always @(posedge clk)
-    g_read_select_2 <= \$749 ;
-  always @(posedge clk)
-    g_read_select_3 <= \$750 ;
-  always @(posedge clk)
-    g_read_select_4 <= \$751 ;
-  always @(posedge clk)
-    g_read_data <= \$752 ;
-  always @(posedge clk)
-    ch0_ctrl_start <= \$753 ;
-  always @(posedge clk)
-    ch0_ctrl_abort <= \$754 ;
-  always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$755 ;
-  always @(posedge clk)
-    ch0_ctrl_periodic <= \$756 ;
-  always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$757 ;
-  always @(posedge clk)
-    ch0_irq_status_done <= \$758 ;
-  always @(posedge clk)
-    ch0_irq_status_error <= \$759 ;
-  always @(posedge clk)
-    ch0_irq_status_access_done <= \$760 ;
-  always @(posedge clk)
-    ch0_irq_enable_config_write <= \$761 ;
-  always @(posedge clk)
-    ch0_irq_enable_done <= \$762 ;
-  always @(posedge clk)
-    ch0_irq_enable_error <= \$763 ;
-  always @(posedge clk)
-    ch0_irq_enable_access_done <= \$764 ;
-  always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$765 ;
-  always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$766 ;
-  always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$767 ;
-  always @(posedge clk)
-    ch0_cfg_period_config_write <= \$768 ;
-  always @(posedge clk)
-    ch0_cfg_period_request_period <= \$769 ;
-  always @(posedge clk)
-    ch0_cfg_break_config_write <= \$770 ;
-  always @(posedge clk)
-    ch0_cfg_break_break_time <= \$771 ;
-  always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$772 ;
-  always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$773 ;
-  always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$774 ;
-  always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$775 ;
-  always @(posedge clk)
-    ch0_cfg_words_config_write <= \$776 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$777 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$778 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$779 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$780 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$781 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_signed <= \$782 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$783 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$784 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$785 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$786 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$787 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_signed <= \$788 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$789 ;
-  always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$790 ;
-  always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$791 ;
-  always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$792 ;
-  always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$793 ;
-  always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$794 ;
-  always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$795 ;
-  always @(posedge clk)
-    ch0_cfg_checks_confirm_frames <= \$796 ;
-  always @(posedge clk)
-    ch0_cfg_quiet_config_write <= \$797 ;
-  always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$798 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_config_write <= \$799 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_poly <= \$800 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$801 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_inverted <= \$802 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_start_config_write <= \$803 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_start_w0_crc_start <= \$804 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_config_write <= \$805 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_poly <= \$806 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$807 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_inverted <= \$808 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_start_config_write <= \$809 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_start_w1_crc_start <= \$810 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_config_write <= \$811 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi <= \$812 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_error <= \$813 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_error_low <= \$814 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_double <= \$815 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_delay <= \$816 ;
-  always @(posedge clk)
-    ch0_cfg_w2_config_write <= \$817 ;
-  always @(posedge clk)
-    ch0_cfg_w2_crc_config_write <= \$818 ;
-  always @(posedge clk)
-    ch0_cfg_w2_crc_start_config_write <= \$819 ;
-  always @(posedge clk)
-    ch0_cfg_w3_config_write <= \$820 ;
-  always @(posedge clk)
-    ch0_cfg_w3_crc_config_write <= \$821 ;
-  always @(posedge clk)
-    ch0_cfg_w3_crc_start_config_write <= \$822 ;
-  always @(posedge clk)
-    ch0_cfg_w4_config_write <= \$823 ;
-  always @(posedge clk)
-    ch0_cfg_w4_crc_config_write <= \$824 ;
-  always @(posedge clk)
-    ch0_cfg_w4_crc_start_config_write <= \$825 ;
-  always @(posedge clk)
-    ch0_cfg_w5_config_write <= \$826 ;
-  always @(posedge clk)
-    ch0_cfg_w5_crc_config_write <= \$827 ;
-  always @(posedge clk)
-    ch0_cfg_w5_crc_start_config_write <= \$828 ;
-  always @(posedge clk)
-    ch0_cfg_w6_config_write <= \$829 ;
-  always @(posedge clk)
-    ch0_cfg_w6_crc_config_write <= \$830 ;
-  always @(posedge clk)
-    ch0_cfg_w6_crc_start_config_write <= \$831 ;
-  always @(posedge clk)
-    ch0_cfg_w7_config_write <= \$832 ;
-  always @(posedge clk)
-    ch0_cfg_w7_crc_config_write <= \$833 ;
-  always @(posedge clk)
-    ch0_cfg_w7_crc_start_config_write <= \$834 ;
-  always @(posedge clk)
-    ch0_ca_request_config_write <= \$835 ;
-  always @(posedge clk)
-    ch0_ca_request_slave_id <= \$836 ;
-  always @(posedge clk)
-    ch0_ca_request_address <= \$837 ;
-  always @(posedge clk)
-    ch0_ca_request_count <= \$838 ;
-  always @(posedge clk)
-    \ch0_ca_request_write$149  <= \$839 ;
-  always @(posedge clk)
-    ch0_ca_ctrl_start <= \$840 ;
-  always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$841 ;
-  always @(posedge clk)
-    config_memory0_write_data <= \$842 ;
-  always @(posedge clk)
-    ch0_config_written <= \$843 ;
-  always @(posedge clk)
-    ch0_config_read_index <= \$844 ;
-  always @(posedge clk)
-    ch0_read_select_80 <= \$845 ;
-  always @(posedge clk)
-    ch0_read_select_81 <= \$846 ;
-  always @(posedge clk)
-    ch0_read_select_82 <= \$847 ;
-  always @(posedge clk)
-    ch0_read_select_84 <= \$848 ;
-  always @(posedge clk)
-    ch0_read_select_86 <= \$849 ;
-  always @(posedge clk)
-    ch0_read_select_87 <= \$850 ;
-  always @(posedge clk)
-    ch0_read_select_90 <= \$851 ;
-  always @(posedge clk)
-    ch0_read_select_91 <= \$852 ;
-  always @(posedge clk)
-    ch0_read_select_92 <= \$853 ;
-  always @(posedge clk)
-    ch0_read_select_93 <= \$854 ;
-  always @(posedge clk)
-    ch0_read_select_94 <= \$855 ;
-  always @(posedge clk)
-    ch0_read_select_95 <= \$856 ;
-  always @(posedge clk)
-    ch0_read_select_96 <= \$857 ;
-  always @(posedge clk)
-    ch0_read_select_97 <= \$858 ;
-  always @(posedge clk)
-    ch0_read_select_a5 <= \$859 ;
-  always @(posedge clk)
-    ch0_read_select_a6 <= \$860 ;
-  always @(posedge clk)
-    ch0_read_select_a7 <= \$861 ;
-  always @(posedge clk)
-    ch0_read_select_a8 <= \$862 ;
-  always @(posedge clk)
-    ch0_read_select_a9 <= \$863 ;
-  always @(posedge clk)
-    ch0_read_select_aa <= \$864 ;
-  always @(posedge clk)
-    ch0_read_select_ac <= \$865 ;
-  always @(posedge clk)
-    ch0_read_select_ad <= \$866 ;
-  always @(posedge clk)
-    ch0_read_select_ae <= \$867 ;
-  always @(posedge clk)
-    ch0_read_select_b0 <= \$868 ;
-  always @(posedge clk)
-    ch0_read_select_b1 <= \$869 ;
-  always @(posedge clk)
-    ch0_read_select_b2 <= \$870 ;
-  always @(posedge clk)
-    ch0_read_select_b4 <= \$871 ;
-  always @(posedge clk)
-    ch0_read_select_b5 <= \$872 ;
-  always @(posedge clk)
-    ch0_read_select_b6 <= \$873 ;
-  always @(posedge clk)
-    ch0_read_select_b8 <= \$874 ;
-  always @(posedge clk)
-    ch0_read_select_b9 <= \$875 ;
-  always @(posedge clk)
-    ch0_read_select_ba <= \$876 ;
-  always @(posedge clk)
-    ch0_read_select_bc <= \$877 ;
-  always @(posedge clk)
-    ch0_read_select_bd <= \$878 ;
-  always @(posedge clk)
-    ch0_read_select_be <= \$879 ;
-  always @(posedge clk)
-    ch0_read_select_c1 <= \$880 ;
-  always @(posedge clk)
-    ch0_read_select_c2 <= \$881 ;
-  always @(posedge clk)
-    ch0_read_select_c3 <= \$882 ;
-  always @(posedge clk)
-    ch0_read_select_c4 <= \$883 ;
-  always @(posedge clk)
-    ch0_read_select_c5 <= \$884 ;
-  always @(posedge clk)
-    ch0_read_select_f0 <= \$885 ;
-  always @(posedge clk)
-    ch0_read_select_f1 <= \$886 ;
-  always @(posedge clk)
-    ch0_read_select_f2 <= \$887 ;
-  always @(posedge clk)
-    ch0_read_select_f3 <= \$888 ;
-  always @(posedge clk)
-    ch0_read_select_f4 <= \$889 ;
-  always @(posedge clk)
-    ch0_read_select_f5 <= \$890 ;
-  always @(posedge clk)
-    ch0_read_select_f6 <= \$891 ;
-  always @(posedge clk)
-    ch0_read_select_f7 <= \$892 ;
-  always @(posedge clk)
-    ch0_read_select_f8 <= \$893 ;
-  always @(posedge clk)
-    ch0_read_select_f9 <= \$894 ;
-  always @(posedge clk)
-    ch0_read_select_fa <= \$895 ;
-  always @(posedge clk)
-    ch0_read_select_fb <= \$896 ;
-  always @(posedge clk)
-    ch0_read_select_fc <= \$897 ;
-  always @(posedge clk)
-    ch0_read_select_fd <= \$898 ;
-  always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$899 ;
-  always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$900 ;
-  always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$901 ;
-  always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$902 ;
-  always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$903 ;
-  always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$904 ;
-  always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$905 ;
-  always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$906 ;
-  always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$907 ;
-  always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$908 ;
-  always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$909 ;
-  always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$910 ;
-  always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$911 ;
+  assign \$245  = ch0_window3_read ? ch0_config_read_data : 32'd0;
+  assign \$246  = \$244  | \$245 ;
+  assign \$247  = write_data[0] & write_strb[0];
+  assign \$248  = ch1_ctrl_write ? \$247  : 1'h0;
+  assign \$249  = write_data[1] & write_strb[0];
+  assign \$250  = ch1_ctrl_write ? \$249  : 1'h0;
+  assign \$251  = write_data[2] & write_strb[0];
+  assign \$252  = ch1_ctrl_write ? \$251  : 1'h0;
+  assign \$253  = ch1_ctrl_write & write_strb[1];
+  assign \$254  = ch1_ctrl_write & write_strb[1];
+  assign \$255  = write_data[0] & write_strb[0];
+  assign \$256  = ch1_irq_status_write ? \$255  : 1'h0;
+  assign \$257  = write_data[1] & write_strb[0];
+  assign \$258  = ch1_irq_status_write ? \$257  : 1'h0;
+  assign \$259  = write_data[2] & write_strb[0];
+  assign \$260  = ch1_irq_status_write ? \$259  : 1'h0;
+  assign \$261  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$262  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$263  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$264  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$265  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$266  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$267  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$268  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$269  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$270  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$271  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$272  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$273  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$274  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$275  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$276  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$277  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$278  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$279  = ch1_cfg_timeout_config_write & config_write_strb[2];
+  assign \$280  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$281  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$282  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$283  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$284  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$285  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$286  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$287  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$288  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$289  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$290  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$291  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$292  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$293  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$294  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$295  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$296  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$297  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$298  = ch1_cfg_checks_config_write & config_write_strb[3];
+  assign \$299  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$300  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$301  = ch1_cfg_crc0_config_write & config_write_strb[0];
+  assign \$302  = ch1_cfg_crc0_config_write & config_write_strb[1];
+  assign \$303  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$304  = ch1_cfg_crc0_config_write & config_write_strb[3];
+  assign \$305  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$306  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$307  = ch1_cfg_crc1_config_write & config_write_strb[0];
+  assign \$308  = ch1_cfg_crc1_config_write & config_write_strb[1];
+  assign \$309  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$310  = ch1_cfg_crc1_config_write & config_write_strb[3];
+  assign \$311  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$312  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$313  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$314  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$315  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$316  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$317  = ch1_cfg_ssi_config_write & config_write_strb[2];
+  assign \$318  = ch1_cfg_ssi_config_write & config_write_strb[3];
+  assign \$319  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$320  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$321  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$322  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$323  = write_data[0] & write_strb[0];
+  assign \$324  = ch1_ca_ctrl_write ? \$323  : 1'h0;
+  assign \$325  = write_data[1] & write_strb[0];
+  assign \$326  = ch1_ca_ctrl_write ? \$325  : 1'h0;
+  assign \$327  = ch1_config_written | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$328  = bus__r_addr == 9'h100;
+  assign \$329  = bus__r_addr == 9'h101;
+  assign \$330  = bus__r_addr == 9'h102;
+  assign \$331  = bus__r_addr == 9'h104;
+  assign \$332  = bus__r_addr == 9'h106;
+  assign \$333  = bus__r_addr == 9'h107;
+  assign \$334  = bus__r_addr == 9'h110;
+  assign \$335  = bus__r_addr == 9'h111;
+  assign \$336  = bus__r_addr == 9'h112;
+  assign \$337  = bus__r_addr == 9'h113;
+  assign \$338  = bus__r_addr == 9'h114;
+  assign \$339  = bus__r_addr == 9'h115;
+  assign \$340  = bus__r_addr == 9'h116;
+  assign \$341  = bus__r_addr == 9'h117;
+  assign \$342  = bus__r_addr == 9'h125;
+  assign \$343  = bus__r_addr == 9'h126;
+  assign \$344  = bus__r_addr == 9'h127;
+  assign \$345  = bus__r_addr == 9'h128;
+  assign \$346  = bus__r_addr == 9'h129;
+  assign \$347  = bus__r_addr == 9'h12a;
+  assign \$348  = bus__r_addr == 9'h12c;
+  assign \$349  = bus__r_addr == 9'h12d;
+  assign \$350  = bus__r_addr == 9'h12e;
+  assign \$351  = bus__r_addr == 9'h130;
+  assign \$352  = bus__r_addr == 9'h131;
+  assign \$353  = bus__r_addr == 9'h132;
+  assign \$354  = bus__r_addr == 9'h134;
+  assign \$355  = bus__r_addr == 9'h135;
+  assign \$356  = bus__r_addr == 9'h136;
+  assign \$357  = bus__r_addr == 9'h138;
+  assign \$358  = bus__r_addr == 9'h139;
+  assign \$359  = bus__r_addr == 9'h13a;
+  assign \$360  = bus__r_addr == 9'h13c;
+  assign \$361  = bus__r_addr == 9'h13d;
+  assign \$362  = bus__r_addr == 9'h13e;
+  assign \$363  = bus__r_addr == 9'h141;
+  assign \$364  = bus__r_addr == 9'h142;
+  assign \$365  = bus__r_addr == 9'h143;
+  assign \$366  = bus__r_addr == 9'h144;
+  assign \$367  = bus__r_addr == 9'h145;
+  assign \$368  = bus__r_addr == 9'h17c;
+  assign \$369  = bus__r_addr == 9'h17d;
+  assign \$370  = ch1_read_select_110 & bus__r_load;
+  assign \$371  = bus__r_addr[10:3] == 6'h23;
+  assign \$372  = bus__r_en & \$371 ;
+  assign \$373  = bus__r_addr[10:4] == 5'h17;
+  assign \$374  = bus__r_en & \$373 ;
+  assign \$375  = bus__r_addr[3:0] < 4'hc;
+  assign \$376  = \$374  & \$375 ;
+  assign \$377  = bus__r_addr[10:4] == 5'h16;
+  assign \$378  = bus__r_en & \$377 ;
+  assign \$379  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$381  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
+  assign \$382  = \$380  | \$381 ;
+  assign \$383  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
+  assign \$384  = \$382  | \$383 ;
+  assign \$385  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$386  = \$384  | \$385 ;
+  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$8126$0 [182:177], 4'h0, \port$8126$0 [186:183], 1'h0, \port$8126$0 [176:174], 1'h0, \port$8126$0 [133:131], 3'h0, \port$8126$0 [49], \port$8126$0 [3:0] } : 32'd0;
+  assign \$392  = \$390  | \$391 ;
+  assign \$393  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$394  = \$392  | \$393 ;
+  assign \$395  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$396  = \$394  | \$395 ;
+  assign \$397  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$398  = \$396  | \$397 ;
+  assign \$399  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$400  = \$398  | \$399 ;
+  assign \$401  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$402  = \$400  | \$401 ;
+  assign \$403  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$404  = \$402  | \$403 ;
+  assign \$405  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
+  assign \$406  = \$404  | \$405 ;
+  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$8214$0 [9:3], 1'h0, \port$8214$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$452  = \$450  | \$451 ;
+  assign \$453  = ch1_read_select_143 ? \port$8137$0 [31:0] : 32'd0;
+  assign \$454  = \$452  | \$453 ;
+  assign \$455  = ch1_read_select_144 ? \port$8137$0 [63:32] : 32'd0;
+  assign \$456  = \$454  | \$455 ;
+  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$8137$0 [79:64] } : 32'd0;
+  assign \$458  = \$456  | \$457 ;
+  assign \$461  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
+  assign \$462  = \$460  | \$461 ;
+  assign \$463  = ch1_window0_read ? ch1__count_data : 32'd0;
+  assign \$464  = \$462  | \$463 ;
+  assign \$467  = ch1_window2_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$468  = \$466  | \$467 ;
+  assign \$469  = ch1_window3_read ? ch1_config_read_data : 32'd0;
+  assign \$470  = \$468  | \$469 ;
+  assign \$471  = ! write_addr;
+  assign g_id_write = write_en & \$471 ;
+  assign \$472  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$472 ;
+  assign \$473  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$473 ;
+  assign \$474  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$474 ;
+  assign \$475  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$475 ;
+  assign \$476  = bus__r_addr[10:3] == 5'h13;
+  assign ch0__count_en = bus__r_en & \$476 ;
+  assign \$477  = bus__r_addr[10:4] == 4'hf;
+  assign \$478  = bus__r_en & \$477 ;
+  assign \$479  = bus__r_addr[3:0] < 4'hc;
+  assign ch0__chain_en = \$478  & \$479 ;
+  assign \$480  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$480 ;
+  assign \$481  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$481 ;
+  assign \$482  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$482 ;
+  assign \$483  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$483 ;
+  assign \$484  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$484 ;
+  assign \$485  = write_addr == 8'h86;
+  assign ch0_caps_chain_write = write_en & \$485 ;
+  assign \$486  = write_addr == 8'h87;
+  assign ch0_caps_chain2_write = write_en & \$486 ;
+  assign \$487  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$487 ;
+  assign \$488  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$488 ;
+  assign \$489  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$489 ;
+  assign \$490  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$490 ;
+  assign \$491  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$491 ;
+  assign \$492  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$492 ;
+  assign \$493  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$493 ;
+  assign \$494  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$494 ;
+  assign \$495  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$495 ;
+  assign \$496  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$496 ;
+  assign \$497  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$497 ;
+  assign \$498  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$498 ;
+  assign \$499  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$499 ;
+  assign \$500  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$500 ;
+  assign \$501  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$501 ;
+  assign \$502  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$502 ;
+  assign \$503  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$503 ;
+  assign \$504  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$504 ;
+  assign \$505  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$505 ;
+  assign \$506  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$506 ;
+  assign \$507  = write_addr == 8'ha4;
+  assign ch0_cfg_ssi_write = write_en & \$507 ;
+  assign \$508  = write_addr == 8'ha5;
+  assign ch0_count_chain_write = write_en & \$508 ;
+  assign \$509  = write_addr == 8'ha6;
+  assign ch0_count_chain2_write = write_en & \$509 ;
+  assign \$510  = write_addr == 8'ha7;
+  assign ch0_count_chain3_write = write_en & \$510 ;
+  assign \$511  = write_addr == 8'ha8;
+  assign ch0_cfg_w2_write = write_en & \$511 ;
+  assign \$512  = write_addr == 8'ha9;
+  assign ch0_cfg_w2_crc_write = write_en & \$512 ;
+  assign \$513  = write_addr == 8'haa;
+  assign ch0_cfg_w2_crc_start_write = write_en & \$513 ;
+  assign \$514  = write_addr == 8'hac;
+  assign ch0_cfg_w3_write = write_en & \$514 ;
+  assign \$515  = write_addr == 8'had;
+  assign ch0_cfg_w3_crc_write = write_en & \$515 ;
+  assign \$516  = write_addr == 8'hae;
+  assign ch0_cfg_w3_crc_start_write = write_en & \$516 ;
+  assign \$517  = write_addr == 8'hb0;
+  assign ch0_cfg_w4_write = write_en & \$517 ;
+  assign \$518  = write_addr == 8'hb1;
+  assign ch0_cfg_w4_crc_write = write_en & \$518 ;
+  assign \$519  = write_addr == 8'hb2;
+  assign ch0_cfg_w4_crc_start_write = write_en & \$519 ;
+  assign \$520  = write_addr == 8'hb4;
+  assign ch0_cfg_w5_write = write_en & \$520 ;
+  assign \$521  = write_addr == 8'hb5;
+  assign ch0_cfg_w5_crc_write = write_en & \$521 ;
+  assign \$522  = write_addr == 8'hb6;
+  assign ch0_cfg_w5_crc_start_write = write_en & \$522 ;
+  assign \$523  = write_addr == 8'hb8;
+  assign ch0_cfg_w6_write = write_en & \$523 ;
+  assign \$524  = write_addr == 8'hb9;
+  assign ch0_cfg_w6_crc_write = write_en & \$524 ;
+  assign \$525  = write_addr == 8'hba;
+  assign ch0_cfg_w6_crc_start_write = write_en & \$525 ;
+  assign \$526  = write_addr == 8'hbc;
+  assign ch0_cfg_w7_write = write_en & \$526 ;
+  assign \$527  = write_addr == 8'hbd;
+  assign ch0_cfg_w7_crc_write = write_en & \$527 ;
+  assign \$528  = write_addr == 8'hbe;
+  assign ch0_cfg_w7_crc_start_write = write_en & \$528 ;
+  assign \$529  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$529 ;
+  assign \$530  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$530 ;
+  assign \$531  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$531 ;
+  assign \$532  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$532 ;
+  assign \$533  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$533 ;
+  assign \$534  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$534 ;
+  assign \$535  = write_addr[10:4] == 4'hd;
+  assign \$536  = write_en & \$535 ;
+  assign ch0__ca_wbuf_en = \$536  ? write_strb : 4'h0;
+  assign \$537  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$537 ;
+  assign \$538  = write_addr == 8'hfc;
+  assign ch0_chain_flags_write = write_en & \$538 ;
+  assign \$539  = write_addr == 8'hfd;
+  assign ch0_chain_updates_write = write_en & \$539 ;
+  assign \$540  = | { ch0_cfg_ssi_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write, ch0_cfg_checks_config_write, ch0_cfg_timeout_config_write, ch0_cfg_break_config_write, ch0_cfg_ma_config_write };
+  assign \$541  = | { ch0_ca_request_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write };
+  assign \$542  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write };
+  assign \$543  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write };
+  assign \$544  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
+  assign \$545  = ~ ch0_config_written;
+  assign \$546  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$545 ;
+  assign \$547  = | \$546 ;
+  assign \$548  = ~ ch0_config_written;
+  assign \$549  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$548 ;
+  assign \$550  = | \$549 ;
+  assign \$551  = ~ ch0_config_written;
+  assign \$552  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$551 ;
+  assign \$553  = | \$552 ;
+  assign \$554  = ~ ch0_config_written;
+  assign \$555  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$554 ;
+  assign \$556  = | \$555 ;
+  assign \$557  = config_write_strb | { \$556 , \$553 , \$550 , \$547  };
+  assign wr__en = \$544  ? \$557  : 4'h0;
+  assign \$558  = bus__r_addr[10:7] == 1'h1;
+  assign \$559  = bus__r_en & \$558 ;
+  assign ch0_config_read = \$559  & config_memory0_read_hit;
+  assign \$560  = ch0_config_written >> ch0_config_read_index;
+  assign \$561  = \$560  ? rd__data : 32'd0;
+  assign \$562  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$564  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$566  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$567 , \$565 , \$563  };
+  assign \$568  = bus__r_addr[10:3] == 6'h23;
+  assign ch1__count_en = bus__r_en & \$568 ;
+  assign \$569  = bus__r_addr[10:4] == 5'h17;
+  assign \$570  = bus__r_en & \$569 ;
+  assign \$571  = bus__r_addr[3:0] < 4'hc;
+  assign ch1__chain_en = \$570  & \$571 ;
+  assign \$572  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$572 ;
+  assign \$573  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$573 ;
+  assign \$574  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$574 ;
+  assign \$575  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$575 ;
+  assign \$576  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$576 ;
+  assign \$577  = write_addr == 9'h106;
+  assign ch1_caps_chain_write = write_en & \$577 ;
+  assign \$578  = write_addr == 9'h107;
+  assign ch1_caps_chain2_write = write_en & \$578 ;
+  assign \$579  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$579 ;
+  assign \$580  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$580 ;
+  assign \$581  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$581 ;
+  assign \$582  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$582 ;
+  assign \$583  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$583 ;
+  assign \$584  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$584 ;
+  assign \$585  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$585 ;
+  assign \$586  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$586 ;
+  assign \$587  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$587 ;
+  assign \$588  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$588 ;
+  assign \$589  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$589 ;
+  assign \$590  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$590 ;
+  assign \$591  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$591 ;
+  assign \$592  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$592 ;
+  assign \$593  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$593 ;
+  assign \$594  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$594 ;
+  assign \$595  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$595 ;
+  assign \$596  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$596 ;
+  assign \$597  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$597 ;
+  assign \$598  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$598 ;
+  assign \$599  = write_addr == 9'h124;
+  assign ch1_cfg_ssi_write = write_en & \$599 ;
+  assign \$600  = write_addr == 9'h125;
+  assign ch1_count_chain_write = write_en & \$600 ;
+  assign \$601  = write_addr == 9'h126;
+  assign ch1_count_chain2_write = write_en & \$601 ;
+  assign \$602  = write_addr == 9'h127;
+  assign ch1_count_chain3_write = write_en & \$602 ;
+  assign \$603  = write_addr == 9'h128;
+  assign ch1_cfg_w2_write = write_en & \$603 ;
+  assign \$604  = write_addr == 9'h129;
+  assign ch1_cfg_w2_crc_write = write_en & \$604 ;
+  assign \$605  = write_addr == 9'h12a;
+  assign ch1_cfg_w2_crc_start_write = write_en & \$605 ;
+  assign \$606  = write_addr == 9'h12c;
+  assign ch1_cfg_w3_write = write_en & \$606 ;
+  assign \$607  = write_addr == 9'h12d;
+  assign ch1_cfg_w3_crc_write = write_en & \$607 ;
+  assign \$608  = write_addr == 9'h12e;
+  assign ch1_cfg_w3_crc_start_write = write_en & \$608 ;
+  assign \$609  = write_addr == 9'h130;
+  assign ch1_cfg_w4_write = write_en & \$609 ;
+  assign \$610  = write_addr == 9'h131;
+  assign ch1_cfg_w4_crc_write = write_en & \$610 ;
+  assign \$611  = write_addr == 9'h132;
+  assign ch1_cfg_w4_crc_start_write = write_en & \$611 ;
+  assign \$612  = write_addr == 9'h134;
+  assign ch1_cfg_w5_write = write_en & \$612 ;
+  assign \$613  = write_addr == 9'h135;
+  assign ch1_cfg_w5_crc_write = write_en & \$613 ;
+  assign \$614  = write_addr == 9'h136;
+  assign ch1_cfg_w5_crc_start_write = write_en & \$614 ;
+  assign \$615  = write_addr == 9'h138;
+  assign ch1_cfg_w6_write = write_en & \$615 ;
+  assign \$616  = write_addr == 9'h139;
+  assign ch1_cfg_w6_crc_write = write_en & \$616 ;
+  assign \$617  = write_addr == 9'h13a;
+  assign ch1_cfg_w6_crc_start_write = write_en & \$617 ;
+  assign \$618  = write_addr == 9'h13c;
+  assign ch1_cfg_w7_write = write_en & \$618 ;
+  assign \$619  = write_addr == 9'h13d;
+  assign ch1_cfg_w7_crc_write = write_en & \$619 ;
+  assign \$620  = write_addr == 9'h13e;
+  assign ch1_cfg_w7_crc_start_write = write_en & \$620 ;
+  assign \$621  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$621 ;
+  assign \$622  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$622 ;
+  assign \$623  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$623 ;
+  assign \$624  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$624 ;
+  assign \$625  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$625 ;
+  assign \$626  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$626 ;
+  assign \$627  = write_addr[10:4] == 5'h15;
+  assign \$628  = write_en & \$627 ;
+  assign ch1__ca_wbuf_en = \$628  ? write_strb : 4'h0;
+  assign \$629  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$629 ;
+  assign \$630  = write_addr == 9'h17c;
+  assign ch1_chain_flags_write = write_en & \$630 ;
+  assign \$631  = write_addr == 9'h17d;
+  assign ch1_chain_updates_write = write_en & \$631 ;
+  assign \$632  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
+  assign \$633  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
+  assign \$634  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
+  assign \$635  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
+  assign \$636  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$637  = ~ ch1_config_written;
+  assign \$638  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$637 ;
+  assign \$639  = | \$638 ;
+  assign \$640  = ~ ch1_config_written;
+  assign \$641  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$640 ;
+  assign \$642  = | \$641 ;
+  assign \$643  = ~ ch1_config_written;
+  assign \$644  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$643 ;
+  assign \$645  = | \$644 ;
+  assign \$646  = ~ ch1_config_written;
+  assign \$647  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$646 ;
+  assign \$648  = | \$647 ;
+  assign \$649  = config_write_strb | { \$648 , \$645 , \$642 , \$639  };
+  assign \wr__en$890  = \$636  ? \$649  : 4'h0;
+  assign \$650  = bus__r_addr[10:7] == 2'h2;
+  assign \$651  = bus__r_en & \$650 ;
+  assign ch1_config_read = \$651  & config_memory0_read_hit;
+  assign \$652  = ch1_config_written >> ch1_config_read_index;
+  assign \$653  = \$652  ? \rd__data$892  : 32'd0;
+  assign \$654  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$656  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$658  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$659 , \$657 , \$655  };
+  assign \$661  = \$660  | ch0_read_data;
+  assign bus__r_data = \$661  | ch1_read_data;
+  always @(posedge clk)
+    write_en <= \$662 ;
+  always @(posedge clk)
+    write_addr <= \$663 ;
+  always @(posedge clk)
+    write_data <= \$664 ;
+  always @(posedge clk)
+    write_strb <= \$665 ;
+  always @(posedge clk)
+    config_write_data <= \$666 ;
+  always @(posedge clk)
+    config_write_strb <= \$667 ;
+  always @(posedge clk)
+    g_trigger_start <= \$668 ;
+  always @(posedge clk)
+    g_read_select_0 <= \$669 ;
+  always @(posedge clk)
+    g_read_select_1 <= \$670 ;
+  always @(posedge clk)
+    g_read_select_2 <= \$671 ;
+  always @(posedge clk)
+    g_read_select_3 <= \$672 ;
+  always @(posedge clk)
+    g_read_select_4 <= \$673 ;
+  always @(posedge clk)
+    g_read_data <= \$674 ;
+  always @(posedge clk)
+    ch0_ctrl_start <= \$675 ;
+  always @(posedge clk)
+    ch0_ctrl_abort <= \$676 ;
+  always @(posedge clk)
+    ch0_ctrl_clear_counters <= \$677 ;
+  always @(posedge clk)
+    ch0_ctrl_periodic <= \$678 ;
+  always @(posedge clk)
+    ch0_ctrl_trigger_enable <= \$679 ;
+  always @(posedge clk)
+    ch0_irq_status_done <= \$680 ;
+  always @(posedge clk)
+    ch0_irq_status_error <= \$681 ;
+  always @(posedge clk)
+    ch0_irq_status_access_done <= \$682 ;
+  always @(posedge clk)
+    ch0_irq_enable_config_write <= \$683 ;
+  always @(posedge clk)
+    ch0_irq_enable_done <= \$684 ;
+  always @(posedge clk)
+    ch0_irq_enable_error <= \$685 ;
+  always @(posedge clk)
+    ch0_irq_enable_access_done <= \$686 ;
+  always @(posedge clk)
+    ch0_cfg_ma_config_write <= \$687 ;
+  always @(posedge clk)
+    ch0_cfg_ma_ma_half_period <= \$688 ;
+  always @(posedge clk)
+    ch0_cfg_ma_delay_limit <= \$689 ;
+  always @(posedge clk)
+    ch0_cfg_period_config_write <= \$690 ;
+  always @(posedge clk)
+    ch0_cfg_period_request_period <= \$691 ;
+  always @(posedge clk)
+    ch0_cfg_break_config_write <= \$692 ;
+  always @(posedge clk)
+    ch0_cfg_break_break_time <= \$693 ;
+  always @(posedge clk)
+    ch0_cfg_ack_config_write <= \$694 ;
+  always @(posedge clk)
+    ch0_cfg_ack_ack_limit <= \$695 ;
+  always @(posedge clk)
+    ch0_cfg_timeout_config_write <= \$696 ;
+  always @(posedge clk)
+    ch0_cfg_timeout_timeout_limit <= \$697 ;
+  always @(posedge clk)
+    ch0_cfg_words_config_write <= \$698 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_data_bits <= \$699 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_nenw <= \$700 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_lc <= \$701 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_crc <= \$702 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_gray <= \$703 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_signed <= \$704 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_data_bits <= \$705 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_nenw <= \$706 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_lc <= \$707 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_crc <= \$708 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_gray <= \$709 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_signed <= \$710 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_enable <= \$711 ;
+  always @(posedge clk)
+    ch0_cfg_checks_config_write <= \$712 ;
+  always @(posedge clk)
+    ch0_cfg_checks_end_check <= \$713 ;
+  always @(posedge clk)
+    ch0_cfg_checks_spw_check <= \$714 ;
+  always @(posedge clk)
+    ch0_cfg_checks_spw_tolerance <= \$715 ;
+  always @(posedge clk)
+    ch0_cfg_checks_noise_limit <= \$716 ;
+  always @(posedge clk)
+    ch0_cfg_checks_delay_tolerance <= \$717 ;
+  always @(posedge clk)
+    ch0_cfg_checks_confirm_frames <= \$718 ;
+  always @(posedge clk)
+    ch0_cfg_quiet_config_write <= \$719 ;
+  always @(posedge clk)
+    ch0_cfg_quiet_quiet_time <= \$720 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_config_write <= \$721 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_w0_crc_poly <= \$722 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_w0_crc_width <= \$723 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_w0_crc_inverted <= \$724 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_start_config_write <= \$725 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_start_w0_crc_start <= \$726 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_config_write <= \$727 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_w1_crc_poly <= \$728 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_w1_crc_width <= \$729 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_w1_crc_inverted <= \$730 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_start_config_write <= \$731 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_start_w1_crc_start <= \$732 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_config_write <= \$733 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi <= \$734 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_error <= \$735 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_error_low <= \$736 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_double <= \$737 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_delay <= \$738 ;
+  always @(posedge clk)
+    ch0_cfg_w2_config_write <= \$739 ;
+  always @(posedge clk)
+    ch0_cfg_w2_crc_config_write <= \$740 ;
+  always @(posedge clk)
+    ch0_cfg_w2_crc_start_config_write <= \$741 ;
+  always @(posedge clk)
+    ch0_cfg_w3_config_write <= \$742 ;
+  always @(posedge clk)
+    ch0_cfg_w3_crc_config_write <= \$743 ;
+  always @(posedge clk)
+    ch0_cfg_w3_crc_start_config_write <= \$744 ;
+  always @(posedge clk)
+    ch0_cfg_w4_config_write <= \$745 ;
+  always @(posedge clk)
+    ch0_cfg_w4_crc_config_write <= \$746 ;
+  always @(posedge clk)
+    ch0_cfg_w4_crc_start_config_write <= \$747 ;
+  always @(posedge clk)
+    ch0_cfg_w5_config_write <= \$748 ;
+  always @(posedge clk)
+    ch0_cfg_w5_crc_config_write <= \$749 ;
+  always @(posedge clk)
+    ch0_cfg_w5_crc_start_config_write <= \$750 ;
+  always @(posedge clk)
+    ch0_cfg_w6_config_write <= \$751 ;
+  always @(posedge clk)
+    ch0_cfg_w6_crc_config_write <= \$752 ;
+  always @(posedge clk)
+    ch0_cfg_w6_crc_start_config_write <= \$753 ;
+  always @(posedge clk)
+    ch0_cfg_w7_config_write <= \$754 ;
+  always @(posedge clk)
+    ch0_cfg_w7_crc_config_write <= \$755 ;
+  always @(posedge clk)
+    ch0_cfg_w7_crc_start_config_write <= \$756 ;
+  always @(posedge clk)
+    ch0_ca_request_config_write <= \$757 ;
+  always @(posedge clk)
+    ch0_ca_request_slave_id <= \$758 ;
+  always @(posedge clk)
+    ch0_ca_request_address <= \$759 ;
+  always @(posedge clk)
+    ch0_ca_request_count <= \$760 ;
+  always @(posedge clk)
+    \ch0_ca_request_write$149  <= \$761 ;
+  always @(posedge clk)
+    ch0_ca_ctrl_start <= \$762 ;
+  always @(posedge clk)
+    ch0_ca_ctrl_abort <= \$763 ;
+  always @(posedge clk)
+    config_memory0_write_data <= \$764 ;
+  always @(posedge clk)
+    ch0_config_written <= \$765 ;
+  always @(posedge clk)
+    ch0_config_read_index <= \$766 ;
+  always @(posedge clk)
+    ch0_read_select_80 <= \$767 ;
+  always @(posedge clk)
+    ch0_read_select_81 <= \$768 ;
+  always @(posedge clk)
+    ch0_read_select_82 <= \$769 ;
+  always @(posedge clk)
+    ch0_read_select_84 <= \$770 ;
+  always @(posedge clk)
+    ch0_read_select_86 <= \$771 ;
+  always @(posedge clk)
+    ch0_read_select_87 <= \$772 ;
+  always @(posedge clk)
+    ch0_read_select_90 <= \$773 ;
+  always @(posedge clk)
+    ch0_read_select_91 <= \$774 ;
+  always @(posedge clk)
+    ch0_read_select_92 <= \$775 ;
+  always @(posedge clk)
+    ch0_read_select_93 <= \$776 ;
+  always @(posedge clk)
+    ch0_read_select_94 <= \$777 ;
+  always @(posedge clk)
+    ch0_read_select_95 <= \$778 ;
+  always @(posedge clk)
+    ch0_read_select_96 <= \$779 ;
+  always @(posedge clk)
+    ch0_read_select_97 <= \$780 ;
+  always @(posedge clk)
+    ch0_read_select_a5 <= \$781 ;
+  always @(posedge clk)
+    ch0_read_select_a6 <= \$782 ;
+  always @(posedge clk)
+    ch0_read_select_a7 <= \$783 ;
+  always @(posedge clk)
+    ch0_read_select_a8 <= \$784 ;
+  always @(posedge clk)
+    ch0_read_select_a9 <= \$785 ;
+  always @(posedge clk)
+    ch0_read_select_aa <= \$786 ;
+  always @(posedge clk)
+    ch0_read_select_ac <= \$787 ;
+  always @(posedge clk)
+    ch0_read_select_ad <= \$788 ;
+  always @(posedge clk)
+    ch0_read_select_ae <= \$789 ;
+  always @(posedge clk)
+    ch0_read_select_b0 <= \$790 ;
+  always @(posedge clk)
+    ch0_read_select_b1 <= \$791 ;
+  always @(posedge clk)
+    ch0_read_select_b2 <= \$792 ;
+  always @(posedge clk)
+    ch0_read_select_b4 <= \$793 ;
+  always @(posedge clk)
+    ch0_read_select_b5 <= \$794 ;
+  always @(posedge clk)
+    ch0_read_select_b6 <= \$795 ;
+  always @(posedge clk)
+    ch0_read_select_b8 <= \$796 ;
+  always @(posedge clk)
+    ch0_read_select_b9 <= \$797 ;
+  always @(posedge clk)
+    ch0_read_select_ba <= \$798 ;
+  always @(posedge clk)
+    ch0_read_select_bc <= \$799 ;
+  always @(posedge clk)
+    ch0_read_select_bd <= \$800 ;
+  always @(posedge clk)
+    ch0_read_select_be <= \$801 ;
+  always @(posedge clk)
+    ch0_read_select_c1 <= \$802 ;
+  always @(posedge clk)
+    ch0_read_select_c2 <= \$803 ;
+  always @(posedge clk)
+    ch0_read_select_c3 <= \$804 ;
+  always @(posedge clk)
+    ch0_read_select_c4 <= \$805 ;
+  always @(posedge clk)
+    ch0_read_select_c5 <= \$806 ;
+  always @(posedge clk)
+    ch0_read_select_fc <= \$807 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$912 ;
+    ch0_read_select_fd <= \$808 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$913 ;
+    ch0_result_status_status_snapshot <= \$809 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$914 ;
+    ch0_result_status_cds_snapshot <= \$810 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$915 ;
+    ch0_result_status_w0_ne_snapshot <= \$811 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$916 ;
+    ch0_result_status_w0_nw_snapshot <= \$812 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$917 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$813 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$918 ;
+    ch0_result_status_w1_ne_snapshot <= \$814 ;
   always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$919 ;
+    ch0_result_status_w1_nw_snapshot <= \$815 ;
   always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$920 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$816 ;
   always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$921 ;
+    ch0_result_status_lc_repeat_snapshot <= \$817 ;
   always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$922 ;
+    ch0_result_status_lc_skip_snapshot <= \$818 ;
   always @(posedge clk)
-    ch0_window0_read <= \$923 ;
+    ch0_result_status_lc_zero_snapshot <= \$819 ;
   always @(posedge clk)
-    ch0_window1_read <= \$924 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$820 ;
   always @(posedge clk)
-    ch0_window2_read <= \$925 ;
+    ch0_result_status_lc_snapshot <= \$821 ;
   always @(posedge clk)
-    ch0_read_data <= \$926 ;
+    ch0_result_seq_seq_snapshot <= \$822 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$927 ;
+    ch0_result_seq_line_delay_snapshot <= \$823 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$928 ;
+    ch0_result_w0_lo_data_snapshot <= \$824 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$929 ;
+    ch0_result_w0_hi_data_snapshot <= \$825 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$930 ;
+    ch0_result_w1_lo_data_snapshot <= \$826 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$931 ;
+    ch0_result_w1_hi_data_snapshot <= \$827 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$932 ;
+    ch0_result_timestamp_time_snapshot <= \$828 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$933 ;
+    ch0_result_line_noise_events_snapshot <= \$829 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$934 ;
+    ch0_result_line_delay_settled_snapshot <= \$830 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$935 ;
+    ch0_result_line_delay_spread_snapshot <= \$831 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$936 ;
+    ch0_result_line_settled_delay_snapshot <= \$832 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$937 ;
+    ch0_window0_read <= \$833 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$938 ;
+    ch0_window1_read <= \$834 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$939 ;
+    ch0_window2_read <= \$835 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$940 ;
+    ch0_window3_read <= \$836 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$941 ;
+    ch0_read_data <= \$837 ;
   always @(posedge clk)
-    ch1_cfg_period_config_write <= \$942 ;
+    ch1_ctrl_start <= \$838 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$943 ;
+    ch1_ctrl_abort <= \$839 ;
   always @(posedge clk)
-    ch1_cfg_break_config_write <= \$944 ;
+    ch1_ctrl_clear_counters <= \$840 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$945 ;
+    ch1_ctrl_periodic <= \$841 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$946 ;
+    ch1_ctrl_trigger_enable <= \$842 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$947 ;
+    ch1_irq_status_done <= \$843 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$948 ;
+    ch1_irq_status_error <= \$844 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$949 ;
+    ch1_irq_status_access_done <= \$845 ;
   always @(posedge clk)
-    ch1_cfg_words_config_write <= \$950 ;
+    ch1_irq_enable_config_write <= \$846 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$951 ;
+    ch1_irq_enable_done <= \$847 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$952 ;
+    ch1_irq_enable_error <= \$848 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$953 ;
+    ch1_irq_enable_access_done <= \$849 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$954 ;
+    ch1_cfg_ma_config_write <= \$850 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$955 ;
+    ch1_cfg_ma_ma_half_period <= \$851 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_signed <= \$956 ;
+    ch1_cfg_ma_delay_limit <= \$852 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$957 ;
+    ch1_cfg_period_config_write <= \$853 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$958 ;
+    ch1_cfg_period_request_period <= \$854 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$959 ;
+    ch1_cfg_break_config_write <= \$855 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$960 ;
+    ch1_cfg_break_break_time <= \$856 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$961 ;
+    ch1_cfg_ack_config_write <= \$857 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_signed <= \$962 ;
+    ch1_cfg_ack_ack_limit <= \$858 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$963 ;
+    ch1_cfg_timeout_config_write <= \$859 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$964 ;
+    ch1_cfg_timeout_timeout_limit <= \$860 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$965 ;
+    ch1_cfg_words_config_write <= \$861 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$966 ;
+    ch1_cfg_words_w0_data_bits <= \$862 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$967 ;
+    ch1_cfg_words_w0_nenw <= \$863 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$968 ;
+    ch1_cfg_words_w0_lc <= \$864 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$969 ;
+    ch1_cfg_words_w0_crc <= \$865 ;
   always @(posedge clk)
-    ch1_cfg_checks_confirm_frames <= \$970 ;
+    ch1_cfg_words_w0_gray <= \$866 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_write <= \$971 ;
+    ch1_cfg_words_w0_signed <= \$867 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$972 ;
+    ch1_cfg_words_w1_data_bits <= \$868 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_write <= \$973 ;
+    ch1_cfg_words_w1_nenw <= \$869 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_poly <= \$974 ;
+    ch1_cfg_words_w1_lc <= \$870 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$975 ;
+    ch1_cfg_words_w1_crc <= \$871 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_inverted <= \$976 ;
+    ch1_cfg_words_w1_gray <= \$872 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_write <= \$977 ;
+    ch1_cfg_words_w1_signed <= \$873 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_w0_crc_start <= \$978 ;
+    ch1_cfg_words_w1_enable <= \$874 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_write <= \$979 ;
+    ch1_cfg_checks_config_write <= \$875 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_poly <= \$980 ;
+    ch1_cfg_checks_end_check <= \$876 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$981 ;
+    ch1_cfg_checks_spw_check <= \$877 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_inverted <= \$982 ;
+    ch1_cfg_checks_spw_tolerance <= \$878 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_write <= \$983 ;
+    ch1_cfg_checks_noise_limit <= \$879 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_w1_crc_start <= \$984 ;
+    ch1_cfg_checks_delay_tolerance <= \$880 ;
   always @(posedge clk)
-    ch1_cfg_ssi_config_write <= \$985 ;
+    ch1_cfg_checks_confirm_frames <= \$881 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi <= \$986 ;
+    ch1_cfg_quiet_config_write <= \$882 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error <= \$987 ;
+    ch1_cfg_quiet_quiet_time <= \$883 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error_low <= \$988 ;
+    ch1_cfg_crc0_config_write <= \$884 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_double <= \$989 ;
+    ch1_cfg_crc0_w0_crc_poly <= \$885 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_delay <= \$990 ;
+    ch1_cfg_crc0_w0_crc_width <= \$886 ;
   always @(posedge clk)
-    ch1_cfg_w2_config_write <= \$991 ;
+    ch1_cfg_crc0_w0_crc_inverted <= \$887 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_config_write <= \$992 ;
+    ch1_cfg_crc0_start_config_write <= \$888 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_start_config_write <= \$993 ;
+    ch1_cfg_crc0_start_w0_crc_start <= \$889 ;
   always @(posedge clk)
-    ch1_cfg_w3_config_write <= \$994 ;
+    ch1_cfg_crc1_config_write <= \$890 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_config_write <= \$995 ;
+    ch1_cfg_crc1_w1_crc_poly <= \$891 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_start_config_write <= \$996 ;
+    ch1_cfg_crc1_w1_crc_width <= \$892 ;
   always @(posedge clk)
-    ch1_cfg_w4_config_write <= \$997 ;
+    ch1_cfg_crc1_w1_crc_inverted <= \$893 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_config_write <= \$998 ;
+    ch1_cfg_crc1_start_config_write <= \$894 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_start_config_write <= \$999 ;
+    ch1_cfg_crc1_start_w1_crc_start <= \$895 ;
   always @(posedge clk)
-    ch1_cfg_w5_config_write <= \$1000 ;
+    ch1_cfg_ssi_config_write <= \$896 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_config_write <= \$1001 ;
+    ch1_cfg_ssi_ssi <= \$897 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_start_config_write <= \$1002 ;
+    ch1_cfg_ssi_ssi_error <= \$898 ;
   always @(posedge clk)
-    ch1_cfg_w6_config_write <= \$1003 ;
+    ch1_cfg_ssi_ssi_error_low <= \$899 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_config_write <= \$1004 ;
+    ch1_cfg_ssi_ssi_double <= \$900 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_start_config_write <= \$1005 ;
+    ch1_cfg_ssi_ssi_delay <= \$901 ;
   always @(posedge clk)
-    ch1_cfg_w7_config_write <= \$1006 ;
+    ch1_cfg_w2_config_write <= \$902 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_config_write <= \$1007 ;
+    ch1_cfg_w2_crc_config_write <= \$903 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_start_config_write <= \$1008 ;
+    ch1_cfg_w2_crc_start_config_write <= \$904 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$1009 ;
+    ch1_cfg_w3_config_write <= \$905 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$1010 ;
+    ch1_cfg_w3_crc_config_write <= \$906 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$1011 ;
+    ch1_cfg_w3_crc_start_config_write <= \$907 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$1012 ;
+    ch1_cfg_w4_config_write <= \$908 ;
   always @(posedge clk)
-    \ch1_ca_request_write$446  <= \$1013 ;
+    ch1_cfg_w4_crc_config_write <= \$909 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$1014 ;
+    ch1_cfg_w4_crc_start_config_write <= \$910 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$1015 ;
+    ch1_cfg_w5_config_write <= \$911 ;
   always @(posedge clk)
-    ch1_config_written <= \$1016 ;
+    ch1_cfg_w5_crc_config_write <= \$912 ;
   always @(posedge clk)
-    ch1_config_read_index <= \$1017 ;
+    ch1_cfg_w5_crc_start_config_write <= \$913 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$1018 ;
+    ch1_cfg_w6_config_write <= \$914 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$1019 ;
+    ch1_cfg_w6_crc_config_write <= \$915 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$1020 ;
+    ch1_cfg_w6_crc_start_config_write <= \$916 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$1021 ;
+    ch1_cfg_w7_config_write <= \$917 ;
   always @(posedge clk)
-    ch1_read_select_106 <= \$1022 ;
+    ch1_cfg_w7_crc_config_write <= \$918 ;
   always @(posedge clk)
-    ch1_read_select_107 <= \$1023 ;
+    ch1_cfg_w7_crc_start_config_write <= \$919 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$1024 ;
+    ch1_ca_request_config_write <= \$920 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$1025 ;
+    ch1_ca_request_slave_id <= \$921 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$1026 ;
+    ch1_ca_request_address <= \$922 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$1027 ;
+    ch1_ca_request_count <= \$923 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$1028 ;
+    \ch1_ca_request_write$430  <= \$924 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$1029 ;
+    ch1_ca_ctrl_start <= \$925 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$1030 ;
+    ch1_ca_ctrl_abort <= \$926 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$1031 ;
+    ch1_config_written <= \$927 ;
   always @(posedge clk)
-    ch1_read_select_125 <= \$1032 ;
+    ch1_config_read_index <= \$928 ;
   always @(posedge clk)
-    ch1_read_select_126 <= \$1033 ;
+    ch1_read_select_100 <= \$929 ;
   always @(posedge clk)
-    ch1_read_select_127 <= \$1034 ;
+    ch1_read_select_101 <= \$930 ;
   always @(posedge clk)
-    ch1_read_select_128 <= \$1035 ;
+    ch1_read_select_102 <= \$931 ;
   always @(posedge clk)
-    ch1_read_select_129 <= \$1036 ;
+    ch1_read_select_104 <= \$932 ;
   always @(posedge clk)
-    ch1_read_select_12a <= \$1037 ;
+    ch1_read_select_106 <= \$933 ;
   always @(posedge clk)
-    ch1_read_select_12c <= \$1038 ;
+    ch1_read_select_107 <= \$934 ;
   always @(posedge clk)
-    ch1_read_select_12d <= \$1039 ;
+    ch1_read_select_110 <= \$935 ;
   always @(posedge clk)
-    ch1_read_select_12e <= \$1040 ;
+    ch1_read_select_111 <= \$936 ;
   always @(posedge clk)
-    ch1_read_select_130 <= \$1041 ;
+    ch1_read_select_112 <= \$937 ;
   always @(posedge clk)
-    ch1_read_select_131 <= \$1042 ;
+    ch1_read_select_113 <= \$938 ;
   always @(posedge clk)
-    ch1_read_select_132 <= \$1043 ;
+    ch1_read_select_114 <= \$939 ;
   always @(posedge clk)
-    ch1_read_select_134 <= \$1044 ;
+    ch1_read_select_115 <= \$940 ;
   always @(posedge clk)
-    ch1_read_select_135 <= \$1045 ;
+    ch1_read_select_116 <= \$941 ;
   always @(posedge clk)
-    ch1_read_select_136 <= \$1046 ;
+    ch1_read_select_117 <= \$942 ;
   always @(posedge clk)
-    ch1_read_select_138 <= \$1047 ;
+    ch1_read_select_125 <= \$943 ;
   always @(posedge clk)
-    ch1_read_select_139 <= \$1048 ;
+    ch1_read_select_126 <= \$944 ;
   always @(posedge clk)
-    ch1_read_select_13a <= \$1049 ;
+    ch1_read_select_127 <= \$945 ;
   always @(posedge clk)
-    ch1_read_select_13c <= \$1050 ;
+    ch1_read_select_128 <= \$946 ;
   always @(posedge clk)
-    ch1_read_select_13d <= \$1051 ;
+    ch1_read_select_129 <= \$947 ;
   always @(posedge clk)
-    ch1_read_select_13e <= \$1052 ;
+    ch1_read_select_12a <= \$948 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$1053 ;
+    ch1_read_select_12c <= \$949 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$1054 ;
+    ch1_read_select_12d <= \$950 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$1055 ;
+    ch1_read_select_12e <= \$951 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$1056 ;
+    ch1_read_select_130 <= \$952 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$1057 ;
+    ch1_read_select_131 <= \$953 ;
   always @(posedge clk)
-    ch1_read_select_170 <= \$1058 ;
+    ch1_read_select_132 <= \$954 ;
   always @(posedge clk)
-    ch1_read_select_171 <= \$1059 ;
+    ch1_read_select_134 <= \$955 ;
   always @(posedge clk)
-    ch1_read_select_172 <= \$1060 ;
+    ch1_read_select_135 <= \$956 ;
   always @(posedge clk)
-    ch1_read_select_173 <= \$1061 ;
+    ch1_read_select_136 <= \$957 ;
   always @(posedge clk)
-    ch1_read_select_174 <= \$1062 ;
+    ch1_read_select_138 <= \$958 ;
   always @(posedge clk)
-    ch1_read_select_175 <= \$1063 ;
+    ch1_read_select_139 <= \$959 ;
   always @(posedge clk)
-    ch1_read_select_176 <= \$1064 ;
+    ch1_read_select_13a <= \$960 ;
   always @(posedge clk)
-    ch1_read_select_177 <= \$1065 ;
+    ch1_read_select_13c <= \$961 ;
   always @(posedge clk)
-    ch1_read_select_178 <= \$1066 ;
+    ch1_read_select_13d <= \$962 ;
   always @(posedge clk)
-    ch1_read_select_179 <= \$1067 ;
+    ch1_read_select_13e <= \$963 ;
   always @(posedge clk)
-    ch1_read_select_17a <= \$1068 ;
+    ch1_read_select_141 <= \$964 ;
   always @(posedge clk)
-    ch1_read_select_17b <= \$1069 ;
+    ch1_read_select_142 <= \$965 ;
   always @(posedge clk)
-    ch1_read_select_17c <= \$1070 ;
+    ch1_read_select_143 <= \$966 ;
   always @(posedge clk)
-    ch1_read_select_17d <= \$1071 ;
+    ch1_read_select_144 <= \$967 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$1072 ;
+    ch1_read_select_145 <= \$968 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$1073 ;
+    ch1_read_select_17c <= \$969 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$1074 ;
+    ch1_read_select_17d <= \$970 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$1075 ;
+    ch1_result_status_status_snapshot <= \$971 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$1076 ;
+    ch1_result_status_cds_snapshot <= \$972 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$1077 ;
+    ch1_result_status_w0_ne_snapshot <= \$973 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$1078 ;
+    ch1_result_status_w0_nw_snapshot <= \$974 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$1079 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$975 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$1080 ;
+    ch1_result_status_w1_ne_snapshot <= \$976 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$1081 ;
+    ch1_result_status_w1_nw_snapshot <= \$977 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$1082 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$978 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$1083 ;
+    ch1_result_status_lc_repeat_snapshot <= \$979 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$1084 ;
+    ch1_result_status_lc_skip_snapshot <= \$980 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$1085 ;
+    ch1_result_status_lc_zero_snapshot <= \$981 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$1086 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$982 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$1087 ;
+    ch1_result_status_lc_snapshot <= \$983 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$1088 ;
+    ch1_result_seq_seq_snapshot <= \$984 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$1089 ;
+    ch1_result_seq_line_delay_snapshot <= \$985 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$1090 ;
+    ch1_result_w0_lo_data_snapshot <= \$986 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$1091 ;
+    ch1_result_w0_hi_data_snapshot <= \$987 ;
   always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$1092 ;
+    ch1_result_w1_lo_data_snapshot <= \$988 ;
   always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$1093 ;
+    ch1_result_w1_hi_data_snapshot <= \$989 ;
   always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$1094 ;
+    ch1_result_timestamp_time_snapshot <= \$990 ;
   always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$1095 ;
+    ch1_result_line_noise_events_snapshot <= \$991 ;
   always @(posedge clk)
-    ch1_window0_read <= \$1096 ;
+    ch1_result_line_delay_settled_snapshot <= \$992 ;
   always @(posedge clk)
-    ch1_window1_read <= \$1097 ;
+    ch1_result_line_delay_spread_snapshot <= \$993 ;
   always @(posedge clk)
-    ch1_window2_read <= \$1098 ;
+    ch1_result_line_settled_delay_snapshot <= \$994 ;
   always @(posedge clk)
-    ch1_read_data <= \$1099 ;
+    ch1_window0_read <= \$995 ;
+  always @(posedge clk)
+    ch1_window1_read <= \$996 ;
+  always @(posedge clk)
+    ch1_window2_read <= \$997 ;
+  always @(posedge clk)
+    ch1_window3_read <= \$998 ;
+  always @(posedge clk)
+    ch1_read_data <= \$999 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$740  = bus__w_en;
+    \$662  = bus__w_en;
+    if (rst) begin
+      \$662  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$663  = write_addr;
+    if (bus__w_en) begin
+      \$663  = bus__w_addr;
+    end
+    if (rst) begin
+      \$663  = 11'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$664  = write_data;
+    if (bus__w_en) begin
+      \$664  = bus__w_data;
+    end
+    if (rst) begin
+      \$664  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$665  = write_strb;
+    if (bus__w_en) begin
+      \$665  = 4'hf;
+    end
+    if (rst) begin
+      \$665  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$666  = config_write_data;
+    if (write_en) begin
+      \$666  = write_data;
+    end
+    if (rst) begin
+      \$666  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$667  = config_write_strb;
+    if (write_en) begin
+      \$667  = write_strb;
+    end
+    if (rst) begin
+      \$667  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$668  = \$2 ;
+    if (rst) begin
+      \$668  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$669  = g_read_select_0;
+    if (bus__r_en) begin
+      \$669  = \$3 ;
+    end
+    if (rst) begin
+      \$669  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$670  = g_read_select_1;
+    if (bus__r_en) begin
+      \$670  = \$4 ;
+    end
+    if (rst) begin
+      \$670  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$671  = g_read_select_2;
+    if (bus__r_en) begin
+      \$671  = \$5 ;
+    end
+    if (rst) begin
+      \$671  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$672  = g_read_select_3;
+    if (bus__r_en) begin
+      \$672  = \$6 ;
+    end
+    if (rst) begin
+      \$672  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$673  = g_read_select_4;
+    if (bus__r_en) begin
+      \$673  = \$7 ;
+    end
+    if (rst) begin
+      \$673  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$674  = g_read_data;
+    if (bus__r_load) begin
+      \$674  = \$17 ;
+    end
+    if (rst) begin
+      \$674  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$675  = \$19 ;
+    if (rst) begin
+      \$675  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$676  = \$21 ;
+    if (rst) begin
+      \$676  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$677  = \$23 ;
+    if (rst) begin
+      \$677  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$678  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$678  = write_data[8];
+    end
+    if (rst) begin
+      \$678  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$679  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$679  = write_data[9];
+    end
+    if (rst) begin
+      \$679  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$680  = ch0_irq_status_done;
+    if (ch0__frame_done) begin
+      \$680  = 1'h1;
+    end else if (\$27 ) begin
+      \$680  = 1'h0;
+    end
+    if (rst) begin
+      \$680  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$681  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$681  = 1'h1;
+    end else if (\$29 ) begin
+      \$681  = 1'h0;
+    end
+    if (rst) begin
+      \$681  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$682  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$682  = 1'h1;
+    end else if (\$31 ) begin
+      \$682  = 1'h0;
+    end
+    if (rst) begin
+      \$682  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$683  = ch0_irq_enable_write;
+    if (rst) begin
+      \$683  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$684  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$684  = config_write_data[0];
+    end
+    if (rst) begin
+      \$684  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$685  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$685  = config_write_data[1];
+    end
+    if (rst) begin
+      \$685  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$686  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$686  = config_write_data[2];
+    end
+    if (rst) begin
+      \$686  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$687  = ch0_cfg_ma_write;
+    if (rst) begin
+      \$687  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$688  = ch0_cfg_ma_ma_half_period;
+    if (\$35 ) begin
+      \$688 [7:0] = config_write_data[7:0];
+    end
+    if (\$36 ) begin
+      \$688 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$688  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$689  = ch0_cfg_ma_delay_limit;
+    if (\$37 ) begin
+      \$689 [7:0] = config_write_data[23:16];
+    end
+    if (\$38 ) begin
+      \$689 [11:8] = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$689  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$690  = ch0_cfg_period_write;
+    if (rst) begin
+      \$690  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$691  = ch0_cfg_period_request_period;
+    if (\$39 ) begin
+      \$691 [7:0] = config_write_data[7:0];
+    end
+    if (\$40 ) begin
+      \$691 [15:8] = config_write_data[15:8];
+    end
+    if (\$41 ) begin
+      \$691 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$691  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$692  = ch0_cfg_break_write;
+    if (rst) begin
+      \$692  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$693  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
+      \$693 [7:0] = config_write_data[7:0];
+    end
+    if (\$43 ) begin
+      \$693 [15:8] = config_write_data[15:8];
+    end
+    if (\$44 ) begin
+      \$693 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$693  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$694  = ch0_cfg_ack_write;
+    if (rst) begin
+      \$694  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$695  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
+      \$695 [7:0] = config_write_data[7:0];
+    end
+    if (\$46 ) begin
+      \$695 [15:8] = config_write_data[15:8];
+    end
+    if (\$47 ) begin
+      \$695 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$695  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$696  = ch0_cfg_timeout_write;
+    if (rst) begin
+      \$696  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$697  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
+      \$697 [7:0] = config_write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$697 [15:8] = config_write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$697 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$697  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$698  = ch0_cfg_words_write;
+    if (rst) begin
+      \$698  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$699  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$699  = config_write_data[5:0];
+    end
+    if (rst) begin
+      \$699  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$700  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$700  = config_write_data[6];
+    end
+    if (rst) begin
+      \$700  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$701  = ch0_cfg_words_w0_lc;
+    if (\$53 ) begin
+      \$701  = config_write_data[7];
+    end
+    if (rst) begin
+      \$701  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$702  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$702  = config_write_data[9:8];
+    end
+    if (rst) begin
+      \$702  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$703  = ch0_cfg_words_w0_gray;
+    if (\$55 ) begin
+      \$703  = config_write_data[10];
+    end
+    if (rst) begin
+      \$703  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$704  = ch0_cfg_words_w0_signed;
+    if (\$56 ) begin
+      \$704  = config_write_data[11];
+    end
+    if (rst) begin
+      \$704  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$705  = ch0_cfg_words_w1_data_bits;
+    if (\$57 ) begin
+      \$705  = config_write_data[21:16];
+    end
+    if (rst) begin
+      \$705  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$706  = ch0_cfg_words_w1_nenw;
+    if (\$58 ) begin
+      \$706  = config_write_data[22];
+    end
+    if (rst) begin
+      \$706  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$707  = ch0_cfg_words_w1_lc;
+    if (\$59 ) begin
+      \$707  = config_write_data[23];
+    end
+    if (rst) begin
+      \$707  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$708  = ch0_cfg_words_w1_crc;
+    if (\$60 ) begin
+      \$708  = config_write_data[25:24];
+    end
+    if (rst) begin
+      \$708  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$709  = ch0_cfg_words_w1_gray;
+    if (\$61 ) begin
+      \$709  = config_write_data[26];
+    end
+    if (rst) begin
+      \$709  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$710  = ch0_cfg_words_w1_signed;
+    if (\$62 ) begin
+      \$710  = config_write_data[27];
+    end
+    if (rst) begin
+      \$710  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$711  = ch0_cfg_words_w1_enable;
+    if (\$63 ) begin
+      \$711  = config_write_data[31];
+    end
+    if (rst) begin
+      \$711  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$712  = ch0_cfg_checks_write;
+    if (rst) begin
+      \$712  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$713  = ch0_cfg_checks_end_check;
+    if (\$64 ) begin
+      \$713  = config_write_data[0];
+    end
+    if (rst) begin
+      \$713  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$714  = ch0_cfg_checks_spw_check;
+    if (\$65 ) begin
+      \$714  = config_write_data[1];
+    end
+    if (rst) begin
+      \$714  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$715  = ch0_cfg_checks_spw_tolerance;
+    if (\$66 ) begin
+      \$715  = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$715  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$716  = ch0_cfg_checks_noise_limit;
+    if (\$67 ) begin
+      \$716  = config_write_data[19:16];
+    end
+    if (rst) begin
+      \$716  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$717  = ch0_cfg_checks_delay_tolerance;
+    if (\$68 ) begin
+      \$717  = config_write_data[23:20];
+    end
+    if (rst) begin
+      \$717  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$718  = ch0_cfg_checks_confirm_frames;
+    if (\$69 ) begin
+      \$718  = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$718  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$719  = ch0_cfg_quiet_write;
+    if (rst) begin
+      \$719  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$720  = ch0_cfg_quiet_quiet_time;
+    if (\$70 ) begin
+      \$720 [7:0] = config_write_data[7:0];
+    end
+    if (\$71 ) begin
+      \$720 [11:8] = config_write_data[11:8];
+    end
+    if (rst) begin
+      \$720  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$721  = ch0_cfg_crc0_write;
+    if (rst) begin
+      \$721  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$722  = ch0_cfg_crc0_w0_crc_poly;
+    if (\$72 ) begin
+      \$722 [7:0] = config_write_data[7:0];
+    end
+    if (\$73 ) begin
+      \$722 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$722  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$723  = ch0_cfg_crc0_w0_crc_width;
+    if (\$74 ) begin
+      \$723  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$723  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$724  = ch0_cfg_crc0_w0_crc_inverted;
+    if (\$75 ) begin
+      \$724  = config_write_data[24];
+    end
+    if (rst) begin
+      \$724  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$725  = ch0_cfg_crc0_start_write;
+    if (rst) begin
+      \$725  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$726  = ch0_cfg_crc0_start_w0_crc_start;
+    if (\$76 ) begin
+      \$726 [7:0] = config_write_data[7:0];
+    end
+    if (\$77 ) begin
+      \$726 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$726  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$727  = ch0_cfg_crc1_write;
+    if (rst) begin
+      \$727  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$728  = ch0_cfg_crc1_w1_crc_poly;
+    if (\$78 ) begin
+      \$728 [7:0] = config_write_data[7:0];
+    end
+    if (\$79 ) begin
+      \$728 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$728  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$729  = ch0_cfg_crc1_w1_crc_width;
+    if (\$80 ) begin
+      \$729  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$729  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$730  = ch0_cfg_crc1_w1_crc_inverted;
+    if (\$81 ) begin
+      \$730  = config_write_data[24];
+    end
+    if (rst) begin
+      \$730  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$731  = ch0_cfg_crc1_start_write;
+    if (rst) begin
+      \$731  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$732  = ch0_cfg_crc1_start_w1_crc_start;
+    if (\$82 ) begin
+      \$732 [7:0] = config_write_data[7:0];
+    end
+    if (\$83 ) begin
+      \$732 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$732  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$733  = ch0_cfg_ssi_write;
+    if (rst) begin
+      \$733  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$734  = ch0_cfg_ssi_ssi;
+    if (\$84 ) begin
+      \$734  = config_write_data[0];
+    end
+    if (rst) begin
+      \$734  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$735  = ch0_cfg_ssi_ssi_error;
+    if (\$85 ) begin
+      \$735  = config_write_data[1];
+    end
+    if (rst) begin
+      \$735  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$736  = ch0_cfg_ssi_ssi_error_low;
+    if (\$86 ) begin
+      \$736  = config_write_data[2];
+    end
+    if (rst) begin
+      \$736  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$737  = ch0_cfg_ssi_ssi_double;
+    if (\$87 ) begin
+      \$737  = config_write_data[3];
+    end
+    if (rst) begin
+      \$737  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$738  = ch0_cfg_ssi_ssi_delay;
+    if (\$88 ) begin
+      \$738 [7:0] = config_write_data[23:16];
+    end
+    if (\$89 ) begin
+      \$738 [11:8] = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$738  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$739  = ch0_cfg_w2_write;
+    if (rst) begin
+      \$739  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$740  = ch0_cfg_w2_crc_write;
     if (rst) begin
       \$740  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$741  = write_addr;
-    if (bus__w_en) begin
-      \$741  = bus__w_addr;
-    end
+    \$741  = ch0_cfg_w2_crc_start_write;
     if (rst) begin
-      \$741  = 11'h000;
+      \$741  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$742  = write_data;
-    if (bus__w_en) begin
-      \$742  = bus__w_data;
-    end
+    \$742  = ch0_cfg_w3_write;
     if (rst) begin
-      \$742  = 32'd0;
+      \$742  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$743  = write_strb;
-    if (bus__w_en) begin
-      \$743  = 4'hf;
-    end
+    \$743  = ch0_cfg_w3_crc_write;
     if (rst) begin
-      \$743  = 4'h0;
+      \$743  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$744  = config_write_data;
-    if (write_en) begin
-      \$744  = write_data;
-    end
+    \$744  = ch0_cfg_w3_crc_start_write;
     if (rst) begin
-      \$744  = 32'd0;
+      \$744  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$745  = config_write_strb;
-    if (write_en) begin
-      \$745  = write_strb;
-    end
+    \$745  = ch0_cfg_w4_write;
     if (rst) begin
-      \$745  = 4'h0;
+      \$745  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$746  = \$2 ;
+    \$746  = ch0_cfg_w4_crc_write;
     if (rst) begin
       \$746  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$747  = g_read_select_0;
-    if (bus__r_en) begin
-      \$747  = \$3 ;
-    end
+    \$747  = ch0_cfg_w4_crc_start_write;
     if (rst) begin
       \$747  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$748  = g_read_select_1;
-    if (bus__r_en) begin
-      \$748  = \$4 ;
-    end
+    \$748  = ch0_cfg_w5_write;
     if (rst) begin
       \$748  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$749  = g_read_select_2;
-    if (bus__r_en) begin
-      \$749  = \$5 ;
-    end
+    \$749  = ch0_cfg_w5_crc_write;
     if (rst) begin
       \$749  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$750  = g_read_select_3;
-    if (bus__r_en) begin
-      \$750  = \$6 ;
-    end
+    \$750  = ch0_cfg_w5_crc_start_write;
     if (rst) begin
       \$750  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$751  = g_read_select_4;
-    if (bus__r_en) begin
-      \$751  = \$7 ;
-    end
+    \$751  = ch0_cfg_w6_write;
     if (rst) begin
       \$751  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$752  = g_read_data;
-    if (bus__r_load) begin
-      \$752  = \$17 ;
-    end
+    \$752  = ch0_cfg_w6_crc_write;
     if (rst) begin
-      \$752  = 32'd0;
+      \$752  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$753  = \$19 ;
+    \$753  = ch0_cfg_w6_crc_start_write;
     if (rst) begin
       \$753  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$754  = \$21 ;
+    \$754  = ch0_cfg_w7_write;
     if (rst) begin
       \$754  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$755  = \$23 ;
+    \$755  = ch0_cfg_w7_crc_write;
     if (rst) begin
       \$755  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$756  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$756  = write_data[8];
-    end
+    \$756  = ch0_cfg_w7_crc_start_write;
     if (rst) begin
       \$756  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$757  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$757  = write_data[9];
-    end
+    \$757  = ch0_ca_request_write;
     if (rst) begin
       \$757  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$758  = ch0_irq_status_done;
-    if (ch0__frame_done) begin
-      \$758  = 1'h1;
-    end else if (\$27 ) begin
-      \$758  = 1'h0;
+    \$758  = ch0_ca_request_slave_id;
+    if (\$90 ) begin
+      \$758  = config_write_data[2:0];
     end
     if (rst) begin
-      \$758  = 1'h0;
+      \$758  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$759  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$759  = 1'h1;
-    end else if (\$29 ) begin
-      \$759  = 1'h0;
+    \$759  = ch0_ca_request_address;
+    if (\$91 ) begin
+      \$759  = config_write_data[14:8];
     end
     if (rst) begin
-      \$759  = 1'h0;
+      \$759  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$760  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$760  = 1'h1;
-    end else if (\$31 ) begin
-      \$760  = 1'h0;
+    \$760  = ch0_ca_request_count;
+    if (\$92 ) begin
+      \$760  = config_write_data[22:16];
     end
     if (rst) begin
-      \$760  = 1'h0;
+      \$760  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$761  = ch0_irq_enable_write;
+    \$761  = \ch0_ca_request_write$149 ;
+    if (\$93 ) begin
+      \$761  = config_write_data[24];
+    end
     if (rst) begin
       \$761  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$762  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$762  = config_write_data[0];
-    end
+    \$762  = \$95 ;
     if (rst) begin
       \$762  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$763  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$763  = config_write_data[1];
-    end
+    \$763  = \$97 ;
     if (rst) begin
       \$763  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$764  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$764  = config_write_data[2];
+    \$764  = config_memory0_write_data;
+    if (write_en) begin
+      \$764  = \$102 ;
     end
     if (rst) begin
-      \$764  = 1'h0;
+      \$764  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$765  = ch0_cfg_ma_write;
+    \$765  = \$103 ;
     if (rst) begin
-      \$765  = 1'h0;
+      \$765  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$766  = ch0_cfg_ma_ma_half_period;
-    if (\$35 ) begin
-      \$766 [7:0] = config_write_data[7:0];
-    end
-    if (\$36 ) begin
-      \$766 [15:8] = config_write_data[15:8];
+    \$766  = ch0_config_read_index;
+    if (ch0_config_read) begin
+      \$766  = config_memory0_read_index;
     end
     if (rst) begin
-      \$766  = 16'h0000;
+      \$766  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$767  = ch0_cfg_ma_delay_limit;
-    if (\$37 ) begin
-      \$767 [7:0] = config_write_data[23:16];
-    end
-    if (\$38 ) begin
-      \$767 [11:8] = config_write_data[27:24];
+    \$767  = ch0_read_select_80;
+    if (bus__r_en) begin
+      \$767  = \$104 ;
     end
     if (rst) begin
-      \$767  = 12'h000;
+      \$767  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$768  = ch0_cfg_period_write;
+    \$768  = ch0_read_select_81;
+    if (bus__r_en) begin
+      \$768  = \$105 ;
+    end
     if (rst) begin
       \$768  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$769  = ch0_cfg_period_request_period;
-    if (\$39 ) begin
-      \$769 [7:0] = config_write_data[7:0];
-    end
-    if (\$40 ) begin
-      \$769 [15:8] = config_write_data[15:8];
-    end
-    if (\$41 ) begin
-      \$769 [23:16] = config_write_data[23:16];
+    \$769  = ch0_read_select_82;
+    if (bus__r_en) begin
+      \$769  = \$106 ;
     end
     if (rst) begin
-      \$769  = 24'h000000;
+      \$769  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$770  = ch0_cfg_break_write;
+    \$770  = ch0_read_select_84;
+    if (bus__r_en) begin
+      \$770  = \$107 ;
+    end
     if (rst) begin
       \$770  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$771  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
-      \$771 [7:0] = config_write_data[7:0];
-    end
-    if (\$43 ) begin
-      \$771 [15:8] = config_write_data[15:8];
-    end
-    if (\$44 ) begin
-      \$771 [23:16] = config_write_data[23:16];
+    \$771  = ch0_read_select_86;
+    if (bus__r_en) begin
+      \$771  = \$108 ;
     end
     if (rst) begin
-      \$771  = 24'h000000;
+      \$771  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$772  = ch0_cfg_ack_write;
+    \$772  = ch0_read_select_87;
+    if (bus__r_en) begin
+      \$772  = \$109 ;
+    end
     if (rst) begin
       \$772  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$773  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
-      \$773 [7:0] = config_write_data[7:0];
-    end
-    if (\$46 ) begin
-      \$773 [15:8] = config_write_data[15:8];
-    end
-    if (\$47 ) begin
-      \$773 [23:16] = config_write_data[23:16];
+    \$773  = ch0_read_select_90;
+    if (bus__r_en) begin
+      \$773  = \$110 ;
     end
     if (rst) begin
-      \$773  = 24'h000000;
+      \$773  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$774  = ch0_cfg_timeout_write;
+    \$774  = ch0_read_select_91;
+    if (bus__r_en) begin
+      \$774  = \$111 ;
+    end
     if (rst) begin
       \$774  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$775  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
-      \$775 [7:0] = config_write_data[7:0];
-    end
-    if (\$49 ) begin
-      \$775 [15:8] = config_write_data[15:8];
-    end
-    if (\$50 ) begin
-      \$775 [23:16] = config_write_data[23:16];
+    \$775  = ch0_read_select_92;
+    if (bus__r_en) begin
+      \$775  = \$112 ;
     end
     if (rst) begin
-      \$775  = 24'h000000;
+      \$775  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$776  = ch0_cfg_words_write;
+    \$776  = ch0_read_select_93;
+    if (bus__r_en) begin
+      \$776  = \$113 ;
+    end
     if (rst) begin
       \$776  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$777  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$777  = config_write_data[5:0];
+    \$777  = ch0_read_select_94;
+    if (bus__r_en) begin
+      \$777  = \$114 ;
     end
     if (rst) begin
-      \$777  = 6'h00;
+      \$777  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$778  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$778  = config_write_data[6];
+    \$778  = ch0_read_select_95;
+    if (bus__r_en) begin
+      \$778  = \$115 ;
     end
     if (rst) begin
       \$778  = 1'h0;
@@ -6196,9 +6634,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$779  = ch0_cfg_words_w0_lc;
-    if (\$53 ) begin
-      \$779  = config_write_data[7];
+    \$779  = ch0_read_select_96;
+    if (bus__r_en) begin
+      \$779  = \$116 ;
     end
     if (rst) begin
       \$779  = 1'h0;
@@ -6206,19 +6644,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$780  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$780  = config_write_data[9:8];
+    \$780  = ch0_read_select_97;
+    if (bus__r_en) begin
+      \$780  = \$117 ;
     end
     if (rst) begin
-      \$780  = 2'h0;
+      \$780  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$781  = ch0_cfg_words_w0_gray;
-    if (\$55 ) begin
-      \$781  = config_write_data[10];
+    \$781  = ch0_read_select_a5;
+    if (bus__r_en) begin
+      \$781  = \$118 ;
     end
     if (rst) begin
       \$781  = 1'h0;
@@ -6226,9 +6664,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$782  = ch0_cfg_words_w0_signed;
-    if (\$56 ) begin
-      \$782  = config_write_data[11];
+    \$782  = ch0_read_select_a6;
+    if (bus__r_en) begin
+      \$782  = \$119 ;
     end
     if (rst) begin
       \$782  = 1'h0;
@@ -6236,19 +6674,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$783  = ch0_cfg_words_w1_data_bits;
-    if (\$57 ) begin
-      \$783  = config_write_data[21:16];
+    \$783  = ch0_read_select_a7;
+    if (bus__r_en) begin
+      \$783  = \$120 ;
     end
     if (rst) begin
-      \$783  = 6'h00;
+      \$783  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$784  = ch0_cfg_words_w1_nenw;
-    if (\$58 ) begin
-      \$784  = config_write_data[22];
+    \$784  = ch0_read_select_a8;
+    if (bus__r_en) begin
+      \$784  = \$121 ;
     end
     if (rst) begin
       \$784  = 1'h0;
@@ -6256,9 +6694,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$785  = ch0_cfg_words_w1_lc;
-    if (\$59 ) begin
-      \$785  = config_write_data[23];
+    \$785  = ch0_read_select_a9;
+    if (bus__r_en) begin
+      \$785  = \$122 ;
     end
     if (rst) begin
       \$785  = 1'h0;
@@ -6266,19 +6704,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$786  = ch0_cfg_words_w1_crc;
-    if (\$60 ) begin
-      \$786  = config_write_data[25:24];
+    \$786  = ch0_read_select_aa;
+    if (bus__r_en) begin
+      \$786  = \$123 ;
     end
     if (rst) begin
-      \$786  = 2'h0;
+      \$786  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$787  = ch0_cfg_words_w1_gray;
-    if (\$61 ) begin
-      \$787  = config_write_data[26];
+    \$787  = ch0_read_select_ac;
+    if (bus__r_en) begin
+      \$787  = \$124 ;
     end
     if (rst) begin
       \$787  = 1'h0;
@@ -6286,9 +6724,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$788  = ch0_cfg_words_w1_signed;
-    if (\$62 ) begin
-      \$788  = config_write_data[27];
+    \$788  = ch0_read_select_ad;
+    if (bus__r_en) begin
+      \$788  = \$125 ;
     end
     if (rst) begin
       \$788  = 1'h0;
@@ -6296,9 +6734,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$789  = ch0_cfg_words_w1_enable;
-    if (\$63 ) begin
-      \$789  = config_write_data[31];
+    \$789  = ch0_read_select_ae;
+    if (bus__r_en) begin
+      \$789  = \$126 ;
     end
     if (rst) begin
       \$789  = 1'h0;
@@ -6306,16 +6744,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$790  = ch0_cfg_checks_write;
+    \$790  = ch0_read_select_b0;
+    if (bus__r_en) begin
+      \$790  = \$127 ;
+    end
     if (rst) begin
       \$790  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$791  = ch0_cfg_checks_end_check;
-    if (\$64 ) begin
-      \$791  = config_write_data[0];
+    \$791  = ch0_read_select_b1;
+    if (bus__r_en) begin
+      \$791  = \$128 ;
     end
     if (rst) begin
       \$791  = 1'h0;
@@ -6323,9 +6764,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$792  = ch0_cfg_checks_spw_check;
-    if (\$65 ) begin
-      \$792  = config_write_data[1];
+    \$792  = ch0_read_select_b2;
+    if (bus__r_en) begin
+      \$792  = \$129 ;
     end
     if (rst) begin
       \$792  = 1'h0;
@@ -6333,99 +6774,99 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$793  = ch0_cfg_checks_spw_tolerance;
-    if (\$66 ) begin
-      \$793  = config_write_data[15:8];
+    \$793  = ch0_read_select_b4;
+    if (bus__r_en) begin
+      \$793  = \$130 ;
     end
     if (rst) begin
-      \$793  = 8'h00;
+      \$793  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$794  = ch0_cfg_checks_noise_limit;
-    if (\$67 ) begin
-      \$794  = config_write_data[19:16];
+    \$794  = ch0_read_select_b5;
+    if (bus__r_en) begin
+      \$794  = \$131 ;
     end
     if (rst) begin
-      \$794  = 4'h0;
+      \$794  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$795  = ch0_cfg_checks_delay_tolerance;
-    if (\$68 ) begin
-      \$795  = config_write_data[23:20];
+    \$795  = ch0_read_select_b6;
+    if (bus__r_en) begin
+      \$795  = \$132 ;
     end
     if (rst) begin
-      \$795  = 4'h0;
+      \$795  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$796  = ch0_cfg_checks_confirm_frames;
-    if (\$69 ) begin
-      \$796  = config_write_data[27:24];
+    \$796  = ch0_read_select_b8;
+    if (bus__r_en) begin
+      \$796  = \$133 ;
     end
     if (rst) begin
-      \$796  = 4'h0;
+      \$796  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$797  = ch0_cfg_quiet_write;
+    \$797  = ch0_read_select_b9;
+    if (bus__r_en) begin
+      \$797  = \$134 ;
+    end
     if (rst) begin
       \$797  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$798  = ch0_cfg_quiet_quiet_time;
-    if (\$70 ) begin
-      \$798 [7:0] = config_write_data[7:0];
-    end
-    if (\$71 ) begin
-      \$798 [11:8] = config_write_data[11:8];
+    \$798  = ch0_read_select_ba;
+    if (bus__r_en) begin
+      \$798  = \$135 ;
     end
     if (rst) begin
-      \$798  = 12'h000;
+      \$798  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$799  = ch0_cfg_crc0_write;
+    \$799  = ch0_read_select_bc;
+    if (bus__r_en) begin
+      \$799  = \$136 ;
+    end
     if (rst) begin
       \$799  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$800  = ch0_cfg_crc0_w0_crc_poly;
-    if (\$72 ) begin
-      \$800 [7:0] = config_write_data[7:0];
-    end
-    if (\$73 ) begin
-      \$800 [15:8] = config_write_data[15:8];
+    \$800  = ch0_read_select_bd;
+    if (bus__r_en) begin
+      \$800  = \$137 ;
     end
     if (rst) begin
-      \$800  = 16'h0000;
+      \$800  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$801  = ch0_cfg_crc0_w0_crc_width;
-    if (\$74 ) begin
-      \$801  = config_write_data[20:16];
+    \$801  = ch0_read_select_be;
+    if (bus__r_en) begin
+      \$801  = \$138 ;
     end
     if (rst) begin
-      \$801  = 5'h00;
+      \$801  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$802  = ch0_cfg_crc0_w0_crc_inverted;
-    if (\$75 ) begin
-      \$802  = config_write_data[24];
+    \$802  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$802  = \$139 ;
     end
     if (rst) begin
       \$802  = 1'h0;
@@ -6433,59 +6874,59 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$803  = ch0_cfg_crc0_start_write;
+    \$803  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$803  = \$140 ;
+    end
     if (rst) begin
       \$803  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$804  = ch0_cfg_crc0_start_w0_crc_start;
-    if (\$76 ) begin
-      \$804 [7:0] = config_write_data[7:0];
-    end
-    if (\$77 ) begin
-      \$804 [15:8] = config_write_data[15:8];
+    \$804  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$804  = \$141 ;
     end
     if (rst) begin
-      \$804  = 16'h0000;
+      \$804  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$805  = ch0_cfg_crc1_write;
+    \$805  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$805  = \$142 ;
+    end
     if (rst) begin
       \$805  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$806  = ch0_cfg_crc1_w1_crc_poly;
-    if (\$78 ) begin
-      \$806 [7:0] = config_write_data[7:0];
-    end
-    if (\$79 ) begin
-      \$806 [15:8] = config_write_data[15:8];
+    \$806  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$806  = \$143 ;
     end
     if (rst) begin
-      \$806  = 16'h0000;
+      \$806  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$807  = ch0_cfg_crc1_w1_crc_width;
-    if (\$80 ) begin
-      \$807  = config_write_data[20:16];
+    \$807  = ch0_read_select_fc;
+    if (bus__r_en) begin
+      \$807  = \$144 ;
     end
     if (rst) begin
-      \$807  = 5'h00;
+      \$807  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$808  = ch0_cfg_crc1_w1_crc_inverted;
-    if (\$81 ) begin
-      \$808  = config_write_data[24];
+    \$808  = ch0_read_select_fd;
+    if (bus__r_en) begin
+      \$808  = \$145 ;
     end
     if (rst) begin
       \$808  = 1'h0;
@@ -6493,36 +6934,39 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$809  = ch0_cfg_crc1_start_write;
+    \$809  = ch0_result_status_status_snapshot;
+    if (\$146 ) begin
+      \$809  = \port$7595$0 [3:0];
+    end
     if (rst) begin
-      \$809  = 1'h0;
+      \$809  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$810  = ch0_cfg_crc1_start_w1_crc_start;
-    if (\$82 ) begin
-      \$810 [7:0] = config_write_data[7:0];
-    end
-    if (\$83 ) begin
-      \$810 [15:8] = config_write_data[15:8];
+    \$810  = ch0_result_status_cds_snapshot;
+    if (\$146 ) begin
+      \$810  = \port$7595$0 [49];
     end
     if (rst) begin
-      \$810  = 16'h0000;
+      \$810  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$811  = ch0_cfg_ssi_write;
+    \$811  = ch0_result_status_w0_ne_snapshot;
+    if (\$146 ) begin
+      \$811  = \port$7595$0 [131];
+    end
     if (rst) begin
       \$811  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$812  = ch0_cfg_ssi_ssi;
-    if (\$84 ) begin
-      \$812  = config_write_data[0];
+    \$812  = ch0_result_status_w0_nw_snapshot;
+    if (\$146 ) begin
+      \$812  = \port$7595$0 [132];
     end
     if (rst) begin
       \$812  = 1'h0;
@@ -6530,9 +6974,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$813  = ch0_cfg_ssi_ssi_error;
-    if (\$85 ) begin
-      \$813  = config_write_data[1];
+    \$813  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$146 ) begin
+      \$813  = \port$7595$0 [133];
     end
     if (rst) begin
       \$813  = 1'h0;
@@ -6540,9 +6984,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$814  = ch0_cfg_ssi_ssi_error_low;
-    if (\$86 ) begin
-      \$814  = config_write_data[2];
+    \$814  = ch0_result_status_w1_ne_snapshot;
+    if (\$146 ) begin
+      \$814  = \port$7595$0 [174];
     end
     if (rst) begin
       \$814  = 1'h0;
@@ -6550,9 +6994,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$815  = ch0_cfg_ssi_ssi_double;
-    if (\$87 ) begin
-      \$815  = config_write_data[3];
+    \$815  = ch0_result_status_w1_nw_snapshot;
+    if (\$146 ) begin
+      \$815  = \port$7595$0 [175];
     end
     if (rst) begin
       \$815  = 1'h0;
@@ -6560,236 +7004,296 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$816  = ch0_cfg_ssi_ssi_delay;
-    if (\$88 ) begin
-      \$816 [7:0] = config_write_data[23:16];
-    end
-    if (\$89 ) begin
-      \$816 [11:8] = config_write_data[27:24];
+    \$816  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$146 ) begin
+      \$816  = \port$7595$0 [176];
     end
     if (rst) begin
-      \$816  = 12'h000;
+      \$816  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$817  = ch0_cfg_w2_write;
+    \$817  = ch0_result_status_lc_repeat_snapshot;
+    if (\$146 ) begin
+      \$817  = \port$7595$0 [183];
+    end
     if (rst) begin
       \$817  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$818  = ch0_cfg_w2_crc_write;
+    \$818  = ch0_result_status_lc_skip_snapshot;
+    if (\$146 ) begin
+      \$818  = \port$7595$0 [184];
+    end
     if (rst) begin
       \$818  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$819  = ch0_cfg_w2_crc_start_write;
+    \$819  = ch0_result_status_lc_zero_snapshot;
+    if (\$146 ) begin
+      \$819  = \port$7595$0 [185];
+    end
     if (rst) begin
       \$819  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$820  = ch0_cfg_w3_write;
+    \$820  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$146 ) begin
+      \$820  = \port$7595$0 [186];
+    end
     if (rst) begin
       \$820  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$821  = ch0_cfg_w3_crc_write;
+    \$821  = ch0_result_status_lc_snapshot;
+    if (\$146 ) begin
+      \$821  = \port$7595$0 [182:177];
+    end
     if (rst) begin
-      \$821  = 1'h0;
+      \$821  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$822  = ch0_cfg_w3_crc_start_write;
+    \$822  = ch0_result_seq_seq_snapshot;
+    if (\$146 ) begin
+      \$822  = ch0__done_count;
+    end
     if (rst) begin
-      \$822  = 1'h0;
+      \$822  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$823  = ch0_cfg_w4_write;
+    \$823  = ch0_result_seq_line_delay_snapshot;
+    if (\$146 ) begin
+      \$823  = \port$7595$0 [48:36];
+    end
     if (rst) begin
-      \$823  = 1'h0;
+      \$823  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$824  = ch0_cfg_w4_crc_write;
+    \$824  = ch0_result_w0_lo_data_snapshot;
+    if (\$146 ) begin
+      \$824  = \port$7595$0 [107:76];
+    end
     if (rst) begin
-      \$824  = 1'h0;
+      \$824  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$825  = ch0_cfg_w4_crc_start_write;
+    \$825  = ch0_result_w0_hi_data_snapshot;
+    if (\$146 ) begin
+      \$825  = \port$7595$0 [130:108];
+    end
     if (rst) begin
-      \$825  = 1'h0;
+      \$825  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$826  = ch0_cfg_w5_write;
+    \$826  = ch0_result_w1_lo_data_snapshot;
+    if (\$146 ) begin
+      \$826  = \port$7595$0 [165:134];
+    end
     if (rst) begin
-      \$826  = 1'h0;
+      \$826  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$827  = ch0_cfg_w5_crc_write;
+    \$827  = ch0_result_w1_hi_data_snapshot;
+    if (\$146 ) begin
+      \$827  = \port$7595$0 [173:166];
+    end
     if (rst) begin
-      \$827  = 1'h0;
+      \$827  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$828  = ch0_cfg_w5_crc_start_write;
+    \$828  = ch0_result_timestamp_time_snapshot;
+    if (\$146 ) begin
+      \$828  = \port$7595$0 [35:4];
+    end
     if (rst) begin
-      \$828  = 1'h0;
+      \$828  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$829  = ch0_cfg_w6_write;
+    \$829  = ch0_result_line_noise_events_snapshot;
+    if (\$146 ) begin
+      \$829  = \port$7595$0 [53:50];
+    end
     if (rst) begin
-      \$829  = 1'h0;
+      \$829  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$830  = ch0_cfg_w6_crc_write;
+    \$830  = ch0_result_line_delay_settled_snapshot;
+    if (\$146 ) begin
+      \$830  = \port$7595$0 [54];
+    end
     if (rst) begin
       \$830  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$831  = ch0_cfg_w6_crc_start_write;
+    \$831  = ch0_result_line_delay_spread_snapshot;
+    if (\$146 ) begin
+      \$831  = \port$7595$0 [75:68];
+    end
     if (rst) begin
-      \$831  = 1'h0;
+      \$831  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$832  = ch0_cfg_w7_write;
+    \$832  = ch0_result_line_settled_delay_snapshot;
+    if (\$146 ) begin
+      \$832  = \port$7595$0 [67:55];
+    end
     if (rst) begin
-      \$832  = 1'h0;
+      \$832  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$833  = ch0_cfg_w7_crc_write;
+    \$833  = ch0_window0_read;
+    if (bus__r_en) begin
+      \$833  = \$148 ;
+    end
     if (rst) begin
       \$833  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$834  = ch0_cfg_w7_crc_start_write;
+    \$834  = ch0_window1_read;
+    if (bus__r_en) begin
+      \$834  = \$152 ;
+    end
     if (rst) begin
       \$834  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$835  = ch0_ca_request_write;
+    \$835  = ch0_window2_read;
+    if (bus__r_en) begin
+      \$835  = \$154 ;
+    end
     if (rst) begin
       \$835  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$836  = ch0_ca_request_slave_id;
-    if (\$90 ) begin
-      \$836  = config_write_data[2:0];
+    \$836  = ch0_window3_read;
+    if (bus__r_en) begin
+      \$836  = ch0_config_read;
     end
     if (rst) begin
-      \$836  = 3'h0;
+      \$836  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$837  = ch0_ca_request_address;
-    if (\$91 ) begin
-      \$837  = config_write_data[14:8];
+    \$837  = ch0_read_data;
+    if (bus__r_load) begin
+      \$837  = \$246 ;
     end
     if (rst) begin
-      \$837  = 7'h00;
+      \$837  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$838  = ch0_ca_request_count;
-    if (\$92 ) begin
-      \$838  = config_write_data[22:16];
-    end
+    \$838  = \$248 ;
     if (rst) begin
-      \$838  = 7'h00;
+      \$838  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$839  = \ch0_ca_request_write$149 ;
-    if (\$93 ) begin
-      \$839  = config_write_data[24];
-    end
+    \$839  = \$250 ;
     if (rst) begin
       \$839  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$840  = \$95 ;
+    \$840  = \$252 ;
     if (rst) begin
       \$840  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$841  = \$97 ;
+    \$841  = ch1_ctrl_periodic;
+    if (\$253 ) begin
+      \$841  = write_data[8];
+    end
     if (rst) begin
       \$841  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$842  = config_memory0_write_data;
-    if (write_en) begin
-      \$842  = \$102 ;
+    \$842  = ch1_ctrl_trigger_enable;
+    if (\$254 ) begin
+      \$842  = write_data[9];
     end
     if (rst) begin
-      \$842  = 32'd0;
+      \$842  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$843  = \$103 ;
+    \$843  = ch1_irq_status_done;
+    if (ch1__frame_done) begin
+      \$843  = 1'h1;
+    end else if (\$256 ) begin
+      \$843  = 1'h0;
+    end
     if (rst) begin
-      \$843  = 15'h0000;
+      \$843  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$844  = ch0_config_read_index;
-    if (ch0_config_read) begin
-      \$844  = config_memory0_read_index;
+    \$844  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$844  = 1'h1;
+    end else if (\$258 ) begin
+      \$844  = 1'h0;
     end
     if (rst) begin
-      \$844  = 4'h0;
+      \$844  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$845  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$845  = \$104 ;
+    \$845  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$845  = 1'h1;
+    end else if (\$260 ) begin
+      \$845  = 1'h0;
     end
     if (rst) begin
       \$845  = 1'h0;
@@ -6797,19 +7301,16 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$846  = ch0_read_select_81;
-    if (bus__r_en) begin
-      \$846  = \$105 ;
-    end
+    \$846  = ch1_irq_enable_write;
     if (rst) begin
       \$846  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$847  = ch0_read_select_82;
-    if (bus__r_en) begin
-      \$847  = \$106 ;
+    \$847  = ch1_irq_enable_done;
+    if (\$261 ) begin
+      \$847  = config_write_data[0];
     end
     if (rst) begin
       \$847  = 1'h0;
@@ -6817,9 +7318,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$848  = ch0_read_select_84;
-    if (bus__r_en) begin
-      \$848  = \$107 ;
+    \$848  = ch1_irq_enable_error;
+    if (\$262 ) begin
+      \$848  = config_write_data[1];
     end
     if (rst) begin
       \$848  = 1'h0;
@@ -6827,9 +7328,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$849  = ch0_read_select_86;
-    if (bus__r_en) begin
-      \$849  = \$108 ;
+    \$849  = ch1_irq_enable_access_done;
+    if (\$263 ) begin
+      \$849  = config_write_data[2];
     end
     if (rst) begin
       \$849  = 1'h0;
@@ -6837,139 +7338,151 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$850  = ch0_read_select_87;
-    if (bus__r_en) begin
-      \$850  = \$109 ;
-    end
+    \$850  = ch1_cfg_ma_write;
     if (rst) begin
       \$850  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$851  = ch0_read_select_90;
-    if (bus__r_en) begin
-      \$851  = \$110 ;
+    \$851  = ch1_cfg_ma_ma_half_period;
+    if (\$264 ) begin
+      \$851 [7:0] = config_write_data[7:0];
+    end
+    if (\$265 ) begin
+      \$851 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$851  = 1'h0;
+      \$851  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$852  = ch0_read_select_91;
-    if (bus__r_en) begin
-      \$852  = \$111 ;
+    \$852  = ch1_cfg_ma_delay_limit;
+    if (\$266 ) begin
+      \$852 [7:0] = config_write_data[23:16];
+    end
+    if (\$267 ) begin
+      \$852 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$852  = 1'h0;
+      \$852  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$853  = ch0_read_select_92;
-    if (bus__r_en) begin
-      \$853  = \$112 ;
-    end
+    \$853  = ch1_cfg_period_write;
     if (rst) begin
       \$853  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$854  = ch0_read_select_93;
-    if (bus__r_en) begin
-      \$854  = \$113 ;
+    \$854  = ch1_cfg_period_request_period;
+    if (\$268 ) begin
+      \$854 [7:0] = config_write_data[7:0];
+    end
+    if (\$269 ) begin
+      \$854 [15:8] = config_write_data[15:8];
+    end
+    if (\$270 ) begin
+      \$854 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$854  = 1'h0;
+      \$854  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$855  = ch0_read_select_94;
-    if (bus__r_en) begin
-      \$855  = \$114 ;
-    end
+    \$855  = ch1_cfg_break_write;
     if (rst) begin
       \$855  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$856  = ch0_read_select_95;
-    if (bus__r_en) begin
-      \$856  = \$115 ;
+    \$856  = ch1_cfg_break_break_time;
+    if (\$271 ) begin
+      \$856 [7:0] = config_write_data[7:0];
+    end
+    if (\$272 ) begin
+      \$856 [15:8] = config_write_data[15:8];
+    end
+    if (\$273 ) begin
+      \$856 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$856  = 1'h0;
+      \$856  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$857  = ch0_read_select_96;
-    if (bus__r_en) begin
-      \$857  = \$116 ;
-    end
+    \$857  = ch1_cfg_ack_write;
     if (rst) begin
       \$857  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$858  = ch0_read_select_97;
-    if (bus__r_en) begin
-      \$858  = \$117 ;
+    \$858  = ch1_cfg_ack_ack_limit;
+    if (\$274 ) begin
+      \$858 [7:0] = config_write_data[7:0];
+    end
+    if (\$275 ) begin
+      \$858 [15:8] = config_write_data[15:8];
+    end
+    if (\$276 ) begin
+      \$858 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$858  = 1'h0;
+      \$858  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$859  = ch0_read_select_a5;
-    if (bus__r_en) begin
-      \$859  = \$118 ;
-    end
+    \$859  = ch1_cfg_timeout_write;
     if (rst) begin
       \$859  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$860  = ch0_read_select_a6;
-    if (bus__r_en) begin
-      \$860  = \$119 ;
+    \$860  = ch1_cfg_timeout_timeout_limit;
+    if (\$277 ) begin
+      \$860 [7:0] = config_write_data[7:0];
+    end
+    if (\$278 ) begin
+      \$860 [15:8] = config_write_data[15:8];
+    end
+    if (\$279 ) begin
+      \$860 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$860  = 1'h0;
+      \$860  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$861  = ch0_read_select_a7;
-    if (bus__r_en) begin
-      \$861  = \$120 ;
-    end
+    \$861  = ch1_cfg_words_write;
     if (rst) begin
       \$861  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$862  = ch0_read_select_a8;
-    if (bus__r_en) begin
-      \$862  = \$121 ;
+    \$862  = ch1_cfg_words_w0_data_bits;
+    if (\$280 ) begin
+      \$862  = config_write_data[5:0];
     end
     if (rst) begin
-      \$862  = 1'h0;
+      \$862  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$863  = ch0_read_select_a9;
-    if (bus__r_en) begin
-      \$863  = \$122 ;
+    \$863  = ch1_cfg_words_w0_nenw;
+    if (\$281 ) begin
+      \$863  = config_write_data[6];
     end
     if (rst) begin
       \$863  = 1'h0;
@@ -6977,9 +7490,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$864  = ch0_read_select_aa;
-    if (bus__r_en) begin
-      \$864  = \$123 ;
+    \$864  = ch1_cfg_words_w0_lc;
+    if (\$282 ) begin
+      \$864  = config_write_data[7];
     end
     if (rst) begin
       \$864  = 1'h0;
@@ -6987,19 +7500,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$865  = ch0_read_select_ac;
-    if (bus__r_en) begin
-      \$865  = \$124 ;
+    \$865  = ch1_cfg_words_w0_crc;
+    if (\$283 ) begin
+      \$865  = config_write_data[9:8];
     end
     if (rst) begin
-      \$865  = 1'h0;
+      \$865  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$866  = ch0_read_select_ad;
-    if (bus__r_en) begin
-      \$866  = \$125 ;
+    \$866  = ch1_cfg_words_w0_gray;
+    if (\$284 ) begin
+      \$866  = config_write_data[10];
     end
     if (rst) begin
       \$866  = 1'h0;
@@ -7007,9 +7520,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$867  = ch0_read_select_ae;
-    if (bus__r_en) begin
-      \$867  = \$126 ;
+    \$867  = ch1_cfg_words_w0_signed;
+    if (\$285 ) begin
+      \$867  = config_write_data[11];
     end
     if (rst) begin
       \$867  = 1'h0;
@@ -7017,19 +7530,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$868  = ch0_read_select_b0;
-    if (bus__r_en) begin
-      \$868  = \$127 ;
+    \$868  = ch1_cfg_words_w1_data_bits;
+    if (\$286 ) begin
+      \$868  = config_write_data[21:16];
     end
     if (rst) begin
-      \$868  = 1'h0;
+      \$868  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$869  = ch0_read_select_b1;
-    if (bus__r_en) begin
-      \$869  = \$128 ;
+    \$869  = ch1_cfg_words_w1_nenw;
+    if (\$287 ) begin
+      \$869  = config_write_data[22];
     end
     if (rst) begin
       \$869  = 1'h0;
@@ -7037,9 +7550,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$870  = ch0_read_select_b2;
-    if (bus__r_en) begin
-      \$870  = \$129 ;
+    \$870  = ch1_cfg_words_w1_lc;
+    if (\$288 ) begin
+      \$870  = config_write_data[23];
     end
     if (rst) begin
       \$870  = 1'h0;
@@ -7047,19 +7560,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$871  = ch0_read_select_b4;
-    if (bus__r_en) begin
-      \$871  = \$130 ;
+    \$871  = ch1_cfg_words_w1_crc;
+    if (\$289 ) begin
+      \$871  = config_write_data[25:24];
     end
     if (rst) begin
-      \$871  = 1'h0;
+      \$871  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$872  = ch0_read_select_b5;
-    if (bus__r_en) begin
-      \$872  = \$131 ;
+    \$872  = ch1_cfg_words_w1_gray;
+    if (\$290 ) begin
+      \$872  = config_write_data[26];
     end
     if (rst) begin
       \$872  = 1'h0;
@@ -7067,9 +7580,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$873  = ch0_read_select_b6;
-    if (bus__r_en) begin
-      \$873  = \$132 ;
+    \$873  = ch1_cfg_words_w1_signed;
+    if (\$291 ) begin
+      \$873  = config_write_data[27];
     end
     if (rst) begin
       \$873  = 1'h0;
@@ -7077,9 +7590,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$874  = ch0_read_select_b8;
-    if (bus__r_en) begin
-      \$874  = \$133 ;
+    \$874  = ch1_cfg_words_w1_enable;
+    if (\$292 ) begin
+      \$874  = config_write_data[31];
     end
     if (rst) begin
       \$874  = 1'h0;
@@ -7087,19 +7600,16 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$875  = ch0_read_select_b9;
-    if (bus__r_en) begin
-      \$875  = \$134 ;
-    end
+    \$875  = ch1_cfg_checks_write;
     if (rst) begin
       \$875  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$876  = ch0_read_select_ba;
-    if (bus__r_en) begin
-      \$876  = \$135 ;
+    \$876  = ch1_cfg_checks_end_check;
+    if (\$293 ) begin
+      \$876  = config_write_data[0];
     end
     if (rst) begin
       \$876  = 1'h0;
@@ -7107,9 +7617,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$877  = ch0_read_select_bc;
-    if (bus__r_en) begin
-      \$877  = \$136 ;
+    \$877  = ch1_cfg_checks_spw_check;
+    if (\$294 ) begin
+      \$877  = config_write_data[1];
     end
     if (rst) begin
       \$877  = 1'h0;
@@ -7117,99 +7627,99 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$878  = ch0_read_select_bd;
-    if (bus__r_en) begin
-      \$878  = \$137 ;
+    \$878  = ch1_cfg_checks_spw_tolerance;
+    if (\$295 ) begin
+      \$878  = config_write_data[15:8];
     end
     if (rst) begin
-      \$878  = 1'h0;
+      \$878  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$879  = ch0_read_select_be;
-    if (bus__r_en) begin
-      \$879  = \$138 ;
+    \$879  = ch1_cfg_checks_noise_limit;
+    if (\$296 ) begin
+      \$879  = config_write_data[19:16];
     end
     if (rst) begin
-      \$879  = 1'h0;
+      \$879  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$880  = ch0_read_select_c1;
-    if (bus__r_en) begin
-      \$880  = \$139 ;
+    \$880  = ch1_cfg_checks_delay_tolerance;
+    if (\$297 ) begin
+      \$880  = config_write_data[23:20];
     end
     if (rst) begin
-      \$880  = 1'h0;
+      \$880  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$881  = ch0_read_select_c2;
-    if (bus__r_en) begin
-      \$881  = \$140 ;
+    \$881  = ch1_cfg_checks_confirm_frames;
+    if (\$298 ) begin
+      \$881  = config_write_data[27:24];
     end
     if (rst) begin
-      \$881  = 1'h0;
+      \$881  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$882  = ch0_read_select_c3;
-    if (bus__r_en) begin
-      \$882  = \$141 ;
-    end
+    \$882  = ch1_cfg_quiet_write;
     if (rst) begin
       \$882  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$883  = ch0_read_select_c4;
-    if (bus__r_en) begin
-      \$883  = \$142 ;
+    \$883  = ch1_cfg_quiet_quiet_time;
+    if (\$299 ) begin
+      \$883 [7:0] = config_write_data[7:0];
+    end
+    if (\$300 ) begin
+      \$883 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$883  = 1'h0;
+      \$883  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$884  = ch0_read_select_c5;
-    if (bus__r_en) begin
-      \$884  = \$143 ;
-    end
+    \$884  = ch1_cfg_crc0_write;
     if (rst) begin
       \$884  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$885  = ch0_read_select_f0;
-    if (bus__r_en) begin
-      \$885  = \$144 ;
+    \$885  = ch1_cfg_crc0_w0_crc_poly;
+    if (\$301 ) begin
+      \$885 [7:0] = config_write_data[7:0];
+    end
+    if (\$302 ) begin
+      \$885 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$885  = 1'h0;
+      \$885  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$886  = ch0_read_select_f1;
-    if (bus__r_en) begin
-      \$886  = \$145 ;
+    \$886  = ch1_cfg_crc0_w0_crc_width;
+    if (\$303 ) begin
+      \$886  = config_write_data[20:16];
     end
     if (rst) begin
-      \$886  = 1'h0;
+      \$886  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$887  = ch0_read_select_f2;
-    if (bus__r_en) begin
-      \$887  = \$146 ;
+    \$887  = ch1_cfg_crc0_w0_crc_inverted;
+    if (\$304 ) begin
+      \$887  = config_write_data[24];
     end
     if (rst) begin
       \$887  = 1'h0;
@@ -7217,59 +7727,59 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$888  = ch0_read_select_f3;
-    if (bus__r_en) begin
-      \$888  = \$147 ;
-    end
+    \$888  = ch1_cfg_crc0_start_write;
     if (rst) begin
       \$888  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$889  = ch0_read_select_f4;
-    if (bus__r_en) begin
-      \$889  = \$148 ;
+    \$889  = ch1_cfg_crc0_start_w0_crc_start;
+    if (\$305 ) begin
+      \$889 [7:0] = config_write_data[7:0];
+    end
+    if (\$306 ) begin
+      \$889 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$889  = 1'h0;
+      \$889  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$890  = ch0_read_select_f5;
-    if (bus__r_en) begin
-      \$890  = \$149 ;
-    end
+    \$890  = ch1_cfg_crc1_write;
     if (rst) begin
       \$890  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$891  = ch0_read_select_f6;
-    if (bus__r_en) begin
-      \$891  = \$150 ;
+    \$891  = ch1_cfg_crc1_w1_crc_poly;
+    if (\$307 ) begin
+      \$891 [7:0] = config_write_data[7:0];
+    end
+    if (\$308 ) begin
+      \$891 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$891  = 1'h0;
+      \$891  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$892  = ch0_read_select_f7;
-    if (bus__r_en) begin
-      \$892  = \$151 ;
+    \$892  = ch1_cfg_crc1_w1_crc_width;
+    if (\$309 ) begin
+      \$892  = config_write_data[20:16];
     end
     if (rst) begin
-      \$892  = 1'h0;
+      \$892  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$893  = ch0_read_select_f8;
-    if (bus__r_en) begin
-      \$893  = \$152 ;
+    \$893  = ch1_cfg_crc1_w1_crc_inverted;
+    if (\$310 ) begin
+      \$893  = config_write_data[24];
     end
     if (rst) begin
       \$893  = 1'h0;
@@ -7277,39 +7787,36 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$894  = ch0_read_select_f9;
-    if (bus__r_en) begin
-      \$894  = \$153 ;
-    end
+    \$894  = ch1_cfg_crc1_start_write;
     if (rst) begin
       \$894  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$895  = ch0_read_select_fa;
-    if (bus__r_en) begin
-      \$895  = \$154 ;
+    \$895  = ch1_cfg_crc1_start_w1_crc_start;
+    if (\$311 ) begin
+      \$895 [7:0] = config_write_data[7:0];
+    end
+    if (\$312 ) begin
+      \$895 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$895  = 1'h0;
+      \$895  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$896  = ch0_read_select_fb;
-    if (bus__r_en) begin
-      \$896  = \$155 ;
-    end
+    \$896  = ch1_cfg_ssi_write;
     if (rst) begin
       \$896  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$897  = ch0_read_select_fc;
-    if (bus__r_en) begin
-      \$897  = \$156 ;
+    \$897  = ch1_cfg_ssi_ssi;
+    if (\$313 ) begin
+      \$897  = config_write_data[0];
     end
     if (rst) begin
       \$897  = 1'h0;
@@ -7317,9 +7824,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$898  = ch0_read_select_fd;
-    if (bus__r_en) begin
-      \$898  = \$157 ;
+    \$898  = ch1_cfg_ssi_ssi_error;
+    if (\$314 ) begin
+      \$898  = config_write_data[1];
     end
     if (rst) begin
       \$898  = 1'h0;
@@ -7327,19 +7834,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$899  = ch0_result_status_status_snapshot;
-    if (\$158 ) begin
-      \$899  = \port$7739$0 [3:0];
+    \$899  = ch1_cfg_ssi_ssi_error_low;
+    if (\$315 ) begin
+      \$899  = config_write_data[2];
     end
     if (rst) begin
-      \$899  = 4'h0;
+      \$899  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$900  = ch0_result_status_cds_snapshot;
-    if (\$158 ) begin
-      \$900  = \port$7739$0 [49];
+    \$900  = ch1_cfg_ssi_ssi_double;
+    if (\$316 ) begin
+      \$900  = config_write_data[3];
     end
     if (rst) begin
       \$900  = 1'h0;
@@ -7347,239 +7854,185 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$901  = ch0_result_status_w0_ne_snapshot;
-    if (\$158 ) begin
-      \$901  = \port$7739$0 [131];
+    \$901  = ch1_cfg_ssi_ssi_delay;
+    if (\$317 ) begin
+      \$901 [7:0] = config_write_data[23:16];
+    end
+    if (\$318 ) begin
+      \$901 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$901  = 1'h0;
+      \$901  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$902  = ch0_result_status_w0_nw_snapshot;
-    if (\$158 ) begin
-      \$902  = \port$7739$0 [132];
-    end
+    \$902  = ch1_cfg_w2_write;
     if (rst) begin
       \$902  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$903  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$158 ) begin
-      \$903  = \port$7739$0 [133];
-    end
+    \$903  = ch1_cfg_w2_crc_write;
     if (rst) begin
       \$903  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$904  = ch0_result_status_w1_ne_snapshot;
-    if (\$158 ) begin
-      \$904  = \port$7739$0 [174];
-    end
+    \$904  = ch1_cfg_w2_crc_start_write;
     if (rst) begin
       \$904  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$905  = ch0_result_status_w1_nw_snapshot;
-    if (\$158 ) begin
-      \$905  = \port$7739$0 [175];
-    end
+    \$905  = ch1_cfg_w3_write;
     if (rst) begin
       \$905  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$906  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$158 ) begin
-      \$906  = \port$7739$0 [176];
-    end
+    \$906  = ch1_cfg_w3_crc_write;
     if (rst) begin
       \$906  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$907  = ch0_result_status_lc_repeat_snapshot;
-    if (\$158 ) begin
-      \$907  = \port$7739$0 [183];
-    end
+    \$907  = ch1_cfg_w3_crc_start_write;
     if (rst) begin
       \$907  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$908  = ch0_result_status_lc_skip_snapshot;
-    if (\$158 ) begin
-      \$908  = \port$7739$0 [184];
-    end
+    \$908  = ch1_cfg_w4_write;
     if (rst) begin
       \$908  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$909  = ch0_result_status_lc_zero_snapshot;
-    if (\$158 ) begin
-      \$909  = \port$7739$0 [185];
-    end
+    \$909  = ch1_cfg_w4_crc_write;
     if (rst) begin
       \$909  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$910  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$158 ) begin
-      \$910  = \port$7739$0 [186];
-    end
+    \$910  = ch1_cfg_w4_crc_start_write;
     if (rst) begin
       \$910  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$911  = ch0_result_status_lc_snapshot;
-    if (\$158 ) begin
-      \$911  = \port$7739$0 [182:177];
-    end
+    \$911  = ch1_cfg_w5_write;
     if (rst) begin
-      \$911  = 6'h00;
+      \$911  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$912  = ch0_result_seq_seq_snapshot;
-    if (\$158 ) begin
-      \$912  = ch0__done_count;
-    end
+    \$912  = ch1_cfg_w5_crc_write;
     if (rst) begin
-      \$912  = 16'h0000;
+      \$912  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$913  = ch0_result_seq_line_delay_snapshot;
-    if (\$158 ) begin
-      \$913  = \port$7739$0 [48:36];
-    end
+    \$913  = ch1_cfg_w5_crc_start_write;
     if (rst) begin
-      \$913  = 13'h0000;
+      \$913  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$914  = ch0_result_w0_lo_data_snapshot;
-    if (\$158 ) begin
-      \$914  = \port$7739$0 [107:76];
-    end
+    \$914  = ch1_cfg_w6_write;
     if (rst) begin
-      \$914  = 32'd0;
+      \$914  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$915  = ch0_result_w0_hi_data_snapshot;
-    if (\$158 ) begin
-      \$915  = \port$7739$0 [130:108];
-    end
+    \$915  = ch1_cfg_w6_crc_write;
     if (rst) begin
-      \$915  = 23'h000000;
+      \$915  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$916  = ch0_result_w1_lo_data_snapshot;
-    if (\$158 ) begin
-      \$916  = \port$7739$0 [165:134];
-    end
+    \$916  = ch1_cfg_w6_crc_start_write;
     if (rst) begin
-      \$916  = 32'd0;
+      \$916  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$917  = ch0_result_w1_hi_data_snapshot;
-    if (\$158 ) begin
-      \$917  = \port$7739$0 [173:166];
-    end
+    \$917  = ch1_cfg_w7_write;
     if (rst) begin
-      \$917  = 8'h00;
+      \$917  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$918  = ch0_result_timestamp_time_snapshot;
-    if (\$158 ) begin
-      \$918  = \port$7739$0 [35:4];
-    end
+    \$918  = ch1_cfg_w7_crc_write;
     if (rst) begin
-      \$918  = 32'd0;
+      \$918  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$919  = ch0_result_line_noise_events_snapshot;
-    if (\$158 ) begin
-      \$919  = \port$7739$0 [53:50];
-    end
+    \$919  = ch1_cfg_w7_crc_start_write;
     if (rst) begin
-      \$919  = 4'h0;
+      \$919  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$920  = ch0_result_line_delay_settled_snapshot;
-    if (\$158 ) begin
-      \$920  = \port$7739$0 [54];
-    end
+    \$920  = ch1_ca_request_write;
     if (rst) begin
       \$920  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$921  = ch0_result_line_delay_spread_snapshot;
-    if (\$158 ) begin
-      \$921  = \port$7739$0 [75:68];
+    \$921  = ch1_ca_request_slave_id;
+    if (\$319 ) begin
+      \$921  = config_write_data[2:0];
     end
     if (rst) begin
-      \$921  = 8'h00;
+      \$921  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$922  = ch0_result_line_settled_delay_snapshot;
-    if (\$158 ) begin
-      \$922  = \port$7739$0 [67:55];
+    \$922  = ch1_ca_request_address;
+    if (\$320 ) begin
+      \$922  = config_write_data[14:8];
     end
     if (rst) begin
-      \$922  = 13'h0000;
+      \$922  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$923  = ch0_window0_read;
-    if (bus__r_en) begin
-      \$923  = \$160 ;
+    \$923  = ch1_ca_request_count;
+    if (\$321 ) begin
+      \$923  = config_write_data[22:16];
     end
     if (rst) begin
-      \$923  = 1'h0;
+      \$923  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$924  = ch0_window1_read;
-    if (bus__r_en) begin
-      \$924  = \$162 ;
+    \$924  = \ch1_ca_request_write$430 ;
+    if (\$322 ) begin
+      \$924  = config_write_data[24];
     end
     if (rst) begin
       \$924  = 1'h0;
@@ -7587,50 +8040,50 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$925  = ch0_window2_read;
-    if (bus__r_en) begin
-      \$925  = ch0_config_read;
-    end
+    \$925  = \$324 ;
     if (rst) begin
       \$925  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$926  = ch0_read_data;
-    if (bus__r_load) begin
-      \$926  = \$276 ;
-    end
+    \$926  = \$326 ;
     if (rst) begin
-      \$926  = 32'd0;
+      \$926  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$927  = \$278 ;
+    \$927  = \$327 ;
     if (rst) begin
-      \$927  = 1'h0;
+      \$927  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$928  = \$280 ;
+    \$928  = ch1_config_read_index;
+    if (ch1_config_read) begin
+      \$928  = config_memory0_read_index;
+    end
     if (rst) begin
-      \$928  = 1'h0;
+      \$928  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$929  = \$282 ;
+    \$929  = ch1_read_select_100;
+    if (bus__r_en) begin
+      \$929  = \$328 ;
+    end
     if (rst) begin
       \$929  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$930  = ch1_ctrl_periodic;
-    if (\$283 ) begin
-      \$930  = write_data[8];
+    \$930  = ch1_read_select_101;
+    if (bus__r_en) begin
+      \$930  = \$329 ;
     end
     if (rst) begin
       \$930  = 1'h0;
@@ -7638,9 +8091,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$931  = ch1_ctrl_trigger_enable;
-    if (\$284 ) begin
-      \$931  = write_data[9];
+    \$931  = ch1_read_select_102;
+    if (bus__r_en) begin
+      \$931  = \$330 ;
     end
     if (rst) begin
       \$931  = 1'h0;
@@ -7648,11 +8101,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$932  = ch1_irq_status_done;
-    if (ch1__frame_done) begin
-      \$932  = 1'h1;
-    end else if (\$286 ) begin
-      \$932  = 1'h0;
+    \$932  = ch1_read_select_104;
+    if (bus__r_en) begin
+      \$932  = \$331 ;
     end
     if (rst) begin
       \$932  = 1'h0;
@@ -7660,11 +8111,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$933  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$933  = 1'h1;
-    end else if (\$288 ) begin
-      \$933  = 1'h0;
+    \$933  = ch1_read_select_106;
+    if (bus__r_en) begin
+      \$933  = \$332 ;
     end
     if (rst) begin
       \$933  = 1'h0;
@@ -7672,11 +8121,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$934  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$934  = 1'h1;
-    end else if (\$290 ) begin
-      \$934  = 1'h0;
+    \$934  = ch1_read_select_107;
+    if (bus__r_en) begin
+      \$934  = \$333 ;
     end
     if (rst) begin
       \$934  = 1'h0;
@@ -7684,16 +8131,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$935  = ch1_irq_enable_write;
+    \$935  = ch1_read_select_110;
+    if (bus__r_en) begin
+      \$935  = \$334 ;
+    end
     if (rst) begin
       \$935  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$936  = ch1_irq_enable_done;
-    if (\$291 ) begin
-      \$936  = config_write_data[0];
+    \$936  = ch1_read_select_111;
+    if (bus__r_en) begin
+      \$936  = \$335 ;
     end
     if (rst) begin
       \$936  = 1'h0;
@@ -7701,9 +8151,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$937  = ch1_irq_enable_error;
-    if (\$292 ) begin
-      \$937  = config_write_data[1];
+    \$937  = ch1_read_select_112;
+    if (bus__r_en) begin
+      \$937  = \$336 ;
     end
     if (rst) begin
       \$937  = 1'h0;
@@ -7711,9 +8161,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$938  = ch1_irq_enable_access_done;
-    if (\$293 ) begin
-      \$938  = config_write_data[2];
+    \$938  = ch1_read_select_113;
+    if (bus__r_en) begin
+      \$938  = \$337 ;
     end
     if (rst) begin
       \$938  = 1'h0;
@@ -7721,151 +8171,139 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$939  = ch1_cfg_ma_write;
+    \$939  = ch1_read_select_114;
+    if (bus__r_en) begin
+      \$939  = \$338 ;
+    end
     if (rst) begin
       \$939  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$940  = ch1_cfg_ma_ma_half_period;
-    if (\$294 ) begin
-      \$940 [7:0] = config_write_data[7:0];
-    end
-    if (\$295 ) begin
-      \$940 [15:8] = config_write_data[15:8];
+    \$940  = ch1_read_select_115;
+    if (bus__r_en) begin
+      \$940  = \$339 ;
     end
     if (rst) begin
-      \$940  = 16'h0000;
+      \$940  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$941  = ch1_cfg_ma_delay_limit;
-    if (\$296 ) begin
-      \$941 [7:0] = config_write_data[23:16];
-    end
-    if (\$297 ) begin
-      \$941 [11:8] = config_write_data[27:24];
+    \$941  = ch1_read_select_116;
+    if (bus__r_en) begin
+      \$941  = \$340 ;
     end
     if (rst) begin
-      \$941  = 12'h000;
+      \$941  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$942  = ch1_cfg_period_write;
+    \$942  = ch1_read_select_117;
+    if (bus__r_en) begin
+      \$942  = \$341 ;
+    end
     if (rst) begin
       \$942  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$943  = ch1_cfg_period_request_period;
-    if (\$298 ) begin
-      \$943 [7:0] = config_write_data[7:0];
-    end
-    if (\$299 ) begin
-      \$943 [15:8] = config_write_data[15:8];
-    end
-    if (\$300 ) begin
-      \$943 [23:16] = config_write_data[23:16];
+    \$943  = ch1_read_select_125;
+    if (bus__r_en) begin
+      \$943  = \$342 ;
     end
     if (rst) begin
-      \$943  = 24'h000000;
+      \$943  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$944  = ch1_cfg_break_write;
+    \$944  = ch1_read_select_126;
+    if (bus__r_en) begin
+      \$944  = \$343 ;
+    end
     if (rst) begin
       \$944  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$945  = ch1_cfg_break_break_time;
-    if (\$301 ) begin
-      \$945 [7:0] = config_write_data[7:0];
-    end
-    if (\$302 ) begin
-      \$945 [15:8] = config_write_data[15:8];
-    end
-    if (\$303 ) begin
-      \$945 [23:16] = config_write_data[23:16];
+    \$945  = ch1_read_select_127;
+    if (bus__r_en) begin
+      \$945  = \$344 ;
     end
     if (rst) begin
-      \$945  = 24'h000000;
+      \$945  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$946  = ch1_cfg_ack_write;
+    \$946  = ch1_read_select_128;
+    if (bus__r_en) begin
+      \$946  = \$345 ;
+    end
     if (rst) begin
       \$946  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$947  = ch1_cfg_ack_ack_limit;
-    if (\$304 ) begin
-      \$947 [7:0] = config_write_data[7:0];
-    end
-    if (\$305 ) begin
-      \$947 [15:8] = config_write_data[15:8];
-    end
-    if (\$306 ) begin
-      \$947 [23:16] = config_write_data[23:16];
+    \$947  = ch1_read_select_129;
+    if (bus__r_en) begin
+      \$947  = \$346 ;
     end
     if (rst) begin
-      \$947  = 24'h000000;
+      \$947  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$948  = ch1_cfg_timeout_write;
+    \$948  = ch1_read_select_12a;
+    if (bus__r_en) begin
+      \$948  = \$347 ;
+    end
     if (rst) begin
       \$948  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$949  = ch1_cfg_timeout_timeout_limit;
-    if (\$307 ) begin
-      \$949 [7:0] = config_write_data[7:0];
-    end
-    if (\$308 ) begin
-      \$949 [15:8] = config_write_data[15:8];
-    end
-    if (\$309 ) begin
-      \$949 [23:16] = config_write_data[23:16];
+    \$949  = ch1_read_select_12c;
+    if (bus__r_en) begin
+      \$949  = \$348 ;
     end
     if (rst) begin
-      \$949  = 24'h000000;
+      \$949  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$950  = ch1_cfg_words_write;
+    \$950  = ch1_read_select_12d;
+    if (bus__r_en) begin
+      \$950  = \$349 ;
+    end
     if (rst) begin
       \$950  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$951  = ch1_cfg_words_w0_data_bits;
-    if (\$310 ) begin
-      \$951  = config_write_data[5:0];
+    \$951  = ch1_read_select_12e;
+    if (bus__r_en) begin
+      \$951  = \$350 ;
     end
     if (rst) begin
-      \$951  = 6'h00;
+      \$951  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$952  = ch1_cfg_words_w0_nenw;
-    if (\$311 ) begin
-      \$952  = config_write_data[6];
+    \$952  = ch1_read_select_130;
+    if (bus__r_en) begin
+      \$952  = \$351 ;
     end
     if (rst) begin
       \$952  = 1'h0;
@@ -7873,9 +8311,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$953  = ch1_cfg_words_w0_lc;
-    if (\$312 ) begin
-      \$953  = config_write_data[7];
+    \$953  = ch1_read_select_131;
+    if (bus__r_en) begin
+      \$953  = \$352 ;
     end
     if (rst) begin
       \$953  = 1'h0;
@@ -7883,19 +8321,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$954  = ch1_cfg_words_w0_crc;
-    if (\$313 ) begin
-      \$954  = config_write_data[9:8];
+    \$954  = ch1_read_select_132;
+    if (bus__r_en) begin
+      \$954  = \$353 ;
     end
     if (rst) begin
-      \$954  = 2'h0;
+      \$954  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$955  = ch1_cfg_words_w0_gray;
-    if (\$314 ) begin
-      \$955  = config_write_data[10];
+    \$955  = ch1_read_select_134;
+    if (bus__r_en) begin
+      \$955  = \$354 ;
     end
     if (rst) begin
       \$955  = 1'h0;
@@ -7903,9 +8341,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$956  = ch1_cfg_words_w0_signed;
-    if (\$315 ) begin
-      \$956  = config_write_data[11];
+    \$956  = ch1_read_select_135;
+    if (bus__r_en) begin
+      \$956  = \$355 ;
     end
     if (rst) begin
       \$956  = 1'h0;
@@ -7913,19 +8351,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$957  = ch1_cfg_words_w1_data_bits;
-    if (\$316 ) begin
-      \$957  = config_write_data[21:16];
+    \$957  = ch1_read_select_136;
+    if (bus__r_en) begin
+      \$957  = \$356 ;
     end
     if (rst) begin
-      \$957  = 6'h00;
+      \$957  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$958  = ch1_cfg_words_w1_nenw;
-    if (\$317 ) begin
-      \$958  = config_write_data[22];
+    \$958  = ch1_read_select_138;
+    if (bus__r_en) begin
+      \$958  = \$357 ;
     end
     if (rst) begin
       \$958  = 1'h0;
@@ -7933,9 +8371,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$959  = ch1_cfg_words_w1_lc;
-    if (\$318 ) begin
-      \$959  = config_write_data[23];
+    \$959  = ch1_read_select_139;
+    if (bus__r_en) begin
+      \$959  = \$358 ;
     end
     if (rst) begin
       \$959  = 1'h0;
@@ -7943,19 +8381,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$960  = ch1_cfg_words_w1_crc;
-    if (\$319 ) begin
-      \$960  = config_write_data[25:24];
+    \$960  = ch1_read_select_13a;
+    if (bus__r_en) begin
+      \$960  = \$359 ;
     end
     if (rst) begin
-      \$960  = 2'h0;
+      \$960  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$961  = ch1_cfg_words_w1_gray;
-    if (\$320 ) begin
-      \$961  = config_write_data[26];
+    \$961  = ch1_read_select_13c;
+    if (bus__r_en) begin
+      \$961  = \$360 ;
     end
     if (rst) begin
       \$961  = 1'h0;
@@ -7963,9 +8401,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$962  = ch1_cfg_words_w1_signed;
-    if (\$321 ) begin
-      \$962  = config_write_data[27];
+    \$962  = ch1_read_select_13d;
+    if (bus__r_en) begin
+      \$962  = \$361 ;
     end
     if (rst) begin
       \$962  = 1'h0;
@@ -7973,9 +8411,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$963  = ch1_cfg_words_w1_enable;
-    if (\$322 ) begin
-      \$963  = config_write_data[31];
+    \$963  = ch1_read_select_13e;
+    if (bus__r_en) begin
+      \$963  = \$362 ;
     end
     if (rst) begin
       \$963  = 1'h0;
@@ -7983,16 +8421,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$964  = ch1_cfg_checks_write;
+    \$964  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$964  = \$363 ;
+    end
     if (rst) begin
       \$964  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$965  = ch1_cfg_checks_end_check;
-    if (\$323 ) begin
-      \$965  = config_write_data[0];
+    \$965  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$965  = \$364 ;
     end
     if (rst) begin
       \$965  = 1'h0;
@@ -8000,9 +8441,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$966  = ch1_cfg_checks_spw_check;
-    if (\$324 ) begin
-      \$966  = config_write_data[1];
+    \$966  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$966  = \$365 ;
     end
     if (rst) begin
       \$966  = 1'h0;
@@ -8010,99 +8451,99 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$967  = ch1_cfg_checks_spw_tolerance;
-    if (\$325 ) begin
-      \$967  = config_write_data[15:8];
+    \$967  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$967  = \$366 ;
     end
     if (rst) begin
-      \$967  = 8'h00;
+      \$967  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$968  = ch1_cfg_checks_noise_limit;
-    if (\$326 ) begin
-      \$968  = config_write_data[19:16];
+    \$968  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$968  = \$367 ;
     end
     if (rst) begin
-      \$968  = 4'h0;
+      \$968  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$969  = ch1_cfg_checks_delay_tolerance;
-    if (\$327 ) begin
-      \$969  = config_write_data[23:20];
+    \$969  = ch1_read_select_17c;
+    if (bus__r_en) begin
+      \$969  = \$368 ;
     end
     if (rst) begin
-      \$969  = 4'h0;
+      \$969  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$970  = ch1_cfg_checks_confirm_frames;
-    if (\$328 ) begin
-      \$970  = config_write_data[27:24];
+    \$970  = ch1_read_select_17d;
+    if (bus__r_en) begin
+      \$970  = \$369 ;
     end
     if (rst) begin
-      \$970  = 4'h0;
+      \$970  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$971  = ch1_cfg_quiet_write;
+    \$971  = ch1_result_status_status_snapshot;
+    if (\$370 ) begin
+      \$971  = \port$8126$0 [3:0];
+    end
     if (rst) begin
-      \$971  = 1'h0;
+      \$971  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$972  = ch1_cfg_quiet_quiet_time;
-    if (\$329 ) begin
-      \$972 [7:0] = config_write_data[7:0];
-    end
-    if (\$330 ) begin
-      \$972 [11:8] = config_write_data[11:8];
+    \$972  = ch1_result_status_cds_snapshot;
+    if (\$370 ) begin
+      \$972  = \port$8126$0 [49];
     end
     if (rst) begin
-      \$972  = 12'h000;
+      \$972  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$973  = ch1_cfg_crc0_write;
+    \$973  = ch1_result_status_w0_ne_snapshot;
+    if (\$370 ) begin
+      \$973  = \port$8126$0 [131];
+    end
     if (rst) begin
       \$973  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$974  = ch1_cfg_crc0_w0_crc_poly;
-    if (\$331 ) begin
-      \$974 [7:0] = config_write_data[7:0];
-    end
-    if (\$332 ) begin
-      \$974 [15:8] = config_write_data[15:8];
+    \$974  = ch1_result_status_w0_nw_snapshot;
+    if (\$370 ) begin
+      \$974  = \port$8126$0 [132];
     end
     if (rst) begin
-      \$974  = 16'h0000;
+      \$974  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$975  = ch1_cfg_crc0_w0_crc_width;
-    if (\$333 ) begin
-      \$975  = config_write_data[20:16];
+    \$975  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$370 ) begin
+      \$975  = \port$8126$0 [133];
     end
     if (rst) begin
-      \$975  = 5'h00;
+      \$975  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$976  = ch1_cfg_crc0_w0_crc_inverted;
-    if (\$334 ) begin
-      \$976  = config_write_data[24];
+    \$976  = ch1_result_status_w1_ne_snapshot;
+    if (\$370 ) begin
+      \$976  = \port$8126$0 [174];
     end
     if (rst) begin
       \$976  = 1'h0;
@@ -8110,59 +8551,59 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$977  = ch1_cfg_crc0_start_write;
+    \$977  = ch1_result_status_w1_nw_snapshot;
+    if (\$370 ) begin
+      \$977  = \port$8126$0 [175];
+    end
     if (rst) begin
       \$977  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$978  = ch1_cfg_crc0_start_w0_crc_start;
-    if (\$335 ) begin
-      \$978 [7:0] = config_write_data[7:0];
-    end
-    if (\$336 ) begin
-      \$978 [15:8] = config_write_data[15:8];
+    \$978  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$370 ) begin
+      \$978  = \port$8126$0 [176];
     end
     if (rst) begin
-      \$978  = 16'h0000;
+      \$978  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$979  = ch1_cfg_crc1_write;
+    \$979  = ch1_result_status_lc_repeat_snapshot;
+    if (\$370 ) begin
+      \$979  = \port$8126$0 [183];
+    end
     if (rst) begin
       \$979  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$980  = ch1_cfg_crc1_w1_crc_poly;
-    if (\$337 ) begin
-      \$980 [7:0] = config_write_data[7:0];
-    end
-    if (\$338 ) begin
-      \$980 [15:8] = config_write_data[15:8];
+    \$980  = ch1_result_status_lc_skip_snapshot;
+    if (\$370 ) begin
+      \$980  = \port$8126$0 [184];
     end
     if (rst) begin
-      \$980  = 16'h0000;
+      \$980  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$981  = ch1_cfg_crc1_w1_crc_width;
-    if (\$339 ) begin
-      \$981  = config_write_data[20:16];
+    \$981  = ch1_result_status_lc_zero_snapshot;
+    if (\$370 ) begin
+      \$981  = \port$8126$0 [185];
     end
     if (rst) begin
-      \$981  = 5'h00;
+      \$981  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$982  = ch1_cfg_crc1_w1_crc_inverted;
-    if (\$340 ) begin
-      \$982  = config_write_data[24];
+    \$982  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$370 ) begin
+      \$982  = \port$8126$0 [186];
     end
     if (rst) begin
       \$982  = 1'h0;
@@ -8170,19 +8611,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$983  = ch1_cfg_crc1_start_write;
+    \$983  = ch1_result_status_lc_snapshot;
+    if (\$370 ) begin
+      \$983  = \port$8126$0 [182:177];
+    end
     if (rst) begin
-      \$983  = 1'h0;
+      \$983  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$984  = ch1_cfg_crc1_start_w1_crc_start;
-    if (\$341 ) begin
-      \$984 [7:0] = config_write_data[7:0];
-    end
-    if (\$342 ) begin
-      \$984 [15:8] = config_write_data[15:8];
+    \$984  = ch1_result_seq_seq_snapshot;
+    if (\$370 ) begin
+      \$984  = ch1__done_count;
     end
     if (rst) begin
       \$984  = 16'h0000;
@@ -8190,1086 +8631,152 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$985  = ch1_cfg_ssi_write;
+    \$985  = ch1_result_seq_line_delay_snapshot;
+    if (\$370 ) begin
+      \$985  = \port$8126$0 [48:36];
+    end
     if (rst) begin
-      \$985  = 1'h0;
+      \$985  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$986  = ch1_cfg_ssi_ssi;
-    if (\$343 ) begin
-      \$986  = config_write_data[0];
+    \$986  = ch1_result_w0_lo_data_snapshot;
+    if (\$370 ) begin
+      \$986  = \port$8126$0 [107:76];
     end
     if (rst) begin
-      \$986  = 1'h0;
+      \$986  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$987  = ch1_cfg_ssi_ssi_error;
-    if (\$344 ) begin
-      \$987  = config_write_data[1];
+    \$987  = ch1_result_w0_hi_data_snapshot;
+    if (\$370 ) begin
+      \$987  = \port$8126$0 [130:108];
     end
     if (rst) begin
-      \$987  = 1'h0;
+      \$987  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$988  = ch1_cfg_ssi_ssi_error_low;
-    if (\$345 ) begin
-      \$988  = config_write_data[2];
+    \$988  = ch1_result_w1_lo_data_snapshot;
+    if (\$370 ) begin
+      \$988  = \port$8126$0 [165:134];
     end
     if (rst) begin
-      \$988  = 1'h0;
+      \$988  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$989  = ch1_cfg_ssi_ssi_double;
-    if (\$346 ) begin
-      \$989  = config_write_data[3];
+    \$989  = ch1_result_w1_hi_data_snapshot;
+    if (\$370 ) begin
+      \$989  = \port$8126$0 [173:166];
     end
     if (rst) begin
-      \$989  = 1'h0;
+      \$989  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$990  = ch1_cfg_ssi_ssi_delay;
-    if (\$347 ) begin
-      \$990 [7:0] = config_write_data[23:16];
-    end
-    if (\$348 ) begin
-      \$990 [11:8] = config_write_data[27:24];
+    \$990  = ch1_result_timestamp_time_snapshot;
+    if (\$370 ) begin
+      \$990  = \port$8126$0 [35:4];
     end
     if (rst) begin
-      \$990  = 12'h000;
+      \$990  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$991  = ch1_cfg_w2_write;
+    \$991  = ch1_result_line_noise_events_snapshot;
+    if (\$370 ) begin
+      \$991  = \port$8126$0 [53:50];
+    end
     if (rst) begin
-      \$991  = 1'h0;
+      \$991  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$992  = ch1_cfg_w2_crc_write;
+    \$992  = ch1_result_line_delay_settled_snapshot;
+    if (\$370 ) begin
+      \$992  = \port$8126$0 [54];
+    end
     if (rst) begin
       \$992  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$993  = ch1_cfg_w2_crc_start_write;
+    \$993  = ch1_result_line_delay_spread_snapshot;
+    if (\$370 ) begin
+      \$993  = \port$8126$0 [75:68];
+    end
     if (rst) begin
-      \$993  = 1'h0;
+      \$993  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$994  = ch1_cfg_w3_write;
+    \$994  = ch1_result_line_settled_delay_snapshot;
+    if (\$370 ) begin
+      \$994  = \port$8126$0 [67:55];
+    end
     if (rst) begin
-      \$994  = 1'h0;
+      \$994  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$995  = ch1_cfg_w3_crc_write;
+    \$995  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$995  = \$372 ;
+    end
     if (rst) begin
       \$995  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$996  = ch1_cfg_w3_crc_start_write;
+    \$996  = ch1_window1_read;
+    if (bus__r_en) begin
+      \$996  = \$376 ;
+    end
     if (rst) begin
       \$996  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$997  = ch1_cfg_w4_write;
+    \$997  = ch1_window2_read;
+    if (bus__r_en) begin
+      \$997  = \$378 ;
+    end
     if (rst) begin
       \$997  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$998  = ch1_cfg_w4_crc_write;
+    \$998  = ch1_window3_read;
+    if (bus__r_en) begin
+      \$998  = ch1_config_read;
+    end
     if (rst) begin
       \$998  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$999  = ch1_cfg_w4_crc_start_write;
-    if (rst) begin
-      \$999  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1000  = ch1_cfg_w5_write;
-    if (rst) begin
-      \$1000  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1001  = ch1_cfg_w5_crc_write;
-    if (rst) begin
-      \$1001  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1002  = ch1_cfg_w5_crc_start_write;
-    if (rst) begin
-      \$1002  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1003  = ch1_cfg_w6_write;
-    if (rst) begin
-      \$1003  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1004  = ch1_cfg_w6_crc_write;
-    if (rst) begin
-      \$1004  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1005  = ch1_cfg_w6_crc_start_write;
-    if (rst) begin
-      \$1005  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1006  = ch1_cfg_w7_write;
-    if (rst) begin
-      \$1006  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1007  = ch1_cfg_w7_crc_write;
-    if (rst) begin
-      \$1007  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1008  = ch1_cfg_w7_crc_start_write;
-    if (rst) begin
-      \$1008  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1009  = ch1_ca_request_write;
-    if (rst) begin
-      \$1009  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1010  = ch1_ca_request_slave_id;
-    if (\$349 ) begin
-      \$1010  = config_write_data[2:0];
-    end
-    if (rst) begin
-      \$1010  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1011  = ch1_ca_request_address;
-    if (\$350 ) begin
-      \$1011  = config_write_data[14:8];
-    end
-    if (rst) begin
-      \$1011  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1012  = ch1_ca_request_count;
-    if (\$351 ) begin
-      \$1012  = config_write_data[22:16];
-    end
-    if (rst) begin
-      \$1012  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1013  = \ch1_ca_request_write$446 ;
-    if (\$352 ) begin
-      \$1013  = config_write_data[24];
-    end
-    if (rst) begin
-      \$1013  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1014  = \$354 ;
-    if (rst) begin
-      \$1014  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1015  = \$356 ;
-    if (rst) begin
-      \$1015  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1016  = \$357 ;
-    if (rst) begin
-      \$1016  = 15'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1017  = ch1_config_read_index;
-    if (ch1_config_read) begin
-      \$1017  = config_memory0_read_index;
-    end
-    if (rst) begin
-      \$1017  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1018  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$1018  = \$358 ;
-    end
-    if (rst) begin
-      \$1018  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1019  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$1019  = \$359 ;
-    end
-    if (rst) begin
-      \$1019  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1020  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$1020  = \$360 ;
-    end
-    if (rst) begin
-      \$1020  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1021  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$1021  = \$361 ;
-    end
-    if (rst) begin
-      \$1021  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1022  = ch1_read_select_106;
-    if (bus__r_en) begin
-      \$1022  = \$362 ;
-    end
-    if (rst) begin
-      \$1022  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1023  = ch1_read_select_107;
-    if (bus__r_en) begin
-      \$1023  = \$363 ;
-    end
-    if (rst) begin
-      \$1023  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1024  = ch1_read_select_110;
-    if (bus__r_en) begin
-      \$1024  = \$364 ;
-    end
-    if (rst) begin
-      \$1024  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1025  = ch1_read_select_111;
-    if (bus__r_en) begin
-      \$1025  = \$365 ;
-    end
-    if (rst) begin
-      \$1025  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1026  = ch1_read_select_112;
-    if (bus__r_en) begin
-      \$1026  = \$366 ;
-    end
-    if (rst) begin
-      \$1026  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1027  = ch1_read_select_113;
-    if (bus__r_en) begin
-      \$1027  = \$367 ;
-    end
-    if (rst) begin
-      \$1027  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1028  = ch1_read_select_114;
-    if (bus__r_en) begin
-      \$1028  = \$368 ;
-    end
-    if (rst) begin
-      \$1028  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1029  = ch1_read_select_115;
-    if (bus__r_en) begin
-      \$1029  = \$369 ;
-    end
-    if (rst) begin
-      \$1029  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1030  = ch1_read_select_116;
-    if (bus__r_en) begin
-      \$1030  = \$370 ;
-    end
-    if (rst) begin
-      \$1030  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1031  = ch1_read_select_117;
-    if (bus__r_en) begin
-      \$1031  = \$371 ;
-    end
-    if (rst) begin
-      \$1031  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1032  = ch1_read_select_125;
-    if (bus__r_en) begin
-      \$1032  = \$372 ;
-    end
-    if (rst) begin
-      \$1032  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1033  = ch1_read_select_126;
-    if (bus__r_en) begin
-      \$1033  = \$373 ;
-    end
-    if (rst) begin
-      \$1033  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1034  = ch1_read_select_127;
-    if (bus__r_en) begin
-      \$1034  = \$374 ;
-    end
-    if (rst) begin
-      \$1034  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1035  = ch1_read_select_128;
-    if (bus__r_en) begin
-      \$1035  = \$375 ;
-    end
-    if (rst) begin
-      \$1035  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1036  = ch1_read_select_129;
-    if (bus__r_en) begin
-      \$1036  = \$376 ;
-    end
-    if (rst) begin
-      \$1036  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1037  = ch1_read_select_12a;
-    if (bus__r_en) begin
-      \$1037  = \$377 ;
-    end
-    if (rst) begin
-      \$1037  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1038  = ch1_read_select_12c;
-    if (bus__r_en) begin
-      \$1038  = \$378 ;
-    end
-    if (rst) begin
-      \$1038  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1039  = ch1_read_select_12d;
-    if (bus__r_en) begin
-      \$1039  = \$379 ;
-    end
-    if (rst) begin
-      \$1039  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1040  = ch1_read_select_12e;
-    if (bus__r_en) begin
-      \$1040  = \$380 ;
-    end
-    if (rst) begin
-      \$1040  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1041  = ch1_read_select_130;
-    if (bus__r_en) begin
-      \$1041  = \$381 ;
-    end
-    if (rst) begin
-      \$1041  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1042  = ch1_read_select_131;
-    if (bus__r_en) begin
-      \$1042  = \$382 ;
-    end
-    if (rst) begin
-      \$1042  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1043  = ch1_read_select_132;
-    if (bus__r_en) begin
-      \$1043  = \$383 ;
-    end
-    if (rst) begin
-      \$1043  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1044  = ch1_read_select_134;
-    if (bus__r_en) begin
-      \$1044  = \$384 ;
-    end
-    if (rst) begin
-      \$1044  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1045  = ch1_read_select_135;
-    if (bus__r_en) begin
-      \$1045  = \$385 ;
-    end
-    if (rst) begin
-      \$1045  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1046  = ch1_read_select_136;
-    if (bus__r_en) begin
-      \$1046  = \$386 ;
-    end
-    if (rst) begin
-      \$1046  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1047  = ch1_read_select_138;
-    if (bus__r_en) begin
-      \$1047  = \$387 ;
-    end
-    if (rst) begin
-      \$1047  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1048  = ch1_read_select_139;
-    if (bus__r_en) begin
-      \$1048  = \$388 ;
-    end
-    if (rst) begin
-      \$1048  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1049  = ch1_read_select_13a;
-    if (bus__r_en) begin
-      \$1049  = \$389 ;
-    end
-    if (rst) begin
-      \$1049  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1050  = ch1_read_select_13c;
-    if (bus__r_en) begin
-      \$1050  = \$390 ;
-    end
-    if (rst) begin
-      \$1050  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1051  = ch1_read_select_13d;
-    if (bus__r_en) begin
-      \$1051  = \$391 ;
-    end
-    if (rst) begin
-      \$1051  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1052  = ch1_read_select_13e;
-    if (bus__r_en) begin
-      \$1052  = \$392 ;
-    end
-    if (rst) begin
-      \$1052  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1053  = ch1_read_select_141;
-    if (bus__r_en) begin
-      \$1053  = \$393 ;
-    end
-    if (rst) begin
-      \$1053  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1054  = ch1_read_select_142;
-    if (bus__r_en) begin
-      \$1054  = \$394 ;
-    end
-    if (rst) begin
-      \$1054  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1055  = ch1_read_select_143;
-    if (bus__r_en) begin
-      \$1055  = \$395 ;
-    end
-    if (rst) begin
-      \$1055  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1056  = ch1_read_select_144;
-    if (bus__r_en) begin
-      \$1056  = \$396 ;
-    end
-    if (rst) begin
-      \$1056  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1057  = ch1_read_select_145;
-    if (bus__r_en) begin
-      \$1057  = \$397 ;
-    end
-    if (rst) begin
-      \$1057  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1058  = ch1_read_select_170;
-    if (bus__r_en) begin
-      \$1058  = \$398 ;
-    end
-    if (rst) begin
-      \$1058  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1059  = ch1_read_select_171;
-    if (bus__r_en) begin
-      \$1059  = \$399 ;
-    end
-    if (rst) begin
-      \$1059  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1060  = ch1_read_select_172;
-    if (bus__r_en) begin
-      \$1060  = \$400 ;
-    end
-    if (rst) begin
-      \$1060  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1061  = ch1_read_select_173;
-    if (bus__r_en) begin
-      \$1061  = \$401 ;
-    end
-    if (rst) begin
-      \$1061  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1062  = ch1_read_select_174;
-    if (bus__r_en) begin
-      \$1062  = \$402 ;
-    end
-    if (rst) begin
-      \$1062  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1063  = ch1_read_select_175;
-    if (bus__r_en) begin
-      \$1063  = \$403 ;
-    end
-    if (rst) begin
-      \$1063  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1064  = ch1_read_select_176;
-    if (bus__r_en) begin
-      \$1064  = \$404 ;
-    end
-    if (rst) begin
-      \$1064  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1065  = ch1_read_select_177;
-    if (bus__r_en) begin
-      \$1065  = \$405 ;
-    end
-    if (rst) begin
-      \$1065  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1066  = ch1_read_select_178;
-    if (bus__r_en) begin
-      \$1066  = \$406 ;
-    end
-    if (rst) begin
-      \$1066  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1067  = ch1_read_select_179;
-    if (bus__r_en) begin
-      \$1067  = \$407 ;
-    end
-    if (rst) begin
-      \$1067  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1068  = ch1_read_select_17a;
-    if (bus__r_en) begin
-      \$1068  = \$408 ;
-    end
-    if (rst) begin
-      \$1068  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1069  = ch1_read_select_17b;
-    if (bus__r_en) begin
-      \$1069  = \$409 ;
-    end
-    if (rst) begin
-      \$1069  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1070  = ch1_read_select_17c;
-    if (bus__r_en) begin
-      \$1070  = \$410 ;
-    end
-    if (rst) begin
-      \$1070  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1071  = ch1_read_select_17d;
-    if (bus__r_en) begin
-      \$1071  = \$411 ;
-    end
-    if (rst) begin
-      \$1071  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1072  = ch1_result_status_status_snapshot;
-    if (\$412 ) begin
-      \$1072  = \port$8270$0 [3:0];
-    end
-    if (rst) begin
-      \$1072  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1073  = ch1_result_status_cds_snapshot;
-    if (\$412 ) begin
-      \$1073  = \port$8270$0 [49];
-    end
-    if (rst) begin
-      \$1073  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1074  = ch1_result_status_w0_ne_snapshot;
-    if (\$412 ) begin
-      \$1074  = \port$8270$0 [131];
-    end
-    if (rst) begin
-      \$1074  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1075  = ch1_result_status_w0_nw_snapshot;
-    if (\$412 ) begin
-      \$1075  = \port$8270$0 [132];
-    end
-    if (rst) begin
-      \$1075  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1076  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$412 ) begin
-      \$1076  = \port$8270$0 [133];
-    end
-    if (rst) begin
-      \$1076  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1077  = ch1_result_status_w1_ne_snapshot;
-    if (\$412 ) begin
-      \$1077  = \port$8270$0 [174];
-    end
-    if (rst) begin
-      \$1077  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1078  = ch1_result_status_w1_nw_snapshot;
-    if (\$412 ) begin
-      \$1078  = \port$8270$0 [175];
-    end
-    if (rst) begin
-      \$1078  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1079  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$412 ) begin
-      \$1079  = \port$8270$0 [176];
-    end
-    if (rst) begin
-      \$1079  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1080  = ch1_result_status_lc_repeat_snapshot;
-    if (\$412 ) begin
-      \$1080  = \port$8270$0 [183];
-    end
-    if (rst) begin
-      \$1080  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1081  = ch1_result_status_lc_skip_snapshot;
-    if (\$412 ) begin
-      \$1081  = \port$8270$0 [184];
-    end
-    if (rst) begin
-      \$1081  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1082  = ch1_result_status_lc_zero_snapshot;
-    if (\$412 ) begin
-      \$1082  = \port$8270$0 [185];
-    end
-    if (rst) begin
-      \$1082  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1083  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$412 ) begin
-      \$1083  = \port$8270$0 [186];
-    end
-    if (rst) begin
-      \$1083  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1084  = ch1_result_status_lc_snapshot;
-    if (\$412 ) begin
-      \$1084  = \port$8270$0 [182:177];
-    end
-    if (rst) begin
-      \$1084  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1085  = ch1_result_seq_seq_snapshot;
-    if (\$412 ) begin
-      \$1085  = ch1__done_count;
-    end
-    if (rst) begin
-      \$1085  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1086  = ch1_result_seq_line_delay_snapshot;
-    if (\$412 ) begin
-      \$1086  = \port$8270$0 [48:36];
-    end
-    if (rst) begin
-      \$1086  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1087  = ch1_result_w0_lo_data_snapshot;
-    if (\$412 ) begin
-      \$1087  = \port$8270$0 [107:76];
-    end
-    if (rst) begin
-      \$1087  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1088  = ch1_result_w0_hi_data_snapshot;
-    if (\$412 ) begin
-      \$1088  = \port$8270$0 [130:108];
-    end
-    if (rst) begin
-      \$1088  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1089  = ch1_result_w1_lo_data_snapshot;
-    if (\$412 ) begin
-      \$1089  = \port$8270$0 [165:134];
-    end
-    if (rst) begin
-      \$1089  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1090  = ch1_result_w1_hi_data_snapshot;
-    if (\$412 ) begin
-      \$1090  = \port$8270$0 [173:166];
-    end
-    if (rst) begin
-      \$1090  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1091  = ch1_result_timestamp_time_snapshot;
-    if (\$412 ) begin
-      \$1091  = \port$8270$0 [35:4];
-    end
-    if (rst) begin
-      \$1091  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1092  = ch1_result_line_noise_events_snapshot;
-    if (\$412 ) begin
-      \$1092  = \port$8270$0 [53:50];
-    end
-    if (rst) begin
-      \$1092  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1093  = ch1_result_line_delay_settled_snapshot;
-    if (\$412 ) begin
-      \$1093  = \port$8270$0 [54];
-    end
-    if (rst) begin
-      \$1093  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1094  = ch1_result_line_delay_spread_snapshot;
-    if (\$412 ) begin
-      \$1094  = \port$8270$0 [75:68];
-    end
-    if (rst) begin
-      \$1094  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1095  = ch1_result_line_settled_delay_snapshot;
-    if (\$412 ) begin
-      \$1095  = \port$8270$0 [67:55];
-    end
-    if (rst) begin
-      \$1095  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1096  = ch1_window0_read;
-    if (bus__r_en) begin
-      \$1096  = \$414 ;
-    end
-    if (rst) begin
-      \$1096  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1097  = ch1_window1_read;
-    if (bus__r_en) begin
-      \$1097  = \$416 ;
-    end
-    if (rst) begin
-      \$1097  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1098  = ch1_window2_read;
-    if (bus__r_en) begin
-      \$1098  = ch1_config_read;
-    end
-    if (rst) begin
-      \$1098  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$1099  = ch1_read_data;
+    \$999  = ch1_read_data;
     if (bus__r_load) begin
-      \$1099  = \$530 ;
+      \$999  = \$470 ;
     end
     if (rst) begin
-      \$1099  = 32'd0;
+      \$999  = 32'd0;
     end
   end
   always @* begin
@@ -9419,27 +8926,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$7739$0 [3:0];
-  assign ch0__cds = \port$7739$0 [49];
-  assign ch0__word0_ne = \port$7739$0 [131];
-  assign ch0__word0_nw = \port$7739$0 [132];
-  assign ch0__word0_crc_ok = \port$7739$0 [133];
-  assign ch0__word1_ne = \port$7739$0 [174];
-  assign ch0__word1_nw = \port$7739$0 [175];
-  assign ch0__word1_crc_ok = \port$7739$0 [176];
-  assign ch0__lc_repeat = \port$7739$0 [183];
-  assign ch0__lc_skip = \port$7739$0 [184];
-  assign ch0__lc_zero = \port$7739$0 [185];
-  assign ch0__spw_mismatch = \port$7739$0 [186];
-  assign ch0__lc = \port$7739$0 [182:177];
-  assign ch0__line_delay = \port$7739$0 [48:36];
-  assign ch0__word0_position = \port$7739$0 [130:76];
-  assign ch0__word1_position = \port$7739$0 [173:134];
-  assign ch0__timestamp = \port$7739$0 [35:4];
-  assign ch0__noise_events = \port$7739$0 [53:50];
-  assign ch0__delay_settled = \port$7739$0 [54];
-  assign ch0__delay_spread = \port$7739$0 [75:68];
-  assign ch0__settled_delay = \port$7739$0 [67:55];
+  assign ch0__status = \port$7595$0 [3:0];
+  assign ch0__cds = \port$7595$0 [49];
+  assign ch0__word0_ne = \port$7595$0 [131];
+  assign ch0__word0_nw = \port$7595$0 [132];
+  assign ch0__word0_crc_ok = \port$7595$0 [133];
+  assign ch0__word1_ne = \port$7595$0 [174];
+  assign ch0__word1_nw = \port$7595$0 [175];
+  assign ch0__word1_crc_ok = \port$7595$0 [176];
+  assign ch0__lc_repeat = \port$7595$0 [183];
+  assign ch0__lc_skip = \port$7595$0 [184];
+  assign ch0__lc_zero = \port$7595$0 [185];
+  assign ch0__spw_mismatch = \port$7595$0 [186];
+  assign ch0__lc = \port$7595$0 [182:177];
+  assign ch0__line_delay = \port$7595$0 [48:36];
+  assign ch0__word0_position = \port$7595$0 [130:76];
+  assign ch0__word1_position = \port$7595$0 [173:134];
+  assign ch0__timestamp = \port$7595$0 [35:4];
+  assign ch0__noise_events = \port$7595$0 [53:50];
+  assign ch0__delay_settled = \port$7595$0 [54];
+  assign ch0__delay_spread = \port$7595$0 [75:68];
+  assign ch0__settled_delay = \port$7595$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9460,13 +8967,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$7827$0 [2:0];
-  assign ch0__ca_bytes_done = \port$7827$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$7750$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$7750$0 [31:16];
-  assign ch0__count_ca_refused = \port$7750$0 [47:32];
-  assign ch0__count_ca_aborted = \port$7750$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$7750$0 [79:64];
+  assign ch0__ca_status = \port$7683$0 [2:0];
+  assign ch0__ca_bytes_done = \port$7683$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$7606$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$7606$0 [31:16];
+  assign ch0__count_ca_refused = \port$7606$0 [47:32];
+  assign ch0__count_ca_aborted = \port$7606$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$7606$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9485,33 +8992,28 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch0__word7_ne = 1'h0;
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
-  assign ch0__word2_position = 64'h0000000000000000;
-  assign ch0__word3_position = 64'h0000000000000000;
-  assign ch0__word4_position = 64'h0000000000000000;
-  assign ch0__word5_position = 64'h0000000000000000;
-  assign ch0__word6_position = 64'h0000000000000000;
-  assign ch0__word7_position = 64'h0000000000000000;
-  assign ch1__status = \port$8270$0 [3:0];
-  assign ch1__cds = \port$8270$0 [49];
-  assign ch1__word0_ne = \port$8270$0 [131];
-  assign ch1__word0_nw = \port$8270$0 [132];
-  assign ch1__word0_crc_ok = \port$8270$0 [133];
-  assign ch1__word1_ne = \port$8270$0 [174];
-  assign ch1__word1_nw = \port$8270$0 [175];
-  assign ch1__word1_crc_ok = \port$8270$0 [176];
-  assign ch1__lc_repeat = \port$8270$0 [183];
-  assign ch1__lc_skip = \port$8270$0 [184];
-  assign ch1__lc_zero = \port$8270$0 [185];
-  assign ch1__spw_mismatch = \port$8270$0 [186];
-  assign ch1__lc = \port$8270$0 [182:177];
-  assign ch1__line_delay = \port$8270$0 [48:36];
-  assign ch1__word0_position = \port$8270$0 [130:76];
-  assign ch1__word1_position = \port$8270$0 [173:134];
-  assign ch1__timestamp = \port$8270$0 [35:4];
-  assign ch1__noise_events = \port$8270$0 [53:50];
-  assign ch1__delay_settled = \port$8270$0 [54];
-  assign ch1__delay_spread = \port$8270$0 [75:68];
-  assign ch1__settled_delay = \port$8270$0 [67:55];
+  assign ch0__chain_data = 32'd0;
+  assign ch1__status = \port$8126$0 [3:0];
+  assign ch1__cds = \port$8126$0 [49];
+  assign ch1__word0_ne = \port$8126$0 [131];
+  assign ch1__word0_nw = \port$8126$0 [132];
+  assign ch1__word0_crc_ok = \port$8126$0 [133];
+  assign ch1__word1_ne = \port$8126$0 [174];
+  assign ch1__word1_nw = \port$8126$0 [175];
+  assign ch1__word1_crc_ok = \port$8126$0 [176];
+  assign ch1__lc_repeat = \port$8126$0 [183];
+  assign ch1__lc_skip = \port$8126$0 [184];
+  assign ch1__lc_zero = \port$8126$0 [185];
+  assign ch1__spw_mismatch = \port$8126$0 [186];
+  assign ch1__lc = \port$8126$0 [182:177];
+  assign ch1__line_delay = \port$8126$0 [48:36];
+  assign ch1__word0_position = \port$8126$0 [130:76];
+  assign ch1__word1_position = \port$8126$0 [173:134];
+  assign ch1__timestamp = \port$8126$0 [35:4];
+  assign ch1__noise_events = \port$8126$0 [53:50];
+  assign ch1__delay_settled = \port$8126$0 [54];
+  assign ch1__delay_spread = \port$8126$0 [75:68];
+  assign ch1__settled_delay = \port$8126$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9532,13 +9034,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$8358$0 [2:0];
-  assign ch1__ca_bytes_done = \port$8358$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$8281$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$8281$0 [31:16];
-  assign ch1__count_ca_refused = \port$8281$0 [47:32];
-  assign ch1__count_ca_aborted = \port$8281$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$8281$0 [79:64];
+  assign ch1__ca_status = \port$8214$0 [2:0];
+  assign ch1__ca_bytes_done = \port$8214$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$8137$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$8137$0 [31:16];
+  assign ch1__count_ca_refused = \port$8137$0 [47:32];
+  assign ch1__count_ca_aborted = \port$8137$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$8137$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9557,14 +9059,10 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch1__word7_ne = 1'h0;
   assign ch1__word7_nw = 1'h0;
   assign ch1__word7_crc_ok = 1'h0;
-  assign ch1__word2_position = 64'h0000000000000000;
-  assign ch1__word3_position = 64'h0000000000000000;
-  assign ch1__word4_position = 64'h0000000000000000;
-  assign ch1__word5_position = 64'h0000000000000000;
-  assign ch1__word6_position = 64'h0000000000000000;
-  assign ch1__word7_position = 64'h0000000000000000;
+  assign ch1__chain_data = 32'd0;
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__r_addr[2:0];
+  assign ch0__chain_addr = bus__r_addr[3:0];
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
   assign ch0__clear_counters = ch0_ctrl_clear_counters;
@@ -9683,10 +9181,11 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
   assign ch0__ca_rbuf_addr = bus__r_addr[3:0];
-  assign wr__addr = { \$612 , \$611 , \$610 , \$609  };
+  assign wr__addr = { \$543 , \$542 , \$541 , \$540  };
   assign wr__data = config_memory0_write_data;
   assign rd__addr = ch0_config_read_index;
   assign ch1__count_addr = bus__r_addr[2:0];
+  assign ch1__chain_addr = bus__r_addr[3:0];
   assign ch1__start = ch1_ctrl_start;
   assign ch1__abort_cycle = ch1_ctrl_abort;
   assign ch1__clear_counters = ch1_ctrl_clear_counters;
@@ -9800,180 +9299,136 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$446 ;
+  assign ch1__ca_write = \ch1_ca_request_write$430 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
   assign ch1__ca_wbuf_data = write_data;
   assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
-  assign \wr__addr$940  = { \$713 , \$712 , \$711 , \$710  };
-  assign \wr__data$941  = config_memory0_write_data;
-  assign \rd__addr$943  = ch1_config_read_index;
+  assign \wr__addr$888  = { \$635 , \$634 , \$633 , \$632  };
+  assign \wr__data$889  = config_memory0_write_data;
+  assign \rd__addr$891  = ch1_config_read_index;
   assign irq = { ch1_irq, ch0_irq };
   assign ch0__ca_wbuf_addr = write_addr[3:0];
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$632  = \$631 ;
-  assign \$634  = \$633 ;
-  assign \$636  = \$635 ;
-  assign \$733  = \$732 ;
-  assign \$735  = \$734 ;
-  assign \$737  = \$736 ;
-  assign \$164  = \$163 ;
-  assign \$171  = 32'd0;
-  assign \$172  = \$170 ;
-  assign \$173  = 32'd0;
-  assign \$174  = \$170 ;
+  assign \$563  = \$562 ;
+  assign \$565  = \$564 ;
+  assign \$567  = \$566 ;
+  assign \$655  = \$654 ;
+  assign \$657  = \$656 ;
+  assign \$659  = \$658 ;
+  assign \$156  = \$155 ;
+  assign \$163  = 32'd0;
+  assign \$164  = \$162 ;
+  assign \$165  = 32'd0;
+  assign \$166  = \$162 ;
+  assign \$183  = 32'd0;
+  assign \$184  = \$182 ;
+  assign \$185  = 32'd0;
+  assign \$186  = \$182 ;
+  assign \$187  = 32'd0;
+  assign \$188  = \$182 ;
+  assign \$189  = 32'd0;
+  assign \$190  = \$182 ;
   assign \$191  = 32'd0;
-  assign \$192  = \$190 ;
+  assign \$192  = \$182 ;
   assign \$193  = 32'd0;
-  assign \$194  = \$190 ;
+  assign \$194  = \$182 ;
   assign \$195  = 32'd0;
-  assign \$196  = \$190 ;
+  assign \$196  = \$182 ;
   assign \$197  = 32'd0;
-  assign \$198  = \$190 ;
+  assign \$198  = \$182 ;
   assign \$199  = 32'd0;
-  assign \$200  = \$190 ;
+  assign \$200  = \$182 ;
   assign \$201  = 32'd0;
-  assign \$202  = \$190 ;
+  assign \$202  = \$182 ;
   assign \$203  = 32'd0;
-  assign \$204  = \$190 ;
+  assign \$204  = \$182 ;
   assign \$205  = 32'd0;
-  assign \$206  = \$190 ;
+  assign \$206  = \$182 ;
   assign \$207  = 32'd0;
-  assign \$208  = \$190 ;
+  assign \$208  = \$182 ;
   assign \$209  = 32'd0;
-  assign \$210  = \$190 ;
+  assign \$210  = \$182 ;
   assign \$211  = 32'd0;
-  assign \$212  = \$190 ;
+  assign \$212  = \$182 ;
   assign \$213  = 32'd0;
-  assign \$214  = \$190 ;
+  assign \$214  = \$182 ;
   assign \$215  = 32'd0;
-  assign \$216  = \$190 ;
+  assign \$216  = \$182 ;
   assign \$217  = 32'd0;
-  assign \$218  = \$190 ;
+  assign \$218  = \$182 ;
   assign \$219  = 32'd0;
-  assign \$220  = \$190 ;
+  assign \$220  = \$182 ;
   assign \$221  = 32'd0;
-  assign \$222  = \$190 ;
+  assign \$222  = \$182 ;
   assign \$223  = 32'd0;
-  assign \$224  = \$190 ;
+  assign \$224  = \$182 ;
   assign \$225  = 32'd0;
-  assign \$226  = \$190 ;
-  assign \$227  = 32'd0;
-  assign \$228  = \$190 ;
-  assign \$229  = 32'd0;
-  assign \$230  = \$190 ;
-  assign \$231  = 32'd0;
-  assign \$232  = \$190 ;
-  assign \$233  = 32'd0;
-  assign \$234  = \$190 ;
-  assign \$245  = 32'd0;
-  assign \$246  = \$244 ;
-  assign \$247  = 32'd0;
-  assign \$248  = \$244 ;
-  assign \$249  = 32'd0;
-  assign \$250  = \$244 ;
-  assign \$251  = 32'd0;
-  assign \$252  = \$244 ;
-  assign \$253  = 32'd0;
-  assign \$254  = \$244 ;
-  assign \$255  = 32'd0;
-  assign \$256  = \$244 ;
-  assign \$257  = 32'd0;
-  assign \$258  = \$244 ;
-  assign \$259  = 32'd0;
-  assign \$260  = \$244 ;
-  assign \$261  = 32'd0;
-  assign \$262  = \$244 ;
-  assign \$263  = 32'd0;
-  assign \$264  = \$244 ;
-  assign \$265  = 32'd0;
-  assign \$266  = \$244 ;
-  assign \$267  = 32'd0;
-  assign \$268  = \$244 ;
-  assign \$269  = 32'd0;
-  assign \$270  = \$244 ;
-  assign ch0_config_read_data = \$630 ;
-  assign \$418  = \$417 ;
+  assign \$226  = \$182 ;
+  assign \$235  = 32'd0;
+  assign \$236  = \$234 ;
+  assign \$241  = 32'd0;
+  assign \$242  = \$240 ;
+  assign ch0_config_read_data = \$561 ;
+  assign \$380  = \$379 ;
+  assign \$387  = 32'd0;
+  assign \$388  = \$386 ;
+  assign \$389  = 32'd0;
+  assign \$390  = \$386 ;
+  assign \$407  = 32'd0;
+  assign \$408  = \$406 ;
+  assign \$409  = 32'd0;
+  assign \$410  = \$406 ;
+  assign \$411  = 32'd0;
+  assign \$412  = \$406 ;
+  assign \$413  = 32'd0;
+  assign \$414  = \$406 ;
+  assign \$415  = 32'd0;
+  assign \$416  = \$406 ;
+  assign \$417  = 32'd0;
+  assign \$418  = \$406 ;
+  assign \$419  = 32'd0;
+  assign \$420  = \$406 ;
+  assign \$421  = 32'd0;
+  assign \$422  = \$406 ;
+  assign \$423  = 32'd0;
+  assign \$424  = \$406 ;
   assign \$425  = 32'd0;
-  assign \$426  = \$424 ;
+  assign \$426  = \$406 ;
   assign \$427  = 32'd0;
-  assign \$428  = \$424 ;
+  assign \$428  = \$406 ;
+  assign \$429  = 32'd0;
+  assign \$430  = \$406 ;
+  assign \$431  = 32'd0;
+  assign \$432  = \$406 ;
+  assign \$433  = 32'd0;
+  assign \$434  = \$406 ;
+  assign \$435  = 32'd0;
+  assign \$436  = \$406 ;
+  assign \$437  = 32'd0;
+  assign \$438  = \$406 ;
+  assign \$439  = 32'd0;
+  assign \$440  = \$406 ;
+  assign \$441  = 32'd0;
+  assign \$442  = \$406 ;
+  assign \$443  = 32'd0;
+  assign \$444  = \$406 ;
   assign \$445  = 32'd0;
-  assign \$446  = \$444 ;
+  assign \$446  = \$406 ;
   assign \$447  = 32'd0;
-  assign \$448  = \$444 ;
+  assign \$448  = \$406 ;
   assign \$449  = 32'd0;
-  assign \$450  = \$444 ;
-  assign \$451  = 32'd0;
-  assign \$452  = \$444 ;
-  assign \$453  = 32'd0;
-  assign \$454  = \$444 ;
-  assign \$455  = 32'd0;
-  assign \$456  = \$444 ;
-  assign \$457  = 32'd0;
-  assign \$458  = \$444 ;
+  assign \$450  = \$406 ;
   assign \$459  = 32'd0;
-  assign \$460  = \$444 ;
-  assign \$461  = 32'd0;
-  assign \$462  = \$444 ;
-  assign \$463  = 32'd0;
-  assign \$464  = \$444 ;
+  assign \$460  = \$458 ;
   assign \$465  = 32'd0;
-  assign \$466  = \$444 ;
-  assign \$467  = 32'd0;
-  assign \$468  = \$444 ;
-  assign \$469  = 32'd0;
-  assign \$470  = \$444 ;
-  assign \$471  = 32'd0;
-  assign \$472  = \$444 ;
-  assign \$473  = 32'd0;
-  assign \$474  = \$444 ;
-  assign \$475  = 32'd0;
-  assign \$476  = \$444 ;
-  assign \$477  = 32'd0;
-  assign \$478  = \$444 ;
-  assign \$479  = 32'd0;
-  assign \$480  = \$444 ;
-  assign \$481  = 32'd0;
-  assign \$482  = \$444 ;
-  assign \$483  = 32'd0;
-  assign \$484  = \$444 ;
-  assign \$485  = 32'd0;
-  assign \$486  = \$444 ;
-  assign \$487  = 32'd0;
-  assign \$488  = \$444 ;
-  assign \$499  = 32'd0;
-  assign \$500  = \$498 ;
-  assign \$501  = 32'd0;
-  assign \$502  = \$498 ;
-  assign \$503  = 32'd0;
-  assign \$504  = \$498 ;
-  assign \$505  = 32'd0;
-  assign \$506  = \$498 ;
-  assign \$507  = 32'd0;
-  assign \$508  = \$498 ;
-  assign \$509  = 32'd0;
-  assign \$510  = \$498 ;
-  assign \$511  = 32'd0;
-  assign \$512  = \$498 ;
-  assign \$513  = 32'd0;
-  assign \$514  = \$498 ;
-  assign \$515  = 32'd0;
-  assign \$516  = \$498 ;
-  assign \$517  = 32'd0;
-  assign \$518  = \$498 ;
-  assign \$519  = 32'd0;
-  assign \$520  = \$498 ;
-  assign \$521  = 32'd0;
-  assign \$522  = \$498 ;
-  assign \$523  = 32'd0;
-  assign \$524  = \$498 ;
-  assign ch1_config_read_data = \$731 ;
+  assign \$466  = \$464 ;
+  assign ch1_config_read_data = \$653 ;
   assign g_irq = 1'h0;
-  assign \$738  = g_read_data;
+  assign \$660  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -12128,7 +11583,7 @@ endmodule
 module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7739$0 , \port$7750$0 , regs__ca_done, \port$7827$0 , slo);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7595$0 , \port$7606$0 , regs__ca_done, \port$7683$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -12312,12 +11767,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7739$0 ;
-  wire [186:0] \port$7739$0 ;
-  output [79:0] \port$7750$0 ;
-  wire [79:0] \port$7750$0 ;
-  output [9:0] \port$7827$0 ;
-  wire [9:0] \port$7827$0 ;
+  output [186:0] \port$7595$0 ;
+  wire [186:0] \port$7595$0 ;
+  output [79:0] \port$7606$0 ;
+  wire [79:0] \port$7606$0 ;
+  output [9:0] \port$7683$0 ;
+  wire [9:0] \port$7683$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -12806,9 +12261,9 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$7739$0  = \$20 ;
-  assign \port$7750$0  = \$21 ;
-  assign \port$7827$0  = \$22 ;
+  assign \port$7595$0  = \$20 ;
+  assign \port$7606$0  = \$21 ;
+  assign \port$7683$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -13885,7 +13340,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7396$272 (cycle[274:272]),
+    .\port$7252$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -13945,7 +13400,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$7396$199 (cycle[199]),
+    .\port$7252$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -13996,7 +13451,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7396$259 (cycle[271:259]),
+    .\port$7252$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -14020,7 +13475,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7384$0 (\bit ),
+    .\port$7240$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -14088,7 +13543,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$3315$0 (\$28 ),
+    .\port$3215$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -18172,7 +17627,7 @@ module \biss_master_uart.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$7396$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$7252$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
@@ -18865,8 +18320,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7396$272 ;
-  wire [2:0] \port$7396$272 ;
+  input [2:0] \port$7252$272 ;
+  wire [2:0] \port$7252$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -19152,7 +18607,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$7396$272 [0];
+  assign error_bit = ssi & \port$7252$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -19206,7 +18661,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$7396$272 [2];
+  assign \$48  = ssi & \port$7252$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -19493,15 +18948,15 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$7396$272 [0];
+  assign \$335  = ssi & \port$7252$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$7396$272 [0];
-  assign \$343  = ~ \port$7396$272 [1];
+  assign \$342  = ssi & \port$7252$272 [0];
+  assign \$343  = ~ \port$7252$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -20133,7 +19588,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$7396$272 [0];
+  assign ssi_error = \port$7252$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -20142,8 +19597,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$7396$272 [2];
-  assign ssi_error_low = \port$7396$272 [1];
+  assign ssi_double = \port$7252$272 [2];
+  assign ssi_error_low = \port$7252$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -21800,7 +21255,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$7396$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$7252$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -21852,8 +21307,8 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$7396$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$7396$199 ;
-  wire \port$7396$199 ;
+  input \port$7252$199 ;
+  wire \port$7252$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -21907,7 +21362,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$7396$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$7396$199  ? word1_len : 8'h00;
+  assign \$11  = \port$7252$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -22017,7 +21472,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$7396$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$7396$199 , 1'h1 };
+  assign enables = { \port$7252$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -24158,7 +23613,7 @@ module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7396$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7252$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -24292,8 +23747,8 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7396$259 ;
-  wire [12:0] \port$7396$259 ;
+  input [12:0] \port$7252$259 ;
+  wire [12:0] \port$7252$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -24318,7 +23773,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7396$259 [12:1] + 1'h1;
+  assign \$11  = \port$7252$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -24443,7 +23898,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7396$259 [0]),
+    .clear_high(\port$7252$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -24586,7 +24041,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7396$259 [0]) begin
+            if (\port$7252$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -24671,7 +24126,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7396$259 [0]) begin
+            if (\port$7252$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -24710,7 +24165,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7396$259 [12:1] };
+            \$85  = { 1'h0, \port$7252$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -25095,11 +24550,11 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7396$259 [12:1] };
-  assign fixed = \port$7396$259 [0];
+  assign fixed_delay = { 1'h0, \port$7252$259 [12:1] };
+  assign fixed = \port$7252$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7396$259 [0];
+  assign clear_high = \port$7252$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -25506,7 +24961,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$7384$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$7240$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -25548,8 +25003,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7384$0 ;
-  wire \port$7384$0 ;
+  input \port$7240$0 ;
+  wire \port$7240$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -25563,9 +25018,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7384$0  };
-  assign \$2  = { lc[4:0], \port$7384$0  } == last;
-  assign \$3  = { lc[4:0], \port$7384$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7240$0  };
+  assign \$2  = { lc[4:0], \port$7240$0  } == last;
+  assign \$3  = { lc[4:0], \port$7240$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -25675,7 +25130,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7384$0  };
+  assign lc_next = { lc[4:0], \port$7240$0  };
   assign zero = is_zero;
 endmodule
 
@@ -26239,7 +25694,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$3315$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$3215$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
@@ -26417,8 +25872,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$3315$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$3315$0 ;
-  wire \port$3315$0 ;
+  output \port$3215$0 ;
+  wire \port$3215$0 ;
   output report;
   wire report;
   input report_frame;
@@ -26536,7 +25991,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$3315$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3315$0  = \$2 ;
+  assign \port$3215$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -26593,7 +26048,7 @@ endmodule
 module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$8270$0 , \port$8281$0 , regs__ca_done, \port$8358$0 , slo);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$8126$0 , \port$8137$0 , regs__ca_done, \port$8214$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -26777,12 +26232,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$8270$0 ;
-  wire [186:0] \port$8270$0 ;
-  output [79:0] \port$8281$0 ;
-  wire [79:0] \port$8281$0 ;
-  output [9:0] \port$8358$0 ;
-  wire [9:0] \port$8358$0 ;
+  output [186:0] \port$8126$0 ;
+  wire [186:0] \port$8126$0 ;
+  output [79:0] \port$8137$0 ;
+  wire [79:0] \port$8137$0 ;
+  output [9:0] \port$8214$0 ;
+  wire [9:0] \port$8214$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -27271,9 +26726,9 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$8270$0  = \$20 ;
-  assign \port$8281$0  = \$21 ;
-  assign \port$8358$0  = \$22 ;
+  assign \port$8126$0  = \$20 ;
+  assign \port$8137$0  = \$21 ;
+  assign \port$8214$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -28350,7 +27805,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7927$272 (cycle[274:272]),
+    .\port$7783$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -28410,7 +27865,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$7927$199 (cycle[199]),
+    .\port$7783$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -28461,7 +27916,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7927$259 (cycle[271:259]),
+    .\port$7783$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -28485,7 +27940,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7915$0 (\bit ),
+    .\port$7771$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -28553,7 +28008,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5728$0 (\$28 ),
+    .\port$5628$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -32637,7 +32092,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$7927$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$7783$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
@@ -33330,8 +32785,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7927$272 ;
-  wire [2:0] \port$7927$272 ;
+  input [2:0] \port$7783$272 ;
+  wire [2:0] \port$7783$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -33617,7 +33072,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$7927$272 [0];
+  assign error_bit = ssi & \port$7783$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -33671,7 +33126,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$7927$272 [2];
+  assign \$48  = ssi & \port$7783$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -33958,15 +33413,15 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$7927$272 [0];
+  assign \$335  = ssi & \port$7783$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$7927$272 [0];
-  assign \$343  = ~ \port$7927$272 [1];
+  assign \$342  = ssi & \port$7783$272 [0];
+  assign \$343  = ~ \port$7783$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -34598,7 +34053,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$7927$272 [0];
+  assign ssi_error = \port$7783$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -34607,8 +34062,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$7927$272 [2];
-  assign ssi_error_low = \port$7927$272 [1];
+  assign ssi_double = \port$7783$272 [2];
+  assign ssi_error_low = \port$7783$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -36265,7 +35720,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$7927$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$7783$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -36317,8 +35772,8 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$7927$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$7927$199 ;
-  wire \port$7927$199 ;
+  input \port$7783$199 ;
+  wire \port$7783$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -36372,7 +35827,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$7927$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$7927$199  ? word1_len : 8'h00;
+  assign \$11  = \port$7783$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -36482,7 +35937,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$7927$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$7927$199 , 1'h1 };
+  assign enables = { \port$7783$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -38623,7 +38078,7 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7927$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7783$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -38757,8 +38212,8 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7927$259 ;
-  wire [12:0] \port$7927$259 ;
+  input [12:0] \port$7783$259 ;
+  wire [12:0] \port$7783$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -38783,7 +38238,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7927$259 [12:1] + 1'h1;
+  assign \$11  = \port$7783$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -38908,7 +38363,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7927$259 [0]),
+    .clear_high(\port$7783$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -39051,7 +38506,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7927$259 [0]) begin
+            if (\port$7783$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -39136,7 +38591,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7927$259 [0]) begin
+            if (\port$7783$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -39175,7 +38630,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7927$259 [12:1] };
+            \$85  = { 1'h0, \port$7783$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -39560,11 +39015,11 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7927$259 [12:1] };
-  assign fixed = \port$7927$259 [0];
+  assign fixed_delay = { 1'h0, \port$7783$259 [12:1] };
+  assign fixed = \port$7783$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7927$259 [0];
+  assign clear_high = \port$7783$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -39971,7 +39426,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7915$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7771$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -40013,8 +39468,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7915$0 ;
-  wire \port$7915$0 ;
+  input \port$7771$0 ;
+  wire \port$7771$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -40028,9 +39483,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7915$0  };
-  assign \$2  = { lc[4:0], \port$7915$0  } == last;
-  assign \$3  = { lc[4:0], \port$7915$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7771$0  };
+  assign \$2  = { lc[4:0], \port$7771$0  } == last;
+  assign \$3  = { lc[4:0], \port$7771$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -40140,7 +39595,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7915$0  };
+  assign lc_next = { lc[4:0], \port$7771$0  };
   assign zero = is_zero;
 endmodule
 
@@ -40704,7 +40159,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5728$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5628$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire \$1 ;
@@ -40882,8 +40337,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5728$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$5728$0 ;
-  wire \port$5728$0 ;
+  output \port$5628$0 ;
+  wire \port$5628$0 ;
   output report;
   wire report;
   input report_frame;
@@ -41001,7 +40456,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5728$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5728$0  = \$2 ;
+  assign \port$5628$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

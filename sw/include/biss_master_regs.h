@@ -988,11 +988,77 @@ typedef struct __attribute__ ((__packed__)) {
     uint32_t rbuf[16];
 } biss_master_regs__channelx__ca_t;
 
-// reg - biss_master_regs.channel[].chain.updates
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__UPDATES__UPDATES_bm 0xffff
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__UPDATES__UPDATES_bp 0
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__UPDATES__UPDATES_bw 16
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__UPDATES__UPDATES_reset 0x0
+// reg - biss_master_regs.channel[].chain.w2_lo
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_LO__DATA_bm 0xffffffff
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_LO__DATA_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_LO__DATA_bw 32
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_LO__DATA_reset 0x0
+
+// reg - biss_master_regs.channel[].chain.w2_hi
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_HI__DATA_bm 0xffffffff
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_HI__DATA_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_HI__DATA_bw 32
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_HI__DATA_reset 0x0
+
+// reg - biss_master_regs.channel[].chain.w3_lo
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_LO__DATA_bm 0xffffffff
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_LO__DATA_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_LO__DATA_bw 32
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_LO__DATA_reset 0x0
+
+// reg - biss_master_regs.channel[].chain.w3_hi
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_HI__DATA_bm 0xffffffff
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_HI__DATA_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_HI__DATA_bw 32
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_HI__DATA_reset 0x0
+
+// reg - biss_master_regs.channel[].chain.w4_lo
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_LO__DATA_bm 0xffffffff
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_LO__DATA_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_LO__DATA_bw 32
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_LO__DATA_reset 0x0
+
+// reg - biss_master_regs.channel[].chain.w4_hi
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_HI__DATA_bm 0xffffffff
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_HI__DATA_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_HI__DATA_bw 32
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_HI__DATA_reset 0x0
+
+// reg - biss_master_regs.channel[].chain.w5_lo
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_LO__DATA_bm 0xffffffff
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_LO__DATA_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_LO__DATA_bw 32
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_LO__DATA_reset 0x0
+
+// reg - biss_master_regs.channel[].chain.w5_hi
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_HI__DATA_bm 0xffffffff
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_HI__DATA_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_HI__DATA_bw 32
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_HI__DATA_reset 0x0
+
+// reg - biss_master_regs.channel[].chain.w6_lo
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_LO__DATA_bm 0xffffffff
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_LO__DATA_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_LO__DATA_bw 32
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_LO__DATA_reset 0x0
+
+// reg - biss_master_regs.channel[].chain.w6_hi
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_HI__DATA_bm 0xffffffff
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_HI__DATA_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_HI__DATA_bw 32
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_HI__DATA_reset 0x0
+
+// reg - biss_master_regs.channel[].chain.w7_lo
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_LO__DATA_bm 0xffffffff
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_LO__DATA_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_LO__DATA_bw 32
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_LO__DATA_reset 0x0
+
+// reg - biss_master_regs.channel[].chain.w7_hi
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_HI__DATA_bm 0xffffffff
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_HI__DATA_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_HI__DATA_bw 32
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_HI__DATA_reset 0x0
 
 // reg - biss_master_regs.channel[].chain.flags
 #define BISS_MASTER_REGS__CHANNELX__CHAIN__FLAGS__W2_NE_bm 0x1
@@ -1068,82 +1134,14 @@ typedef struct __attribute__ ((__packed__)) {
 #define BISS_MASTER_REGS__CHANNELX__CHAIN__FLAGS__W7_CRC_OK_bw 1
 #define BISS_MASTER_REGS__CHANNELX__CHAIN__FLAGS__W7_CRC_OK_reset 0x0
 
-// reg - biss_master_regs.channel[].chain.w2_lo
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_LO__DATA_bm 0xffffffff
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_LO__DATA_bp 0
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_LO__DATA_bw 32
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_LO__DATA_reset 0x0
-
-// reg - biss_master_regs.channel[].chain.w2_hi
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_HI__DATA_bm 0xffffffff
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_HI__DATA_bp 0
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_HI__DATA_bw 32
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W2_HI__DATA_reset 0x0
-
-// reg - biss_master_regs.channel[].chain.w3_lo
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_LO__DATA_bm 0xffffffff
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_LO__DATA_bp 0
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_LO__DATA_bw 32
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_LO__DATA_reset 0x0
-
-// reg - biss_master_regs.channel[].chain.w3_hi
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_HI__DATA_bm 0xffffffff
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_HI__DATA_bp 0
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_HI__DATA_bw 32
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W3_HI__DATA_reset 0x0
-
-// reg - biss_master_regs.channel[].chain.w4_lo
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_LO__DATA_bm 0xffffffff
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_LO__DATA_bp 0
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_LO__DATA_bw 32
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_LO__DATA_reset 0x0
-
-// reg - biss_master_regs.channel[].chain.w4_hi
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_HI__DATA_bm 0xffffffff
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_HI__DATA_bp 0
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_HI__DATA_bw 32
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W4_HI__DATA_reset 0x0
-
-// reg - biss_master_regs.channel[].chain.w5_lo
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_LO__DATA_bm 0xffffffff
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_LO__DATA_bp 0
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_LO__DATA_bw 32
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_LO__DATA_reset 0x0
-
-// reg - biss_master_regs.channel[].chain.w5_hi
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_HI__DATA_bm 0xffffffff
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_HI__DATA_bp 0
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_HI__DATA_bw 32
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W5_HI__DATA_reset 0x0
-
-// reg - biss_master_regs.channel[].chain.w6_lo
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_LO__DATA_bm 0xffffffff
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_LO__DATA_bp 0
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_LO__DATA_bw 32
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_LO__DATA_reset 0x0
-
-// reg - biss_master_regs.channel[].chain.w6_hi
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_HI__DATA_bm 0xffffffff
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_HI__DATA_bp 0
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_HI__DATA_bw 32
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W6_HI__DATA_reset 0x0
-
-// reg - biss_master_regs.channel[].chain.w7_lo
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_LO__DATA_bm 0xffffffff
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_LO__DATA_bp 0
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_LO__DATA_bw 32
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_LO__DATA_reset 0x0
-
-// reg - biss_master_regs.channel[].chain.w7_hi
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_HI__DATA_bm 0xffffffff
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_HI__DATA_bp 0
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_HI__DATA_bw 32
-#define BISS_MASTER_REGS__CHANNELX__CHAIN__W7_HI__DATA_reset 0x0
+// reg - biss_master_regs.channel[].chain.updates
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__UPDATES__UPDATES_bm 0xffff
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__UPDATES__UPDATES_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__UPDATES__UPDATES_bw 16
+#define BISS_MASTER_REGS__CHANNELX__CHAIN__UPDATES__UPDATES_reset 0x0
 
 // regfile - biss_master_regs.channel[].chain
 typedef struct __attribute__ ((__packed__)) {
-    uint32_t updates;
-    uint32_t flags;
     uint32_t w2_lo;
     uint32_t w2_hi;
     uint32_t w3_lo;
@@ -1156,6 +1154,8 @@ typedef struct __attribute__ ((__packed__)) {
     uint32_t w6_hi;
     uint32_t w7_lo;
     uint32_t w7_hi;
+    uint32_t flags;
+    uint32_t updates;
 } biss_master_regs__channelx__chain_t;
 
 // regfile - biss_master_regs.channel[]

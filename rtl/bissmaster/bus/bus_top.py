@@ -66,9 +66,11 @@ CHANNEL_GLUE = ("trigger_enable", "frame_done", "frame_error", "done_count", "re
                 *(f"cap_data_bits_w{w}" for w in range(MAX_WORDS)), "cap_words",
                 "cap_timer_width", "cap_counters", "cap_timestamp", "cap_register_access",
                 "cap_ssi")
-#: A core with every port the register map can name: eight words, counters in memory.
+#: A core with every port the register map can name: eight words, counters and chain words
+#: in memory.
 FULL_PARAMS = MasterParams(max_data_bits=(DATA_BITS_MAX,) * MAX_WORDS,
-                           word_crcs=((Crc.CRC6, Crc.CRC16),) * MAX_WORDS, counter_ram=True)
+                           word_crcs=((Crc.CRC6, Crc.CRC16),) * MAX_WORDS, counter_ram=True,
+                           chain_memory=True)
 #: Pulses of the bank taken into a flip-flop beside the core, so they reach it one clock
 #: later: the bank's pulse register sits by the bank, and with several channels the route from
 #: ``ctrl.abort``'s into a core's controller and timers was the critical path
@@ -122,8 +124,9 @@ class BusChannel(wiring.Component):
     ----------
     params : MasterParams
         The core's; a core with counters is built with ``counter_ram`` (the map reads the
-        counters from its memory), and one with a timestamp with ``time_input`` (the top's
-        one time base), whatever ``params`` says.
+        counters from its memory), every core with ``chain_memory`` (the map reads words 2..7
+        from its chain memory; no change in a build of one or two words), and one with a
+        timestamp with ``time_input`` (the top's one time base), whatever ``params`` says.
     regs : wiring.Signature
         The bank's channel block (:func:`~bissmaster.bus.register_bank.block_signature`).
 
@@ -148,6 +151,8 @@ class BusChannel(wiring.Component):
                                  f"counter_width is {params.counter_width}")
             # The map reads the data channel's counters from the core's counter memory.
             params = replace(params, counter_ram=True)
+        # The map reads words 2..7 from the core's chain memory (none in a two-word build).
+        params = replace(params, chain_memory=True)
         if params.timestamped:
             # One time base for every channel (BusTop's `time_now`), not a counter per core.
             params = replace(params, time_input=True)

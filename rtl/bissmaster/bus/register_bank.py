@@ -214,7 +214,7 @@ class RegisterBank(wiring.Component):
         groups = {}                    # group -> the copies' assignments
         take = {}                      # group -> the word address of its first register
         for name, (offset, count) in self.regmap.memories(registers).items():
-            self._read_window(m, port, name, (base + offset) // 4, count, windows)
+            self._read_window(m, port, name, (base + offset) // 4, count, windows, memory=True)
         for reg in registers:
             word = (base + reg.offset) // 4
             if reg.window:
@@ -458,13 +458,17 @@ class RegisterBank(wiring.Component):
         m.d.comb += [ports["addr"].eq(self._w_addr[:bits]), ports["data"].eq(self._w_data),
                      ports["en"].eq(Mux(hit, self._w_strb, 0))]
 
-    def _read_window(self, m, port, name, word, count, windows):
+    def _read_window(self, m, port, name, word, count, windows, memory=False):
         """A read window (or a memory's registers) of ``count`` words from word ``word``: the
-        bus's word address inside it and its read enable; its data joins ``windows``."""
+        bus's word address inside it and its read enable; its data joins ``windows``. A
+        memory's registers may be fewer than the power of two they are aligned to (the
+        chain words: 12 of 16): the words above them are not the memory's."""
         bus = self.bus
-        bits = self._window_bits(name, word, count)
+        bits = self._window_bits(name, word, 1 << (count - 1).bit_length() if memory else count)
         ports = {p[len(name) + 1:]: getattr(port, p) for p in window_ports(name, count, False)}
         hit = bus.r_en & (bus.r_addr[bits:] == word >> bits)
+        if count != 1 << bits:
+            hit &= bus.r_addr[:bits] < count
         m.d.comb += [ports["addr"].eq(bus.r_addr[:bits]), ports["en"].eq(hit)]
         windows.append((hit, ports["data"]))
 

@@ -100,8 +100,8 @@ class RegisterMap:
     @staticmethod
     def memories(registers):
         """``{memory: (byte offset of its first word, words)}`` of the memory registers of
-        ``registers``; a memory's words are adjacent, a power of two of them, aligned to their
-        size."""
+        ``registers``; a memory's words are adjacent, its first aligned to the power of two
+        that holds them (its word address is then the bus address's low bits)."""
         found = {}
         for reg in registers:
             if reg.memory:
@@ -110,9 +110,10 @@ class RegisterMap:
         for name, offsets in found.items():
             first, count = min(offsets), len(offsets)
             if (sorted(offsets) != list(range(first, first + 4 * count, 4))
-                    or count & (count - 1) or (first // 4) % count):
-                raise ValueError(f"memory {name}: its registers must be adjacent words, a power "
-                                 f"of two of them, aligned to their size (offsets {offsets})")
+                    or (first // 4) % (1 << (count - 1).bit_length())):
+                raise ValueError(f"memory {name}: its registers must be adjacent words, the "
+                                 f"first aligned to the power of two that holds them "
+                                 f"(offsets {offsets})")
             out[name] = (first, count)
         return out
 

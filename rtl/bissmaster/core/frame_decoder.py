@@ -5,7 +5,9 @@ from amaranth.hdl import *
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, SLOT_WIDTH, WORD_INDEX_WIDTH, word_config
+from ..params import (CHAIN_FIRST_WORD, CRC_MAX_WIDTH, CRC_SETTINGS, SLOT_WIDTH,
+                      WORD_INDEX_WIDTH, word_config)
+from .chain_results import CHAIN_INDEX_BITS
 from .crc_engine import CrcEngine
 from .field_ends import FieldEnds
 from .ssi_copy import SsiCopyCompare
@@ -52,6 +54,10 @@ class FrameDecoder(wiring.Component):
     def __init__(self, params):
         self._params = params
         words = params.words
+        # Words with a data register of their own: every word, or with the chain memory
+        # words 0 and 1 (the chain's words share one register, ``chain_data``).
+        self._own_words = range(CHAIN_FIRST_WORD if params.chain_words_in_memory else words)
+        self._chain_bits = max(params.max_data_bits[CHAIN_FIRST_WORD:], default=0)
         super().__init__({
             "sample": In(1),
             "bit": In(1),
@@ -63,7 +69,10 @@ class FrameDecoder(wiring.Component):
             "slots": Out(SLOT_WIDTH),                # slots sampled so far (saturating)
             "slots_full": Out(1),            # slots saturated (registered)
             "cds": Out(1),
-            **{f"data{w}": Out(params.max_data_bits[w]) for w in range(words)},
+            **{f"data{w}": Out(params.max_data_bits[w]) for w in self._own_words},
+            **({"chain_data": Out(self._chain_bits), "chain_end": Out(1),
+                "chain_index": Out(CHAIN_INDEX_BITS)}
+               if params.chain_words_in_memory else {}),
             "ne": Out(words),
             "nw": Out(words),
             "lc": Out(protocol.LC_BITS),
@@ -218,7 +227,7 @@ class FrameDecoder(wiring.Component):
         # (MSB first), which is the register's bit 0 (0 before the first: the decoder is reset
         # between cycles). The CRC engine gets the bits as sent.
         decoded = []
-        for w in range(p.words):
+        for w in self._own_words:
             data_w = getattr(self, f"data{w}")
             decoded.append(self.bit ^ (self.words[w].gray & data_w[0]))
         # A signed word's first bit (its sign, the binary MSB) fills the whole register; each
@@ -227,12 +236,14 @@ class FrameDecoder(wiring.Component):
         first_bit = idx == 0
         for w in range(p.words):
             this_word = in_word & (word == w)
-            data_w = getattr(self, f"data{w}")
-            shifted = Cat(decoded[w], data_w)[:len(data_w)]
-            if p.signed_words:
-                shifted |= (self.words[w].signed & first_bit & decoded[w]).replicate(len(data_w))
-            with m.If(this_word & in_data):
-                m.d.sync += data_w.eq(shifted)
+            if w in self._own_words:
+                data_w = getattr(self, f"data{w}")
+                shifted = Cat(decoded[w], data_w)[:len(data_w)]
+                if p.signed_words:
+                    shifted |= (self.words[w].signed & first_bit
+                                & decoded[w]).replicate(len(data_w))
+                with m.If(this_word & in_data):
+                    m.d.sync += data_w.eq(shifted)
             # A word without nE/nW reads as "no error, no warning" (both high); an SSI error
             # bit (word 0) is read as nE is: 0 when active (inverted when active high).
             nenw = self.words[w].nenw
@@ -252,6 +263,9 @@ class FrameDecoder(wiring.Component):
                     m.d.sync += self.ne[w].eq(self.bit)
                 with m.Elif(this_word & (idx == ends[w]["data_end_p1"])):
                     m.d.sync += self.nw[w].eq(self.bit)
+        if p.chain_words_in_memory:
+            self._chain_register(m, word, first_bit, in_word & in_data,
+                                 in_word & (idx == word_end_m1))
         if p.ssi:
             # The first copy of an SSI double transmission, as sent (word 0 is the only word).
             m.d.comb += copy.first.eq(in_word & ssi)
@@ -281,3 +295,33 @@ class FrameDecoder(wiring.Component):
             m.d.comb += [engine.index.eq(word), engine.load_index.eq(Mux(at_cds, 0, word + 1))]
 
         return m
+
+    def _chain_register(self, m, word, first_bit, data_bit, word_last_bit):
+        """Words 2..7 through one register (``chain_data``), for the chain memory: each
+        word's data as its own register would hold it (Gray-decoded, sign-extended to that
+        word's longest field, 0 above it), final from its last data bit until the next word's
+        first; ``chain_end`` in the clock its last bit (the word's last) is sampled."""
+        p = self._params
+        chain = self.chain_data
+        chain_ws = range(CHAIN_FIRST_WORD, p.words)
+        is_word = {w: word == w for w in chain_ws}
+        in_chain = Cat(is_word.values()).any()
+
+        def either(flag):
+            """``flag`` of the current chain word's settings."""
+            return Cat(is_word[w] & self.words[w][flag] for w in chain_ws).any()
+
+        # The word's first bit starts from 0 (the previous word's data stays until then).
+        previous = Mux(first_bit, 0, chain)
+        decoded = self.bit ^ (either("gray") & previous[0])
+        fill = either("signed") & first_bit & decoded if p.signed_words else C(0)
+        # Bit i exists in the current word's register when its longest field is above i.
+        keep = [C(1) if all(p.max_data_bits[w] > i for w in chain_ws)
+                else Cat(is_word[w] for w in chain_ws if p.max_data_bits[w] > i).any()
+                for i in range(len(chain))]
+        shifted = Cat(keep[i] & ((decoded if i == 0 else previous[i - 1]) | fill)
+                      for i in range(len(chain)))
+        with m.If(data_bit & in_chain):
+            m.d.sync += chain.eq(shifted)
+        m.d.comb += [self.chain_end.eq(word_last_bit & in_chain),
+                     self.chain_index.eq(word - CHAIN_FIRST_WORD)]

@@ -197,21 +197,25 @@ def decode_result(channel, words, time_s, two_words):
         timestamp=w["result.timestamp"])
 
 
+#: Read after the chain words, in one burst: their flags, then the closing read of the update
+#: count (the map puts ``chain.flags`` just below ``chain.updates`` for it).
+CHAIN_CLOSING_REGISTERS = ("chain.flags", "chain.updates")
+
+
 def chain_result_registers(chain):
-    """The chain result registers to read for the chain words ``chain``, in address order:
-    chain.flags and every word's lo / hi up to the last of ``chain`` (one burst)."""
+    """The chain data registers to read for the chain words ``chain``, in address order:
+    every word's lo / hi up to the last of ``chain`` (one burst)."""
     if not chain:
         return ()
-    return ("chain.flags",) + tuple(f"chain.w{w}_{half}" for w in
-                                    range(regmap.CHAIN_WORDS[0], max(chain) + 1)
-                                    for half in ("lo", "hi"))
+    return tuple(f"chain.w{w}_{half}" for w in range(regmap.CHAIN_WORDS[0], max(chain) + 1)
+                 for half in ("lo", "hi"))
 
 
-def decode_chain(words, chain):
+def decode_chain(words, flags_word, chain):
     """``{word: ChainWord}`` of the chain words ``chain`` from the words of
-    :func:`chain_result_registers`."""
+    :func:`chain_result_registers` and ``chain.flags``."""
     w = dict(zip(chain_result_registers(chain), words))
-    flags = regmap.get("chain.flags", w["chain.flags"])
+    flags = regmap.get("chain.flags", flags_word)
     out = {}
     for word in chain:
         lo_reg, hi_reg = f"chain.w{word}_lo", f"chain.w{word}_hi"
@@ -417,10 +421,11 @@ class Board:
         for _ in range(READ_TRIES):
             words = self.read_block(regmap.RESULT_REGISTERS, ch)
             chain = self.read_block(chain_registers, ch)
-            after = self.read_fields("chain.updates", ch)["updates"]
+            flags, updates = self.read_block(CHAIN_CLOSING_REGISTERS, ch)
+            after = regmap.get("chain.updates", updates, "updates")
             if after == before:
                 r = decode_result(ch, words, self.now(), frame.two_words)
-                r.chain = decode_chain(chain, frame.chain)
+                r.chain = decode_chain(chain, flags, frame.chain)
                 return r
             before = after
         raise TornReadError(f"channel {ch}: chain.updates changed during each of {READ_TRIES} "

@@ -151,9 +151,9 @@ CHANNEL.update({
     "count_chain": 0x094, "count_chain2": 0x098, "count_chain3": 0x09C,
     **{f"cfg_w{w}{end}": 0x0A0 + 0x10 * (w - 2) + 4 * k for w in CHAIN_WORDS
        for k, end in enumerate(("", "_crc", "_crc_start"))},
-    "chain.updates": 0x1C0, "chain.flags": 0x1C4,
-    **{f"chain.w{w}_{half}": 0x1C8 + 8 * (w - 2) + 4 * k for w in CHAIN_WORDS
+    **{f"chain.w{w}_{half}": 0x1C0 + 8 * (w - 2) + 4 * k for w in CHAIN_WORDS
        for k, half in enumerate(("lo", "hi"))},
+    "chain.flags": 0x1F0, "chain.updates": 0x1F4,
 })
 FIELDS.update({
     "caps_chain": {f"data_bits_{x}": (8 * k, 7) for k, x in enumerate("abcd")},

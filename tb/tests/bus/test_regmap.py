@@ -78,7 +78,7 @@ def test_counter_memory_words_are_the_cores_slots():
     """The map's counter registers are the words of the core's counter memory, two counts
     each, low half first, in the core's slot order; 16-bit fields."""
     rm = regmap.load()
-    assert rm.memories(rm.channel) == {"count": (0x060, 8)}
+    assert rm.memories(rm.channel)["count"] == (0x060, 8)
     words = sorted((r for r in rm.channel if r.memory == "count"), key=lambda r: r.offset)
     fields = [(f.name, f.lsb, f.width) for r in words
               for f in sorted(r.fields, key=lambda f: f.lsb)]
@@ -155,3 +155,17 @@ def test_unknown_signal_in_map_is_refused(tmp_path):
     bad = tmp_path / "bad.rdl"
     bad.write_text(src)
     refused(lambda: BusTop(regmap=regmap.load(bad)), "cfg_spw_tolerence")
+
+
+def test_chain_memory_words_are_the_chain_words_data():
+    """The chain words' data registers are the words of the core's chain memory: w2_lo,
+    w2_hi, ... w7_hi from 0x1C0 (aligned to the 16 words that hold them), each 32 bits; the
+    flags and the update count follow, outside it (docs/bus.md, Chains)."""
+    rm = regmap.load()
+    assert rm.memories(rm.channel)["chain"] == (0x1C0, 12)
+    words = sorted((r for r in rm.channel if r.memory == "chain"), key=lambda r: r.offset)
+    assert [r.path for r in words] == [f"chain.w{w}_{h}" for w in range(2, 8)
+                                       for h in ("lo", "hi")]
+    assert all([(f.lsb, f.width) for f in r.fields] == [(0, 32)] for r in words)
+    offsets = {r.path: r.offset for r in rm.channel}
+    assert (offsets["chain.flags"], offsets["chain.updates"]) == (0x1F0, 0x1F4)

@@ -111,6 +111,23 @@ def test_counter_ram_gives_a_read_port_instead_of_the_count_ports(tmp_path, caps
     assert "counter_ram needs counter_width 1..16" in capsys.readouterr().err
 
 
+def test_chain_memory_gives_a_read_port_instead_of_the_chain_words_ports(tmp_path):
+    """Words 2.. of a chain in memory: one read port for them (4-bit address: words 2..7, two
+    halves each), no word2_position; words 0 and 1 keep their ports and flags stay ports."""
+    out = tmp_path / "c.v"
+    main(["--preset", "chain", "--chain-memory", "1", "-o", str(out)])
+    text = out.read_text()
+    assert "input [3:0] chain_addr" in text and "output [31:0] chain_data" in text
+    assert "input chain_en" in text and "word2_position" not in text
+    assert "output [63:0] word0_position" in text and "output word2_crc_ok" in text
+    assert "chain_memory    = on" in text
+    # A build of two words has nothing to put there: the same Verilog as without.
+    a, b = tmp_path / "a.v", tmp_path / "b.v"
+    main(["--preset", "safety", "--chain-memory", "1", "-o", str(a)])
+    main(["--preset", "safety", "-o", str(b)])
+    assert a.read_text() == b.read_text()
+
+
 # -- the hook for bus tops ------------------------------------------------------------------------
 
 class FakeBusTop(wiring.Component):
