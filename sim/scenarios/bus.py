@@ -1290,6 +1290,18 @@ CHAIN_CAPS = {"caps": {"words": 4, "data_bits_w0": 40, "data_bits_w1": 32},
               "caps_chain2": {"data_bits_a": 0, "data_bits_b": 0}}
 
 
+async def refused_without_a_pulse(tb, dut):
+    """Channel 0's configuration, just written, is refused: state.config_error, a request
+    ends BAD_CONFIG and the encoder sees no MA pulse."""
+    await ClockCycles(dut.clk, 4)
+    assert (await tb.read_fields("state", 0))["config_error"] == 1
+    frames_before = len(tb.channels[0].encoder.records)
+    res = await tb.request(0)
+    assert res["status"] == STATUS["BAD_CONFIG"], res["status"]
+    await Timer(20, "us")
+    assert len(tb.channels[0].encoder.records) == frames_before, "MA pulsed on a bad config"
+
+
 def fault_once(enc, make):
     """The encoder's next frame passed through ``make`` (a Response maker), the rest good."""
     good = enc.respond
@@ -1362,13 +1374,7 @@ async def chain_fewer_words_and_a_gap(dut):
     cfg_w2 = await tb.read_fields("cfg_w2", 0)
     await tb.write_fields("cfg_w2", 0, **{**cfg_w2, "enable": 0})
     await tb.write_fields("cfg_w3", 0, data_bits=16, crc=CRC_CODE["crc16"], enable=1)
-    await ClockCycles(dut.clk, 4)
-    assert (await tb.read_fields("state", 0))["config_error"] == 1
-    frames_before = len(tb.channels[0].encoder.records)
-    res = await tb.request(0)
-    assert res["status"] == STATUS["BAD_CONFIG"], res["status"]
-    await Timer(20, "us")
-    assert len(tb.channels[0].encoder.records) == frames_before, "MA pulsed on a bad config"
+    await refused_without_a_pulse(tb, dut)
     await tb.write_fields("cfg_w3", 0, enable=0)
     await tb.write_fields("cfg_w2", 0, **cfg_w2)
     await tb.encoders_ready()
@@ -1410,13 +1416,7 @@ async def chain_word_of_64_bits(dut):
     assert top_set, "no position with bit 63 set: the test did not reach the top bit"
     cfg_w2 = await tb.read_fields("cfg_w2", 0)
     await tb.write_fields("cfg_w2", 0, **{**cfg_w2, "data_bits": 65})
-    await ClockCycles(dut.clk, 4)
-    assert (await tb.read_fields("state", 0))["config_error"] == 1
-    frames_before = len(tb.channels[0].encoder.records)
-    res = await tb.request(0)
-    assert res["status"] == STATUS["BAD_CONFIG"], res["status"]
-    await Timer(20, "us")
-    assert len(tb.channels[0].encoder.records) == frames_before, "MA pulsed on a bad config"
+    await refused_without_a_pulse(tb, dut)
     await tb.write_fields("cfg_w2", 0, **cfg_w2)
     await tb.encoders_ready()
     tb.check_result(0, await tb.request(0))
