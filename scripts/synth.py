@@ -74,6 +74,10 @@ PRESET_CONFIGS = ("biss-c", "biss-c-lean", "safety", "bp3", "chain")
 
 #: The chain core of four words the chain configurations build (the sim's axil_chain top's).
 CHAIN_4_OPTIONS = ["--max-data-bits", "40,32,24,16", "--word-crcs", "6+16,6+16,6+16,6+16"]
+#: A chain of eight words as long as the map holds (words 0 and 1 at their map limits, words
+#: 2..7 of 63 bits): one channel of issue 27's `axil-8` target.
+CHAIN_8_OPTIONS = ["--max-data-bits", "55,40,63,63,63,63,63,63", "--word-crcs",
+                   ",".join(["6+16"] * 8)]
 
 #: The bus tops measured (issue 14): name -> (bus, channels, core preset, archs[, options added
 #: to the preset's]). The cores
@@ -90,6 +94,8 @@ BUS_CONFIGS = {
     "uart-1": ("uart", 1, "biss-c", ("ecp5", "ice40", "xilinx", "intel")),
     # a chain of four words behind the bus (issue 26; the core alone: `chain-4`)
     "axil-chain-4": ("axil", 1, "chain", ("ecp5",), CHAIN_4_OPTIONS),
+    # one channel of eight long words: what each channel of issue 27's axil-8 target costs
+    "axil-chain-8": ("axil", 1, "chain", ("ecp5",), CHAIN_8_OPTIONS),
 }
 #: The control for the bus tops' Fmax: N copies of a preset core side by side in one harness,
 #: no bus (name -> (copies, core preset, archs)). Four cores fill the device about as much as

@@ -49,6 +49,13 @@ class FrameDecoder(wiring.Component):
 
     ``frame_end`` is where the frame's verdict and its noise count close: ``done`` in BiSS,
     ``stopped`` in SSI (whose verdict waits for the bit after the word: it must be 0).
+
+    **Chain memory** (``params.chain_words_in_memory``): words 2.. have no ``data<N>``; they
+    share ``chain_data`` (as wide as the longest of them), which holds each word's data as
+    its own register would (Gray-decoded, sign-extended to that word's longest field, 0
+    above), from its last data bit until the next word's first. ``chain_end`` strobes in the
+    clock a chain word's last bit is sampled, with ``chain_index`` = N - 2:
+    :class:`~bissmaster.core.chain_results.ChainResults` writes the word from the next clock.
     """
 
     def __init__(self, params):
