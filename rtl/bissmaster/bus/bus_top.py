@@ -86,8 +86,9 @@ COUNT_BITS = COUNTER_HALF_BITS
 GLOBAL_SIGNALS = ("channels", "trigger", "irq_pending")
 
 
-#: The words' length settings: a map field may be wider than the core's port (BusChannel).
-_LENGTHS = frozenset(f"cfg_w{w}_data_bits" for w in range(MAX_WORDS))
+#: The words' length settings, by word: a map field may be wider than the core's port
+#: (BusChannel).
+_LENGTHS = {f"cfg_w{w}_data_bits": w for w in range(MAX_WORDS)}
 
 
 def _needed_bits(name, port, params):
@@ -95,7 +96,7 @@ def _needed_bits(name, port, params):
     those of the build's longest length for that word (the port may be a bit wider, all words
     sharing one layout); any other port all of its bits."""
     if name in _LENGTHS:
-        return params.max_data_bits[int(name[len("cfg_w")])].bit_length()
+        return params.max_data_bits[_LENGTHS[name]].bit_length()
     return Shape.cast(port.shape).width
 
 
@@ -173,14 +174,15 @@ class BusChannel(wiring.Component):
                 raise ValueError(f"the register map names {name!r}, which is neither a port "
                                  f"of biss_master nor a signal of the bus channel")
             held = Shape.cast(member.shape).width
-            if name in _LENGTHS and name in core and _needed_bits(name, core[name], params) > held:
-                w = int(name[len("cfg_w")])
+            if name not in core or _needed_bits(name, core[name], params) <= held:
+                continue
+            if name in _LENGTHS:
+                w = _LENGTHS[name]
                 raise ValueError(f"the register map holds word {w} lengths of up to "
                                  f"{2**held - 1} data bits ({name}); this build's word {w} has "
                                  f"up to {params.max_data_bits[w]}")
-            if name in core and _needed_bits(name, core[name], params) > held:
-                raise ValueError(f"the register map holds {held} bits of {name}; "
-                                 f"this build's port has {Shape.cast(core[name].shape).width}")
+            raise ValueError(f"the register map holds {held} bits of {name}; "
+                             f"this build's port has {Shape.cast(core[name].shape).width}")
         super().__init__({
             "regs": In(regs),
             "trigger": In(1),

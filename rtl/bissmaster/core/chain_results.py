@@ -65,9 +65,9 @@ class ChainResults(wiring.Component):
     """
 
     def __init__(self, words, data_bits):
-        if not CHAIN_FIRST_WORD < words <= 8:
-            raise ValueError(f"the chain memory holds words 2..7 of a build of 3 to 8 words, "
-                             f"not {words}")
+        if not CHAIN_FIRST_WORD < words <= MAX_WORDS:
+            raise ValueError(f"the chain memory holds words 2..{MAX_WORDS - 1} of a build of "
+                             f"3 to {MAX_WORDS} words, not {words}")
         if not 1 <= data_bits <= HALVES * WORD_BITS:
             raise ValueError(f"a chain word has 1 to {HALVES * WORD_BITS} data bits, "
                              f"not {data_bits}")
