@@ -19,7 +19,7 @@ from encoder_model.cocotb_encoder import Cable
 from encoder_model.control import (BANK_SELECT, USER_REGISTERS, Bp3Eds, ControlSlave,
                                    RegisterFile)
 from master_contract import CA_STATUS, CRC_CODE, STATUS
-from sim.shared.bus_testbench import BUS, CLK_HZ, BusTestbench, Encoder
+from sim.shared.bus_testbench import BUS, CHAIN_64, CLK_HZ, BusTestbench, Encoder
 from sim.shared.discovery import long_on_icarus, only_on_buses
 
 #: The default bus tops have two channels; channel 0 reads a BiSS Safety encoder, channel 1 a
@@ -1379,17 +1379,6 @@ async def chain_fewer_words_and_a_gap(dut):
     await tb.write_fields("cfg_w2", 0, **cfg_w2)
     await tb.encoders_ready()
     tb.check_result(0, await tb.request(0))
-
-
-#: Word 2 as long as a word can be (64 data bits), after a 26-bit and a 12-bit slave: Gray
-#: with CRC-16 and nE/nW, then two's complement with iC-MB4's CRC-8 (0x12F) and no nE/nW.
-CHAIN_64 = tuple(frames.FrameFormat(name, (frames.WordFormat(26), frames.WordFormat(12),
-                                           word), chain=True)
-                 for name, word in (
-                     ("chain_64_gray", frames.WordFormat(64, crc=frames.CRC16, gray=True)),
-                     ("chain_64_signed", frames.WordFormat(
-                         64, nenw=False, signed=True,
-                         crc=frames.CustomCrc(8, 0x2F, 0x00, True)))))
 
 
 @cocotb.test()

@@ -23,7 +23,7 @@ from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
 from master_contract import (CHAIN_BUS_DATA_BITS, STATUS_NAME, crc_config,
                              crc_counters, crc_status, port_position)
-from sim.shared.bus_testbench import CLK_HZ, BusTestbench, Encoder
+from sim.shared.bus_testbench import CHAIN_64, CLK_HZ, BusTestbench, Encoder
 from sim.shared.c_driver import CHAIN_WORDS, CDriver, Config, Result, State
 
 POLLS = 20_000          # biss_wait_done's limit: far beyond a frame (each poll is a bus read)
@@ -258,17 +258,6 @@ async def driver_chain_of_three_on_a_four_word_build(dut):
     await drv.check("biss_read_result", byref(ch), byref(raw))
     assert raw.chain_words == 1 and all(raw.chain[i].data == 0 and not raw.chain[i].crc_ok
                                         for i in range(1, CHAIN_WORDS))
-
-
-#: Word 2 of 64 data bits (the build's word 2 is 64): Gray with CRC-16, then two's complement
-#: with a CRC-8 of its own and no nE/nW.
-CHAIN_64 = tuple(frames.FrameFormat(name, (frames.WordFormat(26), frames.WordFormat(12), word),
-                                    chain=True)
-                 for name, word in (
-                     ("chain_64_gray", frames.WordFormat(64, gray=True, crc=frames.CRC16)),
-                     ("chain_64_signed", frames.WordFormat(
-                         64, nenw=False, signed=True,
-                         crc=frames.CustomCrc(8, 0x2F, 0x00, True)))))
 
 
 @cocotb.test()
