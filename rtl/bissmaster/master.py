@@ -16,8 +16,8 @@ from .core.delay_check import DelayCheck
 from .core.frame_decoder import FrameDecoder
 from .core.frame_verdict import FrameVerdict
 from .layouts import (BUFFER_LANES, BUFFER_WORD_BITS, access_request_layout, access_result_layout,
-                      buffer_write_layout, config_enables, config_ports, config_words, counter_names,
-                      counter_ports, counter_slots, COUNT_ADDR_BITS, field,
+                      buffer_write_layout, config_custom_crcs, config_enables, config_ports,
+                      config_words, counter_names, counter_ports, counter_slots, COUNT_ADDR_BITS, field,
                       flat_fields, result_layout)
 from .core.limit_timers import LimitTimers
 from .core.line_noise import LineNoise
@@ -344,7 +344,10 @@ class BissMaster(wiring.Component):
         ]
         for w, word in enumerate(b.words):
             m.d.comb += [b.decoder.words[w].eq(word), b.ma_stop.words[w].eq(word)]
-        m.d.comb += [b.decoder.crcs.eq(b.config.crcs), b.ma_stop.crcs.eq(b.config.crcs)]
+        m.d.comb += [b.decoder.crc_widths.eq(b.config.crc_widths),
+                     b.ma_stop.crc_widths.eq(b.config.crc_widths)]
+        for w, custom in enumerate(config_custom_crcs(b.cycle, p)):
+            m.d.comb += b.decoder.customs[w].eq(custom)
         m.d.comb += b.ma_stop.enables.eq(Cat(*config_enables(b.cycle, p)))
         if two:
             m.d.comb += [

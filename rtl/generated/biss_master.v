@@ -55,7 +55,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$signal ;
   wire abort;
   wire \abort$122 ;
-  wire \abort$319 ;
+  wire \abort$320 ;
   input abort_cycle;
   wire abort_cycle;
   wire ack_expired;
@@ -64,7 +64,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [23:0] \ack_limit$178 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$349 ;
+  wire \bit$350 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$155 ;
@@ -72,7 +72,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output busy;
   wire busy;
   wire \busy$130 ;
-  wire \busy$323 ;
+  wire \busy$324 ;
   input ca_abort;
   wire ca_abort;
   input [6:0] ca_address;
@@ -114,11 +114,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$326 ;
+  wire \cdm$327 ;
   wire cdm_cycle;
   output cds;
   wire cds;
-  wire \cds$300 ;
+  wire \cds$301 ;
   wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -266,10 +266,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   reg clean = 1'h0;
   (* init = 1'h0 *)
   wire \clean$242 ;
-  wire \clean$350 ;
+  wire \clean$351 ;
   wire clear;
   wire \clear$202 ;
-  wire \clear$342 ;
+  wire \clear$343 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -345,43 +345,30 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$254 ;
+  wire [39:0] \cpw_top$255 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$279 ;
-  wire [75:0] crcs;
-  wire [75:0] \crcs$250 ;
-  wire [37:0] \crcs$250[0] ;
-  wire \crcs$250[0].inverted ;
-  wire [15:0] \crcs$250[0].poly ;
-  wire [15:0] \crcs$250[0].start ;
-  wire [4:0] \crcs$250[0].width ;
-  wire [37:0] \crcs$250[1] ;
-  wire \crcs$250[1].inverted ;
-  wire [15:0] \crcs$250[1].poly ;
-  wire [15:0] \crcs$250[1].start ;
-  wire [4:0] \crcs$250[1].width ;
-  wire [75:0] \crcs$251 ;
-  wire [37:0] \crcs$251[0] ;
-  wire \crcs$251[0].inverted ;
-  wire [15:0] \crcs$251[0].poly ;
-  wire [15:0] \crcs$251[0].start ;
-  wire [4:0] \crcs$251[0].width ;
-  wire [37:0] \crcs$251[1] ;
-  wire \crcs$251[1].inverted ;
-  wire [15:0] \crcs$251[1].poly ;
-  wire [15:0] \crcs$251[1].start ;
-  wire [4:0] \crcs$251[1].width ;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  wire [1:0] \crc_ok$280 ;
+  wire [9:0] crc_widths;
+  wire [9:0] \crc_widths$250 ;
+  wire [4:0] \crc_widths$250[0] ;
+  wire [4:0] \crc_widths$250[1] ;
+  wire [9:0] \crc_widths$251 ;
+  wire [4:0] \crc_widths$251[0] ;
+  wire [4:0] \crc_widths$251[1] ;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
+  wire [75:0] customs;
+  wire [37:0] \customs[0] ;
+  wire \customs[0].inverted ;
+  wire [15:0] \customs[0].poly ;
+  wire [15:0] \customs[0].start ;
+  wire [4:0] \customs[0].width ;
+  wire [37:0] \customs[1] ;
+  wire \customs[1].inverted ;
+  wire [15:0] \customs[1].poly ;
+  wire [15:0] \customs[1].start ;
+  wire [4:0] \customs[1].width ;
   wire [274:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -457,8 +444,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [16:0] delay_tolerance;
   output done;
   wire done;
-  wire \done$324 ;
-  wire \done$345 ;
+  wire \done$325 ;
+  wire \done$346 ;
   wire doubtful;
   wire early;
   wire \early$138 ;
@@ -468,30 +455,30 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$337 ;
-  wire \events$337.aborted ;
-  wire \events$337.ca_aborted ;
-  wire \events$337.ca_crc4_error ;
-  wire \events$337.ca_data_fault ;
-  wire \events$337.ca_no_answer ;
-  wire \events$337.ca_refused ;
-  wire \events$337.crc_word0 ;
-  wire \events$337.crc_word1 ;
-  wire \events$337.delay_jump ;
-  wire \events$337.delay_range ;
-  wire \events$337.lc_repeat ;
-  wire \events$337.lc_skip ;
-  wire \events$337.lc_zero ;
-  wire \events$337.no_ack ;
-  wire \events$337.no_start ;
-  wire \events$337.no_stop ;
-  wire \events$337.noise_event ;
-  wire \events$337.noisy_line ;
-  wire \events$337.overrun ;
-  wire \events$337.slo_stuck_low ;
-  wire \events$337.spw_mismatch ;
+  wire [20:0] \events$338 ;
+  wire \events$338.aborted ;
+  wire \events$338.ca_aborted ;
+  wire \events$338.ca_crc4_error ;
+  wire \events$338.ca_data_fault ;
+  wire \events$338.ca_no_answer ;
+  wire \events$338.ca_refused ;
+  wire \events$338.crc_word0 ;
+  wire \events$338.crc_word1 ;
+  wire \events$338.delay_jump ;
+  wire \events$338.delay_range ;
+  wire \events$338.lc_repeat ;
+  wire \events$338.lc_skip ;
+  wire \events$338.lc_zero ;
+  wire \events$338.no_ack ;
+  wire \events$338.no_start ;
+  wire \events$338.no_stop ;
+  wire \events$338.noise_event ;
+  wire \events$338.noisy_line ;
+  wire \events$338.overrun ;
+  wire \events$338.slo_stuck_low ;
+  wire \events$338.spw_mismatch ;
   wire fault;
-  wire \fault$275 ;
+  wire \fault$276 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -527,7 +514,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$277 ;
+  wire [3:0] \fault_status$278 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -537,7 +524,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$313 ;
+  wire \first_rise$314 ;
   wire [31:0] first_rise_time;
   wire fixed;
   wire [12:0] fixed_delay;
@@ -587,7 +574,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
-  wire \frame_end$331 ;
+  wire \frame_end$332 ;
   wire frame_ok;
   wire frames;
   wire [15:0] half_period;
@@ -610,15 +597,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [5:0] \lc_next$216 ;
   output lc_repeat;
   wire lc_repeat;
-  wire \lc_repeat$305 ;
+  wire \lc_repeat$306 ;
   wire lc_repeat_seen;
   output lc_skip;
   wire lc_skip;
-  wire \lc_skip$306 ;
+  wire \lc_skip$307 ;
   wire lc_skip_seen;
   output lc_zero;
   wire lc_zero;
-  wire \lc_zero$307 ;
+  wire \lc_zero$308 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
@@ -685,7 +672,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \locked$136 ;
   output ma;
   wire ma;
-  wire \ma$344 ;
+  wire \ma$345 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$167 ;
@@ -709,7 +696,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire ok;
   output overrun;
   wire overrun;
-  wire \overrun$340 ;
+  wire \overrun$341 ;
   wire passed;
   wire pending;
   wire [23:0] period;
@@ -730,36 +717,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$289 ;
-  wire \report$293 ;
+  wire \report$290 ;
+  wire \report$294 ;
   wire report_delay;
-  wire \report_delay$296 ;
+  wire \report_delay$297 ;
   wire report_frame;
-  wire \report_frame$274 ;
-  wire \report_frame$294 ;
+  wire \report_frame$275 ;
+  wire \report_frame$295 ;
   wire request;
   wire \request$121 ;
-  wire [17:0] \request$315 ;
-  wire [6:0] \request$315.address ;
-  wire [6:0] \request$315.count ;
-  wire [2:0] \request$315.slave_id ;
-  wire \request$315.write ;
+  wire [17:0] \request$316 ;
+  wire [6:0] \request$316.address ;
+  wire [6:0] \request$316.count ;
+  wire [2:0] \request$316.slave_id ;
+  wire \request$316.write ;
   wire restart;
   wire \restart$229 ;
   wire restart_timer;
   wire [9:0] result;
-  wire [186:0] \result$347 ;
-  wire \result$347.cds ;
-  wire \result$347.delay_settled ;
-  wire [7:0] \result$347.delay_spread ;
-  wire [5:0] \result$347.lc ;
-  wire \result$347.lc_repeat ;
-  wire \result$347.lc_skip ;
-  wire \result$347.lc_zero ;
-  wire [12:0] \result$347.line_delay ;
-  wire [3:0] \result$347.noise_events ;
-  wire [12:0] \result$347.settled_delay ;
-  wire \result$347.spw_mismatch ;
+  wire [186:0] \result$348 ;
+  wire \result$348.cds ;
+  wire \result$348.delay_settled ;
+  wire [7:0] \result$348.delay_spread ;
+  wire [5:0] \result$348.lc ;
+  wire \result$348.lc_repeat ;
+  wire \result$348.lc_skip ;
+  wire \result$348.lc_zero ;
+  wire [12:0] \result$348.line_delay ;
+  wire [3:0] \result$348.noise_events ;
+  wire [12:0] \result$348.settled_delay ;
+  wire \result$348.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -777,18 +764,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$347.status ;
-  wire [31:0] \result$347.timestamp ;
-  wire [57:0] \result$347.word0 ;
-  wire \result$347.word0.crc_ok ;
-  wire \result$347.word0.ne ;
-  wire \result$347.word0.nw ;
-  wire [54:0] \result$347.word0.position ;
-  wire [42:0] \result$347.word1 ;
-  wire \result$347.word1.crc_ok ;
-  wire \result$347.word1.ne ;
-  wire \result$347.word1.nw ;
-  wire [39:0] \result$347.word1.position ;
+  wire [3:0] \result$348.status ;
+  wire [31:0] \result$348.timestamp ;
+  wire [57:0] \result$348.word0 ;
+  wire \result$348.word0.crc_ok ;
+  wire \result$348.word0.ne ;
+  wire \result$348.word0.nw ;
+  wire [54:0] \result$348.word0.position ;
+  wire [42:0] \result$348.word1 ;
+  wire \result$348.word1.crc_ok ;
+  wire \result$348.word1.ne ;
+  wire \result$348.word1.nw ;
+  wire [39:0] \result$348.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -807,14 +794,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$348 ;
+  wire \sample$349 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   output [12:0] settled_delay;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$303 ;
+  wire [12:0] \settled_delay$304 ;
   wire skip;
   input slo;
   wire slo;
@@ -832,19 +819,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire spw_match;
   output spw_mismatch;
   wire spw_mismatch;
-  wire \spw_mismatch$312 ;
+  wire \spw_mismatch$313 ;
   wire ssi;
-  wire \ssi$263 ;
-  wire \ssi$267 ;
+  wire \ssi$264 ;
+  wire \ssi$268 ;
   wire ssi_double;
-  wire \ssi_double$268 ;
+  wire \ssi_double$269 ;
   wire ssi_error;
-  wire \ssi_error$269 ;
+  wire \ssi_error$270 ;
   wire ssi_error_low;
   input start;
   wire start;
   wire \start$113 ;
-  wire \start$318 ;
+  wire \start$319 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$199 ;
   wire started;
@@ -887,7 +874,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$290 ;
+  wire [3:0] \status$291 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -905,7 +892,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$291 ;
+  wire [3:0] \status$292 ;
   wire stop_bit;
   wire \stop_bit$151 ;
   wire stopped;
@@ -919,12 +906,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [31:0] timestamp;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$258 ;
+  wire [7:0] \tolerance$259 ;
   wire unconfirmed;
   output valid;
   wire valid;
-  wire \valid$297 ;
   wire \valid$298 ;
+  wire \valid$299 ;
   wire valid_out;
   wire waiting;
   wire watch;
@@ -1011,13 +998,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$3  = ~ started_before;
   assign \check$237  = started & \$3 ;
   assign \$4  = ~ cycle[259];
-  assign cdm = \cdm$326  & \$4 ;
+  assign cdm = \cdm$327  & \$4 ;
   assign \$5  = ~ cycle[259];
   assign frame_ok = passed & \$5 ;
-  assign \$6  = report_frame & \spw_mismatch$312 ;
-  assign \$7  = \status$290  == 4'hd;
+  assign \$6  = report_frame & \spw_mismatch$313 ;
+  assign \$7  = \status$291  == 4'hd;
   assign \$8  = report_frame & \$7 ;
-  assign \$9  = \status$290  == 4'he;
+  assign \$9  = \status$291  == 4'he;
   assign \$10  = report_frame & \$9 ;
   assign \$11  = result[2:0] == 1'h1;
   assign \$12  = ca_done & \$11 ;
@@ -1032,7 +1019,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
   assign \$21  = ~ \clear$202 ;
-  assign \$22  = \sample$348  & \$21 ;
+  assign \$22  = \sample$349  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -1046,7 +1033,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   \biss_master.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
-    .crcs(crcs),
+    .crc_widths(crc_widths),
     .cycle(cycle),
     .delay_limit(delay_limit),
     .delay_tolerance(tolerance),
@@ -1065,7 +1052,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report(report),
     .rst(rst),
     .setting(cycle[148:145]),
-    .status(\status$290 )
+    .status(\status$291 )
   );
   \biss_master.controller  controller (
     .abort(abort_cycle),
@@ -1118,16 +1105,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clear(clear_counters),
     .clk(clk),
     .counts(counts),
-    .events(\events$337 ),
+    .events(\events$338 ),
     .rst(rst)
   );
   \biss_master.decoder  decoder (
     .\bit (\bit ),
-    .cds(\cds$300 ),
+    .cds(\cds$301 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
-    .crcs(crcs),
+    .crc_widths(crc_widths),
+    .customs(customs),
     .data0(data0),
     .data1(spw),
     .frame_end(frame_done),
@@ -1136,7 +1124,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$2170$272 (cycle[274:272]),
+    .\port$2197$272 (cycle[274:272]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(sample),
@@ -1160,7 +1148,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .rearm(rearm),
     .rst(rst),
     .settled(settled),
-    .settled_delay(\settled_delay$303 ),
+    .settled_delay(\settled_delay$304 ),
     .spread(spread),
     .\tolerance$8 (tolerance)
   );
@@ -1194,9 +1182,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   \biss_master.ma_stop  ma_stop (
     .clear(\clear$202 ),
     .clk(clk),
-    .crcs(crcs),
+    .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$2170$199 (cycle[199]),
+    .\port$2197$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -1209,17 +1197,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   \biss_master.register_access  register_access (
     .abort(ca_abort),
     .busy(ca_busy),
-    .cdm(\cdm$326 ),
+    .cdm(\cdm$327 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
-    .frame_cds(\cds$300 ),
+    .frame_cds(\cds$301 ),
     .frame_end(report),
     .frame_ok(frame_ok),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(ca_rbuf_en),
-    .request(\request$315 ),
+    .request(\request$316 ),
     .result(result),
     .rst(rst),
     .start(ca_start),
@@ -1232,14 +1220,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$347 ),
+    .result(\result$348 ),
     .rst(rst),
-    .valid(\valid$297 ),
+    .valid(\valid$298 ),
     .valid_out(valid)
   );
   \biss_master.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$349 ),
+    .\bit (\bit$350 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -1247,10 +1235,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$2170$259 (cycle[271:259]),
+    .\port$2197$259 (cycle[271:259]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
-    .sample(\sample$348 ),
+    .sample(\sample$349 ),
     .slo(slo)
   );
   \biss_master.scheduler  scheduler (
@@ -1270,7 +1258,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$213 ),
     .load(load),
-    .\port$2158$0 (\bit ),
+    .\port$2185$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1320,7 +1308,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$350 ),
+    .clean(\clean$351 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
@@ -1329,22 +1317,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .fault(\restart$229 ),
     .fault_status(fault_status),
     .lc_check(check),
-    .lc_repeat(\lc_repeat$305 ),
+    .lc_repeat(\lc_repeat$306 ),
     .lc_repeat_seen(lc_repeat_seen),
-    .lc_skip(\lc_skip$306 ),
+    .lc_skip(\lc_skip$307 ),
     .lc_skip_seen(lc_skip_seen),
-    .lc_zero(\lc_zero$307 ),
+    .lc_zero(\lc_zero$308 ),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$1591$0 (\$28 ),
+    .\port$1617$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
-    .spw_mismatch(\spw_mismatch$312 ),
-    .status(\status$290 ),
+    .spw_mismatch(\spw_mismatch$313 ),
+    .status(\status$291 ),
     .unconfirmed(unconfirmed),
-    .valid(\valid$297 )
+    .valid(\valid$298 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
@@ -1355,7 +1343,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$24  = \bit$349 ;
+    \$24  = \bit$350 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -1376,7 +1364,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$27  = \clean$350 ;
+    \$27  = \clean$351 ;
     if (rst) begin
       \$27  = 1'h0;
     end
@@ -1456,80 +1444,80 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \clean$242  = clean;
   assign \noisy$244  = noisy;
   assign jump = delay_jump;
-  assign \crcs$250  = crcs;
-  assign \crcs$251  = crcs;
+  assign \crc_widths$250  = crc_widths;
+  assign \crc_widths$251  = crc_widths;
   assign enables = { cycle[199], 1'h1 };
-  assign \cpw_top$254  = cpw_top;
+  assign \cpw_top$255  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[205:200];
-  assign \tolerance$258  = cycle[258:251];
+  assign \tolerance$259  = cycle[258:251];
   assign match = spw_match;
   assign fixed = cycle[259];
   assign fixed_delay = { 1'h0, cycle[271:260] };
-  assign \ssi$263  = cycle[259];
+  assign \ssi$264  = cycle[259];
   assign ssi_error = cycle[272];
   assign ssi_error_low = cycle[273];
   assign ssi_double = cycle[274];
-  assign \ssi$267  = cycle[259];
-  assign \ssi_double$268  = cycle[274];
-  assign \ssi_error$269  = cycle[272];
+  assign \ssi$268  = cycle[259];
+  assign \ssi_double$269  = cycle[274];
+  assign \ssi_error$270  = cycle[272];
   assign mismatch = copy_mismatch;
   assign cfg = cycle;
-  assign \report_frame$274  = report_frame;
-  assign \fault$275  = \restart$229 ;
-  assign \fault_status$277  = fault_status;
-  assign \crc_ok$279  = crc_ok;
+  assign \report_frame$275  = report_frame;
+  assign \fault$276  = \restart$229 ;
+  assign \fault_status$278  = fault_status;
+  assign \crc_ok$280  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$289  = report;
-  assign \status$291  = \status$290 ;
+  assign \report$290  = report;
+  assign \status$292  = \status$291 ;
   assign setting = cycle[148:145];
-  assign \report$293  = report;
-  assign \report_frame$294  = report_frame;
-  assign \report_delay$296  = report_delay;
-  assign \valid$298  = \valid$297 ;
+  assign \report$294  = report;
+  assign \report_frame$295  = report_frame;
+  assign \report_delay$297  = report_delay;
+  assign \valid$299  = \valid$298 ;
   assign word_crc_ok = { \$28 , crc_ok[0] };
-  assign \first_rise$313  = first_rise;
-  assign \start$318  = ca_start;
-  assign \abort$319  = ca_abort;
+  assign \first_rise$314  = first_rise;
+  assign \start$319  = ca_start;
+  assign \abort$320  = ca_abort;
   assign rbuf_addr = ca_rbuf_addr;
   assign rbuf_en = ca_rbuf_en;
   assign rbuf_data = ca_rbuf_data;
-  assign \busy$323  = ca_busy;
-  assign \done$324  = ca_done;
+  assign \busy$324  = ca_busy;
+  assign \done$325  = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
-  assign \frame_end$331  = report;
-  assign frame_cds = \cds$300 ;
+  assign \frame_end$332  = report;
+  assign frame_cds = \cds$301 ;
   assign cdm_cycle = frame_cdm;
-  assign \overrun$340  = overrun;
-  assign \clear$342  = clear_counters;
-  assign \ma$344  = ma;
-  assign \done$345  = done;
+  assign \overrun$341  = overrun;
+  assign \clear$343  = clear_counters;
+  assign \ma$345  = ma;
+  assign \done$346  = done;
   assign valid_out = valid;
-  assign status = \result$347 [3:0];
-  assign timestamp = \result$347 [35:4];
-  assign line_delay = \result$347 [48:36];
-  assign cds = \result$347 [49];
-  assign noise_events = \result$347 [53:50];
-  assign delay_settled = \result$347 [54];
-  assign settled_delay = \result$347 [67:55];
-  assign delay_spread = \result$347 [75:68];
-  assign word0_position = \result$347 [130:76];
-  assign word0_ne = \result$347 [131];
-  assign word0_nw = \result$347 [132];
-  assign word0_crc_ok = \result$347 [133];
-  assign word1_position = \result$347 [173:134];
-  assign word1_ne = \result$347 [174];
-  assign word1_nw = \result$347 [175];
-  assign word1_crc_ok = \result$347 [176];
-  assign lc = \result$347 [182:177];
-  assign lc_repeat = \result$347 [183];
-  assign lc_skip = \result$347 [184];
-  assign lc_zero = \result$347 [185];
-  assign spw_mismatch = \result$347 [186];
+  assign status = \result$348 [3:0];
+  assign timestamp = \result$348 [35:4];
+  assign line_delay = \result$348 [48:36];
+  assign cds = \result$348 [49];
+  assign noise_events = \result$348 [53:50];
+  assign delay_settled = \result$348 [54];
+  assign settled_delay = \result$348 [67:55];
+  assign delay_spread = \result$348 [75:68];
+  assign word0_position = \result$348 [130:76];
+  assign word0_ne = \result$348 [131];
+  assign word0_nw = \result$348 [132];
+  assign word0_crc_ok = \result$348 [133];
+  assign word1_position = \result$348 [173:134];
+  assign word1_ne = \result$348 [174];
+  assign word1_nw = \result$348 [175];
+  assign word1_crc_ok = \result$348 [176];
+  assign lc = \result$348 [182:177];
+  assign lc_repeat = \result$348 [183];
+  assign lc_skip = \result$348 [184];
+  assign lc_zero = \result$348 [185];
+  assign spw_mismatch = \result$348 [186];
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
   assign count_crc_word0 = counts[15:0];
@@ -1667,36 +1655,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \words$248[1].crc  = \words$248 [21:20];
   assign \words$248[1].gray  = \words$248 [22];
   assign \words$248[1].signed  = \words$248 [23];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$250[0]  = crcs[37:0];
-  assign \crcs$250[0].width  = crcs[4:0];
-  assign \crcs$250[0].poly  = crcs[20:5];
-  assign \crcs$250[0].start  = crcs[36:21];
-  assign \crcs$250[0].inverted  = crcs[37];
-  assign \crcs$250[1]  = crcs[75:38];
-  assign \crcs$250[1].width  = crcs[42:38];
-  assign \crcs$250[1].poly  = crcs[58:43];
-  assign \crcs$250[1].start  = crcs[74:59];
-  assign \crcs$250[1].inverted  = crcs[75];
-  assign \crcs$251[0]  = crcs[37:0];
-  assign \crcs$251[0].width  = crcs[4:0];
-  assign \crcs$251[0].poly  = crcs[20:5];
-  assign \crcs$251[0].start  = crcs[36:21];
-  assign \crcs$251[0].inverted  = crcs[37];
-  assign \crcs$251[1]  = crcs[75:38];
-  assign \crcs$251[1].width  = crcs[42:38];
-  assign \crcs$251[1].poly  = crcs[58:43];
-  assign \crcs$251[1].start  = crcs[74:59];
-  assign \crcs$251[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
+  assign \crc_widths$250[0]  = crc_widths[4:0];
+  assign \crc_widths$250[1]  = crc_widths[9:5];
+  assign \crc_widths$251[0]  = crc_widths[4:0];
+  assign \crc_widths$251[1]  = crc_widths[9:5];
+  assign \customs[0]  = customs[37:0];
+  assign \customs[0].width  = customs[4:0];
+  assign \customs[0].poly  = customs[20:5];
+  assign \customs[0].start  = customs[36:21];
+  assign \customs[0].inverted  = customs[37];
+  assign \customs[1]  = customs[75:38];
+  assign \customs[1].width  = customs[42:38];
+  assign \customs[1].poly  = customs[58:43];
+  assign \customs[1].start  = customs[74:59];
+  assign \customs[1].inverted  = customs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -1763,36 +1737,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$315.slave_id  = \request$315 [2:0];
-  assign \request$315.address  = \request$315 [9:3];
-  assign \request$315.count  = \request$315 [16:10];
-  assign \request$315.write  = \request$315 [17];
+  assign \request$316.slave_id  = \request$316 [2:0];
+  assign \request$316.address  = \request$316 [9:3];
+  assign \request$316.count  = \request$316 [16:10];
+  assign \request$316.write  = \request$316 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$337.crc_word0  = \events$337 [0];
-  assign \events$337.crc_word1  = \events$337 [1];
-  assign \events$337.no_ack  = \events$337 [2];
-  assign \events$337.no_start  = \events$337 [3];
-  assign \events$337.delay_range  = \events$337 [4];
-  assign \events$337.slo_stuck_low  = \events$337 [5];
-  assign \events$337.lc_repeat  = \events$337 [6];
-  assign \events$337.lc_skip  = \events$337 [7];
-  assign \events$337.lc_zero  = \events$337 [8];
-  assign \events$337.spw_mismatch  = \events$337 [9];
-  assign \events$337.overrun  = \events$337 [10];
-  assign \events$337.aborted  = \events$337 [11];
-  assign \events$337.no_stop  = \events$337 [12];
-  assign \events$337.noisy_line  = \events$337 [13];
-  assign \events$337.delay_jump  = \events$337 [14];
-  assign \events$337.noise_event  = \events$337 [15];
-  assign \events$337.ca_crc4_error  = \events$337 [16];
-  assign \events$337.ca_no_answer  = \events$337 [17];
-  assign \events$337.ca_refused  = \events$337 [18];
-  assign \events$337.ca_aborted  = \events$337 [19];
-  assign \events$337.ca_data_fault  = \events$337 [20];
+  assign \events$338.crc_word0  = \events$338 [0];
+  assign \events$338.crc_word1  = \events$338 [1];
+  assign \events$338.no_ack  = \events$338 [2];
+  assign \events$338.no_start  = \events$338 [3];
+  assign \events$338.delay_range  = \events$338 [4];
+  assign \events$338.slo_stuck_low  = \events$338 [5];
+  assign \events$338.lc_repeat  = \events$338 [6];
+  assign \events$338.lc_skip  = \events$338 [7];
+  assign \events$338.lc_zero  = \events$338 [8];
+  assign \events$338.spw_mismatch  = \events$338 [9];
+  assign \events$338.overrun  = \events$338 [10];
+  assign \events$338.aborted  = \events$338 [11];
+  assign \events$338.no_stop  = \events$338 [12];
+  assign \events$338.noisy_line  = \events$338 [13];
+  assign \events$338.delay_jump  = \events$338 [14];
+  assign \events$338.noise_event  = \events$338 [15];
+  assign \events$338.ca_crc4_error  = \events$338 [16];
+  assign \events$338.ca_no_answer  = \events$338 [17];
+  assign \events$338.ca_refused  = \events$338 [18];
+  assign \events$338.ca_aborted  = \events$338 [19];
+  assign \events$338.ca_data_fault  = \events$338 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -1821,59 +1795,59 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$347.status  = \result$347 [3:0];
-  assign \result$347.timestamp  = \result$347 [35:4];
-  assign \result$347.line_delay  = \result$347 [48:36];
-  assign \result$347.cds  = \result$347 [49];
-  assign \result$347.noise_events  = \result$347 [53:50];
-  assign \result$347.delay_settled  = \result$347 [54];
-  assign \result$347.settled_delay  = \result$347 [67:55];
-  assign \result$347.delay_spread  = \result$347 [75:68];
-  assign \result$347.word0  = \result$347 [133:76];
-  assign \result$347.word0.position  = \result$347 [130:76];
-  assign \result$347.word0.ne  = \result$347 [131];
-  assign \result$347.word0.nw  = \result$347 [132];
-  assign \result$347.word0.crc_ok  = \result$347 [133];
-  assign \result$347.word1  = \result$347 [176:134];
-  assign \result$347.word1.position  = \result$347 [173:134];
-  assign \result$347.word1.ne  = \result$347 [174];
-  assign \result$347.word1.nw  = \result$347 [175];
-  assign \result$347.word1.crc_ok  = \result$347 [176];
-  assign \result$347.lc  = \result$347 [182:177];
-  assign \result$347.lc_repeat  = \result$347 [183];
-  assign \result$347.lc_skip  = \result$347 [184];
-  assign \result$347.lc_zero  = \result$347 [185];
-  assign \result$347.spw_mismatch  = \result$347 [186];
-  assign \events$337 [20] = \$20 ;
-  assign \events$337 [19] = \$18 ;
-  assign \events$337 [18] = \$16 ;
-  assign \events$337 [17] = \$14 ;
-  assign \events$337 [16] = \$12 ;
-  assign \events$337 [15] = \event ;
-  assign \events$337 [14] = \$10 ;
-  assign \events$337 [13] = \$8 ;
-  assign \events$337 [12] = faults[6];
-  assign \events$337 [11] = faults[4];
-  assign \events$337 [10] = overrun;
-  assign \events$337 [9] = \$6 ;
-  assign \events$337 [8] = \lc_zero$307 ;
-  assign \events$337 [7] = \lc_skip$306 ;
-  assign \events$337 [6] = \lc_repeat$305 ;
-  assign \events$337 [5] = faults[3];
-  assign \events$337 [4] = faults[2];
-  assign \events$337 [3] = faults[1];
-  assign \events$337 [2] = faults[0];
-  assign \events$337 [1] = crc_error[1];
-  assign \events$337 [0] = crc_error[0];
+  assign \result$348.status  = \result$348 [3:0];
+  assign \result$348.timestamp  = \result$348 [35:4];
+  assign \result$348.line_delay  = \result$348 [48:36];
+  assign \result$348.cds  = \result$348 [49];
+  assign \result$348.noise_events  = \result$348 [53:50];
+  assign \result$348.delay_settled  = \result$348 [54];
+  assign \result$348.settled_delay  = \result$348 [67:55];
+  assign \result$348.delay_spread  = \result$348 [75:68];
+  assign \result$348.word0  = \result$348 [133:76];
+  assign \result$348.word0.position  = \result$348 [130:76];
+  assign \result$348.word0.ne  = \result$348 [131];
+  assign \result$348.word0.nw  = \result$348 [132];
+  assign \result$348.word0.crc_ok  = \result$348 [133];
+  assign \result$348.word1  = \result$348 [176:134];
+  assign \result$348.word1.position  = \result$348 [173:134];
+  assign \result$348.word1.ne  = \result$348 [174];
+  assign \result$348.word1.nw  = \result$348 [175];
+  assign \result$348.word1.crc_ok  = \result$348 [176];
+  assign \result$348.lc  = \result$348 [182:177];
+  assign \result$348.lc_repeat  = \result$348 [183];
+  assign \result$348.lc_skip  = \result$348 [184];
+  assign \result$348.lc_zero  = \result$348 [185];
+  assign \result$348.spw_mismatch  = \result$348 [186];
+  assign \events$338 [20] = \$20 ;
+  assign \events$338 [19] = \$18 ;
+  assign \events$338 [18] = \$16 ;
+  assign \events$338 [17] = \$14 ;
+  assign \events$338 [16] = \$12 ;
+  assign \events$338 [15] = \event ;
+  assign \events$338 [14] = \$10 ;
+  assign \events$338 [13] = \$8 ;
+  assign \events$338 [12] = faults[6];
+  assign \events$338 [11] = faults[4];
+  assign \events$338 [10] = overrun;
+  assign \events$338 [9] = \$6 ;
+  assign \events$338 [8] = \lc_zero$308 ;
+  assign \events$338 [7] = \lc_skip$307 ;
+  assign \events$338 [6] = \lc_repeat$306 ;
+  assign \events$338 [5] = faults[3];
+  assign \events$338 [4] = faults[2];
+  assign \events$338 [3] = faults[1];
+  assign \events$338 [2] = faults[0];
+  assign \events$338 [1] = crc_error[1];
+  assign \events$338 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$315 [17] = ca_write;
-  assign \request$315 [16:10] = ca_count;
-  assign \request$315 [9:3] = ca_address;
-  assign \request$315 [2:0] = ca_slave_id;
+  assign \request$316 [17] = ca_write;
+  assign \request$316 [16:10] = ca_count;
+  assign \request$316 [9:3] = ca_address;
+  assign \request$316 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[186] = \spw_mismatch$312 ;
+  assign frame[186] = \spw_mismatch$313 ;
   assign frame[176] = \$28 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
@@ -1882,17 +1856,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign frame[132] = nw[0];
   assign frame[131] = ne[0];
   assign frame[130:76] = data0;
-  assign frame[185] = \lc_zero$307 ;
-  assign frame[184] = \lc_skip$306 ;
-  assign frame[183] = \lc_repeat$305 ;
+  assign frame[185] = \lc_zero$308 ;
+  assign frame[184] = \lc_skip$307 ;
+  assign frame[183] = \lc_repeat$306 ;
   assign frame[182:177] = \lc$213 ;
   assign frame[75:68] = spread;
-  assign frame[67:55] = \settled_delay$303 ;
+  assign frame[67:55] = \settled_delay$304 ;
   assign frame[54] = settled;
   assign frame[53:50] = events;
-  assign frame[49] = \cds$300 ;
+  assign frame[49] = \cds$301 ;
   assign frame[48:36] = delay;
-  assign frame[3:0] = \status$290 ;
+  assign frame[3:0] = \status$291 ;
+  assign customs[75:38] = cycle[249:212];
+  assign customs[37:0] = cycle[198:161];
   assign \words$248 [23:12] = cycle[211:200];
   assign \words$248 [11:0] = cycle[160:149];
   assign words[23:12] = cycle[211:200];
@@ -1939,7 +1915,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crcs, no_start_limit, idle, clk);
+module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crc_widths, no_start_limit, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$6  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -2003,37 +1979,41 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \$63 ;
   wire [3:0] \$64 ;
   wire [16:0] \$65 ;
-  wire [24:0] \$66 ;
-  wire [1:0] \$67 ;
-  wire [2:0] \$68 ;
-  reg \$69 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire [37:0] \$69 ;
   wire \$7 ;
-  reg [274:0] \$70 ;
-  reg [23:0] \$71 ;
-  reg [23:0] \$72 ;
-  reg [11:0] \$73 ;
-  reg [11:0] \$74 ;
-  reg [16:0] \$75 ;
-  reg [75:0] \$76 ;
-  reg [24:0] \$77 ;
+  wire [37:0] \$70 ;
+  wire [37:0] \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire [37:0] \$75 ;
+  wire [37:0] \$76 ;
+  wire [37:0] \$77 ;
+  wire [24:0] \$78 ;
+  wire [1:0] \$79 ;
   wire \$8 ;
+  wire [2:0] \$80 ;
+  reg \$81 ;
+  reg [274:0] \$82 ;
+  reg [23:0] \$83 ;
+  reg [23:0] \$84 ;
+  reg [11:0] \$85 ;
+  reg [11:0] \$86 ;
+  reg [16:0] \$87 ;
+  reg [9:0] \$88 ;
+  reg [24:0] \$89 ;
   wire \$9 ;
   output [23:0] ack_limit;
   reg [23:0] ack_limit = 24'h000000;
   input clk;
   wire clk;
-  output [75:0] crcs;
-  reg [75:0] crcs = 76'h0000000000000000000;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  output [9:0] crc_widths;
+  reg [9:0] crc_widths = 10'h000;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
   output [274:0] cycle;
   reg [274:0] cycle = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
@@ -2162,6 +2142,18 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
+  assign \$11  = | live[165:161];
+  assign \$12  = \$10  & \$11 ;
+  assign \$13  = live[165:161] <= 5'h10;
+  assign \$14  = \$12  & \$13 ;
+  assign \$15  = \$9  | \$14 ;
+  assign \$16  = \$4  & \$15 ;
+  assign \$17  = \$1  & \$16 ;
+  assign \$18  = ~ live[199];
+  assign \$19  = | live[205:200];
+  assign \$20  = live[205:200] <= 6'h28;
+  assign \$21  = \$19  & \$20 ;
+  assign \$22  = ! live[209:208];
   assign \$23  = live[209:208] == 1'h1;
   assign \$24  = \$22  | \$23 ;
   assign \$25  = live[209:208] == 2'h2;
@@ -2204,26 +2196,38 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$63  = ! live[144:141];
   assign \$64  = \$63  ? 4'h2 : live[144:141];
   assign \$65  = live[15:0] + \$64 ;
-  assign \$66  = ack_limit + { cycle[15:0], 1'h1 };
-  assign \$68  = 2'h1 + cycle[199];
+  assign \$66  = live[158:157] == 2'h3;
+  assign \$67  = live[158:157] == 2'h2;
+  assign \$68  = live[158:157] == 1'h1;
+  assign \$69  = \$68  ? 38'h2000000066 : 38'h0000000000;
+  assign \$70  = \$67  ? 38'h2000121b30 : \$69 ;
+  assign \$71  = \$66  ? live[198:161] : \$70 ;
+  assign \$72  = live[209:208] == 2'h3;
+  assign \$73  = live[209:208] == 2'h2;
+  assign \$74  = live[209:208] == 1'h1;
+  assign \$75  = \$74  ? 38'h2000000066 : 38'h0000000000;
+  assign \$76  = \$73  ? 38'h2000121b30 : \$75 ;
+  assign \$77  = \$72  ? live[249:212] : \$76 ;
+  assign \$78  = ack_limit + { cycle[15:0], 1'h1 };
+  assign \$80  = 2'h1 + cycle[199];
   always @(posedge clk)
-    ok <= \$69 ;
+    ok <= \$81 ;
   always @(posedge clk)
-    cycle <= \$70 ;
+    cycle <= \$82 ;
   always @(posedge clk)
-    ack_limit <= \$71 ;
+    ack_limit <= \$83 ;
   always @(posedge clk)
-    timeout_limit <= \$72 ;
+    timeout_limit <= \$84 ;
   always @(posedge clk)
-    delay_limit <= \$73 ;
+    delay_limit <= \$85 ;
   always @(posedge clk)
-    quiet_time <= \$74 ;
+    quiet_time <= \$86 ;
   always @(posedge clk)
-    delay_tolerance <= \$75 ;
+    delay_tolerance <= \$87 ;
   always @(posedge clk)
-    crcs <= \$76 ;
+    crc_widths <= \$88 ;
   always @(posedge clk)
-    no_start_limit <= \$77 ;
+    no_start_limit <= \$89 ;
   assign \$1  = | live[15:1];
   assign \$2  = | live[154:149];
   assign \$3  = live[154:149] <= 6'h37;
@@ -2234,144 +2238,92 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$8  = live[158:157] == 2'h2;
   assign \$9  = \$7  | \$8 ;
   assign \$10  = live[158:157] == 2'h3;
-  assign \$11  = | live[165:161];
-  assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[165:161] <= 5'h10;
-  assign \$14  = \$12  & \$13 ;
-  assign \$15  = \$9  | \$14 ;
-  assign \$16  = \$4  & \$15 ;
-  assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[199];
-  assign \$19  = | live[205:200];
-  assign \$20  = live[205:200] <= 6'h28;
-  assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[209:208];
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$69  = \$54 ;
+    \$81  = \$54 ;
     if (rst) begin
-      \$69  = 1'h0;
+      \$81  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$70  = cycle;
+    \$82  = cycle;
     if (idle) begin
-      \$70  = live;
+      \$82  = live;
     end
     if (rst) begin
-      \$70  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
+      \$82  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$71  = ack_limit;
+    \$83  = ack_limit;
     if (idle) begin
-      \$71  = \$56 ;
+      \$83  = \$56 ;
     end
     if (rst) begin
-      \$71  = 24'h000000;
+      \$83  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$72  = timeout_limit;
+    \$84  = timeout_limit;
     if (idle) begin
-      \$72  = \$58 ;
+      \$84  = \$58 ;
     end
     if (rst) begin
-      \$72  = 24'h000000;
+      \$84  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$73  = delay_limit;
+    \$85  = delay_limit;
     if (idle) begin
-      \$73  = \$60 ;
+      \$85  = \$60 ;
     end
     if (rst) begin
-      \$73  = 12'h000;
+      \$85  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$74  = quiet_time;
+    \$86  = quiet_time;
     if (idle) begin
-      \$74  = \$62 ;
+      \$86  = \$62 ;
     end
     if (rst) begin
-      \$74  = 12'h000;
+      \$86  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$75  = delay_tolerance;
+    \$87  = delay_tolerance;
     if (idle) begin
-      \$75  = \$65 ;
+      \$87  = \$65 ;
     end
     if (rst) begin
-      \$75  = 17'h00000;
+      \$87  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$76  = crcs;
+    \$88  = crc_widths;
     if (idle) begin
-      (* full_case = 32'd1 *)
-      casez (live[158:157])
-        2'h1:
-          begin
-            \$76 [4:0] = 5'h06;
-            \$76 [20:5] = 16'h0003;
-            \$76 [36:21] = 16'h0000;
-            \$76 [37] = 1'h1;
-          end
-        2'h2:
-          begin
-            \$76 [4:0] = 5'h10;
-            \$76 [20:5] = 16'h90d9;
-            \$76 [36:21] = 16'h0000;
-            \$76 [37] = 1'h1;
-          end
-        2'h3:
-            \$76 [37:0] = live[198:161];
-        default:
-            \$76 [37:0] = 38'h0000000000;
-      endcase
-      (* full_case = 32'd1 *)
-      casez (live[209:208])
-        2'h1:
-          begin
-            \$76 [42:38] = 5'h06;
-            \$76 [58:43] = 16'h0003;
-            \$76 [74:59] = 16'h0000;
-            \$76 [75] = 1'h1;
-          end
-        2'h2:
-          begin
-            \$76 [42:38] = 5'h10;
-            \$76 [58:43] = 16'h90d9;
-            \$76 [74:59] = 16'h0000;
-            \$76 [75] = 1'h1;
-          end
-        2'h3:
-            \$76 [75:38] = live[249:212];
-        default:
-            \$76 [75:38] = 38'h0000000000;
-      endcase
+      \$88 [4:0] = \$71 [4:0];
+      \$88 [9:5] = \$77 [4:0];
     end
     if (rst) begin
-      \$76  = 76'h0000000000000000000;
+      \$88  = 10'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$77  = \$66 ;
+    \$89  = \$78 ;
     if (rst) begin
-      \$77  = 25'h0000000;
+      \$89  = 25'h0000000;
     end
   end
-  assign word_count = \$68 [1:0];
+  assign word_count = \$80 [1:0];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -2458,18 +2410,10 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \cycle.ssi_error  = cycle[272];
   assign \cycle.ssi_error_low  = cycle[273];
   assign \cycle.ssi_double  = cycle[274];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
   assign \$36  = live[156];
-  assign \$67  = 2'h1;
+  assign \$79  = 2'h1;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -5601,8 +5545,8 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$2170$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
-, lc, cpw_top, mismatch, crc_ok, clk);
+module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$2197$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+, data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -6197,51 +6141,60 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   input \bit ;
   wire \bit ;
   wire \bit$11 ;
-  wire \bit$35 ;
+  wire \bit$37 ;
   output cds;
   reg cds = 1'h0;
   wire check;
   input clk;
   wire clk;
+  wire [3:0] codes;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \codes[0] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \codes[1] ;
   wire \cover ;
   output [39:0] cpw_top;
   reg [39:0] cpw_top = 40'h0000000000;
   output [1:0] crc_ok;
   wire [1:0] crc_ok;
-  input [75:0] crcs;
-  wire [75:0] crcs;
-  wire [75:0] \crcs$28 ;
-  wire [37:0] \crcs$28[0] ;
-  wire \crcs$28[0].inverted ;
-  wire [15:0] \crcs$28[0].poly ;
-  wire [15:0] \crcs$28[0].start ;
-  wire [4:0] \crcs$28[0].width ;
-  wire [37:0] \crcs$28[1] ;
-  wire \crcs$28[1].inverted ;
-  wire [15:0] \crcs$28[1].poly ;
-  wire [15:0] \crcs$28[1].start ;
-  wire [4:0] \crcs$28[1].width ;
-  wire [75:0] \crcs$3 ;
-  wire [37:0] \crcs$3[0] ;
-  wire \crcs$3[0].inverted ;
-  wire [15:0] \crcs$3[0].poly ;
-  wire [15:0] \crcs$3[0].start ;
-  wire [4:0] \crcs$3[0].width ;
-  wire [37:0] \crcs$3[1] ;
-  wire \crcs$3[1].inverted ;
-  wire [15:0] \crcs$3[1].poly ;
-  wire [15:0] \crcs$3[1].start ;
-  wire [4:0] \crcs$3[1].width ;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  input [9:0] crc_widths;
+  wire [9:0] crc_widths;
+  wire [9:0] \crc_widths$3 ;
+  wire [4:0] \crc_widths$3[0] ;
+  wire [4:0] \crc_widths$3[1] ;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
+  input [75:0] customs;
+  wire [75:0] customs;
+  wire [75:0] \customs$30 ;
+  wire [37:0] \customs$30[0] ;
+  wire \customs$30[0].inverted ;
+  wire [15:0] \customs$30[0].poly ;
+  wire [15:0] \customs$30[0].start ;
+  wire [4:0] \customs$30[0].width ;
+  wire [37:0] \customs$30[1] ;
+  wire \customs$30[1].inverted ;
+  wire [15:0] \customs$30[1].poly ;
+  wire [15:0] \customs$30[1].start ;
+  wire [4:0] \customs$30[1].width ;
+  wire [37:0] \customs[0] ;
+  wire \customs[0].inverted ;
+  wire [15:0] \customs[0].poly ;
+  wire [15:0] \customs[0].start ;
+  wire [4:0] \customs[0].width ;
+  wire [37:0] \customs[1] ;
+  wire \customs[1].inverted ;
+  wire [15:0] \customs[1].poly ;
+  wire [15:0] \customs[1].start ;
+  wire [4:0] \customs[1].width ;
   output [54:0] data0;
   reg [54:0] data0 = 55'h00000000000000;
   output [39:0] data1;
@@ -6277,7 +6230,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   reg in_word;
   wire [6:0] index;
   (* init = 1'h0 *)
-  wire \index$38 ;
+  wire \index$40 ;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -6294,8 +6247,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$2170$272 ;
-  wire [2:0] \port$2170$272 ;
+  input [2:0] \port$2197$272 ;
+  wire [2:0] \port$2197$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -6581,7 +6534,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$2170$272 [0];
+  assign error_bit = ssi & \port$2197$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -6635,7 +6588,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$2170$272 [2];
+  assign \$48  = ssi & \port$2197$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -6922,15 +6875,15 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$2170$272 [0];
+  assign \$335  = ssi & \port$2197$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$2170$272 [0];
-  assign \$343  = ~ \port$2170$272 [1];
+  assign \$342  = ssi & \port$2197$272 [0];
+  assign \$343  = ~ \port$2197$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -7003,8 +6956,9 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
     .\bit (\bit ),
     .check(check),
     .clk(clk),
+    .codes(codes),
     .\cover (\cover ),
-    .crcs(crcs),
+    .customs(customs),
     .index(word),
     .last(last),
     .load(load),
@@ -7015,7 +6969,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   );
   \biss_master.decoder.field_ends  field_ends (
     .clk(clk),
-    .crcs(crcs),
+    .crc_widths(crc_widths),
     .ends(ends),
     .error_bit(error_bit),
     .receiver_clear(receiver_clear),
@@ -7561,18 +7515,18 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
     end
   end
   assign \words$1  = words;
-  assign \crcs$3  = crcs;
-  assign ssi_error = \port$2170$272 [0];
+  assign \crc_widths$3  = crc_widths;
+  assign ssi_error = \port$2197$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$28  = crcs;
-  assign \bit$35  = \bit ;
+  assign \customs$30  = customs;
+  assign \bit$37  = \bit ;
   assign ok = crc_ok;
-  assign \index$38  = word;
+  assign \index$40  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$2170$272 [2];
-  assign ssi_error_low = \port$2170$272 [1];
+  assign ssi_double = \port$2197$272 [2];
+  assign ssi_error_low = \port$2197$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -7601,26 +7555,10 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   assign \words$1[1].crc  = words[21:20];
   assign \words$1[1].gray  = words[22];
   assign \words$1[1].signed  = words[23];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$3[0]  = crcs[37:0];
-  assign \crcs$3[0].width  = crcs[4:0];
-  assign \crcs$3[0].poly  = crcs[20:5];
-  assign \crcs$3[0].start  = crcs[36:21];
-  assign \crcs$3[0].inverted  = crcs[37];
-  assign \crcs$3[1]  = crcs[75:38];
-  assign \crcs$3[1].width  = crcs[42:38];
-  assign \crcs$3[1].poly  = crcs[58:43];
-  assign \crcs$3[1].start  = crcs[74:59];
-  assign \crcs$3[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
+  assign \crc_widths$3[0]  = crc_widths[4:0];
+  assign \crc_widths$3[1]  = crc_widths[9:5];
   assign \ends[0]  = ends[36:0];
   assign \ends[0].data_end_p1  = ends[6:0];
   assign \ends[0].data_end_m1  = ends[13:7];
@@ -7637,16 +7575,30 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   assign \ends[1].word_end_m1  = ends[71:65];
   assign \ends[1].data_at0  = ends[72];
   assign \ends[1].lc_at0  = ends[73];
-  assign \crcs$28[0]  = crcs[37:0];
-  assign \crcs$28[0].width  = crcs[4:0];
-  assign \crcs$28[0].poly  = crcs[20:5];
-  assign \crcs$28[0].start  = crcs[36:21];
-  assign \crcs$28[0].inverted  = crcs[37];
-  assign \crcs$28[1]  = crcs[75:38];
-  assign \crcs$28[1].width  = crcs[42:38];
-  assign \crcs$28[1].poly  = crcs[58:43];
-  assign \crcs$28[1].start  = crcs[74:59];
-  assign \crcs$28[1].inverted  = crcs[75];
+  assign \codes[0]  = codes[1:0];
+  assign \codes[1]  = codes[3:2];
+  assign \customs[0]  = customs[37:0];
+  assign \customs[0].width  = customs[4:0];
+  assign \customs[0].poly  = customs[20:5];
+  assign \customs[0].start  = customs[36:21];
+  assign \customs[0].inverted  = customs[37];
+  assign \customs[1]  = customs[75:38];
+  assign \customs[1].width  = customs[42:38];
+  assign \customs[1].poly  = customs[58:43];
+  assign \customs[1].start  = customs[74:59];
+  assign \customs[1].inverted  = customs[75];
+  assign \customs$30[0]  = customs[37:0];
+  assign \customs$30[0].width  = customs[4:0];
+  assign \customs$30[0].poly  = customs[20:5];
+  assign \customs$30[0].start  = customs[36:21];
+  assign \customs$30[0].inverted  = customs[37];
+  assign \customs$30[1]  = customs[75:38];
+  assign \customs$30[1].width  = customs[42:38];
+  assign \customs$30[1].poly  = customs[58:43];
+  assign \customs$30[1].start  = customs[74:59];
+  assign \customs$30[1].inverted  = customs[75];
+  assign codes[3:2] = words[21:20];
+  assign codes[1:0] = words[9:8];
   assign \$44  = ends[72];
   assign \$45  = ends[73];
   assign \$351  = word;
@@ -7722,63 +7674,109 @@ module \biss_master.decoder.copy (rst, index, first, \bit , receiver_clear, sepa
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
+module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, customs, \bit , receiver_clear, codes, index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
-  reg [15:0] \$1 ;
-  wire \$10 ;
-  reg \$11 ;
+  reg [1:0] \$1 ;
+  wire [37:0] \$10 ;
+  reg [1:0] \$11 ;
   wire \$12 ;
-  wire \$13 ;
-  wire \$14 ;
+  reg [37:0] \$13 ;
+  reg [1:0] \$14 ;
   wire \$15 ;
-  reg [4:0] \$16 ;
+  reg [1:0] \$16 ;
   wire \$17 ;
-  wire \$18 ;
-  reg \$19 ;
-  reg [4:0] \$2 ;
-  wire \$20 ;
-  wire \$21 ;
+  wire [37:0] \$18 ;
+  wire [37:0] \$19 ;
+  wire \$2 ;
+  wire [37:0] \$20 ;
+  reg [1:0] \$21 ;
   wire \$22 ;
-  wire \$23 ;
-  wire \$24 ;
-  reg [4:0] \$25 ;
-  wire \$26 ;
+  reg [37:0] \$23 ;
+  reg [1:0] \$24 ;
+  wire \$25 ;
+  reg [1:0] \$26 ;
   wire \$27 ;
-  reg \$28 ;
-  wire \$29 ;
-  wire \$3 ;
-  wire \$30 ;
-  wire \$31 ;
+  wire [37:0] \$28 ;
+  wire [37:0] \$29 ;
+  reg [37:0] \$3 ;
+  wire [37:0] \$30 ;
+  reg [1:0] \$31 ;
   wire \$32 ;
-  reg [15:0] \$33 ;
-  reg \$34 ;
-  reg [1:0] \$35 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  wire [15:0] \$6 ;
-  wire [15:0] \$7 ;
-  reg [4:0] \$8 ;
-  wire \$9 ;
+  reg [37:0] \$33 ;
+  reg [1:0] \$34 ;
+  wire \$35 ;
+  reg [1:0] \$36 ;
+  wire \$37 ;
+  wire [37:0] \$38 ;
+  wire [37:0] \$39 ;
+  reg [1:0] \$4 ;
+  wire [37:0] \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  wire [15:0] \$43 ;
+  wire [15:0] \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  wire \$48 ;
+  wire \$49 ;
+  wire \$5 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  wire \$55 ;
+  wire \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
+  reg [1:0] \$6 ;
+  wire \$60 ;
+  wire \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  reg [15:0] \$64 ;
+  reg \$65 ;
+  reg [37:0] \$66 ;
+  reg [1:0] \$67 ;
+  wire \$7 ;
+  wire [37:0] \$8 ;
+  wire [37:0] \$9 ;
   input \bit ;
   wire \bit ;
   input check;
   wire check;
   input clk;
   wire clk;
+  input [3:0] codes;
+  wire [3:0] codes;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \codes[0] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \codes[1] ;
   input \cover ;
   wire \cover ;
-  input [75:0] crcs;
-  wire [75:0] crcs;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  input [75:0] customs;
+  wire [75:0] customs;
+  wire [37:0] \customs[0] ;
+  wire \customs[0].inverted ;
+  wire [15:0] \customs[0].poly ;
+  wire [15:0] \customs[0].start ;
+  wire [4:0] \customs[0].width ;
+  wire [37:0] \customs[1] ;
+  wire \customs[1].inverted ;
+  wire [15:0] \customs[1].poly ;
+  wire [15:0] \customs[1].start ;
+  wire [4:0] \customs[1].width ;
   input index;
   wire index;
   input last;
@@ -7795,190 +7793,313 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
   reg [15:0] \reg  = 16'h0000;
   input rst;
   wire rst;
-  assign \$3  = { \reg , 1'h0 } >> \$2 ;
-  assign \$4  = \$3  ^ \bit ;
-  assign \$6  = \$4  ? \$5  : 16'h0000;
-  assign \$7  = { \reg [14:0], 1'h0 } ^ \$6 ;
-  assign \$9  = { \reg , 1'h0 } >> \$8 ;
-  assign \$10  = \bit  ^ \$9 ;
-  assign \$12  = \$10  ^ \$11 ;
-  assign \$13  = check & \$12 ;
-  assign \$14  = mismatch | \$13 ;
-  assign \$15  = ! index;
-  assign \$17  = { \reg , 1'h0 } >> \$16 ;
-  assign \$18  = \bit  ^ \$17 ;
-  assign \$20  = \$18  ^ \$19 ;
-  assign \$21  = check & \$20 ;
-  assign \$22  = mismatch | \$21 ;
-  assign \$23  = ~ \$22 ;
-  assign \$26  = { \reg , 1'h0 } >> \$25 ;
-  assign \$27  = \bit  ^ \$26 ;
-  assign \$29  = \$27  ^ \$28 ;
-  assign \$30  = check & \$29 ;
-  assign \$31  = mismatch | \$30 ;
-  assign \$32  = ~ \$31 ;
+  reg [37:0] settings = 38'h0000000000;
+  wire \settings.inverted ;
+  wire [15:0] \settings.poly ;
+  wire [15:0] \settings.start ;
+  wire [4:0] \settings.width ;
+  assign \$35  = \$34  == 2'h2;
+  assign \$37  = \$36  == 1'h1;
+  assign \$38  = \$37  ? 38'h2000000066 : 38'h0000000000;
+  assign \$39  = \$35  ? 38'h2000121b30 : \$38 ;
+  assign \$40  = \$32  ? \$33  : \$39 ;
+  assign \$41  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$42  = \$41  ^ \bit ;
+  assign \$43  = \$42  ? settings[20:5] : 16'h0000;
+  assign \$44  = { \reg [14:0], 1'h0 } ^ \$43 ;
+  assign \$45  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$46  = \bit  ^ \$45 ;
+  assign \$47  = \$46  ^ settings[37];
+  assign \$48  = check & \$47 ;
+  assign \$49  = mismatch | \$48 ;
+  assign \$50  = ! index;
+  assign \$51  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$52  = \bit  ^ \$51 ;
+  assign \$53  = \$52  ^ settings[37];
+  assign \$54  = check & \$53 ;
+  assign \$55  = mismatch | \$54 ;
+  assign \$56  = ~ \$55 ;
+  assign \$58  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$59  = \bit  ^ \$58 ;
+  assign \$60  = \$59  ^ settings[37];
+  assign \$61  = check & \$60 ;
+  assign \$62  = mismatch | \$61 ;
+  assign \$63  = ~ \$62 ;
   always @(posedge clk)
-    \reg  <= \$33 ;
+    \reg  <= \$64 ;
   always @(posedge clk)
-    mismatch <= \$34 ;
+    mismatch <= \$65 ;
   always @(posedge clk)
-    ok <= \$35 ;
+    settings <= \$66 ;
+  always @(posedge clk)
+    ok <= \$67 ;
+  assign \$2  = \$1  == 2'h3;
+  assign \$5  = \$4  == 2'h2;
+  assign \$7  = \$6  == 1'h1;
+  assign \$8  = \$7  ? 38'h2000000066 : 38'h0000000000;
+  assign \$9  = \$5  ? 38'h2000121b30 : \$8 ;
+  assign \$10  = \$2  ? \$3  : \$9 ;
+  assign \$12  = \$11  == 2'h3;
+  assign \$15  = \$14  == 2'h2;
+  assign \$17  = \$16  == 1'h1;
+  assign \$18  = \$17  ? 38'h2000000066 : 38'h0000000000;
+  assign \$19  = \$15  ? 38'h2000121b30 : \$18 ;
+  assign \$20  = \$12  ? \$13  : \$19 ;
+  assign \$22  = \$21  == 2'h3;
+  assign \$25  = \$24  == 2'h2;
+  assign \$27  = \$26  == 1'h1;
+  assign \$28  = \$27  ? 38'h2000000066 : 38'h0000000000;
+  assign \$29  = \$25  ? 38'h2000121b30 : \$28 ;
+  assign \$30  = \$22  ? \$23  : \$29 ;
+  assign \$32  = \$31  == 2'h3;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (load_index)
       1'h0:
-          \$1  = crcs[36:21];
+          \$33  = customs[37:0];
       1'h1:
-          \$1  = crcs[74:59];
+          \$33  = customs[75:38];
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
-    casez (index)
+    casez (load_index)
       1'h0:
-          \$2  = crcs[4:0];
+          \$34  = codes[1:0];
       1'h1:
-          \$2  = crcs[42:38];
+          \$34  = codes[3:2];
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
-    casez (index)
+    casez (load_index)
       1'h0:
-          \$5  = crcs[20:5];
+          \$36  = codes[1:0];
       1'h1:
-          \$5  = crcs[58:43];
+          \$36  = codes[3:2];
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$8  = crcs[4:0];
-      1'h1:
-          \$8  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$11  = crcs[37];
-      1'h1:
-          \$11  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$16  = crcs[4:0];
-      1'h1:
-          \$16  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$19  = crcs[37];
-      1'h1:
-          \$19  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$25  = crcs[4:0];
-      1'h1:
-          \$25  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$28  = crcs[37];
-      1'h1:
-          \$28  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    \$33  = \reg ;
+    \$64  = \reg ;
     if (load) begin
-      \$33  = \$1 ;
+      \$64  = \$10 [36:21];
     end else if (\cover ) begin
-      \$33  = \$7 ;
+      \$64  = \$44 ;
     end else if (check) begin
-      \$33  = { \reg [14:0], 1'h0 };
+      \$64  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$33  = 16'h0000;
+      \$64  = 16'h0000;
     end
     if (rst) begin
-      \$33  = 16'h0000;
+      \$64  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    \$34  = mismatch;
+    \$65  = mismatch;
     if (load) begin
-      \$34  = 1'h0;
+      \$65  = 1'h0;
     end else if (\cover ) begin
     end else if (check) begin
-      \$34  = \$14 ;
+      \$65  = \$49 ;
     end
     if (receiver_clear) begin
-      \$34  = 1'h0;
+      \$65  = 1'h0;
     end
     if (rst) begin
-      \$34  = 1'h0;
+      \$65  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    \$35  = ok;
+    \$66  = settings;
+    if (load) begin
+      \$66 [4:0] = \$20 [4:0];
+      \$66 [20:5] = \$30 [20:5];
+      \$66 [37] = \$40 [37];
+    end
+    if (receiver_clear) begin
+      \$66 [20:0] = 21'h000000;
+      \$66 [37] = 1'h0;
+    end
+    if (rst) begin
+      \$66  = 38'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    \$67  = ok;
     if (last) begin
-      if (\$15 ) begin
-        \$35 [0] = \$23 ;
+      if (\$50 ) begin
+        \$67 [0] = \$56 ;
       end
-      if (\$24 ) begin
-        \$35 [1] = \$32 ;
+      if (\$57 ) begin
+        \$67 [1] = \$63 ;
       end
     end
     if (receiver_clear) begin
-      \$35  = 2'h3;
+      \$67  = 2'h3;
     end
     if (rst) begin
-      \$35  = 2'h3;
+      \$67  = 2'h3;
     end
   end
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
-  assign \$24  = index;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$1  = codes[1:0];
+      1'h1:
+          \$1  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$3  = customs[37:0];
+      1'h1:
+          \$3  = customs[75:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$4  = codes[1:0];
+      1'h1:
+          \$4  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$6  = codes[1:0];
+      1'h1:
+          \$6  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$11  = codes[1:0];
+      1'h1:
+          \$11  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$13  = customs[37:0];
+      1'h1:
+          \$13  = customs[75:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$14  = codes[1:0];
+      1'h1:
+          \$14  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$16  = codes[1:0];
+      1'h1:
+          \$16  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$21  = codes[1:0];
+      1'h1:
+          \$21  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$23  = customs[37:0];
+      1'h1:
+          \$23  = customs[75:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$24  = codes[1:0];
+      1'h1:
+          \$24  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$26  = codes[1:0];
+      1'h1:
+          \$26  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$31  = codes[1:0];
+      1'h1:
+          \$31  = codes[3:2];
+    endcase
+  end
+  assign \codes[0]  = codes[1:0];
+  assign \codes[1]  = codes[3:2];
+  assign \customs[0]  = customs[37:0];
+  assign \customs[0].width  = customs[4:0];
+  assign \customs[0].poly  = customs[20:5];
+  assign \customs[0].start  = customs[36:21];
+  assign \customs[0].inverted  = customs[37];
+  assign \customs[1]  = customs[75:38];
+  assign \customs[1].width  = customs[42:38];
+  assign \customs[1].poly  = customs[58:43];
+  assign \customs[1].start  = customs[74:59];
+  assign \customs[1].inverted  = customs[75];
+  assign \settings.width  = settings[4:0];
+  assign \settings.poly  = settings[20:5];
+  assign \settings.start  = settings[36:21];
+  assign \settings.inverted  = settings[37];
+  assign \$57  = index;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.field_ends (rst, error_bit, words, crcs, receiver_clear, ends, clk);
+module \biss_master.decoder.field_ends (rst, error_bit, words, crc_widths, receiver_clear, ends, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
@@ -8018,18 +8139,10 @@ module \biss_master.decoder.field_ends (rst, error_bit, words, crcs, receiver_cl
   wire [7:0] \$9 ;
   input clk;
   wire clk;
-  input [75:0] crcs;
-  wire [75:0] crcs;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  input [9:0] crc_widths;
+  wire [9:0] crc_widths;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
   output [73:0] ends;
   wire [73:0] ends;
   wire [36:0] \ends[0] ;
@@ -8100,7 +8213,7 @@ module \biss_master.decoder.field_ends (rst, error_bit, words, crcs, receiver_cl
   assign \$2  = words[5:0] + 7'h7f;
   assign \$4  = words[5:0] + \$3 ;
   assign \$6  = words[5:0] + \$5 ;
-  assign \$8  = \$7  + crcs[4:0];
+  assign \$8  = \$7  + crc_widths[4:0];
   assign \$9  = words[5:0] + \$8 [6:0];
   assign \$10  = | words[5:0];
   assign \$12  = words[5:0] + \$11 ;
@@ -8112,7 +8225,7 @@ module \biss_master.decoder.field_ends (rst, error_bit, words, crcs, receiver_cl
   assign \$19  = words[17:12] + 7'h7f;
   assign \$21  = words[17:12] + \$20 ;
   assign \$23  = words[17:12] + \$22 ;
-  assign \$25  = \$24  + crcs[42:38];
+  assign \$25  = \$24  + crc_widths[9:5];
   assign \$26  = words[17:12] + \$25 [6:0];
   assign \$27  = | words[17:12];
   assign \$29  = words[17:12] + \$28 ;
@@ -8348,16 +8461,8 @@ module \biss_master.decoder.field_ends (rst, error_bit, words, crcs, receiver_cl
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
   assign \$36 [36] = \$34 ;
   assign \$36 [35] = \$27 ;
   assign \$36 [34:28] = \$26 [6:0];
@@ -9229,7 +9334,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_stop (rst, words, \port$2170$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master.ma_stop (rst, words, \port$2197$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -9264,25 +9369,17 @@ module \biss_master.ma_stop (rst, words, \port$2170$199 , ssi, ssi_error, ssi_do
   wire clear;
   input clk;
   wire clk;
-  input [75:0] crcs;
-  wire [75:0] crcs;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  input [9:0] crc_widths;
+  wire [9:0] crc_widths;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
   wire [1:0] enables;
   output enough;
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$2170$199 ;
-  wire \port$2170$199 ;
+  input \port$2197$199 ;
+  wire \port$2197$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -9328,7 +9425,7 @@ module \biss_master.ma_stop (rst, words, \port$2170$199 , ssi, ssi_error, ssi_do
   wire \words[1].nenw ;
   wire \words[1].signed ;
   assign \$1  = ssi & ssi_error;
-  assign \$3  = \$2  + crcs[4:0];
+  assign \$3  = \$2  + crc_widths[4:0];
   assign \$4  = words[5:0] + \$3 [7:0];
   assign \$5  = n + 1'h1;
   assign \$6  = n + 1'h1;
@@ -9336,7 +9433,7 @@ module \biss_master.ma_stop (rst, words, \port$2170$199 , ssi, ssi_error, ssi_do
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$2170$199  ? word1_len : 8'h00;
+  assign \$11  = \port$2197$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -9345,7 +9442,7 @@ module \biss_master.ma_stop (rst, words, \port$2170$199 , ssi, ssi_error, ssi_do
   assign \$17  = started & \$16 ;
   assign \$18  = ~ clear;
   assign \$19  = \$17  & \$18 ;
-  assign \$21  = \$20  + crcs[42:38];
+  assign \$21  = \$20  + crc_widths[9:5];
   assign \$22  = words[17:12] + \$21 [7:0];
   always @(posedge clk)
     n <= \$23 ;
@@ -9446,7 +9543,7 @@ module \biss_master.ma_stop (rst, words, \port$2170$199 , ssi, ssi_error, ssi_do
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$2170$199 , 1'h1 };
+  assign enables = { \port$2197$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -9461,16 +9558,8 @@ module \biss_master.ma_stop (rst, words, \port$2170$199 , ssi, ssi_error, ssi_do
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
 endmodule
 
 (* generator = "Amaranth" *)
@@ -11587,7 +11676,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2170$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2197$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -11721,8 +11810,8 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$217
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$2170$259 ;
-  wire [12:0] \port$2170$259 ;
+  input [12:0] \port$2197$259 ;
+  wire [12:0] \port$2197$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -11747,7 +11836,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$217
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$2170$259 [12:1] + 1'h1;
+  assign \$11  = \port$2197$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -11872,7 +11961,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$217
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$2170$259 [0]),
+    .clear_high(\port$2197$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -12015,7 +12104,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$217
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$2170$259 [0]) begin
+            if (\port$2197$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -12100,7 +12189,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$217
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$2170$259 [0]) begin
+            if (\port$2197$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -12139,7 +12228,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$217
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$2170$259 [12:1] };
+            \$85  = { 1'h0, \port$2197$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -12524,11 +12613,11 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$217
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$2170$259 [12:1] };
-  assign fixed = \port$2170$259 [0];
+  assign fixed_delay = { 1'h0, \port$2197$259 [12:1] };
+  assign fixed = \port$2197$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$2170$259 [0];
+  assign clear_high = \port$2197$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -12935,7 +13024,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2158$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2185$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -12977,8 +13066,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2158$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2158$0 ;
-  wire \port$2158$0 ;
+  input \port$2185$0 ;
+  wire \port$2185$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -12992,9 +13081,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2158$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2158$0  };
-  assign \$2  = { lc[4:0], \port$2158$0  } == last;
-  assign \$3  = { lc[4:0], \port$2158$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2185$0  };
+  assign \$2  = { lc[4:0], \port$2185$0  } == last;
+  assign \$3  = { lc[4:0], \port$2185$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -13104,7 +13193,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2158$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2158$0  };
+  assign lc_next = { lc[4:0], \port$2185$0  };
   assign zero = is_zero;
 endmodule
 
@@ -13679,7 +13768,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1591$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1617$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
@@ -13857,8 +13946,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1591$0 , lc_check, lc_re
   wire noisy;
   output passed;
   wire passed;
-  output \port$1591$0 ;
-  wire \port$1591$0 ;
+  output \port$1617$0 ;
+  wire \port$1617$0 ;
   output report;
   wire report;
   input report_frame;
@@ -13976,7 +14065,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1591$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1591$0  = \$2 ;
+  assign \port$1617$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

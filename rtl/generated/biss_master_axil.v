@@ -1098,12 +1098,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$7097$0 (\$10 ),
-    .\port$7108$0 (\$11 ),
-    .\port$7185$0 (\$12 ),
-    .\port$7628$0 (\$13 ),
-    .\port$7639$0 (\$14 ),
-    .\port$7716$0 (\$15 ),
+    .\port$7153$0 (\$10 ),
+    .\port$7164$0 (\$11 ),
+    .\port$7241$0 (\$12 ),
+    .\port$7688$0 (\$13 ),
+    .\port$7699$0 (\$14 ),
+    .\port$7776$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1188,9 +1188,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$7097$0 (\$10 ),
-    .\port$7108$0 (\$11 ),
-    .\port$7185$0 (\$12 ),
+    .\port$7153$0 (\$10 ),
+    .\port$7164$0 (\$11 ),
+    .\port$7241$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1265,9 +1265,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(\regs__count_en$783 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$807 ),
-    .\port$7628$0 (\$13 ),
-    .\port$7639$0 (\$14 ),
-    .\port$7716$0 (\$15 ),
+    .\port$7688$0 (\$13 ),
+    .\port$7699$0 (\$14 ),
+    .\port$7776$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$471 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -2034,8 +2034,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort
 , ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc
 , ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low
-, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7097$0 , \port$7108$0 , ch0__ca_done, \port$7185$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$7628$0 , \port$7639$0 , ch1__ca_done
-, \port$7716$0 , bus__r_addr);
+, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7153$0 , \port$7164$0 , ch0__ca_done, \port$7241$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$7688$0 , \port$7699$0 , ch1__ca_done
+, \port$7776$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -4161,18 +4161,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$7097$0 ;
-  wire [186:0] \port$7097$0 ;
-  input [79:0] \port$7108$0 ;
-  wire [79:0] \port$7108$0 ;
-  input [9:0] \port$7185$0 ;
-  wire [9:0] \port$7185$0 ;
-  input [186:0] \port$7628$0 ;
-  wire [186:0] \port$7628$0 ;
-  input [79:0] \port$7639$0 ;
-  wire [79:0] \port$7639$0 ;
-  input [9:0] \port$7716$0 ;
-  wire [9:0] \port$7716$0 ;
+  input [186:0] \port$7153$0 ;
+  wire [186:0] \port$7153$0 ;
+  input [79:0] \port$7164$0 ;
+  wire [79:0] \port$7164$0 ;
+  input [9:0] \port$7241$0 ;
+  wire [9:0] \port$7241$0 ;
+  input [186:0] \port$7688$0 ;
+  wire [186:0] \port$7688$0 ;
+  input [79:0] \port$7699$0 ;
+  wire [79:0] \port$7699$0 ;
+  input [9:0] \port$7776$0 ;
+  wire [9:0] \port$7776$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
@@ -4410,7 +4410,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$160  = \$158  | \$159 ;
   assign \$161  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$7097$0 [182:177], 4'h0, \port$7097$0 [186:183], 1'h0, \port$7097$0 [176:174], 1'h0, \port$7097$0 [133:131], 3'h0, \port$7097$0 [49], \port$7097$0 [3:0] } : 32'd0;
+  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$7153$0 [182:177], 4'h0, \port$7153$0 [186:183], 1'h0, \port$7153$0 [176:174], 1'h0, \port$7153$0 [133:131], 3'h0, \port$7153$0 [49], \port$7153$0 [3:0] } : 32'd0;
   assign \$168  = \$166  | \$167 ;
   assign \$169  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$170  = \$168  | \$169 ;
@@ -4426,13 +4426,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$180  = \$178  | \$179 ;
   assign \$181  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$7185$0 [9:3], 1'h0, \port$7185$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$7241$0 [9:3], 1'h0, \port$7241$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$228  = \$226  | \$227 ;
-  assign \$229  = ch0_read_select_c3 ? \port$7108$0 [31:0] : 32'd0;
+  assign \$229  = ch0_read_select_c3 ? \port$7164$0 [31:0] : 32'd0;
   assign \$230  = \$228  | \$229 ;
-  assign \$231  = ch0_read_select_c4 ? \port$7108$0 [63:32] : 32'd0;
+  assign \$231  = ch0_read_select_c4 ? \port$7164$0 [63:32] : 32'd0;
   assign \$232  = \$230  | \$231 ;
-  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$7108$0 [79:64] } : 32'd0;
+  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$7164$0 [79:64] } : 32'd0;
   assign \$234  = \$232  | \$233 ;
   assign \$237  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$238  = \$236  | \$237 ;
@@ -4581,7 +4581,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$384  = \$382  | \$383 ;
   assign \$385  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$386  = \$384  | \$385 ;
-  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$7628$0 [182:177], 4'h0, \port$7628$0 [186:183], 1'h0, \port$7628$0 [176:174], 1'h0, \port$7628$0 [133:131], 3'h0, \port$7628$0 [49], \port$7628$0 [3:0] } : 32'd0;
+  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$7688$0 [182:177], 4'h0, \port$7688$0 [186:183], 1'h0, \port$7688$0 [176:174], 1'h0, \port$7688$0 [133:131], 3'h0, \port$7688$0 [49], \port$7688$0 [3:0] } : 32'd0;
   assign \$392  = \$390  | \$391 ;
   assign \$393  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$394  = \$392  | \$393 ;
@@ -4597,13 +4597,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$404  = \$402  | \$403 ;
   assign \$405  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$406  = \$404  | \$405 ;
-  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$7716$0 [9:3], 1'h0, \port$7716$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$7776$0 [9:3], 1'h0, \port$7776$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$452  = \$450  | \$451 ;
-  assign \$453  = ch1_read_select_143 ? \port$7639$0 [31:0] : 32'd0;
+  assign \$453  = ch1_read_select_143 ? \port$7699$0 [31:0] : 32'd0;
   assign \$454  = \$452  | \$453 ;
-  assign \$455  = ch1_read_select_144 ? \port$7639$0 [63:32] : 32'd0;
+  assign \$455  = ch1_read_select_144 ? \port$7699$0 [63:32] : 32'd0;
   assign \$456  = \$454  | \$455 ;
-  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$7639$0 [79:64] } : 32'd0;
+  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$7699$0 [79:64] } : 32'd0;
   assign \$458  = \$456  | \$457 ;
   assign \$461  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$462  = \$460  | \$461 ;
@@ -7012,7 +7012,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$809  = ch0_result_status_status_snapshot;
     if (\$146 ) begin
-      \$809  = \port$7097$0 [3:0];
+      \$809  = \port$7153$0 [3:0];
     end
     if (rst) begin
       \$809  = 4'h0;
@@ -7022,7 +7022,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$810  = ch0_result_status_cds_snapshot;
     if (\$146 ) begin
-      \$810  = \port$7097$0 [49];
+      \$810  = \port$7153$0 [49];
     end
     if (rst) begin
       \$810  = 1'h0;
@@ -7032,7 +7032,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$811  = ch0_result_status_w0_ne_snapshot;
     if (\$146 ) begin
-      \$811  = \port$7097$0 [131];
+      \$811  = \port$7153$0 [131];
     end
     if (rst) begin
       \$811  = 1'h0;
@@ -7042,7 +7042,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$812  = ch0_result_status_w0_nw_snapshot;
     if (\$146 ) begin
-      \$812  = \port$7097$0 [132];
+      \$812  = \port$7153$0 [132];
     end
     if (rst) begin
       \$812  = 1'h0;
@@ -7052,7 +7052,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$813  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$146 ) begin
-      \$813  = \port$7097$0 [133];
+      \$813  = \port$7153$0 [133];
     end
     if (rst) begin
       \$813  = 1'h0;
@@ -7062,7 +7062,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$814  = ch0_result_status_w1_ne_snapshot;
     if (\$146 ) begin
-      \$814  = \port$7097$0 [174];
+      \$814  = \port$7153$0 [174];
     end
     if (rst) begin
       \$814  = 1'h0;
@@ -7072,7 +7072,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$815  = ch0_result_status_w1_nw_snapshot;
     if (\$146 ) begin
-      \$815  = \port$7097$0 [175];
+      \$815  = \port$7153$0 [175];
     end
     if (rst) begin
       \$815  = 1'h0;
@@ -7082,7 +7082,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$816  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$146 ) begin
-      \$816  = \port$7097$0 [176];
+      \$816  = \port$7153$0 [176];
     end
     if (rst) begin
       \$816  = 1'h0;
@@ -7092,7 +7092,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$817  = ch0_result_status_lc_repeat_snapshot;
     if (\$146 ) begin
-      \$817  = \port$7097$0 [183];
+      \$817  = \port$7153$0 [183];
     end
     if (rst) begin
       \$817  = 1'h0;
@@ -7102,7 +7102,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$818  = ch0_result_status_lc_skip_snapshot;
     if (\$146 ) begin
-      \$818  = \port$7097$0 [184];
+      \$818  = \port$7153$0 [184];
     end
     if (rst) begin
       \$818  = 1'h0;
@@ -7112,7 +7112,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$819  = ch0_result_status_lc_zero_snapshot;
     if (\$146 ) begin
-      \$819  = \port$7097$0 [185];
+      \$819  = \port$7153$0 [185];
     end
     if (rst) begin
       \$819  = 1'h0;
@@ -7122,7 +7122,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$820  = ch0_result_status_spw_mismatch_snapshot;
     if (\$146 ) begin
-      \$820  = \port$7097$0 [186];
+      \$820  = \port$7153$0 [186];
     end
     if (rst) begin
       \$820  = 1'h0;
@@ -7132,7 +7132,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$821  = ch0_result_status_lc_snapshot;
     if (\$146 ) begin
-      \$821  = \port$7097$0 [182:177];
+      \$821  = \port$7153$0 [182:177];
     end
     if (rst) begin
       \$821  = 6'h00;
@@ -7152,7 +7152,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$823  = ch0_result_seq_line_delay_snapshot;
     if (\$146 ) begin
-      \$823  = \port$7097$0 [48:36];
+      \$823  = \port$7153$0 [48:36];
     end
     if (rst) begin
       \$823  = 13'h0000;
@@ -7162,7 +7162,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$824  = ch0_result_w0_lo_data_snapshot;
     if (\$146 ) begin
-      \$824  = \port$7097$0 [107:76];
+      \$824  = \port$7153$0 [107:76];
     end
     if (rst) begin
       \$824  = 32'd0;
@@ -7172,7 +7172,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$825  = ch0_result_w0_hi_data_snapshot;
     if (\$146 ) begin
-      \$825  = \port$7097$0 [130:108];
+      \$825  = \port$7153$0 [130:108];
     end
     if (rst) begin
       \$825  = 23'h000000;
@@ -7182,7 +7182,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$826  = ch0_result_w1_lo_data_snapshot;
     if (\$146 ) begin
-      \$826  = \port$7097$0 [165:134];
+      \$826  = \port$7153$0 [165:134];
     end
     if (rst) begin
       \$826  = 32'd0;
@@ -7192,7 +7192,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$827  = ch0_result_w1_hi_data_snapshot;
     if (\$146 ) begin
-      \$827  = \port$7097$0 [173:166];
+      \$827  = \port$7153$0 [173:166];
     end
     if (rst) begin
       \$827  = 8'h00;
@@ -7202,7 +7202,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$828  = ch0_result_timestamp_time_snapshot;
     if (\$146 ) begin
-      \$828  = \port$7097$0 [35:4];
+      \$828  = \port$7153$0 [35:4];
     end
     if (rst) begin
       \$828  = 32'd0;
@@ -7212,7 +7212,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$829  = ch0_result_line_noise_events_snapshot;
     if (\$146 ) begin
-      \$829  = \port$7097$0 [53:50];
+      \$829  = \port$7153$0 [53:50];
     end
     if (rst) begin
       \$829  = 4'h0;
@@ -7222,7 +7222,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$830  = ch0_result_line_delay_settled_snapshot;
     if (\$146 ) begin
-      \$830  = \port$7097$0 [54];
+      \$830  = \port$7153$0 [54];
     end
     if (rst) begin
       \$830  = 1'h0;
@@ -7232,7 +7232,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$831  = ch0_result_line_delay_spread_snapshot;
     if (\$146 ) begin
-      \$831  = \port$7097$0 [75:68];
+      \$831  = \port$7153$0 [75:68];
     end
     if (rst) begin
       \$831  = 8'h00;
@@ -7242,7 +7242,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$832  = ch0_result_line_settled_delay_snapshot;
     if (\$146 ) begin
-      \$832  = \port$7097$0 [67:55];
+      \$832  = \port$7153$0 [67:55];
     end
     if (rst) begin
       \$832  = 13'h0000;
@@ -8569,7 +8569,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$971  = ch1_result_status_status_snapshot;
     if (\$370 ) begin
-      \$971  = \port$7628$0 [3:0];
+      \$971  = \port$7688$0 [3:0];
     end
     if (rst) begin
       \$971  = 4'h0;
@@ -8579,7 +8579,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$972  = ch1_result_status_cds_snapshot;
     if (\$370 ) begin
-      \$972  = \port$7628$0 [49];
+      \$972  = \port$7688$0 [49];
     end
     if (rst) begin
       \$972  = 1'h0;
@@ -8589,7 +8589,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$973  = ch1_result_status_w0_ne_snapshot;
     if (\$370 ) begin
-      \$973  = \port$7628$0 [131];
+      \$973  = \port$7688$0 [131];
     end
     if (rst) begin
       \$973  = 1'h0;
@@ -8599,7 +8599,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$974  = ch1_result_status_w0_nw_snapshot;
     if (\$370 ) begin
-      \$974  = \port$7628$0 [132];
+      \$974  = \port$7688$0 [132];
     end
     if (rst) begin
       \$974  = 1'h0;
@@ -8609,7 +8609,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$975  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$370 ) begin
-      \$975  = \port$7628$0 [133];
+      \$975  = \port$7688$0 [133];
     end
     if (rst) begin
       \$975  = 1'h0;
@@ -8619,7 +8619,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$976  = ch1_result_status_w1_ne_snapshot;
     if (\$370 ) begin
-      \$976  = \port$7628$0 [174];
+      \$976  = \port$7688$0 [174];
     end
     if (rst) begin
       \$976  = 1'h0;
@@ -8629,7 +8629,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$977  = ch1_result_status_w1_nw_snapshot;
     if (\$370 ) begin
-      \$977  = \port$7628$0 [175];
+      \$977  = \port$7688$0 [175];
     end
     if (rst) begin
       \$977  = 1'h0;
@@ -8639,7 +8639,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$978  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$370 ) begin
-      \$978  = \port$7628$0 [176];
+      \$978  = \port$7688$0 [176];
     end
     if (rst) begin
       \$978  = 1'h0;
@@ -8649,7 +8649,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$979  = ch1_result_status_lc_repeat_snapshot;
     if (\$370 ) begin
-      \$979  = \port$7628$0 [183];
+      \$979  = \port$7688$0 [183];
     end
     if (rst) begin
       \$979  = 1'h0;
@@ -8659,7 +8659,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$980  = ch1_result_status_lc_skip_snapshot;
     if (\$370 ) begin
-      \$980  = \port$7628$0 [184];
+      \$980  = \port$7688$0 [184];
     end
     if (rst) begin
       \$980  = 1'h0;
@@ -8669,7 +8669,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$981  = ch1_result_status_lc_zero_snapshot;
     if (\$370 ) begin
-      \$981  = \port$7628$0 [185];
+      \$981  = \port$7688$0 [185];
     end
     if (rst) begin
       \$981  = 1'h0;
@@ -8679,7 +8679,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$982  = ch1_result_status_spw_mismatch_snapshot;
     if (\$370 ) begin
-      \$982  = \port$7628$0 [186];
+      \$982  = \port$7688$0 [186];
     end
     if (rst) begin
       \$982  = 1'h0;
@@ -8689,7 +8689,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$983  = ch1_result_status_lc_snapshot;
     if (\$370 ) begin
-      \$983  = \port$7628$0 [182:177];
+      \$983  = \port$7688$0 [182:177];
     end
     if (rst) begin
       \$983  = 6'h00;
@@ -8709,7 +8709,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$985  = ch1_result_seq_line_delay_snapshot;
     if (\$370 ) begin
-      \$985  = \port$7628$0 [48:36];
+      \$985  = \port$7688$0 [48:36];
     end
     if (rst) begin
       \$985  = 13'h0000;
@@ -8719,7 +8719,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$986  = ch1_result_w0_lo_data_snapshot;
     if (\$370 ) begin
-      \$986  = \port$7628$0 [107:76];
+      \$986  = \port$7688$0 [107:76];
     end
     if (rst) begin
       \$986  = 32'd0;
@@ -8729,7 +8729,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$987  = ch1_result_w0_hi_data_snapshot;
     if (\$370 ) begin
-      \$987  = \port$7628$0 [130:108];
+      \$987  = \port$7688$0 [130:108];
     end
     if (rst) begin
       \$987  = 23'h000000;
@@ -8739,7 +8739,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$988  = ch1_result_w1_lo_data_snapshot;
     if (\$370 ) begin
-      \$988  = \port$7628$0 [165:134];
+      \$988  = \port$7688$0 [165:134];
     end
     if (rst) begin
       \$988  = 32'd0;
@@ -8749,7 +8749,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$989  = ch1_result_w1_hi_data_snapshot;
     if (\$370 ) begin
-      \$989  = \port$7628$0 [173:166];
+      \$989  = \port$7688$0 [173:166];
     end
     if (rst) begin
       \$989  = 8'h00;
@@ -8759,7 +8759,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$990  = ch1_result_timestamp_time_snapshot;
     if (\$370 ) begin
-      \$990  = \port$7628$0 [35:4];
+      \$990  = \port$7688$0 [35:4];
     end
     if (rst) begin
       \$990  = 32'd0;
@@ -8769,7 +8769,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$991  = ch1_result_line_noise_events_snapshot;
     if (\$370 ) begin
-      \$991  = \port$7628$0 [53:50];
+      \$991  = \port$7688$0 [53:50];
     end
     if (rst) begin
       \$991  = 4'h0;
@@ -8779,7 +8779,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$992  = ch1_result_line_delay_settled_snapshot;
     if (\$370 ) begin
-      \$992  = \port$7628$0 [54];
+      \$992  = \port$7688$0 [54];
     end
     if (rst) begin
       \$992  = 1'h0;
@@ -8789,7 +8789,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$993  = ch1_result_line_delay_spread_snapshot;
     if (\$370 ) begin
-      \$993  = \port$7628$0 [75:68];
+      \$993  = \port$7688$0 [75:68];
     end
     if (rst) begin
       \$993  = 8'h00;
@@ -8799,7 +8799,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$994  = ch1_result_line_settled_delay_snapshot;
     if (\$370 ) begin
-      \$994  = \port$7628$0 [67:55];
+      \$994  = \port$7688$0 [67:55];
     end
     if (rst) begin
       \$994  = 13'h0000;
@@ -9001,27 +9001,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$7097$0 [3:0];
-  assign ch0__cds = \port$7097$0 [49];
-  assign ch0__word0_ne = \port$7097$0 [131];
-  assign ch0__word0_nw = \port$7097$0 [132];
-  assign ch0__word0_crc_ok = \port$7097$0 [133];
-  assign ch0__word1_ne = \port$7097$0 [174];
-  assign ch0__word1_nw = \port$7097$0 [175];
-  assign ch0__word1_crc_ok = \port$7097$0 [176];
-  assign ch0__lc_repeat = \port$7097$0 [183];
-  assign ch0__lc_skip = \port$7097$0 [184];
-  assign ch0__lc_zero = \port$7097$0 [185];
-  assign ch0__spw_mismatch = \port$7097$0 [186];
-  assign ch0__lc = \port$7097$0 [182:177];
-  assign ch0__line_delay = \port$7097$0 [48:36];
-  assign ch0__word0_position = \port$7097$0 [130:76];
-  assign ch0__word1_position = \port$7097$0 [173:134];
-  assign ch0__timestamp = \port$7097$0 [35:4];
-  assign ch0__noise_events = \port$7097$0 [53:50];
-  assign ch0__delay_settled = \port$7097$0 [54];
-  assign ch0__delay_spread = \port$7097$0 [75:68];
-  assign ch0__settled_delay = \port$7097$0 [67:55];
+  assign ch0__status = \port$7153$0 [3:0];
+  assign ch0__cds = \port$7153$0 [49];
+  assign ch0__word0_ne = \port$7153$0 [131];
+  assign ch0__word0_nw = \port$7153$0 [132];
+  assign ch0__word0_crc_ok = \port$7153$0 [133];
+  assign ch0__word1_ne = \port$7153$0 [174];
+  assign ch0__word1_nw = \port$7153$0 [175];
+  assign ch0__word1_crc_ok = \port$7153$0 [176];
+  assign ch0__lc_repeat = \port$7153$0 [183];
+  assign ch0__lc_skip = \port$7153$0 [184];
+  assign ch0__lc_zero = \port$7153$0 [185];
+  assign ch0__spw_mismatch = \port$7153$0 [186];
+  assign ch0__lc = \port$7153$0 [182:177];
+  assign ch0__line_delay = \port$7153$0 [48:36];
+  assign ch0__word0_position = \port$7153$0 [130:76];
+  assign ch0__word1_position = \port$7153$0 [173:134];
+  assign ch0__timestamp = \port$7153$0 [35:4];
+  assign ch0__noise_events = \port$7153$0 [53:50];
+  assign ch0__delay_settled = \port$7153$0 [54];
+  assign ch0__delay_spread = \port$7153$0 [75:68];
+  assign ch0__settled_delay = \port$7153$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9042,13 +9042,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$7185$0 [2:0];
-  assign ch0__ca_bytes_done = \port$7185$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$7108$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$7108$0 [31:16];
-  assign ch0__count_ca_refused = \port$7108$0 [47:32];
-  assign ch0__count_ca_aborted = \port$7108$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$7108$0 [79:64];
+  assign ch0__ca_status = \port$7241$0 [2:0];
+  assign ch0__ca_bytes_done = \port$7241$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$7164$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$7164$0 [31:16];
+  assign ch0__count_ca_refused = \port$7164$0 [47:32];
+  assign ch0__count_ca_aborted = \port$7164$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$7164$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9068,27 +9068,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$7628$0 [3:0];
-  assign ch1__cds = \port$7628$0 [49];
-  assign ch1__word0_ne = \port$7628$0 [131];
-  assign ch1__word0_nw = \port$7628$0 [132];
-  assign ch1__word0_crc_ok = \port$7628$0 [133];
-  assign ch1__word1_ne = \port$7628$0 [174];
-  assign ch1__word1_nw = \port$7628$0 [175];
-  assign ch1__word1_crc_ok = \port$7628$0 [176];
-  assign ch1__lc_repeat = \port$7628$0 [183];
-  assign ch1__lc_skip = \port$7628$0 [184];
-  assign ch1__lc_zero = \port$7628$0 [185];
-  assign ch1__spw_mismatch = \port$7628$0 [186];
-  assign ch1__lc = \port$7628$0 [182:177];
-  assign ch1__line_delay = \port$7628$0 [48:36];
-  assign ch1__word0_position = \port$7628$0 [130:76];
-  assign ch1__word1_position = \port$7628$0 [173:134];
-  assign ch1__timestamp = \port$7628$0 [35:4];
-  assign ch1__noise_events = \port$7628$0 [53:50];
-  assign ch1__delay_settled = \port$7628$0 [54];
-  assign ch1__delay_spread = \port$7628$0 [75:68];
-  assign ch1__settled_delay = \port$7628$0 [67:55];
+  assign ch1__status = \port$7688$0 [3:0];
+  assign ch1__cds = \port$7688$0 [49];
+  assign ch1__word0_ne = \port$7688$0 [131];
+  assign ch1__word0_nw = \port$7688$0 [132];
+  assign ch1__word0_crc_ok = \port$7688$0 [133];
+  assign ch1__word1_ne = \port$7688$0 [174];
+  assign ch1__word1_nw = \port$7688$0 [175];
+  assign ch1__word1_crc_ok = \port$7688$0 [176];
+  assign ch1__lc_repeat = \port$7688$0 [183];
+  assign ch1__lc_skip = \port$7688$0 [184];
+  assign ch1__lc_zero = \port$7688$0 [185];
+  assign ch1__spw_mismatch = \port$7688$0 [186];
+  assign ch1__lc = \port$7688$0 [182:177];
+  assign ch1__line_delay = \port$7688$0 [48:36];
+  assign ch1__word0_position = \port$7688$0 [130:76];
+  assign ch1__word1_position = \port$7688$0 [173:134];
+  assign ch1__timestamp = \port$7688$0 [35:4];
+  assign ch1__noise_events = \port$7688$0 [53:50];
+  assign ch1__delay_settled = \port$7688$0 [54];
+  assign ch1__delay_spread = \port$7688$0 [75:68];
+  assign ch1__settled_delay = \port$7688$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9109,13 +9109,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$7716$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7716$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7639$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7639$0 [31:16];
-  assign ch1__count_ca_refused = \port$7639$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7639$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7639$0 [79:64];
+  assign ch1__ca_status = \port$7776$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7776$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7699$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7699$0 [31:16];
+  assign ch1__count_ca_refused = \port$7699$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7699$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7699$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9754,7 +9754,7 @@ endmodule
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7097$0 , \port$7108$0 , regs__ca_done, \port$7185$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7153$0 , \port$7164$0 , regs__ca_done, \port$7241$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -9938,12 +9938,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7097$0 ;
-  wire [186:0] \port$7097$0 ;
-  output [79:0] \port$7108$0 ;
-  wire [79:0] \port$7108$0 ;
-  output [9:0] \port$7185$0 ;
-  wire [9:0] \port$7185$0 ;
+  output [186:0] \port$7153$0 ;
+  wire [186:0] \port$7153$0 ;
+  output [79:0] \port$7164$0 ;
+  wire [79:0] \port$7164$0 ;
+  output [9:0] \port$7241$0 ;
+  wire [9:0] \port$7241$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10152,8 +10152,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
     regs__result_updates <= \$19 ;
   \biss_master_axil.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$266 (ca_abort),
-    .\busy$315 (regs__busy),
+    .\abort$267 (ca_abort),
+    .\busy$316 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -10202,13 +10202,13 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$291 (clear_counters),
+    .\clear$292 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$21 ),
-    .\done$318 (done),
+    .\done$319 (done),
     .frames(regs__ca_busy),
     .ma(ma),
     .now(time_now),
@@ -10217,13 +10217,13 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$22 ),
-    .\result$323 (\$20 ),
+    .\result$324 (\$20 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$264 (ca_start),
+    .\start$265 (ca_start),
     .trigger(trigger),
-    .\valid$320 (valid)
+    .\valid$321 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
@@ -10432,16 +10432,16 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$7097$0  = \$20 ;
-  assign \port$7108$0  = \$21 ;
-  assign \port$7185$0  = \$22 ;
+  assign \port$7153$0  = \$20 ;
+  assign \port$7164$0  = \$21 ;
+  assign \port$7241$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$315 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$291 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit
+module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$316 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$292 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit
 , cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
-, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$264 
-, \abort$266 , abort, ma, \done$318 , \valid$320 , \result$323 , counts, ca_done, result, rbuf_addr);
+, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$265 
+, \abort$267 , abort, ma, \done$319 , \valid$321 , \result$324 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10475,8 +10475,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$266 ;
-  wire \abort$266 ;
+  input \abort$267 ;
+  wire \abort$267 ;
   wire \abort$57 ;
   wire abort_cycle;
   wire ack_expired;
@@ -10485,16 +10485,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] \ack_limit$113 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$347 ;
+  wire \bit$348 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$90 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$275 ;
-  wire \busy$312 ;
-  output \busy$315 ;
-  wire \busy$315 ;
+  wire \busy$276 ;
+  wire \busy$313 ;
+  output \busy$316 ;
+  wire \busy$316 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -10529,10 +10529,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$279 ;
+  wire \cdm$280 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$326 ;
+  wire \cds$327 ;
   wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -10680,12 +10680,12 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   reg clean = 1'h0;
   (* init = 1'h0 *)
   wire \clean$177 ;
-  wire \clean$348 ;
+  wire \clean$349 ;
   wire clear;
   wire \clear$137 ;
-  input \clear$291 ;
-  wire \clear$291 ;
-  wire \clear$304 ;
+  input \clear$292 ;
+  wire \clear$292 ;
+  wire \clear$305 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -10714,43 +10714,30 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$189 ;
+  wire [39:0] \cpw_top$190 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$214 ;
-  wire [75:0] crcs;
-  wire [75:0] \crcs$185 ;
-  wire [37:0] \crcs$185[0] ;
-  wire \crcs$185[0].inverted ;
-  wire [15:0] \crcs$185[0].poly ;
-  wire [15:0] \crcs$185[0].start ;
-  wire [4:0] \crcs$185[0].width ;
-  wire [37:0] \crcs$185[1] ;
-  wire \crcs$185[1].inverted ;
-  wire [15:0] \crcs$185[1].poly ;
-  wire [15:0] \crcs$185[1].start ;
-  wire [4:0] \crcs$185[1].width ;
-  wire [75:0] \crcs$186 ;
-  wire [37:0] \crcs$186[0] ;
-  wire \crcs$186[0].inverted ;
-  wire [15:0] \crcs$186[0].poly ;
-  wire [15:0] \crcs$186[0].start ;
-  wire [4:0] \crcs$186[0].width ;
-  wire [37:0] \crcs$186[1] ;
-  wire \crcs$186[1].inverted ;
-  wire [15:0] \crcs$186[1].poly ;
-  wire [15:0] \crcs$186[1].start ;
-  wire [4:0] \crcs$186[1].width ;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  wire [1:0] \crc_ok$215 ;
+  wire [9:0] crc_widths;
+  wire [9:0] \crc_widths$185 ;
+  wire [4:0] \crc_widths$185[0] ;
+  wire [4:0] \crc_widths$185[1] ;
+  wire [9:0] \crc_widths$186 ;
+  wire [4:0] \crc_widths$186[0] ;
+  wire [4:0] \crc_widths$186[1] ;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
+  wire [75:0] customs;
+  wire [37:0] \customs[0] ;
+  wire \customs[0].inverted ;
+  wire [15:0] \customs[0].poly ;
+  wire [15:0] \customs[0].start ;
+  wire [4:0] \customs[0].width ;
+  wire [37:0] \customs[1] ;
+  wire \customs[1].inverted ;
+  wire [15:0] \customs[1].poly ;
+  wire [15:0] \customs[1].start ;
+  wire [4:0] \customs[1].width ;
   wire [274:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -10823,9 +10810,9 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  output \done$318 ;
-  wire \done$318 ;
+  output \done$319 ;
   wire \done$319 ;
+  wire \done$320 ;
   wire doubtful;
   wire early;
   wire \early$73 ;
@@ -10835,31 +10822,31 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$290 ;
-  wire \events$290.ca_aborted ;
-  wire \events$290.ca_crc4_error ;
-  wire \events$290.ca_data_fault ;
-  wire \events$290.ca_no_answer ;
-  wire \events$290.ca_refused ;
-  wire [15:0] \events$299 ;
-  wire \events$299.aborted ;
-  wire \events$299.crc_word0 ;
-  wire \events$299.crc_word1 ;
-  wire \events$299.delay_jump ;
-  wire \events$299.delay_range ;
-  wire \events$299.lc_repeat ;
-  wire \events$299.lc_skip ;
-  wire \events$299.lc_zero ;
-  wire \events$299.no_ack ;
-  wire \events$299.no_start ;
-  wire \events$299.no_stop ;
-  wire \events$299.noise_event ;
-  wire \events$299.noisy_line ;
-  wire \events$299.overrun ;
-  wire \events$299.slo_stuck_low ;
-  wire \events$299.spw_mismatch ;
+  wire [4:0] \events$291 ;
+  wire \events$291.ca_aborted ;
+  wire \events$291.ca_crc4_error ;
+  wire \events$291.ca_data_fault ;
+  wire \events$291.ca_no_answer ;
+  wire \events$291.ca_refused ;
+  wire [15:0] \events$300 ;
+  wire \events$300.aborted ;
+  wire \events$300.crc_word0 ;
+  wire \events$300.crc_word1 ;
+  wire \events$300.delay_jump ;
+  wire \events$300.delay_range ;
+  wire \events$300.lc_repeat ;
+  wire \events$300.lc_skip ;
+  wire \events$300.lc_zero ;
+  wire \events$300.no_ack ;
+  wire \events$300.no_start ;
+  wire \events$300.no_stop ;
+  wire \events$300.noise_event ;
+  wire \events$300.noisy_line ;
+  wire \events$300.overrun ;
+  wire \events$300.slo_stuck_low ;
+  wire \events$300.spw_mismatch ;
   wire fault;
-  wire \fault$210 ;
+  wire \fault$211 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -10895,7 +10882,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$212 ;
+  wire [3:0] \fault_status$213 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -10905,7 +10892,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$248 ;
+  wire \first_rise$249 ;
   wire [31:0] first_rise_time;
   wire fixed;
   wire [12:0] fixed_delay;
@@ -10955,7 +10942,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
-  wire \frame_end$284 ;
+  wire \frame_end$285 ;
   wire frame_ok;
   output frames;
   wire frames;
@@ -10971,19 +10958,19 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$149 ;
-  wire [5:0] \lc$339 ;
+  wire [5:0] \lc$340 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$151 ;
   wire lc_repeat;
-  wire \lc_repeat$340 ;
+  wire \lc_repeat$341 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$341 ;
+  wire \lc_skip$342 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$342 ;
+  wire \lc_zero$343 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
@@ -11049,7 +11036,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \locked$71 ;
   output ma;
   wire ma;
-  wire \ma$314 ;
+  wire \ma$315 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$102 ;
@@ -11073,7 +11060,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$317 ;
+  wire \overrun$318 ;
   wire passed;
   wire pending;
   wire [23:0] period;
@@ -11100,38 +11087,38 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$224 ;
-  wire \report$228 ;
+  wire \report$225 ;
+  wire \report$229 ;
   wire report_delay;
-  wire \report_delay$231 ;
+  wire \report_delay$232 ;
   wire report_frame;
-  wire \report_frame$209 ;
-  wire \report_frame$229 ;
+  wire \report_frame$210 ;
+  wire \report_frame$230 ;
   wire request;
-  wire [17:0] \request$252 ;
-  wire [6:0] \request$252.address ;
-  wire [6:0] \request$252.count ;
-  wire [2:0] \request$252.slave_id ;
-  wire \request$252.write ;
+  wire [17:0] \request$253 ;
+  wire [6:0] \request$253.address ;
+  wire [6:0] \request$253.count ;
+  wire [2:0] \request$253.slave_id ;
+  wire \request$253.write ;
   wire \request$56 ;
   wire restart;
   wire \restart$164 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$323 ;
-  wire [186:0] \result$323 ;
-  wire \result$323.cds ;
-  wire \result$323.delay_settled ;
-  wire [7:0] \result$323.delay_spread ;
-  wire [5:0] \result$323.lc ;
-  wire \result$323.lc_repeat ;
-  wire \result$323.lc_skip ;
-  wire \result$323.lc_zero ;
-  wire [12:0] \result$323.line_delay ;
-  wire [3:0] \result$323.noise_events ;
-  wire [12:0] \result$323.settled_delay ;
-  wire \result$323.spw_mismatch ;
+  output [186:0] \result$324 ;
+  wire [186:0] \result$324 ;
+  wire \result$324.cds ;
+  wire \result$324.delay_settled ;
+  wire [7:0] \result$324.delay_spread ;
+  wire [5:0] \result$324.lc ;
+  wire \result$324.lc_repeat ;
+  wire \result$324.lc_skip ;
+  wire \result$324.lc_zero ;
+  wire [12:0] \result$324.line_delay ;
+  wire [3:0] \result$324.noise_events ;
+  wire [12:0] \result$324.settled_delay ;
+  wire \result$324.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -11149,18 +11136,18 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$323.status ;
-  wire [31:0] \result$323.timestamp ;
-  wire [57:0] \result$323.word0 ;
-  wire \result$323.word0.crc_ok ;
-  wire \result$323.word0.ne ;
-  wire \result$323.word0.nw ;
-  wire [54:0] \result$323.word0.position ;
-  wire [42:0] \result$323.word1 ;
-  wire \result$323.word1.crc_ok ;
-  wire \result$323.word1.ne ;
-  wire \result$323.word1.nw ;
-  wire [39:0] \result$323.word1.position ;
+  wire [3:0] \result$324.status ;
+  wire [31:0] \result$324.timestamp ;
+  wire [57:0] \result$324.word0 ;
+  wire \result$324.word0.crc_ok ;
+  wire \result$324.word0.ne ;
+  wire \result$324.word0.nw ;
+  wire [54:0] \result$324.word0.position ;
+  wire [42:0] \result$324.word1 ;
+  wire \result$324.word1.crc_ok ;
+  wire \result$324.word1.ne ;
+  wire \result$324.word1.nw ;
+  wire [39:0] \result$324.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -11179,13 +11166,13 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$346 ;
+  wire \sample$347 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$329 ;
+  wire [12:0] \settled_delay$330 ;
   wire skip;
   input slo;
   wire slo;
@@ -11202,19 +11189,19 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$343 ;
+  wire \spw_mismatch$344 ;
   wire ssi;
-  wire \ssi$198 ;
-  wire \ssi$202 ;
+  wire \ssi$199 ;
+  wire \ssi$203 ;
   wire ssi_double;
-  wire \ssi_double$203 ;
+  wire \ssi_double$204 ;
   wire ssi_error;
-  wire \ssi_error$204 ;
+  wire \ssi_error$205 ;
   wire ssi_error_low;
   input start;
   wire start;
-  input \start$264 ;
-  wire \start$264 ;
+  input \start$265 ;
+  wire \start$265 ;
   wire \start$43 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$134 ;
@@ -11257,7 +11244,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$226 ;
+  wire [3:0] \status$227 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -11275,7 +11262,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$322 ;
+  wire [3:0] \status$323 ;
   wire stop_bit;
   wire \stop_bit$86 ;
   wire stopped;
@@ -11289,15 +11276,15 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$193 ;
+  wire [7:0] \tolerance$194 ;
   input trigger;
   wire trigger;
   wire \trigger$54 ;
   wire unconfirmed;
   wire valid;
-  wire \valid$233 ;
-  output \valid$320 ;
-  wire \valid$320 ;
+  wire \valid$234 ;
+  output \valid$321 ;
+  wire \valid$321 ;
   wire valid_out;
   wire waiting;
   wire watch;
@@ -11376,7 +11363,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \$3  = ~ started_before;
   assign \check$172  = started & \$3 ;
   assign \$4  = ~ cycle[259];
-  assign cdm = \cdm$279  & \$4 ;
+  assign cdm = \cdm$280  & \$4 ;
   assign \$5  = ~ cycle[259];
   assign frame_ok = passed & \$5 ;
   assign \$6  = result[2:0] == 1'h1;
@@ -11394,10 +11381,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \$18  = report_frame & \$17 ;
   assign \$19  = status == 4'he;
   assign \$20  = report_frame & \$19 ;
-  assign \busy$315  = ~ idle;
+  assign \busy$316  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$21  = ~ \clear$137 ;
-  assign \$22  = \sample$346  & \$21 ;
+  assign \$22  = \sample$347  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -11411,7 +11398,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   \biss_master_axil.ch0.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
-    .crcs(crcs),
+    .crc_widths(crc_widths),
     .cycle(cycle),
     .delay_limit(delay_limit),
     .delay_tolerance(tolerance),
@@ -11481,19 +11468,19 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch0.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$291 ),
+    .clear(\clear$292 ),
     .clk(clk),
-    .events(\events$299 ),
+    .events(\events$300 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters  counters (
-    .clear(\clear$291 ),
+    .clear(\clear$292 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$290 ),
+    .events(\events$291 ),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.decoder  decoder (
@@ -11502,7 +11489,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
-    .crcs(crcs),
+    .crc_widths(crc_widths),
+    .customs(customs),
     .data0(data0),
     .data1(spw),
     .frame_end(frame_done),
@@ -11511,7 +11499,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6754$272 (cycle[274:272]),
+    .\port$6807$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -11569,9 +11557,9 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   \biss_master_axil.ch0.core.ma_stop  ma_stop (
     .clear(\clear$137 ),
     .clk(clk),
-    .crcs(crcs),
+    .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$6754$199 (cycle[199]),
+    .\port$6807$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -11582,9 +11570,9 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .words(\words$183 )
   );
   \biss_master_axil.ch0.core.register_access  register_access (
-    .abort(\abort$266 ),
+    .abort(\abort$267 ),
     .busy(frames),
-    .cdm(\cdm$279 ),
+    .cdm(\cdm$280 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -11594,27 +11582,27 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$252 ),
+    .request(\request$253 ),
     .result(result),
     .rst(rst),
-    .start(\start$264 ),
+    .start(\start$265 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch0.core.results  results (
     .clk(clk),
-    .done(\done$318 ),
+    .done(\done$319 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$323 ),
+    .result(\result$324 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$320 )
+    .valid_out(\valid$321 )
   );
   \biss_master_axil.ch0.core.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$347 ),
+    .\bit (\bit$348 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -11622,10 +11610,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6754$259 (cycle[271:259]),
+    .\port$6807$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
-    .sample(\sample$346 ),
+    .sample(\sample$347 ),
     .slo(slo)
   );
   \biss_master_axil.ch0.core.scheduler  scheduler (
@@ -11646,7 +11634,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6742$0 (\bit ),
+    .\port$6795$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -11697,7 +11685,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch0.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$348 ),
+    .clean(\clean$349 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
@@ -11714,7 +11702,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2789$0 (\$28 ),
+    .\port$2815$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -11732,7 +11720,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$24  = \bit$347 ;
+    \$24  = \bit$348 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -11753,7 +11741,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$27  = \clean$348 ;
+    \$27  = \clean$349 ;
     if (rst) begin
       \$27  = 1'h0;
     end
@@ -11833,95 +11821,95 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \clean$177  = clean;
   assign \noisy$179  = noisy;
   assign jump = delay_jump;
-  assign \crcs$185  = crcs;
-  assign \crcs$186  = crcs;
+  assign \crc_widths$185  = crc_widths;
+  assign \crc_widths$186  = crc_widths;
   assign enables = { cycle[199], 1'h1 };
-  assign \cpw_top$189  = cpw_top;
+  assign \cpw_top$190  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[205:200];
-  assign \tolerance$193  = cycle[258:251];
+  assign \tolerance$194  = cycle[258:251];
   assign match = spw_match;
   assign fixed = cycle[259];
   assign fixed_delay = { 1'h0, cycle[271:260] };
-  assign \ssi$198  = cycle[259];
+  assign \ssi$199  = cycle[259];
   assign ssi_error = cycle[272];
   assign ssi_error_low = cycle[273];
   assign ssi_double = cycle[274];
-  assign \ssi$202  = cycle[259];
-  assign \ssi_double$203  = cycle[274];
-  assign \ssi_error$204  = cycle[272];
+  assign \ssi$203  = cycle[259];
+  assign \ssi_double$204  = cycle[274];
+  assign \ssi_error$205  = cycle[272];
   assign mismatch = copy_mismatch;
   assign cfg = cycle;
-  assign \report_frame$209  = report_frame;
-  assign \fault$210  = \restart$164 ;
-  assign \fault_status$212  = fault_status;
-  assign \crc_ok$214  = crc_ok;
+  assign \report_frame$210  = report_frame;
+  assign \fault$211  = \restart$164 ;
+  assign \fault_status$213  = fault_status;
+  assign \crc_ok$215  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$224  = report;
-  assign \status$226  = status;
+  assign \report$225  = report;
+  assign \status$227  = status;
   assign setting = cycle[148:145];
-  assign \report$228  = report;
-  assign \report_frame$229  = report_frame;
-  assign \report_delay$231  = report_delay;
-  assign \valid$233  = valid;
+  assign \report$229  = report;
+  assign \report_frame$230  = report_frame;
+  assign \report_delay$232  = report_delay;
+  assign \valid$234  = valid;
   assign word_crc_ok = { \$28 , crc_ok[0] };
-  assign \first_rise$248  = first_rise;
+  assign \first_rise$249  = first_rise;
   assign time_now = now;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$264 ;
-  assign ca_abort = \abort$266 ;
+  assign ca_start = \start$265 ;
+  assign ca_abort = \abort$267 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$275  = frames;
+  assign \busy$276  = frames;
   assign done = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
-  assign \frame_end$284  = report;
+  assign \frame_end$285  = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$291 ;
+  assign clear_counters = \clear$292 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$304  = \clear$291 ;
+  assign \clear$305  = \clear$292 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$312  = count_busy;
-  assign \ma$314  = ma;
-  assign \overrun$317  = overrun;
-  assign \done$319  = \done$318 ;
-  assign valid_out = \valid$320 ;
-  assign \status$322  = \result$323 [3:0];
-  assign timestamp = \result$323 [35:4];
-  assign line_delay = \result$323 [48:36];
-  assign \cds$326  = \result$323 [49];
-  assign noise_events = \result$323 [53:50];
-  assign delay_settled = \result$323 [54];
-  assign \settled_delay$329  = \result$323 [67:55];
-  assign delay_spread = \result$323 [75:68];
-  assign word0_position = \result$323 [130:76];
-  assign word0_ne = \result$323 [131];
-  assign word0_nw = \result$323 [132];
-  assign word0_crc_ok = \result$323 [133];
-  assign word1_position = \result$323 [173:134];
-  assign word1_ne = \result$323 [174];
-  assign word1_nw = \result$323 [175];
-  assign word1_crc_ok = \result$323 [176];
-  assign \lc$339  = \result$323 [182:177];
-  assign \lc_repeat$340  = \result$323 [183];
-  assign \lc_skip$341  = \result$323 [184];
-  assign \lc_zero$342  = \result$323 [185];
-  assign \spw_mismatch$343  = \result$323 [186];
+  assign \busy$313  = count_busy;
+  assign \ma$315  = ma;
+  assign \overrun$318  = overrun;
+  assign \done$320  = \done$319 ;
+  assign valid_out = \valid$321 ;
+  assign \status$323  = \result$324 [3:0];
+  assign timestamp = \result$324 [35:4];
+  assign line_delay = \result$324 [48:36];
+  assign \cds$327  = \result$324 [49];
+  assign noise_events = \result$324 [53:50];
+  assign delay_settled = \result$324 [54];
+  assign \settled_delay$330  = \result$324 [67:55];
+  assign delay_spread = \result$324 [75:68];
+  assign word0_position = \result$324 [130:76];
+  assign word0_ne = \result$324 [131];
+  assign word0_nw = \result$324 [132];
+  assign word0_crc_ok = \result$324 [133];
+  assign word1_position = \result$324 [173:134];
+  assign word1_ne = \result$324 [174];
+  assign word1_nw = \result$324 [175];
+  assign word1_crc_ok = \result$324 [176];
+  assign \lc$340  = \result$324 [182:177];
+  assign \lc_repeat$341  = \result$324 [183];
+  assign \lc_skip$342  = \result$324 [184];
+  assign \lc_zero$343  = \result$324 [185];
+  assign \spw_mismatch$344  = \result$324 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -12036,36 +12024,22 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \words$183[1].crc  = \words$183 [21:20];
   assign \words$183[1].gray  = \words$183 [22];
   assign \words$183[1].signed  = \words$183 [23];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$185[0]  = crcs[37:0];
-  assign \crcs$185[0].width  = crcs[4:0];
-  assign \crcs$185[0].poly  = crcs[20:5];
-  assign \crcs$185[0].start  = crcs[36:21];
-  assign \crcs$185[0].inverted  = crcs[37];
-  assign \crcs$185[1]  = crcs[75:38];
-  assign \crcs$185[1].width  = crcs[42:38];
-  assign \crcs$185[1].poly  = crcs[58:43];
-  assign \crcs$185[1].start  = crcs[74:59];
-  assign \crcs$185[1].inverted  = crcs[75];
-  assign \crcs$186[0]  = crcs[37:0];
-  assign \crcs$186[0].width  = crcs[4:0];
-  assign \crcs$186[0].poly  = crcs[20:5];
-  assign \crcs$186[0].start  = crcs[36:21];
-  assign \crcs$186[0].inverted  = crcs[37];
-  assign \crcs$186[1]  = crcs[75:38];
-  assign \crcs$186[1].width  = crcs[42:38];
-  assign \crcs$186[1].poly  = crcs[58:43];
-  assign \crcs$186[1].start  = crcs[74:59];
-  assign \crcs$186[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
+  assign \crc_widths$185[0]  = crc_widths[4:0];
+  assign \crc_widths$185[1]  = crc_widths[9:5];
+  assign \crc_widths$186[0]  = crc_widths[4:0];
+  assign \crc_widths$186[1]  = crc_widths[9:5];
+  assign \customs[0]  = customs[37:0];
+  assign \customs[0].width  = customs[4:0];
+  assign \customs[0].poly  = customs[20:5];
+  assign \customs[0].start  = customs[36:21];
+  assign \customs[0].inverted  = customs[37];
+  assign \customs[1]  = customs[75:38];
+  assign \customs[1].width  = customs[42:38];
+  assign \customs[1].poly  = customs[58:43];
+  assign \customs[1].start  = customs[74:59];
+  assign \customs[1].inverted  = customs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -12132,41 +12106,41 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$252.slave_id  = \request$252 [2:0];
-  assign \request$252.address  = \request$252 [9:3];
-  assign \request$252.count  = \request$252 [16:10];
-  assign \request$252.write  = \request$252 [17];
+  assign \request$253.slave_id  = \request$253 [2:0];
+  assign \request$253.address  = \request$253 [9:3];
+  assign \request$253.count  = \request$253 [16:10];
+  assign \request$253.write  = \request$253 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$290.ca_crc4_error  = \events$290 [0];
-  assign \events$290.ca_no_answer  = \events$290 [1];
-  assign \events$290.ca_refused  = \events$290 [2];
-  assign \events$290.ca_aborted  = \events$290 [3];
-  assign \events$290.ca_data_fault  = \events$290 [4];
+  assign \events$291.ca_crc4_error  = \events$291 [0];
+  assign \events$291.ca_no_answer  = \events$291 [1];
+  assign \events$291.ca_refused  = \events$291 [2];
+  assign \events$291.ca_aborted  = \events$291 [3];
+  assign \events$291.ca_data_fault  = \events$291 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$299.crc_word0  = \events$299 [0];
-  assign \events$299.crc_word1  = \events$299 [1];
-  assign \events$299.no_ack  = \events$299 [2];
-  assign \events$299.no_start  = \events$299 [3];
-  assign \events$299.delay_range  = \events$299 [4];
-  assign \events$299.slo_stuck_low  = \events$299 [5];
-  assign \events$299.lc_repeat  = \events$299 [6];
-  assign \events$299.lc_skip  = \events$299 [7];
-  assign \events$299.lc_zero  = \events$299 [8];
-  assign \events$299.spw_mismatch  = \events$299 [9];
-  assign \events$299.overrun  = \events$299 [10];
-  assign \events$299.aborted  = \events$299 [11];
-  assign \events$299.no_stop  = \events$299 [12];
-  assign \events$299.noisy_line  = \events$299 [13];
-  assign \events$299.delay_jump  = \events$299 [14];
-  assign \events$299.noise_event  = \events$299 [15];
+  assign \events$300.crc_word0  = \events$300 [0];
+  assign \events$300.crc_word1  = \events$300 [1];
+  assign \events$300.no_ack  = \events$300 [2];
+  assign \events$300.no_start  = \events$300 [3];
+  assign \events$300.delay_range  = \events$300 [4];
+  assign \events$300.slo_stuck_low  = \events$300 [5];
+  assign \events$300.lc_repeat  = \events$300 [6];
+  assign \events$300.lc_skip  = \events$300 [7];
+  assign \events$300.lc_zero  = \events$300 [8];
+  assign \events$300.spw_mismatch  = \events$300 [9];
+  assign \events$300.overrun  = \events$300 [10];
+  assign \events$300.aborted  = \events$300 [11];
+  assign \events$300.no_stop  = \events$300 [12];
+  assign \events$300.noisy_line  = \events$300 [13];
+  assign \events$300.delay_jump  = \events$300 [14];
+  assign \events$300.noise_event  = \events$300 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -12174,57 +12148,57 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$323.status  = \result$323 [3:0];
-  assign \result$323.timestamp  = \result$323 [35:4];
-  assign \result$323.line_delay  = \result$323 [48:36];
-  assign \result$323.cds  = \result$323 [49];
-  assign \result$323.noise_events  = \result$323 [53:50];
-  assign \result$323.delay_settled  = \result$323 [54];
-  assign \result$323.settled_delay  = \result$323 [67:55];
-  assign \result$323.delay_spread  = \result$323 [75:68];
-  assign \result$323.word0  = \result$323 [133:76];
-  assign \result$323.word0.position  = \result$323 [130:76];
-  assign \result$323.word0.ne  = \result$323 [131];
-  assign \result$323.word0.nw  = \result$323 [132];
-  assign \result$323.word0.crc_ok  = \result$323 [133];
-  assign \result$323.word1  = \result$323 [176:134];
-  assign \result$323.word1.position  = \result$323 [173:134];
-  assign \result$323.word1.ne  = \result$323 [174];
-  assign \result$323.word1.nw  = \result$323 [175];
-  assign \result$323.word1.crc_ok  = \result$323 [176];
-  assign \result$323.lc  = \result$323 [182:177];
-  assign \result$323.lc_repeat  = \result$323 [183];
-  assign \result$323.lc_skip  = \result$323 [184];
-  assign \result$323.lc_zero  = \result$323 [185];
-  assign \result$323.spw_mismatch  = \result$323 [186];
-  assign \events$299 [15] = \event ;
-  assign \events$299 [14] = \$20 ;
-  assign \events$299 [13] = \$18 ;
-  assign \events$299 [12] = faults[6];
-  assign \events$299 [11] = faults[4];
-  assign \events$299 [10] = overrun;
-  assign \events$299 [9] = \$16 ;
-  assign \events$299 [8] = lc_zero;
-  assign \events$299 [7] = lc_skip;
-  assign \events$299 [6] = lc_repeat;
-  assign \events$299 [5] = faults[3];
-  assign \events$299 [4] = faults[2];
-  assign \events$299 [3] = faults[1];
-  assign \events$299 [2] = faults[0];
-  assign \events$299 [1] = crc_error[1];
-  assign \events$299 [0] = crc_error[0];
-  assign \events$290 [4] = \$15 ;
-  assign \events$290 [3] = \$13 ;
-  assign \events$290 [2] = \$11 ;
-  assign \events$290 [1] = \$9 ;
-  assign \events$290 [0] = \$7 ;
+  assign \result$324.status  = \result$324 [3:0];
+  assign \result$324.timestamp  = \result$324 [35:4];
+  assign \result$324.line_delay  = \result$324 [48:36];
+  assign \result$324.cds  = \result$324 [49];
+  assign \result$324.noise_events  = \result$324 [53:50];
+  assign \result$324.delay_settled  = \result$324 [54];
+  assign \result$324.settled_delay  = \result$324 [67:55];
+  assign \result$324.delay_spread  = \result$324 [75:68];
+  assign \result$324.word0  = \result$324 [133:76];
+  assign \result$324.word0.position  = \result$324 [130:76];
+  assign \result$324.word0.ne  = \result$324 [131];
+  assign \result$324.word0.nw  = \result$324 [132];
+  assign \result$324.word0.crc_ok  = \result$324 [133];
+  assign \result$324.word1  = \result$324 [176:134];
+  assign \result$324.word1.position  = \result$324 [173:134];
+  assign \result$324.word1.ne  = \result$324 [174];
+  assign \result$324.word1.nw  = \result$324 [175];
+  assign \result$324.word1.crc_ok  = \result$324 [176];
+  assign \result$324.lc  = \result$324 [182:177];
+  assign \result$324.lc_repeat  = \result$324 [183];
+  assign \result$324.lc_skip  = \result$324 [184];
+  assign \result$324.lc_zero  = \result$324 [185];
+  assign \result$324.spw_mismatch  = \result$324 [186];
+  assign \events$300 [15] = \event ;
+  assign \events$300 [14] = \$20 ;
+  assign \events$300 [13] = \$18 ;
+  assign \events$300 [12] = faults[6];
+  assign \events$300 [11] = faults[4];
+  assign \events$300 [10] = overrun;
+  assign \events$300 [9] = \$16 ;
+  assign \events$300 [8] = lc_zero;
+  assign \events$300 [7] = lc_skip;
+  assign \events$300 [6] = lc_repeat;
+  assign \events$300 [5] = faults[3];
+  assign \events$300 [4] = faults[2];
+  assign \events$300 [3] = faults[1];
+  assign \events$300 [2] = faults[0];
+  assign \events$300 [1] = crc_error[1];
+  assign \events$300 [0] = crc_error[0];
+  assign \events$291 [4] = \$15 ;
+  assign \events$291 [3] = \$13 ;
+  assign \events$291 [2] = \$11 ;
+  assign \events$291 [1] = \$9 ;
+  assign \events$291 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$252 [17] = ca_write;
-  assign \request$252 [16:10] = ca_count;
-  assign \request$252 [9:3] = ca_address;
-  assign \request$252 [2:0] = ca_slave_id;
+  assign \request$253 [17] = ca_write;
+  assign \request$253 [16:10] = ca_count;
+  assign \request$253 [9:3] = ca_address;
+  assign \request$253 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$28 ;
@@ -12246,6 +12220,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
+  assign customs[75:38] = cycle[249:212];
+  assign customs[37:0] = cycle[198:161];
   assign \words$183 [23:12] = cycle[211:200];
   assign \words$183 [11:0] = cycle[160:149];
   assign words[23:12] = cycle[211:200];
@@ -12292,7 +12268,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crcs, no_start_limit, idle, clk);
+module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crc_widths, no_start_limit, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -12356,37 +12332,41 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire \$63 ;
   wire [3:0] \$64 ;
   wire [16:0] \$65 ;
-  wire [24:0] \$66 ;
-  wire [1:0] \$67 ;
-  wire [2:0] \$68 ;
-  reg \$69 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire [37:0] \$69 ;
   wire \$7 ;
-  reg [274:0] \$70 ;
-  reg [23:0] \$71 ;
-  reg [23:0] \$72 ;
-  reg [11:0] \$73 ;
-  reg [11:0] \$74 ;
-  reg [16:0] \$75 ;
-  reg [75:0] \$76 ;
-  reg [24:0] \$77 ;
+  wire [37:0] \$70 ;
+  wire [37:0] \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire [37:0] \$75 ;
+  wire [37:0] \$76 ;
+  wire [37:0] \$77 ;
+  wire [24:0] \$78 ;
+  wire [1:0] \$79 ;
   wire \$8 ;
+  wire [2:0] \$80 ;
+  reg \$81 ;
+  reg [274:0] \$82 ;
+  reg [23:0] \$83 ;
+  reg [23:0] \$84 ;
+  reg [11:0] \$85 ;
+  reg [11:0] \$86 ;
+  reg [16:0] \$87 ;
+  reg [9:0] \$88 ;
+  reg [24:0] \$89 ;
   wire \$9 ;
   output [23:0] ack_limit;
   reg [23:0] ack_limit = 24'h000000;
   input clk;
   wire clk;
-  output [75:0] crcs;
-  reg [75:0] crcs = 76'h0000000000000000000;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  output [9:0] crc_widths;
+  reg [9:0] crc_widths = 10'h000;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
   output [274:0] cycle;
   reg [274:0] cycle = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
@@ -12515,6 +12495,18 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
+  assign \$11  = | live[165:161];
+  assign \$12  = \$10  & \$11 ;
+  assign \$13  = live[165:161] <= 5'h10;
+  assign \$14  = \$12  & \$13 ;
+  assign \$15  = \$9  | \$14 ;
+  assign \$16  = \$4  & \$15 ;
+  assign \$17  = \$1  & \$16 ;
+  assign \$18  = ~ live[199];
+  assign \$19  = | live[205:200];
+  assign \$20  = live[205:200] <= 6'h28;
+  assign \$21  = \$19  & \$20 ;
+  assign \$22  = ! live[209:208];
   assign \$23  = live[209:208] == 1'h1;
   assign \$24  = \$22  | \$23 ;
   assign \$25  = live[209:208] == 2'h2;
@@ -12557,26 +12549,38 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$63  = ! live[144:141];
   assign \$64  = \$63  ? 4'h2 : live[144:141];
   assign \$65  = live[15:0] + \$64 ;
-  assign \$66  = ack_limit + { cycle[15:0], 1'h1 };
-  assign \$68  = 2'h1 + cycle[199];
+  assign \$66  = live[158:157] == 2'h3;
+  assign \$67  = live[158:157] == 2'h2;
+  assign \$68  = live[158:157] == 1'h1;
+  assign \$69  = \$68  ? 38'h2000000066 : 38'h0000000000;
+  assign \$70  = \$67  ? 38'h2000121b30 : \$69 ;
+  assign \$71  = \$66  ? live[198:161] : \$70 ;
+  assign \$72  = live[209:208] == 2'h3;
+  assign \$73  = live[209:208] == 2'h2;
+  assign \$74  = live[209:208] == 1'h1;
+  assign \$75  = \$74  ? 38'h2000000066 : 38'h0000000000;
+  assign \$76  = \$73  ? 38'h2000121b30 : \$75 ;
+  assign \$77  = \$72  ? live[249:212] : \$76 ;
+  assign \$78  = ack_limit + { cycle[15:0], 1'h1 };
+  assign \$80  = 2'h1 + cycle[199];
   always @(posedge clk)
-    ok <= \$69 ;
+    ok <= \$81 ;
   always @(posedge clk)
-    cycle <= \$70 ;
+    cycle <= \$82 ;
   always @(posedge clk)
-    ack_limit <= \$71 ;
+    ack_limit <= \$83 ;
   always @(posedge clk)
-    timeout_limit <= \$72 ;
+    timeout_limit <= \$84 ;
   always @(posedge clk)
-    delay_limit <= \$73 ;
+    delay_limit <= \$85 ;
   always @(posedge clk)
-    quiet_time <= \$74 ;
+    quiet_time <= \$86 ;
   always @(posedge clk)
-    delay_tolerance <= \$75 ;
+    delay_tolerance <= \$87 ;
   always @(posedge clk)
-    crcs <= \$76 ;
+    crc_widths <= \$88 ;
   always @(posedge clk)
-    no_start_limit <= \$77 ;
+    no_start_limit <= \$89 ;
   assign \$1  = | live[15:1];
   assign \$2  = | live[154:149];
   assign \$3  = live[154:149] <= 6'h37;
@@ -12587,144 +12591,92 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$8  = live[158:157] == 2'h2;
   assign \$9  = \$7  | \$8 ;
   assign \$10  = live[158:157] == 2'h3;
-  assign \$11  = | live[165:161];
-  assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[165:161] <= 5'h10;
-  assign \$14  = \$12  & \$13 ;
-  assign \$15  = \$9  | \$14 ;
-  assign \$16  = \$4  & \$15 ;
-  assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[199];
-  assign \$19  = | live[205:200];
-  assign \$20  = live[205:200] <= 6'h28;
-  assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[209:208];
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$69  = \$54 ;
+    \$81  = \$54 ;
     if (rst) begin
-      \$69  = 1'h0;
+      \$81  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$70  = cycle;
+    \$82  = cycle;
     if (idle) begin
-      \$70  = live;
+      \$82  = live;
     end
     if (rst) begin
-      \$70  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
+      \$82  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$71  = ack_limit;
+    \$83  = ack_limit;
     if (idle) begin
-      \$71  = \$56 ;
+      \$83  = \$56 ;
     end
     if (rst) begin
-      \$71  = 24'h000000;
+      \$83  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$72  = timeout_limit;
+    \$84  = timeout_limit;
     if (idle) begin
-      \$72  = \$58 ;
+      \$84  = \$58 ;
     end
     if (rst) begin
-      \$72  = 24'h000000;
+      \$84  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$73  = delay_limit;
+    \$85  = delay_limit;
     if (idle) begin
-      \$73  = \$60 ;
+      \$85  = \$60 ;
     end
     if (rst) begin
-      \$73  = 12'h000;
+      \$85  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$74  = quiet_time;
+    \$86  = quiet_time;
     if (idle) begin
-      \$74  = \$62 ;
+      \$86  = \$62 ;
     end
     if (rst) begin
-      \$74  = 12'h000;
+      \$86  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$75  = delay_tolerance;
+    \$87  = delay_tolerance;
     if (idle) begin
-      \$75  = \$65 ;
+      \$87  = \$65 ;
     end
     if (rst) begin
-      \$75  = 17'h00000;
+      \$87  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$76  = crcs;
+    \$88  = crc_widths;
     if (idle) begin
-      (* full_case = 32'd1 *)
-      casez (live[158:157])
-        2'h1:
-          begin
-            \$76 [4:0] = 5'h06;
-            \$76 [20:5] = 16'h0003;
-            \$76 [36:21] = 16'h0000;
-            \$76 [37] = 1'h1;
-          end
-        2'h2:
-          begin
-            \$76 [4:0] = 5'h10;
-            \$76 [20:5] = 16'h90d9;
-            \$76 [36:21] = 16'h0000;
-            \$76 [37] = 1'h1;
-          end
-        2'h3:
-            \$76 [37:0] = live[198:161];
-        default:
-            \$76 [37:0] = 38'h0000000000;
-      endcase
-      (* full_case = 32'd1 *)
-      casez (live[209:208])
-        2'h1:
-          begin
-            \$76 [42:38] = 5'h06;
-            \$76 [58:43] = 16'h0003;
-            \$76 [74:59] = 16'h0000;
-            \$76 [75] = 1'h1;
-          end
-        2'h2:
-          begin
-            \$76 [42:38] = 5'h10;
-            \$76 [58:43] = 16'h90d9;
-            \$76 [74:59] = 16'h0000;
-            \$76 [75] = 1'h1;
-          end
-        2'h3:
-            \$76 [75:38] = live[249:212];
-        default:
-            \$76 [75:38] = 38'h0000000000;
-      endcase
+      \$88 [4:0] = \$71 [4:0];
+      \$88 [9:5] = \$77 [4:0];
     end
     if (rst) begin
-      \$76  = 76'h0000000000000000000;
+      \$88  = 10'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$77  = \$66 ;
+    \$89  = \$78 ;
     if (rst) begin
-      \$77  = 25'h0000000;
+      \$89  = 25'h0000000;
     end
   end
-  assign word_count = \$68 [1:0];
+  assign word_count = \$80 [1:0];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -12811,18 +12763,10 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.ssi_error  = cycle[272];
   assign \cycle.ssi_error_low  = cycle[273];
   assign \cycle.ssi_double  = cycle[274];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
   assign \$36  = live[156];
-  assign \$67  = 2'h1;
+  assign \$79  = 2'h1;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -15798,8 +15742,8 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6754$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
-, lc, cpw_top, mismatch, crc_ok, clk);
+module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$6807$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+, data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -16394,51 +16338,60 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   input \bit ;
   wire \bit ;
   wire \bit$11 ;
-  wire \bit$35 ;
+  wire \bit$37 ;
   output cds;
   reg cds = 1'h0;
   wire check;
   input clk;
   wire clk;
+  wire [3:0] codes;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \codes[0] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \codes[1] ;
   wire \cover ;
   output [39:0] cpw_top;
   reg [39:0] cpw_top = 40'h0000000000;
   output [1:0] crc_ok;
   wire [1:0] crc_ok;
-  input [75:0] crcs;
-  wire [75:0] crcs;
-  wire [75:0] \crcs$28 ;
-  wire [37:0] \crcs$28[0] ;
-  wire \crcs$28[0].inverted ;
-  wire [15:0] \crcs$28[0].poly ;
-  wire [15:0] \crcs$28[0].start ;
-  wire [4:0] \crcs$28[0].width ;
-  wire [37:0] \crcs$28[1] ;
-  wire \crcs$28[1].inverted ;
-  wire [15:0] \crcs$28[1].poly ;
-  wire [15:0] \crcs$28[1].start ;
-  wire [4:0] \crcs$28[1].width ;
-  wire [75:0] \crcs$3 ;
-  wire [37:0] \crcs$3[0] ;
-  wire \crcs$3[0].inverted ;
-  wire [15:0] \crcs$3[0].poly ;
-  wire [15:0] \crcs$3[0].start ;
-  wire [4:0] \crcs$3[0].width ;
-  wire [37:0] \crcs$3[1] ;
-  wire \crcs$3[1].inverted ;
-  wire [15:0] \crcs$3[1].poly ;
-  wire [15:0] \crcs$3[1].start ;
-  wire [4:0] \crcs$3[1].width ;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  input [9:0] crc_widths;
+  wire [9:0] crc_widths;
+  wire [9:0] \crc_widths$3 ;
+  wire [4:0] \crc_widths$3[0] ;
+  wire [4:0] \crc_widths$3[1] ;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
+  input [75:0] customs;
+  wire [75:0] customs;
+  wire [75:0] \customs$30 ;
+  wire [37:0] \customs$30[0] ;
+  wire \customs$30[0].inverted ;
+  wire [15:0] \customs$30[0].poly ;
+  wire [15:0] \customs$30[0].start ;
+  wire [4:0] \customs$30[0].width ;
+  wire [37:0] \customs$30[1] ;
+  wire \customs$30[1].inverted ;
+  wire [15:0] \customs$30[1].poly ;
+  wire [15:0] \customs$30[1].start ;
+  wire [4:0] \customs$30[1].width ;
+  wire [37:0] \customs[0] ;
+  wire \customs[0].inverted ;
+  wire [15:0] \customs[0].poly ;
+  wire [15:0] \customs[0].start ;
+  wire [4:0] \customs[0].width ;
+  wire [37:0] \customs[1] ;
+  wire \customs[1].inverted ;
+  wire [15:0] \customs[1].poly ;
+  wire [15:0] \customs[1].start ;
+  wire [4:0] \customs[1].width ;
   output [54:0] data0;
   reg [54:0] data0 = 55'h00000000000000;
   output [39:0] data1;
@@ -16474,7 +16427,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   reg in_word;
   wire [6:0] index;
   (* init = 1'h0 *)
-  wire \index$38 ;
+  wire \index$40 ;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -16491,8 +16444,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6754$272 ;
-  wire [2:0] \port$6754$272 ;
+  input [2:0] \port$6807$272 ;
+  wire [2:0] \port$6807$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -16778,7 +16731,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6754$272 [0];
+  assign error_bit = ssi & \port$6807$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -16832,7 +16785,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6754$272 [2];
+  assign \$48  = ssi & \port$6807$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -17119,15 +17072,15 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6754$272 [0];
+  assign \$335  = ssi & \port$6807$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6754$272 [0];
-  assign \$343  = ~ \port$6754$272 [1];
+  assign \$342  = ssi & \port$6807$272 [0];
+  assign \$343  = ~ \port$6807$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -17200,8 +17153,9 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     .\bit (\bit ),
     .check(check),
     .clk(clk),
+    .codes(codes),
     .\cover (\cover ),
-    .crcs(crcs),
+    .customs(customs),
     .index(word),
     .last(last),
     .load(load),
@@ -17212,7 +17166,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   );
   \biss_master_axil.ch0.core.decoder.field_ends  field_ends (
     .clk(clk),
-    .crcs(crcs),
+    .crc_widths(crc_widths),
     .ends(ends),
     .error_bit(error_bit),
     .receiver_clear(receiver_clear),
@@ -17758,18 +17712,18 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   assign \words$1  = words;
-  assign \crcs$3  = crcs;
-  assign ssi_error = \port$6754$272 [0];
+  assign \crc_widths$3  = crc_widths;
+  assign ssi_error = \port$6807$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$28  = crcs;
-  assign \bit$35  = \bit ;
+  assign \customs$30  = customs;
+  assign \bit$37  = \bit ;
   assign ok = crc_ok;
-  assign \index$38  = word;
+  assign \index$40  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6754$272 [2];
-  assign ssi_error_low = \port$6754$272 [1];
+  assign ssi_double = \port$6807$272 [2];
+  assign ssi_error_low = \port$6807$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -17798,26 +17752,10 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \words$1[1].crc  = words[21:20];
   assign \words$1[1].gray  = words[22];
   assign \words$1[1].signed  = words[23];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$3[0]  = crcs[37:0];
-  assign \crcs$3[0].width  = crcs[4:0];
-  assign \crcs$3[0].poly  = crcs[20:5];
-  assign \crcs$3[0].start  = crcs[36:21];
-  assign \crcs$3[0].inverted  = crcs[37];
-  assign \crcs$3[1]  = crcs[75:38];
-  assign \crcs$3[1].width  = crcs[42:38];
-  assign \crcs$3[1].poly  = crcs[58:43];
-  assign \crcs$3[1].start  = crcs[74:59];
-  assign \crcs$3[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
+  assign \crc_widths$3[0]  = crc_widths[4:0];
+  assign \crc_widths$3[1]  = crc_widths[9:5];
   assign \ends[0]  = ends[36:0];
   assign \ends[0].data_end_p1  = ends[6:0];
   assign \ends[0].data_end_m1  = ends[13:7];
@@ -17834,16 +17772,30 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \ends[1].word_end_m1  = ends[71:65];
   assign \ends[1].data_at0  = ends[72];
   assign \ends[1].lc_at0  = ends[73];
-  assign \crcs$28[0]  = crcs[37:0];
-  assign \crcs$28[0].width  = crcs[4:0];
-  assign \crcs$28[0].poly  = crcs[20:5];
-  assign \crcs$28[0].start  = crcs[36:21];
-  assign \crcs$28[0].inverted  = crcs[37];
-  assign \crcs$28[1]  = crcs[75:38];
-  assign \crcs$28[1].width  = crcs[42:38];
-  assign \crcs$28[1].poly  = crcs[58:43];
-  assign \crcs$28[1].start  = crcs[74:59];
-  assign \crcs$28[1].inverted  = crcs[75];
+  assign \codes[0]  = codes[1:0];
+  assign \codes[1]  = codes[3:2];
+  assign \customs[0]  = customs[37:0];
+  assign \customs[0].width  = customs[4:0];
+  assign \customs[0].poly  = customs[20:5];
+  assign \customs[0].start  = customs[36:21];
+  assign \customs[0].inverted  = customs[37];
+  assign \customs[1]  = customs[75:38];
+  assign \customs[1].width  = customs[42:38];
+  assign \customs[1].poly  = customs[58:43];
+  assign \customs[1].start  = customs[74:59];
+  assign \customs[1].inverted  = customs[75];
+  assign \customs$30[0]  = customs[37:0];
+  assign \customs$30[0].width  = customs[4:0];
+  assign \customs$30[0].poly  = customs[20:5];
+  assign \customs$30[0].start  = customs[36:21];
+  assign \customs$30[0].inverted  = customs[37];
+  assign \customs$30[1]  = customs[75:38];
+  assign \customs$30[1].width  = customs[42:38];
+  assign \customs$30[1].poly  = customs[58:43];
+  assign \customs$30[1].start  = customs[74:59];
+  assign \customs$30[1].inverted  = customs[75];
+  assign codes[3:2] = words[21:20];
+  assign codes[1:0] = words[9:8];
   assign \$44  = ends[72];
   assign \$45  = ends[73];
   assign \$351  = word;
@@ -17919,63 +17871,109 @@ module \biss_master_axil.ch0.core.decoder.copy (rst, index, first, \bit , receiv
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
+module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, load_index, customs, \bit , receiver_clear, codes, index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
-  reg [15:0] \$1 ;
-  wire \$10 ;
-  reg \$11 ;
+  reg [1:0] \$1 ;
+  wire [37:0] \$10 ;
+  reg [1:0] \$11 ;
   wire \$12 ;
-  wire \$13 ;
-  wire \$14 ;
+  reg [37:0] \$13 ;
+  reg [1:0] \$14 ;
   wire \$15 ;
-  reg [4:0] \$16 ;
+  reg [1:0] \$16 ;
   wire \$17 ;
-  wire \$18 ;
-  reg \$19 ;
-  reg [4:0] \$2 ;
-  wire \$20 ;
-  wire \$21 ;
+  wire [37:0] \$18 ;
+  wire [37:0] \$19 ;
+  wire \$2 ;
+  wire [37:0] \$20 ;
+  reg [1:0] \$21 ;
   wire \$22 ;
-  wire \$23 ;
-  wire \$24 ;
-  reg [4:0] \$25 ;
-  wire \$26 ;
+  reg [37:0] \$23 ;
+  reg [1:0] \$24 ;
+  wire \$25 ;
+  reg [1:0] \$26 ;
   wire \$27 ;
-  reg \$28 ;
-  wire \$29 ;
-  wire \$3 ;
-  wire \$30 ;
-  wire \$31 ;
+  wire [37:0] \$28 ;
+  wire [37:0] \$29 ;
+  reg [37:0] \$3 ;
+  wire [37:0] \$30 ;
+  reg [1:0] \$31 ;
   wire \$32 ;
-  reg [15:0] \$33 ;
-  reg \$34 ;
-  reg [1:0] \$35 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  wire [15:0] \$6 ;
-  wire [15:0] \$7 ;
-  reg [4:0] \$8 ;
-  wire \$9 ;
+  reg [37:0] \$33 ;
+  reg [1:0] \$34 ;
+  wire \$35 ;
+  reg [1:0] \$36 ;
+  wire \$37 ;
+  wire [37:0] \$38 ;
+  wire [37:0] \$39 ;
+  reg [1:0] \$4 ;
+  wire [37:0] \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  wire [15:0] \$43 ;
+  wire [15:0] \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  wire \$48 ;
+  wire \$49 ;
+  wire \$5 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  wire \$55 ;
+  wire \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
+  reg [1:0] \$6 ;
+  wire \$60 ;
+  wire \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  reg [15:0] \$64 ;
+  reg \$65 ;
+  reg [37:0] \$66 ;
+  reg [1:0] \$67 ;
+  wire \$7 ;
+  wire [37:0] \$8 ;
+  wire [37:0] \$9 ;
   input \bit ;
   wire \bit ;
   input check;
   wire check;
   input clk;
   wire clk;
+  input [3:0] codes;
+  wire [3:0] codes;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \codes[0] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \codes[1] ;
   input \cover ;
   wire \cover ;
-  input [75:0] crcs;
-  wire [75:0] crcs;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  input [75:0] customs;
+  wire [75:0] customs;
+  wire [37:0] \customs[0] ;
+  wire \customs[0].inverted ;
+  wire [15:0] \customs[0].poly ;
+  wire [15:0] \customs[0].start ;
+  wire [4:0] \customs[0].width ;
+  wire [37:0] \customs[1] ;
+  wire \customs[1].inverted ;
+  wire [15:0] \customs[1].poly ;
+  wire [15:0] \customs[1].start ;
+  wire [4:0] \customs[1].width ;
   input index;
   wire index;
   input last;
@@ -17992,190 +17990,313 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   reg [15:0] \reg  = 16'h0000;
   input rst;
   wire rst;
-  assign \$3  = { \reg , 1'h0 } >> \$2 ;
-  assign \$4  = \$3  ^ \bit ;
-  assign \$6  = \$4  ? \$5  : 16'h0000;
-  assign \$7  = { \reg [14:0], 1'h0 } ^ \$6 ;
-  assign \$9  = { \reg , 1'h0 } >> \$8 ;
-  assign \$10  = \bit  ^ \$9 ;
-  assign \$12  = \$10  ^ \$11 ;
-  assign \$13  = check & \$12 ;
-  assign \$14  = mismatch | \$13 ;
-  assign \$15  = ! index;
-  assign \$17  = { \reg , 1'h0 } >> \$16 ;
-  assign \$18  = \bit  ^ \$17 ;
-  assign \$20  = \$18  ^ \$19 ;
-  assign \$21  = check & \$20 ;
-  assign \$22  = mismatch | \$21 ;
-  assign \$23  = ~ \$22 ;
-  assign \$26  = { \reg , 1'h0 } >> \$25 ;
-  assign \$27  = \bit  ^ \$26 ;
-  assign \$29  = \$27  ^ \$28 ;
-  assign \$30  = check & \$29 ;
-  assign \$31  = mismatch | \$30 ;
-  assign \$32  = ~ \$31 ;
+  reg [37:0] settings = 38'h0000000000;
+  wire \settings.inverted ;
+  wire [15:0] \settings.poly ;
+  wire [15:0] \settings.start ;
+  wire [4:0] \settings.width ;
+  assign \$35  = \$34  == 2'h2;
+  assign \$37  = \$36  == 1'h1;
+  assign \$38  = \$37  ? 38'h2000000066 : 38'h0000000000;
+  assign \$39  = \$35  ? 38'h2000121b30 : \$38 ;
+  assign \$40  = \$32  ? \$33  : \$39 ;
+  assign \$41  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$42  = \$41  ^ \bit ;
+  assign \$43  = \$42  ? settings[20:5] : 16'h0000;
+  assign \$44  = { \reg [14:0], 1'h0 } ^ \$43 ;
+  assign \$45  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$46  = \bit  ^ \$45 ;
+  assign \$47  = \$46  ^ settings[37];
+  assign \$48  = check & \$47 ;
+  assign \$49  = mismatch | \$48 ;
+  assign \$50  = ! index;
+  assign \$51  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$52  = \bit  ^ \$51 ;
+  assign \$53  = \$52  ^ settings[37];
+  assign \$54  = check & \$53 ;
+  assign \$55  = mismatch | \$54 ;
+  assign \$56  = ~ \$55 ;
+  assign \$58  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$59  = \bit  ^ \$58 ;
+  assign \$60  = \$59  ^ settings[37];
+  assign \$61  = check & \$60 ;
+  assign \$62  = mismatch | \$61 ;
+  assign \$63  = ~ \$62 ;
   always @(posedge clk)
-    \reg  <= \$33 ;
+    \reg  <= \$64 ;
   always @(posedge clk)
-    mismatch <= \$34 ;
+    mismatch <= \$65 ;
   always @(posedge clk)
-    ok <= \$35 ;
+    settings <= \$66 ;
+  always @(posedge clk)
+    ok <= \$67 ;
+  assign \$2  = \$1  == 2'h3;
+  assign \$5  = \$4  == 2'h2;
+  assign \$7  = \$6  == 1'h1;
+  assign \$8  = \$7  ? 38'h2000000066 : 38'h0000000000;
+  assign \$9  = \$5  ? 38'h2000121b30 : \$8 ;
+  assign \$10  = \$2  ? \$3  : \$9 ;
+  assign \$12  = \$11  == 2'h3;
+  assign \$15  = \$14  == 2'h2;
+  assign \$17  = \$16  == 1'h1;
+  assign \$18  = \$17  ? 38'h2000000066 : 38'h0000000000;
+  assign \$19  = \$15  ? 38'h2000121b30 : \$18 ;
+  assign \$20  = \$12  ? \$13  : \$19 ;
+  assign \$22  = \$21  == 2'h3;
+  assign \$25  = \$24  == 2'h2;
+  assign \$27  = \$26  == 1'h1;
+  assign \$28  = \$27  ? 38'h2000000066 : 38'h0000000000;
+  assign \$29  = \$25  ? 38'h2000121b30 : \$28 ;
+  assign \$30  = \$22  ? \$23  : \$29 ;
+  assign \$32  = \$31  == 2'h3;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     (* full_case = 32'd1 *)
     casez (load_index)
       1'h0:
-          \$1  = crcs[36:21];
+          \$33  = customs[37:0];
       1'h1:
-          \$1  = crcs[74:59];
+          \$33  = customs[75:38];
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     (* full_case = 32'd1 *)
-    casez (index)
+    casez (load_index)
       1'h0:
-          \$2  = crcs[4:0];
+          \$34  = codes[1:0];
       1'h1:
-          \$2  = crcs[42:38];
+          \$34  = codes[3:2];
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     (* full_case = 32'd1 *)
-    casez (index)
+    casez (load_index)
       1'h0:
-          \$5  = crcs[20:5];
+          \$36  = codes[1:0];
       1'h1:
-          \$5  = crcs[58:43];
+          \$36  = codes[3:2];
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$8  = crcs[4:0];
-      1'h1:
-          \$8  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$11  = crcs[37];
-      1'h1:
-          \$11  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$16  = crcs[4:0];
-      1'h1:
-          \$16  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$19  = crcs[37];
-      1'h1:
-          \$19  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$25  = crcs[4:0];
-      1'h1:
-          \$25  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$28  = crcs[37];
-      1'h1:
-          \$28  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$33  = \reg ;
+    \$64  = \reg ;
     if (load) begin
-      \$33  = \$1 ;
+      \$64  = \$10 [36:21];
     end else if (\cover ) begin
-      \$33  = \$7 ;
+      \$64  = \$44 ;
     end else if (check) begin
-      \$33  = { \reg [14:0], 1'h0 };
+      \$64  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$33  = 16'h0000;
+      \$64  = 16'h0000;
     end
     if (rst) begin
-      \$33  = 16'h0000;
+      \$64  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$34  = mismatch;
+    \$65  = mismatch;
     if (load) begin
-      \$34  = 1'h0;
+      \$65  = 1'h0;
     end else if (\cover ) begin
     end else if (check) begin
-      \$34  = \$14 ;
+      \$65  = \$49 ;
     end
     if (receiver_clear) begin
-      \$34  = 1'h0;
+      \$65  = 1'h0;
     end
     if (rst) begin
-      \$34  = 1'h0;
+      \$65  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$35  = ok;
+    \$66  = settings;
+    if (load) begin
+      \$66 [4:0] = \$20 [4:0];
+      \$66 [20:5] = \$30 [20:5];
+      \$66 [37] = \$40 [37];
+    end
+    if (receiver_clear) begin
+      \$66 [20:0] = 21'h000000;
+      \$66 [37] = 1'h0;
+    end
+    if (rst) begin
+      \$66  = 38'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    \$67  = ok;
     if (last) begin
-      if (\$15 ) begin
-        \$35 [0] = \$23 ;
+      if (\$50 ) begin
+        \$67 [0] = \$56 ;
       end
-      if (\$24 ) begin
-        \$35 [1] = \$32 ;
+      if (\$57 ) begin
+        \$67 [1] = \$63 ;
       end
     end
     if (receiver_clear) begin
-      \$35  = 2'h3;
+      \$67  = 2'h3;
     end
     if (rst) begin
-      \$35  = 2'h3;
+      \$67  = 2'h3;
     end
   end
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
-  assign \$24  = index;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$1  = codes[1:0];
+      1'h1:
+          \$1  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$3  = customs[37:0];
+      1'h1:
+          \$3  = customs[75:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$4  = codes[1:0];
+      1'h1:
+          \$4  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$6  = codes[1:0];
+      1'h1:
+          \$6  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$11  = codes[1:0];
+      1'h1:
+          \$11  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$13  = customs[37:0];
+      1'h1:
+          \$13  = customs[75:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$14  = codes[1:0];
+      1'h1:
+          \$14  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$16  = codes[1:0];
+      1'h1:
+          \$16  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$21  = codes[1:0];
+      1'h1:
+          \$21  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$23  = customs[37:0];
+      1'h1:
+          \$23  = customs[75:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$24  = codes[1:0];
+      1'h1:
+          \$24  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$26  = codes[1:0];
+      1'h1:
+          \$26  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$31  = codes[1:0];
+      1'h1:
+          \$31  = codes[3:2];
+    endcase
+  end
+  assign \codes[0]  = codes[1:0];
+  assign \codes[1]  = codes[3:2];
+  assign \customs[0]  = customs[37:0];
+  assign \customs[0].width  = customs[4:0];
+  assign \customs[0].poly  = customs[20:5];
+  assign \customs[0].start  = customs[36:21];
+  assign \customs[0].inverted  = customs[37];
+  assign \customs[1]  = customs[75:38];
+  assign \customs[1].width  = customs[42:38];
+  assign \customs[1].poly  = customs[58:43];
+  assign \customs[1].start  = customs[74:59];
+  assign \customs[1].inverted  = customs[75];
+  assign \settings.width  = settings[4:0];
+  assign \settings.poly  = settings[20:5];
+  assign \settings.start  = settings[36:21];
+  assign \settings.inverted  = settings[37];
+  assign \$57  = index;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crcs, receiver_clear, ends, clk);
+module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc_widths, receiver_clear, ends, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
@@ -18215,18 +18336,10 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
   wire [7:0] \$9 ;
   input clk;
   wire clk;
-  input [75:0] crcs;
-  wire [75:0] crcs;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  input [9:0] crc_widths;
+  wire [9:0] crc_widths;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
   output [73:0] ends;
   wire [73:0] ends;
   wire [36:0] \ends[0] ;
@@ -18297,7 +18410,7 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
   assign \$2  = words[5:0] + 7'h7f;
   assign \$4  = words[5:0] + \$3 ;
   assign \$6  = words[5:0] + \$5 ;
-  assign \$8  = \$7  + crcs[4:0];
+  assign \$8  = \$7  + crc_widths[4:0];
   assign \$9  = words[5:0] + \$8 [6:0];
   assign \$10  = | words[5:0];
   assign \$12  = words[5:0] + \$11 ;
@@ -18309,7 +18422,7 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
   assign \$19  = words[17:12] + 7'h7f;
   assign \$21  = words[17:12] + \$20 ;
   assign \$23  = words[17:12] + \$22 ;
-  assign \$25  = \$24  + crcs[42:38];
+  assign \$25  = \$24  + crc_widths[9:5];
   assign \$26  = words[17:12] + \$25 [6:0];
   assign \$27  = | words[17:12];
   assign \$29  = words[17:12] + \$28 ;
@@ -18545,16 +18658,8 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
   assign \$36 [36] = \$34 ;
   assign \$36 [35] = \$27 ;
   assign \$36 [34:28] = \$26 [6:0];
@@ -19426,7 +19531,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6754$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6807$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -19461,25 +19566,17 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6754$199 , ssi, ssi
   wire clear;
   input clk;
   wire clk;
-  input [75:0] crcs;
-  wire [75:0] crcs;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  input [9:0] crc_widths;
+  wire [9:0] crc_widths;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
   wire [1:0] enables;
   output enough;
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6754$199 ;
-  wire \port$6754$199 ;
+  input \port$6807$199 ;
+  wire \port$6807$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -19525,7 +19622,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6754$199 , ssi, ssi
   wire \words[1].nenw ;
   wire \words[1].signed ;
   assign \$1  = ssi & ssi_error;
-  assign \$3  = \$2  + crcs[4:0];
+  assign \$3  = \$2  + crc_widths[4:0];
   assign \$4  = words[5:0] + \$3 [7:0];
   assign \$5  = n + 1'h1;
   assign \$6  = n + 1'h1;
@@ -19533,7 +19630,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6754$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6754$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6807$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -19542,7 +19639,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6754$199 , ssi, ssi
   assign \$17  = started & \$16 ;
   assign \$18  = ~ clear;
   assign \$19  = \$17  & \$18 ;
-  assign \$21  = \$20  + crcs[42:38];
+  assign \$21  = \$20  + crc_widths[9:5];
   assign \$22  = words[17:12] + \$21 [7:0];
   always @(posedge clk)
     n <= \$23 ;
@@ -19643,7 +19740,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6754$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6754$199 , 1'h1 };
+  assign enables = { \port$6807$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -19658,16 +19755,8 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6754$199 , ssi, ssi
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
 endmodule
 
 (* generator = "Amaranth" *)
@@ -21784,7 +21873,7 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6754$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6807$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -21918,8 +22007,8 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6754$259 ;
-  wire [12:0] \port$6754$259 ;
+  input [12:0] \port$6807$259 ;
+  wire [12:0] \port$6807$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -21944,7 +22033,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6754$259 [12:1] + 1'h1;
+  assign \$11  = \port$6807$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -22069,7 +22158,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6754$259 [0]),
+    .clear_high(\port$6807$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -22212,7 +22301,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6754$259 [0]) begin
+            if (\port$6807$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -22297,7 +22386,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6754$259 [0]) begin
+            if (\port$6807$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -22336,7 +22425,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6754$259 [12:1] };
+            \$85  = { 1'h0, \port$6807$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -22721,11 +22810,11 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6754$259 [12:1] };
-  assign fixed = \port$6754$259 [0];
+  assign fixed_delay = { 1'h0, \port$6807$259 [12:1] };
+  assign fixed = \port$6807$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6754$259 [0];
+  assign clear_high = \port$6807$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -23132,7 +23221,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6742$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6795$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -23174,8 +23263,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6742$0 ;
-  wire \port$6742$0 ;
+  input \port$6795$0 ;
+  wire \port$6795$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -23189,9 +23278,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6742$0  };
-  assign \$2  = { lc[4:0], \port$6742$0  } == last;
-  assign \$3  = { lc[4:0], \port$6742$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6795$0  };
+  assign \$2  = { lc[4:0], \port$6795$0  } == last;
+  assign \$3  = { lc[4:0], \port$6795$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -23301,7 +23390,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6742$0  };
+  assign lc_next = { lc[4:0], \port$6795$0  };
   assign zero = is_zero;
 endmodule
 
@@ -23865,7 +23954,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2789$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2815$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -24043,8 +24132,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2789$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$2789$0 ;
-  wire \port$2789$0 ;
+  output \port$2815$0 ;
+  wire \port$2815$0 ;
   output report;
   wire report;
   input report_frame;
@@ -24162,7 +24251,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2789$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2789$0  = \$2 ;
+  assign \port$2815$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -24219,7 +24308,7 @@ endmodule
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7628$0 , \port$7639$0 , regs__ca_done, \port$7716$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7688$0 , \port$7699$0 , regs__ca_done, \port$7776$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -24403,12 +24492,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7628$0 ;
-  wire [186:0] \port$7628$0 ;
-  output [79:0] \port$7639$0 ;
-  wire [79:0] \port$7639$0 ;
-  output [9:0] \port$7716$0 ;
-  wire [9:0] \port$7716$0 ;
+  output [186:0] \port$7688$0 ;
+  wire [186:0] \port$7688$0 ;
+  output [79:0] \port$7699$0 ;
+  wire [79:0] \port$7699$0 ;
+  output [9:0] \port$7776$0 ;
+  wire [9:0] \port$7776$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -24617,8 +24706,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
     regs__result_updates <= \$19 ;
   \biss_master_axil.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$266 (ca_abort),
-    .\busy$315 (regs__busy),
+    .\abort$267 (ca_abort),
+    .\busy$316 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -24667,13 +24756,13 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$291 (clear_counters),
+    .\clear$292 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$21 ),
-    .\done$318 (done),
+    .\done$319 (done),
     .frames(regs__ca_busy),
     .ma(ma),
     .now(time_now),
@@ -24682,13 +24771,13 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$22 ),
-    .\result$323 (\$20 ),
+    .\result$324 (\$20 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$264 (ca_start),
+    .\start$265 (ca_start),
     .trigger(trigger),
-    .\valid$320 (valid)
+    .\valid$321 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
@@ -24897,16 +24986,16 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$7628$0  = \$20 ;
-  assign \port$7639$0  = \$21 ;
-  assign \port$7716$0  = \$22 ;
+  assign \port$7688$0  = \$20 ;
+  assign \port$7699$0  = \$21 ;
+  assign \port$7776$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$315 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$291 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit
+module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$316 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$292 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit
 , cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
-, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$264 
-, \abort$266 , abort, ma, \done$318 , \valid$320 , \result$323 , counts, ca_done, result, rbuf_addr);
+, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$265 
+, \abort$267 , abort, ma, \done$319 , \valid$321 , \result$324 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -24940,8 +25029,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$266 ;
-  wire \abort$266 ;
+  input \abort$267 ;
+  wire \abort$267 ;
   wire \abort$57 ;
   wire abort_cycle;
   wire ack_expired;
@@ -24950,16 +25039,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] \ack_limit$113 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$347 ;
+  wire \bit$348 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$90 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$275 ;
-  wire \busy$312 ;
-  output \busy$315 ;
-  wire \busy$315 ;
+  wire \busy$276 ;
+  wire \busy$313 ;
+  output \busy$316 ;
+  wire \busy$316 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -24994,10 +25083,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$279 ;
+  wire \cdm$280 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$326 ;
+  wire \cds$327 ;
   wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -25145,12 +25234,12 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   reg clean = 1'h0;
   (* init = 1'h0 *)
   wire \clean$177 ;
-  wire \clean$348 ;
+  wire \clean$349 ;
   wire clear;
   wire \clear$137 ;
-  input \clear$291 ;
-  wire \clear$291 ;
-  wire \clear$304 ;
+  input \clear$292 ;
+  wire \clear$292 ;
+  wire \clear$305 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -25179,43 +25268,30 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$189 ;
+  wire [39:0] \cpw_top$190 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$214 ;
-  wire [75:0] crcs;
-  wire [75:0] \crcs$185 ;
-  wire [37:0] \crcs$185[0] ;
-  wire \crcs$185[0].inverted ;
-  wire [15:0] \crcs$185[0].poly ;
-  wire [15:0] \crcs$185[0].start ;
-  wire [4:0] \crcs$185[0].width ;
-  wire [37:0] \crcs$185[1] ;
-  wire \crcs$185[1].inverted ;
-  wire [15:0] \crcs$185[1].poly ;
-  wire [15:0] \crcs$185[1].start ;
-  wire [4:0] \crcs$185[1].width ;
-  wire [75:0] \crcs$186 ;
-  wire [37:0] \crcs$186[0] ;
-  wire \crcs$186[0].inverted ;
-  wire [15:0] \crcs$186[0].poly ;
-  wire [15:0] \crcs$186[0].start ;
-  wire [4:0] \crcs$186[0].width ;
-  wire [37:0] \crcs$186[1] ;
-  wire \crcs$186[1].inverted ;
-  wire [15:0] \crcs$186[1].poly ;
-  wire [15:0] \crcs$186[1].start ;
-  wire [4:0] \crcs$186[1].width ;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  wire [1:0] \crc_ok$215 ;
+  wire [9:0] crc_widths;
+  wire [9:0] \crc_widths$185 ;
+  wire [4:0] \crc_widths$185[0] ;
+  wire [4:0] \crc_widths$185[1] ;
+  wire [9:0] \crc_widths$186 ;
+  wire [4:0] \crc_widths$186[0] ;
+  wire [4:0] \crc_widths$186[1] ;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
+  wire [75:0] customs;
+  wire [37:0] \customs[0] ;
+  wire \customs[0].inverted ;
+  wire [15:0] \customs[0].poly ;
+  wire [15:0] \customs[0].start ;
+  wire [4:0] \customs[0].width ;
+  wire [37:0] \customs[1] ;
+  wire \customs[1].inverted ;
+  wire [15:0] \customs[1].poly ;
+  wire [15:0] \customs[1].start ;
+  wire [4:0] \customs[1].width ;
   wire [274:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
@@ -25288,9 +25364,9 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  output \done$318 ;
-  wire \done$318 ;
+  output \done$319 ;
   wire \done$319 ;
+  wire \done$320 ;
   wire doubtful;
   wire early;
   wire \early$73 ;
@@ -25300,31 +25376,31 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$290 ;
-  wire \events$290.ca_aborted ;
-  wire \events$290.ca_crc4_error ;
-  wire \events$290.ca_data_fault ;
-  wire \events$290.ca_no_answer ;
-  wire \events$290.ca_refused ;
-  wire [15:0] \events$299 ;
-  wire \events$299.aborted ;
-  wire \events$299.crc_word0 ;
-  wire \events$299.crc_word1 ;
-  wire \events$299.delay_jump ;
-  wire \events$299.delay_range ;
-  wire \events$299.lc_repeat ;
-  wire \events$299.lc_skip ;
-  wire \events$299.lc_zero ;
-  wire \events$299.no_ack ;
-  wire \events$299.no_start ;
-  wire \events$299.no_stop ;
-  wire \events$299.noise_event ;
-  wire \events$299.noisy_line ;
-  wire \events$299.overrun ;
-  wire \events$299.slo_stuck_low ;
-  wire \events$299.spw_mismatch ;
+  wire [4:0] \events$291 ;
+  wire \events$291.ca_aborted ;
+  wire \events$291.ca_crc4_error ;
+  wire \events$291.ca_data_fault ;
+  wire \events$291.ca_no_answer ;
+  wire \events$291.ca_refused ;
+  wire [15:0] \events$300 ;
+  wire \events$300.aborted ;
+  wire \events$300.crc_word0 ;
+  wire \events$300.crc_word1 ;
+  wire \events$300.delay_jump ;
+  wire \events$300.delay_range ;
+  wire \events$300.lc_repeat ;
+  wire \events$300.lc_skip ;
+  wire \events$300.lc_zero ;
+  wire \events$300.no_ack ;
+  wire \events$300.no_start ;
+  wire \events$300.no_stop ;
+  wire \events$300.noise_event ;
+  wire \events$300.noisy_line ;
+  wire \events$300.overrun ;
+  wire \events$300.slo_stuck_low ;
+  wire \events$300.spw_mismatch ;
   wire fault;
-  wire \fault$210 ;
+  wire \fault$211 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -25360,7 +25436,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$212 ;
+  wire [3:0] \fault_status$213 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -25370,7 +25446,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$248 ;
+  wire \first_rise$249 ;
   wire [31:0] first_rise_time;
   wire fixed;
   wire [12:0] fixed_delay;
@@ -25420,7 +25496,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
-  wire \frame_end$284 ;
+  wire \frame_end$285 ;
   wire frame_ok;
   output frames;
   wire frames;
@@ -25436,19 +25512,19 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$149 ;
-  wire [5:0] \lc$339 ;
+  wire [5:0] \lc$340 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$151 ;
   wire lc_repeat;
-  wire \lc_repeat$340 ;
+  wire \lc_repeat$341 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$341 ;
+  wire \lc_skip$342 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$342 ;
+  wire \lc_zero$343 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
@@ -25514,7 +25590,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \locked$71 ;
   output ma;
   wire ma;
-  wire \ma$314 ;
+  wire \ma$315 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$102 ;
@@ -25538,7 +25614,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$317 ;
+  wire \overrun$318 ;
   wire passed;
   wire pending;
   wire [23:0] period;
@@ -25565,38 +25641,38 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$224 ;
-  wire \report$228 ;
+  wire \report$225 ;
+  wire \report$229 ;
   wire report_delay;
-  wire \report_delay$231 ;
+  wire \report_delay$232 ;
   wire report_frame;
-  wire \report_frame$209 ;
-  wire \report_frame$229 ;
+  wire \report_frame$210 ;
+  wire \report_frame$230 ;
   wire request;
-  wire [17:0] \request$252 ;
-  wire [6:0] \request$252.address ;
-  wire [6:0] \request$252.count ;
-  wire [2:0] \request$252.slave_id ;
-  wire \request$252.write ;
+  wire [17:0] \request$253 ;
+  wire [6:0] \request$253.address ;
+  wire [6:0] \request$253.count ;
+  wire [2:0] \request$253.slave_id ;
+  wire \request$253.write ;
   wire \request$56 ;
   wire restart;
   wire \restart$164 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$323 ;
-  wire [186:0] \result$323 ;
-  wire \result$323.cds ;
-  wire \result$323.delay_settled ;
-  wire [7:0] \result$323.delay_spread ;
-  wire [5:0] \result$323.lc ;
-  wire \result$323.lc_repeat ;
-  wire \result$323.lc_skip ;
-  wire \result$323.lc_zero ;
-  wire [12:0] \result$323.line_delay ;
-  wire [3:0] \result$323.noise_events ;
-  wire [12:0] \result$323.settled_delay ;
-  wire \result$323.spw_mismatch ;
+  output [186:0] \result$324 ;
+  wire [186:0] \result$324 ;
+  wire \result$324.cds ;
+  wire \result$324.delay_settled ;
+  wire [7:0] \result$324.delay_spread ;
+  wire [5:0] \result$324.lc ;
+  wire \result$324.lc_repeat ;
+  wire \result$324.lc_skip ;
+  wire \result$324.lc_zero ;
+  wire [12:0] \result$324.line_delay ;
+  wire [3:0] \result$324.noise_events ;
+  wire [12:0] \result$324.settled_delay ;
+  wire \result$324.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -25614,18 +25690,18 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$323.status ;
-  wire [31:0] \result$323.timestamp ;
-  wire [57:0] \result$323.word0 ;
-  wire \result$323.word0.crc_ok ;
-  wire \result$323.word0.ne ;
-  wire \result$323.word0.nw ;
-  wire [54:0] \result$323.word0.position ;
-  wire [42:0] \result$323.word1 ;
-  wire \result$323.word1.crc_ok ;
-  wire \result$323.word1.ne ;
-  wire \result$323.word1.nw ;
-  wire [39:0] \result$323.word1.position ;
+  wire [3:0] \result$324.status ;
+  wire [31:0] \result$324.timestamp ;
+  wire [57:0] \result$324.word0 ;
+  wire \result$324.word0.crc_ok ;
+  wire \result$324.word0.ne ;
+  wire \result$324.word0.nw ;
+  wire [54:0] \result$324.word0.position ;
+  wire [42:0] \result$324.word1 ;
+  wire \result$324.word1.crc_ok ;
+  wire \result$324.word1.ne ;
+  wire \result$324.word1.nw ;
+  wire [39:0] \result$324.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -25644,13 +25720,13 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$346 ;
+  wire \sample$347 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$329 ;
+  wire [12:0] \settled_delay$330 ;
   wire skip;
   input slo;
   wire slo;
@@ -25667,19 +25743,19 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$343 ;
+  wire \spw_mismatch$344 ;
   wire ssi;
-  wire \ssi$198 ;
-  wire \ssi$202 ;
+  wire \ssi$199 ;
+  wire \ssi$203 ;
   wire ssi_double;
-  wire \ssi_double$203 ;
+  wire \ssi_double$204 ;
   wire ssi_error;
-  wire \ssi_error$204 ;
+  wire \ssi_error$205 ;
   wire ssi_error_low;
   input start;
   wire start;
-  input \start$264 ;
-  wire \start$264 ;
+  input \start$265 ;
+  wire \start$265 ;
   wire \start$43 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$134 ;
@@ -25722,7 +25798,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$226 ;
+  wire [3:0] \status$227 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -25740,7 +25816,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$322 ;
+  wire [3:0] \status$323 ;
   wire stop_bit;
   wire \stop_bit$86 ;
   wire stopped;
@@ -25754,15 +25830,15 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$193 ;
+  wire [7:0] \tolerance$194 ;
   input trigger;
   wire trigger;
   wire \trigger$54 ;
   wire unconfirmed;
   wire valid;
-  wire \valid$233 ;
-  output \valid$320 ;
-  wire \valid$320 ;
+  wire \valid$234 ;
+  output \valid$321 ;
+  wire \valid$321 ;
   wire valid_out;
   wire waiting;
   wire watch;
@@ -25841,7 +25917,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \$3  = ~ started_before;
   assign \check$172  = started & \$3 ;
   assign \$4  = ~ cycle[259];
-  assign cdm = \cdm$279  & \$4 ;
+  assign cdm = \cdm$280  & \$4 ;
   assign \$5  = ~ cycle[259];
   assign frame_ok = passed & \$5 ;
   assign \$6  = result[2:0] == 1'h1;
@@ -25859,10 +25935,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \$18  = report_frame & \$17 ;
   assign \$19  = status == 4'he;
   assign \$20  = report_frame & \$19 ;
-  assign \busy$315  = ~ idle;
+  assign \busy$316  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$21  = ~ \clear$137 ;
-  assign \$22  = \sample$346  & \$21 ;
+  assign \$22  = \sample$347  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -25876,7 +25952,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   \biss_master_axil.ch1.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
-    .crcs(crcs),
+    .crc_widths(crc_widths),
     .cycle(cycle),
     .delay_limit(delay_limit),
     .delay_tolerance(tolerance),
@@ -25946,19 +26022,19 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch1.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$291 ),
+    .clear(\clear$292 ),
     .clk(clk),
-    .events(\events$299 ),
+    .events(\events$300 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters  counters (
-    .clear(\clear$291 ),
+    .clear(\clear$292 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$290 ),
+    .events(\events$291 ),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.decoder  decoder (
@@ -25967,7 +26043,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
-    .crcs(crcs),
+    .crc_widths(crc_widths),
+    .customs(customs),
     .data0(data0),
     .data1(spw),
     .frame_end(frame_done),
@@ -25976,7 +26053,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7285$272 (cycle[274:272]),
+    .\port$7342$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -26034,9 +26111,9 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   \biss_master_axil.ch1.core.ma_stop  ma_stop (
     .clear(\clear$137 ),
     .clk(clk),
-    .crcs(crcs),
+    .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$7285$199 (cycle[199]),
+    .\port$7342$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -26047,9 +26124,9 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .words(\words$183 )
   );
   \biss_master_axil.ch1.core.register_access  register_access (
-    .abort(\abort$266 ),
+    .abort(\abort$267 ),
     .busy(frames),
-    .cdm(\cdm$279 ),
+    .cdm(\cdm$280 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -26059,27 +26136,27 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$252 ),
+    .request(\request$253 ),
     .result(result),
     .rst(rst),
-    .start(\start$264 ),
+    .start(\start$265 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch1.core.results  results (
     .clk(clk),
-    .done(\done$318 ),
+    .done(\done$319 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$323 ),
+    .result(\result$324 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$320 )
+    .valid_out(\valid$321 )
   );
   \biss_master_axil.ch1.core.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$347 ),
+    .\bit (\bit$348 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -26087,10 +26164,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7285$259 (cycle[271:259]),
+    .\port$7342$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
-    .sample(\sample$346 ),
+    .sample(\sample$347 ),
     .slo(slo)
   );
   \biss_master_axil.ch1.core.scheduler  scheduler (
@@ -26111,7 +26188,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7273$0 (\bit ),
+    .\port$7330$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -26162,7 +26239,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch1.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$348 ),
+    .clean(\clean$349 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
@@ -26179,7 +26256,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5202$0 (\$28 ),
+    .\port$5254$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -26197,7 +26274,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$24  = \bit$347 ;
+    \$24  = \bit$348 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -26218,7 +26295,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$27  = \clean$348 ;
+    \$27  = \clean$349 ;
     if (rst) begin
       \$27  = 1'h0;
     end
@@ -26298,95 +26375,95 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \clean$177  = clean;
   assign \noisy$179  = noisy;
   assign jump = delay_jump;
-  assign \crcs$185  = crcs;
-  assign \crcs$186  = crcs;
+  assign \crc_widths$185  = crc_widths;
+  assign \crc_widths$186  = crc_widths;
   assign enables = { cycle[199], 1'h1 };
-  assign \cpw_top$189  = cpw_top;
+  assign \cpw_top$190  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[205:200];
-  assign \tolerance$193  = cycle[258:251];
+  assign \tolerance$194  = cycle[258:251];
   assign match = spw_match;
   assign fixed = cycle[259];
   assign fixed_delay = { 1'h0, cycle[271:260] };
-  assign \ssi$198  = cycle[259];
+  assign \ssi$199  = cycle[259];
   assign ssi_error = cycle[272];
   assign ssi_error_low = cycle[273];
   assign ssi_double = cycle[274];
-  assign \ssi$202  = cycle[259];
-  assign \ssi_double$203  = cycle[274];
-  assign \ssi_error$204  = cycle[272];
+  assign \ssi$203  = cycle[259];
+  assign \ssi_double$204  = cycle[274];
+  assign \ssi_error$205  = cycle[272];
   assign mismatch = copy_mismatch;
   assign cfg = cycle;
-  assign \report_frame$209  = report_frame;
-  assign \fault$210  = \restart$164 ;
-  assign \fault_status$212  = fault_status;
-  assign \crc_ok$214  = crc_ok;
+  assign \report_frame$210  = report_frame;
+  assign \fault$211  = \restart$164 ;
+  assign \fault_status$213  = fault_status;
+  assign \crc_ok$215  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$224  = report;
-  assign \status$226  = status;
+  assign \report$225  = report;
+  assign \status$227  = status;
   assign setting = cycle[148:145];
-  assign \report$228  = report;
-  assign \report_frame$229  = report_frame;
-  assign \report_delay$231  = report_delay;
-  assign \valid$233  = valid;
+  assign \report$229  = report;
+  assign \report_frame$230  = report_frame;
+  assign \report_delay$232  = report_delay;
+  assign \valid$234  = valid;
   assign word_crc_ok = { \$28 , crc_ok[0] };
-  assign \first_rise$248  = first_rise;
+  assign \first_rise$249  = first_rise;
   assign time_now = now;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$264 ;
-  assign ca_abort = \abort$266 ;
+  assign ca_start = \start$265 ;
+  assign ca_abort = \abort$267 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$275  = frames;
+  assign \busy$276  = frames;
   assign done = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
-  assign \frame_end$284  = report;
+  assign \frame_end$285  = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$291 ;
+  assign clear_counters = \clear$292 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$304  = \clear$291 ;
+  assign \clear$305  = \clear$292 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$312  = count_busy;
-  assign \ma$314  = ma;
-  assign \overrun$317  = overrun;
-  assign \done$319  = \done$318 ;
-  assign valid_out = \valid$320 ;
-  assign \status$322  = \result$323 [3:0];
-  assign timestamp = \result$323 [35:4];
-  assign line_delay = \result$323 [48:36];
-  assign \cds$326  = \result$323 [49];
-  assign noise_events = \result$323 [53:50];
-  assign delay_settled = \result$323 [54];
-  assign \settled_delay$329  = \result$323 [67:55];
-  assign delay_spread = \result$323 [75:68];
-  assign word0_position = \result$323 [130:76];
-  assign word0_ne = \result$323 [131];
-  assign word0_nw = \result$323 [132];
-  assign word0_crc_ok = \result$323 [133];
-  assign word1_position = \result$323 [173:134];
-  assign word1_ne = \result$323 [174];
-  assign word1_nw = \result$323 [175];
-  assign word1_crc_ok = \result$323 [176];
-  assign \lc$339  = \result$323 [182:177];
-  assign \lc_repeat$340  = \result$323 [183];
-  assign \lc_skip$341  = \result$323 [184];
-  assign \lc_zero$342  = \result$323 [185];
-  assign \spw_mismatch$343  = \result$323 [186];
+  assign \busy$313  = count_busy;
+  assign \ma$315  = ma;
+  assign \overrun$318  = overrun;
+  assign \done$320  = \done$319 ;
+  assign valid_out = \valid$321 ;
+  assign \status$323  = \result$324 [3:0];
+  assign timestamp = \result$324 [35:4];
+  assign line_delay = \result$324 [48:36];
+  assign \cds$327  = \result$324 [49];
+  assign noise_events = \result$324 [53:50];
+  assign delay_settled = \result$324 [54];
+  assign \settled_delay$330  = \result$324 [67:55];
+  assign delay_spread = \result$324 [75:68];
+  assign word0_position = \result$324 [130:76];
+  assign word0_ne = \result$324 [131];
+  assign word0_nw = \result$324 [132];
+  assign word0_crc_ok = \result$324 [133];
+  assign word1_position = \result$324 [173:134];
+  assign word1_ne = \result$324 [174];
+  assign word1_nw = \result$324 [175];
+  assign word1_crc_ok = \result$324 [176];
+  assign \lc$340  = \result$324 [182:177];
+  assign \lc_repeat$341  = \result$324 [183];
+  assign \lc_skip$342  = \result$324 [184];
+  assign \lc_zero$343  = \result$324 [185];
+  assign \spw_mismatch$344  = \result$324 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -26501,36 +26578,22 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \words$183[1].crc  = \words$183 [21:20];
   assign \words$183[1].gray  = \words$183 [22];
   assign \words$183[1].signed  = \words$183 [23];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$185[0]  = crcs[37:0];
-  assign \crcs$185[0].width  = crcs[4:0];
-  assign \crcs$185[0].poly  = crcs[20:5];
-  assign \crcs$185[0].start  = crcs[36:21];
-  assign \crcs$185[0].inverted  = crcs[37];
-  assign \crcs$185[1]  = crcs[75:38];
-  assign \crcs$185[1].width  = crcs[42:38];
-  assign \crcs$185[1].poly  = crcs[58:43];
-  assign \crcs$185[1].start  = crcs[74:59];
-  assign \crcs$185[1].inverted  = crcs[75];
-  assign \crcs$186[0]  = crcs[37:0];
-  assign \crcs$186[0].width  = crcs[4:0];
-  assign \crcs$186[0].poly  = crcs[20:5];
-  assign \crcs$186[0].start  = crcs[36:21];
-  assign \crcs$186[0].inverted  = crcs[37];
-  assign \crcs$186[1]  = crcs[75:38];
-  assign \crcs$186[1].width  = crcs[42:38];
-  assign \crcs$186[1].poly  = crcs[58:43];
-  assign \crcs$186[1].start  = crcs[74:59];
-  assign \crcs$186[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
+  assign \crc_widths$185[0]  = crc_widths[4:0];
+  assign \crc_widths$185[1]  = crc_widths[9:5];
+  assign \crc_widths$186[0]  = crc_widths[4:0];
+  assign \crc_widths$186[1]  = crc_widths[9:5];
+  assign \customs[0]  = customs[37:0];
+  assign \customs[0].width  = customs[4:0];
+  assign \customs[0].poly  = customs[20:5];
+  assign \customs[0].start  = customs[36:21];
+  assign \customs[0].inverted  = customs[37];
+  assign \customs[1]  = customs[75:38];
+  assign \customs[1].width  = customs[42:38];
+  assign \customs[1].poly  = customs[58:43];
+  assign \customs[1].start  = customs[74:59];
+  assign \customs[1].inverted  = customs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -26597,41 +26660,41 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$252.slave_id  = \request$252 [2:0];
-  assign \request$252.address  = \request$252 [9:3];
-  assign \request$252.count  = \request$252 [16:10];
-  assign \request$252.write  = \request$252 [17];
+  assign \request$253.slave_id  = \request$253 [2:0];
+  assign \request$253.address  = \request$253 [9:3];
+  assign \request$253.count  = \request$253 [16:10];
+  assign \request$253.write  = \request$253 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$290.ca_crc4_error  = \events$290 [0];
-  assign \events$290.ca_no_answer  = \events$290 [1];
-  assign \events$290.ca_refused  = \events$290 [2];
-  assign \events$290.ca_aborted  = \events$290 [3];
-  assign \events$290.ca_data_fault  = \events$290 [4];
+  assign \events$291.ca_crc4_error  = \events$291 [0];
+  assign \events$291.ca_no_answer  = \events$291 [1];
+  assign \events$291.ca_refused  = \events$291 [2];
+  assign \events$291.ca_aborted  = \events$291 [3];
+  assign \events$291.ca_data_fault  = \events$291 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$299.crc_word0  = \events$299 [0];
-  assign \events$299.crc_word1  = \events$299 [1];
-  assign \events$299.no_ack  = \events$299 [2];
-  assign \events$299.no_start  = \events$299 [3];
-  assign \events$299.delay_range  = \events$299 [4];
-  assign \events$299.slo_stuck_low  = \events$299 [5];
-  assign \events$299.lc_repeat  = \events$299 [6];
-  assign \events$299.lc_skip  = \events$299 [7];
-  assign \events$299.lc_zero  = \events$299 [8];
-  assign \events$299.spw_mismatch  = \events$299 [9];
-  assign \events$299.overrun  = \events$299 [10];
-  assign \events$299.aborted  = \events$299 [11];
-  assign \events$299.no_stop  = \events$299 [12];
-  assign \events$299.noisy_line  = \events$299 [13];
-  assign \events$299.delay_jump  = \events$299 [14];
-  assign \events$299.noise_event  = \events$299 [15];
+  assign \events$300.crc_word0  = \events$300 [0];
+  assign \events$300.crc_word1  = \events$300 [1];
+  assign \events$300.no_ack  = \events$300 [2];
+  assign \events$300.no_start  = \events$300 [3];
+  assign \events$300.delay_range  = \events$300 [4];
+  assign \events$300.slo_stuck_low  = \events$300 [5];
+  assign \events$300.lc_repeat  = \events$300 [6];
+  assign \events$300.lc_skip  = \events$300 [7];
+  assign \events$300.lc_zero  = \events$300 [8];
+  assign \events$300.spw_mismatch  = \events$300 [9];
+  assign \events$300.overrun  = \events$300 [10];
+  assign \events$300.aborted  = \events$300 [11];
+  assign \events$300.no_stop  = \events$300 [12];
+  assign \events$300.noisy_line  = \events$300 [13];
+  assign \events$300.delay_jump  = \events$300 [14];
+  assign \events$300.noise_event  = \events$300 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -26639,57 +26702,57 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$323.status  = \result$323 [3:0];
-  assign \result$323.timestamp  = \result$323 [35:4];
-  assign \result$323.line_delay  = \result$323 [48:36];
-  assign \result$323.cds  = \result$323 [49];
-  assign \result$323.noise_events  = \result$323 [53:50];
-  assign \result$323.delay_settled  = \result$323 [54];
-  assign \result$323.settled_delay  = \result$323 [67:55];
-  assign \result$323.delay_spread  = \result$323 [75:68];
-  assign \result$323.word0  = \result$323 [133:76];
-  assign \result$323.word0.position  = \result$323 [130:76];
-  assign \result$323.word0.ne  = \result$323 [131];
-  assign \result$323.word0.nw  = \result$323 [132];
-  assign \result$323.word0.crc_ok  = \result$323 [133];
-  assign \result$323.word1  = \result$323 [176:134];
-  assign \result$323.word1.position  = \result$323 [173:134];
-  assign \result$323.word1.ne  = \result$323 [174];
-  assign \result$323.word1.nw  = \result$323 [175];
-  assign \result$323.word1.crc_ok  = \result$323 [176];
-  assign \result$323.lc  = \result$323 [182:177];
-  assign \result$323.lc_repeat  = \result$323 [183];
-  assign \result$323.lc_skip  = \result$323 [184];
-  assign \result$323.lc_zero  = \result$323 [185];
-  assign \result$323.spw_mismatch  = \result$323 [186];
-  assign \events$299 [15] = \event ;
-  assign \events$299 [14] = \$20 ;
-  assign \events$299 [13] = \$18 ;
-  assign \events$299 [12] = faults[6];
-  assign \events$299 [11] = faults[4];
-  assign \events$299 [10] = overrun;
-  assign \events$299 [9] = \$16 ;
-  assign \events$299 [8] = lc_zero;
-  assign \events$299 [7] = lc_skip;
-  assign \events$299 [6] = lc_repeat;
-  assign \events$299 [5] = faults[3];
-  assign \events$299 [4] = faults[2];
-  assign \events$299 [3] = faults[1];
-  assign \events$299 [2] = faults[0];
-  assign \events$299 [1] = crc_error[1];
-  assign \events$299 [0] = crc_error[0];
-  assign \events$290 [4] = \$15 ;
-  assign \events$290 [3] = \$13 ;
-  assign \events$290 [2] = \$11 ;
-  assign \events$290 [1] = \$9 ;
-  assign \events$290 [0] = \$7 ;
+  assign \result$324.status  = \result$324 [3:0];
+  assign \result$324.timestamp  = \result$324 [35:4];
+  assign \result$324.line_delay  = \result$324 [48:36];
+  assign \result$324.cds  = \result$324 [49];
+  assign \result$324.noise_events  = \result$324 [53:50];
+  assign \result$324.delay_settled  = \result$324 [54];
+  assign \result$324.settled_delay  = \result$324 [67:55];
+  assign \result$324.delay_spread  = \result$324 [75:68];
+  assign \result$324.word0  = \result$324 [133:76];
+  assign \result$324.word0.position  = \result$324 [130:76];
+  assign \result$324.word0.ne  = \result$324 [131];
+  assign \result$324.word0.nw  = \result$324 [132];
+  assign \result$324.word0.crc_ok  = \result$324 [133];
+  assign \result$324.word1  = \result$324 [176:134];
+  assign \result$324.word1.position  = \result$324 [173:134];
+  assign \result$324.word1.ne  = \result$324 [174];
+  assign \result$324.word1.nw  = \result$324 [175];
+  assign \result$324.word1.crc_ok  = \result$324 [176];
+  assign \result$324.lc  = \result$324 [182:177];
+  assign \result$324.lc_repeat  = \result$324 [183];
+  assign \result$324.lc_skip  = \result$324 [184];
+  assign \result$324.lc_zero  = \result$324 [185];
+  assign \result$324.spw_mismatch  = \result$324 [186];
+  assign \events$300 [15] = \event ;
+  assign \events$300 [14] = \$20 ;
+  assign \events$300 [13] = \$18 ;
+  assign \events$300 [12] = faults[6];
+  assign \events$300 [11] = faults[4];
+  assign \events$300 [10] = overrun;
+  assign \events$300 [9] = \$16 ;
+  assign \events$300 [8] = lc_zero;
+  assign \events$300 [7] = lc_skip;
+  assign \events$300 [6] = lc_repeat;
+  assign \events$300 [5] = faults[3];
+  assign \events$300 [4] = faults[2];
+  assign \events$300 [3] = faults[1];
+  assign \events$300 [2] = faults[0];
+  assign \events$300 [1] = crc_error[1];
+  assign \events$300 [0] = crc_error[0];
+  assign \events$291 [4] = \$15 ;
+  assign \events$291 [3] = \$13 ;
+  assign \events$291 [2] = \$11 ;
+  assign \events$291 [1] = \$9 ;
+  assign \events$291 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$252 [17] = ca_write;
-  assign \request$252 [16:10] = ca_count;
-  assign \request$252 [9:3] = ca_address;
-  assign \request$252 [2:0] = ca_slave_id;
+  assign \request$253 [17] = ca_write;
+  assign \request$253 [16:10] = ca_count;
+  assign \request$253 [9:3] = ca_address;
+  assign \request$253 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$28 ;
@@ -26711,6 +26774,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
+  assign customs[75:38] = cycle[249:212];
+  assign customs[37:0] = cycle[198:161];
   assign \words$183 [23:12] = cycle[211:200];
   assign \words$183 [11:0] = cycle[160:149];
   assign words[23:12] = cycle[211:200];
@@ -26757,7 +26822,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crcs, no_start_limit, idle, clk);
+module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crc_widths, no_start_limit, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -26821,37 +26886,41 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire \$63 ;
   wire [3:0] \$64 ;
   wire [16:0] \$65 ;
-  wire [24:0] \$66 ;
-  wire [1:0] \$67 ;
-  wire [2:0] \$68 ;
-  reg \$69 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire [37:0] \$69 ;
   wire \$7 ;
-  reg [274:0] \$70 ;
-  reg [23:0] \$71 ;
-  reg [23:0] \$72 ;
-  reg [11:0] \$73 ;
-  reg [11:0] \$74 ;
-  reg [16:0] \$75 ;
-  reg [75:0] \$76 ;
-  reg [24:0] \$77 ;
+  wire [37:0] \$70 ;
+  wire [37:0] \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire [37:0] \$75 ;
+  wire [37:0] \$76 ;
+  wire [37:0] \$77 ;
+  wire [24:0] \$78 ;
+  wire [1:0] \$79 ;
   wire \$8 ;
+  wire [2:0] \$80 ;
+  reg \$81 ;
+  reg [274:0] \$82 ;
+  reg [23:0] \$83 ;
+  reg [23:0] \$84 ;
+  reg [11:0] \$85 ;
+  reg [11:0] \$86 ;
+  reg [16:0] \$87 ;
+  reg [9:0] \$88 ;
+  reg [24:0] \$89 ;
   wire \$9 ;
   output [23:0] ack_limit;
   reg [23:0] ack_limit = 24'h000000;
   input clk;
   wire clk;
-  output [75:0] crcs;
-  reg [75:0] crcs = 76'h0000000000000000000;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  output [9:0] crc_widths;
+  reg [9:0] crc_widths = 10'h000;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
   output [274:0] cycle;
   reg [274:0] cycle = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
@@ -26980,6 +27049,18 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
+  assign \$11  = | live[165:161];
+  assign \$12  = \$10  & \$11 ;
+  assign \$13  = live[165:161] <= 5'h10;
+  assign \$14  = \$12  & \$13 ;
+  assign \$15  = \$9  | \$14 ;
+  assign \$16  = \$4  & \$15 ;
+  assign \$17  = \$1  & \$16 ;
+  assign \$18  = ~ live[199];
+  assign \$19  = | live[205:200];
+  assign \$20  = live[205:200] <= 6'h28;
+  assign \$21  = \$19  & \$20 ;
+  assign \$22  = ! live[209:208];
   assign \$23  = live[209:208] == 1'h1;
   assign \$24  = \$22  | \$23 ;
   assign \$25  = live[209:208] == 2'h2;
@@ -27022,26 +27103,38 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$63  = ! live[144:141];
   assign \$64  = \$63  ? 4'h2 : live[144:141];
   assign \$65  = live[15:0] + \$64 ;
-  assign \$66  = ack_limit + { cycle[15:0], 1'h1 };
-  assign \$68  = 2'h1 + cycle[199];
+  assign \$66  = live[158:157] == 2'h3;
+  assign \$67  = live[158:157] == 2'h2;
+  assign \$68  = live[158:157] == 1'h1;
+  assign \$69  = \$68  ? 38'h2000000066 : 38'h0000000000;
+  assign \$70  = \$67  ? 38'h2000121b30 : \$69 ;
+  assign \$71  = \$66  ? live[198:161] : \$70 ;
+  assign \$72  = live[209:208] == 2'h3;
+  assign \$73  = live[209:208] == 2'h2;
+  assign \$74  = live[209:208] == 1'h1;
+  assign \$75  = \$74  ? 38'h2000000066 : 38'h0000000000;
+  assign \$76  = \$73  ? 38'h2000121b30 : \$75 ;
+  assign \$77  = \$72  ? live[249:212] : \$76 ;
+  assign \$78  = ack_limit + { cycle[15:0], 1'h1 };
+  assign \$80  = 2'h1 + cycle[199];
   always @(posedge clk)
-    ok <= \$69 ;
+    ok <= \$81 ;
   always @(posedge clk)
-    cycle <= \$70 ;
+    cycle <= \$82 ;
   always @(posedge clk)
-    ack_limit <= \$71 ;
+    ack_limit <= \$83 ;
   always @(posedge clk)
-    timeout_limit <= \$72 ;
+    timeout_limit <= \$84 ;
   always @(posedge clk)
-    delay_limit <= \$73 ;
+    delay_limit <= \$85 ;
   always @(posedge clk)
-    quiet_time <= \$74 ;
+    quiet_time <= \$86 ;
   always @(posedge clk)
-    delay_tolerance <= \$75 ;
+    delay_tolerance <= \$87 ;
   always @(posedge clk)
-    crcs <= \$76 ;
+    crc_widths <= \$88 ;
   always @(posedge clk)
-    no_start_limit <= \$77 ;
+    no_start_limit <= \$89 ;
   assign \$1  = | live[15:1];
   assign \$2  = | live[154:149];
   assign \$3  = live[154:149] <= 6'h37;
@@ -27052,144 +27145,92 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$8  = live[158:157] == 2'h2;
   assign \$9  = \$7  | \$8 ;
   assign \$10  = live[158:157] == 2'h3;
-  assign \$11  = | live[165:161];
-  assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[165:161] <= 5'h10;
-  assign \$14  = \$12  & \$13 ;
-  assign \$15  = \$9  | \$14 ;
-  assign \$16  = \$4  & \$15 ;
-  assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[199];
-  assign \$19  = | live[205:200];
-  assign \$20  = live[205:200] <= 6'h28;
-  assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[209:208];
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$69  = \$54 ;
+    \$81  = \$54 ;
     if (rst) begin
-      \$69  = 1'h0;
+      \$81  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$70  = cycle;
+    \$82  = cycle;
     if (idle) begin
-      \$70  = live;
+      \$82  = live;
     end
     if (rst) begin
-      \$70  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
+      \$82  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$71  = ack_limit;
+    \$83  = ack_limit;
     if (idle) begin
-      \$71  = \$56 ;
+      \$83  = \$56 ;
     end
     if (rst) begin
-      \$71  = 24'h000000;
+      \$83  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$72  = timeout_limit;
+    \$84  = timeout_limit;
     if (idle) begin
-      \$72  = \$58 ;
+      \$84  = \$58 ;
     end
     if (rst) begin
-      \$72  = 24'h000000;
+      \$84  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$73  = delay_limit;
+    \$85  = delay_limit;
     if (idle) begin
-      \$73  = \$60 ;
+      \$85  = \$60 ;
     end
     if (rst) begin
-      \$73  = 12'h000;
+      \$85  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$74  = quiet_time;
+    \$86  = quiet_time;
     if (idle) begin
-      \$74  = \$62 ;
+      \$86  = \$62 ;
     end
     if (rst) begin
-      \$74  = 12'h000;
+      \$86  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$75  = delay_tolerance;
+    \$87  = delay_tolerance;
     if (idle) begin
-      \$75  = \$65 ;
+      \$87  = \$65 ;
     end
     if (rst) begin
-      \$75  = 17'h00000;
+      \$87  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$76  = crcs;
+    \$88  = crc_widths;
     if (idle) begin
-      (* full_case = 32'd1 *)
-      casez (live[158:157])
-        2'h1:
-          begin
-            \$76 [4:0] = 5'h06;
-            \$76 [20:5] = 16'h0003;
-            \$76 [36:21] = 16'h0000;
-            \$76 [37] = 1'h1;
-          end
-        2'h2:
-          begin
-            \$76 [4:0] = 5'h10;
-            \$76 [20:5] = 16'h90d9;
-            \$76 [36:21] = 16'h0000;
-            \$76 [37] = 1'h1;
-          end
-        2'h3:
-            \$76 [37:0] = live[198:161];
-        default:
-            \$76 [37:0] = 38'h0000000000;
-      endcase
-      (* full_case = 32'd1 *)
-      casez (live[209:208])
-        2'h1:
-          begin
-            \$76 [42:38] = 5'h06;
-            \$76 [58:43] = 16'h0003;
-            \$76 [74:59] = 16'h0000;
-            \$76 [75] = 1'h1;
-          end
-        2'h2:
-          begin
-            \$76 [42:38] = 5'h10;
-            \$76 [58:43] = 16'h90d9;
-            \$76 [74:59] = 16'h0000;
-            \$76 [75] = 1'h1;
-          end
-        2'h3:
-            \$76 [75:38] = live[249:212];
-        default:
-            \$76 [75:38] = 38'h0000000000;
-      endcase
+      \$88 [4:0] = \$71 [4:0];
+      \$88 [9:5] = \$77 [4:0];
     end
     if (rst) begin
-      \$76  = 76'h0000000000000000000;
+      \$88  = 10'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$77  = \$66 ;
+    \$89  = \$78 ;
     if (rst) begin
-      \$77  = 25'h0000000;
+      \$89  = 25'h0000000;
     end
   end
-  assign word_count = \$68 [1:0];
+  assign word_count = \$80 [1:0];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -27276,18 +27317,10 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.ssi_error  = cycle[272];
   assign \cycle.ssi_error_low  = cycle[273];
   assign \cycle.ssi_double  = cycle[274];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
   assign \$36  = live[156];
-  assign \$67  = 2'h1;
+  assign \$79  = 2'h1;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -30263,8 +30296,8 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$7285$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
-, lc, cpw_top, mismatch, crc_ok, clk);
+module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$7342$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+, data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -30859,51 +30892,60 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   input \bit ;
   wire \bit ;
   wire \bit$11 ;
-  wire \bit$35 ;
+  wire \bit$37 ;
   output cds;
   reg cds = 1'h0;
   wire check;
   input clk;
   wire clk;
+  wire [3:0] codes;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \codes[0] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \codes[1] ;
   wire \cover ;
   output [39:0] cpw_top;
   reg [39:0] cpw_top = 40'h0000000000;
   output [1:0] crc_ok;
   wire [1:0] crc_ok;
-  input [75:0] crcs;
-  wire [75:0] crcs;
-  wire [75:0] \crcs$28 ;
-  wire [37:0] \crcs$28[0] ;
-  wire \crcs$28[0].inverted ;
-  wire [15:0] \crcs$28[0].poly ;
-  wire [15:0] \crcs$28[0].start ;
-  wire [4:0] \crcs$28[0].width ;
-  wire [37:0] \crcs$28[1] ;
-  wire \crcs$28[1].inverted ;
-  wire [15:0] \crcs$28[1].poly ;
-  wire [15:0] \crcs$28[1].start ;
-  wire [4:0] \crcs$28[1].width ;
-  wire [75:0] \crcs$3 ;
-  wire [37:0] \crcs$3[0] ;
-  wire \crcs$3[0].inverted ;
-  wire [15:0] \crcs$3[0].poly ;
-  wire [15:0] \crcs$3[0].start ;
-  wire [4:0] \crcs$3[0].width ;
-  wire [37:0] \crcs$3[1] ;
-  wire \crcs$3[1].inverted ;
-  wire [15:0] \crcs$3[1].poly ;
-  wire [15:0] \crcs$3[1].start ;
-  wire [4:0] \crcs$3[1].width ;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  input [9:0] crc_widths;
+  wire [9:0] crc_widths;
+  wire [9:0] \crc_widths$3 ;
+  wire [4:0] \crc_widths$3[0] ;
+  wire [4:0] \crc_widths$3[1] ;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
+  input [75:0] customs;
+  wire [75:0] customs;
+  wire [75:0] \customs$30 ;
+  wire [37:0] \customs$30[0] ;
+  wire \customs$30[0].inverted ;
+  wire [15:0] \customs$30[0].poly ;
+  wire [15:0] \customs$30[0].start ;
+  wire [4:0] \customs$30[0].width ;
+  wire [37:0] \customs$30[1] ;
+  wire \customs$30[1].inverted ;
+  wire [15:0] \customs$30[1].poly ;
+  wire [15:0] \customs$30[1].start ;
+  wire [4:0] \customs$30[1].width ;
+  wire [37:0] \customs[0] ;
+  wire \customs[0].inverted ;
+  wire [15:0] \customs[0].poly ;
+  wire [15:0] \customs[0].start ;
+  wire [4:0] \customs[0].width ;
+  wire [37:0] \customs[1] ;
+  wire \customs[1].inverted ;
+  wire [15:0] \customs[1].poly ;
+  wire [15:0] \customs[1].start ;
+  wire [4:0] \customs[1].width ;
   output [54:0] data0;
   reg [54:0] data0 = 55'h00000000000000;
   output [39:0] data1;
@@ -30939,7 +30981,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   reg in_word;
   wire [6:0] index;
   (* init = 1'h0 *)
-  wire \index$38 ;
+  wire \index$40 ;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -30956,8 +30998,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7285$272 ;
-  wire [2:0] \port$7285$272 ;
+  input [2:0] \port$7342$272 ;
+  wire [2:0] \port$7342$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -31243,7 +31285,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$7285$272 [0];
+  assign error_bit = ssi & \port$7342$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -31297,7 +31339,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$7285$272 [2];
+  assign \$48  = ssi & \port$7342$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -31584,15 +31626,15 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$7285$272 [0];
+  assign \$335  = ssi & \port$7342$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$7285$272 [0];
-  assign \$343  = ~ \port$7285$272 [1];
+  assign \$342  = ssi & \port$7342$272 [0];
+  assign \$343  = ~ \port$7342$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -31665,8 +31707,9 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     .\bit (\bit ),
     .check(check),
     .clk(clk),
+    .codes(codes),
     .\cover (\cover ),
-    .crcs(crcs),
+    .customs(customs),
     .index(word),
     .last(last),
     .load(load),
@@ -31677,7 +31720,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   );
   \biss_master_axil.ch1.core.decoder.field_ends  field_ends (
     .clk(clk),
-    .crcs(crcs),
+    .crc_widths(crc_widths),
     .ends(ends),
     .error_bit(error_bit),
     .receiver_clear(receiver_clear),
@@ -32223,18 +32266,18 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   assign \words$1  = words;
-  assign \crcs$3  = crcs;
-  assign ssi_error = \port$7285$272 [0];
+  assign \crc_widths$3  = crc_widths;
+  assign ssi_error = \port$7342$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$28  = crcs;
-  assign \bit$35  = \bit ;
+  assign \customs$30  = customs;
+  assign \bit$37  = \bit ;
   assign ok = crc_ok;
-  assign \index$38  = word;
+  assign \index$40  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$7285$272 [2];
-  assign ssi_error_low = \port$7285$272 [1];
+  assign ssi_double = \port$7342$272 [2];
+  assign ssi_error_low = \port$7342$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -32263,26 +32306,10 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \words$1[1].crc  = words[21:20];
   assign \words$1[1].gray  = words[22];
   assign \words$1[1].signed  = words[23];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$3[0]  = crcs[37:0];
-  assign \crcs$3[0].width  = crcs[4:0];
-  assign \crcs$3[0].poly  = crcs[20:5];
-  assign \crcs$3[0].start  = crcs[36:21];
-  assign \crcs$3[0].inverted  = crcs[37];
-  assign \crcs$3[1]  = crcs[75:38];
-  assign \crcs$3[1].width  = crcs[42:38];
-  assign \crcs$3[1].poly  = crcs[58:43];
-  assign \crcs$3[1].start  = crcs[74:59];
-  assign \crcs$3[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
+  assign \crc_widths$3[0]  = crc_widths[4:0];
+  assign \crc_widths$3[1]  = crc_widths[9:5];
   assign \ends[0]  = ends[36:0];
   assign \ends[0].data_end_p1  = ends[6:0];
   assign \ends[0].data_end_m1  = ends[13:7];
@@ -32299,16 +32326,30 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \ends[1].word_end_m1  = ends[71:65];
   assign \ends[1].data_at0  = ends[72];
   assign \ends[1].lc_at0  = ends[73];
-  assign \crcs$28[0]  = crcs[37:0];
-  assign \crcs$28[0].width  = crcs[4:0];
-  assign \crcs$28[0].poly  = crcs[20:5];
-  assign \crcs$28[0].start  = crcs[36:21];
-  assign \crcs$28[0].inverted  = crcs[37];
-  assign \crcs$28[1]  = crcs[75:38];
-  assign \crcs$28[1].width  = crcs[42:38];
-  assign \crcs$28[1].poly  = crcs[58:43];
-  assign \crcs$28[1].start  = crcs[74:59];
-  assign \crcs$28[1].inverted  = crcs[75];
+  assign \codes[0]  = codes[1:0];
+  assign \codes[1]  = codes[3:2];
+  assign \customs[0]  = customs[37:0];
+  assign \customs[0].width  = customs[4:0];
+  assign \customs[0].poly  = customs[20:5];
+  assign \customs[0].start  = customs[36:21];
+  assign \customs[0].inverted  = customs[37];
+  assign \customs[1]  = customs[75:38];
+  assign \customs[1].width  = customs[42:38];
+  assign \customs[1].poly  = customs[58:43];
+  assign \customs[1].start  = customs[74:59];
+  assign \customs[1].inverted  = customs[75];
+  assign \customs$30[0]  = customs[37:0];
+  assign \customs$30[0].width  = customs[4:0];
+  assign \customs$30[0].poly  = customs[20:5];
+  assign \customs$30[0].start  = customs[36:21];
+  assign \customs$30[0].inverted  = customs[37];
+  assign \customs$30[1]  = customs[75:38];
+  assign \customs$30[1].width  = customs[42:38];
+  assign \customs$30[1].poly  = customs[58:43];
+  assign \customs$30[1].start  = customs[74:59];
+  assign \customs$30[1].inverted  = customs[75];
+  assign codes[3:2] = words[21:20];
+  assign codes[1:0] = words[9:8];
   assign \$44  = ends[72];
   assign \$45  = ends[73];
   assign \$351  = word;
@@ -32384,63 +32425,109 @@ module \biss_master_axil.ch1.core.decoder.copy (rst, index, first, \bit , receiv
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
+module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, load_index, customs, \bit , receiver_clear, codes, index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
-  reg [15:0] \$1 ;
-  wire \$10 ;
-  reg \$11 ;
+  reg [1:0] \$1 ;
+  wire [37:0] \$10 ;
+  reg [1:0] \$11 ;
   wire \$12 ;
-  wire \$13 ;
-  wire \$14 ;
+  reg [37:0] \$13 ;
+  reg [1:0] \$14 ;
   wire \$15 ;
-  reg [4:0] \$16 ;
+  reg [1:0] \$16 ;
   wire \$17 ;
-  wire \$18 ;
-  reg \$19 ;
-  reg [4:0] \$2 ;
-  wire \$20 ;
-  wire \$21 ;
+  wire [37:0] \$18 ;
+  wire [37:0] \$19 ;
+  wire \$2 ;
+  wire [37:0] \$20 ;
+  reg [1:0] \$21 ;
   wire \$22 ;
-  wire \$23 ;
-  wire \$24 ;
-  reg [4:0] \$25 ;
-  wire \$26 ;
+  reg [37:0] \$23 ;
+  reg [1:0] \$24 ;
+  wire \$25 ;
+  reg [1:0] \$26 ;
   wire \$27 ;
-  reg \$28 ;
-  wire \$29 ;
-  wire \$3 ;
-  wire \$30 ;
-  wire \$31 ;
+  wire [37:0] \$28 ;
+  wire [37:0] \$29 ;
+  reg [37:0] \$3 ;
+  wire [37:0] \$30 ;
+  reg [1:0] \$31 ;
   wire \$32 ;
-  reg [15:0] \$33 ;
-  reg \$34 ;
-  reg [1:0] \$35 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  wire [15:0] \$6 ;
-  wire [15:0] \$7 ;
-  reg [4:0] \$8 ;
-  wire \$9 ;
+  reg [37:0] \$33 ;
+  reg [1:0] \$34 ;
+  wire \$35 ;
+  reg [1:0] \$36 ;
+  wire \$37 ;
+  wire [37:0] \$38 ;
+  wire [37:0] \$39 ;
+  reg [1:0] \$4 ;
+  wire [37:0] \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  wire [15:0] \$43 ;
+  wire [15:0] \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  wire \$48 ;
+  wire \$49 ;
+  wire \$5 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  wire \$55 ;
+  wire \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
+  reg [1:0] \$6 ;
+  wire \$60 ;
+  wire \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  reg [15:0] \$64 ;
+  reg \$65 ;
+  reg [37:0] \$66 ;
+  reg [1:0] \$67 ;
+  wire \$7 ;
+  wire [37:0] \$8 ;
+  wire [37:0] \$9 ;
   input \bit ;
   wire \bit ;
   input check;
   wire check;
   input clk;
   wire clk;
+  input [3:0] codes;
+  wire [3:0] codes;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \codes[0] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \codes[1] ;
   input \cover ;
   wire \cover ;
-  input [75:0] crcs;
-  wire [75:0] crcs;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  input [75:0] customs;
+  wire [75:0] customs;
+  wire [37:0] \customs[0] ;
+  wire \customs[0].inverted ;
+  wire [15:0] \customs[0].poly ;
+  wire [15:0] \customs[0].start ;
+  wire [4:0] \customs[0].width ;
+  wire [37:0] \customs[1] ;
+  wire \customs[1].inverted ;
+  wire [15:0] \customs[1].poly ;
+  wire [15:0] \customs[1].start ;
+  wire [4:0] \customs[1].width ;
   input index;
   wire index;
   input last;
@@ -32457,190 +32544,313 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   reg [15:0] \reg  = 16'h0000;
   input rst;
   wire rst;
-  assign \$3  = { \reg , 1'h0 } >> \$2 ;
-  assign \$4  = \$3  ^ \bit ;
-  assign \$6  = \$4  ? \$5  : 16'h0000;
-  assign \$7  = { \reg [14:0], 1'h0 } ^ \$6 ;
-  assign \$9  = { \reg , 1'h0 } >> \$8 ;
-  assign \$10  = \bit  ^ \$9 ;
-  assign \$12  = \$10  ^ \$11 ;
-  assign \$13  = check & \$12 ;
-  assign \$14  = mismatch | \$13 ;
-  assign \$15  = ! index;
-  assign \$17  = { \reg , 1'h0 } >> \$16 ;
-  assign \$18  = \bit  ^ \$17 ;
-  assign \$20  = \$18  ^ \$19 ;
-  assign \$21  = check & \$20 ;
-  assign \$22  = mismatch | \$21 ;
-  assign \$23  = ~ \$22 ;
-  assign \$26  = { \reg , 1'h0 } >> \$25 ;
-  assign \$27  = \bit  ^ \$26 ;
-  assign \$29  = \$27  ^ \$28 ;
-  assign \$30  = check & \$29 ;
-  assign \$31  = mismatch | \$30 ;
-  assign \$32  = ~ \$31 ;
+  reg [37:0] settings = 38'h0000000000;
+  wire \settings.inverted ;
+  wire [15:0] \settings.poly ;
+  wire [15:0] \settings.start ;
+  wire [4:0] \settings.width ;
+  assign \$35  = \$34  == 2'h2;
+  assign \$37  = \$36  == 1'h1;
+  assign \$38  = \$37  ? 38'h2000000066 : 38'h0000000000;
+  assign \$39  = \$35  ? 38'h2000121b30 : \$38 ;
+  assign \$40  = \$32  ? \$33  : \$39 ;
+  assign \$41  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$42  = \$41  ^ \bit ;
+  assign \$43  = \$42  ? settings[20:5] : 16'h0000;
+  assign \$44  = { \reg [14:0], 1'h0 } ^ \$43 ;
+  assign \$45  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$46  = \bit  ^ \$45 ;
+  assign \$47  = \$46  ^ settings[37];
+  assign \$48  = check & \$47 ;
+  assign \$49  = mismatch | \$48 ;
+  assign \$50  = ! index;
+  assign \$51  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$52  = \bit  ^ \$51 ;
+  assign \$53  = \$52  ^ settings[37];
+  assign \$54  = check & \$53 ;
+  assign \$55  = mismatch | \$54 ;
+  assign \$56  = ~ \$55 ;
+  assign \$58  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$59  = \bit  ^ \$58 ;
+  assign \$60  = \$59  ^ settings[37];
+  assign \$61  = check & \$60 ;
+  assign \$62  = mismatch | \$61 ;
+  assign \$63  = ~ \$62 ;
   always @(posedge clk)
-    \reg  <= \$33 ;
+    \reg  <= \$64 ;
   always @(posedge clk)
-    mismatch <= \$34 ;
+    mismatch <= \$65 ;
   always @(posedge clk)
-    ok <= \$35 ;
+    settings <= \$66 ;
+  always @(posedge clk)
+    ok <= \$67 ;
+  assign \$2  = \$1  == 2'h3;
+  assign \$5  = \$4  == 2'h2;
+  assign \$7  = \$6  == 1'h1;
+  assign \$8  = \$7  ? 38'h2000000066 : 38'h0000000000;
+  assign \$9  = \$5  ? 38'h2000121b30 : \$8 ;
+  assign \$10  = \$2  ? \$3  : \$9 ;
+  assign \$12  = \$11  == 2'h3;
+  assign \$15  = \$14  == 2'h2;
+  assign \$17  = \$16  == 1'h1;
+  assign \$18  = \$17  ? 38'h2000000066 : 38'h0000000000;
+  assign \$19  = \$15  ? 38'h2000121b30 : \$18 ;
+  assign \$20  = \$12  ? \$13  : \$19 ;
+  assign \$22  = \$21  == 2'h3;
+  assign \$25  = \$24  == 2'h2;
+  assign \$27  = \$26  == 1'h1;
+  assign \$28  = \$27  ? 38'h2000000066 : 38'h0000000000;
+  assign \$29  = \$25  ? 38'h2000121b30 : \$28 ;
+  assign \$30  = \$22  ? \$23  : \$29 ;
+  assign \$32  = \$31  == 2'h3;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
     casez (load_index)
       1'h0:
-          \$1  = crcs[36:21];
+          \$33  = customs[37:0];
       1'h1:
-          \$1  = crcs[74:59];
+          \$33  = customs[75:38];
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
-    casez (index)
+    casez (load_index)
       1'h0:
-          \$2  = crcs[4:0];
+          \$34  = codes[1:0];
       1'h1:
-          \$2  = crcs[42:38];
+          \$34  = codes[3:2];
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
-    casez (index)
+    casez (load_index)
       1'h0:
-          \$5  = crcs[20:5];
+          \$36  = codes[1:0];
       1'h1:
-          \$5  = crcs[58:43];
+          \$36  = codes[3:2];
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$8  = crcs[4:0];
-      1'h1:
-          \$8  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$11  = crcs[37];
-      1'h1:
-          \$11  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$16  = crcs[4:0];
-      1'h1:
-          \$16  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$19  = crcs[37];
-      1'h1:
-          \$19  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$25  = crcs[4:0];
-      1'h1:
-          \$25  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (index)
-      1'h0:
-          \$28  = crcs[37];
-      1'h1:
-          \$28  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$33  = \reg ;
+    \$64  = \reg ;
     if (load) begin
-      \$33  = \$1 ;
+      \$64  = \$10 [36:21];
     end else if (\cover ) begin
-      \$33  = \$7 ;
+      \$64  = \$44 ;
     end else if (check) begin
-      \$33  = { \reg [14:0], 1'h0 };
+      \$64  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$33  = 16'h0000;
+      \$64  = 16'h0000;
     end
     if (rst) begin
-      \$33  = 16'h0000;
+      \$64  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$34  = mismatch;
+    \$65  = mismatch;
     if (load) begin
-      \$34  = 1'h0;
+      \$65  = 1'h0;
     end else if (\cover ) begin
     end else if (check) begin
-      \$34  = \$14 ;
+      \$65  = \$49 ;
     end
     if (receiver_clear) begin
-      \$34  = 1'h0;
+      \$65  = 1'h0;
     end
     if (rst) begin
-      \$34  = 1'h0;
+      \$65  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$35  = ok;
+    \$66  = settings;
+    if (load) begin
+      \$66 [4:0] = \$20 [4:0];
+      \$66 [20:5] = \$30 [20:5];
+      \$66 [37] = \$40 [37];
+    end
+    if (receiver_clear) begin
+      \$66 [20:0] = 21'h000000;
+      \$66 [37] = 1'h0;
+    end
+    if (rst) begin
+      \$66  = 38'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    \$67  = ok;
     if (last) begin
-      if (\$15 ) begin
-        \$35 [0] = \$23 ;
+      if (\$50 ) begin
+        \$67 [0] = \$56 ;
       end
-      if (\$24 ) begin
-        \$35 [1] = \$32 ;
+      if (\$57 ) begin
+        \$67 [1] = \$63 ;
       end
     end
     if (receiver_clear) begin
-      \$35  = 2'h3;
+      \$67  = 2'h3;
     end
     if (rst) begin
-      \$35  = 2'h3;
+      \$67  = 2'h3;
     end
   end
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
-  assign \$24  = index;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$1  = codes[1:0];
+      1'h1:
+          \$1  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$3  = customs[37:0];
+      1'h1:
+          \$3  = customs[75:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$4  = codes[1:0];
+      1'h1:
+          \$4  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$6  = codes[1:0];
+      1'h1:
+          \$6  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$11  = codes[1:0];
+      1'h1:
+          \$11  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$13  = customs[37:0];
+      1'h1:
+          \$13  = customs[75:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$14  = codes[1:0];
+      1'h1:
+          \$14  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$16  = codes[1:0];
+      1'h1:
+          \$16  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$21  = codes[1:0];
+      1'h1:
+          \$21  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$23  = customs[37:0];
+      1'h1:
+          \$23  = customs[75:38];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$24  = codes[1:0];
+      1'h1:
+          \$24  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$26  = codes[1:0];
+      1'h1:
+          \$26  = codes[3:2];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    (* full_case = 32'd1 *)
+    casez (load_index)
+      1'h0:
+          \$31  = codes[1:0];
+      1'h1:
+          \$31  = codes[3:2];
+    endcase
+  end
+  assign \codes[0]  = codes[1:0];
+  assign \codes[1]  = codes[3:2];
+  assign \customs[0]  = customs[37:0];
+  assign \customs[0].width  = customs[4:0];
+  assign \customs[0].poly  = customs[20:5];
+  assign \customs[0].start  = customs[36:21];
+  assign \customs[0].inverted  = customs[37];
+  assign \customs[1]  = customs[75:38];
+  assign \customs[1].width  = customs[42:38];
+  assign \customs[1].poly  = customs[58:43];
+  assign \customs[1].start  = customs[74:59];
+  assign \customs[1].inverted  = customs[75];
+  assign \settings.width  = settings[4:0];
+  assign \settings.poly  = settings[20:5];
+  assign \settings.start  = settings[36:21];
+  assign \settings.inverted  = settings[37];
+  assign \$57  = index;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crcs, receiver_clear, ends, clk);
+module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc_widths, receiver_clear, ends, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
@@ -32680,18 +32890,10 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
   wire [7:0] \$9 ;
   input clk;
   wire clk;
-  input [75:0] crcs;
-  wire [75:0] crcs;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  input [9:0] crc_widths;
+  wire [9:0] crc_widths;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
   output [73:0] ends;
   wire [73:0] ends;
   wire [36:0] \ends[0] ;
@@ -32762,7 +32964,7 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
   assign \$2  = words[5:0] + 7'h7f;
   assign \$4  = words[5:0] + \$3 ;
   assign \$6  = words[5:0] + \$5 ;
-  assign \$8  = \$7  + crcs[4:0];
+  assign \$8  = \$7  + crc_widths[4:0];
   assign \$9  = words[5:0] + \$8 [6:0];
   assign \$10  = | words[5:0];
   assign \$12  = words[5:0] + \$11 ;
@@ -32774,7 +32976,7 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
   assign \$19  = words[17:12] + 7'h7f;
   assign \$21  = words[17:12] + \$20 ;
   assign \$23  = words[17:12] + \$22 ;
-  assign \$25  = \$24  + crcs[42:38];
+  assign \$25  = \$24  + crc_widths[9:5];
   assign \$26  = words[17:12] + \$25 [6:0];
   assign \$27  = | words[17:12];
   assign \$29  = words[17:12] + \$28 ;
@@ -33010,16 +33212,8 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
   assign \$36 [36] = \$34 ;
   assign \$36 [35] = \$27 ;
   assign \$36 [34:28] = \$26 [6:0];
@@ -33891,7 +34085,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$7285$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$7342$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -33926,25 +34120,17 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$7285$199 , ssi, ssi
   wire clear;
   input clk;
   wire clk;
-  input [75:0] crcs;
-  wire [75:0] crcs;
-  wire [37:0] \crcs[0] ;
-  wire \crcs[0].inverted ;
-  wire [15:0] \crcs[0].poly ;
-  wire [15:0] \crcs[0].start ;
-  wire [4:0] \crcs[0].width ;
-  wire [37:0] \crcs[1] ;
-  wire \crcs[1].inverted ;
-  wire [15:0] \crcs[1].poly ;
-  wire [15:0] \crcs[1].start ;
-  wire [4:0] \crcs[1].width ;
+  input [9:0] crc_widths;
+  wire [9:0] crc_widths;
+  wire [4:0] \crc_widths[0] ;
+  wire [4:0] \crc_widths[1] ;
   wire [1:0] enables;
   output enough;
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$7285$199 ;
-  wire \port$7285$199 ;
+  input \port$7342$199 ;
+  wire \port$7342$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -33990,7 +34176,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$7285$199 , ssi, ssi
   wire \words[1].nenw ;
   wire \words[1].signed ;
   assign \$1  = ssi & ssi_error;
-  assign \$3  = \$2  + crcs[4:0];
+  assign \$3  = \$2  + crc_widths[4:0];
   assign \$4  = words[5:0] + \$3 [7:0];
   assign \$5  = n + 1'h1;
   assign \$6  = n + 1'h1;
@@ -33998,7 +34184,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$7285$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$7285$199  ? word1_len : 8'h00;
+  assign \$11  = \port$7342$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -34007,7 +34193,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$7285$199 , ssi, ssi
   assign \$17  = started & \$16 ;
   assign \$18  = ~ clear;
   assign \$19  = \$17  & \$18 ;
-  assign \$21  = \$20  + crcs[42:38];
+  assign \$21  = \$20  + crc_widths[9:5];
   assign \$22  = words[17:12] + \$21 [7:0];
   always @(posedge clk)
     n <= \$23 ;
@@ -34108,7 +34294,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$7285$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$7285$199 , 1'h1 };
+  assign enables = { \port$7342$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -34123,16 +34309,8 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$7285$199 , ssi, ssi
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \crcs[0]  = crcs[37:0];
-  assign \crcs[0].width  = crcs[4:0];
-  assign \crcs[0].poly  = crcs[20:5];
-  assign \crcs[0].start  = crcs[36:21];
-  assign \crcs[0].inverted  = crcs[37];
-  assign \crcs[1]  = crcs[75:38];
-  assign \crcs[1].width  = crcs[42:38];
-  assign \crcs[1].poly  = crcs[58:43];
-  assign \crcs[1].start  = crcs[74:59];
-  assign \crcs[1].inverted  = crcs[75];
+  assign \crc_widths[0]  = crc_widths[4:0];
+  assign \crc_widths[1]  = crc_widths[9:5];
 endmodule
 
 (* generator = "Amaranth" *)
@@ -36249,7 +36427,7 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7285$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7342$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -36383,8 +36561,8 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7285$259 ;
-  wire [12:0] \port$7285$259 ;
+  input [12:0] \port$7342$259 ;
+  wire [12:0] \port$7342$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -36409,7 +36587,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7285$259 [12:1] + 1'h1;
+  assign \$11  = \port$7342$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -36534,7 +36712,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7285$259 [0]),
+    .clear_high(\port$7342$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -36677,7 +36855,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7285$259 [0]) begin
+            if (\port$7342$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -36762,7 +36940,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7285$259 [0]) begin
+            if (\port$7342$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -36801,7 +36979,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7285$259 [12:1] };
+            \$85  = { 1'h0, \port$7342$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -37186,11 +37364,11 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7285$259 [12:1] };
-  assign fixed = \port$7285$259 [0];
+  assign fixed_delay = { 1'h0, \port$7342$259 [12:1] };
+  assign fixed = \port$7342$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7285$259 [0];
+  assign clear_high = \port$7342$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -37597,7 +37775,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7273$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7330$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -37639,8 +37817,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7273$0 ;
-  wire \port$7273$0 ;
+  input \port$7330$0 ;
+  wire \port$7330$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -37654,9 +37832,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7273$0  };
-  assign \$2  = { lc[4:0], \port$7273$0  } == last;
-  assign \$3  = { lc[4:0], \port$7273$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7330$0  };
+  assign \$2  = { lc[4:0], \port$7330$0  } == last;
+  assign \$3  = { lc[4:0], \port$7330$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -37766,7 +37944,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7273$0  };
+  assign lc_next = { lc[4:0], \port$7330$0  };
   assign zero = is_zero;
 endmodule
 
@@ -38330,7 +38508,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$5202$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$5254$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -38508,8 +38686,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$5202$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$5202$0 ;
-  wire \port$5202$0 ;
+  output \port$5254$0 ;
+  wire \port$5254$0 ;
   output report;
   wire report;
   input report_frame;
@@ -38627,7 +38805,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$5202$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5202$0  = \$2 ;
+  assign \port$5254$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

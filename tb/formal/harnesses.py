@@ -36,7 +36,7 @@ from bissmaster.core.frame_decoder import FrameDecoder
 from bissmaster.core.frame_verdict import FrameVerdict
 from bissmaster.core.ma_clock import MaClock
 from bissmaster.master import BissMaster
-from bissmaster.params import Crc
+from bissmaster.params import CRC_SETTINGS, Crc
 from bissmaster.control.register_access import RegisterAccess
 from bissmaster.core.slo_sampler import SloSampler
 from master_contract import (CA_STATUS, CHECK_OFF, CONFIRM_FRAMES_DEFAULT, CONFIRM_NEUTRAL,
@@ -88,6 +88,7 @@ INTERNALS = {
     "decoder.word": ("signal", "", "word"),                     # word index (builds of 2+ words)
     "decoder.crc_reg": ("signal", "crc", "reg"),                # the CrcEngine's shift register
     "decoder.crc_mismatch": ("signal", "crc", "mismatch"),      # a received CRC bit differed
+    "decoder.crc_settings": ("signal", "crc", "settings"),      # the current word's CRC
     "decoder.crc_ok": ("port", "", "crc_ok"),                   # the verdict per word
     "decoder.in_crc": ("signal", "", "in_crc"),                 # the bit is a received CRC bit
     # BissMaster
@@ -1153,8 +1154,9 @@ class DecoderCrcHarness(Harness):
             c = {name: self.any_const(m, len(getattr(dut.words[w], name)), f"w{w}_{name}")
                  for name in ("data_bits", "nenw", "lc", "crc")}
             m.d.comb += [getattr(dut.words[w], name).eq(v) for name, v in c.items()]
-            m.d.comb += [getattr(dut.crcs[w], name).eq(v)
-                         for name, v in _engine_settings(c["crc"]).items()]
+            # Named CRCs only (the custom settings are left 0): the width as the master's
+            # configuration resolves it; the engine resolves the rest itself.
+            m.d.comb += dut.crc_widths[w].eq(_engine_settings(c["crc"])["width"])
             _assume_word_config(m, c, p, w)
             cfg.append(c)
         count = self.any_const(m, len(dut.word_count), "word_count")
@@ -1188,6 +1190,14 @@ class DecoderCrcHarness(Harness):
             if p.words >= 2:
                 word = inside("decoder.word")
                 m.d.comb += Assert(~state["WORD"] | (word == parse.word), "lemma: word index")
+            # The engine holds the current word's CRC, taken at the word's load.
+            code = cfg[0]["crc"] if p.words == 1 else Array(c["crc"] for c in cfg)[parse.word]
+            held = CRC_SETTINGS(inside("decoder.crc_settings"))     # its port layout
+            want = _engine_settings(code)
+            m.d.comb += Assert(~state["WORD"] | ((held.width == want["width"])
+                                                 & (held.poly == want["poly"])
+                                                 & (held.inverted == want["inverted"])),
+                               "lemma: the engine holds the word's CRC")
             if p.ssi:
                 # BiSS frames (``ssi`` left at 0): the SSI double transmission's states are
                 # never entered.

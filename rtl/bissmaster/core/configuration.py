@@ -6,16 +6,8 @@ from amaranth.lib.wiring import In, Out
 
 from .. import protocol
 from ..layouts import config_custom_crcs, config_enables, config_layout, config_words
-from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, HALF_PERIOD_WIDTH, QUIET_WIDTH, Crc
-
-
-#: The named CRCs as the engine runs them: start 0, sent inverted (docs/protocol.md, section 6).
-NAMED_CRCS = {
-    Crc.CRC6: (protocol.CRC6_WIDTH, protocol.CRC6_POLY, protocol.CRC_INIT, 1),
-    Crc.CRC16: (protocol.CRC16_WIDTH, protocol.CRC16_POLY, protocol.CRC_INIT, 1),
-}
-assert protocol.CRC6_XOR_OUT == 2**protocol.CRC6_WIDTH - 1
-assert protocol.CRC16_XOR_OUT == 2**protocol.CRC16_WIDTH - 1
+from ..params import CRC_MAX_WIDTH, HALF_PERIOD_WIDTH, QUIET_WIDTH, Crc
+from .crc_engine import crc_settings
 
 
 class Configuration(wiring.Component):
@@ -63,10 +55,11 @@ class Configuration(wiring.Component):
         WAIT_READY).
     word_count : Out(range(1, words + 1))
         Words in the cycle's frame.
-    crcs : Out(ArrayLayout(CRC_SETTINGS, words))
-        Each word's CRC for the cycle, its code resolved: a named CRC's width, polynomial,
-        start 0 and inversion, a custom CRC's ``cfg_wN_crc_*`` settings, width 0 for none.
-        Latched with ``cycle``, so the CRC engine reads flip-flops.
+    crc_widths : Out(ArrayLayout(range(CRC_MAX_WIDTH + 1), words))
+        Each word's CRC width for the cycle, its code resolved: a named CRC's width, a custom
+        CRC's ``cfg_wN_crc_width``, 0 for none. Latched with ``cycle``, so the field ends and
+        the frame length are computed from flip-flops. (The rest of a word's CRC is resolved by
+        the CRC engine, one word at a time.)
     """
 
     def __init__(self, params):
@@ -84,7 +77,7 @@ class Configuration(wiring.Component):
             "delay_tolerance": Out(HALF_PERIOD_WIDTH + 1),
             "no_start_limit": Out(p.cycle_timer_width),
             "word_count": Out(range(1, p.words + 1)),
-            "crcs": Out(data.ArrayLayout(CRC_SETTINGS, p.words)),
+            "crc_widths": Out(data.ArrayLayout(range(CRC_MAX_WIDTH + 1), p.words)),
         })
 
     def valid(self, cfg):
@@ -157,20 +150,10 @@ class Configuration(wiring.Component):
                                         + or_default(live.delay_tolerance,
                                                      protocol.DELAY_TOLERANCE_DEFAULT)),
             ]
-            customs = config_custom_crcs(live, p)
+            customs = config_custom_crcs(live, p) or [None] * p.words
             for w, word in enumerate(config_words(live, p)):
-                crc = self.crcs[w]
-                with m.Switch(word.crc):
-                    for kind in p.word_crcs[w]:
-                        width, poly, start, inverted = NAMED_CRCS[kind]
-                        with m.Case(kind):
-                            m.d.sync += [crc.width.eq(width), crc.poly.eq(poly),
-                                         crc.start.eq(start), crc.inverted.eq(inverted)]
-                    if p.custom_crc:
-                        with m.Case(Crc.CUSTOM):
-                            m.d.sync += crc.eq(customs[w])
-                    with m.Default():       # NONE (anything else is refused before a cycle)
-                        m.d.sync += crc.eq(0)
+                m.d.sync += self.crc_widths[w].eq(
+                    crc_settings(word.crc, customs[w], p.word_crcs[w]).width)
         # NO_START: the Ack limit plus one MA period (two half periods) plus one clock: the
         # controller sees Start one clock later after its decision than the Ack's (the register
         # between sampler and decoder), so the same decisions pass as with the Ack limit alone.

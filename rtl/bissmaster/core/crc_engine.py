@@ -4,7 +4,33 @@ from amaranth.hdl import *
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import CRC_MAX_WIDTH, CRC_SETTINGS
+from .. import protocol
+from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, Crc
+
+
+#: The named CRCs as the engine runs them: start 0, sent inverted (docs/protocol.md, section 6).
+NAMED_CRCS = {
+    Crc.CRC6: (protocol.CRC6_WIDTH, protocol.CRC6_POLY, protocol.CRC_INIT, 1),
+    Crc.CRC16: (protocol.CRC16_WIDTH, protocol.CRC16_POLY, protocol.CRC_INIT, 1),
+}
+assert protocol.CRC6_XOR_OUT == 2**protocol.CRC6_WIDTH - 1
+assert protocol.CRC16_XOR_OUT == 2**protocol.CRC16_WIDTH - 1
+
+
+def crc_settings(code, custom, kinds):
+    """A word's CRC code resolved (combinational), as a :data:`CRC_SETTINGS` view: a named CRC
+    of ``kinds`` gives its settings, ``Crc.CUSTOM`` the word's ``custom`` settings (``None`` in
+    builds without custom CRCs), anything else width 0 (no CRC; a code the build lacks is
+    refused before a cycle: Configuration.ok)."""
+    value = C(0, CRC_SETTINGS.size)
+    for kind in kinds:
+        width, poly, start, inverted = NAMED_CRCS[kind]
+        named = CRC_SETTINGS.const({"width": width, "poly": poly, "start": start,
+                                    "inverted": inverted}).as_value()
+        value = Mux(code == kind, named, value)
+    if custom is not None:
+        value = Mux(code == Crc.CUSTOM, custom.as_value(), value)
+    return CRC_SETTINGS(value)
 
 
 class CrcEngine(wiring.Component):
@@ -12,9 +38,14 @@ class CrcEngine(wiring.Component):
 
     The words of a frame follow each other on the line, so one bit-serial engine serves them
     all: before a word's first bit (``load``) it starts again from that word's settings
-    (``crcs[index]``, :data:`~bissmaster.params.CRC_SETTINGS`: width 0..16, register
-    polynomial, start value, inversion), which is what lets any word have any CRC at no cost
-    per word.
+    (:data:`~bissmaster.params.CRC_SETTINGS`: width 0..16, register polynomial, start value,
+    inversion), which is what lets any word have any CRC at no cost per word. The settings are
+    resolved here, for one word at a time: ``load`` takes word ``load_index``'s code
+    (``codes``) and, for a custom CRC, its ``customs`` entry, loads the register with the start
+    value and holds the width, polynomial and inversion in ``settings`` for the word's bits.
+    So a word's CRC is read from the configuration once per word, through one multiplexer, and
+    no resolved copy per word is kept (issue 27: that was 38 flip-flops and a resolution per
+    word).
 
     Every bit of the word *before* its CRC field (``cover``: data, nE, nW, LC) goes through
     the textbook shift register (MSB first, not reflected): feedback = register MSB xor bit,
@@ -32,8 +63,10 @@ class CrcEngine(wiring.Component):
 
     Attributes
     ----------
-    crcs : In(ArrayLayout(CRC_SETTINGS, words))
-        Each word's CRC, held for the cycle (Configuration.crcs).
+    codes : In(ArrayLayout(Crc, words))
+        Each word's CRC code (``cfg_wN_crc``), held for the cycle.
+    customs : In(ArrayLayout(CRC_SETTINGS, words))
+        Each word's custom CRC (``cfg_wN_crc_*``), held for the cycle (builds with custom CRCs).
     index : In(range(words))
         The word the current bit belongs to (builds of more than one word).
     load : In(1)
@@ -54,10 +87,15 @@ class CrcEngine(wiring.Component):
         Per word: every received CRC bit matched.
     """
 
-    def __init__(self, words):
+    def __init__(self, words, kinds=tuple(NAMED_CRCS), custom=True):
+        """``kinds``: the named CRCs any word of the build may have; ``custom``: the build has
+        custom CRCs (``customs``)."""
         self._words = words
+        self._kinds = tuple(kinds)
+        self._custom = custom
         super().__init__({
-            "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
+            "codes": In(data.ArrayLayout(Crc, words)),
+            **({"customs": In(data.ArrayLayout(CRC_SETTINGS, words))} if custom else {}),
             **({"index": In(range(words)), "load_index": In(range(words))} if words > 1 else {}),
             "load": In(1),
             "cover": In(1),
@@ -71,9 +109,16 @@ class CrcEngine(wiring.Component):
         m = Module()
         n = self._words
         word = self.index if n > 1 else C(0, 1)
-        crc = self.crcs[0] if n == 1 else Array(self.crcs[w] for w in range(n))[word]
-        load_word = self.load_index if n > 1 else C(0, 1)
-        load_crc = self.crcs[0] if n == 1 else Array(self.crcs[w] for w in range(n))[load_word]
+
+        def of_load_word(values):
+            return values[0] if n == 1 else Array(values[w] for w in range(n))[self.load_index]
+
+        load_crc = crc_settings(of_load_word(self.codes),
+                                of_load_word(self.customs) if self._custom else None,
+                                self._kinds)
+        # The current word's width, polynomial and inversion (its start value went into the
+        # register at ``load``).
+        crc = Signal(CRC_SETTINGS, name="settings")
 
         reg = Signal(CRC_MAX_WIDTH)
         mismatch = Signal()
@@ -88,7 +133,9 @@ class CrcEngine(wiring.Component):
         seen = mismatch | wrong
 
         with m.If(self.load):
-            m.d.sync += [reg.eq(load_crc.start), mismatch.eq(0)]
+            m.d.sync += [reg.eq(load_crc.start), mismatch.eq(0),
+                         crc.width.eq(load_crc.width), crc.poly.eq(load_crc.poly),
+                         crc.inverted.eq(load_crc.inverted)]
         with m.Elif(self.cover):
             m.d.sync += reg.eq(shifted ^ Mux(feedback, crc.poly, 0))
         with m.Elif(self.check):

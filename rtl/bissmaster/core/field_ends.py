@@ -5,7 +5,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 from .. import protocol
-from ..params import CRC_SETTINGS, WORD_CONFIG, WORD_INDEX_WIDTH
+from ..params import CRC_MAX_WIDTH, WORD_CONFIG, WORD_INDEX_WIDTH
 
 
 def _table(index, values, width):
@@ -31,19 +31,18 @@ def flag_bits(nenw, lc, error):
     return nenw * protocol.NE_NW_BITS + lc * protocol.LC_BITS + error
 
 
-def tail_bits(word, crc, extra=0, width=WORD_INDEX_WIDTH, error_bit=None):
+def tail_bits(word, crc_width, extra=0, width=WORD_INDEX_WIDTH, error_bit=None):
     """Bits after a word's data field (nE/nW, LC, the SSI error bit, CRC), plus ``extra``,
-    modulo ``2**width``: a table on the flag bits plus the CRC's width (a WORD_CONFIG and a
-    CRC_SETTINGS view; ``error_bit`` as in :func:`_flag_table`)."""
+    modulo ``2**width``: a table on the flag bits plus the CRC's width (a WORD_CONFIG view and
+    its resolved CRC width; ``error_bit`` as in :func:`_flag_table`)."""
     flags = _flag_table(word, error_bit, width, lambda *f: flag_bits(*f) + extra)
-    return (flags + crc.width)[:width]
+    return (flags + crc_width)[:width]
 
 
-def word_length(word, crc, extra=0, width=WORD_INDEX_WIDTH, error_bit=None):
+def word_length(word, crc_width, extra=0, width=WORD_INDEX_WIDTH, error_bit=None):
     """Bits of one word on the line (plus ``extra``), from its runtime configuration (a
-    WORD_CONFIG view and its resolved CRC_SETTINGS view; ``error_bit`` as in
-    :func:`_flag_table`)."""
-    return (word.data_bits + tail_bits(word, crc, extra, width, error_bit))[:width]
+    WORD_CONFIG view and its resolved CRC width; ``error_bit`` as in :func:`_flag_table`)."""
+    return (word.data_bits + tail_bits(word, crc_width, extra, width, error_bit))[:width]
 
 
 #: One word's field ends, as bit indices inside the word (``idx`` of the decoder counts from 0
@@ -65,7 +64,7 @@ FIELD_ENDS = data.StructLayout({
 class FieldEnds(wiring.Component):
     """Each word's field boundaries, registered from its configuration.
 
-    The registers are not reset (they follow ``words``, ``crcs`` and ``error_bit`` in every
+    The registers are not reset (they follow ``words``, ``crc_widths`` and ``error_bit`` in every
     clock, even while the decoder around them is held in reset), so they are valid one clock
     after their inputs settle. The "- 1" and "+ 1" are folded into tables on the flag bits
     (modulo ``2**WORD_INDEX_WIDTH``): a field end of 0, which only an invalid ``data_bits`` of 0
@@ -81,8 +80,8 @@ class FieldEnds(wiring.Component):
     Attributes
     ----------
     words : In(ArrayLayout(WORD_CONFIG, words))
-    crcs : In(ArrayLayout(CRC_SETTINGS, words))
-        Each word's settings and resolved CRC.
+    crc_widths : In(ArrayLayout(range(CRC_MAX_WIDTH + 1), words))
+        Each word's settings and its resolved CRC width.
     error_bit : In(1)
         Word 0 has an SSI error bit (SSI builds: ``ssi & ssi_error``).
     ends : Out(ArrayLayout(FIELD_ENDS, words))
@@ -94,7 +93,7 @@ class FieldEnds(wiring.Component):
         self._error_bit = error_bit
         super().__init__({
             "words": In(data.ArrayLayout(word_layout, words)),
-            "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
+            "crc_widths": In(data.ArrayLayout(range(CRC_MAX_WIDTH + 1), words)),
             **({"error_bit": In(1)} if error_bit else {}),
             "ends": Out(data.ArrayLayout(FIELD_ENDS, words)),
         })
@@ -104,7 +103,7 @@ class FieldEnds(wiring.Component):
         iw = WORD_INDEX_WIDTH
         for w in range(self._words):
             err = self.error_bit if (w == 0 and self._error_bit) else None
-            wcfg, wcrc = self.words[w], self.crcs[w]
+            wcfg, wcrc = self.words[w], self.crc_widths[w]
             regs = Signal(FIELD_ENDS, name=f"w{w}_ends", reset_less=True)
             m.d.comb += self.ends[w].eq(regs)
             # The flag fields' lengths: nE/nW (or the SSI error bit), and those plus LC.

@@ -25,7 +25,8 @@ class FrameDecoder(wiring.Component):
     master may look for SLO high again.
 
     One :class:`~bissmaster.core.crc_engine.CrcEngine` checks every word's CRC in turn, each
-    with its own settings (``crcs``). ``crc_ok`` comes from the engine's flip-flops: valid in
+    with its own settings (its code in ``words``, ``customs``, ``crc_widths``). ``crc_ok``
+    comes from the engine's flip-flops: valid in
     the clock after the word's last bit was sampled, and held until the next frame.
 
     The master holds it in reset between cycles (``ResetInserter``), which also clears the
@@ -69,7 +70,11 @@ class FrameDecoder(wiring.Component):
             "sample": In(1),
             "bit": In(1),
             "words": In(data.ArrayLayout(word_config(params), words)),
-            "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
+            # Each word's resolved CRC width (Configuration.crc_widths) and, in builds with
+            # custom CRCs, its ``cfg_wN_crc_*`` settings.
+            "crc_widths": In(data.ArrayLayout(range(CRC_MAX_WIDTH + 1), words)),
+            **({"customs": In(data.ArrayLayout(CRC_SETTINGS, words))}
+               if params.custom_crc else {}),
             "word_count": In(range(1, words + 1)),
             "started": Out(1),
             "start_slot": Out(SLOT_WIDTH),
@@ -108,7 +113,7 @@ class FrameDecoder(wiring.Component):
         # comes at least three samples (Ack, Start, CDS) after that (SSI: see above).
         m.submodules.field_ends = field_ends = FieldEnds(p.words, error_bit=p.ssi,
                                                          word_layout=word_config(p))
-        m.d.comb += [field_ends.words.eq(self.words), field_ends.crcs.eq(self.crcs)]
+        m.d.comb += [field_ends.words.eq(self.words), field_ends.crc_widths.eq(self.crc_widths)]
         if p.ssi:
             # Word 0's SSI error bit: a flag bit after the data, like nE.
             error_bit = self.ssi & self.ssi_error
@@ -288,9 +293,12 @@ class FrameDecoder(wiring.Component):
                 m.d.sync += self.cpw_top.eq(Cat(decoded[0], self.cpw_top))
 
         # One CRC engine for every word in turn, fed each bit of the word (data and the CRC).
-        m.submodules.crc = engine = CrcEngine(p.words)
+        kinds = sorted({kind for crcs in p.word_crcs for kind in crcs})
+        m.submodules.crc = engine = CrcEngine(p.words, kinds=kinds, custom=p.custom_crc)
+        m.d.comb += [engine.codes[w].eq(self.words[w].crc) for w in range(p.words)]
+        if p.custom_crc:
+            m.d.comb += engine.customs.eq(self.customs)
         m.d.comb += [
-            engine.crcs.eq(self.crcs),
             engine.load.eq(at_cds | (in_word & (idx == word_end_m1))),
             engine.cover.eq(in_word & ~in_crc),
             engine.check.eq(in_word & in_crc),

@@ -5,7 +5,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 from .field_ends import word_length
-from ..params import CRC_SETTINGS, SLOT_WIDTH, WORD_CONFIG, frame_length_width
+from ..params import CRC_MAX_WIDTH, SLOT_WIDTH, WORD_CONFIG, frame_length_width
 
 
 #: Slot ``k`` is the bit the encoder puts on SLO at MA rising edge ``k + 2`` (SloSampler). Start
@@ -47,8 +47,8 @@ class MaStop(wiring.Component):
     ----------
     words : In(ArrayLayout(WORD_CONFIG, words))
         The cycle's word settings.
-    crcs : In(ArrayLayout(CRC_SETTINGS, words))
-        Their CRCs (Configuration.crcs: the width counts).
+    crc_widths : In(ArrayLayout(range(CRC_MAX_WIDTH + 1), words))
+        Their CRCs' widths (Configuration.crc_widths).
     enables : In(words)
         Which words are in the frame (bit 0, word 0, is not read: it always is).
     started : In(1)
@@ -68,7 +68,7 @@ class MaStop(wiring.Component):
         self._ssi = ssi
         super().__init__({
             "words": In(data.ArrayLayout(word_layout, words)),
-            "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
+            "crc_widths": In(data.ArrayLayout(range(CRC_MAX_WIDTH + 1), words)),
             "enables": In(words),
             "started": In(1),
             "start_slot": In(SLOT_WIDTH),
@@ -91,13 +91,13 @@ class MaStop(wiring.Component):
             # One register stage more: the word's length, then the frame's by mode (one stage
             # of both was the SSI build's critical path).
             n = Signal(width)
-            m.d.sync += n.eq(word_length(self.words[0], self.crcs[0], width=width,
+            m.d.sync += n.eq(word_length(self.words[0], self.crc_widths[0], width=width,
                                          error_bit=self.ssi & self.ssi_error))
             ssi_len = Mux(self.ssi_double, Cat(C(0, 1), n + SSI_RISES_BEYOND_WORD),
                           n + SSI_RISES_BEYOND_WORD)
             m.d.sync += word_len[0].eq(Mux(self.ssi, ssi_len, n + RISES_BEYOND_WORDS))
         else:
-            m.d.sync += word_len[0].eq(word_length(self.words[0], self.crcs[0],
+            m.d.sync += word_len[0].eq(word_length(self.words[0], self.crc_widths[0],
                                                    extra=RISES_BEYOND_WORDS,
                                                    width=width))
         # SSI: the frame starts with MA (the first rise), not when Start comes back: MA stops
@@ -114,5 +114,5 @@ class MaStop(wiring.Component):
             self.enough.eq(started & (self.rises >= target_rises) & ~self.clear),
         ]
         for w in range(1, n_words):
-            m.d.sync += word_len[w].eq(word_length(self.words[w], self.crcs[w], width=width))
+            m.d.sync += word_len[w].eq(word_length(self.words[w], self.crc_widths[w], width=width))
         return m

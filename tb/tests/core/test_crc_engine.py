@@ -14,6 +14,7 @@ import pytest
 from bissmaster.core.crc_engine import CrcEngine
 from encoder_model.crc import crc_msb_first, int_to_bits
 
+from master_contract import CRC_CODE
 from testkit.block_sim import simulate
 
 #: (name, width, poly, init, xorout, check) from the reveng catalogue; xorout 0 or all ones.
@@ -45,15 +46,27 @@ def _settings(width, poly, start, inverted):
 
 
 def _run(words, jobs, seed):
-    """Each job is (word index, settings, covered bits, received CRC bits). The engine loads
-    the job's word before its first bit, either in a clock of its own or with the last bit
-    of the job before (as the decoder does after CDS and between words); the bits come one
-    per 1..3 clocks with junk between; ``crcs`` holds every word's settings from the job on.
-    Returns per job (ok[word] the clock after its last bit, ok[word] two clocks later)."""
+    """Each job is (word index, settings, covered bits, received CRC bits); settings are a
+    custom CRC (a :func:`_settings` dict: the word's code is "custom") or a named CRC's code.
+    The engine loads the job's word before its first bit, either in a clock of its own or with
+    the last bit of the job before (as the decoder does after CDS and between words); the bits
+    come one per 1..3 clocks with junk between. The word's code and custom settings are set
+    before its load; in about a third of the jobs they are then overwritten with junk, which
+    the engine must not read (it takes a word's settings at its load). Returns per job
+    (ok[word] the clock after its last bit, ok[word] two clocks later)."""
     rng = random.Random(seed)
     dut = CrcEngine(words)
-    crcs = [_settings(0, 0, 0, 0)] * words
+    codes = [CRC_CODE["none"]] * words
+    customs = [_settings(0, 0, 0, 0)] * words
     results = []
+
+    def put(ctx, word, settings):
+        if isinstance(settings, dict):
+            codes[word], customs[word] = CRC_CODE["custom"], settings
+        else:
+            codes[word], customs[word] = settings, _settings(*_random_crc(rng))
+        ctx.set(dut.codes, codes)
+        ctx.set(dut.customs, customs)
 
     async def tb(ctx):
         def drive(**values):
@@ -68,8 +81,7 @@ def _run(words, jobs, seed):
         for word, settings, covered, received in jobs:
             # Sharing a clock needs another word: each word's settings hold through it.
             if pending is not None and pending["word"] != word and rng.random() < 0.7:
-                crcs[word] = settings
-                ctx.set(dut.crcs, crcs)
+                put(ctx, word, settings)
                 drive(**pending, load=1, load_word=word)
                 await ctx.tick()
                 results.append(await _verdict(ctx, pending["word"]))
@@ -78,10 +90,12 @@ def _run(words, jobs, seed):
                     drive(**pending)
                     await ctx.tick()
                     results.append(await _verdict(ctx, pending["word"]))
-                crcs[word] = settings
-                ctx.set(dut.crcs, crcs)
+                put(ctx, word, settings)
                 drive(load=1, load_word=word)
                 await ctx.tick()
+            if rng.random() < 0.35:
+                put(ctx, word, rng.choice([_settings(*_random_crc(rng)), CRC_CODE["crc6"],
+                                           CRC_CODE["crc16"], CRC_CODE["none"]]))
             bits = [(b, 1, 0) for b in covered] + [(b, 0, 1) for b in received]
             for i, (b, cover, check) in enumerate(bits):
                 step = {"bit": b, "cover": cover, "check": check, "last": 1, "word": word}
@@ -184,7 +198,8 @@ def test_crc_engine_width_0_word_is_good_and_other_verdicts_hold():
     seen = []
 
     async def tb(ctx):
-        ctx.set(dut.crcs, [_settings(6, 0x03, 0, 1), _settings(0, 0, 0, 0)])
+        ctx.set(dut.codes, [CRC_CODE["custom"], CRC_CODE["custom"]])
+        ctx.set(dut.customs, [_settings(6, 0x03, 0, 1), _settings(0, 0, 0, 0)])
         for word, bits in ((0, [(b, 1, 0) for b in covered] + [(b, 0, 1) for b in bad]),
                            (1, [(b, 1, 0) for b in covered])):
             ctx.set(dut.index, word)
@@ -208,3 +223,38 @@ def test_crc_engine_width_0_word_is_good_and_other_verdicts_hold():
 
     simulate(dut, tb)
     assert seen == [0b10, 0b10]
+
+
+@pytest.mark.parametrize("words", (1, 3))
+def test_crc_engine_named_codes_run_the_biss_crcs(words):
+    """A named code (``cfg_wN_crc`` 1 and 2) runs the BiSS CRC of docs/protocol.md section 6
+    (CRC-6 0x43, CRC-16 0x190D9, start 0, sent inverted: ``BISS`` above, the test's own
+    values), and code 0 a word without CRC, mixed with custom CRCs word by word: a correct
+    CRC passes and a flipped bit fails."""
+    rng = random.Random(8300 + words)
+    named = {CRC_CODE["crc6"]: BISS[0], CRC_CODE["crc16"]: BISS[1]}
+    jobs, expected = [], []
+    for _ in range(90):
+        word = rng.randrange(words)
+        covered = [rng.randrange(2) for _ in range(rng.randint(1, 64))]
+        code = rng.choice([CRC_CODE["crc6"], CRC_CODE["crc16"], CRC_CODE["none"], "custom"])
+        if code == CRC_CODE["none"]:
+            jobs.append((word, code, covered, []))
+            expected.append((1, 1))
+            continue
+        if code == "custom":
+            width, poly, start, inverted = _random_crc(rng)
+            settings = _settings(width, poly, start, inverted)
+            xorout = 2**width - 1 if inverted else 0
+        else:
+            _, width, poly, start, xorout = named[code]
+            settings = code
+        received = int_to_bits(crc_msb_first(covered, width=width, poly=poly, init=start,
+                                             xor_out=xorout), width)
+        flip = rng.random() < 0.5
+        if flip:
+            j = rng.randrange(width)
+            received = received[:j] + [received[j] ^ 1] + received[j + 1:]
+        jobs.append((word, settings, covered, received))
+        expected.append((int(not flip),) * 2)
+    assert _run(words, jobs, seed=words) == expected

@@ -49,7 +49,8 @@ def test_field_ends_one_clock_after_the_settings(words, error_bit):
     for _ in range(60):
         wfs = [_random_word(rng, 63) for _ in range(words)]
         error = int(error_bit and not wfs[0].nenw and rng.random() < 0.5)
-        step = {"words": [_word(wf) for wf in wfs], "crcs": [crc_settings(wf.crc) for wf in wfs]}
+        step = {"words": [_word(wf) for wf in wfs],
+                "crc_widths": [crc_settings(wf.crc)["width"] for wf in wfs]}
         if error_bit:
             step["error_bit"] = error
         steps.append(step)
@@ -65,6 +66,6 @@ def test_field_ends_one_clock_after_the_settings(words, error_bit):
 def test_field_ends_longest_word_fits_the_index():
     """63 data bits, nE/nW, LC and CRC-16: 87 bits, the last at index 86."""
     wf = WordFormat(63, lc=True, crc=CRC16)
-    trace = run_clocks(FieldEnds(1), [{"words": [_word(wf)], "crcs": [crc_settings(CRC16)]}] * 2,
-                       ["ends"])
+    step = {"words": [_word(wf)], "crc_widths": [crc_settings(CRC16)["width"]]}
+    trace = run_clocks(FieldEnds(1), [step] * 2, ["ends"])
     assert unpack(FIELD_ENDS, trace[1]["ends"])["word_end_m1"] == 86 == wf.total_bits - 1

@@ -33,7 +33,10 @@ def _run(word_cfg, crc, line, *, error=0, error_low=0, double=0, seed=0):
 
     async def tb(ctx):
         ctx.set(dut.words, [word_cfg, {"data_bits": 0, "nenw": 0, "lc": 0, "crc": 0}])
-        ctx.set(dut.crcs, [crc, crc_settings("none")])
+        # The resolved width; the settings as custom ones (read only with the custom code).
+        ctx.set(dut.crc_widths, [crc["width"], 0])
+        if PARAMS.custom_crc:
+            ctx.set(dut.customs, [crc, crc_settings("none")])
         ctx.set(dut.word_count, 1)
         for name, value in (("ssi_error", error), ("ssi_error_low", error_low),
                             ("ssi_double", double)):

@@ -58,7 +58,7 @@ def scenario(words, w1_enable, start_slot, *, step, started_at, clears=4, extra=
         enables = 1 | w1_enable << 1
     target = start_slot + frame_bits(words, enables=enables) + RISES_AROUND_WORDS
     cfg = {"words": [_word_cfg(wf) for wf in words], "enables": enables,
-           "crcs": [crc_settings(wf.crc) for wf in words]}
+           "crc_widths": [crc_settings(wf.crc)["width"] for wf in words]}
     steps = [{**cfg, "clear": 1, "rises": 0, "started": 0, "start_slot": 0}] * clears
     t, end = 0, None
     while end is None or t < end:
@@ -175,8 +175,8 @@ def test_ma_stop_ssi_rises_from_the_first_whatever_start_says(bits, error, nenw,
     n = wf.total_bits + error
     target = 2 * n + 2 if double else n + 1
     cfg = {"words": [_word_cfg(wf), _word_cfg(RSH[1])], "enables": 1,
-           "crcs": [crc_settings(crc), crc_settings(CRC16)], "ssi": 1, "ssi_error": error,
-           "ssi_double": double, "started": 0, "start_slot": 0}
+           "crc_widths": [crc_settings(crc)["width"], crc_settings(CRC16)["width"]], "ssi": 1,
+           "ssi_error": error, "ssi_double": double, "started": 0, "start_slot": 0}
     steps = [{**cfg, "clear": 1, "rises": 0}] * 2
     # MA's first rise comes at least 2 clocks after the clear (a low phase of >= 2 clocks).
     steps += [{**cfg, "clear": 0, "rises": (t + 2) // step if t >= 2 else 0}
