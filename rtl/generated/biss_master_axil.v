@@ -1098,12 +1098,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$7153$0 (\$10 ),
-    .\port$7164$0 (\$11 ),
-    .\port$7241$0 (\$12 ),
-    .\port$7688$0 (\$13 ),
-    .\port$7699$0 (\$14 ),
-    .\port$7776$0 (\$15 ),
+    .\port$7519$0 (\$10 ),
+    .\port$7530$0 (\$11 ),
+    .\port$7607$0 (\$12 ),
+    .\port$8054$0 (\$13 ),
+    .\port$8065$0 (\$14 ),
+    .\port$8142$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1188,9 +1188,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$7153$0 (\$10 ),
-    .\port$7164$0 (\$11 ),
-    .\port$7241$0 (\$12 ),
+    .\port$7519$0 (\$10 ),
+    .\port$7530$0 (\$11 ),
+    .\port$7607$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1265,9 +1265,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(\regs__count_en$783 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$807 ),
-    .\port$7688$0 (\$13 ),
-    .\port$7699$0 (\$14 ),
-    .\port$7776$0 (\$15 ),
+    .\port$8054$0 (\$13 ),
+    .\port$8065$0 (\$14 ),
+    .\port$8142$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$471 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -2034,8 +2034,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort
 , ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc
 , ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low
-, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7153$0 , \port$7164$0 , ch0__ca_done, \port$7241$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$7688$0 , \port$7699$0 , ch1__ca_done
-, \port$7776$0 , bus__r_addr);
+, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7519$0 , \port$7530$0 , ch0__ca_done, \port$7607$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$8054$0 , \port$8065$0 , ch1__ca_done
+, \port$8142$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -4161,18 +4161,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$7153$0 ;
-  wire [186:0] \port$7153$0 ;
-  input [79:0] \port$7164$0 ;
-  wire [79:0] \port$7164$0 ;
-  input [9:0] \port$7241$0 ;
-  wire [9:0] \port$7241$0 ;
-  input [186:0] \port$7688$0 ;
-  wire [186:0] \port$7688$0 ;
-  input [79:0] \port$7699$0 ;
-  wire [79:0] \port$7699$0 ;
-  input [9:0] \port$7776$0 ;
-  wire [9:0] \port$7776$0 ;
+  input [186:0] \port$7519$0 ;
+  wire [186:0] \port$7519$0 ;
+  input [79:0] \port$7530$0 ;
+  wire [79:0] \port$7530$0 ;
+  input [9:0] \port$7607$0 ;
+  wire [9:0] \port$7607$0 ;
+  input [186:0] \port$8054$0 ;
+  wire [186:0] \port$8054$0 ;
+  input [79:0] \port$8065$0 ;
+  wire [79:0] \port$8065$0 ;
+  input [9:0] \port$8142$0 ;
+  wire [9:0] \port$8142$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
@@ -4410,7 +4410,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$160  = \$158  | \$159 ;
   assign \$161  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$7153$0 [182:177], 4'h0, \port$7153$0 [186:183], 1'h0, \port$7153$0 [176:174], 1'h0, \port$7153$0 [133:131], 3'h0, \port$7153$0 [49], \port$7153$0 [3:0] } : 32'd0;
+  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$7519$0 [182:177], 4'h0, \port$7519$0 [186:183], 1'h0, \port$7519$0 [176:174], 1'h0, \port$7519$0 [133:131], 3'h0, \port$7519$0 [49], \port$7519$0 [3:0] } : 32'd0;
   assign \$168  = \$166  | \$167 ;
   assign \$169  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$170  = \$168  | \$169 ;
@@ -4426,13 +4426,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$180  = \$178  | \$179 ;
   assign \$181  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$7241$0 [9:3], 1'h0, \port$7241$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$7607$0 [9:3], 1'h0, \port$7607$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$228  = \$226  | \$227 ;
-  assign \$229  = ch0_read_select_c3 ? \port$7164$0 [31:0] : 32'd0;
+  assign \$229  = ch0_read_select_c3 ? \port$7530$0 [31:0] : 32'd0;
   assign \$230  = \$228  | \$229 ;
-  assign \$231  = ch0_read_select_c4 ? \port$7164$0 [63:32] : 32'd0;
+  assign \$231  = ch0_read_select_c4 ? \port$7530$0 [63:32] : 32'd0;
   assign \$232  = \$230  | \$231 ;
-  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$7164$0 [79:64] } : 32'd0;
+  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$7530$0 [79:64] } : 32'd0;
   assign \$234  = \$232  | \$233 ;
   assign \$237  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$238  = \$236  | \$237 ;
@@ -4581,7 +4581,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$384  = \$382  | \$383 ;
   assign \$385  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$386  = \$384  | \$385 ;
-  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$7688$0 [182:177], 4'h0, \port$7688$0 [186:183], 1'h0, \port$7688$0 [176:174], 1'h0, \port$7688$0 [133:131], 3'h0, \port$7688$0 [49], \port$7688$0 [3:0] } : 32'd0;
+  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$8054$0 [182:177], 4'h0, \port$8054$0 [186:183], 1'h0, \port$8054$0 [176:174], 1'h0, \port$8054$0 [133:131], 3'h0, \port$8054$0 [49], \port$8054$0 [3:0] } : 32'd0;
   assign \$392  = \$390  | \$391 ;
   assign \$393  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$394  = \$392  | \$393 ;
@@ -4597,13 +4597,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$404  = \$402  | \$403 ;
   assign \$405  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$406  = \$404  | \$405 ;
-  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$7776$0 [9:3], 1'h0, \port$7776$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$8142$0 [9:3], 1'h0, \port$8142$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$452  = \$450  | \$451 ;
-  assign \$453  = ch1_read_select_143 ? \port$7699$0 [31:0] : 32'd0;
+  assign \$453  = ch1_read_select_143 ? \port$8065$0 [31:0] : 32'd0;
   assign \$454  = \$452  | \$453 ;
-  assign \$455  = ch1_read_select_144 ? \port$7699$0 [63:32] : 32'd0;
+  assign \$455  = ch1_read_select_144 ? \port$8065$0 [63:32] : 32'd0;
   assign \$456  = \$454  | \$455 ;
-  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$7699$0 [79:64] } : 32'd0;
+  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$8065$0 [79:64] } : 32'd0;
   assign \$458  = \$456  | \$457 ;
   assign \$461  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$462  = \$460  | \$461 ;
@@ -7012,7 +7012,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$809  = ch0_result_status_status_snapshot;
     if (\$146 ) begin
-      \$809  = \port$7153$0 [3:0];
+      \$809  = \port$7519$0 [3:0];
     end
     if (rst) begin
       \$809  = 4'h0;
@@ -7022,7 +7022,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$810  = ch0_result_status_cds_snapshot;
     if (\$146 ) begin
-      \$810  = \port$7153$0 [49];
+      \$810  = \port$7519$0 [49];
     end
     if (rst) begin
       \$810  = 1'h0;
@@ -7032,7 +7032,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$811  = ch0_result_status_w0_ne_snapshot;
     if (\$146 ) begin
-      \$811  = \port$7153$0 [131];
+      \$811  = \port$7519$0 [131];
     end
     if (rst) begin
       \$811  = 1'h0;
@@ -7042,7 +7042,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$812  = ch0_result_status_w0_nw_snapshot;
     if (\$146 ) begin
-      \$812  = \port$7153$0 [132];
+      \$812  = \port$7519$0 [132];
     end
     if (rst) begin
       \$812  = 1'h0;
@@ -7052,7 +7052,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$813  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$146 ) begin
-      \$813  = \port$7153$0 [133];
+      \$813  = \port$7519$0 [133];
     end
     if (rst) begin
       \$813  = 1'h0;
@@ -7062,7 +7062,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$814  = ch0_result_status_w1_ne_snapshot;
     if (\$146 ) begin
-      \$814  = \port$7153$0 [174];
+      \$814  = \port$7519$0 [174];
     end
     if (rst) begin
       \$814  = 1'h0;
@@ -7072,7 +7072,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$815  = ch0_result_status_w1_nw_snapshot;
     if (\$146 ) begin
-      \$815  = \port$7153$0 [175];
+      \$815  = \port$7519$0 [175];
     end
     if (rst) begin
       \$815  = 1'h0;
@@ -7082,7 +7082,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$816  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$146 ) begin
-      \$816  = \port$7153$0 [176];
+      \$816  = \port$7519$0 [176];
     end
     if (rst) begin
       \$816  = 1'h0;
@@ -7092,7 +7092,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$817  = ch0_result_status_lc_repeat_snapshot;
     if (\$146 ) begin
-      \$817  = \port$7153$0 [183];
+      \$817  = \port$7519$0 [183];
     end
     if (rst) begin
       \$817  = 1'h0;
@@ -7102,7 +7102,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$818  = ch0_result_status_lc_skip_snapshot;
     if (\$146 ) begin
-      \$818  = \port$7153$0 [184];
+      \$818  = \port$7519$0 [184];
     end
     if (rst) begin
       \$818  = 1'h0;
@@ -7112,7 +7112,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$819  = ch0_result_status_lc_zero_snapshot;
     if (\$146 ) begin
-      \$819  = \port$7153$0 [185];
+      \$819  = \port$7519$0 [185];
     end
     if (rst) begin
       \$819  = 1'h0;
@@ -7122,7 +7122,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$820  = ch0_result_status_spw_mismatch_snapshot;
     if (\$146 ) begin
-      \$820  = \port$7153$0 [186];
+      \$820  = \port$7519$0 [186];
     end
     if (rst) begin
       \$820  = 1'h0;
@@ -7132,7 +7132,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$821  = ch0_result_status_lc_snapshot;
     if (\$146 ) begin
-      \$821  = \port$7153$0 [182:177];
+      \$821  = \port$7519$0 [182:177];
     end
     if (rst) begin
       \$821  = 6'h00;
@@ -7152,7 +7152,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$823  = ch0_result_seq_line_delay_snapshot;
     if (\$146 ) begin
-      \$823  = \port$7153$0 [48:36];
+      \$823  = \port$7519$0 [48:36];
     end
     if (rst) begin
       \$823  = 13'h0000;
@@ -7162,7 +7162,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$824  = ch0_result_w0_lo_data_snapshot;
     if (\$146 ) begin
-      \$824  = \port$7153$0 [107:76];
+      \$824  = \port$7519$0 [107:76];
     end
     if (rst) begin
       \$824  = 32'd0;
@@ -7172,7 +7172,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$825  = ch0_result_w0_hi_data_snapshot;
     if (\$146 ) begin
-      \$825  = \port$7153$0 [130:108];
+      \$825  = \port$7519$0 [130:108];
     end
     if (rst) begin
       \$825  = 23'h000000;
@@ -7182,7 +7182,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$826  = ch0_result_w1_lo_data_snapshot;
     if (\$146 ) begin
-      \$826  = \port$7153$0 [165:134];
+      \$826  = \port$7519$0 [165:134];
     end
     if (rst) begin
       \$826  = 32'd0;
@@ -7192,7 +7192,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$827  = ch0_result_w1_hi_data_snapshot;
     if (\$146 ) begin
-      \$827  = \port$7153$0 [173:166];
+      \$827  = \port$7519$0 [173:166];
     end
     if (rst) begin
       \$827  = 8'h00;
@@ -7202,7 +7202,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$828  = ch0_result_timestamp_time_snapshot;
     if (\$146 ) begin
-      \$828  = \port$7153$0 [35:4];
+      \$828  = \port$7519$0 [35:4];
     end
     if (rst) begin
       \$828  = 32'd0;
@@ -7212,7 +7212,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$829  = ch0_result_line_noise_events_snapshot;
     if (\$146 ) begin
-      \$829  = \port$7153$0 [53:50];
+      \$829  = \port$7519$0 [53:50];
     end
     if (rst) begin
       \$829  = 4'h0;
@@ -7222,7 +7222,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$830  = ch0_result_line_delay_settled_snapshot;
     if (\$146 ) begin
-      \$830  = \port$7153$0 [54];
+      \$830  = \port$7519$0 [54];
     end
     if (rst) begin
       \$830  = 1'h0;
@@ -7232,7 +7232,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$831  = ch0_result_line_delay_spread_snapshot;
     if (\$146 ) begin
-      \$831  = \port$7153$0 [75:68];
+      \$831  = \port$7519$0 [75:68];
     end
     if (rst) begin
       \$831  = 8'h00;
@@ -7242,7 +7242,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$832  = ch0_result_line_settled_delay_snapshot;
     if (\$146 ) begin
-      \$832  = \port$7153$0 [67:55];
+      \$832  = \port$7519$0 [67:55];
     end
     if (rst) begin
       \$832  = 13'h0000;
@@ -8569,7 +8569,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$971  = ch1_result_status_status_snapshot;
     if (\$370 ) begin
-      \$971  = \port$7688$0 [3:0];
+      \$971  = \port$8054$0 [3:0];
     end
     if (rst) begin
       \$971  = 4'h0;
@@ -8579,7 +8579,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$972  = ch1_result_status_cds_snapshot;
     if (\$370 ) begin
-      \$972  = \port$7688$0 [49];
+      \$972  = \port$8054$0 [49];
     end
     if (rst) begin
       \$972  = 1'h0;
@@ -8589,7 +8589,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$973  = ch1_result_status_w0_ne_snapshot;
     if (\$370 ) begin
-      \$973  = \port$7688$0 [131];
+      \$973  = \port$8054$0 [131];
     end
     if (rst) begin
       \$973  = 1'h0;
@@ -8599,7 +8599,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$974  = ch1_result_status_w0_nw_snapshot;
     if (\$370 ) begin
-      \$974  = \port$7688$0 [132];
+      \$974  = \port$8054$0 [132];
     end
     if (rst) begin
       \$974  = 1'h0;
@@ -8609,7 +8609,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$975  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$370 ) begin
-      \$975  = \port$7688$0 [133];
+      \$975  = \port$8054$0 [133];
     end
     if (rst) begin
       \$975  = 1'h0;
@@ -8619,7 +8619,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$976  = ch1_result_status_w1_ne_snapshot;
     if (\$370 ) begin
-      \$976  = \port$7688$0 [174];
+      \$976  = \port$8054$0 [174];
     end
     if (rst) begin
       \$976  = 1'h0;
@@ -8629,7 +8629,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$977  = ch1_result_status_w1_nw_snapshot;
     if (\$370 ) begin
-      \$977  = \port$7688$0 [175];
+      \$977  = \port$8054$0 [175];
     end
     if (rst) begin
       \$977  = 1'h0;
@@ -8639,7 +8639,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$978  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$370 ) begin
-      \$978  = \port$7688$0 [176];
+      \$978  = \port$8054$0 [176];
     end
     if (rst) begin
       \$978  = 1'h0;
@@ -8649,7 +8649,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$979  = ch1_result_status_lc_repeat_snapshot;
     if (\$370 ) begin
-      \$979  = \port$7688$0 [183];
+      \$979  = \port$8054$0 [183];
     end
     if (rst) begin
       \$979  = 1'h0;
@@ -8659,7 +8659,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$980  = ch1_result_status_lc_skip_snapshot;
     if (\$370 ) begin
-      \$980  = \port$7688$0 [184];
+      \$980  = \port$8054$0 [184];
     end
     if (rst) begin
       \$980  = 1'h0;
@@ -8669,7 +8669,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$981  = ch1_result_status_lc_zero_snapshot;
     if (\$370 ) begin
-      \$981  = \port$7688$0 [185];
+      \$981  = \port$8054$0 [185];
     end
     if (rst) begin
       \$981  = 1'h0;
@@ -8679,7 +8679,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$982  = ch1_result_status_spw_mismatch_snapshot;
     if (\$370 ) begin
-      \$982  = \port$7688$0 [186];
+      \$982  = \port$8054$0 [186];
     end
     if (rst) begin
       \$982  = 1'h0;
@@ -8689,7 +8689,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$983  = ch1_result_status_lc_snapshot;
     if (\$370 ) begin
-      \$983  = \port$7688$0 [182:177];
+      \$983  = \port$8054$0 [182:177];
     end
     if (rst) begin
       \$983  = 6'h00;
@@ -8709,7 +8709,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$985  = ch1_result_seq_line_delay_snapshot;
     if (\$370 ) begin
-      \$985  = \port$7688$0 [48:36];
+      \$985  = \port$8054$0 [48:36];
     end
     if (rst) begin
       \$985  = 13'h0000;
@@ -8719,7 +8719,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$986  = ch1_result_w0_lo_data_snapshot;
     if (\$370 ) begin
-      \$986  = \port$7688$0 [107:76];
+      \$986  = \port$8054$0 [107:76];
     end
     if (rst) begin
       \$986  = 32'd0;
@@ -8729,7 +8729,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$987  = ch1_result_w0_hi_data_snapshot;
     if (\$370 ) begin
-      \$987  = \port$7688$0 [130:108];
+      \$987  = \port$8054$0 [130:108];
     end
     if (rst) begin
       \$987  = 23'h000000;
@@ -8739,7 +8739,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$988  = ch1_result_w1_lo_data_snapshot;
     if (\$370 ) begin
-      \$988  = \port$7688$0 [165:134];
+      \$988  = \port$8054$0 [165:134];
     end
     if (rst) begin
       \$988  = 32'd0;
@@ -8749,7 +8749,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$989  = ch1_result_w1_hi_data_snapshot;
     if (\$370 ) begin
-      \$989  = \port$7688$0 [173:166];
+      \$989  = \port$8054$0 [173:166];
     end
     if (rst) begin
       \$989  = 8'h00;
@@ -8759,7 +8759,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$990  = ch1_result_timestamp_time_snapshot;
     if (\$370 ) begin
-      \$990  = \port$7688$0 [35:4];
+      \$990  = \port$8054$0 [35:4];
     end
     if (rst) begin
       \$990  = 32'd0;
@@ -8769,7 +8769,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$991  = ch1_result_line_noise_events_snapshot;
     if (\$370 ) begin
-      \$991  = \port$7688$0 [53:50];
+      \$991  = \port$8054$0 [53:50];
     end
     if (rst) begin
       \$991  = 4'h0;
@@ -8779,7 +8779,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$992  = ch1_result_line_delay_settled_snapshot;
     if (\$370 ) begin
-      \$992  = \port$7688$0 [54];
+      \$992  = \port$8054$0 [54];
     end
     if (rst) begin
       \$992  = 1'h0;
@@ -8789,7 +8789,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$993  = ch1_result_line_delay_spread_snapshot;
     if (\$370 ) begin
-      \$993  = \port$7688$0 [75:68];
+      \$993  = \port$8054$0 [75:68];
     end
     if (rst) begin
       \$993  = 8'h00;
@@ -8799,7 +8799,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$994  = ch1_result_line_settled_delay_snapshot;
     if (\$370 ) begin
-      \$994  = \port$7688$0 [67:55];
+      \$994  = \port$8054$0 [67:55];
     end
     if (rst) begin
       \$994  = 13'h0000;
@@ -9001,27 +9001,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$7153$0 [3:0];
-  assign ch0__cds = \port$7153$0 [49];
-  assign ch0__word0_ne = \port$7153$0 [131];
-  assign ch0__word0_nw = \port$7153$0 [132];
-  assign ch0__word0_crc_ok = \port$7153$0 [133];
-  assign ch0__word1_ne = \port$7153$0 [174];
-  assign ch0__word1_nw = \port$7153$0 [175];
-  assign ch0__word1_crc_ok = \port$7153$0 [176];
-  assign ch0__lc_repeat = \port$7153$0 [183];
-  assign ch0__lc_skip = \port$7153$0 [184];
-  assign ch0__lc_zero = \port$7153$0 [185];
-  assign ch0__spw_mismatch = \port$7153$0 [186];
-  assign ch0__lc = \port$7153$0 [182:177];
-  assign ch0__line_delay = \port$7153$0 [48:36];
-  assign ch0__word0_position = \port$7153$0 [130:76];
-  assign ch0__word1_position = \port$7153$0 [173:134];
-  assign ch0__timestamp = \port$7153$0 [35:4];
-  assign ch0__noise_events = \port$7153$0 [53:50];
-  assign ch0__delay_settled = \port$7153$0 [54];
-  assign ch0__delay_spread = \port$7153$0 [75:68];
-  assign ch0__settled_delay = \port$7153$0 [67:55];
+  assign ch0__status = \port$7519$0 [3:0];
+  assign ch0__cds = \port$7519$0 [49];
+  assign ch0__word0_ne = \port$7519$0 [131];
+  assign ch0__word0_nw = \port$7519$0 [132];
+  assign ch0__word0_crc_ok = \port$7519$0 [133];
+  assign ch0__word1_ne = \port$7519$0 [174];
+  assign ch0__word1_nw = \port$7519$0 [175];
+  assign ch0__word1_crc_ok = \port$7519$0 [176];
+  assign ch0__lc_repeat = \port$7519$0 [183];
+  assign ch0__lc_skip = \port$7519$0 [184];
+  assign ch0__lc_zero = \port$7519$0 [185];
+  assign ch0__spw_mismatch = \port$7519$0 [186];
+  assign ch0__lc = \port$7519$0 [182:177];
+  assign ch0__line_delay = \port$7519$0 [48:36];
+  assign ch0__word0_position = \port$7519$0 [130:76];
+  assign ch0__word1_position = \port$7519$0 [173:134];
+  assign ch0__timestamp = \port$7519$0 [35:4];
+  assign ch0__noise_events = \port$7519$0 [53:50];
+  assign ch0__delay_settled = \port$7519$0 [54];
+  assign ch0__delay_spread = \port$7519$0 [75:68];
+  assign ch0__settled_delay = \port$7519$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9042,13 +9042,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$7241$0 [2:0];
-  assign ch0__ca_bytes_done = \port$7241$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$7164$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$7164$0 [31:16];
-  assign ch0__count_ca_refused = \port$7164$0 [47:32];
-  assign ch0__count_ca_aborted = \port$7164$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$7164$0 [79:64];
+  assign ch0__ca_status = \port$7607$0 [2:0];
+  assign ch0__ca_bytes_done = \port$7607$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$7530$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$7530$0 [31:16];
+  assign ch0__count_ca_refused = \port$7530$0 [47:32];
+  assign ch0__count_ca_aborted = \port$7530$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$7530$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9068,27 +9068,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$7688$0 [3:0];
-  assign ch1__cds = \port$7688$0 [49];
-  assign ch1__word0_ne = \port$7688$0 [131];
-  assign ch1__word0_nw = \port$7688$0 [132];
-  assign ch1__word0_crc_ok = \port$7688$0 [133];
-  assign ch1__word1_ne = \port$7688$0 [174];
-  assign ch1__word1_nw = \port$7688$0 [175];
-  assign ch1__word1_crc_ok = \port$7688$0 [176];
-  assign ch1__lc_repeat = \port$7688$0 [183];
-  assign ch1__lc_skip = \port$7688$0 [184];
-  assign ch1__lc_zero = \port$7688$0 [185];
-  assign ch1__spw_mismatch = \port$7688$0 [186];
-  assign ch1__lc = \port$7688$0 [182:177];
-  assign ch1__line_delay = \port$7688$0 [48:36];
-  assign ch1__word0_position = \port$7688$0 [130:76];
-  assign ch1__word1_position = \port$7688$0 [173:134];
-  assign ch1__timestamp = \port$7688$0 [35:4];
-  assign ch1__noise_events = \port$7688$0 [53:50];
-  assign ch1__delay_settled = \port$7688$0 [54];
-  assign ch1__delay_spread = \port$7688$0 [75:68];
-  assign ch1__settled_delay = \port$7688$0 [67:55];
+  assign ch1__status = \port$8054$0 [3:0];
+  assign ch1__cds = \port$8054$0 [49];
+  assign ch1__word0_ne = \port$8054$0 [131];
+  assign ch1__word0_nw = \port$8054$0 [132];
+  assign ch1__word0_crc_ok = \port$8054$0 [133];
+  assign ch1__word1_ne = \port$8054$0 [174];
+  assign ch1__word1_nw = \port$8054$0 [175];
+  assign ch1__word1_crc_ok = \port$8054$0 [176];
+  assign ch1__lc_repeat = \port$8054$0 [183];
+  assign ch1__lc_skip = \port$8054$0 [184];
+  assign ch1__lc_zero = \port$8054$0 [185];
+  assign ch1__spw_mismatch = \port$8054$0 [186];
+  assign ch1__lc = \port$8054$0 [182:177];
+  assign ch1__line_delay = \port$8054$0 [48:36];
+  assign ch1__word0_position = \port$8054$0 [130:76];
+  assign ch1__word1_position = \port$8054$0 [173:134];
+  assign ch1__timestamp = \port$8054$0 [35:4];
+  assign ch1__noise_events = \port$8054$0 [53:50];
+  assign ch1__delay_settled = \port$8054$0 [54];
+  assign ch1__delay_spread = \port$8054$0 [75:68];
+  assign ch1__settled_delay = \port$8054$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9109,13 +9109,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$7776$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7776$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7699$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7699$0 [31:16];
-  assign ch1__count_ca_refused = \port$7699$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7699$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7699$0 [79:64];
+  assign ch1__ca_status = \port$8142$0 [2:0];
+  assign ch1__ca_bytes_done = \port$8142$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$8065$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$8065$0 [31:16];
+  assign ch1__count_ca_refused = \port$8065$0 [47:32];
+  assign ch1__count_ca_aborted = \port$8065$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$8065$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9754,7 +9754,7 @@ endmodule
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7153$0 , \port$7164$0 , regs__ca_done, \port$7241$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7519$0 , \port$7530$0 , regs__ca_done, \port$7607$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -9938,12 +9938,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7153$0 ;
-  wire [186:0] \port$7153$0 ;
-  output [79:0] \port$7164$0 ;
-  wire [79:0] \port$7164$0 ;
-  output [9:0] \port$7241$0 ;
-  wire [9:0] \port$7241$0 ;
+  output [186:0] \port$7519$0 ;
+  wire [186:0] \port$7519$0 ;
+  output [79:0] \port$7530$0 ;
+  wire [79:0] \port$7530$0 ;
+  output [9:0] \port$7607$0 ;
+  wire [9:0] \port$7607$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10432,9 +10432,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$7153$0  = \$20 ;
-  assign \port$7164$0  = \$21 ;
-  assign \port$7241$0  = \$22 ;
+  assign \port$7519$0  = \$20 ;
+  assign \port$7530$0  = \$21 ;
+  assign \port$7607$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -11499,7 +11499,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6807$272 (cycle[274:272]),
+    .\port$7173$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -11559,7 +11559,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$6807$199 (cycle[199]),
+    .\port$7173$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -11610,7 +11610,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6807$259 (cycle[271:259]),
+    .\port$7173$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -11634,7 +11634,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6795$0 (\bit ),
+    .\port$7161$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -11702,7 +11702,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2815$0 (\$28 ),
+    .\port$2998$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -12268,7 +12268,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crc_widths, no_start_limit, idle, clk);
+module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, no_start_limit, crc_widths, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -12332,20 +12332,20 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire \$63 ;
   wire [3:0] \$64 ;
   wire [16:0] \$65 ;
-  wire \$66 ;
+  wire [24:0] \$66 ;
   wire \$67 ;
   wire \$68 ;
-  wire [37:0] \$69 ;
+  wire \$69 ;
   wire \$7 ;
   wire [37:0] \$70 ;
   wire [37:0] \$71 ;
-  wire \$72 ;
+  wire [37:0] \$72 ;
   wire \$73 ;
   wire \$74 ;
-  wire [37:0] \$75 ;
+  wire \$75 ;
   wire [37:0] \$76 ;
   wire [37:0] \$77 ;
-  wire [24:0] \$78 ;
+  wire [37:0] \$78 ;
   wire [1:0] \$79 ;
   wire \$8 ;
   wire [2:0] \$80 ;
@@ -12356,15 +12356,14 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg [11:0] \$85 ;
   reg [11:0] \$86 ;
   reg [16:0] \$87 ;
-  reg [9:0] \$88 ;
-  reg [24:0] \$89 ;
+  reg [24:0] \$88 ;
   wire \$9 ;
   output [23:0] ack_limit;
   reg [23:0] ack_limit = 24'h000000;
   input clk;
   wire clk;
   output [9:0] crc_widths;
-  reg [9:0] crc_widths = 10'h000;
+  wire [9:0] crc_widths;
   wire [4:0] \crc_widths[0] ;
   wire [4:0] \crc_widths[1] ;
   output [274:0] cycle;
@@ -12495,7 +12494,6 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
-  assign \$11  = | live[165:161];
   assign \$12  = \$10  & \$11 ;
   assign \$13  = live[165:161] <= 5'h10;
   assign \$14  = \$12  & \$13 ;
@@ -12549,19 +12547,19 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$63  = ! live[144:141];
   assign \$64  = \$63  ? 4'h2 : live[144:141];
   assign \$65  = live[15:0] + \$64 ;
-  assign \$66  = live[158:157] == 2'h3;
-  assign \$67  = live[158:157] == 2'h2;
-  assign \$68  = live[158:157] == 1'h1;
-  assign \$69  = \$68  ? 38'h2000000066 : 38'h0000000000;
-  assign \$70  = \$67  ? 38'h2000121b30 : \$69 ;
-  assign \$71  = \$66  ? live[198:161] : \$70 ;
-  assign \$72  = live[209:208] == 2'h3;
-  assign \$73  = live[209:208] == 2'h2;
-  assign \$74  = live[209:208] == 1'h1;
-  assign \$75  = \$74  ? 38'h2000000066 : 38'h0000000000;
-  assign \$76  = \$73  ? 38'h2000121b30 : \$75 ;
-  assign \$77  = \$72  ? live[249:212] : \$76 ;
-  assign \$78  = ack_limit + { cycle[15:0], 1'h1 };
+  assign \$66  = ack_limit + { cycle[15:0], 1'h1 };
+  assign \$67  = cycle[158:157] == 2'h3;
+  assign \$68  = cycle[158:157] == 2'h2;
+  assign \$69  = cycle[158:157] == 1'h1;
+  assign \$70  = \$69  ? 38'h2000000066 : 38'h0000000000;
+  assign \$71  = \$68  ? 38'h2000121b30 : \$70 ;
+  assign \$72  = \$67  ? cycle[198:161] : \$71 ;
+  assign \$73  = cycle[209:208] == 2'h3;
+  assign \$74  = cycle[209:208] == 2'h2;
+  assign \$75  = cycle[209:208] == 1'h1;
+  assign \$76  = \$75  ? 38'h2000000066 : 38'h0000000000;
+  assign \$77  = \$74  ? 38'h2000121b30 : \$76 ;
+  assign \$78  = \$73  ? cycle[249:212] : \$77 ;
   assign \$80  = 2'h1 + cycle[199];
   always @(posedge clk)
     ok <= \$81 ;
@@ -12578,9 +12576,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   always @(posedge clk)
     delay_tolerance <= \$87 ;
   always @(posedge clk)
-    crc_widths <= \$88 ;
-  always @(posedge clk)
-    no_start_limit <= \$89 ;
+    no_start_limit <= \$88 ;
   assign \$1  = | live[15:1];
   assign \$2  = | live[154:149];
   assign \$3  = live[154:149] <= 6'h37;
@@ -12591,6 +12587,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$8  = live[158:157] == 2'h2;
   assign \$9  = \$7  | \$8 ;
   assign \$10  = live[158:157] == 2'h3;
+  assign \$11  = | live[165:161];
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$81  = \$54 ;
@@ -12660,20 +12657,9 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$88  = crc_widths;
-    if (idle) begin
-      \$88 [4:0] = \$71 [4:0];
-      \$88 [9:5] = \$77 [4:0];
-    end
+    \$88  = \$66 ;
     if (rst) begin
-      \$88  = 10'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$89  = \$78 ;
-    if (rst) begin
-      \$89  = 25'h0000000;
+      \$88  = 25'h0000000;
     end
   end
   assign word_count = \$80 [1:0];
@@ -12765,6 +12751,8 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.ssi_double  = cycle[274];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
+  assign crc_widths[9:5] = \$78 [4:0];
+  assign crc_widths[4:0] = \$72 [4:0];
   assign \$36  = live[156];
   assign \$79  = 2'h1;
 endmodule
@@ -15742,11 +15730,11 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$6807$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$7173$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
-  wire \$10 ;
+  wire [1:0] \$10 ;
   wire \$100 ;
   wire \$101 ;
   wire \$102 ;
@@ -15845,7 +15833,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$187 ;
   wire \$188 ;
   wire \$189 ;
-  wire [16:0] \$19 ;
+  wire \$19 ;
   wire \$190 ;
   wire \$191 ;
   wire \$192 ;
@@ -15856,8 +15844,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$197 ;
   wire \$198 ;
   wire \$199 ;
-  wire [6:0] \$2 ;
-  wire \$20 ;
+  wire \$2 ;
+  wire [16:0] \$20 ;
   wire \$200 ;
   wire \$201 ;
   wire \$202 ;
@@ -15901,7 +15889,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$237 ;
   wire \$238 ;
   wire \$239 ;
-  wire [7:0] \$24 ;
+  wire \$24 ;
   wire \$240 ;
   wire \$241 ;
   wire \$242 ;
@@ -15912,7 +15900,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$247 ;
   wire \$248 ;
   wire \$249 ;
-  wire [6:0] \$25 ;
+  reg [1:0] \$25 ;
   wire \$250 ;
   wire \$251 ;
   wire \$252 ;
@@ -15923,7 +15911,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$257 ;
   wire \$258 ;
   wire \$259 ;
-  wire \$26 ;
+  wire [6:0] \$26 ;
   wire \$260 ;
   wire \$261 ;
   wire \$262 ;
@@ -15945,7 +15933,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$277 ;
   wire \$278 ;
   wire \$279 ;
-  wire [6:0] \$28 ;
+  wire \$28 ;
   wire \$280 ;
   wire \$281 ;
   wire \$282 ;
@@ -15956,7 +15944,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$287 ;
   wire \$288 ;
   wire \$289 ;
-  wire \$29 ;
+  reg [3:0] \$29 ;
   wire \$290 ;
   wire \$291 ;
   wire \$292 ;
@@ -15967,8 +15955,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$297 ;
   wire \$298 ;
   wire \$299 ;
-  wire \$3 ;
-  wire \$30 ;
+  wire [2:0] \$3 ;
+  wire [6:0] \$30 ;
   wire \$300 ;
   wire \$301 ;
   wire \$302 ;
@@ -15979,7 +15967,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$307 ;
   wire \$308 ;
   wire \$309 ;
-  wire [6:0] \$31 ;
+  wire \$31 ;
   wire \$310 ;
   wire \$311 ;
   wire \$312 ;
@@ -16005,20 +15993,20 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$330 ;
   wire \$331 ;
   wire \$332 ;
-  wire [54:0] \$333 ;
+  wire \$333 ;
   wire \$334 ;
   wire \$335 ;
   wire \$336 ;
   wire \$337 ;
   wire \$338 ;
   wire \$339 ;
-  wire [6:0] \$34 ;
+  wire \$34 ;
   wire \$340 ;
   wire \$341 ;
   wire \$342 ;
   wire \$343 ;
   wire \$344 ;
-  wire \$345 ;
+  wire [54:0] \$345 ;
   wire \$346 ;
   wire \$347 ;
   wire \$348 ;
@@ -16034,7 +16022,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$357 ;
   wire \$358 ;
   wire \$359 ;
-  wire \$36 ;
+  reg [1:0] \$36 ;
   wire \$360 ;
   wire \$361 ;
   wire \$362 ;
@@ -16079,7 +16067,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$398 ;
   wire \$399 ;
   wire \$4 ;
-  wire \$40 ;
+  reg [3:0] \$40 ;
   wire \$400 ;
   wire \$401 ;
   wire \$402 ;
@@ -16090,7 +16078,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$407 ;
   wire \$408 ;
   wire \$409 ;
-  wire \$41 ;
+  wire [6:0] \$41 ;
   wire \$410 ;
   wire \$411 ;
   wire \$412 ;
@@ -16101,7 +16089,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$417 ;
   wire \$418 ;
   wire \$419 ;
-  wire [6:0] \$42 ;
+  wire \$42 ;
   wire \$420 ;
   wire \$421 ;
   wire \$422 ;
@@ -16134,7 +16122,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$447 ;
   wire \$448 ;
   wire \$449 ;
-  wire \$45 ;
+  wire [7:0] \$45 ;
   wire \$450 ;
   wire \$451 ;
   wire \$452 ;
@@ -16145,7 +16133,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$457 ;
   wire \$458 ;
   wire \$459 ;
-  wire [2:0] \$46 ;
+  wire \$46 ;
   wire \$460 ;
   wire \$461 ;
   wire \$462 ;
@@ -16178,7 +16166,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$487 ;
   wire \$488 ;
   wire \$489 ;
-  wire [1:0] \$49 ;
+  wire \$49 ;
   wire \$490 ;
   wire \$491 ;
   wire \$492 ;
@@ -16190,7 +16178,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$498 ;
   wire \$499 ;
   wire \$5 ;
-  wire [7:0] \$50 ;
+  wire \$50 ;
   wire \$500 ;
   wire \$501 ;
   wire \$502 ;
@@ -16201,7 +16189,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$507 ;
   wire \$508 ;
   wire \$509 ;
-  wire [6:0] \$51 ;
+  wire \$51 ;
   wire \$510 ;
   wire \$511 ;
   wire \$512 ;
@@ -16252,7 +16240,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$553 ;
   wire \$554 ;
   wire \$555 ;
-  wire [39:0] \$556 ;
+  wire \$556 ;
   wire \$557 ;
   wire \$558 ;
   wire \$559 ;
@@ -16265,36 +16253,48 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$565 ;
   wire \$566 ;
   wire \$567 ;
-  wire \$568 ;
-  reg \$569 ;
+  wire [39:0] \$568 ;
+  wire \$569 ;
   wire \$57 ;
-  reg \$570 ;
-  reg [15:0] \$571 ;
-  reg \$572 ;
-  reg [6:0] \$573 ;
-  reg \$574 ;
-  reg \$575 ;
-  reg \$576 ;
-  reg \$577 ;
-  reg \$578 ;
-  reg [2:0] \$579 ;
+  wire \$570 ;
+  wire \$571 ;
+  wire \$572 ;
+  wire \$573 ;
+  wire \$574 ;
+  wire \$575 ;
+  wire \$576 ;
+  wire \$577 ;
+  wire \$578 ;
+  wire \$579 ;
   wire \$58 ;
-  reg \$580 ;
-  reg [15:0] \$581 ;
+  wire \$580 ;
+  reg \$581 ;
   reg \$582 ;
-  reg \$583 ;
-  reg [54:0] \$584 ;
-  reg [1:0] \$585 ;
-  reg [1:0] \$586 ;
-  reg [39:0] \$587 ;
-  reg [5:0] \$588 ;
-  reg [39:0] \$589 ;
-  wire \$59 ;
-  wire [6:0] \$6 ;
+  reg [15:0] \$583 ;
+  reg \$584 ;
+  reg [6:0] \$585 ;
+  reg \$586 ;
+  reg \$587 ;
+  reg \$588 ;
+  reg \$589 ;
+  wire [2:0] \$59 ;
+  reg \$590 ;
+  reg [2:0] \$591 ;
+  reg \$592 ;
+  reg [15:0] \$593 ;
+  reg \$594 ;
+  reg \$595 ;
+  reg [54:0] \$596 ;
+  reg [1:0] \$597 ;
+  reg [1:0] \$598 ;
+  reg [39:0] \$599 ;
+  wire \$6 ;
   wire \$60 ;
+  reg [5:0] \$600 ;
+  reg [39:0] \$601 ;
   wire \$61 ;
-  wire \$62 ;
-  wire \$63 ;
+  wire [1:0] \$62 ;
+  wire [7:0] \$63 ;
   wire \$64 ;
   wire \$65 ;
   wire \$66 ;
@@ -16312,7 +16312,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$77 ;
   wire \$78 ;
   wire \$79 ;
-  wire [1:0] \$8 ;
+  wire \$8 ;
   wire \$80 ;
   wire \$81 ;
   wire \$82 ;
@@ -16334,11 +16334,13 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$97 ;
   wire \$98 ;
   wire \$99 ;
+  reg advance;
   reg at_cds;
+  reg \begin ;
   input \bit ;
   wire \bit ;
-  wire \bit$11 ;
-  wire \bit$37 ;
+  wire \bit$13 ;
+  wire \bit$41 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -16369,19 +16371,27 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire [4:0] \crc_widths$3[1] ;
   wire [4:0] \crc_widths[0] ;
   wire [4:0] \crc_widths[1] ;
+  wire [36:0] current;
+  wire \current.data_at0 ;
+  wire [6:0] \current.data_end_m1 ;
+  wire [6:0] \current.data_end_p1 ;
+  wire \current.lc_at0 ;
+  wire [6:0] \current.lc_end_m1 ;
+  wire [6:0] \current.nenw_end_m1 ;
+  wire [6:0] \current.word_end_m1 ;
   input [75:0] customs;
   wire [75:0] customs;
-  wire [75:0] \customs$30 ;
-  wire [37:0] \customs$30[0] ;
-  wire \customs$30[0].inverted ;
-  wire [15:0] \customs$30[0].poly ;
-  wire [15:0] \customs$30[0].start ;
-  wire [4:0] \customs$30[0].width ;
-  wire [37:0] \customs$30[1] ;
-  wire \customs$30[1].inverted ;
-  wire [15:0] \customs$30[1].poly ;
-  wire [15:0] \customs$30[1].start ;
-  wire [4:0] \customs$30[1].width ;
+  wire [75:0] \customs$35 ;
+  wire [37:0] \customs$35[0] ;
+  wire \customs$35[0].inverted ;
+  wire [15:0] \customs$35[0].poly ;
+  wire [15:0] \customs$35[0].start ;
+  wire [4:0] \customs$35[0].width ;
+  wire [37:0] \customs$35[1] ;
+  wire \customs$35[1].inverted ;
+  wire [15:0] \customs$35[1].poly ;
+  wire [15:0] \customs$35[1].start ;
+  wire [4:0] \customs$35[1].width ;
   wire [37:0] \customs[0] ;
   wire \customs[0].inverted ;
   wire [15:0] \customs[0].poly ;
@@ -16398,25 +16408,16 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   reg [39:0] data1 = 40'h0000000000;
   reg [2:0] decoder_fsm_state = 3'h0;
   reg done = 1'h0;
-  wire [73:0] ends;
-  wire [36:0] \ends[0] ;
-  wire \ends[0].data_at0 ;
-  wire [6:0] \ends[0].data_end_m1 ;
-  wire [6:0] \ends[0].data_end_p1 ;
-  wire \ends[0].lc_at0 ;
-  wire [6:0] \ends[0].lc_end_m1 ;
-  wire [6:0] \ends[0].nenw_end_m1 ;
-  wire [6:0] \ends[0].word_end_m1 ;
-  wire [36:0] \ends[1] ;
-  wire \ends[1].data_at0 ;
-  wire [6:0] \ends[1].data_end_m1 ;
-  wire [6:0] \ends[1].data_end_p1 ;
-  wire \ends[1].lc_at0 ;
-  wire [6:0] \ends[1].lc_end_m1 ;
-  wire [6:0] \ends[1].nenw_end_m1 ;
-  wire [6:0] \ends[1].word_end_m1 ;
   wire error_bit;
   wire first;
+  wire [36:0] following;
+  wire \following.data_at0 ;
+  wire [6:0] \following.data_end_m1 ;
+  wire [6:0] \following.data_end_p1 ;
+  wire \following.lc_at0 ;
+  wire [6:0] \following.lc_end_m1 ;
+  wire [6:0] \following.nenw_end_m1 ;
+  wire [6:0] \following.word_end_m1 ;
   output frame_end;
   wire frame_end;
   reg [6:0] idx = 7'h00;
@@ -16425,9 +16426,10 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
-  wire [6:0] index;
+  reg index = 1'h0;
+  wire [6:0] \index$14 ;
   (* init = 1'h0 *)
-  wire \index$40 ;
+  wire \index$44 ;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -16438,14 +16440,14 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire load_index;
   output mismatch;
   wire mismatch;
-  wire \mismatch$16 ;
+  wire \mismatch$17 ;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6807$272 ;
-  wire [2:0] \port$6807$272 ;
+  input [2:0] \port$7173$272 ;
+  wire [2:0] \port$7173$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -16470,7 +16472,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   reg stop_bit = 1'h0;
   output stopped;
   reg stopped = 1'h0;
-  reg word = 1'h0;
+  (* init = 1'h0 *)
+  wire word;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [23:0] words;
@@ -16524,625 +16527,634 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$402  = words[23] & \$401 ;
-  assign \$403  = words[22] & data1[0];
-  assign \$404  = \bit  ^ \$403 ;
-  assign \$405  = \$402  & \$404 ;
-  assign \$406  = ! idx;
-  assign \$407  = words[23] & \$406 ;
-  assign \$408  = words[22] & data1[0];
-  assign \$409  = \bit  ^ \$408 ;
-  assign \$410  = \$407  & \$409 ;
-  assign \$411  = ! idx;
-  assign \$412  = words[23] & \$411 ;
-  assign \$413  = words[22] & data1[0];
-  assign \$414  = \bit  ^ \$413 ;
-  assign \$415  = \$412  & \$414 ;
-  assign \$416  = ! idx;
-  assign \$417  = words[23] & \$416 ;
-  assign \$418  = words[22] & data1[0];
-  assign \$419  = \bit  ^ \$418 ;
-  assign \$420  = \$417  & \$419 ;
-  assign \$421  = ! idx;
-  assign \$422  = words[23] & \$421 ;
-  assign \$423  = words[22] & data1[0];
-  assign \$424  = \bit  ^ \$423 ;
-  assign \$425  = \$422  & \$424 ;
-  assign \$426  = ! idx;
-  assign \$427  = words[23] & \$426 ;
-  assign \$428  = words[22] & data1[0];
-  assign \$429  = \bit  ^ \$428 ;
-  assign \$430  = \$427  & \$429 ;
-  assign \$431  = ! idx;
-  assign \$432  = words[23] & \$431 ;
-  assign \$433  = words[22] & data1[0];
-  assign \$434  = \bit  ^ \$433 ;
-  assign \$435  = \$432  & \$434 ;
-  assign \$436  = ! idx;
-  assign \$437  = words[23] & \$436 ;
-  assign \$438  = words[22] & data1[0];
-  assign \$439  = \bit  ^ \$438 ;
-  assign \$440  = \$437  & \$439 ;
-  assign \$441  = ! idx;
-  assign \$442  = words[23] & \$441 ;
-  assign \$443  = words[22] & data1[0];
-  assign \$444  = \bit  ^ \$443 ;
-  assign \$445  = \$442  & \$444 ;
-  assign \$446  = ! idx;
-  assign \$447  = words[23] & \$446 ;
-  assign \$448  = words[22] & data1[0];
-  assign \$449  = \bit  ^ \$448 ;
-  assign \$450  = \$447  & \$449 ;
-  assign \$451  = ! idx;
-  assign \$452  = words[23] & \$451 ;
-  assign \$453  = words[22] & data1[0];
-  assign \$454  = \bit  ^ \$453 ;
-  assign \$455  = \$452  & \$454 ;
-  assign \$456  = ! idx;
-  assign \$457  = words[23] & \$456 ;
-  assign \$458  = words[22] & data1[0];
-  assign \$459  = \bit  ^ \$458 ;
-  assign \$460  = \$457  & \$459 ;
-  assign \$461  = ! idx;
-  assign \$462  = words[23] & \$461 ;
-  assign \$463  = words[22] & data1[0];
-  assign \$464  = \bit  ^ \$463 ;
-  assign \$465  = \$462  & \$464 ;
-  assign \$466  = ! idx;
-  assign \$467  = words[23] & \$466 ;
-  assign \$468  = words[22] & data1[0];
-  assign \$469  = \bit  ^ \$468 ;
-  assign \$470  = \$467  & \$469 ;
-  assign \$471  = ! idx;
-  assign \$472  = words[23] & \$471 ;
-  assign \$473  = words[22] & data1[0];
-  assign \$474  = \bit  ^ \$473 ;
-  assign \$475  = \$472  & \$474 ;
-  assign \$476  = ! idx;
-  assign \$477  = words[23] & \$476 ;
-  assign \$478  = words[22] & data1[0];
-  assign \$479  = \bit  ^ \$478 ;
-  assign \$480  = \$477  & \$479 ;
-  assign \$481  = ! idx;
-  assign \$482  = words[23] & \$481 ;
-  assign \$483  = words[22] & data1[0];
-  assign \$484  = \bit  ^ \$483 ;
-  assign \$485  = \$482  & \$484 ;
-  assign \$486  = ! idx;
-  assign \$487  = words[23] & \$486 ;
-  assign \$488  = words[22] & data1[0];
-  assign \$489  = \bit  ^ \$488 ;
-  assign \$490  = \$487  & \$489 ;
-  assign \$491  = ! idx;
-  assign \$492  = words[23] & \$491 ;
-  assign \$493  = words[22] & data1[0];
-  assign \$494  = \bit  ^ \$493 ;
-  assign \$495  = \$492  & \$494 ;
-  assign \$496  = ! idx;
-  assign \$497  = words[23] & \$496 ;
-  assign \$498  = words[22] & data1[0];
-  assign \$499  = \bit  ^ \$498 ;
-  assign \$500  = \$497  & \$499 ;
-  assign \$501  = ! idx;
-  assign \$502  = words[23] & \$501 ;
-  assign \$503  = words[22] & data1[0];
-  assign \$504  = \bit  ^ \$503 ;
-  assign \$505  = \$502  & \$504 ;
-  assign \$506  = ! idx;
-  assign \$507  = words[23] & \$506 ;
-  assign \$508  = words[22] & data1[0];
-  assign \$509  = \bit  ^ \$508 ;
-  assign \$510  = \$507  & \$509 ;
-  assign \$511  = ! idx;
-  assign \$512  = words[23] & \$511 ;
-  assign \$513  = words[22] & data1[0];
-  assign \$514  = \bit  ^ \$513 ;
-  assign \$515  = \$512  & \$514 ;
-  assign \$516  = ! idx;
-  assign \$517  = words[23] & \$516 ;
-  assign \$518  = words[22] & data1[0];
-  assign \$519  = \bit  ^ \$518 ;
-  assign \$520  = \$517  & \$519 ;
-  assign \$521  = ! idx;
-  assign \$522  = words[23] & \$521 ;
-  assign \$523  = words[22] & data1[0];
-  assign \$524  = \bit  ^ \$523 ;
-  assign \$525  = \$522  & \$524 ;
-  assign \$526  = ! idx;
-  assign \$527  = words[23] & \$526 ;
-  assign \$528  = words[22] & data1[0];
-  assign \$529  = \bit  ^ \$528 ;
-  assign \$530  = \$527  & \$529 ;
-  assign \$531  = ! idx;
-  assign \$532  = words[23] & \$531 ;
-  assign \$533  = words[22] & data1[0];
-  assign \$534  = \bit  ^ \$533 ;
-  assign \$535  = \$532  & \$534 ;
-  assign \$536  = ! idx;
-  assign \$537  = words[23] & \$536 ;
-  assign \$538  = words[22] & data1[0];
-  assign \$539  = \bit  ^ \$538 ;
-  assign \$540  = \$537  & \$539 ;
-  assign \$541  = ! idx;
-  assign \$542  = words[23] & \$541 ;
-  assign \$543  = words[22] & data1[0];
-  assign \$544  = \bit  ^ \$543 ;
-  assign \$545  = \$542  & \$544 ;
-  assign \$546  = ! idx;
-  assign \$547  = words[23] & \$546 ;
-  assign \$548  = words[22] & data1[0];
-  assign \$549  = \bit  ^ \$548 ;
-  assign \$550  = \$547  & \$549 ;
-  assign \$551  = ! idx;
-  assign \$552  = words[23] & \$551 ;
-  assign \$553  = words[22] & data1[0];
-  assign \$554  = \bit  ^ \$553 ;
-  assign \$555  = \$552  & \$554 ;
-  assign \$556  = { data1[38:0], \$355  } | { \$555 , \$550 , \$545 , \$540 , \$535 , \$530 , \$525 , \$520 , \$515 , \$510 , \$505 , \$500 , \$495 , \$490 , \$485 , \$480 , \$475 , \$470 , \$465 , \$460 , \$455 , \$450 , \$445 , \$440 , \$435 , \$430 , \$425 , \$420 , \$415 , \$410 , \$405 , \$400 , \$395 , \$390 , \$385 , \$380 , \$375 , \$370 , \$365 , \$360  };
-  assign \$557  = ~ words[18];
-  assign \$559  = in_word & \$558 ;
-  assign \$560  = idx == words[17:12];
-  assign \$561  = \$559  & \$560 ;
-  assign \$563  = in_word & \$562 ;
-  assign \$564  = idx == ends[43:37];
-  assign \$565  = \$563  & \$564 ;
-  assign \$566  = in_word & in_top;
-  assign \$567  = words[10] & data0[0];
-  assign \$568  = \bit  ^ \$567 ;
+  assign \$391  = \bit  ^ \$390 ;
+  assign \$392  = \$389  & \$391 ;
+  assign \$393  = ! idx;
+  assign \$394  = words[23] & \$393 ;
+  assign \$395  = words[22] & data1[0];
+  assign \$396  = \bit  ^ \$395 ;
+  assign \$397  = \$394  & \$396 ;
+  assign \$398  = ! idx;
+  assign \$399  = words[23] & \$398 ;
+  assign \$400  = words[22] & data1[0];
+  assign \$401  = \bit  ^ \$400 ;
+  assign \$402  = \$399  & \$401 ;
+  assign \$403  = ! idx;
+  assign \$404  = words[23] & \$403 ;
+  assign \$405  = words[22] & data1[0];
+  assign \$406  = \bit  ^ \$405 ;
+  assign \$407  = \$404  & \$406 ;
+  assign \$408  = ! idx;
+  assign \$409  = words[23] & \$408 ;
+  assign \$410  = words[22] & data1[0];
+  assign \$411  = \bit  ^ \$410 ;
+  assign \$412  = \$409  & \$411 ;
+  assign \$413  = ! idx;
+  assign \$414  = words[23] & \$413 ;
+  assign \$415  = words[22] & data1[0];
+  assign \$416  = \bit  ^ \$415 ;
+  assign \$417  = \$414  & \$416 ;
+  assign \$418  = ! idx;
+  assign \$419  = words[23] & \$418 ;
+  assign \$420  = words[22] & data1[0];
+  assign \$421  = \bit  ^ \$420 ;
+  assign \$422  = \$419  & \$421 ;
+  assign \$423  = ! idx;
+  assign \$424  = words[23] & \$423 ;
+  assign \$425  = words[22] & data1[0];
+  assign \$426  = \bit  ^ \$425 ;
+  assign \$427  = \$424  & \$426 ;
+  assign \$428  = ! idx;
+  assign \$429  = words[23] & \$428 ;
+  assign \$430  = words[22] & data1[0];
+  assign \$431  = \bit  ^ \$430 ;
+  assign \$432  = \$429  & \$431 ;
+  assign \$433  = ! idx;
+  assign \$434  = words[23] & \$433 ;
+  assign \$435  = words[22] & data1[0];
+  assign \$436  = \bit  ^ \$435 ;
+  assign \$437  = \$434  & \$436 ;
+  assign \$438  = ! idx;
+  assign \$439  = words[23] & \$438 ;
+  assign \$440  = words[22] & data1[0];
+  assign \$441  = \bit  ^ \$440 ;
+  assign \$442  = \$439  & \$441 ;
+  assign \$443  = ! idx;
+  assign \$444  = words[23] & \$443 ;
+  assign \$445  = words[22] & data1[0];
+  assign \$446  = \bit  ^ \$445 ;
+  assign \$447  = \$444  & \$446 ;
+  assign \$448  = ! idx;
+  assign \$449  = words[23] & \$448 ;
+  assign \$450  = words[22] & data1[0];
+  assign \$451  = \bit  ^ \$450 ;
+  assign \$452  = \$449  & \$451 ;
+  assign \$453  = ! idx;
+  assign \$454  = words[23] & \$453 ;
+  assign \$455  = words[22] & data1[0];
+  assign \$456  = \bit  ^ \$455 ;
+  assign \$457  = \$454  & \$456 ;
+  assign \$458  = ! idx;
+  assign \$459  = words[23] & \$458 ;
+  assign \$460  = words[22] & data1[0];
+  assign \$461  = \bit  ^ \$460 ;
+  assign \$462  = \$459  & \$461 ;
+  assign \$463  = ! idx;
+  assign \$464  = words[23] & \$463 ;
+  assign \$465  = words[22] & data1[0];
+  assign \$466  = \bit  ^ \$465 ;
+  assign \$467  = \$464  & \$466 ;
+  assign \$468  = ! idx;
+  assign \$469  = words[23] & \$468 ;
+  assign \$470  = words[22] & data1[0];
+  assign \$471  = \bit  ^ \$470 ;
+  assign \$472  = \$469  & \$471 ;
+  assign \$473  = ! idx;
+  assign \$474  = words[23] & \$473 ;
+  assign \$475  = words[22] & data1[0];
+  assign \$476  = \bit  ^ \$475 ;
+  assign \$477  = \$474  & \$476 ;
+  assign \$478  = ! idx;
+  assign \$479  = words[23] & \$478 ;
+  assign \$480  = words[22] & data1[0];
+  assign \$481  = \bit  ^ \$480 ;
+  assign \$482  = \$479  & \$481 ;
+  assign \$483  = ! idx;
+  assign \$484  = words[23] & \$483 ;
+  assign \$485  = words[22] & data1[0];
+  assign \$486  = \bit  ^ \$485 ;
+  assign \$487  = \$484  & \$486 ;
+  assign \$488  = ! idx;
+  assign \$489  = words[23] & \$488 ;
+  assign \$490  = words[22] & data1[0];
+  assign \$491  = \bit  ^ \$490 ;
+  assign \$492  = \$489  & \$491 ;
+  assign \$493  = ! idx;
+  assign \$494  = words[23] & \$493 ;
+  assign \$495  = words[22] & data1[0];
+  assign \$496  = \bit  ^ \$495 ;
+  assign \$497  = \$494  & \$496 ;
+  assign \$498  = ! idx;
+  assign \$499  = words[23] & \$498 ;
+  assign \$500  = words[22] & data1[0];
+  assign \$501  = \bit  ^ \$500 ;
+  assign \$502  = \$499  & \$501 ;
+  assign \$503  = ! idx;
+  assign \$504  = words[23] & \$503 ;
+  assign \$505  = words[22] & data1[0];
+  assign \$506  = \bit  ^ \$505 ;
+  assign \$507  = \$504  & \$506 ;
+  assign \$508  = ! idx;
+  assign \$509  = words[23] & \$508 ;
+  assign \$510  = words[22] & data1[0];
+  assign \$511  = \bit  ^ \$510 ;
+  assign \$512  = \$509  & \$511 ;
+  assign \$513  = ! idx;
+  assign \$514  = words[23] & \$513 ;
+  assign \$515  = words[22] & data1[0];
+  assign \$516  = \bit  ^ \$515 ;
+  assign \$517  = \$514  & \$516 ;
+  assign \$518  = ! idx;
+  assign \$519  = words[23] & \$518 ;
+  assign \$520  = words[22] & data1[0];
+  assign \$521  = \bit  ^ \$520 ;
+  assign \$522  = \$519  & \$521 ;
+  assign \$523  = ! idx;
+  assign \$524  = words[23] & \$523 ;
+  assign \$525  = words[22] & data1[0];
+  assign \$526  = \bit  ^ \$525 ;
+  assign \$527  = \$524  & \$526 ;
+  assign \$528  = ! idx;
+  assign \$529  = words[23] & \$528 ;
+  assign \$530  = words[22] & data1[0];
+  assign \$531  = \bit  ^ \$530 ;
+  assign \$532  = \$529  & \$531 ;
+  assign \$533  = ! idx;
+  assign \$534  = words[23] & \$533 ;
+  assign \$535  = words[22] & data1[0];
+  assign \$536  = \bit  ^ \$535 ;
+  assign \$537  = \$534  & \$536 ;
+  assign \$538  = ! idx;
+  assign \$539  = words[23] & \$538 ;
+  assign \$540  = words[22] & data1[0];
+  assign \$541  = \bit  ^ \$540 ;
+  assign \$542  = \$539  & \$541 ;
+  assign \$543  = ! idx;
+  assign \$544  = words[23] & \$543 ;
+  assign \$545  = words[22] & data1[0];
+  assign \$546  = \bit  ^ \$545 ;
+  assign \$547  = \$544  & \$546 ;
+  assign \$548  = ! idx;
+  assign \$549  = words[23] & \$548 ;
+  assign \$550  = words[22] & data1[0];
+  assign \$551  = \bit  ^ \$550 ;
+  assign \$552  = \$549  & \$551 ;
+  assign \$553  = ! idx;
+  assign \$554  = words[23] & \$553 ;
+  assign \$555  = words[22] & data1[0];
+  assign \$556  = \bit  ^ \$555 ;
+  assign \$557  = \$554  & \$556 ;
+  assign \$558  = ! idx;
+  assign \$559  = words[23] & \$558 ;
+  assign \$560  = words[22] & data1[0];
+  assign \$561  = \bit  ^ \$560 ;
+  assign \$562  = \$559  & \$561 ;
+  assign \$563  = ! idx;
+  assign \$564  = words[23] & \$563 ;
+  assign \$565  = words[22] & data1[0];
+  assign \$566  = \bit  ^ \$565 ;
+  assign \$567  = \$564  & \$566 ;
+  assign \$568  = { data1[38:0], \$367  } | { \$567 , \$562 , \$557 , \$552 , \$547 , \$542 , \$537 , \$532 , \$527 , \$522 , \$517 , \$512 , \$507 , \$502 , \$497 , \$492 , \$487 , \$482 , \$477 , \$472 , \$467 , \$462 , \$457 , \$452 , \$447 , \$442 , \$437 , \$432 , \$427 , \$422 , \$417 , \$412 , \$407 , \$402 , \$397 , \$392 , \$387 , \$382 , \$377 , \$372  };
+  assign \$569  = ~ words[18];
+  assign \$571  = in_word & \$570 ;
+  assign \$572  = idx == words[17:12];
+  assign \$573  = \$571  & \$572 ;
+  assign \$575  = in_word & \$574 ;
+  assign \$576  = idx == current[6:0];
+  assign \$577  = \$575  & \$576 ;
+  assign \$578  = in_word & in_top;
+  assign \$579  = words[10] & data0[0];
+  assign \$580  = \bit  ^ \$579 ;
   always @(posedge clk)
-    done <= \$569 ;
+    done <= \$581 ;
   always @(posedge clk)
-    stopped <= \$570 ;
+    stopped <= \$582 ;
   always @(posedge clk)
-    slots <= \$571 ;
+    slots <= \$583 ;
   always @(posedge clk)
-    slots_full <= \$572 ;
+    slots_full <= \$584 ;
   always @(posedge clk)
-    idx <= \$573 ;
+    idx <= \$585 ;
   always @(posedge clk)
-    in_data <= \$574 ;
+    in_data <= \$586 ;
   always @(posedge clk)
-    in_lc <= \$575 ;
+    in_lc <= \$587 ;
   always @(posedge clk)
-    in_crc <= \$576 ;
+    in_crc <= \$588 ;
   always @(posedge clk)
-    in_top <= \$577 ;
+    in_top <= \$589 ;
   always @(posedge clk)
-    word <= \$578 ;
+    index <= \$590 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$579 ;
+    decoder_fsm_state <= \$591 ;
   always @(posedge clk)
-    started <= \$580 ;
+    started <= \$592 ;
   always @(posedge clk)
-    start_slot <= \$581 ;
+    start_slot <= \$593 ;
   always @(posedge clk)
-    cds <= \$582 ;
+    cds <= \$594 ;
   always @(posedge clk)
-    stop_bit <= \$583 ;
+    stop_bit <= \$595 ;
   always @(posedge clk)
-    data0 <= \$584 ;
+    data0 <= \$596 ;
   always @(posedge clk)
-    ne <= \$585 ;
+    ne <= \$597 ;
   always @(posedge clk)
-    nw <= \$586 ;
+    nw <= \$598 ;
   always @(posedge clk)
-    data1 <= \$587 ;
+    data1 <= \$599 ;
   always @(posedge clk)
-    lc <= \$588 ;
+    lc <= \$600 ;
   always @(posedge clk)
-    cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6807$272 [0];
+    cpw_top <= \$601 ;
+  assign error_bit = ssi & \port$7173$272 [0];
   assign frame_end = ssi ? stopped : done;
-  assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
+  assign \$2  = idx == current[34:28];
+  assign \$3  = word_count - 1'h1;
+  assign \$4  = index == \$3 ;
   assign first = in_word & ssi;
   assign lc_load = in_word & in_lc;
-  assign \$2  = word ? ends[71:65] : ends[34:28];
-  assign \$3  = idx == \$2 ;
-  assign \$4  = in_word & \$3 ;
-  assign load = at_cds | \$4 ;
-  assign \$5  = ~ in_crc;
-  assign \cover  = in_word & \$5 ;
+  assign \$5  = idx == current[34:28];
+  assign \$6  = in_word & \$5 ;
+  assign load = at_cds | \$6 ;
+  assign \$7  = ~ in_crc;
+  assign \cover  = in_word & \$7 ;
   assign check = in_word & in_crc;
-  assign \$6  = word ? ends[71:65] : ends[34:28];
-  assign \$7  = idx == \$6 ;
-  assign last = in_word & \$7 ;
-  assign \$8  = word + 1'h1;
-  assign \$9  = at_cds ? 2'h0 : \$8 ;
-  assign \$10  = ! decoder_fsm_state;
-  assign \$11  = decoder_fsm_state == 1'h1;
-  assign \$12  = decoder_fsm_state == 2'h2;
-  assign \$13  = decoder_fsm_state == 2'h3;
-  assign \$14  = decoder_fsm_state == 3'h4;
-  assign \$15  = decoder_fsm_state == 3'h5;
-  assign \$16  = decoder_fsm_state == 3'h6;
-  assign \$17  = ~ slots_full;
-  assign \$18  = sample & \$17 ;
-  assign \$19  = slots + 1'h1;
-  assign \$20  = slots == 16'hfffe;
-  assign \$21  = sample & \bit ;
-  assign \$22  = | words[17:12];
-  assign \$23  = | words[17:12];
-  assign \$24  = idx + 1'h1;
-  assign \$25  = word ? ends[50:44] : ends[13:7];
-  assign \$26  = idx != \$25 ;
-  assign \$27  = in_data & \$26 ;
-  assign \$28  = word ? ends[57:51] : ends[20:14];
-  assign \$29  = idx == \$28 ;
-  assign \$30  = in_lc | \$29 ;
-  assign \$31  = word ? ends[64:58] : ends[27:21];
-  assign \$32  = idx != \$31 ;
-  assign \$33  = \$30  & \$32 ;
-  assign \$34  = word ? ends[64:58] : ends[27:21];
-  assign \$35  = idx == \$34 ;
-  assign \$36  = in_crc | \$35 ;
-  assign \$37  = word ? ends[71:65] : ends[34:28];
-  assign \$38  = idx != \$37 ;
-  assign \$39  = \$36  & \$38 ;
-  assign \$40  = idx != ends[50:44];
-  assign \$41  = in_top & \$40 ;
-  assign \$42  = word ? ends[71:65] : ends[34:28];
-  assign \$43  = idx == \$42 ;
-  assign \$46  = word_count - 1'h1;
-  assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6807$272 [2];
-  assign \$49  = word + 1'h1;
-  assign \$50  = idx + 1'h1;
-  assign \$51  = word ? ends[71:65] : ends[34:28];
-  assign \$52  = idx == \$51 ;
-  assign \$53  = ! word;
-  assign \$54  = in_word & \$53 ;
-  assign \$55  = \$54  & in_data;
-  assign \$56  = words[10] & data0[0];
-  assign \$57  = \bit  ^ \$56 ;
-  assign \$58  = ! idx;
-  assign \$59  = words[11] & \$58 ;
-  assign \$60  = words[10] & data0[0];
-  assign \$61  = \bit  ^ \$60 ;
-  assign \$62  = \$59  & \$61 ;
-  assign \$63  = ! idx;
-  assign \$64  = words[11] & \$63 ;
-  assign \$65  = words[10] & data0[0];
-  assign \$66  = \bit  ^ \$65 ;
-  assign \$67  = \$64  & \$66 ;
-  assign \$68  = ! idx;
-  assign \$69  = words[11] & \$68 ;
-  assign \$70  = words[10] & data0[0];
-  assign \$71  = \bit  ^ \$70 ;
-  assign \$72  = \$69  & \$71 ;
-  assign \$73  = ! idx;
-  assign \$74  = words[11] & \$73 ;
-  assign \$75  = words[10] & data0[0];
-  assign \$76  = \bit  ^ \$75 ;
-  assign \$77  = \$74  & \$76 ;
-  assign \$78  = ! idx;
-  assign \$79  = words[11] & \$78 ;
-  assign \$80  = words[10] & data0[0];
-  assign \$81  = \bit  ^ \$80 ;
-  assign \$82  = \$79  & \$81 ;
-  assign \$83  = ! idx;
-  assign \$84  = words[11] & \$83 ;
-  assign \$85  = words[10] & data0[0];
-  assign \$86  = \bit  ^ \$85 ;
-  assign \$87  = \$84  & \$86 ;
-  assign \$88  = ! idx;
-  assign \$89  = words[11] & \$88 ;
-  assign \$90  = words[10] & data0[0];
-  assign \$91  = \bit  ^ \$90 ;
-  assign \$92  = \$89  & \$91 ;
-  assign \$93  = ! idx;
-  assign \$94  = words[11] & \$93 ;
-  assign \$95  = words[10] & data0[0];
-  assign \$96  = \bit  ^ \$95 ;
-  assign \$97  = \$94  & \$96 ;
-  assign \$98  = ! idx;
-  assign \$99  = words[11] & \$98 ;
-  assign \$100  = words[10] & data0[0];
-  assign \$101  = \bit  ^ \$100 ;
-  assign \$102  = \$99  & \$101 ;
-  assign \$103  = ! idx;
-  assign \$104  = words[11] & \$103 ;
-  assign \$105  = words[10] & data0[0];
-  assign \$106  = \bit  ^ \$105 ;
-  assign \$107  = \$104  & \$106 ;
-  assign \$108  = ! idx;
-  assign \$109  = words[11] & \$108 ;
-  assign \$110  = words[10] & data0[0];
-  assign \$111  = \bit  ^ \$110 ;
-  assign \$112  = \$109  & \$111 ;
-  assign \$113  = ! idx;
-  assign \$114  = words[11] & \$113 ;
-  assign \$115  = words[10] & data0[0];
-  assign \$116  = \bit  ^ \$115 ;
-  assign \$117  = \$114  & \$116 ;
-  assign \$118  = ! idx;
-  assign \$119  = words[11] & \$118 ;
-  assign \$120  = words[10] & data0[0];
-  assign \$121  = \bit  ^ \$120 ;
-  assign \$122  = \$119  & \$121 ;
-  assign \$123  = ! idx;
-  assign \$124  = words[11] & \$123 ;
-  assign \$125  = words[10] & data0[0];
-  assign \$126  = \bit  ^ \$125 ;
-  assign \$127  = \$124  & \$126 ;
-  assign \$128  = ! idx;
-  assign \$129  = words[11] & \$128 ;
-  assign \$130  = words[10] & data0[0];
-  assign \$131  = \bit  ^ \$130 ;
-  assign \$132  = \$129  & \$131 ;
-  assign \$133  = ! idx;
-  assign \$134  = words[11] & \$133 ;
-  assign \$135  = words[10] & data0[0];
-  assign \$136  = \bit  ^ \$135 ;
-  assign \$137  = \$134  & \$136 ;
-  assign \$138  = ! idx;
-  assign \$139  = words[11] & \$138 ;
-  assign \$140  = words[10] & data0[0];
-  assign \$141  = \bit  ^ \$140 ;
-  assign \$142  = \$139  & \$141 ;
-  assign \$143  = ! idx;
-  assign \$144  = words[11] & \$143 ;
-  assign \$145  = words[10] & data0[0];
-  assign \$146  = \bit  ^ \$145 ;
-  assign \$147  = \$144  & \$146 ;
-  assign \$148  = ! idx;
-  assign \$149  = words[11] & \$148 ;
-  assign \$150  = words[10] & data0[0];
-  assign \$151  = \bit  ^ \$150 ;
-  assign \$152  = \$149  & \$151 ;
-  assign \$153  = ! idx;
-  assign \$154  = words[11] & \$153 ;
-  assign \$155  = words[10] & data0[0];
-  assign \$156  = \bit  ^ \$155 ;
-  assign \$157  = \$154  & \$156 ;
-  assign \$158  = ! idx;
-  assign \$159  = words[11] & \$158 ;
-  assign \$160  = words[10] & data0[0];
-  assign \$161  = \bit  ^ \$160 ;
-  assign \$162  = \$159  & \$161 ;
-  assign \$163  = ! idx;
-  assign \$164  = words[11] & \$163 ;
-  assign \$165  = words[10] & data0[0];
-  assign \$166  = \bit  ^ \$165 ;
-  assign \$167  = \$164  & \$166 ;
-  assign \$168  = ! idx;
-  assign \$169  = words[11] & \$168 ;
-  assign \$170  = words[10] & data0[0];
-  assign \$171  = \bit  ^ \$170 ;
-  assign \$172  = \$169  & \$171 ;
-  assign \$173  = ! idx;
-  assign \$174  = words[11] & \$173 ;
-  assign \$175  = words[10] & data0[0];
-  assign \$176  = \bit  ^ \$175 ;
-  assign \$177  = \$174  & \$176 ;
-  assign \$178  = ! idx;
-  assign \$179  = words[11] & \$178 ;
-  assign \$180  = words[10] & data0[0];
-  assign \$181  = \bit  ^ \$180 ;
-  assign \$182  = \$179  & \$181 ;
-  assign \$183  = ! idx;
-  assign \$184  = words[11] & \$183 ;
-  assign \$185  = words[10] & data0[0];
-  assign \$186  = \bit  ^ \$185 ;
-  assign \$187  = \$184  & \$186 ;
-  assign \$188  = ! idx;
-  assign \$189  = words[11] & \$188 ;
-  assign \$190  = words[10] & data0[0];
-  assign \$191  = \bit  ^ \$190 ;
-  assign \$192  = \$189  & \$191 ;
-  assign \$193  = ! idx;
-  assign \$194  = words[11] & \$193 ;
-  assign \$195  = words[10] & data0[0];
-  assign \$196  = \bit  ^ \$195 ;
-  assign \$197  = \$194  & \$196 ;
-  assign \$198  = ! idx;
-  assign \$199  = words[11] & \$198 ;
-  assign \$200  = words[10] & data0[0];
-  assign \$201  = \bit  ^ \$200 ;
-  assign \$202  = \$199  & \$201 ;
-  assign \$203  = ! idx;
-  assign \$204  = words[11] & \$203 ;
-  assign \$205  = words[10] & data0[0];
-  assign \$206  = \bit  ^ \$205 ;
-  assign \$207  = \$204  & \$206 ;
-  assign \$208  = ! idx;
-  assign \$209  = words[11] & \$208 ;
-  assign \$210  = words[10] & data0[0];
-  assign \$211  = \bit  ^ \$210 ;
-  assign \$212  = \$209  & \$211 ;
-  assign \$213  = ! idx;
-  assign \$214  = words[11] & \$213 ;
-  assign \$215  = words[10] & data0[0];
-  assign \$216  = \bit  ^ \$215 ;
-  assign \$217  = \$214  & \$216 ;
-  assign \$218  = ! idx;
-  assign \$219  = words[11] & \$218 ;
-  assign \$220  = words[10] & data0[0];
-  assign \$221  = \bit  ^ \$220 ;
-  assign \$222  = \$219  & \$221 ;
-  assign \$223  = ! idx;
-  assign \$224  = words[11] & \$223 ;
-  assign \$225  = words[10] & data0[0];
-  assign \$226  = \bit  ^ \$225 ;
-  assign \$227  = \$224  & \$226 ;
-  assign \$228  = ! idx;
-  assign \$229  = words[11] & \$228 ;
-  assign \$230  = words[10] & data0[0];
-  assign \$231  = \bit  ^ \$230 ;
-  assign \$232  = \$229  & \$231 ;
-  assign \$233  = ! idx;
-  assign \$234  = words[11] & \$233 ;
-  assign \$235  = words[10] & data0[0];
-  assign \$236  = \bit  ^ \$235 ;
-  assign \$237  = \$234  & \$236 ;
-  assign \$238  = ! idx;
-  assign \$239  = words[11] & \$238 ;
-  assign \$240  = words[10] & data0[0];
-  assign \$241  = \bit  ^ \$240 ;
-  assign \$242  = \$239  & \$241 ;
-  assign \$243  = ! idx;
-  assign \$244  = words[11] & \$243 ;
-  assign \$245  = words[10] & data0[0];
-  assign \$246  = \bit  ^ \$245 ;
-  assign \$247  = \$244  & \$246 ;
-  assign \$248  = ! idx;
-  assign \$249  = words[11] & \$248 ;
-  assign \$250  = words[10] & data0[0];
-  assign \$251  = \bit  ^ \$250 ;
-  assign \$252  = \$249  & \$251 ;
-  assign \$253  = ! idx;
-  assign \$254  = words[11] & \$253 ;
-  assign \$255  = words[10] & data0[0];
-  assign \$256  = \bit  ^ \$255 ;
-  assign \$257  = \$254  & \$256 ;
-  assign \$258  = ! idx;
-  assign \$259  = words[11] & \$258 ;
-  assign \$260  = words[10] & data0[0];
-  assign \$261  = \bit  ^ \$260 ;
-  assign \$262  = \$259  & \$261 ;
-  assign \$263  = ! idx;
-  assign \$264  = words[11] & \$263 ;
-  assign \$265  = words[10] & data0[0];
-  assign \$266  = \bit  ^ \$265 ;
-  assign \$267  = \$264  & \$266 ;
-  assign \$268  = ! idx;
-  assign \$269  = words[11] & \$268 ;
-  assign \$270  = words[10] & data0[0];
-  assign \$271  = \bit  ^ \$270 ;
-  assign \$272  = \$269  & \$271 ;
-  assign \$273  = ! idx;
-  assign \$274  = words[11] & \$273 ;
-  assign \$275  = words[10] & data0[0];
-  assign \$276  = \bit  ^ \$275 ;
-  assign \$277  = \$274  & \$276 ;
-  assign \$278  = ! idx;
-  assign \$279  = words[11] & \$278 ;
-  assign \$280  = words[10] & data0[0];
-  assign \$281  = \bit  ^ \$280 ;
-  assign \$282  = \$279  & \$281 ;
-  assign \$283  = ! idx;
-  assign \$284  = words[11] & \$283 ;
-  assign \$285  = words[10] & data0[0];
-  assign \$286  = \bit  ^ \$285 ;
-  assign \$287  = \$284  & \$286 ;
-  assign \$288  = ! idx;
-  assign \$289  = words[11] & \$288 ;
-  assign \$290  = words[10] & data0[0];
-  assign \$291  = \bit  ^ \$290 ;
-  assign \$292  = \$289  & \$291 ;
-  assign \$293  = ! idx;
-  assign \$294  = words[11] & \$293 ;
-  assign \$295  = words[10] & data0[0];
-  assign \$296  = \bit  ^ \$295 ;
-  assign \$297  = \$294  & \$296 ;
-  assign \$298  = ! idx;
-  assign \$299  = words[11] & \$298 ;
-  assign \$300  = words[10] & data0[0];
-  assign \$301  = \bit  ^ \$300 ;
-  assign \$302  = \$299  & \$301 ;
-  assign \$303  = ! idx;
-  assign \$304  = words[11] & \$303 ;
-  assign \$305  = words[10] & data0[0];
-  assign \$306  = \bit  ^ \$305 ;
-  assign \$307  = \$304  & \$306 ;
-  assign \$308  = ! idx;
-  assign \$309  = words[11] & \$308 ;
-  assign \$310  = words[10] & data0[0];
-  assign \$311  = \bit  ^ \$310 ;
-  assign \$312  = \$309  & \$311 ;
-  assign \$313  = ! idx;
-  assign \$314  = words[11] & \$313 ;
-  assign \$315  = words[10] & data0[0];
-  assign \$316  = \bit  ^ \$315 ;
-  assign \$317  = \$314  & \$316 ;
-  assign \$318  = ! idx;
-  assign \$319  = words[11] & \$318 ;
-  assign \$320  = words[10] & data0[0];
-  assign \$321  = \bit  ^ \$320 ;
-  assign \$322  = \$319  & \$321 ;
-  assign \$323  = ! idx;
-  assign \$324  = words[11] & \$323 ;
-  assign \$325  = words[10] & data0[0];
-  assign \$326  = \bit  ^ \$325 ;
-  assign \$327  = \$324  & \$326 ;
-  assign \$328  = ! idx;
-  assign \$329  = words[11] & \$328 ;
-  assign \$330  = words[10] & data0[0];
-  assign \$331  = \bit  ^ \$330 ;
-  assign \$332  = \$329  & \$331 ;
-  assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
-  assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6807$272 [0];
-  assign \$336  = ~ \$335 ;
-  assign \$337  = \$334  & \$336 ;
-  assign \$338  = ! word;
-  assign \$339  = in_word & \$338 ;
-  assign \$340  = idx == words[5:0];
-  assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6807$272 [0];
-  assign \$343  = ~ \port$6807$272 [1];
-  assign \$344  = \$342  & \$343 ;
-  assign \$345  = \bit  ^ \$344 ;
+  assign \$8  = idx == current[34:28];
+  assign last = in_word & \$8 ;
+  assign \$9  = index + 1'h1;
+  assign \$10  = at_cds ? 2'h0 : \$9 ;
+  assign \$11  = ! decoder_fsm_state;
+  assign \$12  = decoder_fsm_state == 1'h1;
+  assign \$13  = decoder_fsm_state == 2'h2;
+  assign \$14  = decoder_fsm_state == 2'h3;
+  assign \$15  = decoder_fsm_state == 3'h4;
+  assign \$16  = decoder_fsm_state == 3'h5;
+  assign \$17  = decoder_fsm_state == 3'h6;
+  assign \$18  = ~ slots_full;
+  assign \$19  = sample & \$18 ;
+  assign \$20  = slots + 1'h1;
+  assign \$21  = slots == 16'hfffe;
+  assign \$22  = sample & \bit ;
+  assign \$23  = | words[5:0];
+  assign \$24  = ssi & \port$7173$272 [0];
+  assign \$26  = words[5:0] + \$25 ;
+  assign \$27  = ! \$26 ;
+  assign \$28  = ssi & \port$7173$272 [0];
+  assign \$30  = words[5:0] + \$29 ;
+  assign \$31  = | \$30 ;
+  assign \$32  = \$27  & \$31 ;
+  assign \$33  = | words[17:12];
+  assign \$34  = | words[5:0];
+  assign \$35  = ssi & \port$7173$272 [0];
+  assign \$37  = words[5:0] + \$36 ;
+  assign \$38  = ! \$37 ;
+  assign \$39  = ssi & \port$7173$272 [0];
+  assign \$41  = words[5:0] + \$40 ;
+  assign \$42  = | \$41 ;
+  assign \$43  = \$38  & \$42 ;
+  assign \$44  = | words[17:12];
+  assign \$45  = idx + 1'h1;
+  assign \$46  = idx != current[13:7];
+  assign \$47  = in_data & \$46 ;
+  assign \$48  = idx == current[20:14];
+  assign \$49  = in_lc | \$48 ;
+  assign \$50  = idx != current[27:21];
+  assign \$51  = \$49  & \$50 ;
+  assign \$52  = idx == current[27:21];
+  assign \$53  = in_crc | \$52 ;
+  assign \$54  = idx != current[34:28];
+  assign \$55  = \$53  & \$54 ;
+  assign \$56  = idx != following[13:7];
+  assign \$57  = in_top & \$56 ;
+  assign \$58  = idx == current[34:28];
+  assign \$59  = word_count - 1'h1;
+  assign \$60  = index == \$59 ;
+  assign \$61  = ssi & \port$7173$272 [2];
+  assign \$62  = index + 1'h1;
+  assign \$63  = idx + 1'h1;
+  assign \$64  = idx == current[34:28];
+  assign \$65  = ! index;
+  assign \$66  = in_word & \$65 ;
+  assign \$67  = \$66  & in_data;
+  assign \$68  = words[10] & data0[0];
+  assign \$69  = \bit  ^ \$68 ;
+  assign \$70  = ! idx;
+  assign \$71  = words[11] & \$70 ;
+  assign \$72  = words[10] & data0[0];
+  assign \$73  = \bit  ^ \$72 ;
+  assign \$74  = \$71  & \$73 ;
+  assign \$75  = ! idx;
+  assign \$76  = words[11] & \$75 ;
+  assign \$77  = words[10] & data0[0];
+  assign \$78  = \bit  ^ \$77 ;
+  assign \$79  = \$76  & \$78 ;
+  assign \$80  = ! idx;
+  assign \$81  = words[11] & \$80 ;
+  assign \$82  = words[10] & data0[0];
+  assign \$83  = \bit  ^ \$82 ;
+  assign \$84  = \$81  & \$83 ;
+  assign \$85  = ! idx;
+  assign \$86  = words[11] & \$85 ;
+  assign \$87  = words[10] & data0[0];
+  assign \$88  = \bit  ^ \$87 ;
+  assign \$89  = \$86  & \$88 ;
+  assign \$90  = ! idx;
+  assign \$91  = words[11] & \$90 ;
+  assign \$92  = words[10] & data0[0];
+  assign \$93  = \bit  ^ \$92 ;
+  assign \$94  = \$91  & \$93 ;
+  assign \$95  = ! idx;
+  assign \$96  = words[11] & \$95 ;
+  assign \$97  = words[10] & data0[0];
+  assign \$98  = \bit  ^ \$97 ;
+  assign \$99  = \$96  & \$98 ;
+  assign \$100  = ! idx;
+  assign \$101  = words[11] & \$100 ;
+  assign \$102  = words[10] & data0[0];
+  assign \$103  = \bit  ^ \$102 ;
+  assign \$104  = \$101  & \$103 ;
+  assign \$105  = ! idx;
+  assign \$106  = words[11] & \$105 ;
+  assign \$107  = words[10] & data0[0];
+  assign \$108  = \bit  ^ \$107 ;
+  assign \$109  = \$106  & \$108 ;
+  assign \$110  = ! idx;
+  assign \$111  = words[11] & \$110 ;
+  assign \$112  = words[10] & data0[0];
+  assign \$113  = \bit  ^ \$112 ;
+  assign \$114  = \$111  & \$113 ;
+  assign \$115  = ! idx;
+  assign \$116  = words[11] & \$115 ;
+  assign \$117  = words[10] & data0[0];
+  assign \$118  = \bit  ^ \$117 ;
+  assign \$119  = \$116  & \$118 ;
+  assign \$120  = ! idx;
+  assign \$121  = words[11] & \$120 ;
+  assign \$122  = words[10] & data0[0];
+  assign \$123  = \bit  ^ \$122 ;
+  assign \$124  = \$121  & \$123 ;
+  assign \$125  = ! idx;
+  assign \$126  = words[11] & \$125 ;
+  assign \$127  = words[10] & data0[0];
+  assign \$128  = \bit  ^ \$127 ;
+  assign \$129  = \$126  & \$128 ;
+  assign \$130  = ! idx;
+  assign \$131  = words[11] & \$130 ;
+  assign \$132  = words[10] & data0[0];
+  assign \$133  = \bit  ^ \$132 ;
+  assign \$134  = \$131  & \$133 ;
+  assign \$135  = ! idx;
+  assign \$136  = words[11] & \$135 ;
+  assign \$137  = words[10] & data0[0];
+  assign \$138  = \bit  ^ \$137 ;
+  assign \$139  = \$136  & \$138 ;
+  assign \$140  = ! idx;
+  assign \$141  = words[11] & \$140 ;
+  assign \$142  = words[10] & data0[0];
+  assign \$143  = \bit  ^ \$142 ;
+  assign \$144  = \$141  & \$143 ;
+  assign \$145  = ! idx;
+  assign \$146  = words[11] & \$145 ;
+  assign \$147  = words[10] & data0[0];
+  assign \$148  = \bit  ^ \$147 ;
+  assign \$149  = \$146  & \$148 ;
+  assign \$150  = ! idx;
+  assign \$151  = words[11] & \$150 ;
+  assign \$152  = words[10] & data0[0];
+  assign \$153  = \bit  ^ \$152 ;
+  assign \$154  = \$151  & \$153 ;
+  assign \$155  = ! idx;
+  assign \$156  = words[11] & \$155 ;
+  assign \$157  = words[10] & data0[0];
+  assign \$158  = \bit  ^ \$157 ;
+  assign \$159  = \$156  & \$158 ;
+  assign \$160  = ! idx;
+  assign \$161  = words[11] & \$160 ;
+  assign \$162  = words[10] & data0[0];
+  assign \$163  = \bit  ^ \$162 ;
+  assign \$164  = \$161  & \$163 ;
+  assign \$165  = ! idx;
+  assign \$166  = words[11] & \$165 ;
+  assign \$167  = words[10] & data0[0];
+  assign \$168  = \bit  ^ \$167 ;
+  assign \$169  = \$166  & \$168 ;
+  assign \$170  = ! idx;
+  assign \$171  = words[11] & \$170 ;
+  assign \$172  = words[10] & data0[0];
+  assign \$173  = \bit  ^ \$172 ;
+  assign \$174  = \$171  & \$173 ;
+  assign \$175  = ! idx;
+  assign \$176  = words[11] & \$175 ;
+  assign \$177  = words[10] & data0[0];
+  assign \$178  = \bit  ^ \$177 ;
+  assign \$179  = \$176  & \$178 ;
+  assign \$180  = ! idx;
+  assign \$181  = words[11] & \$180 ;
+  assign \$182  = words[10] & data0[0];
+  assign \$183  = \bit  ^ \$182 ;
+  assign \$184  = \$181  & \$183 ;
+  assign \$185  = ! idx;
+  assign \$186  = words[11] & \$185 ;
+  assign \$187  = words[10] & data0[0];
+  assign \$188  = \bit  ^ \$187 ;
+  assign \$189  = \$186  & \$188 ;
+  assign \$190  = ! idx;
+  assign \$191  = words[11] & \$190 ;
+  assign \$192  = words[10] & data0[0];
+  assign \$193  = \bit  ^ \$192 ;
+  assign \$194  = \$191  & \$193 ;
+  assign \$195  = ! idx;
+  assign \$196  = words[11] & \$195 ;
+  assign \$197  = words[10] & data0[0];
+  assign \$198  = \bit  ^ \$197 ;
+  assign \$199  = \$196  & \$198 ;
+  assign \$200  = ! idx;
+  assign \$201  = words[11] & \$200 ;
+  assign \$202  = words[10] & data0[0];
+  assign \$203  = \bit  ^ \$202 ;
+  assign \$204  = \$201  & \$203 ;
+  assign \$205  = ! idx;
+  assign \$206  = words[11] & \$205 ;
+  assign \$207  = words[10] & data0[0];
+  assign \$208  = \bit  ^ \$207 ;
+  assign \$209  = \$206  & \$208 ;
+  assign \$210  = ! idx;
+  assign \$211  = words[11] & \$210 ;
+  assign \$212  = words[10] & data0[0];
+  assign \$213  = \bit  ^ \$212 ;
+  assign \$214  = \$211  & \$213 ;
+  assign \$215  = ! idx;
+  assign \$216  = words[11] & \$215 ;
+  assign \$217  = words[10] & data0[0];
+  assign \$218  = \bit  ^ \$217 ;
+  assign \$219  = \$216  & \$218 ;
+  assign \$220  = ! idx;
+  assign \$221  = words[11] & \$220 ;
+  assign \$222  = words[10] & data0[0];
+  assign \$223  = \bit  ^ \$222 ;
+  assign \$224  = \$221  & \$223 ;
+  assign \$225  = ! idx;
+  assign \$226  = words[11] & \$225 ;
+  assign \$227  = words[10] & data0[0];
+  assign \$228  = \bit  ^ \$227 ;
+  assign \$229  = \$226  & \$228 ;
+  assign \$230  = ! idx;
+  assign \$231  = words[11] & \$230 ;
+  assign \$232  = words[10] & data0[0];
+  assign \$233  = \bit  ^ \$232 ;
+  assign \$234  = \$231  & \$233 ;
+  assign \$235  = ! idx;
+  assign \$236  = words[11] & \$235 ;
+  assign \$237  = words[10] & data0[0];
+  assign \$238  = \bit  ^ \$237 ;
+  assign \$239  = \$236  & \$238 ;
+  assign \$240  = ! idx;
+  assign \$241  = words[11] & \$240 ;
+  assign \$242  = words[10] & data0[0];
+  assign \$243  = \bit  ^ \$242 ;
+  assign \$244  = \$241  & \$243 ;
+  assign \$245  = ! idx;
+  assign \$246  = words[11] & \$245 ;
+  assign \$247  = words[10] & data0[0];
+  assign \$248  = \bit  ^ \$247 ;
+  assign \$249  = \$246  & \$248 ;
+  assign \$250  = ! idx;
+  assign \$251  = words[11] & \$250 ;
+  assign \$252  = words[10] & data0[0];
+  assign \$253  = \bit  ^ \$252 ;
+  assign \$254  = \$251  & \$253 ;
+  assign \$255  = ! idx;
+  assign \$256  = words[11] & \$255 ;
+  assign \$257  = words[10] & data0[0];
+  assign \$258  = \bit  ^ \$257 ;
+  assign \$259  = \$256  & \$258 ;
+  assign \$260  = ! idx;
+  assign \$261  = words[11] & \$260 ;
+  assign \$262  = words[10] & data0[0];
+  assign \$263  = \bit  ^ \$262 ;
+  assign \$264  = \$261  & \$263 ;
+  assign \$265  = ! idx;
+  assign \$266  = words[11] & \$265 ;
+  assign \$267  = words[10] & data0[0];
+  assign \$268  = \bit  ^ \$267 ;
+  assign \$269  = \$266  & \$268 ;
+  assign \$270  = ! idx;
+  assign \$271  = words[11] & \$270 ;
+  assign \$272  = words[10] & data0[0];
+  assign \$273  = \bit  ^ \$272 ;
+  assign \$274  = \$271  & \$273 ;
+  assign \$275  = ! idx;
+  assign \$276  = words[11] & \$275 ;
+  assign \$277  = words[10] & data0[0];
+  assign \$278  = \bit  ^ \$277 ;
+  assign \$279  = \$276  & \$278 ;
+  assign \$280  = ! idx;
+  assign \$281  = words[11] & \$280 ;
+  assign \$282  = words[10] & data0[0];
+  assign \$283  = \bit  ^ \$282 ;
+  assign \$284  = \$281  & \$283 ;
+  assign \$285  = ! idx;
+  assign \$286  = words[11] & \$285 ;
+  assign \$287  = words[10] & data0[0];
+  assign \$288  = \bit  ^ \$287 ;
+  assign \$289  = \$286  & \$288 ;
+  assign \$290  = ! idx;
+  assign \$291  = words[11] & \$290 ;
+  assign \$292  = words[10] & data0[0];
+  assign \$293  = \bit  ^ \$292 ;
+  assign \$294  = \$291  & \$293 ;
+  assign \$295  = ! idx;
+  assign \$296  = words[11] & \$295 ;
+  assign \$297  = words[10] & data0[0];
+  assign \$298  = \bit  ^ \$297 ;
+  assign \$299  = \$296  & \$298 ;
+  assign \$300  = ! idx;
+  assign \$301  = words[11] & \$300 ;
+  assign \$302  = words[10] & data0[0];
+  assign \$303  = \bit  ^ \$302 ;
+  assign \$304  = \$301  & \$303 ;
+  assign \$305  = ! idx;
+  assign \$306  = words[11] & \$305 ;
+  assign \$307  = words[10] & data0[0];
+  assign \$308  = \bit  ^ \$307 ;
+  assign \$309  = \$306  & \$308 ;
+  assign \$310  = ! idx;
+  assign \$311  = words[11] & \$310 ;
+  assign \$312  = words[10] & data0[0];
+  assign \$313  = \bit  ^ \$312 ;
+  assign \$314  = \$311  & \$313 ;
+  assign \$315  = ! idx;
+  assign \$316  = words[11] & \$315 ;
+  assign \$317  = words[10] & data0[0];
+  assign \$318  = \bit  ^ \$317 ;
+  assign \$319  = \$316  & \$318 ;
+  assign \$320  = ! idx;
+  assign \$321  = words[11] & \$320 ;
+  assign \$322  = words[10] & data0[0];
+  assign \$323  = \bit  ^ \$322 ;
+  assign \$324  = \$321  & \$323 ;
+  assign \$325  = ! idx;
+  assign \$326  = words[11] & \$325 ;
+  assign \$327  = words[10] & data0[0];
+  assign \$328  = \bit  ^ \$327 ;
+  assign \$329  = \$326  & \$328 ;
+  assign \$330  = ! idx;
+  assign \$331  = words[11] & \$330 ;
+  assign \$332  = words[10] & data0[0];
+  assign \$333  = \bit  ^ \$332 ;
+  assign \$334  = \$331  & \$333 ;
+  assign \$335  = ! idx;
+  assign \$336  = words[11] & \$335 ;
+  assign \$337  = words[10] & data0[0];
+  assign \$338  = \bit  ^ \$337 ;
+  assign \$339  = \$336  & \$338 ;
+  assign \$340  = ! idx;
+  assign \$341  = words[11] & \$340 ;
+  assign \$342  = words[10] & data0[0];
+  assign \$343  = \bit  ^ \$342 ;
+  assign \$344  = \$341  & \$343 ;
+  assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ! word;
-  assign \$348  = in_word & \$347 ;
-  assign \$349  = idx == ends[6:0];
-  assign \$350  = \$348  & \$349 ;
-  assign \$352  = in_word & \$351 ;
-  assign \$353  = \$352  & in_data;
-  assign \$354  = words[22] & data1[0];
-  assign \$355  = \bit  ^ \$354 ;
-  assign \$356  = ! idx;
-  assign \$357  = words[23] & \$356 ;
-  assign \$358  = words[22] & data1[0];
-  assign \$359  = \bit  ^ \$358 ;
-  assign \$360  = \$357  & \$359 ;
-  assign \$361  = ! idx;
-  assign \$362  = words[23] & \$361 ;
-  assign \$363  = words[22] & data1[0];
-  assign \$364  = \bit  ^ \$363 ;
-  assign \$365  = \$362  & \$364 ;
-  assign \$366  = ! idx;
-  assign \$367  = words[23] & \$366 ;
-  assign \$368  = words[22] & data1[0];
-  assign \$369  = \bit  ^ \$368 ;
-  assign \$370  = \$367  & \$369 ;
-  assign \$371  = ! idx;
-  assign \$372  = words[23] & \$371 ;
-  assign \$373  = words[22] & data1[0];
-  assign \$374  = \bit  ^ \$373 ;
-  assign \$375  = \$372  & \$374 ;
-  assign \$376  = ! idx;
-  assign \$377  = words[23] & \$376 ;
-  assign \$378  = words[22] & data1[0];
-  assign \$379  = \bit  ^ \$378 ;
-  assign \$380  = \$377  & \$379 ;
-  assign \$381  = ! idx;
-  assign \$382  = words[23] & \$381 ;
-  assign \$383  = words[22] & data1[0];
-  assign \$384  = \bit  ^ \$383 ;
-  assign \$385  = \$382  & \$384 ;
-  assign \$386  = ! idx;
-  assign \$387  = words[23] & \$386 ;
-  assign \$388  = words[22] & data1[0];
-  assign \$389  = \bit  ^ \$388 ;
-  assign \$390  = \$387  & \$389 ;
-  assign \$391  = ! idx;
-  assign \$392  = words[23] & \$391 ;
-  assign \$393  = words[22] & data1[0];
-  assign \$394  = \bit  ^ \$393 ;
-  assign \$395  = \$392  & \$394 ;
-  assign \$396  = ! idx;
-  assign \$397  = words[23] & \$396 ;
-  assign \$398  = words[22] & data1[0];
-  assign \$399  = \bit  ^ \$398 ;
-  assign \$400  = \$397  & \$399 ;
-  assign \$401  = ! idx;
+  assign \$347  = ssi & \port$7173$272 [0];
+  assign \$348  = ~ \$347 ;
+  assign \$349  = \$346  & \$348 ;
+  assign \$350  = ! index;
+  assign \$351  = in_word & \$350 ;
+  assign \$352  = idx == words[5:0];
+  assign \$353  = \$351  & \$352 ;
+  assign \$354  = ssi & \port$7173$272 [0];
+  assign \$355  = ~ \port$7173$272 [1];
+  assign \$356  = \$354  & \$355 ;
+  assign \$357  = \bit  ^ \$356 ;
+  assign \$358  = ~ words[6];
+  assign \$359  = ! index;
+  assign \$360  = in_word & \$359 ;
+  assign \$361  = idx == current[6:0];
+  assign \$362  = \$360  & \$361 ;
+  assign \$364  = in_word & \$363 ;
+  assign \$365  = \$364  & in_data;
+  assign \$366  = words[22] & data1[0];
+  assign \$367  = \bit  ^ \$366 ;
+  assign \$368  = ! idx;
+  assign \$369  = words[23] & \$368 ;
+  assign \$370  = words[22] & data1[0];
+  assign \$371  = \bit  ^ \$370 ;
+  assign \$372  = \$369  & \$371 ;
+  assign \$373  = ! idx;
+  assign \$374  = words[23] & \$373 ;
+  assign \$375  = words[22] & data1[0];
+  assign \$376  = \bit  ^ \$375 ;
+  assign \$377  = \$374  & \$376 ;
+  assign \$378  = ! idx;
+  assign \$379  = words[23] & \$378 ;
+  assign \$380  = words[22] & data1[0];
+  assign \$381  = \bit  ^ \$380 ;
+  assign \$382  = \$379  & \$381 ;
+  assign \$383  = ! idx;
+  assign \$384  = words[23] & \$383 ;
+  assign \$385  = words[22] & data1[0];
+  assign \$386  = \bit  ^ \$385 ;
+  assign \$387  = \$384  & \$386 ;
+  assign \$388  = ! idx;
+  assign \$389  = words[23] & \$388 ;
+  assign \$390  = words[22] & data1[0];
   \biss_master_axil.ch0.core.decoder.copy  copy (
     .\bit (\bit ),
     .clk(clk),
     .first(first),
-    .index(index),
+    .index(current[34:28]),
     .mismatch(mismatch),
     .receiver_clear(receiver_clear),
     .rst(rst),
@@ -17156,19 +17168,23 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     .codes(codes),
     .\cover (\cover ),
     .customs(customs),
-    .index(word),
+    .index(index),
     .last(last),
     .load(load),
-    .load_index(\$9 [0]),
+    .load_index(\$10 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.decoder.field_ends  field_ends (
+    .advance(advance),
+    .\begin (\begin ),
     .clk(clk),
     .crc_widths(crc_widths),
-    .ends(ends),
+    .current(current),
     .error_bit(error_bit),
+    .following(following),
+    .index(index),
     .receiver_clear(receiver_clear),
     .rst(rst),
     .words(words)
@@ -17189,6 +17205,20 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \begin  = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \begin  = 1'h1;
+          end
+      3'h2:
+          if (sample) begin
+            \begin  = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -17197,6 +17227,26 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
           /* empty */;
       3'h1:
           in_word = sample;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    advance = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            if (\$2 ) begin
+              (* full_case = 32'd1 *)
+              if (\$4 ) begin
+              end else begin
+                advance = 1'h1;
+              end
+            end
+          end
     endcase
   end
   always @* begin
@@ -17231,7 +17281,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$569  = 1'h0;
+    \$581  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -17239,12 +17289,12 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
           /* empty */;
       3'h1:
           if (sample) begin
-            if (\$43 ) begin
-              if (\$47 ) begin
+            if (\$58 ) begin
+              if (\$60 ) begin
                 (* full_case = 32'd1 *)
-                if (\$48 ) begin
+                if (\$61 ) begin
                 end else begin
-                  \$569  = 1'h1;
+                  \$581  = 1'h1;
                 end
               end
             end
@@ -17253,21 +17303,21 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
           /* empty */;
       3'h5:
           if (sample) begin
-            if (\$52 ) begin
-              \$569  = 1'h1;
+            if (\$64 ) begin
+              \$581  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$569  = 1'h0;
+      \$581  = 1'h0;
     end
     if (rst) begin
-      \$569  = 1'h0;
+      \$581  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$570  = 1'h0;
+    \$582  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -17281,320 +17331,320 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
           /* empty */;
       3'h4:
           if (sample) begin
-            \$570  = 1'h1;
+            \$582  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$570  = 1'h0;
+      \$582  = 1'h0;
     end
     if (rst) begin
-      \$570  = 1'h0;
+      \$582  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$571  = slots;
-    if (\$18 ) begin
-      \$571  = \$19 [15:0];
+    \$583  = slots;
+    if (\$19 ) begin
+      \$583  = \$20 [15:0];
     end
     if (receiver_clear) begin
-      \$571  = 16'h0000;
+      \$583  = 16'h0000;
     end
     if (rst) begin
-      \$571  = 16'h0000;
+      \$583  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$572  = slots_full;
-    if (\$18 ) begin
-      \$572  = \$20 ;
+    \$584  = slots_full;
+    if (\$19 ) begin
+      \$584  = \$21 ;
     end
     if (receiver_clear) begin
-      \$572  = 1'h0;
+      \$584  = 1'h0;
     end
     if (rst) begin
-      \$572  = 1'h0;
+      \$584  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$573  = idx;
+    \$585  = idx;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$573  = 7'h00;
+            \$585  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$573  = 7'h00;
+            \$585  = 7'h00;
           end
       3'h1:
           if (sample) begin
-            \$573  = \$24 [6:0];
-            if (\$43 ) begin
-              \$573  = 7'h00;
+            \$585  = \$45 [6:0];
+            if (\$58 ) begin
+              \$585  = 7'h00;
             end
           end
       3'h3:
           /* empty */;
       3'h5:
           if (sample) begin
-            \$573  = \$50 [6:0];
+            \$585  = \$63 [6:0];
           end
     endcase
     if (receiver_clear) begin
-      \$573  = 7'h00;
+      \$585  = 7'h00;
     end
     if (rst) begin
-      \$573  = 7'h00;
+      \$585  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$574  = in_data;
+    \$586  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$574  = ends[35];
+            \$586  = \$23 ;
           end
       3'h2:
           if (sample) begin
-            \$574  = ends[35];
+            \$586  = \$34 ;
           end
       3'h1:
           if (sample) begin
-            \$574  = \$27 ;
-            if (\$43 ) begin
-              \$574  = \$44 ;
+            \$586  = \$47 ;
+            if (\$58 ) begin
+              \$586  = following[35];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$574  = 1'h0;
+      \$586  = 1'h0;
     end
     if (rst) begin
-      \$574  = 1'h0;
+      \$586  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$575  = in_lc;
+    \$587  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$575  = ends[36];
+            \$587  = \$32 ;
           end
       3'h2:
           if (sample) begin
-            \$575  = ends[36];
+            \$587  = \$43 ;
           end
       3'h1:
           if (sample) begin
-            \$575  = \$33 ;
-            if (\$43 ) begin
-              \$575  = \$45 ;
+            \$587  = \$51 ;
+            if (\$58 ) begin
+              \$587  = following[36];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$575  = 1'h0;
+      \$587  = 1'h0;
     end
     if (rst) begin
-      \$575  = 1'h0;
+      \$587  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$576  = in_crc;
+    \$588  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$576  = 1'h0;
+            \$588  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$576  = 1'h0;
+            \$588  = 1'h0;
           end
       3'h1:
           if (sample) begin
-            \$576  = \$39 ;
+            \$588  = \$55 ;
           end
     endcase
     if (receiver_clear) begin
-      \$576  = 1'h0;
+      \$588  = 1'h0;
     end
     if (rst) begin
-      \$576  = 1'h0;
+      \$588  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$577  = in_top;
+    \$589  = in_top;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$577  = \$22 ;
+            \$589  = \$33 ;
           end
       3'h2:
           if (sample) begin
-            \$577  = \$23 ;
+            \$589  = \$44 ;
           end
       3'h1:
           if (sample) begin
-            \$577  = \$41 ;
-            if (\$43 ) begin
-              \$577  = 1'h0;
+            \$589  = \$57 ;
+            if (\$58 ) begin
+              \$589  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$577  = 1'h0;
+      \$589  = 1'h0;
     end
     if (rst) begin
-      \$577  = 1'h0;
+      \$589  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$578  = word;
+    \$590  = index;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$578  = 1'h0;
+            \$590  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$578  = 1'h0;
+            \$590  = 1'h0;
           end
       3'h1:
           if (sample) begin
-            if (\$43 ) begin
+            if (\$58 ) begin
               (* full_case = 32'd1 *)
-              if (\$47 ) begin
+              if (\$60 ) begin
               end else begin
-                \$578  = \$49 [0];
+                \$590  = \$62 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$578  = 1'h0;
+      \$590  = 1'h0;
     end
     if (rst) begin
-      \$578  = 1'h0;
+      \$590  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$579  = decoder_fsm_state;
+    \$591  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$579  = 3'h1;
-          end else if (\$21 ) begin
-            \$579  = 3'h2;
+            \$591  = 3'h1;
+          end else if (\$22 ) begin
+            \$591  = 3'h2;
           end
       3'h2:
           if (sample) begin
-            \$579  = 3'h1;
+            \$591  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            if (\$43 ) begin
-              if (\$47 ) begin
+            if (\$58 ) begin
+              if (\$60 ) begin
                 (* full_case = 32'd1 *)
-                if (\$48 ) begin
-                  \$579  = 3'h3;
+                if (\$61 ) begin
+                  \$591  = 3'h3;
                 end else begin
-                  \$579  = 3'h4;
+                  \$591  = 3'h4;
                 end
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$579  = 3'h5;
+            \$591  = 3'h5;
           end
       3'h5:
           if (sample) begin
-            if (\$52 ) begin
-              \$579  = 3'h4;
+            if (\$64 ) begin
+              \$591  = 3'h4;
             end
           end
       3'h4:
           if (sample) begin
-            \$579  = 3'h6;
+            \$591  = 3'h6;
           end
     endcase
     if (receiver_clear) begin
-      \$579  = 3'h0;
+      \$591  = 3'h0;
     end
     if (rst) begin
-      \$579  = 3'h0;
+      \$591  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$580  = started;
+    \$592  = started;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-          end else if (\$21 ) begin
-            \$580  = 1'h1;
+          end else if (\$22 ) begin
+            \$592  = 1'h1;
           end
       3'h2:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$580  = 1'h1;
+            \$592  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$580  = 1'h0;
+      \$592  = 1'h0;
     end
     if (rst) begin
-      \$580  = 1'h0;
+      \$592  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$581  = start_slot;
+    \$593  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-          end else if (\$21 ) begin
-            \$581  = slots;
+          end else if (\$22 ) begin
+            \$593  = slots;
           end
     endcase
     if (receiver_clear) begin
-      \$581  = 16'h0000;
+      \$593  = 16'h0000;
     end
     if (rst) begin
-      \$581  = 16'h0000;
+      \$593  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$582  = cds;
+    \$594  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h2:
           if (sample) begin
-            \$582  = \bit ;
+            \$594  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$582  = 1'h0;
+      \$594  = 1'h0;
     end
     if (rst) begin
-      \$582  = 1'h0;
+      \$594  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$583  = stop_bit;
+    \$595  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -17608,122 +17658,212 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
           /* empty */;
       3'h4:
           if (sample) begin
-            \$583  = \bit ;
+            \$595  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$583  = 1'h0;
+      \$595  = 1'h0;
     end
     if (rst) begin
-      \$583  = 1'h0;
+      \$595  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$584  = data0;
-    if (\$55 ) begin
-      \$584  = \$333 ;
+    \$596  = data0;
+    if (\$67 ) begin
+      \$596  = \$345 ;
     end
     if (receiver_clear) begin
-      \$584  = 55'h00000000000000;
+      \$596  = 55'h00000000000000;
     end
     if (rst) begin
-      \$584  = 55'h00000000000000;
+      \$596  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$585  = ne;
-    if (\$337 ) begin
-      \$585 [0] = 1'h1;
-    end else if (\$341 ) begin
-      \$585 [0] = \$345 ;
+    \$597  = ne;
+    if (\$349 ) begin
+      \$597 [0] = 1'h1;
+    end else if (\$353 ) begin
+      \$597 [0] = \$357 ;
     end
-    if (\$557 ) begin
-      \$585 [1] = 1'h1;
-    end else if (\$561 ) begin
-      \$585 [1] = \bit ;
+    if (\$569 ) begin
+      \$597 [1] = 1'h1;
+    end else if (\$573 ) begin
+      \$597 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$585  = 2'h0;
+      \$597  = 2'h0;
     end
     if (rst) begin
-      \$585  = 2'h0;
+      \$597  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$586  = nw;
-    if (\$346 ) begin
-      \$586 [0] = 1'h1;
-    end else if (\$350 ) begin
-      \$586 [0] = \bit ;
+    \$598  = nw;
+    if (\$358 ) begin
+      \$598 [0] = 1'h1;
+    end else if (\$362 ) begin
+      \$598 [0] = \bit ;
     end
-    if (\$557 ) begin
-      \$586 [1] = 1'h1;
-    end else if (\$561 ) begin
-    end else if (\$565 ) begin
-      \$586 [1] = \bit ;
+    if (\$569 ) begin
+      \$598 [1] = 1'h1;
+    end else if (\$573 ) begin
+    end else if (\$577 ) begin
+      \$598 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$586  = 2'h0;
+      \$598  = 2'h0;
     end
     if (rst) begin
-      \$586  = 2'h0;
+      \$598  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$587  = data1;
-    if (\$353 ) begin
-      \$587  = \$556 ;
+    \$599  = data1;
+    if (\$365 ) begin
+      \$599  = \$568 ;
     end
     if (receiver_clear) begin
-      \$587  = 40'h0000000000;
+      \$599  = 40'h0000000000;
     end
     if (rst) begin
-      \$587  = 40'h0000000000;
+      \$599  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$588  = lc;
+    \$600  = lc;
     if (lc_load) begin
-      \$588  = { lc[4:0], \bit  };
+      \$600  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$588  = 6'h00;
+      \$600  = 6'h00;
     end
     if (rst) begin
-      \$588  = 6'h00;
+      \$600  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$589  = cpw_top;
-    if (\$566 ) begin
-      \$589  = { cpw_top[38:0], \$568  };
+    \$601  = cpw_top;
+    if (\$578 ) begin
+      \$601  = { cpw_top[38:0], \$580  };
     end
     if (receiver_clear) begin
-      \$589  = 40'h0000000000;
+      \$601  = 40'h0000000000;
     end
     if (rst) begin
-      \$589  = 40'h0000000000;
+      \$601  = 40'h0000000000;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$24 , words[7:6] })
+      3'h0:
+          \$25  = 2'h0;
+      3'h1:
+          \$25  = 2'h2;
+      3'h2:
+          \$25  = 2'h0;
+      3'h3:
+          \$25  = 2'h2;
+      3'h4:
+          \$25  = 2'h1;
+      3'h5:
+          \$25  = 2'h3;
+      3'h6:
+          \$25  = 2'h1;
+      3'h7:
+          \$25  = 2'h3;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$28 , words[7:6] })
+      3'h0:
+          \$29  = 4'h0;
+      3'h1:
+          \$29  = 4'h2;
+      3'h2:
+          \$29  = 4'h6;
+      3'h3:
+          \$29  = 4'h8;
+      3'h4:
+          \$29  = 4'h1;
+      3'h5:
+          \$29  = 4'h3;
+      3'h6:
+          \$29  = 4'h7;
+      3'h7:
+          \$29  = 4'h9;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$35 , words[7:6] })
+      3'h0:
+          \$36  = 2'h0;
+      3'h1:
+          \$36  = 2'h2;
+      3'h2:
+          \$36  = 2'h0;
+      3'h3:
+          \$36  = 2'h2;
+      3'h4:
+          \$36  = 2'h1;
+      3'h5:
+          \$36  = 2'h3;
+      3'h6:
+          \$36  = 2'h1;
+      3'h7:
+          \$36  = 2'h3;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$39 , words[7:6] })
+      3'h0:
+          \$40  = 4'h0;
+      3'h1:
+          \$40  = 4'h2;
+      3'h2:
+          \$40  = 4'h6;
+      3'h3:
+          \$40  = 4'h8;
+      3'h4:
+          \$40  = 4'h1;
+      3'h5:
+          \$40  = 4'h3;
+      3'h6:
+          \$40  = 4'h7;
+      3'h7:
+          \$40  = 4'h9;
+    endcase
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$6807$272 [0];
-  assign \bit$11  = \bit ;
-  assign \mismatch$16  = mismatch;
+  assign word = index;
+  assign ssi_error = \port$7173$272 [0];
+  assign \bit$13  = \bit ;
+  assign \index$14  = current[34:28];
+  assign \mismatch$17  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
-  assign \customs$30  = customs;
-  assign \bit$37  = \bit ;
+  assign \customs$35  = customs;
+  assign \bit$41  = \bit ;
   assign ok = crc_ok;
-  assign \index$40  = word;
-  assign load_index = \$9 [0];
-  assign ssi_double = \port$6807$272 [2];
-  assign ssi_error_low = \port$6807$272 [1];
+  assign \index$44  = index;
+  assign load_index = \$10 [0];
+  assign ssi_double = \port$7173$272 [2];
+  assign ssi_error_low = \port$7173$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -17756,22 +17896,13 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \crc_widths[1]  = crc_widths[9:5];
   assign \crc_widths$3[0]  = crc_widths[4:0];
   assign \crc_widths$3[1]  = crc_widths[9:5];
-  assign \ends[0]  = ends[36:0];
-  assign \ends[0].data_end_p1  = ends[6:0];
-  assign \ends[0].data_end_m1  = ends[13:7];
-  assign \ends[0].nenw_end_m1  = ends[20:14];
-  assign \ends[0].lc_end_m1  = ends[27:21];
-  assign \ends[0].word_end_m1  = ends[34:28];
-  assign \ends[0].data_at0  = ends[35];
-  assign \ends[0].lc_at0  = ends[36];
-  assign \ends[1]  = ends[73:37];
-  assign \ends[1].data_end_p1  = ends[43:37];
-  assign \ends[1].data_end_m1  = ends[50:44];
-  assign \ends[1].nenw_end_m1  = ends[57:51];
-  assign \ends[1].lc_end_m1  = ends[64:58];
-  assign \ends[1].word_end_m1  = ends[71:65];
-  assign \ends[1].data_at0  = ends[72];
-  assign \ends[1].lc_at0  = ends[73];
+  assign \current.data_end_p1  = current[6:0];
+  assign \current.data_end_m1  = current[13:7];
+  assign \current.nenw_end_m1  = current[20:14];
+  assign \current.lc_end_m1  = current[27:21];
+  assign \current.word_end_m1  = current[34:28];
+  assign \current.data_at0  = current[35];
+  assign \current.lc_at0  = current[36];
   assign \codes[0]  = codes[1:0];
   assign \codes[1]  = codes[3:2];
   assign \customs[0]  = customs[37:0];
@@ -17784,27 +17915,32 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \customs[1].poly  = customs[58:43];
   assign \customs[1].start  = customs[74:59];
   assign \customs[1].inverted  = customs[75];
-  assign \customs$30[0]  = customs[37:0];
-  assign \customs$30[0].width  = customs[4:0];
-  assign \customs$30[0].poly  = customs[20:5];
-  assign \customs$30[0].start  = customs[36:21];
-  assign \customs$30[0].inverted  = customs[37];
-  assign \customs$30[1]  = customs[75:38];
-  assign \customs$30[1].width  = customs[42:38];
-  assign \customs$30[1].poly  = customs[58:43];
-  assign \customs$30[1].start  = customs[74:59];
-  assign \customs$30[1].inverted  = customs[75];
+  assign \customs$35[0]  = customs[37:0];
+  assign \customs$35[0].width  = customs[4:0];
+  assign \customs$35[0].poly  = customs[20:5];
+  assign \customs$35[0].start  = customs[36:21];
+  assign \customs$35[0].inverted  = customs[37];
+  assign \customs$35[1]  = customs[75:38];
+  assign \customs$35[1].width  = customs[42:38];
+  assign \customs$35[1].poly  = customs[58:43];
+  assign \customs$35[1].start  = customs[74:59];
+  assign \customs$35[1].inverted  = customs[75];
+  assign \following.data_end_p1  = following[6:0];
+  assign \following.data_end_m1  = following[13:7];
+  assign \following.nenw_end_m1  = following[20:14];
+  assign \following.lc_end_m1  = following[27:21];
+  assign \following.word_end_m1  = following[34:28];
+  assign \following.data_at0  = following[35];
+  assign \following.lc_at0  = following[36];
   assign codes[3:2] = words[21:20];
   assign codes[1:0] = words[9:8];
-  assign \$44  = ends[72];
-  assign \$45  = ends[73];
-  assign \$351  = word;
-  assign \$558  = word;
-  assign \$562  = word;
+  assign \$363  = index;
+  assign \$570  = index;
+  assign \$574  = index;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder.copy (rst, index, first, \bit , receiver_clear, separator, second, mismatch, clk);
+module \biss_master_axil.ch0.core.decoder.copy (rst, first, \bit , receiver_clear, separator, second, index, mismatch, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -18296,90 +18432,155 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc_widths, receiver_clear, ends, clk);
+module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc_widths, receiver_clear, \begin , advance, index, current, following, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
-  wire [6:0] \$1 ;
-  wire \$10 ;
-  reg [1:0] \$11 ;
-  wire [6:0] \$12 ;
-  wire \$13 ;
-  reg [3:0] \$14 ;
-  wire [6:0] \$15 ;
-  wire \$16 ;
+  wire [2:0] \$1 ;
+  wire [7:0] \$10 ;
+  wire \$11 ;
+  reg [1:0] \$12 ;
+  wire [6:0] \$13 ;
+  wire \$14 ;
+  reg [3:0] \$15 ;
+  wire [6:0] \$16 ;
   wire \$17 ;
-  wire [6:0] \$18 ;
-  wire [7:0] \$19 ;
-  wire [7:0] \$2 ;
-  reg [6:0] \$20 ;
-  wire [7:0] \$21 ;
-  reg [6:0] \$22 ;
-  wire [7:0] \$23 ;
-  reg [6:0] \$24 ;
-  wire [7:0] \$25 ;
-  wire [7:0] \$26 ;
-  wire \$27 ;
-  reg [1:0] \$28 ;
-  wire [6:0] \$29 ;
-  reg [6:0] \$3 ;
-  wire \$30 ;
-  reg [3:0] \$31 ;
-  wire [6:0] \$32 ;
-  wire \$33 ;
-  wire \$34 ;
-  wire [36:0] \$35 ;
-  wire [36:0] \$36 ;
-  wire [7:0] \$4 ;
-  reg [6:0] \$5 ;
-  wire [7:0] \$6 ;
-  reg [6:0] \$7 ;
-  wire [7:0] \$8 ;
+  wire \$18 ;
+  reg [5:0] \$19 ;
+  wire [6:0] \$2 ;
+  wire [6:0] \$20 ;
+  reg [5:0] \$21 ;
+  wire [7:0] \$22 ;
+  reg [5:0] \$23 ;
+  reg \$24 ;
+  reg \$25 ;
+  reg [6:0] \$26 ;
+  wire [7:0] \$27 ;
+  reg [5:0] \$28 ;
+  reg \$29 ;
+  wire [7:0] \$3 ;
+  reg \$30 ;
+  reg [6:0] \$31 ;
+  wire [7:0] \$32 ;
+  reg [5:0] \$33 ;
+  reg \$34 ;
+  reg \$35 ;
+  reg [6:0] \$36 ;
+  reg [4:0] \$37 ;
+  wire [7:0] \$38 ;
+  wire [7:0] \$39 ;
+  reg [6:0] \$4 ;
+  reg [5:0] \$40 ;
+  wire \$41 ;
+  reg [5:0] \$42 ;
+  reg \$43 ;
+  reg \$44 ;
+  reg [1:0] \$45 ;
+  wire [6:0] \$46 ;
+  wire \$47 ;
+  reg [5:0] \$48 ;
+  reg \$49 ;
+  wire [7:0] \$5 ;
+  reg \$50 ;
+  reg [3:0] \$51 ;
+  wire [6:0] \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  reg [5:0] \$55 ;
+  wire [6:0] \$56 ;
+  reg [5:0] \$57 ;
+  wire [7:0] \$58 ;
+  reg [5:0] \$59 ;
+  reg [6:0] \$6 ;
+  reg \$60 ;
+  reg \$61 ;
+  reg [6:0] \$62 ;
+  wire [7:0] \$63 ;
+  reg [5:0] \$64 ;
+  reg \$65 ;
+  reg \$66 ;
+  reg [6:0] \$67 ;
+  wire [7:0] \$68 ;
+  reg [5:0] \$69 ;
+  wire [7:0] \$7 ;
+  reg \$70 ;
+  reg \$71 ;
+  reg [6:0] \$72 ;
+  reg [4:0] \$73 ;
+  wire [7:0] \$74 ;
+  wire [7:0] \$75 ;
+  reg [5:0] \$76 ;
+  wire \$77 ;
+  reg [5:0] \$78 ;
+  reg \$79 ;
+  reg [6:0] \$8 ;
+  reg \$80 ;
+  reg [1:0] \$81 ;
+  wire [6:0] \$82 ;
+  wire \$83 ;
+  reg [5:0] \$84 ;
+  reg \$85 ;
+  reg \$86 ;
+  reg [3:0] \$87 ;
+  wire [6:0] \$88 ;
+  wire \$89 ;
   wire [7:0] \$9 ;
+  wire \$90 ;
+  reg [36:0] \$91 ;
+  reg [36:0] \$92 ;
+  input advance;
+  wire advance;
+  input \begin ;
+  wire \begin ;
   input clk;
   wire clk;
   input [9:0] crc_widths;
   wire [9:0] crc_widths;
   wire [4:0] \crc_widths[0] ;
   wire [4:0] \crc_widths[1] ;
-  output [73:0] ends;
-  wire [73:0] ends;
-  wire [36:0] \ends[0] ;
-  wire \ends[0].data_at0 ;
-  wire [6:0] \ends[0].data_end_m1 ;
-  wire [6:0] \ends[0].data_end_p1 ;
-  wire \ends[0].lc_at0 ;
-  wire [6:0] \ends[0].lc_end_m1 ;
-  wire [6:0] \ends[0].nenw_end_m1 ;
-  wire [6:0] \ends[0].word_end_m1 ;
-  wire [36:0] \ends[1] ;
-  wire \ends[1].data_at0 ;
-  wire [6:0] \ends[1].data_end_m1 ;
-  wire [6:0] \ends[1].data_end_p1 ;
-  wire \ends[1].lc_at0 ;
-  wire [6:0] \ends[1].lc_end_m1 ;
-  wire [6:0] \ends[1].nenw_end_m1 ;
-  wire [6:0] \ends[1].word_end_m1 ;
+  output [36:0] current;
+  reg [36:0] current = 37'h0000000000;
+  wire \current.data_at0 ;
+  wire [6:0] \current.data_end_m1 ;
+  wire [6:0] \current.data_end_p1 ;
+  wire \current.lc_at0 ;
+  wire [6:0] \current.lc_end_m1 ;
+  wire [6:0] \current.nenw_end_m1 ;
+  wire [6:0] \current.word_end_m1 ;
+  (* init = 37'h0000000000 *)
+  wire [36:0] current_ends;
+  wire \current_ends.data_at0 ;
+  wire [6:0] \current_ends.data_end_m1 ;
+  wire [6:0] \current_ends.data_end_p1 ;
+  wire \current_ends.lc_at0 ;
+  wire [6:0] \current_ends.lc_end_m1 ;
+  wire [6:0] \current_ends.nenw_end_m1 ;
+  wire [6:0] \current_ends.word_end_m1 ;
   input error_bit;
   wire error_bit;
+  output [36:0] following;
+  reg [36:0] following = 37'h0000000000;
+  wire \following.data_at0 ;
+  wire [6:0] \following.data_end_m1 ;
+  wire [6:0] \following.data_end_p1 ;
+  wire \following.lc_at0 ;
+  wire [6:0] \following.lc_end_m1 ;
+  wire [6:0] \following.nenw_end_m1 ;
+  wire [6:0] \following.word_end_m1 ;
+  (* init = 37'h0000000000 *)
+  wire [36:0] following_ends;
+  wire \following_ends.data_at0 ;
+  wire [6:0] \following_ends.data_end_m1 ;
+  wire [6:0] \following_ends.data_end_p1 ;
+  wire \following_ends.lc_at0 ;
+  wire [6:0] \following_ends.lc_end_m1 ;
+  wire [6:0] \following_ends.nenw_end_m1 ;
+  wire [6:0] \following_ends.word_end_m1 ;
+  wire following_word;
+  input index;
+  wire index;
   input receiver_clear;
   wire receiver_clear;
   input rst;
   wire rst;
-  reg [36:0] w0_ends = 37'h0000000000;
-  wire \w0_ends.data_at0 ;
-  wire [6:0] \w0_ends.data_end_m1 ;
-  wire [6:0] \w0_ends.data_end_p1 ;
-  wire \w0_ends.lc_at0 ;
-  wire [6:0] \w0_ends.lc_end_m1 ;
-  wire [6:0] \w0_ends.nenw_end_m1 ;
-  wire [6:0] \w0_ends.word_end_m1 ;
-  reg [36:0] w1_ends = 37'h0000000000;
-  wire \w1_ends.data_at0 ;
-  wire [6:0] \w1_ends.data_end_m1 ;
-  wire [6:0] \w1_ends.data_end_p1 ;
-  wire \w1_ends.lc_at0 ;
-  wire [6:0] \w1_ends.lc_end_m1 ;
-  wire [6:0] \w1_ends.nenw_end_m1 ;
-  wire [6:0] \w1_ends.word_end_m1 ;
   input [23:0] words;
   wire [23:0] words;
   wire [11:0] \words[0] ;
@@ -18406,76 +18607,68 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$1  = words[5:0] + 1'h1;
-  assign \$2  = words[5:0] + 7'h7f;
-  assign \$4  = words[5:0] + \$3 ;
-  assign \$6  = words[5:0] + \$5 ;
-  assign \$8  = \$7  + crc_widths[4:0];
-  assign \$9  = words[5:0] + \$8 [6:0];
-  assign \$10  = | words[5:0];
-  assign \$12  = words[5:0] + \$11 ;
-  assign \$13  = ! \$12 ;
-  assign \$15  = words[5:0] + \$14 ;
-  assign \$16  = | \$15 ;
-  assign \$17  = \$13  & \$16 ;
-  assign \$18  = words[17:12] + 1'h1;
-  assign \$19  = words[17:12] + 7'h7f;
-  assign \$21  = words[17:12] + \$20 ;
-  assign \$23  = words[17:12] + \$22 ;
-  assign \$25  = \$24  + crc_widths[9:5];
-  assign \$26  = words[17:12] + \$25 [6:0];
-  assign \$27  = | words[17:12];
-  assign \$29  = words[17:12] + \$28 ;
-  assign \$30  = ! \$29 ;
-  assign \$32  = words[17:12] + \$31 ;
-  assign \$33  = | \$32 ;
-  assign \$34  = \$30  & \$33 ;
+  assign \$7  = words[5:0] + \$6 ;
+  assign \$9  = \$8  + crc_widths[4:0];
+  assign \$10  = words[5:0] + \$9 [6:0];
+  assign \$11  = | words[5:0];
+  assign \$13  = words[5:0] + \$12 ;
+  assign \$14  = ! \$13 ;
+  assign \$16  = words[5:0] + \$15 ;
+  assign \$17  = | \$16 ;
+  assign \$18  = \$14  & \$17 ;
+  assign \$20  = \$19  + 1'h1;
+  assign \$22  = \$21  + 7'h7f;
+  assign \$27  = \$23  + \$26 ;
+  assign \$32  = \$28  + \$31 ;
+  assign \$38  = \$36  + \$37 ;
+  assign \$39  = \$33  + \$38 [6:0];
+  assign \$41  = | \$40 ;
+  assign \$46  = \$42  + \$45 ;
+  assign \$47  = ! \$46 ;
+  assign \$52  = \$48  + \$51 ;
+  assign \$53  = | \$52 ;
+  assign \$54  = \$47  & \$53 ;
+  assign \$56  = \$55  + 1'h1;
+  assign \$58  = \$57  + 7'h7f;
+  assign \$63  = \$59  + \$62 ;
+  assign \$68  = \$64  + \$67 ;
+  assign \$74  = \$72  + \$73 ;
+  assign \$75  = \$69  + \$74 [6:0];
+  assign \$77  = | \$76 ;
+  assign \$82  = \$78  + \$81 ;
+  assign \$83  = ! \$82 ;
+  assign \$88  = \$84  + \$87 ;
+  assign \$89  = | \$88 ;
+  assign \$90  = \$83  & \$89 ;
   always @(posedge clk)
-    w0_ends <= \$35 ;
+    current <= \$91 ;
   always @(posedge clk)
-    w1_ends <= \$36 ;
+    following <= \$92 ;
+  assign \$1  = index + 2'h2;
+  assign following_word = \begin  ? 1'h1 : \$1 [0];
+  assign \$2  = words[5:0] + 1'h1;
+  assign \$3  = words[5:0] + 7'h7f;
+  assign \$5  = words[5:0] + \$4 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$3  = 7'h7f;
+          \$8  = 7'h7f;
       3'h1:
-          \$3  = 7'h01;
+          \$8  = 7'h01;
       3'h2:
-          \$3  = 7'h7f;
+          \$8  = 7'h05;
       3'h3:
-          \$3  = 7'h01;
+          \$8  = 7'h07;
       3'h4:
-          \$3  = 7'h00;
+          \$8  = 7'h00;
       3'h5:
-          \$3  = 7'h02;
+          \$8  = 7'h02;
       3'h6:
-          \$3  = 7'h00;
+          \$8  = 7'h06;
       3'h7:
-          \$3  = 7'h02;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ error_bit, words[7:6] })
-      3'h0:
-          \$5  = 7'h7f;
-      3'h1:
-          \$5  = 7'h01;
-      3'h2:
-          \$5  = 7'h05;
-      3'h3:
-          \$5  = 7'h07;
-      3'h4:
-          \$5  = 7'h00;
-      3'h5:
-          \$5  = 7'h02;
-      3'h6:
-          \$5  = 7'h06;
-      3'h7:
-          \$5  = 7'h08;
+          \$8  = 7'h08;
     endcase
   end
   always @* begin
@@ -18483,21 +18676,21 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$7  = 7'h7f;
+          \$12  = 2'h0;
       3'h1:
-          \$7  = 7'h01;
+          \$12  = 2'h2;
       3'h2:
-          \$7  = 7'h05;
+          \$12  = 2'h0;
       3'h3:
-          \$7  = 7'h07;
+          \$12  = 2'h2;
       3'h4:
-          \$7  = 7'h00;
+          \$12  = 2'h1;
       3'h5:
-          \$7  = 7'h02;
+          \$12  = 2'h3;
       3'h6:
-          \$7  = 7'h06;
+          \$12  = 2'h1;
       3'h7:
-          \$7  = 7'h08;
+          \$12  = 2'h3;
     endcase
   end
   always @* begin
@@ -18505,21 +18698,599 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$11  = 2'h0;
+          \$15  = 4'h0;
       3'h1:
-          \$11  = 2'h2;
+          \$15  = 4'h2;
       3'h2:
-          \$11  = 2'h0;
+          \$15  = 4'h6;
       3'h3:
-          \$11  = 2'h2;
+          \$15  = 4'h8;
       3'h4:
-          \$11  = 2'h1;
+          \$15  = 4'h1;
       3'h5:
-          \$11  = 2'h3;
+          \$15  = 4'h3;
       3'h6:
-          \$11  = 2'h1;
+          \$15  = 4'h7;
       3'h7:
-          \$11  = 2'h3;
+          \$15  = 4'h9;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$19  = words[5:0];
+      1'h1:
+          \$19  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$21  = words[5:0];
+      1'h1:
+          \$21  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$23  = words[5:0];
+      1'h1:
+          \$23  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$24  = words[6];
+      1'h1:
+          \$24  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$25  = words[7];
+      1'h1:
+          \$25  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$25 , \$24  })
+      2'h0:
+          \$26  = 7'h7f;
+      2'h1:
+          \$26  = 7'h01;
+      2'h2:
+          \$26  = 7'h7f;
+      2'h3:
+          \$26  = 7'h01;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$28  = words[5:0];
+      1'h1:
+          \$28  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$29  = words[6];
+      1'h1:
+          \$29  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$30  = words[7];
+      1'h1:
+          \$30  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$30 , \$29  })
+      2'h0:
+          \$31  = 7'h7f;
+      2'h1:
+          \$31  = 7'h01;
+      2'h2:
+          \$31  = 7'h05;
+      2'h3:
+          \$31  = 7'h07;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$33  = words[5:0];
+      1'h1:
+          \$33  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$34  = words[6];
+      1'h1:
+          \$34  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$35  = words[7];
+      1'h1:
+          \$35  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$35 , \$34  })
+      2'h0:
+          \$36  = 7'h7f;
+      2'h1:
+          \$36  = 7'h01;
+      2'h2:
+          \$36  = 7'h05;
+      2'h3:
+          \$36  = 7'h07;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$37  = crc_widths[4:0];
+      1'h1:
+          \$37  = crc_widths[9:5];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$40  = words[5:0];
+      1'h1:
+          \$40  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$42  = words[5:0];
+      1'h1:
+          \$42  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$43  = words[6];
+      1'h1:
+          \$43  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$44  = words[7];
+      1'h1:
+          \$44  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$44 , \$43  })
+      2'h0:
+          \$45  = 2'h0;
+      2'h1:
+          \$45  = 2'h2;
+      2'h2:
+          \$45  = 2'h0;
+      2'h3:
+          \$45  = 2'h2;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$48  = words[5:0];
+      1'h1:
+          \$48  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$49  = words[6];
+      1'h1:
+          \$49  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$50  = words[7];
+      1'h1:
+          \$50  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$50 , \$49  })
+      2'h0:
+          \$51  = 4'h0;
+      2'h1:
+          \$51  = 4'h2;
+      2'h2:
+          \$51  = 4'h6;
+      2'h3:
+          \$51  = 4'h8;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$55  = words[5:0];
+      1'h1:
+          \$55  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$57  = words[5:0];
+      1'h1:
+          \$57  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$59  = words[5:0];
+      1'h1:
+          \$59  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$60  = words[6];
+      1'h1:
+          \$60  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$61  = words[7];
+      1'h1:
+          \$61  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$61 , \$60  })
+      2'h0:
+          \$62  = 7'h7f;
+      2'h1:
+          \$62  = 7'h01;
+      2'h2:
+          \$62  = 7'h7f;
+      2'h3:
+          \$62  = 7'h01;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$64  = words[5:0];
+      1'h1:
+          \$64  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$65  = words[6];
+      1'h1:
+          \$65  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$66  = words[7];
+      1'h1:
+          \$66  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$66 , \$65  })
+      2'h0:
+          \$67  = 7'h7f;
+      2'h1:
+          \$67  = 7'h01;
+      2'h2:
+          \$67  = 7'h05;
+      2'h3:
+          \$67  = 7'h07;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$69  = words[5:0];
+      1'h1:
+          \$69  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$70  = words[6];
+      1'h1:
+          \$70  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$71  = words[7];
+      1'h1:
+          \$71  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$71 , \$70  })
+      2'h0:
+          \$72  = 7'h7f;
+      2'h1:
+          \$72  = 7'h01;
+      2'h2:
+          \$72  = 7'h05;
+      2'h3:
+          \$72  = 7'h07;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$73  = crc_widths[4:0];
+      1'h1:
+          \$73  = crc_widths[9:5];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$76  = words[5:0];
+      1'h1:
+          \$76  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$78  = words[5:0];
+      1'h1:
+          \$78  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$79  = words[6];
+      1'h1:
+          \$79  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$80  = words[7];
+      1'h1:
+          \$80  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$80 , \$79  })
+      2'h0:
+          \$81  = 2'h0;
+      2'h1:
+          \$81  = 2'h2;
+      2'h2:
+          \$81  = 2'h0;
+      2'h3:
+          \$81  = 2'h2;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$84  = words[5:0];
+      1'h1:
+          \$84  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$85  = words[6];
+      1'h1:
+          \$85  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$86  = words[7];
+      1'h1:
+          \$86  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$86 , \$85  })
+      2'h0:
+          \$87  = 4'h0;
+      2'h1:
+          \$87  = 4'h2;
+      2'h2:
+          \$87  = 4'h6;
+      2'h3:
+          \$87  = 4'h8;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$91  = current;
+    if (\begin ) begin
+      \$91 [6:0] = \$2 ;
+      \$91 [13:7] = \$3 [6:0];
+      \$91 [20:14] = \$5 [6:0];
+      \$91 [27:21] = \$7 [6:0];
+      \$91 [34:28] = \$10 [6:0];
+      \$91 [35] = \$11 ;
+      \$91 [36] = \$18 ;
+    end else if (advance) begin
+      \$91  = following;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$92  = following;
+    if (\begin ) begin
+      \$92 [6:0] = \$20 ;
+      \$92 [13:7] = \$22 [6:0];
+      \$92 [20:14] = \$27 [6:0];
+      \$92 [27:21] = \$32 [6:0];
+      \$92 [34:28] = \$39 [6:0];
+      \$92 [35] = \$41 ;
+      \$92 [36] = \$54 ;
+    end else if (advance) begin
+      \$92 [6:0] = \$56 ;
+      \$92 [13:7] = \$58 [6:0];
+      \$92 [20:14] = \$63 [6:0];
+      \$92 [27:21] = \$68 [6:0];
+      \$92 [34:28] = \$75 [6:0];
+      \$92 [35] = \$77 ;
+      \$92 [36] = \$90 ;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ error_bit, words[7:6] })
+      3'h0:
+          \$4  = 7'h7f;
+      3'h1:
+          \$4  = 7'h01;
+      3'h2:
+          \$4  = 7'h7f;
+      3'h3:
+          \$4  = 7'h01;
+      3'h4:
+          \$4  = 7'h00;
+      3'h5:
+          \$4  = 7'h02;
+      3'h6:
+          \$4  = 7'h00;
+      3'h7:
+          \$4  = 7'h02;
     endcase
   end
   always @* begin
@@ -18527,123 +19298,53 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$14  = 4'h0;
+          \$6  = 7'h7f;
       3'h1:
-          \$14  = 4'h2;
+          \$6  = 7'h01;
       3'h2:
-          \$14  = 4'h6;
+          \$6  = 7'h05;
       3'h3:
-          \$14  = 4'h8;
+          \$6  = 7'h07;
       3'h4:
-          \$14  = 4'h1;
+          \$6  = 7'h00;
       3'h5:
-          \$14  = 4'h3;
+          \$6  = 7'h02;
       3'h6:
-          \$14  = 4'h7;
+          \$6  = 7'h06;
       3'h7:
-          \$14  = 4'h9;
+          \$6  = 7'h08;
     endcase
   end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$20  = 7'h7f;
-      2'h1:
-          \$20  = 7'h01;
-      2'h2:
-          \$20  = 7'h7f;
-      2'h3:
-          \$20  = 7'h01;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$22  = 7'h7f;
-      2'h1:
-          \$22  = 7'h01;
-      2'h2:
-          \$22  = 7'h05;
-      2'h3:
-          \$22  = 7'h07;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$24  = 7'h7f;
-      2'h1:
-          \$24  = 7'h01;
-      2'h2:
-          \$24  = 7'h05;
-      2'h3:
-          \$24  = 7'h07;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$28  = 2'h0;
-      2'h1:
-          \$28  = 2'h2;
-      2'h2:
-          \$28  = 2'h0;
-      2'h3:
-          \$28  = 2'h2;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$31  = 4'h0;
-      2'h1:
-          \$31  = 4'h2;
-      2'h2:
-          \$31  = 4'h6;
-      2'h3:
-          \$31  = 4'h8;
-    endcase
-  end
-  assign \ends[0]  = ends[36:0];
-  assign \ends[0].data_end_p1  = ends[6:0];
-  assign \ends[0].data_end_m1  = ends[13:7];
-  assign \ends[0].nenw_end_m1  = ends[20:14];
-  assign \ends[0].lc_end_m1  = ends[27:21];
-  assign \ends[0].word_end_m1  = ends[34:28];
-  assign \ends[0].data_at0  = ends[35];
-  assign \ends[0].lc_at0  = ends[36];
-  assign \ends[1]  = ends[73:37];
-  assign \ends[1].data_end_p1  = ends[43:37];
-  assign \ends[1].data_end_m1  = ends[50:44];
-  assign \ends[1].nenw_end_m1  = ends[57:51];
-  assign \ends[1].lc_end_m1  = ends[64:58];
-  assign \ends[1].word_end_m1  = ends[71:65];
-  assign \ends[1].data_at0  = ends[72];
-  assign \ends[1].lc_at0  = ends[73];
-  assign \w0_ends.data_end_p1  = w0_ends[6:0];
-  assign \w0_ends.data_end_m1  = w0_ends[13:7];
-  assign \w0_ends.nenw_end_m1  = w0_ends[20:14];
-  assign \w0_ends.lc_end_m1  = w0_ends[27:21];
-  assign \w0_ends.word_end_m1  = w0_ends[34:28];
-  assign \w0_ends.data_at0  = w0_ends[35];
-  assign \w0_ends.lc_at0  = w0_ends[36];
-  assign \w1_ends.data_end_p1  = w1_ends[6:0];
-  assign \w1_ends.data_end_m1  = w1_ends[13:7];
-  assign \w1_ends.nenw_end_m1  = w1_ends[20:14];
-  assign \w1_ends.lc_end_m1  = w1_ends[27:21];
-  assign \w1_ends.word_end_m1  = w1_ends[34:28];
-  assign \w1_ends.data_at0  = w1_ends[35];
-  assign \w1_ends.lc_at0  = w1_ends[36];
+  assign current_ends = current;
+  assign following_ends = following;
+  assign \current.data_end_p1  = current[6:0];
+  assign \current.data_end_m1  = current[13:7];
+  assign \current.nenw_end_m1  = current[20:14];
+  assign \current.lc_end_m1  = current[27:21];
+  assign \current.word_end_m1  = current[34:28];
+  assign \current.data_at0  = current[35];
+  assign \current.lc_at0  = current[36];
+  assign \current_ends.data_end_p1  = current[6:0];
+  assign \current_ends.data_end_m1  = current[13:7];
+  assign \current_ends.nenw_end_m1  = current[20:14];
+  assign \current_ends.lc_end_m1  = current[27:21];
+  assign \current_ends.word_end_m1  = current[34:28];
+  assign \current_ends.data_at0  = current[35];
+  assign \current_ends.lc_at0  = current[36];
+  assign \following.data_end_p1  = following[6:0];
+  assign \following.data_end_m1  = following[13:7];
+  assign \following.nenw_end_m1  = following[20:14];
+  assign \following.lc_end_m1  = following[27:21];
+  assign \following.word_end_m1  = following[34:28];
+  assign \following.data_at0  = following[35];
+  assign \following.lc_at0  = following[36];
+  assign \following_ends.data_end_p1  = following[6:0];
+  assign \following_ends.data_end_m1  = following[13:7];
+  assign \following_ends.nenw_end_m1  = following[20:14];
+  assign \following_ends.lc_end_m1  = following[27:21];
+  assign \following_ends.word_end_m1  = following[34:28];
+  assign \following_ends.data_at0  = following[35];
+  assign \following_ends.lc_at0  = following[36];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -18660,22 +19361,6 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
   assign \words[1].signed  = words[23];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign \$36 [36] = \$34 ;
-  assign \$36 [35] = \$27 ;
-  assign \$36 [34:28] = \$26 [6:0];
-  assign \$36 [27:21] = \$23 [6:0];
-  assign \$36 [20:14] = \$21 [6:0];
-  assign \$36 [13:7] = \$19 [6:0];
-  assign \$36 [6:0] = \$18 ;
-  assign \$35 [36] = \$17 ;
-  assign \$35 [35] = \$10 ;
-  assign \$35 [34:28] = \$9 [6:0];
-  assign \$35 [27:21] = \$6 [6:0];
-  assign \$35 [20:14] = \$4 [6:0];
-  assign \$35 [13:7] = \$2 [6:0];
-  assign \$35 [6:0] = \$1 ;
-  assign ends[73:37] = w1_ends;
-  assign ends[36:0] = w0_ends;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -19531,7 +20216,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6807$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$7173$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -19575,8 +20260,8 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6807$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6807$199 ;
-  wire \port$6807$199 ;
+  input \port$7173$199 ;
+  wire \port$7173$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -19630,7 +20315,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6807$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6807$199  ? word1_len : 8'h00;
+  assign \$11  = \port$7173$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -19740,7 +20425,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6807$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6807$199 , 1'h1 };
+  assign enables = { \port$7173$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -21873,7 +22558,7 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6807$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7173$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -22007,8 +22692,8 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6807$259 ;
-  wire [12:0] \port$6807$259 ;
+  input [12:0] \port$7173$259 ;
+  wire [12:0] \port$7173$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -22033,7 +22718,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6807$259 [12:1] + 1'h1;
+  assign \$11  = \port$7173$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -22158,7 +22843,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6807$259 [0]),
+    .clear_high(\port$7173$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -22301,7 +22986,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6807$259 [0]) begin
+            if (\port$7173$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -22386,7 +23071,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6807$259 [0]) begin
+            if (\port$7173$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -22425,7 +23110,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6807$259 [12:1] };
+            \$85  = { 1'h0, \port$7173$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -22810,11 +23495,11 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6807$259 [12:1] };
-  assign fixed = \port$6807$259 [0];
+  assign fixed_delay = { 1'h0, \port$7173$259 [12:1] };
+  assign fixed = \port$7173$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6807$259 [0];
+  assign clear_high = \port$7173$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -23221,7 +23906,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6795$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$7161$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -23263,8 +23948,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6795$0 ;
-  wire \port$6795$0 ;
+  input \port$7161$0 ;
+  wire \port$7161$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -23278,9 +23963,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6795$0  };
-  assign \$2  = { lc[4:0], \port$6795$0  } == last;
-  assign \$3  = { lc[4:0], \port$6795$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7161$0  };
+  assign \$2  = { lc[4:0], \port$7161$0  } == last;
+  assign \$3  = { lc[4:0], \port$7161$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -23390,7 +24075,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6795$0  };
+  assign lc_next = { lc[4:0], \port$7161$0  };
   assign zero = is_zero;
 endmodule
 
@@ -23954,7 +24639,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2815$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2998$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -24132,8 +24817,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2815$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$2815$0 ;
-  wire \port$2815$0 ;
+  output \port$2998$0 ;
+  wire \port$2998$0 ;
   output report;
   wire report;
   input report_frame;
@@ -24251,7 +24936,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2815$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2815$0  = \$2 ;
+  assign \port$2998$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -24308,7 +24993,7 @@ endmodule
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7688$0 , \port$7699$0 , regs__ca_done, \port$7776$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$8054$0 , \port$8065$0 , regs__ca_done, \port$8142$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -24492,12 +25177,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7688$0 ;
-  wire [186:0] \port$7688$0 ;
-  output [79:0] \port$7699$0 ;
-  wire [79:0] \port$7699$0 ;
-  output [9:0] \port$7776$0 ;
-  wire [9:0] \port$7776$0 ;
+  output [186:0] \port$8054$0 ;
+  wire [186:0] \port$8054$0 ;
+  output [79:0] \port$8065$0 ;
+  wire [79:0] \port$8065$0 ;
+  output [9:0] \port$8142$0 ;
+  wire [9:0] \port$8142$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -24986,9 +25671,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$7688$0  = \$20 ;
-  assign \port$7699$0  = \$21 ;
-  assign \port$7776$0  = \$22 ;
+  assign \port$8054$0  = \$20 ;
+  assign \port$8065$0  = \$21 ;
+  assign \port$8142$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -26053,7 +26738,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7342$272 (cycle[274:272]),
+    .\port$7708$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -26113,7 +26798,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$7342$199 (cycle[199]),
+    .\port$7708$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -26164,7 +26849,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7342$259 (cycle[271:259]),
+    .\port$7708$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -26188,7 +26873,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7330$0 (\bit ),
+    .\port$7696$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -26256,7 +26941,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5254$0 (\$28 ),
+    .\port$5620$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -26822,7 +27507,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crc_widths, no_start_limit, idle, clk);
+module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, no_start_limit, crc_widths, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -26886,20 +27571,20 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire \$63 ;
   wire [3:0] \$64 ;
   wire [16:0] \$65 ;
-  wire \$66 ;
+  wire [24:0] \$66 ;
   wire \$67 ;
   wire \$68 ;
-  wire [37:0] \$69 ;
+  wire \$69 ;
   wire \$7 ;
   wire [37:0] \$70 ;
   wire [37:0] \$71 ;
-  wire \$72 ;
+  wire [37:0] \$72 ;
   wire \$73 ;
   wire \$74 ;
-  wire [37:0] \$75 ;
+  wire \$75 ;
   wire [37:0] \$76 ;
   wire [37:0] \$77 ;
-  wire [24:0] \$78 ;
+  wire [37:0] \$78 ;
   wire [1:0] \$79 ;
   wire \$8 ;
   wire [2:0] \$80 ;
@@ -26910,15 +27595,14 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg [11:0] \$85 ;
   reg [11:0] \$86 ;
   reg [16:0] \$87 ;
-  reg [9:0] \$88 ;
-  reg [24:0] \$89 ;
+  reg [24:0] \$88 ;
   wire \$9 ;
   output [23:0] ack_limit;
   reg [23:0] ack_limit = 24'h000000;
   input clk;
   wire clk;
   output [9:0] crc_widths;
-  reg [9:0] crc_widths = 10'h000;
+  wire [9:0] crc_widths;
   wire [4:0] \crc_widths[0] ;
   wire [4:0] \crc_widths[1] ;
   output [274:0] cycle;
@@ -27049,7 +27733,6 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
-  assign \$11  = | live[165:161];
   assign \$12  = \$10  & \$11 ;
   assign \$13  = live[165:161] <= 5'h10;
   assign \$14  = \$12  & \$13 ;
@@ -27103,19 +27786,19 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$63  = ! live[144:141];
   assign \$64  = \$63  ? 4'h2 : live[144:141];
   assign \$65  = live[15:0] + \$64 ;
-  assign \$66  = live[158:157] == 2'h3;
-  assign \$67  = live[158:157] == 2'h2;
-  assign \$68  = live[158:157] == 1'h1;
-  assign \$69  = \$68  ? 38'h2000000066 : 38'h0000000000;
-  assign \$70  = \$67  ? 38'h2000121b30 : \$69 ;
-  assign \$71  = \$66  ? live[198:161] : \$70 ;
-  assign \$72  = live[209:208] == 2'h3;
-  assign \$73  = live[209:208] == 2'h2;
-  assign \$74  = live[209:208] == 1'h1;
-  assign \$75  = \$74  ? 38'h2000000066 : 38'h0000000000;
-  assign \$76  = \$73  ? 38'h2000121b30 : \$75 ;
-  assign \$77  = \$72  ? live[249:212] : \$76 ;
-  assign \$78  = ack_limit + { cycle[15:0], 1'h1 };
+  assign \$66  = ack_limit + { cycle[15:0], 1'h1 };
+  assign \$67  = cycle[158:157] == 2'h3;
+  assign \$68  = cycle[158:157] == 2'h2;
+  assign \$69  = cycle[158:157] == 1'h1;
+  assign \$70  = \$69  ? 38'h2000000066 : 38'h0000000000;
+  assign \$71  = \$68  ? 38'h2000121b30 : \$70 ;
+  assign \$72  = \$67  ? cycle[198:161] : \$71 ;
+  assign \$73  = cycle[209:208] == 2'h3;
+  assign \$74  = cycle[209:208] == 2'h2;
+  assign \$75  = cycle[209:208] == 1'h1;
+  assign \$76  = \$75  ? 38'h2000000066 : 38'h0000000000;
+  assign \$77  = \$74  ? 38'h2000121b30 : \$76 ;
+  assign \$78  = \$73  ? cycle[249:212] : \$77 ;
   assign \$80  = 2'h1 + cycle[199];
   always @(posedge clk)
     ok <= \$81 ;
@@ -27132,9 +27815,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   always @(posedge clk)
     delay_tolerance <= \$87 ;
   always @(posedge clk)
-    crc_widths <= \$88 ;
-  always @(posedge clk)
-    no_start_limit <= \$89 ;
+    no_start_limit <= \$88 ;
   assign \$1  = | live[15:1];
   assign \$2  = | live[154:149];
   assign \$3  = live[154:149] <= 6'h37;
@@ -27145,6 +27826,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$8  = live[158:157] == 2'h2;
   assign \$9  = \$7  | \$8 ;
   assign \$10  = live[158:157] == 2'h3;
+  assign \$11  = | live[165:161];
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$81  = \$54 ;
@@ -27214,20 +27896,9 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$88  = crc_widths;
-    if (idle) begin
-      \$88 [4:0] = \$71 [4:0];
-      \$88 [9:5] = \$77 [4:0];
-    end
+    \$88  = \$66 ;
     if (rst) begin
-      \$88  = 10'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$89  = \$78 ;
-    if (rst) begin
-      \$89  = 25'h0000000;
+      \$88  = 25'h0000000;
     end
   end
   assign word_count = \$80 [1:0];
@@ -27319,6 +27990,8 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.ssi_double  = cycle[274];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
+  assign crc_widths[9:5] = \$78 [4:0];
+  assign crc_widths[4:0] = \$72 [4:0];
   assign \$36  = live[156];
   assign \$79  = 2'h1;
 endmodule
@@ -30296,11 +30969,11 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$7342$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$7708$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
-  wire \$10 ;
+  wire [1:0] \$10 ;
   wire \$100 ;
   wire \$101 ;
   wire \$102 ;
@@ -30399,7 +31072,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$187 ;
   wire \$188 ;
   wire \$189 ;
-  wire [16:0] \$19 ;
+  wire \$19 ;
   wire \$190 ;
   wire \$191 ;
   wire \$192 ;
@@ -30410,8 +31083,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$197 ;
   wire \$198 ;
   wire \$199 ;
-  wire [6:0] \$2 ;
-  wire \$20 ;
+  wire \$2 ;
+  wire [16:0] \$20 ;
   wire \$200 ;
   wire \$201 ;
   wire \$202 ;
@@ -30455,7 +31128,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$237 ;
   wire \$238 ;
   wire \$239 ;
-  wire [7:0] \$24 ;
+  wire \$24 ;
   wire \$240 ;
   wire \$241 ;
   wire \$242 ;
@@ -30466,7 +31139,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$247 ;
   wire \$248 ;
   wire \$249 ;
-  wire [6:0] \$25 ;
+  reg [1:0] \$25 ;
   wire \$250 ;
   wire \$251 ;
   wire \$252 ;
@@ -30477,7 +31150,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$257 ;
   wire \$258 ;
   wire \$259 ;
-  wire \$26 ;
+  wire [6:0] \$26 ;
   wire \$260 ;
   wire \$261 ;
   wire \$262 ;
@@ -30499,7 +31172,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$277 ;
   wire \$278 ;
   wire \$279 ;
-  wire [6:0] \$28 ;
+  wire \$28 ;
   wire \$280 ;
   wire \$281 ;
   wire \$282 ;
@@ -30510,7 +31183,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$287 ;
   wire \$288 ;
   wire \$289 ;
-  wire \$29 ;
+  reg [3:0] \$29 ;
   wire \$290 ;
   wire \$291 ;
   wire \$292 ;
@@ -30521,8 +31194,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$297 ;
   wire \$298 ;
   wire \$299 ;
-  wire \$3 ;
-  wire \$30 ;
+  wire [2:0] \$3 ;
+  wire [6:0] \$30 ;
   wire \$300 ;
   wire \$301 ;
   wire \$302 ;
@@ -30533,7 +31206,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$307 ;
   wire \$308 ;
   wire \$309 ;
-  wire [6:0] \$31 ;
+  wire \$31 ;
   wire \$310 ;
   wire \$311 ;
   wire \$312 ;
@@ -30559,20 +31232,20 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$330 ;
   wire \$331 ;
   wire \$332 ;
-  wire [54:0] \$333 ;
+  wire \$333 ;
   wire \$334 ;
   wire \$335 ;
   wire \$336 ;
   wire \$337 ;
   wire \$338 ;
   wire \$339 ;
-  wire [6:0] \$34 ;
+  wire \$34 ;
   wire \$340 ;
   wire \$341 ;
   wire \$342 ;
   wire \$343 ;
   wire \$344 ;
-  wire \$345 ;
+  wire [54:0] \$345 ;
   wire \$346 ;
   wire \$347 ;
   wire \$348 ;
@@ -30588,7 +31261,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$357 ;
   wire \$358 ;
   wire \$359 ;
-  wire \$36 ;
+  reg [1:0] \$36 ;
   wire \$360 ;
   wire \$361 ;
   wire \$362 ;
@@ -30633,7 +31306,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$398 ;
   wire \$399 ;
   wire \$4 ;
-  wire \$40 ;
+  reg [3:0] \$40 ;
   wire \$400 ;
   wire \$401 ;
   wire \$402 ;
@@ -30644,7 +31317,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$407 ;
   wire \$408 ;
   wire \$409 ;
-  wire \$41 ;
+  wire [6:0] \$41 ;
   wire \$410 ;
   wire \$411 ;
   wire \$412 ;
@@ -30655,7 +31328,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$417 ;
   wire \$418 ;
   wire \$419 ;
-  wire [6:0] \$42 ;
+  wire \$42 ;
   wire \$420 ;
   wire \$421 ;
   wire \$422 ;
@@ -30688,7 +31361,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$447 ;
   wire \$448 ;
   wire \$449 ;
-  wire \$45 ;
+  wire [7:0] \$45 ;
   wire \$450 ;
   wire \$451 ;
   wire \$452 ;
@@ -30699,7 +31372,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$457 ;
   wire \$458 ;
   wire \$459 ;
-  wire [2:0] \$46 ;
+  wire \$46 ;
   wire \$460 ;
   wire \$461 ;
   wire \$462 ;
@@ -30732,7 +31405,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$487 ;
   wire \$488 ;
   wire \$489 ;
-  wire [1:0] \$49 ;
+  wire \$49 ;
   wire \$490 ;
   wire \$491 ;
   wire \$492 ;
@@ -30744,7 +31417,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$498 ;
   wire \$499 ;
   wire \$5 ;
-  wire [7:0] \$50 ;
+  wire \$50 ;
   wire \$500 ;
   wire \$501 ;
   wire \$502 ;
@@ -30755,7 +31428,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$507 ;
   wire \$508 ;
   wire \$509 ;
-  wire [6:0] \$51 ;
+  wire \$51 ;
   wire \$510 ;
   wire \$511 ;
   wire \$512 ;
@@ -30806,7 +31479,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$553 ;
   wire \$554 ;
   wire \$555 ;
-  wire [39:0] \$556 ;
+  wire \$556 ;
   wire \$557 ;
   wire \$558 ;
   wire \$559 ;
@@ -30819,36 +31492,48 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$565 ;
   wire \$566 ;
   wire \$567 ;
-  wire \$568 ;
-  reg \$569 ;
+  wire [39:0] \$568 ;
+  wire \$569 ;
   wire \$57 ;
-  reg \$570 ;
-  reg [15:0] \$571 ;
-  reg \$572 ;
-  reg [6:0] \$573 ;
-  reg \$574 ;
-  reg \$575 ;
-  reg \$576 ;
-  reg \$577 ;
-  reg \$578 ;
-  reg [2:0] \$579 ;
+  wire \$570 ;
+  wire \$571 ;
+  wire \$572 ;
+  wire \$573 ;
+  wire \$574 ;
+  wire \$575 ;
+  wire \$576 ;
+  wire \$577 ;
+  wire \$578 ;
+  wire \$579 ;
   wire \$58 ;
-  reg \$580 ;
-  reg [15:0] \$581 ;
+  wire \$580 ;
+  reg \$581 ;
   reg \$582 ;
-  reg \$583 ;
-  reg [54:0] \$584 ;
-  reg [1:0] \$585 ;
-  reg [1:0] \$586 ;
-  reg [39:0] \$587 ;
-  reg [5:0] \$588 ;
-  reg [39:0] \$589 ;
-  wire \$59 ;
-  wire [6:0] \$6 ;
+  reg [15:0] \$583 ;
+  reg \$584 ;
+  reg [6:0] \$585 ;
+  reg \$586 ;
+  reg \$587 ;
+  reg \$588 ;
+  reg \$589 ;
+  wire [2:0] \$59 ;
+  reg \$590 ;
+  reg [2:0] \$591 ;
+  reg \$592 ;
+  reg [15:0] \$593 ;
+  reg \$594 ;
+  reg \$595 ;
+  reg [54:0] \$596 ;
+  reg [1:0] \$597 ;
+  reg [1:0] \$598 ;
+  reg [39:0] \$599 ;
+  wire \$6 ;
   wire \$60 ;
+  reg [5:0] \$600 ;
+  reg [39:0] \$601 ;
   wire \$61 ;
-  wire \$62 ;
-  wire \$63 ;
+  wire [1:0] \$62 ;
+  wire [7:0] \$63 ;
   wire \$64 ;
   wire \$65 ;
   wire \$66 ;
@@ -30866,7 +31551,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$77 ;
   wire \$78 ;
   wire \$79 ;
-  wire [1:0] \$8 ;
+  wire \$8 ;
   wire \$80 ;
   wire \$81 ;
   wire \$82 ;
@@ -30888,11 +31573,13 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \$97 ;
   wire \$98 ;
   wire \$99 ;
+  reg advance;
   reg at_cds;
+  reg \begin ;
   input \bit ;
   wire \bit ;
-  wire \bit$11 ;
-  wire \bit$37 ;
+  wire \bit$13 ;
+  wire \bit$41 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -30923,19 +31610,27 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire [4:0] \crc_widths$3[1] ;
   wire [4:0] \crc_widths[0] ;
   wire [4:0] \crc_widths[1] ;
+  wire [36:0] current;
+  wire \current.data_at0 ;
+  wire [6:0] \current.data_end_m1 ;
+  wire [6:0] \current.data_end_p1 ;
+  wire \current.lc_at0 ;
+  wire [6:0] \current.lc_end_m1 ;
+  wire [6:0] \current.nenw_end_m1 ;
+  wire [6:0] \current.word_end_m1 ;
   input [75:0] customs;
   wire [75:0] customs;
-  wire [75:0] \customs$30 ;
-  wire [37:0] \customs$30[0] ;
-  wire \customs$30[0].inverted ;
-  wire [15:0] \customs$30[0].poly ;
-  wire [15:0] \customs$30[0].start ;
-  wire [4:0] \customs$30[0].width ;
-  wire [37:0] \customs$30[1] ;
-  wire \customs$30[1].inverted ;
-  wire [15:0] \customs$30[1].poly ;
-  wire [15:0] \customs$30[1].start ;
-  wire [4:0] \customs$30[1].width ;
+  wire [75:0] \customs$35 ;
+  wire [37:0] \customs$35[0] ;
+  wire \customs$35[0].inverted ;
+  wire [15:0] \customs$35[0].poly ;
+  wire [15:0] \customs$35[0].start ;
+  wire [4:0] \customs$35[0].width ;
+  wire [37:0] \customs$35[1] ;
+  wire \customs$35[1].inverted ;
+  wire [15:0] \customs$35[1].poly ;
+  wire [15:0] \customs$35[1].start ;
+  wire [4:0] \customs$35[1].width ;
   wire [37:0] \customs[0] ;
   wire \customs[0].inverted ;
   wire [15:0] \customs[0].poly ;
@@ -30952,25 +31647,16 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   reg [39:0] data1 = 40'h0000000000;
   reg [2:0] decoder_fsm_state = 3'h0;
   reg done = 1'h0;
-  wire [73:0] ends;
-  wire [36:0] \ends[0] ;
-  wire \ends[0].data_at0 ;
-  wire [6:0] \ends[0].data_end_m1 ;
-  wire [6:0] \ends[0].data_end_p1 ;
-  wire \ends[0].lc_at0 ;
-  wire [6:0] \ends[0].lc_end_m1 ;
-  wire [6:0] \ends[0].nenw_end_m1 ;
-  wire [6:0] \ends[0].word_end_m1 ;
-  wire [36:0] \ends[1] ;
-  wire \ends[1].data_at0 ;
-  wire [6:0] \ends[1].data_end_m1 ;
-  wire [6:0] \ends[1].data_end_p1 ;
-  wire \ends[1].lc_at0 ;
-  wire [6:0] \ends[1].lc_end_m1 ;
-  wire [6:0] \ends[1].nenw_end_m1 ;
-  wire [6:0] \ends[1].word_end_m1 ;
   wire error_bit;
   wire first;
+  wire [36:0] following;
+  wire \following.data_at0 ;
+  wire [6:0] \following.data_end_m1 ;
+  wire [6:0] \following.data_end_p1 ;
+  wire \following.lc_at0 ;
+  wire [6:0] \following.lc_end_m1 ;
+  wire [6:0] \following.nenw_end_m1 ;
+  wire [6:0] \following.word_end_m1 ;
   output frame_end;
   wire frame_end;
   reg [6:0] idx = 7'h00;
@@ -30979,9 +31665,10 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
-  wire [6:0] index;
+  reg index = 1'h0;
+  wire [6:0] \index$14 ;
   (* init = 1'h0 *)
-  wire \index$40 ;
+  wire \index$44 ;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -30992,14 +31679,14 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire load_index;
   output mismatch;
   wire mismatch;
-  wire \mismatch$16 ;
+  wire \mismatch$17 ;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7342$272 ;
-  wire [2:0] \port$7342$272 ;
+  input [2:0] \port$7708$272 ;
+  wire [2:0] \port$7708$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -31024,7 +31711,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   reg stop_bit = 1'h0;
   output stopped;
   reg stopped = 1'h0;
-  reg word = 1'h0;
+  (* init = 1'h0 *)
+  wire word;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [23:0] words;
@@ -31078,625 +31766,634 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$402  = words[23] & \$401 ;
-  assign \$403  = words[22] & data1[0];
-  assign \$404  = \bit  ^ \$403 ;
-  assign \$405  = \$402  & \$404 ;
-  assign \$406  = ! idx;
-  assign \$407  = words[23] & \$406 ;
-  assign \$408  = words[22] & data1[0];
-  assign \$409  = \bit  ^ \$408 ;
-  assign \$410  = \$407  & \$409 ;
-  assign \$411  = ! idx;
-  assign \$412  = words[23] & \$411 ;
-  assign \$413  = words[22] & data1[0];
-  assign \$414  = \bit  ^ \$413 ;
-  assign \$415  = \$412  & \$414 ;
-  assign \$416  = ! idx;
-  assign \$417  = words[23] & \$416 ;
-  assign \$418  = words[22] & data1[0];
-  assign \$419  = \bit  ^ \$418 ;
-  assign \$420  = \$417  & \$419 ;
-  assign \$421  = ! idx;
-  assign \$422  = words[23] & \$421 ;
-  assign \$423  = words[22] & data1[0];
-  assign \$424  = \bit  ^ \$423 ;
-  assign \$425  = \$422  & \$424 ;
-  assign \$426  = ! idx;
-  assign \$427  = words[23] & \$426 ;
-  assign \$428  = words[22] & data1[0];
-  assign \$429  = \bit  ^ \$428 ;
-  assign \$430  = \$427  & \$429 ;
-  assign \$431  = ! idx;
-  assign \$432  = words[23] & \$431 ;
-  assign \$433  = words[22] & data1[0];
-  assign \$434  = \bit  ^ \$433 ;
-  assign \$435  = \$432  & \$434 ;
-  assign \$436  = ! idx;
-  assign \$437  = words[23] & \$436 ;
-  assign \$438  = words[22] & data1[0];
-  assign \$439  = \bit  ^ \$438 ;
-  assign \$440  = \$437  & \$439 ;
-  assign \$441  = ! idx;
-  assign \$442  = words[23] & \$441 ;
-  assign \$443  = words[22] & data1[0];
-  assign \$444  = \bit  ^ \$443 ;
-  assign \$445  = \$442  & \$444 ;
-  assign \$446  = ! idx;
-  assign \$447  = words[23] & \$446 ;
-  assign \$448  = words[22] & data1[0];
-  assign \$449  = \bit  ^ \$448 ;
-  assign \$450  = \$447  & \$449 ;
-  assign \$451  = ! idx;
-  assign \$452  = words[23] & \$451 ;
-  assign \$453  = words[22] & data1[0];
-  assign \$454  = \bit  ^ \$453 ;
-  assign \$455  = \$452  & \$454 ;
-  assign \$456  = ! idx;
-  assign \$457  = words[23] & \$456 ;
-  assign \$458  = words[22] & data1[0];
-  assign \$459  = \bit  ^ \$458 ;
-  assign \$460  = \$457  & \$459 ;
-  assign \$461  = ! idx;
-  assign \$462  = words[23] & \$461 ;
-  assign \$463  = words[22] & data1[0];
-  assign \$464  = \bit  ^ \$463 ;
-  assign \$465  = \$462  & \$464 ;
-  assign \$466  = ! idx;
-  assign \$467  = words[23] & \$466 ;
-  assign \$468  = words[22] & data1[0];
-  assign \$469  = \bit  ^ \$468 ;
-  assign \$470  = \$467  & \$469 ;
-  assign \$471  = ! idx;
-  assign \$472  = words[23] & \$471 ;
-  assign \$473  = words[22] & data1[0];
-  assign \$474  = \bit  ^ \$473 ;
-  assign \$475  = \$472  & \$474 ;
-  assign \$476  = ! idx;
-  assign \$477  = words[23] & \$476 ;
-  assign \$478  = words[22] & data1[0];
-  assign \$479  = \bit  ^ \$478 ;
-  assign \$480  = \$477  & \$479 ;
-  assign \$481  = ! idx;
-  assign \$482  = words[23] & \$481 ;
-  assign \$483  = words[22] & data1[0];
-  assign \$484  = \bit  ^ \$483 ;
-  assign \$485  = \$482  & \$484 ;
-  assign \$486  = ! idx;
-  assign \$487  = words[23] & \$486 ;
-  assign \$488  = words[22] & data1[0];
-  assign \$489  = \bit  ^ \$488 ;
-  assign \$490  = \$487  & \$489 ;
-  assign \$491  = ! idx;
-  assign \$492  = words[23] & \$491 ;
-  assign \$493  = words[22] & data1[0];
-  assign \$494  = \bit  ^ \$493 ;
-  assign \$495  = \$492  & \$494 ;
-  assign \$496  = ! idx;
-  assign \$497  = words[23] & \$496 ;
-  assign \$498  = words[22] & data1[0];
-  assign \$499  = \bit  ^ \$498 ;
-  assign \$500  = \$497  & \$499 ;
-  assign \$501  = ! idx;
-  assign \$502  = words[23] & \$501 ;
-  assign \$503  = words[22] & data1[0];
-  assign \$504  = \bit  ^ \$503 ;
-  assign \$505  = \$502  & \$504 ;
-  assign \$506  = ! idx;
-  assign \$507  = words[23] & \$506 ;
-  assign \$508  = words[22] & data1[0];
-  assign \$509  = \bit  ^ \$508 ;
-  assign \$510  = \$507  & \$509 ;
-  assign \$511  = ! idx;
-  assign \$512  = words[23] & \$511 ;
-  assign \$513  = words[22] & data1[0];
-  assign \$514  = \bit  ^ \$513 ;
-  assign \$515  = \$512  & \$514 ;
-  assign \$516  = ! idx;
-  assign \$517  = words[23] & \$516 ;
-  assign \$518  = words[22] & data1[0];
-  assign \$519  = \bit  ^ \$518 ;
-  assign \$520  = \$517  & \$519 ;
-  assign \$521  = ! idx;
-  assign \$522  = words[23] & \$521 ;
-  assign \$523  = words[22] & data1[0];
-  assign \$524  = \bit  ^ \$523 ;
-  assign \$525  = \$522  & \$524 ;
-  assign \$526  = ! idx;
-  assign \$527  = words[23] & \$526 ;
-  assign \$528  = words[22] & data1[0];
-  assign \$529  = \bit  ^ \$528 ;
-  assign \$530  = \$527  & \$529 ;
-  assign \$531  = ! idx;
-  assign \$532  = words[23] & \$531 ;
-  assign \$533  = words[22] & data1[0];
-  assign \$534  = \bit  ^ \$533 ;
-  assign \$535  = \$532  & \$534 ;
-  assign \$536  = ! idx;
-  assign \$537  = words[23] & \$536 ;
-  assign \$538  = words[22] & data1[0];
-  assign \$539  = \bit  ^ \$538 ;
-  assign \$540  = \$537  & \$539 ;
-  assign \$541  = ! idx;
-  assign \$542  = words[23] & \$541 ;
-  assign \$543  = words[22] & data1[0];
-  assign \$544  = \bit  ^ \$543 ;
-  assign \$545  = \$542  & \$544 ;
-  assign \$546  = ! idx;
-  assign \$547  = words[23] & \$546 ;
-  assign \$548  = words[22] & data1[0];
-  assign \$549  = \bit  ^ \$548 ;
-  assign \$550  = \$547  & \$549 ;
-  assign \$551  = ! idx;
-  assign \$552  = words[23] & \$551 ;
-  assign \$553  = words[22] & data1[0];
-  assign \$554  = \bit  ^ \$553 ;
-  assign \$555  = \$552  & \$554 ;
-  assign \$556  = { data1[38:0], \$355  } | { \$555 , \$550 , \$545 , \$540 , \$535 , \$530 , \$525 , \$520 , \$515 , \$510 , \$505 , \$500 , \$495 , \$490 , \$485 , \$480 , \$475 , \$470 , \$465 , \$460 , \$455 , \$450 , \$445 , \$440 , \$435 , \$430 , \$425 , \$420 , \$415 , \$410 , \$405 , \$400 , \$395 , \$390 , \$385 , \$380 , \$375 , \$370 , \$365 , \$360  };
-  assign \$557  = ~ words[18];
-  assign \$559  = in_word & \$558 ;
-  assign \$560  = idx == words[17:12];
-  assign \$561  = \$559  & \$560 ;
-  assign \$563  = in_word & \$562 ;
-  assign \$564  = idx == ends[43:37];
-  assign \$565  = \$563  & \$564 ;
-  assign \$566  = in_word & in_top;
-  assign \$567  = words[10] & data0[0];
-  assign \$568  = \bit  ^ \$567 ;
+  assign \$391  = \bit  ^ \$390 ;
+  assign \$392  = \$389  & \$391 ;
+  assign \$393  = ! idx;
+  assign \$394  = words[23] & \$393 ;
+  assign \$395  = words[22] & data1[0];
+  assign \$396  = \bit  ^ \$395 ;
+  assign \$397  = \$394  & \$396 ;
+  assign \$398  = ! idx;
+  assign \$399  = words[23] & \$398 ;
+  assign \$400  = words[22] & data1[0];
+  assign \$401  = \bit  ^ \$400 ;
+  assign \$402  = \$399  & \$401 ;
+  assign \$403  = ! idx;
+  assign \$404  = words[23] & \$403 ;
+  assign \$405  = words[22] & data1[0];
+  assign \$406  = \bit  ^ \$405 ;
+  assign \$407  = \$404  & \$406 ;
+  assign \$408  = ! idx;
+  assign \$409  = words[23] & \$408 ;
+  assign \$410  = words[22] & data1[0];
+  assign \$411  = \bit  ^ \$410 ;
+  assign \$412  = \$409  & \$411 ;
+  assign \$413  = ! idx;
+  assign \$414  = words[23] & \$413 ;
+  assign \$415  = words[22] & data1[0];
+  assign \$416  = \bit  ^ \$415 ;
+  assign \$417  = \$414  & \$416 ;
+  assign \$418  = ! idx;
+  assign \$419  = words[23] & \$418 ;
+  assign \$420  = words[22] & data1[0];
+  assign \$421  = \bit  ^ \$420 ;
+  assign \$422  = \$419  & \$421 ;
+  assign \$423  = ! idx;
+  assign \$424  = words[23] & \$423 ;
+  assign \$425  = words[22] & data1[0];
+  assign \$426  = \bit  ^ \$425 ;
+  assign \$427  = \$424  & \$426 ;
+  assign \$428  = ! idx;
+  assign \$429  = words[23] & \$428 ;
+  assign \$430  = words[22] & data1[0];
+  assign \$431  = \bit  ^ \$430 ;
+  assign \$432  = \$429  & \$431 ;
+  assign \$433  = ! idx;
+  assign \$434  = words[23] & \$433 ;
+  assign \$435  = words[22] & data1[0];
+  assign \$436  = \bit  ^ \$435 ;
+  assign \$437  = \$434  & \$436 ;
+  assign \$438  = ! idx;
+  assign \$439  = words[23] & \$438 ;
+  assign \$440  = words[22] & data1[0];
+  assign \$441  = \bit  ^ \$440 ;
+  assign \$442  = \$439  & \$441 ;
+  assign \$443  = ! idx;
+  assign \$444  = words[23] & \$443 ;
+  assign \$445  = words[22] & data1[0];
+  assign \$446  = \bit  ^ \$445 ;
+  assign \$447  = \$444  & \$446 ;
+  assign \$448  = ! idx;
+  assign \$449  = words[23] & \$448 ;
+  assign \$450  = words[22] & data1[0];
+  assign \$451  = \bit  ^ \$450 ;
+  assign \$452  = \$449  & \$451 ;
+  assign \$453  = ! idx;
+  assign \$454  = words[23] & \$453 ;
+  assign \$455  = words[22] & data1[0];
+  assign \$456  = \bit  ^ \$455 ;
+  assign \$457  = \$454  & \$456 ;
+  assign \$458  = ! idx;
+  assign \$459  = words[23] & \$458 ;
+  assign \$460  = words[22] & data1[0];
+  assign \$461  = \bit  ^ \$460 ;
+  assign \$462  = \$459  & \$461 ;
+  assign \$463  = ! idx;
+  assign \$464  = words[23] & \$463 ;
+  assign \$465  = words[22] & data1[0];
+  assign \$466  = \bit  ^ \$465 ;
+  assign \$467  = \$464  & \$466 ;
+  assign \$468  = ! idx;
+  assign \$469  = words[23] & \$468 ;
+  assign \$470  = words[22] & data1[0];
+  assign \$471  = \bit  ^ \$470 ;
+  assign \$472  = \$469  & \$471 ;
+  assign \$473  = ! idx;
+  assign \$474  = words[23] & \$473 ;
+  assign \$475  = words[22] & data1[0];
+  assign \$476  = \bit  ^ \$475 ;
+  assign \$477  = \$474  & \$476 ;
+  assign \$478  = ! idx;
+  assign \$479  = words[23] & \$478 ;
+  assign \$480  = words[22] & data1[0];
+  assign \$481  = \bit  ^ \$480 ;
+  assign \$482  = \$479  & \$481 ;
+  assign \$483  = ! idx;
+  assign \$484  = words[23] & \$483 ;
+  assign \$485  = words[22] & data1[0];
+  assign \$486  = \bit  ^ \$485 ;
+  assign \$487  = \$484  & \$486 ;
+  assign \$488  = ! idx;
+  assign \$489  = words[23] & \$488 ;
+  assign \$490  = words[22] & data1[0];
+  assign \$491  = \bit  ^ \$490 ;
+  assign \$492  = \$489  & \$491 ;
+  assign \$493  = ! idx;
+  assign \$494  = words[23] & \$493 ;
+  assign \$495  = words[22] & data1[0];
+  assign \$496  = \bit  ^ \$495 ;
+  assign \$497  = \$494  & \$496 ;
+  assign \$498  = ! idx;
+  assign \$499  = words[23] & \$498 ;
+  assign \$500  = words[22] & data1[0];
+  assign \$501  = \bit  ^ \$500 ;
+  assign \$502  = \$499  & \$501 ;
+  assign \$503  = ! idx;
+  assign \$504  = words[23] & \$503 ;
+  assign \$505  = words[22] & data1[0];
+  assign \$506  = \bit  ^ \$505 ;
+  assign \$507  = \$504  & \$506 ;
+  assign \$508  = ! idx;
+  assign \$509  = words[23] & \$508 ;
+  assign \$510  = words[22] & data1[0];
+  assign \$511  = \bit  ^ \$510 ;
+  assign \$512  = \$509  & \$511 ;
+  assign \$513  = ! idx;
+  assign \$514  = words[23] & \$513 ;
+  assign \$515  = words[22] & data1[0];
+  assign \$516  = \bit  ^ \$515 ;
+  assign \$517  = \$514  & \$516 ;
+  assign \$518  = ! idx;
+  assign \$519  = words[23] & \$518 ;
+  assign \$520  = words[22] & data1[0];
+  assign \$521  = \bit  ^ \$520 ;
+  assign \$522  = \$519  & \$521 ;
+  assign \$523  = ! idx;
+  assign \$524  = words[23] & \$523 ;
+  assign \$525  = words[22] & data1[0];
+  assign \$526  = \bit  ^ \$525 ;
+  assign \$527  = \$524  & \$526 ;
+  assign \$528  = ! idx;
+  assign \$529  = words[23] & \$528 ;
+  assign \$530  = words[22] & data1[0];
+  assign \$531  = \bit  ^ \$530 ;
+  assign \$532  = \$529  & \$531 ;
+  assign \$533  = ! idx;
+  assign \$534  = words[23] & \$533 ;
+  assign \$535  = words[22] & data1[0];
+  assign \$536  = \bit  ^ \$535 ;
+  assign \$537  = \$534  & \$536 ;
+  assign \$538  = ! idx;
+  assign \$539  = words[23] & \$538 ;
+  assign \$540  = words[22] & data1[0];
+  assign \$541  = \bit  ^ \$540 ;
+  assign \$542  = \$539  & \$541 ;
+  assign \$543  = ! idx;
+  assign \$544  = words[23] & \$543 ;
+  assign \$545  = words[22] & data1[0];
+  assign \$546  = \bit  ^ \$545 ;
+  assign \$547  = \$544  & \$546 ;
+  assign \$548  = ! idx;
+  assign \$549  = words[23] & \$548 ;
+  assign \$550  = words[22] & data1[0];
+  assign \$551  = \bit  ^ \$550 ;
+  assign \$552  = \$549  & \$551 ;
+  assign \$553  = ! idx;
+  assign \$554  = words[23] & \$553 ;
+  assign \$555  = words[22] & data1[0];
+  assign \$556  = \bit  ^ \$555 ;
+  assign \$557  = \$554  & \$556 ;
+  assign \$558  = ! idx;
+  assign \$559  = words[23] & \$558 ;
+  assign \$560  = words[22] & data1[0];
+  assign \$561  = \bit  ^ \$560 ;
+  assign \$562  = \$559  & \$561 ;
+  assign \$563  = ! idx;
+  assign \$564  = words[23] & \$563 ;
+  assign \$565  = words[22] & data1[0];
+  assign \$566  = \bit  ^ \$565 ;
+  assign \$567  = \$564  & \$566 ;
+  assign \$568  = { data1[38:0], \$367  } | { \$567 , \$562 , \$557 , \$552 , \$547 , \$542 , \$537 , \$532 , \$527 , \$522 , \$517 , \$512 , \$507 , \$502 , \$497 , \$492 , \$487 , \$482 , \$477 , \$472 , \$467 , \$462 , \$457 , \$452 , \$447 , \$442 , \$437 , \$432 , \$427 , \$422 , \$417 , \$412 , \$407 , \$402 , \$397 , \$392 , \$387 , \$382 , \$377 , \$372  };
+  assign \$569  = ~ words[18];
+  assign \$571  = in_word & \$570 ;
+  assign \$572  = idx == words[17:12];
+  assign \$573  = \$571  & \$572 ;
+  assign \$575  = in_word & \$574 ;
+  assign \$576  = idx == current[6:0];
+  assign \$577  = \$575  & \$576 ;
+  assign \$578  = in_word & in_top;
+  assign \$579  = words[10] & data0[0];
+  assign \$580  = \bit  ^ \$579 ;
   always @(posedge clk)
-    done <= \$569 ;
+    done <= \$581 ;
   always @(posedge clk)
-    stopped <= \$570 ;
+    stopped <= \$582 ;
   always @(posedge clk)
-    slots <= \$571 ;
+    slots <= \$583 ;
   always @(posedge clk)
-    slots_full <= \$572 ;
+    slots_full <= \$584 ;
   always @(posedge clk)
-    idx <= \$573 ;
+    idx <= \$585 ;
   always @(posedge clk)
-    in_data <= \$574 ;
+    in_data <= \$586 ;
   always @(posedge clk)
-    in_lc <= \$575 ;
+    in_lc <= \$587 ;
   always @(posedge clk)
-    in_crc <= \$576 ;
+    in_crc <= \$588 ;
   always @(posedge clk)
-    in_top <= \$577 ;
+    in_top <= \$589 ;
   always @(posedge clk)
-    word <= \$578 ;
+    index <= \$590 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$579 ;
+    decoder_fsm_state <= \$591 ;
   always @(posedge clk)
-    started <= \$580 ;
+    started <= \$592 ;
   always @(posedge clk)
-    start_slot <= \$581 ;
+    start_slot <= \$593 ;
   always @(posedge clk)
-    cds <= \$582 ;
+    cds <= \$594 ;
   always @(posedge clk)
-    stop_bit <= \$583 ;
+    stop_bit <= \$595 ;
   always @(posedge clk)
-    data0 <= \$584 ;
+    data0 <= \$596 ;
   always @(posedge clk)
-    ne <= \$585 ;
+    ne <= \$597 ;
   always @(posedge clk)
-    nw <= \$586 ;
+    nw <= \$598 ;
   always @(posedge clk)
-    data1 <= \$587 ;
+    data1 <= \$599 ;
   always @(posedge clk)
-    lc <= \$588 ;
+    lc <= \$600 ;
   always @(posedge clk)
-    cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$7342$272 [0];
+    cpw_top <= \$601 ;
+  assign error_bit = ssi & \port$7708$272 [0];
   assign frame_end = ssi ? stopped : done;
-  assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
+  assign \$2  = idx == current[34:28];
+  assign \$3  = word_count - 1'h1;
+  assign \$4  = index == \$3 ;
   assign first = in_word & ssi;
   assign lc_load = in_word & in_lc;
-  assign \$2  = word ? ends[71:65] : ends[34:28];
-  assign \$3  = idx == \$2 ;
-  assign \$4  = in_word & \$3 ;
-  assign load = at_cds | \$4 ;
-  assign \$5  = ~ in_crc;
-  assign \cover  = in_word & \$5 ;
+  assign \$5  = idx == current[34:28];
+  assign \$6  = in_word & \$5 ;
+  assign load = at_cds | \$6 ;
+  assign \$7  = ~ in_crc;
+  assign \cover  = in_word & \$7 ;
   assign check = in_word & in_crc;
-  assign \$6  = word ? ends[71:65] : ends[34:28];
-  assign \$7  = idx == \$6 ;
-  assign last = in_word & \$7 ;
-  assign \$8  = word + 1'h1;
-  assign \$9  = at_cds ? 2'h0 : \$8 ;
-  assign \$10  = ! decoder_fsm_state;
-  assign \$11  = decoder_fsm_state == 1'h1;
-  assign \$12  = decoder_fsm_state == 2'h2;
-  assign \$13  = decoder_fsm_state == 2'h3;
-  assign \$14  = decoder_fsm_state == 3'h4;
-  assign \$15  = decoder_fsm_state == 3'h5;
-  assign \$16  = decoder_fsm_state == 3'h6;
-  assign \$17  = ~ slots_full;
-  assign \$18  = sample & \$17 ;
-  assign \$19  = slots + 1'h1;
-  assign \$20  = slots == 16'hfffe;
-  assign \$21  = sample & \bit ;
-  assign \$22  = | words[17:12];
-  assign \$23  = | words[17:12];
-  assign \$24  = idx + 1'h1;
-  assign \$25  = word ? ends[50:44] : ends[13:7];
-  assign \$26  = idx != \$25 ;
-  assign \$27  = in_data & \$26 ;
-  assign \$28  = word ? ends[57:51] : ends[20:14];
-  assign \$29  = idx == \$28 ;
-  assign \$30  = in_lc | \$29 ;
-  assign \$31  = word ? ends[64:58] : ends[27:21];
-  assign \$32  = idx != \$31 ;
-  assign \$33  = \$30  & \$32 ;
-  assign \$34  = word ? ends[64:58] : ends[27:21];
-  assign \$35  = idx == \$34 ;
-  assign \$36  = in_crc | \$35 ;
-  assign \$37  = word ? ends[71:65] : ends[34:28];
-  assign \$38  = idx != \$37 ;
-  assign \$39  = \$36  & \$38 ;
-  assign \$40  = idx != ends[50:44];
-  assign \$41  = in_top & \$40 ;
-  assign \$42  = word ? ends[71:65] : ends[34:28];
-  assign \$43  = idx == \$42 ;
-  assign \$46  = word_count - 1'h1;
-  assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$7342$272 [2];
-  assign \$49  = word + 1'h1;
-  assign \$50  = idx + 1'h1;
-  assign \$51  = word ? ends[71:65] : ends[34:28];
-  assign \$52  = idx == \$51 ;
-  assign \$53  = ! word;
-  assign \$54  = in_word & \$53 ;
-  assign \$55  = \$54  & in_data;
-  assign \$56  = words[10] & data0[0];
-  assign \$57  = \bit  ^ \$56 ;
-  assign \$58  = ! idx;
-  assign \$59  = words[11] & \$58 ;
-  assign \$60  = words[10] & data0[0];
-  assign \$61  = \bit  ^ \$60 ;
-  assign \$62  = \$59  & \$61 ;
-  assign \$63  = ! idx;
-  assign \$64  = words[11] & \$63 ;
-  assign \$65  = words[10] & data0[0];
-  assign \$66  = \bit  ^ \$65 ;
-  assign \$67  = \$64  & \$66 ;
-  assign \$68  = ! idx;
-  assign \$69  = words[11] & \$68 ;
-  assign \$70  = words[10] & data0[0];
-  assign \$71  = \bit  ^ \$70 ;
-  assign \$72  = \$69  & \$71 ;
-  assign \$73  = ! idx;
-  assign \$74  = words[11] & \$73 ;
-  assign \$75  = words[10] & data0[0];
-  assign \$76  = \bit  ^ \$75 ;
-  assign \$77  = \$74  & \$76 ;
-  assign \$78  = ! idx;
-  assign \$79  = words[11] & \$78 ;
-  assign \$80  = words[10] & data0[0];
-  assign \$81  = \bit  ^ \$80 ;
-  assign \$82  = \$79  & \$81 ;
-  assign \$83  = ! idx;
-  assign \$84  = words[11] & \$83 ;
-  assign \$85  = words[10] & data0[0];
-  assign \$86  = \bit  ^ \$85 ;
-  assign \$87  = \$84  & \$86 ;
-  assign \$88  = ! idx;
-  assign \$89  = words[11] & \$88 ;
-  assign \$90  = words[10] & data0[0];
-  assign \$91  = \bit  ^ \$90 ;
-  assign \$92  = \$89  & \$91 ;
-  assign \$93  = ! idx;
-  assign \$94  = words[11] & \$93 ;
-  assign \$95  = words[10] & data0[0];
-  assign \$96  = \bit  ^ \$95 ;
-  assign \$97  = \$94  & \$96 ;
-  assign \$98  = ! idx;
-  assign \$99  = words[11] & \$98 ;
-  assign \$100  = words[10] & data0[0];
-  assign \$101  = \bit  ^ \$100 ;
-  assign \$102  = \$99  & \$101 ;
-  assign \$103  = ! idx;
-  assign \$104  = words[11] & \$103 ;
-  assign \$105  = words[10] & data0[0];
-  assign \$106  = \bit  ^ \$105 ;
-  assign \$107  = \$104  & \$106 ;
-  assign \$108  = ! idx;
-  assign \$109  = words[11] & \$108 ;
-  assign \$110  = words[10] & data0[0];
-  assign \$111  = \bit  ^ \$110 ;
-  assign \$112  = \$109  & \$111 ;
-  assign \$113  = ! idx;
-  assign \$114  = words[11] & \$113 ;
-  assign \$115  = words[10] & data0[0];
-  assign \$116  = \bit  ^ \$115 ;
-  assign \$117  = \$114  & \$116 ;
-  assign \$118  = ! idx;
-  assign \$119  = words[11] & \$118 ;
-  assign \$120  = words[10] & data0[0];
-  assign \$121  = \bit  ^ \$120 ;
-  assign \$122  = \$119  & \$121 ;
-  assign \$123  = ! idx;
-  assign \$124  = words[11] & \$123 ;
-  assign \$125  = words[10] & data0[0];
-  assign \$126  = \bit  ^ \$125 ;
-  assign \$127  = \$124  & \$126 ;
-  assign \$128  = ! idx;
-  assign \$129  = words[11] & \$128 ;
-  assign \$130  = words[10] & data0[0];
-  assign \$131  = \bit  ^ \$130 ;
-  assign \$132  = \$129  & \$131 ;
-  assign \$133  = ! idx;
-  assign \$134  = words[11] & \$133 ;
-  assign \$135  = words[10] & data0[0];
-  assign \$136  = \bit  ^ \$135 ;
-  assign \$137  = \$134  & \$136 ;
-  assign \$138  = ! idx;
-  assign \$139  = words[11] & \$138 ;
-  assign \$140  = words[10] & data0[0];
-  assign \$141  = \bit  ^ \$140 ;
-  assign \$142  = \$139  & \$141 ;
-  assign \$143  = ! idx;
-  assign \$144  = words[11] & \$143 ;
-  assign \$145  = words[10] & data0[0];
-  assign \$146  = \bit  ^ \$145 ;
-  assign \$147  = \$144  & \$146 ;
-  assign \$148  = ! idx;
-  assign \$149  = words[11] & \$148 ;
-  assign \$150  = words[10] & data0[0];
-  assign \$151  = \bit  ^ \$150 ;
-  assign \$152  = \$149  & \$151 ;
-  assign \$153  = ! idx;
-  assign \$154  = words[11] & \$153 ;
-  assign \$155  = words[10] & data0[0];
-  assign \$156  = \bit  ^ \$155 ;
-  assign \$157  = \$154  & \$156 ;
-  assign \$158  = ! idx;
-  assign \$159  = words[11] & \$158 ;
-  assign \$160  = words[10] & data0[0];
-  assign \$161  = \bit  ^ \$160 ;
-  assign \$162  = \$159  & \$161 ;
-  assign \$163  = ! idx;
-  assign \$164  = words[11] & \$163 ;
-  assign \$165  = words[10] & data0[0];
-  assign \$166  = \bit  ^ \$165 ;
-  assign \$167  = \$164  & \$166 ;
-  assign \$168  = ! idx;
-  assign \$169  = words[11] & \$168 ;
-  assign \$170  = words[10] & data0[0];
-  assign \$171  = \bit  ^ \$170 ;
-  assign \$172  = \$169  & \$171 ;
-  assign \$173  = ! idx;
-  assign \$174  = words[11] & \$173 ;
-  assign \$175  = words[10] & data0[0];
-  assign \$176  = \bit  ^ \$175 ;
-  assign \$177  = \$174  & \$176 ;
-  assign \$178  = ! idx;
-  assign \$179  = words[11] & \$178 ;
-  assign \$180  = words[10] & data0[0];
-  assign \$181  = \bit  ^ \$180 ;
-  assign \$182  = \$179  & \$181 ;
-  assign \$183  = ! idx;
-  assign \$184  = words[11] & \$183 ;
-  assign \$185  = words[10] & data0[0];
-  assign \$186  = \bit  ^ \$185 ;
-  assign \$187  = \$184  & \$186 ;
-  assign \$188  = ! idx;
-  assign \$189  = words[11] & \$188 ;
-  assign \$190  = words[10] & data0[0];
-  assign \$191  = \bit  ^ \$190 ;
-  assign \$192  = \$189  & \$191 ;
-  assign \$193  = ! idx;
-  assign \$194  = words[11] & \$193 ;
-  assign \$195  = words[10] & data0[0];
-  assign \$196  = \bit  ^ \$195 ;
-  assign \$197  = \$194  & \$196 ;
-  assign \$198  = ! idx;
-  assign \$199  = words[11] & \$198 ;
-  assign \$200  = words[10] & data0[0];
-  assign \$201  = \bit  ^ \$200 ;
-  assign \$202  = \$199  & \$201 ;
-  assign \$203  = ! idx;
-  assign \$204  = words[11] & \$203 ;
-  assign \$205  = words[10] & data0[0];
-  assign \$206  = \bit  ^ \$205 ;
-  assign \$207  = \$204  & \$206 ;
-  assign \$208  = ! idx;
-  assign \$209  = words[11] & \$208 ;
-  assign \$210  = words[10] & data0[0];
-  assign \$211  = \bit  ^ \$210 ;
-  assign \$212  = \$209  & \$211 ;
-  assign \$213  = ! idx;
-  assign \$214  = words[11] & \$213 ;
-  assign \$215  = words[10] & data0[0];
-  assign \$216  = \bit  ^ \$215 ;
-  assign \$217  = \$214  & \$216 ;
-  assign \$218  = ! idx;
-  assign \$219  = words[11] & \$218 ;
-  assign \$220  = words[10] & data0[0];
-  assign \$221  = \bit  ^ \$220 ;
-  assign \$222  = \$219  & \$221 ;
-  assign \$223  = ! idx;
-  assign \$224  = words[11] & \$223 ;
-  assign \$225  = words[10] & data0[0];
-  assign \$226  = \bit  ^ \$225 ;
-  assign \$227  = \$224  & \$226 ;
-  assign \$228  = ! idx;
-  assign \$229  = words[11] & \$228 ;
-  assign \$230  = words[10] & data0[0];
-  assign \$231  = \bit  ^ \$230 ;
-  assign \$232  = \$229  & \$231 ;
-  assign \$233  = ! idx;
-  assign \$234  = words[11] & \$233 ;
-  assign \$235  = words[10] & data0[0];
-  assign \$236  = \bit  ^ \$235 ;
-  assign \$237  = \$234  & \$236 ;
-  assign \$238  = ! idx;
-  assign \$239  = words[11] & \$238 ;
-  assign \$240  = words[10] & data0[0];
-  assign \$241  = \bit  ^ \$240 ;
-  assign \$242  = \$239  & \$241 ;
-  assign \$243  = ! idx;
-  assign \$244  = words[11] & \$243 ;
-  assign \$245  = words[10] & data0[0];
-  assign \$246  = \bit  ^ \$245 ;
-  assign \$247  = \$244  & \$246 ;
-  assign \$248  = ! idx;
-  assign \$249  = words[11] & \$248 ;
-  assign \$250  = words[10] & data0[0];
-  assign \$251  = \bit  ^ \$250 ;
-  assign \$252  = \$249  & \$251 ;
-  assign \$253  = ! idx;
-  assign \$254  = words[11] & \$253 ;
-  assign \$255  = words[10] & data0[0];
-  assign \$256  = \bit  ^ \$255 ;
-  assign \$257  = \$254  & \$256 ;
-  assign \$258  = ! idx;
-  assign \$259  = words[11] & \$258 ;
-  assign \$260  = words[10] & data0[0];
-  assign \$261  = \bit  ^ \$260 ;
-  assign \$262  = \$259  & \$261 ;
-  assign \$263  = ! idx;
-  assign \$264  = words[11] & \$263 ;
-  assign \$265  = words[10] & data0[0];
-  assign \$266  = \bit  ^ \$265 ;
-  assign \$267  = \$264  & \$266 ;
-  assign \$268  = ! idx;
-  assign \$269  = words[11] & \$268 ;
-  assign \$270  = words[10] & data0[0];
-  assign \$271  = \bit  ^ \$270 ;
-  assign \$272  = \$269  & \$271 ;
-  assign \$273  = ! idx;
-  assign \$274  = words[11] & \$273 ;
-  assign \$275  = words[10] & data0[0];
-  assign \$276  = \bit  ^ \$275 ;
-  assign \$277  = \$274  & \$276 ;
-  assign \$278  = ! idx;
-  assign \$279  = words[11] & \$278 ;
-  assign \$280  = words[10] & data0[0];
-  assign \$281  = \bit  ^ \$280 ;
-  assign \$282  = \$279  & \$281 ;
-  assign \$283  = ! idx;
-  assign \$284  = words[11] & \$283 ;
-  assign \$285  = words[10] & data0[0];
-  assign \$286  = \bit  ^ \$285 ;
-  assign \$287  = \$284  & \$286 ;
-  assign \$288  = ! idx;
-  assign \$289  = words[11] & \$288 ;
-  assign \$290  = words[10] & data0[0];
-  assign \$291  = \bit  ^ \$290 ;
-  assign \$292  = \$289  & \$291 ;
-  assign \$293  = ! idx;
-  assign \$294  = words[11] & \$293 ;
-  assign \$295  = words[10] & data0[0];
-  assign \$296  = \bit  ^ \$295 ;
-  assign \$297  = \$294  & \$296 ;
-  assign \$298  = ! idx;
-  assign \$299  = words[11] & \$298 ;
-  assign \$300  = words[10] & data0[0];
-  assign \$301  = \bit  ^ \$300 ;
-  assign \$302  = \$299  & \$301 ;
-  assign \$303  = ! idx;
-  assign \$304  = words[11] & \$303 ;
-  assign \$305  = words[10] & data0[0];
-  assign \$306  = \bit  ^ \$305 ;
-  assign \$307  = \$304  & \$306 ;
-  assign \$308  = ! idx;
-  assign \$309  = words[11] & \$308 ;
-  assign \$310  = words[10] & data0[0];
-  assign \$311  = \bit  ^ \$310 ;
-  assign \$312  = \$309  & \$311 ;
-  assign \$313  = ! idx;
-  assign \$314  = words[11] & \$313 ;
-  assign \$315  = words[10] & data0[0];
-  assign \$316  = \bit  ^ \$315 ;
-  assign \$317  = \$314  & \$316 ;
-  assign \$318  = ! idx;
-  assign \$319  = words[11] & \$318 ;
-  assign \$320  = words[10] & data0[0];
-  assign \$321  = \bit  ^ \$320 ;
-  assign \$322  = \$319  & \$321 ;
-  assign \$323  = ! idx;
-  assign \$324  = words[11] & \$323 ;
-  assign \$325  = words[10] & data0[0];
-  assign \$326  = \bit  ^ \$325 ;
-  assign \$327  = \$324  & \$326 ;
-  assign \$328  = ! idx;
-  assign \$329  = words[11] & \$328 ;
-  assign \$330  = words[10] & data0[0];
-  assign \$331  = \bit  ^ \$330 ;
-  assign \$332  = \$329  & \$331 ;
-  assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
-  assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$7342$272 [0];
-  assign \$336  = ~ \$335 ;
-  assign \$337  = \$334  & \$336 ;
-  assign \$338  = ! word;
-  assign \$339  = in_word & \$338 ;
-  assign \$340  = idx == words[5:0];
-  assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$7342$272 [0];
-  assign \$343  = ~ \port$7342$272 [1];
-  assign \$344  = \$342  & \$343 ;
-  assign \$345  = \bit  ^ \$344 ;
+  assign \$8  = idx == current[34:28];
+  assign last = in_word & \$8 ;
+  assign \$9  = index + 1'h1;
+  assign \$10  = at_cds ? 2'h0 : \$9 ;
+  assign \$11  = ! decoder_fsm_state;
+  assign \$12  = decoder_fsm_state == 1'h1;
+  assign \$13  = decoder_fsm_state == 2'h2;
+  assign \$14  = decoder_fsm_state == 2'h3;
+  assign \$15  = decoder_fsm_state == 3'h4;
+  assign \$16  = decoder_fsm_state == 3'h5;
+  assign \$17  = decoder_fsm_state == 3'h6;
+  assign \$18  = ~ slots_full;
+  assign \$19  = sample & \$18 ;
+  assign \$20  = slots + 1'h1;
+  assign \$21  = slots == 16'hfffe;
+  assign \$22  = sample & \bit ;
+  assign \$23  = | words[5:0];
+  assign \$24  = ssi & \port$7708$272 [0];
+  assign \$26  = words[5:0] + \$25 ;
+  assign \$27  = ! \$26 ;
+  assign \$28  = ssi & \port$7708$272 [0];
+  assign \$30  = words[5:0] + \$29 ;
+  assign \$31  = | \$30 ;
+  assign \$32  = \$27  & \$31 ;
+  assign \$33  = | words[17:12];
+  assign \$34  = | words[5:0];
+  assign \$35  = ssi & \port$7708$272 [0];
+  assign \$37  = words[5:0] + \$36 ;
+  assign \$38  = ! \$37 ;
+  assign \$39  = ssi & \port$7708$272 [0];
+  assign \$41  = words[5:0] + \$40 ;
+  assign \$42  = | \$41 ;
+  assign \$43  = \$38  & \$42 ;
+  assign \$44  = | words[17:12];
+  assign \$45  = idx + 1'h1;
+  assign \$46  = idx != current[13:7];
+  assign \$47  = in_data & \$46 ;
+  assign \$48  = idx == current[20:14];
+  assign \$49  = in_lc | \$48 ;
+  assign \$50  = idx != current[27:21];
+  assign \$51  = \$49  & \$50 ;
+  assign \$52  = idx == current[27:21];
+  assign \$53  = in_crc | \$52 ;
+  assign \$54  = idx != current[34:28];
+  assign \$55  = \$53  & \$54 ;
+  assign \$56  = idx != following[13:7];
+  assign \$57  = in_top & \$56 ;
+  assign \$58  = idx == current[34:28];
+  assign \$59  = word_count - 1'h1;
+  assign \$60  = index == \$59 ;
+  assign \$61  = ssi & \port$7708$272 [2];
+  assign \$62  = index + 1'h1;
+  assign \$63  = idx + 1'h1;
+  assign \$64  = idx == current[34:28];
+  assign \$65  = ! index;
+  assign \$66  = in_word & \$65 ;
+  assign \$67  = \$66  & in_data;
+  assign \$68  = words[10] & data0[0];
+  assign \$69  = \bit  ^ \$68 ;
+  assign \$70  = ! idx;
+  assign \$71  = words[11] & \$70 ;
+  assign \$72  = words[10] & data0[0];
+  assign \$73  = \bit  ^ \$72 ;
+  assign \$74  = \$71  & \$73 ;
+  assign \$75  = ! idx;
+  assign \$76  = words[11] & \$75 ;
+  assign \$77  = words[10] & data0[0];
+  assign \$78  = \bit  ^ \$77 ;
+  assign \$79  = \$76  & \$78 ;
+  assign \$80  = ! idx;
+  assign \$81  = words[11] & \$80 ;
+  assign \$82  = words[10] & data0[0];
+  assign \$83  = \bit  ^ \$82 ;
+  assign \$84  = \$81  & \$83 ;
+  assign \$85  = ! idx;
+  assign \$86  = words[11] & \$85 ;
+  assign \$87  = words[10] & data0[0];
+  assign \$88  = \bit  ^ \$87 ;
+  assign \$89  = \$86  & \$88 ;
+  assign \$90  = ! idx;
+  assign \$91  = words[11] & \$90 ;
+  assign \$92  = words[10] & data0[0];
+  assign \$93  = \bit  ^ \$92 ;
+  assign \$94  = \$91  & \$93 ;
+  assign \$95  = ! idx;
+  assign \$96  = words[11] & \$95 ;
+  assign \$97  = words[10] & data0[0];
+  assign \$98  = \bit  ^ \$97 ;
+  assign \$99  = \$96  & \$98 ;
+  assign \$100  = ! idx;
+  assign \$101  = words[11] & \$100 ;
+  assign \$102  = words[10] & data0[0];
+  assign \$103  = \bit  ^ \$102 ;
+  assign \$104  = \$101  & \$103 ;
+  assign \$105  = ! idx;
+  assign \$106  = words[11] & \$105 ;
+  assign \$107  = words[10] & data0[0];
+  assign \$108  = \bit  ^ \$107 ;
+  assign \$109  = \$106  & \$108 ;
+  assign \$110  = ! idx;
+  assign \$111  = words[11] & \$110 ;
+  assign \$112  = words[10] & data0[0];
+  assign \$113  = \bit  ^ \$112 ;
+  assign \$114  = \$111  & \$113 ;
+  assign \$115  = ! idx;
+  assign \$116  = words[11] & \$115 ;
+  assign \$117  = words[10] & data0[0];
+  assign \$118  = \bit  ^ \$117 ;
+  assign \$119  = \$116  & \$118 ;
+  assign \$120  = ! idx;
+  assign \$121  = words[11] & \$120 ;
+  assign \$122  = words[10] & data0[0];
+  assign \$123  = \bit  ^ \$122 ;
+  assign \$124  = \$121  & \$123 ;
+  assign \$125  = ! idx;
+  assign \$126  = words[11] & \$125 ;
+  assign \$127  = words[10] & data0[0];
+  assign \$128  = \bit  ^ \$127 ;
+  assign \$129  = \$126  & \$128 ;
+  assign \$130  = ! idx;
+  assign \$131  = words[11] & \$130 ;
+  assign \$132  = words[10] & data0[0];
+  assign \$133  = \bit  ^ \$132 ;
+  assign \$134  = \$131  & \$133 ;
+  assign \$135  = ! idx;
+  assign \$136  = words[11] & \$135 ;
+  assign \$137  = words[10] & data0[0];
+  assign \$138  = \bit  ^ \$137 ;
+  assign \$139  = \$136  & \$138 ;
+  assign \$140  = ! idx;
+  assign \$141  = words[11] & \$140 ;
+  assign \$142  = words[10] & data0[0];
+  assign \$143  = \bit  ^ \$142 ;
+  assign \$144  = \$141  & \$143 ;
+  assign \$145  = ! idx;
+  assign \$146  = words[11] & \$145 ;
+  assign \$147  = words[10] & data0[0];
+  assign \$148  = \bit  ^ \$147 ;
+  assign \$149  = \$146  & \$148 ;
+  assign \$150  = ! idx;
+  assign \$151  = words[11] & \$150 ;
+  assign \$152  = words[10] & data0[0];
+  assign \$153  = \bit  ^ \$152 ;
+  assign \$154  = \$151  & \$153 ;
+  assign \$155  = ! idx;
+  assign \$156  = words[11] & \$155 ;
+  assign \$157  = words[10] & data0[0];
+  assign \$158  = \bit  ^ \$157 ;
+  assign \$159  = \$156  & \$158 ;
+  assign \$160  = ! idx;
+  assign \$161  = words[11] & \$160 ;
+  assign \$162  = words[10] & data0[0];
+  assign \$163  = \bit  ^ \$162 ;
+  assign \$164  = \$161  & \$163 ;
+  assign \$165  = ! idx;
+  assign \$166  = words[11] & \$165 ;
+  assign \$167  = words[10] & data0[0];
+  assign \$168  = \bit  ^ \$167 ;
+  assign \$169  = \$166  & \$168 ;
+  assign \$170  = ! idx;
+  assign \$171  = words[11] & \$170 ;
+  assign \$172  = words[10] & data0[0];
+  assign \$173  = \bit  ^ \$172 ;
+  assign \$174  = \$171  & \$173 ;
+  assign \$175  = ! idx;
+  assign \$176  = words[11] & \$175 ;
+  assign \$177  = words[10] & data0[0];
+  assign \$178  = \bit  ^ \$177 ;
+  assign \$179  = \$176  & \$178 ;
+  assign \$180  = ! idx;
+  assign \$181  = words[11] & \$180 ;
+  assign \$182  = words[10] & data0[0];
+  assign \$183  = \bit  ^ \$182 ;
+  assign \$184  = \$181  & \$183 ;
+  assign \$185  = ! idx;
+  assign \$186  = words[11] & \$185 ;
+  assign \$187  = words[10] & data0[0];
+  assign \$188  = \bit  ^ \$187 ;
+  assign \$189  = \$186  & \$188 ;
+  assign \$190  = ! idx;
+  assign \$191  = words[11] & \$190 ;
+  assign \$192  = words[10] & data0[0];
+  assign \$193  = \bit  ^ \$192 ;
+  assign \$194  = \$191  & \$193 ;
+  assign \$195  = ! idx;
+  assign \$196  = words[11] & \$195 ;
+  assign \$197  = words[10] & data0[0];
+  assign \$198  = \bit  ^ \$197 ;
+  assign \$199  = \$196  & \$198 ;
+  assign \$200  = ! idx;
+  assign \$201  = words[11] & \$200 ;
+  assign \$202  = words[10] & data0[0];
+  assign \$203  = \bit  ^ \$202 ;
+  assign \$204  = \$201  & \$203 ;
+  assign \$205  = ! idx;
+  assign \$206  = words[11] & \$205 ;
+  assign \$207  = words[10] & data0[0];
+  assign \$208  = \bit  ^ \$207 ;
+  assign \$209  = \$206  & \$208 ;
+  assign \$210  = ! idx;
+  assign \$211  = words[11] & \$210 ;
+  assign \$212  = words[10] & data0[0];
+  assign \$213  = \bit  ^ \$212 ;
+  assign \$214  = \$211  & \$213 ;
+  assign \$215  = ! idx;
+  assign \$216  = words[11] & \$215 ;
+  assign \$217  = words[10] & data0[0];
+  assign \$218  = \bit  ^ \$217 ;
+  assign \$219  = \$216  & \$218 ;
+  assign \$220  = ! idx;
+  assign \$221  = words[11] & \$220 ;
+  assign \$222  = words[10] & data0[0];
+  assign \$223  = \bit  ^ \$222 ;
+  assign \$224  = \$221  & \$223 ;
+  assign \$225  = ! idx;
+  assign \$226  = words[11] & \$225 ;
+  assign \$227  = words[10] & data0[0];
+  assign \$228  = \bit  ^ \$227 ;
+  assign \$229  = \$226  & \$228 ;
+  assign \$230  = ! idx;
+  assign \$231  = words[11] & \$230 ;
+  assign \$232  = words[10] & data0[0];
+  assign \$233  = \bit  ^ \$232 ;
+  assign \$234  = \$231  & \$233 ;
+  assign \$235  = ! idx;
+  assign \$236  = words[11] & \$235 ;
+  assign \$237  = words[10] & data0[0];
+  assign \$238  = \bit  ^ \$237 ;
+  assign \$239  = \$236  & \$238 ;
+  assign \$240  = ! idx;
+  assign \$241  = words[11] & \$240 ;
+  assign \$242  = words[10] & data0[0];
+  assign \$243  = \bit  ^ \$242 ;
+  assign \$244  = \$241  & \$243 ;
+  assign \$245  = ! idx;
+  assign \$246  = words[11] & \$245 ;
+  assign \$247  = words[10] & data0[0];
+  assign \$248  = \bit  ^ \$247 ;
+  assign \$249  = \$246  & \$248 ;
+  assign \$250  = ! idx;
+  assign \$251  = words[11] & \$250 ;
+  assign \$252  = words[10] & data0[0];
+  assign \$253  = \bit  ^ \$252 ;
+  assign \$254  = \$251  & \$253 ;
+  assign \$255  = ! idx;
+  assign \$256  = words[11] & \$255 ;
+  assign \$257  = words[10] & data0[0];
+  assign \$258  = \bit  ^ \$257 ;
+  assign \$259  = \$256  & \$258 ;
+  assign \$260  = ! idx;
+  assign \$261  = words[11] & \$260 ;
+  assign \$262  = words[10] & data0[0];
+  assign \$263  = \bit  ^ \$262 ;
+  assign \$264  = \$261  & \$263 ;
+  assign \$265  = ! idx;
+  assign \$266  = words[11] & \$265 ;
+  assign \$267  = words[10] & data0[0];
+  assign \$268  = \bit  ^ \$267 ;
+  assign \$269  = \$266  & \$268 ;
+  assign \$270  = ! idx;
+  assign \$271  = words[11] & \$270 ;
+  assign \$272  = words[10] & data0[0];
+  assign \$273  = \bit  ^ \$272 ;
+  assign \$274  = \$271  & \$273 ;
+  assign \$275  = ! idx;
+  assign \$276  = words[11] & \$275 ;
+  assign \$277  = words[10] & data0[0];
+  assign \$278  = \bit  ^ \$277 ;
+  assign \$279  = \$276  & \$278 ;
+  assign \$280  = ! idx;
+  assign \$281  = words[11] & \$280 ;
+  assign \$282  = words[10] & data0[0];
+  assign \$283  = \bit  ^ \$282 ;
+  assign \$284  = \$281  & \$283 ;
+  assign \$285  = ! idx;
+  assign \$286  = words[11] & \$285 ;
+  assign \$287  = words[10] & data0[0];
+  assign \$288  = \bit  ^ \$287 ;
+  assign \$289  = \$286  & \$288 ;
+  assign \$290  = ! idx;
+  assign \$291  = words[11] & \$290 ;
+  assign \$292  = words[10] & data0[0];
+  assign \$293  = \bit  ^ \$292 ;
+  assign \$294  = \$291  & \$293 ;
+  assign \$295  = ! idx;
+  assign \$296  = words[11] & \$295 ;
+  assign \$297  = words[10] & data0[0];
+  assign \$298  = \bit  ^ \$297 ;
+  assign \$299  = \$296  & \$298 ;
+  assign \$300  = ! idx;
+  assign \$301  = words[11] & \$300 ;
+  assign \$302  = words[10] & data0[0];
+  assign \$303  = \bit  ^ \$302 ;
+  assign \$304  = \$301  & \$303 ;
+  assign \$305  = ! idx;
+  assign \$306  = words[11] & \$305 ;
+  assign \$307  = words[10] & data0[0];
+  assign \$308  = \bit  ^ \$307 ;
+  assign \$309  = \$306  & \$308 ;
+  assign \$310  = ! idx;
+  assign \$311  = words[11] & \$310 ;
+  assign \$312  = words[10] & data0[0];
+  assign \$313  = \bit  ^ \$312 ;
+  assign \$314  = \$311  & \$313 ;
+  assign \$315  = ! idx;
+  assign \$316  = words[11] & \$315 ;
+  assign \$317  = words[10] & data0[0];
+  assign \$318  = \bit  ^ \$317 ;
+  assign \$319  = \$316  & \$318 ;
+  assign \$320  = ! idx;
+  assign \$321  = words[11] & \$320 ;
+  assign \$322  = words[10] & data0[0];
+  assign \$323  = \bit  ^ \$322 ;
+  assign \$324  = \$321  & \$323 ;
+  assign \$325  = ! idx;
+  assign \$326  = words[11] & \$325 ;
+  assign \$327  = words[10] & data0[0];
+  assign \$328  = \bit  ^ \$327 ;
+  assign \$329  = \$326  & \$328 ;
+  assign \$330  = ! idx;
+  assign \$331  = words[11] & \$330 ;
+  assign \$332  = words[10] & data0[0];
+  assign \$333  = \bit  ^ \$332 ;
+  assign \$334  = \$331  & \$333 ;
+  assign \$335  = ! idx;
+  assign \$336  = words[11] & \$335 ;
+  assign \$337  = words[10] & data0[0];
+  assign \$338  = \bit  ^ \$337 ;
+  assign \$339  = \$336  & \$338 ;
+  assign \$340  = ! idx;
+  assign \$341  = words[11] & \$340 ;
+  assign \$342  = words[10] & data0[0];
+  assign \$343  = \bit  ^ \$342 ;
+  assign \$344  = \$341  & \$343 ;
+  assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ! word;
-  assign \$348  = in_word & \$347 ;
-  assign \$349  = idx == ends[6:0];
-  assign \$350  = \$348  & \$349 ;
-  assign \$352  = in_word & \$351 ;
-  assign \$353  = \$352  & in_data;
-  assign \$354  = words[22] & data1[0];
-  assign \$355  = \bit  ^ \$354 ;
-  assign \$356  = ! idx;
-  assign \$357  = words[23] & \$356 ;
-  assign \$358  = words[22] & data1[0];
-  assign \$359  = \bit  ^ \$358 ;
-  assign \$360  = \$357  & \$359 ;
-  assign \$361  = ! idx;
-  assign \$362  = words[23] & \$361 ;
-  assign \$363  = words[22] & data1[0];
-  assign \$364  = \bit  ^ \$363 ;
-  assign \$365  = \$362  & \$364 ;
-  assign \$366  = ! idx;
-  assign \$367  = words[23] & \$366 ;
-  assign \$368  = words[22] & data1[0];
-  assign \$369  = \bit  ^ \$368 ;
-  assign \$370  = \$367  & \$369 ;
-  assign \$371  = ! idx;
-  assign \$372  = words[23] & \$371 ;
-  assign \$373  = words[22] & data1[0];
-  assign \$374  = \bit  ^ \$373 ;
-  assign \$375  = \$372  & \$374 ;
-  assign \$376  = ! idx;
-  assign \$377  = words[23] & \$376 ;
-  assign \$378  = words[22] & data1[0];
-  assign \$379  = \bit  ^ \$378 ;
-  assign \$380  = \$377  & \$379 ;
-  assign \$381  = ! idx;
-  assign \$382  = words[23] & \$381 ;
-  assign \$383  = words[22] & data1[0];
-  assign \$384  = \bit  ^ \$383 ;
-  assign \$385  = \$382  & \$384 ;
-  assign \$386  = ! idx;
-  assign \$387  = words[23] & \$386 ;
-  assign \$388  = words[22] & data1[0];
-  assign \$389  = \bit  ^ \$388 ;
-  assign \$390  = \$387  & \$389 ;
-  assign \$391  = ! idx;
-  assign \$392  = words[23] & \$391 ;
-  assign \$393  = words[22] & data1[0];
-  assign \$394  = \bit  ^ \$393 ;
-  assign \$395  = \$392  & \$394 ;
-  assign \$396  = ! idx;
-  assign \$397  = words[23] & \$396 ;
-  assign \$398  = words[22] & data1[0];
-  assign \$399  = \bit  ^ \$398 ;
-  assign \$400  = \$397  & \$399 ;
-  assign \$401  = ! idx;
+  assign \$347  = ssi & \port$7708$272 [0];
+  assign \$348  = ~ \$347 ;
+  assign \$349  = \$346  & \$348 ;
+  assign \$350  = ! index;
+  assign \$351  = in_word & \$350 ;
+  assign \$352  = idx == words[5:0];
+  assign \$353  = \$351  & \$352 ;
+  assign \$354  = ssi & \port$7708$272 [0];
+  assign \$355  = ~ \port$7708$272 [1];
+  assign \$356  = \$354  & \$355 ;
+  assign \$357  = \bit  ^ \$356 ;
+  assign \$358  = ~ words[6];
+  assign \$359  = ! index;
+  assign \$360  = in_word & \$359 ;
+  assign \$361  = idx == current[6:0];
+  assign \$362  = \$360  & \$361 ;
+  assign \$364  = in_word & \$363 ;
+  assign \$365  = \$364  & in_data;
+  assign \$366  = words[22] & data1[0];
+  assign \$367  = \bit  ^ \$366 ;
+  assign \$368  = ! idx;
+  assign \$369  = words[23] & \$368 ;
+  assign \$370  = words[22] & data1[0];
+  assign \$371  = \bit  ^ \$370 ;
+  assign \$372  = \$369  & \$371 ;
+  assign \$373  = ! idx;
+  assign \$374  = words[23] & \$373 ;
+  assign \$375  = words[22] & data1[0];
+  assign \$376  = \bit  ^ \$375 ;
+  assign \$377  = \$374  & \$376 ;
+  assign \$378  = ! idx;
+  assign \$379  = words[23] & \$378 ;
+  assign \$380  = words[22] & data1[0];
+  assign \$381  = \bit  ^ \$380 ;
+  assign \$382  = \$379  & \$381 ;
+  assign \$383  = ! idx;
+  assign \$384  = words[23] & \$383 ;
+  assign \$385  = words[22] & data1[0];
+  assign \$386  = \bit  ^ \$385 ;
+  assign \$387  = \$384  & \$386 ;
+  assign \$388  = ! idx;
+  assign \$389  = words[23] & \$388 ;
+  assign \$390  = words[22] & data1[0];
   \biss_master_axil.ch1.core.decoder.copy  copy (
     .\bit (\bit ),
     .clk(clk),
     .first(first),
-    .index(index),
+    .index(current[34:28]),
     .mismatch(mismatch),
     .receiver_clear(receiver_clear),
     .rst(rst),
@@ -31710,19 +32407,23 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     .codes(codes),
     .\cover (\cover ),
     .customs(customs),
-    .index(word),
+    .index(index),
     .last(last),
     .load(load),
-    .load_index(\$9 [0]),
+    .load_index(\$10 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.decoder.field_ends  field_ends (
+    .advance(advance),
+    .\begin (\begin ),
     .clk(clk),
     .crc_widths(crc_widths),
-    .ends(ends),
+    .current(current),
     .error_bit(error_bit),
+    .following(following),
+    .index(index),
     .receiver_clear(receiver_clear),
     .rst(rst),
     .words(words)
@@ -31743,6 +32444,20 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    \begin  = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \begin  = 1'h1;
+          end
+      3'h2:
+          if (sample) begin
+            \begin  = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -31751,6 +32466,26 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
           /* empty */;
       3'h1:
           in_word = sample;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    advance = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            if (\$2 ) begin
+              (* full_case = 32'd1 *)
+              if (\$4 ) begin
+              end else begin
+                advance = 1'h1;
+              end
+            end
+          end
     endcase
   end
   always @* begin
@@ -31785,7 +32520,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$569  = 1'h0;
+    \$581  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -31793,12 +32528,12 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
           /* empty */;
       3'h1:
           if (sample) begin
-            if (\$43 ) begin
-              if (\$47 ) begin
+            if (\$58 ) begin
+              if (\$60 ) begin
                 (* full_case = 32'd1 *)
-                if (\$48 ) begin
+                if (\$61 ) begin
                 end else begin
-                  \$569  = 1'h1;
+                  \$581  = 1'h1;
                 end
               end
             end
@@ -31807,21 +32542,21 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
           /* empty */;
       3'h5:
           if (sample) begin
-            if (\$52 ) begin
-              \$569  = 1'h1;
+            if (\$64 ) begin
+              \$581  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$569  = 1'h0;
+      \$581  = 1'h0;
     end
     if (rst) begin
-      \$569  = 1'h0;
+      \$581  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$570  = 1'h0;
+    \$582  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -31835,320 +32570,320 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
           /* empty */;
       3'h4:
           if (sample) begin
-            \$570  = 1'h1;
+            \$582  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$570  = 1'h0;
+      \$582  = 1'h0;
     end
     if (rst) begin
-      \$570  = 1'h0;
+      \$582  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$571  = slots;
-    if (\$18 ) begin
-      \$571  = \$19 [15:0];
+    \$583  = slots;
+    if (\$19 ) begin
+      \$583  = \$20 [15:0];
     end
     if (receiver_clear) begin
-      \$571  = 16'h0000;
+      \$583  = 16'h0000;
     end
     if (rst) begin
-      \$571  = 16'h0000;
+      \$583  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$572  = slots_full;
-    if (\$18 ) begin
-      \$572  = \$20 ;
+    \$584  = slots_full;
+    if (\$19 ) begin
+      \$584  = \$21 ;
     end
     if (receiver_clear) begin
-      \$572  = 1'h0;
+      \$584  = 1'h0;
     end
     if (rst) begin
-      \$572  = 1'h0;
+      \$584  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$573  = idx;
+    \$585  = idx;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$573  = 7'h00;
+            \$585  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$573  = 7'h00;
+            \$585  = 7'h00;
           end
       3'h1:
           if (sample) begin
-            \$573  = \$24 [6:0];
-            if (\$43 ) begin
-              \$573  = 7'h00;
+            \$585  = \$45 [6:0];
+            if (\$58 ) begin
+              \$585  = 7'h00;
             end
           end
       3'h3:
           /* empty */;
       3'h5:
           if (sample) begin
-            \$573  = \$50 [6:0];
+            \$585  = \$63 [6:0];
           end
     endcase
     if (receiver_clear) begin
-      \$573  = 7'h00;
+      \$585  = 7'h00;
     end
     if (rst) begin
-      \$573  = 7'h00;
+      \$585  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$574  = in_data;
+    \$586  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$574  = ends[35];
+            \$586  = \$23 ;
           end
       3'h2:
           if (sample) begin
-            \$574  = ends[35];
+            \$586  = \$34 ;
           end
       3'h1:
           if (sample) begin
-            \$574  = \$27 ;
-            if (\$43 ) begin
-              \$574  = \$44 ;
+            \$586  = \$47 ;
+            if (\$58 ) begin
+              \$586  = following[35];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$574  = 1'h0;
+      \$586  = 1'h0;
     end
     if (rst) begin
-      \$574  = 1'h0;
+      \$586  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$575  = in_lc;
+    \$587  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$575  = ends[36];
+            \$587  = \$32 ;
           end
       3'h2:
           if (sample) begin
-            \$575  = ends[36];
+            \$587  = \$43 ;
           end
       3'h1:
           if (sample) begin
-            \$575  = \$33 ;
-            if (\$43 ) begin
-              \$575  = \$45 ;
+            \$587  = \$51 ;
+            if (\$58 ) begin
+              \$587  = following[36];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$575  = 1'h0;
+      \$587  = 1'h0;
     end
     if (rst) begin
-      \$575  = 1'h0;
+      \$587  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$576  = in_crc;
+    \$588  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$576  = 1'h0;
+            \$588  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$576  = 1'h0;
+            \$588  = 1'h0;
           end
       3'h1:
           if (sample) begin
-            \$576  = \$39 ;
+            \$588  = \$55 ;
           end
     endcase
     if (receiver_clear) begin
-      \$576  = 1'h0;
+      \$588  = 1'h0;
     end
     if (rst) begin
-      \$576  = 1'h0;
+      \$588  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$577  = in_top;
+    \$589  = in_top;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$577  = \$22 ;
+            \$589  = \$33 ;
           end
       3'h2:
           if (sample) begin
-            \$577  = \$23 ;
+            \$589  = \$44 ;
           end
       3'h1:
           if (sample) begin
-            \$577  = \$41 ;
-            if (\$43 ) begin
-              \$577  = 1'h0;
+            \$589  = \$57 ;
+            if (\$58 ) begin
+              \$589  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$577  = 1'h0;
+      \$589  = 1'h0;
     end
     if (rst) begin
-      \$577  = 1'h0;
+      \$589  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$578  = word;
+    \$590  = index;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$578  = 1'h0;
+            \$590  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$578  = 1'h0;
+            \$590  = 1'h0;
           end
       3'h1:
           if (sample) begin
-            if (\$43 ) begin
+            if (\$58 ) begin
               (* full_case = 32'd1 *)
-              if (\$47 ) begin
+              if (\$60 ) begin
               end else begin
-                \$578  = \$49 [0];
+                \$590  = \$62 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$578  = 1'h0;
+      \$590  = 1'h0;
     end
     if (rst) begin
-      \$578  = 1'h0;
+      \$590  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$579  = decoder_fsm_state;
+    \$591  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$579  = 3'h1;
-          end else if (\$21 ) begin
-            \$579  = 3'h2;
+            \$591  = 3'h1;
+          end else if (\$22 ) begin
+            \$591  = 3'h2;
           end
       3'h2:
           if (sample) begin
-            \$579  = 3'h1;
+            \$591  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            if (\$43 ) begin
-              if (\$47 ) begin
+            if (\$58 ) begin
+              if (\$60 ) begin
                 (* full_case = 32'd1 *)
-                if (\$48 ) begin
-                  \$579  = 3'h3;
+                if (\$61 ) begin
+                  \$591  = 3'h3;
                 end else begin
-                  \$579  = 3'h4;
+                  \$591  = 3'h4;
                 end
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$579  = 3'h5;
+            \$591  = 3'h5;
           end
       3'h5:
           if (sample) begin
-            if (\$52 ) begin
-              \$579  = 3'h4;
+            if (\$64 ) begin
+              \$591  = 3'h4;
             end
           end
       3'h4:
           if (sample) begin
-            \$579  = 3'h6;
+            \$591  = 3'h6;
           end
     endcase
     if (receiver_clear) begin
-      \$579  = 3'h0;
+      \$591  = 3'h0;
     end
     if (rst) begin
-      \$579  = 3'h0;
+      \$591  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$580  = started;
+    \$592  = started;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-          end else if (\$21 ) begin
-            \$580  = 1'h1;
+          end else if (\$22 ) begin
+            \$592  = 1'h1;
           end
       3'h2:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$580  = 1'h1;
+            \$592  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$580  = 1'h0;
+      \$592  = 1'h0;
     end
     if (rst) begin
-      \$580  = 1'h0;
+      \$592  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$581  = start_slot;
+    \$593  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-          end else if (\$21 ) begin
-            \$581  = slots;
+          end else if (\$22 ) begin
+            \$593  = slots;
           end
     endcase
     if (receiver_clear) begin
-      \$581  = 16'h0000;
+      \$593  = 16'h0000;
     end
     if (rst) begin
-      \$581  = 16'h0000;
+      \$593  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$582  = cds;
+    \$594  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h2:
           if (sample) begin
-            \$582  = \bit ;
+            \$594  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$582  = 1'h0;
+      \$594  = 1'h0;
     end
     if (rst) begin
-      \$582  = 1'h0;
+      \$594  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$583  = stop_bit;
+    \$595  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -32162,122 +32897,212 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
           /* empty */;
       3'h4:
           if (sample) begin
-            \$583  = \bit ;
+            \$595  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$583  = 1'h0;
+      \$595  = 1'h0;
     end
     if (rst) begin
-      \$583  = 1'h0;
+      \$595  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$584  = data0;
-    if (\$55 ) begin
-      \$584  = \$333 ;
+    \$596  = data0;
+    if (\$67 ) begin
+      \$596  = \$345 ;
     end
     if (receiver_clear) begin
-      \$584  = 55'h00000000000000;
+      \$596  = 55'h00000000000000;
     end
     if (rst) begin
-      \$584  = 55'h00000000000000;
+      \$596  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$585  = ne;
-    if (\$337 ) begin
-      \$585 [0] = 1'h1;
-    end else if (\$341 ) begin
-      \$585 [0] = \$345 ;
+    \$597  = ne;
+    if (\$349 ) begin
+      \$597 [0] = 1'h1;
+    end else if (\$353 ) begin
+      \$597 [0] = \$357 ;
     end
-    if (\$557 ) begin
-      \$585 [1] = 1'h1;
-    end else if (\$561 ) begin
-      \$585 [1] = \bit ;
+    if (\$569 ) begin
+      \$597 [1] = 1'h1;
+    end else if (\$573 ) begin
+      \$597 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$585  = 2'h0;
+      \$597  = 2'h0;
     end
     if (rst) begin
-      \$585  = 2'h0;
+      \$597  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$586  = nw;
-    if (\$346 ) begin
-      \$586 [0] = 1'h1;
-    end else if (\$350 ) begin
-      \$586 [0] = \bit ;
+    \$598  = nw;
+    if (\$358 ) begin
+      \$598 [0] = 1'h1;
+    end else if (\$362 ) begin
+      \$598 [0] = \bit ;
     end
-    if (\$557 ) begin
-      \$586 [1] = 1'h1;
-    end else if (\$561 ) begin
-    end else if (\$565 ) begin
-      \$586 [1] = \bit ;
+    if (\$569 ) begin
+      \$598 [1] = 1'h1;
+    end else if (\$573 ) begin
+    end else if (\$577 ) begin
+      \$598 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$586  = 2'h0;
+      \$598  = 2'h0;
     end
     if (rst) begin
-      \$586  = 2'h0;
+      \$598  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$587  = data1;
-    if (\$353 ) begin
-      \$587  = \$556 ;
+    \$599  = data1;
+    if (\$365 ) begin
+      \$599  = \$568 ;
     end
     if (receiver_clear) begin
-      \$587  = 40'h0000000000;
+      \$599  = 40'h0000000000;
     end
     if (rst) begin
-      \$587  = 40'h0000000000;
+      \$599  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$588  = lc;
+    \$600  = lc;
     if (lc_load) begin
-      \$588  = { lc[4:0], \bit  };
+      \$600  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$588  = 6'h00;
+      \$600  = 6'h00;
     end
     if (rst) begin
-      \$588  = 6'h00;
+      \$600  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$589  = cpw_top;
-    if (\$566 ) begin
-      \$589  = { cpw_top[38:0], \$568  };
+    \$601  = cpw_top;
+    if (\$578 ) begin
+      \$601  = { cpw_top[38:0], \$580  };
     end
     if (receiver_clear) begin
-      \$589  = 40'h0000000000;
+      \$601  = 40'h0000000000;
     end
     if (rst) begin
-      \$589  = 40'h0000000000;
+      \$601  = 40'h0000000000;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$24 , words[7:6] })
+      3'h0:
+          \$25  = 2'h0;
+      3'h1:
+          \$25  = 2'h2;
+      3'h2:
+          \$25  = 2'h0;
+      3'h3:
+          \$25  = 2'h2;
+      3'h4:
+          \$25  = 2'h1;
+      3'h5:
+          \$25  = 2'h3;
+      3'h6:
+          \$25  = 2'h1;
+      3'h7:
+          \$25  = 2'h3;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$28 , words[7:6] })
+      3'h0:
+          \$29  = 4'h0;
+      3'h1:
+          \$29  = 4'h2;
+      3'h2:
+          \$29  = 4'h6;
+      3'h3:
+          \$29  = 4'h8;
+      3'h4:
+          \$29  = 4'h1;
+      3'h5:
+          \$29  = 4'h3;
+      3'h6:
+          \$29  = 4'h7;
+      3'h7:
+          \$29  = 4'h9;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$35 , words[7:6] })
+      3'h0:
+          \$36  = 2'h0;
+      3'h1:
+          \$36  = 2'h2;
+      3'h2:
+          \$36  = 2'h0;
+      3'h3:
+          \$36  = 2'h2;
+      3'h4:
+          \$36  = 2'h1;
+      3'h5:
+          \$36  = 2'h3;
+      3'h6:
+          \$36  = 2'h1;
+      3'h7:
+          \$36  = 2'h3;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$39 , words[7:6] })
+      3'h0:
+          \$40  = 4'h0;
+      3'h1:
+          \$40  = 4'h2;
+      3'h2:
+          \$40  = 4'h6;
+      3'h3:
+          \$40  = 4'h8;
+      3'h4:
+          \$40  = 4'h1;
+      3'h5:
+          \$40  = 4'h3;
+      3'h6:
+          \$40  = 4'h7;
+      3'h7:
+          \$40  = 4'h9;
+    endcase
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$7342$272 [0];
-  assign \bit$11  = \bit ;
-  assign \mismatch$16  = mismatch;
+  assign word = index;
+  assign ssi_error = \port$7708$272 [0];
+  assign \bit$13  = \bit ;
+  assign \index$14  = current[34:28];
+  assign \mismatch$17  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
-  assign \customs$30  = customs;
-  assign \bit$37  = \bit ;
+  assign \customs$35  = customs;
+  assign \bit$41  = \bit ;
   assign ok = crc_ok;
-  assign \index$40  = word;
-  assign load_index = \$9 [0];
-  assign ssi_double = \port$7342$272 [2];
-  assign ssi_error_low = \port$7342$272 [1];
+  assign \index$44  = index;
+  assign load_index = \$10 [0];
+  assign ssi_double = \port$7708$272 [2];
+  assign ssi_error_low = \port$7708$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -32310,22 +33135,13 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \crc_widths[1]  = crc_widths[9:5];
   assign \crc_widths$3[0]  = crc_widths[4:0];
   assign \crc_widths$3[1]  = crc_widths[9:5];
-  assign \ends[0]  = ends[36:0];
-  assign \ends[0].data_end_p1  = ends[6:0];
-  assign \ends[0].data_end_m1  = ends[13:7];
-  assign \ends[0].nenw_end_m1  = ends[20:14];
-  assign \ends[0].lc_end_m1  = ends[27:21];
-  assign \ends[0].word_end_m1  = ends[34:28];
-  assign \ends[0].data_at0  = ends[35];
-  assign \ends[0].lc_at0  = ends[36];
-  assign \ends[1]  = ends[73:37];
-  assign \ends[1].data_end_p1  = ends[43:37];
-  assign \ends[1].data_end_m1  = ends[50:44];
-  assign \ends[1].nenw_end_m1  = ends[57:51];
-  assign \ends[1].lc_end_m1  = ends[64:58];
-  assign \ends[1].word_end_m1  = ends[71:65];
-  assign \ends[1].data_at0  = ends[72];
-  assign \ends[1].lc_at0  = ends[73];
+  assign \current.data_end_p1  = current[6:0];
+  assign \current.data_end_m1  = current[13:7];
+  assign \current.nenw_end_m1  = current[20:14];
+  assign \current.lc_end_m1  = current[27:21];
+  assign \current.word_end_m1  = current[34:28];
+  assign \current.data_at0  = current[35];
+  assign \current.lc_at0  = current[36];
   assign \codes[0]  = codes[1:0];
   assign \codes[1]  = codes[3:2];
   assign \customs[0]  = customs[37:0];
@@ -32338,27 +33154,32 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \customs[1].poly  = customs[58:43];
   assign \customs[1].start  = customs[74:59];
   assign \customs[1].inverted  = customs[75];
-  assign \customs$30[0]  = customs[37:0];
-  assign \customs$30[0].width  = customs[4:0];
-  assign \customs$30[0].poly  = customs[20:5];
-  assign \customs$30[0].start  = customs[36:21];
-  assign \customs$30[0].inverted  = customs[37];
-  assign \customs$30[1]  = customs[75:38];
-  assign \customs$30[1].width  = customs[42:38];
-  assign \customs$30[1].poly  = customs[58:43];
-  assign \customs$30[1].start  = customs[74:59];
-  assign \customs$30[1].inverted  = customs[75];
+  assign \customs$35[0]  = customs[37:0];
+  assign \customs$35[0].width  = customs[4:0];
+  assign \customs$35[0].poly  = customs[20:5];
+  assign \customs$35[0].start  = customs[36:21];
+  assign \customs$35[0].inverted  = customs[37];
+  assign \customs$35[1]  = customs[75:38];
+  assign \customs$35[1].width  = customs[42:38];
+  assign \customs$35[1].poly  = customs[58:43];
+  assign \customs$35[1].start  = customs[74:59];
+  assign \customs$35[1].inverted  = customs[75];
+  assign \following.data_end_p1  = following[6:0];
+  assign \following.data_end_m1  = following[13:7];
+  assign \following.nenw_end_m1  = following[20:14];
+  assign \following.lc_end_m1  = following[27:21];
+  assign \following.word_end_m1  = following[34:28];
+  assign \following.data_at0  = following[35];
+  assign \following.lc_at0  = following[36];
   assign codes[3:2] = words[21:20];
   assign codes[1:0] = words[9:8];
-  assign \$44  = ends[72];
-  assign \$45  = ends[73];
-  assign \$351  = word;
-  assign \$558  = word;
-  assign \$562  = word;
+  assign \$363  = index;
+  assign \$570  = index;
+  assign \$574  = index;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder.copy (rst, index, first, \bit , receiver_clear, separator, second, mismatch, clk);
+module \biss_master_axil.ch1.core.decoder.copy (rst, first, \bit , receiver_clear, separator, second, index, mismatch, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -32850,90 +33671,155 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc_widths, receiver_clear, ends, clk);
+module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc_widths, receiver_clear, \begin , advance, index, current, following, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
-  wire [6:0] \$1 ;
-  wire \$10 ;
-  reg [1:0] \$11 ;
-  wire [6:0] \$12 ;
-  wire \$13 ;
-  reg [3:0] \$14 ;
-  wire [6:0] \$15 ;
-  wire \$16 ;
+  wire [2:0] \$1 ;
+  wire [7:0] \$10 ;
+  wire \$11 ;
+  reg [1:0] \$12 ;
+  wire [6:0] \$13 ;
+  wire \$14 ;
+  reg [3:0] \$15 ;
+  wire [6:0] \$16 ;
   wire \$17 ;
-  wire [6:0] \$18 ;
-  wire [7:0] \$19 ;
-  wire [7:0] \$2 ;
-  reg [6:0] \$20 ;
-  wire [7:0] \$21 ;
-  reg [6:0] \$22 ;
-  wire [7:0] \$23 ;
-  reg [6:0] \$24 ;
-  wire [7:0] \$25 ;
-  wire [7:0] \$26 ;
-  wire \$27 ;
-  reg [1:0] \$28 ;
-  wire [6:0] \$29 ;
-  reg [6:0] \$3 ;
-  wire \$30 ;
-  reg [3:0] \$31 ;
-  wire [6:0] \$32 ;
-  wire \$33 ;
-  wire \$34 ;
-  wire [36:0] \$35 ;
-  wire [36:0] \$36 ;
-  wire [7:0] \$4 ;
-  reg [6:0] \$5 ;
-  wire [7:0] \$6 ;
-  reg [6:0] \$7 ;
-  wire [7:0] \$8 ;
+  wire \$18 ;
+  reg [5:0] \$19 ;
+  wire [6:0] \$2 ;
+  wire [6:0] \$20 ;
+  reg [5:0] \$21 ;
+  wire [7:0] \$22 ;
+  reg [5:0] \$23 ;
+  reg \$24 ;
+  reg \$25 ;
+  reg [6:0] \$26 ;
+  wire [7:0] \$27 ;
+  reg [5:0] \$28 ;
+  reg \$29 ;
+  wire [7:0] \$3 ;
+  reg \$30 ;
+  reg [6:0] \$31 ;
+  wire [7:0] \$32 ;
+  reg [5:0] \$33 ;
+  reg \$34 ;
+  reg \$35 ;
+  reg [6:0] \$36 ;
+  reg [4:0] \$37 ;
+  wire [7:0] \$38 ;
+  wire [7:0] \$39 ;
+  reg [6:0] \$4 ;
+  reg [5:0] \$40 ;
+  wire \$41 ;
+  reg [5:0] \$42 ;
+  reg \$43 ;
+  reg \$44 ;
+  reg [1:0] \$45 ;
+  wire [6:0] \$46 ;
+  wire \$47 ;
+  reg [5:0] \$48 ;
+  reg \$49 ;
+  wire [7:0] \$5 ;
+  reg \$50 ;
+  reg [3:0] \$51 ;
+  wire [6:0] \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  reg [5:0] \$55 ;
+  wire [6:0] \$56 ;
+  reg [5:0] \$57 ;
+  wire [7:0] \$58 ;
+  reg [5:0] \$59 ;
+  reg [6:0] \$6 ;
+  reg \$60 ;
+  reg \$61 ;
+  reg [6:0] \$62 ;
+  wire [7:0] \$63 ;
+  reg [5:0] \$64 ;
+  reg \$65 ;
+  reg \$66 ;
+  reg [6:0] \$67 ;
+  wire [7:0] \$68 ;
+  reg [5:0] \$69 ;
+  wire [7:0] \$7 ;
+  reg \$70 ;
+  reg \$71 ;
+  reg [6:0] \$72 ;
+  reg [4:0] \$73 ;
+  wire [7:0] \$74 ;
+  wire [7:0] \$75 ;
+  reg [5:0] \$76 ;
+  wire \$77 ;
+  reg [5:0] \$78 ;
+  reg \$79 ;
+  reg [6:0] \$8 ;
+  reg \$80 ;
+  reg [1:0] \$81 ;
+  wire [6:0] \$82 ;
+  wire \$83 ;
+  reg [5:0] \$84 ;
+  reg \$85 ;
+  reg \$86 ;
+  reg [3:0] \$87 ;
+  wire [6:0] \$88 ;
+  wire \$89 ;
   wire [7:0] \$9 ;
+  wire \$90 ;
+  reg [36:0] \$91 ;
+  reg [36:0] \$92 ;
+  input advance;
+  wire advance;
+  input \begin ;
+  wire \begin ;
   input clk;
   wire clk;
   input [9:0] crc_widths;
   wire [9:0] crc_widths;
   wire [4:0] \crc_widths[0] ;
   wire [4:0] \crc_widths[1] ;
-  output [73:0] ends;
-  wire [73:0] ends;
-  wire [36:0] \ends[0] ;
-  wire \ends[0].data_at0 ;
-  wire [6:0] \ends[0].data_end_m1 ;
-  wire [6:0] \ends[0].data_end_p1 ;
-  wire \ends[0].lc_at0 ;
-  wire [6:0] \ends[0].lc_end_m1 ;
-  wire [6:0] \ends[0].nenw_end_m1 ;
-  wire [6:0] \ends[0].word_end_m1 ;
-  wire [36:0] \ends[1] ;
-  wire \ends[1].data_at0 ;
-  wire [6:0] \ends[1].data_end_m1 ;
-  wire [6:0] \ends[1].data_end_p1 ;
-  wire \ends[1].lc_at0 ;
-  wire [6:0] \ends[1].lc_end_m1 ;
-  wire [6:0] \ends[1].nenw_end_m1 ;
-  wire [6:0] \ends[1].word_end_m1 ;
+  output [36:0] current;
+  reg [36:0] current = 37'h0000000000;
+  wire \current.data_at0 ;
+  wire [6:0] \current.data_end_m1 ;
+  wire [6:0] \current.data_end_p1 ;
+  wire \current.lc_at0 ;
+  wire [6:0] \current.lc_end_m1 ;
+  wire [6:0] \current.nenw_end_m1 ;
+  wire [6:0] \current.word_end_m1 ;
+  (* init = 37'h0000000000 *)
+  wire [36:0] current_ends;
+  wire \current_ends.data_at0 ;
+  wire [6:0] \current_ends.data_end_m1 ;
+  wire [6:0] \current_ends.data_end_p1 ;
+  wire \current_ends.lc_at0 ;
+  wire [6:0] \current_ends.lc_end_m1 ;
+  wire [6:0] \current_ends.nenw_end_m1 ;
+  wire [6:0] \current_ends.word_end_m1 ;
   input error_bit;
   wire error_bit;
+  output [36:0] following;
+  reg [36:0] following = 37'h0000000000;
+  wire \following.data_at0 ;
+  wire [6:0] \following.data_end_m1 ;
+  wire [6:0] \following.data_end_p1 ;
+  wire \following.lc_at0 ;
+  wire [6:0] \following.lc_end_m1 ;
+  wire [6:0] \following.nenw_end_m1 ;
+  wire [6:0] \following.word_end_m1 ;
+  (* init = 37'h0000000000 *)
+  wire [36:0] following_ends;
+  wire \following_ends.data_at0 ;
+  wire [6:0] \following_ends.data_end_m1 ;
+  wire [6:0] \following_ends.data_end_p1 ;
+  wire \following_ends.lc_at0 ;
+  wire [6:0] \following_ends.lc_end_m1 ;
+  wire [6:0] \following_ends.nenw_end_m1 ;
+  wire [6:0] \following_ends.word_end_m1 ;
+  wire following_word;
+  input index;
+  wire index;
   input receiver_clear;
   wire receiver_clear;
   input rst;
   wire rst;
-  reg [36:0] w0_ends = 37'h0000000000;
-  wire \w0_ends.data_at0 ;
-  wire [6:0] \w0_ends.data_end_m1 ;
-  wire [6:0] \w0_ends.data_end_p1 ;
-  wire \w0_ends.lc_at0 ;
-  wire [6:0] \w0_ends.lc_end_m1 ;
-  wire [6:0] \w0_ends.nenw_end_m1 ;
-  wire [6:0] \w0_ends.word_end_m1 ;
-  reg [36:0] w1_ends = 37'h0000000000;
-  wire \w1_ends.data_at0 ;
-  wire [6:0] \w1_ends.data_end_m1 ;
-  wire [6:0] \w1_ends.data_end_p1 ;
-  wire \w1_ends.lc_at0 ;
-  wire [6:0] \w1_ends.lc_end_m1 ;
-  wire [6:0] \w1_ends.nenw_end_m1 ;
-  wire [6:0] \w1_ends.word_end_m1 ;
   input [23:0] words;
   wire [23:0] words;
   wire [11:0] \words[0] ;
@@ -32960,76 +33846,68 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$1  = words[5:0] + 1'h1;
-  assign \$2  = words[5:0] + 7'h7f;
-  assign \$4  = words[5:0] + \$3 ;
-  assign \$6  = words[5:0] + \$5 ;
-  assign \$8  = \$7  + crc_widths[4:0];
-  assign \$9  = words[5:0] + \$8 [6:0];
-  assign \$10  = | words[5:0];
-  assign \$12  = words[5:0] + \$11 ;
-  assign \$13  = ! \$12 ;
-  assign \$15  = words[5:0] + \$14 ;
-  assign \$16  = | \$15 ;
-  assign \$17  = \$13  & \$16 ;
-  assign \$18  = words[17:12] + 1'h1;
-  assign \$19  = words[17:12] + 7'h7f;
-  assign \$21  = words[17:12] + \$20 ;
-  assign \$23  = words[17:12] + \$22 ;
-  assign \$25  = \$24  + crc_widths[9:5];
-  assign \$26  = words[17:12] + \$25 [6:0];
-  assign \$27  = | words[17:12];
-  assign \$29  = words[17:12] + \$28 ;
-  assign \$30  = ! \$29 ;
-  assign \$32  = words[17:12] + \$31 ;
-  assign \$33  = | \$32 ;
-  assign \$34  = \$30  & \$33 ;
+  assign \$7  = words[5:0] + \$6 ;
+  assign \$9  = \$8  + crc_widths[4:0];
+  assign \$10  = words[5:0] + \$9 [6:0];
+  assign \$11  = | words[5:0];
+  assign \$13  = words[5:0] + \$12 ;
+  assign \$14  = ! \$13 ;
+  assign \$16  = words[5:0] + \$15 ;
+  assign \$17  = | \$16 ;
+  assign \$18  = \$14  & \$17 ;
+  assign \$20  = \$19  + 1'h1;
+  assign \$22  = \$21  + 7'h7f;
+  assign \$27  = \$23  + \$26 ;
+  assign \$32  = \$28  + \$31 ;
+  assign \$38  = \$36  + \$37 ;
+  assign \$39  = \$33  + \$38 [6:0];
+  assign \$41  = | \$40 ;
+  assign \$46  = \$42  + \$45 ;
+  assign \$47  = ! \$46 ;
+  assign \$52  = \$48  + \$51 ;
+  assign \$53  = | \$52 ;
+  assign \$54  = \$47  & \$53 ;
+  assign \$56  = \$55  + 1'h1;
+  assign \$58  = \$57  + 7'h7f;
+  assign \$63  = \$59  + \$62 ;
+  assign \$68  = \$64  + \$67 ;
+  assign \$74  = \$72  + \$73 ;
+  assign \$75  = \$69  + \$74 [6:0];
+  assign \$77  = | \$76 ;
+  assign \$82  = \$78  + \$81 ;
+  assign \$83  = ! \$82 ;
+  assign \$88  = \$84  + \$87 ;
+  assign \$89  = | \$88 ;
+  assign \$90  = \$83  & \$89 ;
   always @(posedge clk)
-    w0_ends <= \$35 ;
+    current <= \$91 ;
   always @(posedge clk)
-    w1_ends <= \$36 ;
+    following <= \$92 ;
+  assign \$1  = index + 2'h2;
+  assign following_word = \begin  ? 1'h1 : \$1 [0];
+  assign \$2  = words[5:0] + 1'h1;
+  assign \$3  = words[5:0] + 7'h7f;
+  assign \$5  = words[5:0] + \$4 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$3  = 7'h7f;
+          \$8  = 7'h7f;
       3'h1:
-          \$3  = 7'h01;
+          \$8  = 7'h01;
       3'h2:
-          \$3  = 7'h7f;
+          \$8  = 7'h05;
       3'h3:
-          \$3  = 7'h01;
+          \$8  = 7'h07;
       3'h4:
-          \$3  = 7'h00;
+          \$8  = 7'h00;
       3'h5:
-          \$3  = 7'h02;
+          \$8  = 7'h02;
       3'h6:
-          \$3  = 7'h00;
+          \$8  = 7'h06;
       3'h7:
-          \$3  = 7'h02;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ error_bit, words[7:6] })
-      3'h0:
-          \$5  = 7'h7f;
-      3'h1:
-          \$5  = 7'h01;
-      3'h2:
-          \$5  = 7'h05;
-      3'h3:
-          \$5  = 7'h07;
-      3'h4:
-          \$5  = 7'h00;
-      3'h5:
-          \$5  = 7'h02;
-      3'h6:
-          \$5  = 7'h06;
-      3'h7:
-          \$5  = 7'h08;
+          \$8  = 7'h08;
     endcase
   end
   always @* begin
@@ -33037,21 +33915,21 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$7  = 7'h7f;
+          \$12  = 2'h0;
       3'h1:
-          \$7  = 7'h01;
+          \$12  = 2'h2;
       3'h2:
-          \$7  = 7'h05;
+          \$12  = 2'h0;
       3'h3:
-          \$7  = 7'h07;
+          \$12  = 2'h2;
       3'h4:
-          \$7  = 7'h00;
+          \$12  = 2'h1;
       3'h5:
-          \$7  = 7'h02;
+          \$12  = 2'h3;
       3'h6:
-          \$7  = 7'h06;
+          \$12  = 2'h1;
       3'h7:
-          \$7  = 7'h08;
+          \$12  = 2'h3;
     endcase
   end
   always @* begin
@@ -33059,21 +33937,599 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$11  = 2'h0;
+          \$15  = 4'h0;
       3'h1:
-          \$11  = 2'h2;
+          \$15  = 4'h2;
       3'h2:
-          \$11  = 2'h0;
+          \$15  = 4'h6;
       3'h3:
-          \$11  = 2'h2;
+          \$15  = 4'h8;
       3'h4:
-          \$11  = 2'h1;
+          \$15  = 4'h1;
       3'h5:
-          \$11  = 2'h3;
+          \$15  = 4'h3;
       3'h6:
-          \$11  = 2'h1;
+          \$15  = 4'h7;
       3'h7:
-          \$11  = 2'h3;
+          \$15  = 4'h9;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$19  = words[5:0];
+      1'h1:
+          \$19  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$21  = words[5:0];
+      1'h1:
+          \$21  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$23  = words[5:0];
+      1'h1:
+          \$23  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$24  = words[6];
+      1'h1:
+          \$24  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$25  = words[7];
+      1'h1:
+          \$25  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$25 , \$24  })
+      2'h0:
+          \$26  = 7'h7f;
+      2'h1:
+          \$26  = 7'h01;
+      2'h2:
+          \$26  = 7'h7f;
+      2'h3:
+          \$26  = 7'h01;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$28  = words[5:0];
+      1'h1:
+          \$28  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$29  = words[6];
+      1'h1:
+          \$29  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$30  = words[7];
+      1'h1:
+          \$30  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$30 , \$29  })
+      2'h0:
+          \$31  = 7'h7f;
+      2'h1:
+          \$31  = 7'h01;
+      2'h2:
+          \$31  = 7'h05;
+      2'h3:
+          \$31  = 7'h07;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$33  = words[5:0];
+      1'h1:
+          \$33  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$34  = words[6];
+      1'h1:
+          \$34  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$35  = words[7];
+      1'h1:
+          \$35  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$35 , \$34  })
+      2'h0:
+          \$36  = 7'h7f;
+      2'h1:
+          \$36  = 7'h01;
+      2'h2:
+          \$36  = 7'h05;
+      2'h3:
+          \$36  = 7'h07;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$37  = crc_widths[4:0];
+      1'h1:
+          \$37  = crc_widths[9:5];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$40  = words[5:0];
+      1'h1:
+          \$40  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$42  = words[5:0];
+      1'h1:
+          \$42  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$43  = words[6];
+      1'h1:
+          \$43  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$44  = words[7];
+      1'h1:
+          \$44  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$44 , \$43  })
+      2'h0:
+          \$45  = 2'h0;
+      2'h1:
+          \$45  = 2'h2;
+      2'h2:
+          \$45  = 2'h0;
+      2'h3:
+          \$45  = 2'h2;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$48  = words[5:0];
+      1'h1:
+          \$48  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$49  = words[6];
+      1'h1:
+          \$49  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$50  = words[7];
+      1'h1:
+          \$50  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$50 , \$49  })
+      2'h0:
+          \$51  = 4'h0;
+      2'h1:
+          \$51  = 4'h2;
+      2'h2:
+          \$51  = 4'h6;
+      2'h3:
+          \$51  = 4'h8;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$55  = words[5:0];
+      1'h1:
+          \$55  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$57  = words[5:0];
+      1'h1:
+          \$57  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$59  = words[5:0];
+      1'h1:
+          \$59  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$60  = words[6];
+      1'h1:
+          \$60  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$61  = words[7];
+      1'h1:
+          \$61  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$61 , \$60  })
+      2'h0:
+          \$62  = 7'h7f;
+      2'h1:
+          \$62  = 7'h01;
+      2'h2:
+          \$62  = 7'h7f;
+      2'h3:
+          \$62  = 7'h01;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$64  = words[5:0];
+      1'h1:
+          \$64  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$65  = words[6];
+      1'h1:
+          \$65  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$66  = words[7];
+      1'h1:
+          \$66  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$66 , \$65  })
+      2'h0:
+          \$67  = 7'h7f;
+      2'h1:
+          \$67  = 7'h01;
+      2'h2:
+          \$67  = 7'h05;
+      2'h3:
+          \$67  = 7'h07;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$69  = words[5:0];
+      1'h1:
+          \$69  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$70  = words[6];
+      1'h1:
+          \$70  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$71  = words[7];
+      1'h1:
+          \$71  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$71 , \$70  })
+      2'h0:
+          \$72  = 7'h7f;
+      2'h1:
+          \$72  = 7'h01;
+      2'h2:
+          \$72  = 7'h05;
+      2'h3:
+          \$72  = 7'h07;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$73  = crc_widths[4:0];
+      1'h1:
+          \$73  = crc_widths[9:5];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$76  = words[5:0];
+      1'h1:
+          \$76  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$78  = words[5:0];
+      1'h1:
+          \$78  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$79  = words[6];
+      1'h1:
+          \$79  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$80  = words[7];
+      1'h1:
+          \$80  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$80 , \$79  })
+      2'h0:
+          \$81  = 2'h0;
+      2'h1:
+          \$81  = 2'h2;
+      2'h2:
+          \$81  = 2'h0;
+      2'h3:
+          \$81  = 2'h2;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$84  = words[5:0];
+      1'h1:
+          \$84  = words[17:12];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$85  = words[6];
+      1'h1:
+          \$85  = words[18];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez (following_word)
+      1'h0:
+          \$86  = words[7];
+      1'h1:
+          \$86  = words[19];
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$86 , \$85  })
+      2'h0:
+          \$87  = 4'h0;
+      2'h1:
+          \$87  = 4'h2;
+      2'h2:
+          \$87  = 4'h6;
+      2'h3:
+          \$87  = 4'h8;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    \$91  = current;
+    if (\begin ) begin
+      \$91 [6:0] = \$2 ;
+      \$91 [13:7] = \$3 [6:0];
+      \$91 [20:14] = \$5 [6:0];
+      \$91 [27:21] = \$7 [6:0];
+      \$91 [34:28] = \$10 [6:0];
+      \$91 [35] = \$11 ;
+      \$91 [36] = \$18 ;
+    end else if (advance) begin
+      \$91  = following;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    \$92  = following;
+    if (\begin ) begin
+      \$92 [6:0] = \$20 ;
+      \$92 [13:7] = \$22 [6:0];
+      \$92 [20:14] = \$27 [6:0];
+      \$92 [27:21] = \$32 [6:0];
+      \$92 [34:28] = \$39 [6:0];
+      \$92 [35] = \$41 ;
+      \$92 [36] = \$54 ;
+    end else if (advance) begin
+      \$92 [6:0] = \$56 ;
+      \$92 [13:7] = \$58 [6:0];
+      \$92 [20:14] = \$63 [6:0];
+      \$92 [27:21] = \$68 [6:0];
+      \$92 [34:28] = \$75 [6:0];
+      \$92 [35] = \$77 ;
+      \$92 [36] = \$90 ;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ error_bit, words[7:6] })
+      3'h0:
+          \$4  = 7'h7f;
+      3'h1:
+          \$4  = 7'h01;
+      3'h2:
+          \$4  = 7'h7f;
+      3'h3:
+          \$4  = 7'h01;
+      3'h4:
+          \$4  = 7'h00;
+      3'h5:
+          \$4  = 7'h02;
+      3'h6:
+          \$4  = 7'h00;
+      3'h7:
+          \$4  = 7'h02;
     endcase
   end
   always @* begin
@@ -33081,123 +34537,53 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$14  = 4'h0;
+          \$6  = 7'h7f;
       3'h1:
-          \$14  = 4'h2;
+          \$6  = 7'h01;
       3'h2:
-          \$14  = 4'h6;
+          \$6  = 7'h05;
       3'h3:
-          \$14  = 4'h8;
+          \$6  = 7'h07;
       3'h4:
-          \$14  = 4'h1;
+          \$6  = 7'h00;
       3'h5:
-          \$14  = 4'h3;
+          \$6  = 7'h02;
       3'h6:
-          \$14  = 4'h7;
+          \$6  = 7'h06;
       3'h7:
-          \$14  = 4'h9;
+          \$6  = 7'h08;
     endcase
   end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$20  = 7'h7f;
-      2'h1:
-          \$20  = 7'h01;
-      2'h2:
-          \$20  = 7'h7f;
-      2'h3:
-          \$20  = 7'h01;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$22  = 7'h7f;
-      2'h1:
-          \$22  = 7'h01;
-      2'h2:
-          \$22  = 7'h05;
-      2'h3:
-          \$22  = 7'h07;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$24  = 7'h7f;
-      2'h1:
-          \$24  = 7'h01;
-      2'h2:
-          \$24  = 7'h05;
-      2'h3:
-          \$24  = 7'h07;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$28  = 2'h0;
-      2'h1:
-          \$28  = 2'h2;
-      2'h2:
-          \$28  = 2'h0;
-      2'h3:
-          \$28  = 2'h2;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$31  = 4'h0;
-      2'h1:
-          \$31  = 4'h2;
-      2'h2:
-          \$31  = 4'h6;
-      2'h3:
-          \$31  = 4'h8;
-    endcase
-  end
-  assign \ends[0]  = ends[36:0];
-  assign \ends[0].data_end_p1  = ends[6:0];
-  assign \ends[0].data_end_m1  = ends[13:7];
-  assign \ends[0].nenw_end_m1  = ends[20:14];
-  assign \ends[0].lc_end_m1  = ends[27:21];
-  assign \ends[0].word_end_m1  = ends[34:28];
-  assign \ends[0].data_at0  = ends[35];
-  assign \ends[0].lc_at0  = ends[36];
-  assign \ends[1]  = ends[73:37];
-  assign \ends[1].data_end_p1  = ends[43:37];
-  assign \ends[1].data_end_m1  = ends[50:44];
-  assign \ends[1].nenw_end_m1  = ends[57:51];
-  assign \ends[1].lc_end_m1  = ends[64:58];
-  assign \ends[1].word_end_m1  = ends[71:65];
-  assign \ends[1].data_at0  = ends[72];
-  assign \ends[1].lc_at0  = ends[73];
-  assign \w0_ends.data_end_p1  = w0_ends[6:0];
-  assign \w0_ends.data_end_m1  = w0_ends[13:7];
-  assign \w0_ends.nenw_end_m1  = w0_ends[20:14];
-  assign \w0_ends.lc_end_m1  = w0_ends[27:21];
-  assign \w0_ends.word_end_m1  = w0_ends[34:28];
-  assign \w0_ends.data_at0  = w0_ends[35];
-  assign \w0_ends.lc_at0  = w0_ends[36];
-  assign \w1_ends.data_end_p1  = w1_ends[6:0];
-  assign \w1_ends.data_end_m1  = w1_ends[13:7];
-  assign \w1_ends.nenw_end_m1  = w1_ends[20:14];
-  assign \w1_ends.lc_end_m1  = w1_ends[27:21];
-  assign \w1_ends.word_end_m1  = w1_ends[34:28];
-  assign \w1_ends.data_at0  = w1_ends[35];
-  assign \w1_ends.lc_at0  = w1_ends[36];
+  assign current_ends = current;
+  assign following_ends = following;
+  assign \current.data_end_p1  = current[6:0];
+  assign \current.data_end_m1  = current[13:7];
+  assign \current.nenw_end_m1  = current[20:14];
+  assign \current.lc_end_m1  = current[27:21];
+  assign \current.word_end_m1  = current[34:28];
+  assign \current.data_at0  = current[35];
+  assign \current.lc_at0  = current[36];
+  assign \current_ends.data_end_p1  = current[6:0];
+  assign \current_ends.data_end_m1  = current[13:7];
+  assign \current_ends.nenw_end_m1  = current[20:14];
+  assign \current_ends.lc_end_m1  = current[27:21];
+  assign \current_ends.word_end_m1  = current[34:28];
+  assign \current_ends.data_at0  = current[35];
+  assign \current_ends.lc_at0  = current[36];
+  assign \following.data_end_p1  = following[6:0];
+  assign \following.data_end_m1  = following[13:7];
+  assign \following.nenw_end_m1  = following[20:14];
+  assign \following.lc_end_m1  = following[27:21];
+  assign \following.word_end_m1  = following[34:28];
+  assign \following.data_at0  = following[35];
+  assign \following.lc_at0  = following[36];
+  assign \following_ends.data_end_p1  = following[6:0];
+  assign \following_ends.data_end_m1  = following[13:7];
+  assign \following_ends.nenw_end_m1  = following[20:14];
+  assign \following_ends.lc_end_m1  = following[27:21];
+  assign \following_ends.word_end_m1  = following[34:28];
+  assign \following_ends.data_at0  = following[35];
+  assign \following_ends.lc_at0  = following[36];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -33214,22 +34600,6 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
   assign \words[1].signed  = words[23];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign \$36 [36] = \$34 ;
-  assign \$36 [35] = \$27 ;
-  assign \$36 [34:28] = \$26 [6:0];
-  assign \$36 [27:21] = \$23 [6:0];
-  assign \$36 [20:14] = \$21 [6:0];
-  assign \$36 [13:7] = \$19 [6:0];
-  assign \$36 [6:0] = \$18 ;
-  assign \$35 [36] = \$17 ;
-  assign \$35 [35] = \$10 ;
-  assign \$35 [34:28] = \$9 [6:0];
-  assign \$35 [27:21] = \$6 [6:0];
-  assign \$35 [20:14] = \$4 [6:0];
-  assign \$35 [13:7] = \$2 [6:0];
-  assign \$35 [6:0] = \$1 ;
-  assign ends[73:37] = w1_ends;
-  assign ends[36:0] = w0_ends;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -34085,7 +35455,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$7342$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$7708$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -34129,8 +35499,8 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$7342$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$7342$199 ;
-  wire \port$7342$199 ;
+  input \port$7708$199 ;
+  wire \port$7708$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -34184,7 +35554,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$7342$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$7342$199  ? word1_len : 8'h00;
+  assign \$11  = \port$7708$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -34294,7 +35664,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$7342$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$7342$199 , 1'h1 };
+  assign enables = { \port$7708$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -36427,7 +37797,7 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7342$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7708$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -36561,8 +37931,8 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7342$259 ;
-  wire [12:0] \port$7342$259 ;
+  input [12:0] \port$7708$259 ;
+  wire [12:0] \port$7708$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -36587,7 +37957,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7342$259 [12:1] + 1'h1;
+  assign \$11  = \port$7708$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -36712,7 +38082,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7342$259 [0]),
+    .clear_high(\port$7708$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -36855,7 +38225,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7342$259 [0]) begin
+            if (\port$7708$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -36940,7 +38310,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7342$259 [0]) begin
+            if (\port$7708$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -36979,7 +38349,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7342$259 [12:1] };
+            \$85  = { 1'h0, \port$7708$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -37364,11 +38734,11 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7342$259 [12:1] };
-  assign fixed = \port$7342$259 [0];
+  assign fixed_delay = { 1'h0, \port$7708$259 [12:1] };
+  assign fixed = \port$7708$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7342$259 [0];
+  assign clear_high = \port$7708$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -37775,7 +39145,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7330$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7696$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -37817,8 +39187,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7330$0 ;
-  wire \port$7330$0 ;
+  input \port$7696$0 ;
+  wire \port$7696$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -37832,9 +39202,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7330$0  };
-  assign \$2  = { lc[4:0], \port$7330$0  } == last;
-  assign \$3  = { lc[4:0], \port$7330$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7696$0  };
+  assign \$2  = { lc[4:0], \port$7696$0  } == last;
+  assign \$3  = { lc[4:0], \port$7696$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -37944,7 +39314,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7330$0  };
+  assign lc_next = { lc[4:0], \port$7696$0  };
   assign zero = is_zero;
 endmodule
 
@@ -38508,7 +39878,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$5254$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$5620$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -38686,8 +40056,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$5254$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$5254$0 ;
-  wire \port$5254$0 ;
+  output \port$5620$0 ;
+  wire \port$5620$0 ;
   output report;
   wire report;
   input report_frame;
@@ -38805,7 +40175,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$5254$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5254$0  = \$2 ;
+  assign \port$5620$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

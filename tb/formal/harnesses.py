@@ -36,6 +36,7 @@ from bissmaster.core.frame_decoder import FrameDecoder
 from bissmaster.core.frame_verdict import FrameVerdict
 from bissmaster.core.ma_clock import MaClock
 from bissmaster.master import BissMaster
+from bissmaster.core.field_ends import FIELD_ENDS
 from bissmaster.params import CRC_SETTINGS, Crc
 from bissmaster.control.register_access import RegisterAccess
 from bissmaster.core.slo_sampler import SloSampler
@@ -89,6 +90,8 @@ INTERNALS = {
     "decoder.crc_reg": ("signal", "crc", "reg"),                # the CrcEngine's shift register
     "decoder.crc_mismatch": ("signal", "crc", "mismatch"),      # a received CRC bit differed
     "decoder.crc_settings": ("signal", "crc", "settings"),      # the current word's CRC
+    "decoder.ends_current": ("signal", "field_ends", "current_ends"),      # its field ends ...
+    "decoder.ends_following": ("signal", "field_ends", "following_ends"),  # ... the next word's
     "decoder.crc_ok": ("port", "", "crc_ok"),                   # the verdict per word
     "decoder.in_crc": ("signal", "", "in_crc"),                 # the bit is a received CRC bit
     # BissMaster
@@ -922,6 +925,25 @@ def _engine_settings(code):
     return {"width": width, "poly": poly, "start": facts.CRC_INIT, "inverted": named}
 
 
+def _field_ends(m, w, c, payload, length):
+    """A word's field ends as the decoder registers them (FIELD_ENDS, its port layout: the
+    last data bit, the nW bit, the last nE/nW bit, the last LC bit, the last bit, all as bit
+    indices from 0 at the word's first data bit; data at bit 0; LC at bit 0) from the word's
+    configuration ``c`` (word ``w``) and the parser's payload (data + nE/nW + LC) and length."""
+    value = Signal(FIELD_ENDS, name=f"h_ends{w}")
+    nenw = Mux(c["nenw"], facts.NE_NW_BITS, 0)
+    m.d.comb += [
+        value.data_end_p1.eq(c["data_bits"] + 1),
+        value.data_end_m1.eq(c["data_bits"] - 1),
+        value.nenw_end_m1.eq(c["data_bits"] + nenw - 1),
+        value.lc_end_m1.eq(payload - 1),
+        value.word_end_m1.eq(length - 1),
+        value.data_at0.eq(1),          # data_bits >= 1
+        value.lc_at0.eq(0),
+    ]
+    return value.as_value()
+
+
 def _lfsr_step(reg, bit, width, poly):
     """One bit into a Galois CRC register, MSB first: shift left, and if the bit that falls
     out differs from the data bit, add the polynomial."""
@@ -1190,14 +1212,29 @@ class DecoderCrcHarness(Harness):
             if p.words >= 2:
                 word = inside("decoder.word")
                 m.d.comb += Assert(~state["WORD"] | (word == parse.word), "lemma: word index")
-            # The engine holds the current word's CRC, taken at the word's load.
-            code = cfg[0]["crc"] if p.words == 1 else Array(c["crc"] for c in cfg)[parse.word]
-            held = CRC_SETTINGS(inside("decoder.crc_settings"))     # its port layout
-            want = _engine_settings(code)
-            m.d.comb += Assert(~state["WORD"] | ((held.width == want["width"])
-                                                 & (held.poly == want["poly"])
-                                                 & (held.inverted == want["inverted"])),
-                               "lemma: the engine holds the word's CRC")
+            if p.words >= 2:
+                # The engine holds the current word's CRC, taken at the word's load (a
+                # one-word engine reads the configuration instead).
+                held = CRC_SETTINGS(inside("decoder.crc_settings"))     # its port layout
+                want = _engine_settings(Array(c["crc"] for c in cfg)[parse.word])
+                m.d.comb += Assert(~state["WORD"] | ((held.width == want["width"])
+                                                     & (held.poly == want["poly"])
+                                                     & (held.inverted == want["inverted"])),
+                                   "lemma: the engine holds the word's CRC")
+            # The field ends of the current word and of the next (builds of 2+ words), as
+            # bit indices within the word (docs/ports.md's word layout; 7 bits).
+            held = inside("decoder.ends_current")
+            lemma = "lemma: the current word's field ends"
+            ends = [_field_ends(m, w, c, parse.payload[w], parse.length[w])
+                    for w, c in enumerate(cfg)]
+            m.d.comb += Assert(~state["WORD"] | (held == (ends[0] if p.words == 1
+                                                          else Array(ends)[parse.word])), lemma)
+            if p.words >= 2:
+                held = inside("decoder.ends_following")
+                for w in range(p.words - 1):
+                    m.d.comb += Assert(~(state["WORD"] & (parse.word == w))
+                                       | (held == ends[w + 1]),
+                                       "lemma: the following word's field ends")
             if p.ssi:
                 # BiSS frames (``ssi`` left at 0): the SSI double transmission's states are
                 # never entered.

@@ -56,10 +56,10 @@ class Configuration(wiring.Component):
     word_count : Out(range(1, words + 1))
         Words in the cycle's frame.
     crc_widths : Out(ArrayLayout(range(CRC_MAX_WIDTH + 1), words))
-        Each word's CRC width for the cycle, its code resolved: a named CRC's width, a custom
-        CRC's ``cfg_wN_crc_width``, 0 for none. Latched with ``cycle``, so the field ends and
-        the frame length are computed from flip-flops. (The rest of a word's CRC is resolved by
-        the CRC engine, one word at a time.)
+        Each word's CRC width for the cycle, its code resolved from ``cycle`` (combinational):
+        a named CRC's width, a custom CRC's ``cfg_wN_crc_width``, 0 for none. Its readers
+        (the field ends, the frame length) register what they compute from it. (The rest of a
+        word's CRC is resolved by the CRC engine, one word at a time.)
     """
 
     def __init__(self, params):
@@ -150,14 +150,14 @@ class Configuration(wiring.Component):
                                         + or_default(live.delay_tolerance,
                                                      protocol.DELAY_TOLERANCE_DEFAULT)),
             ]
-            customs = config_custom_crcs(live, p) or [None] * p.words
-            for w, word in enumerate(config_words(live, p)):
-                m.d.sync += self.crc_widths[w].eq(
-                    crc_settings(word.crc, customs[w], p.word_crcs[w]).width)
         # NO_START: the Ack limit plus one MA period (two half periods) plus one clock: the
         # controller sees Start one clock later after its decision than the Ack's (the register
         # between sampler and decoder), so the same decisions pass as with the Ack limit alone.
         m.d.sync += self.no_start_limit.eq(self.ack_limit + Cat(C(1, 1), cycle.ma_half_period))
+        customs = config_custom_crcs(cycle, p) or [None] * p.words
+        for w, word in enumerate(config_words(cycle, p)):
+            m.d.comb += self.crc_widths[w].eq(
+                crc_settings(word.crc, customs[w], p.word_crcs[w]).width)
         # The words in the frame: word 0 and the enabled ones after it (in order: a gap is
         # refused above).
         m.d.comb += self.word_count.eq(sum(config_enables(cycle, p)))

@@ -44,8 +44,9 @@ class CrcEngine(wiring.Component):
     (``codes``) and, for a custom CRC, its ``customs`` entry, loads the register with the start
     value and holds the width, polynomial and inversion in ``settings`` for the word's bits.
     So a word's CRC is read from the configuration once per word, through one multiplexer, and
-    no resolved copy per word is kept (issue 27: that was 38 flip-flops and a resolution per
-    word).
+    no resolved copy per word is kept (issue 27: that was a resolution per word). A one-word
+    engine has no ``settings``: it reads ``codes`` and ``customs`` at every bit, so they must
+    be held from ``load`` to the word's last bit (the master's are latched for the cycle).
 
     Every bit of the word *before* its CRC field (``cover``: data, nE, nW, LC) goes through
     the textbook shift register (MSB first, not reflected): feedback = register MSB xor bit,
@@ -117,8 +118,13 @@ class CrcEngine(wiring.Component):
                                 of_load_word(self.customs) if self._custom else None,
                                 self._kinds)
         # The current word's width, polynomial and inversion (its start value went into the
-        # register at ``load``).
-        crc = Signal(CRC_SETTINGS, name="settings")
+        # register at ``load``). A one-word engine reads its word's settings directly: they
+        # are the configuration's latch for the cycle, and a register here would hold them a
+        # second time (22 FF in the `biss-c` preset).
+        if n == 1:
+            crc = load_crc
+        else:
+            crc = Signal(CRC_SETTINGS, name="settings")
 
         reg = Signal(CRC_MAX_WIDTH)
         mismatch = Signal()
@@ -133,9 +139,10 @@ class CrcEngine(wiring.Component):
         seen = mismatch | wrong
 
         with m.If(self.load):
-            m.d.sync += [reg.eq(load_crc.start), mismatch.eq(0),
-                         crc.width.eq(load_crc.width), crc.poly.eq(load_crc.poly),
-                         crc.inverted.eq(load_crc.inverted)]
+            m.d.sync += [reg.eq(load_crc.start), mismatch.eq(0)]
+            if n > 1:
+                m.d.sync += [crc.width.eq(load_crc.width), crc.poly.eq(load_crc.poly),
+                             crc.inverted.eq(load_crc.inverted)]
         with m.Elif(self.cover):
             m.d.sync += reg.eq(shifted ^ Mux(feedback, crc.poly, 0))
         with m.Elif(self.check):

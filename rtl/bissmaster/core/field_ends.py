@@ -61,14 +61,47 @@ FIELD_ENDS = data.StructLayout({
 })
 
 
-class FieldEnds(wiring.Component):
-    """Each word's field boundaries, registered from its configuration.
+def field_ends(wcfg, crc_width, err=None):
+    """One word's :data:`FIELD_ENDS` as a dict of values (combinational) from its settings (a
+    WORD_CONFIG view), its resolved CRC width and, for word 0 of an SSI build, its error bit.
+    The "- 1" and "+ 1" are folded into tables on the flag bits (modulo
+    ``2**WORD_INDEX_WIDTH``): a field end of 0, which only an invalid ``data_bits`` of 0 gives,
+    becomes ``2**WORD_INDEX_WIDTH - 1``, which a bit index never reaches inside a word."""
+    iw = WORD_INDEX_WIDTH
+    # The flag fields' lengths: nE/nW (or the SSI error bit), and those plus LC.
+    nenw_bits = _flag_table(wcfg, err, 2, lambda n, lc, e: flag_bits(n, 0, e))
+    nenw_lc_bits = _flag_table(wcfg, err, 4, flag_bits)
+    nenw_m1 = _flag_table(wcfg, err, iw, lambda n, lc, e: flag_bits(n, 0, e) - 1)
+    nenw_lc_m1 = _flag_table(wcfg, err, iw, lambda *f: flag_bits(*f) - 1)
+    return {
+        "data_end_p1": (wcfg.data_bits + 1)[:iw],
+        "data_end_m1": (wcfg.data_bits + C(2**iw - 1, iw))[:iw],
+        "nenw_end_m1": (wcfg.data_bits + nenw_m1)[:iw],
+        "lc_end_m1": (wcfg.data_bits + nenw_lc_m1)[:iw],
+        # data_bits >= 1, so "- 1" folded into the table (modulo 2**iw) never wraps.
+        "word_end_m1": (wcfg.data_bits + tail_bits(wcfg, crc_width, extra=-1,
+                                                   error_bit=err))[:iw],
+        "data_at0": wcfg.data_bits != 0,
+        "lc_at0": (wcfg.data_bits + nenw_bits == 0) & (wcfg.data_bits + nenw_lc_bits != 0),
+    }
 
-    The registers are not reset (they follow ``words``, ``crc_widths`` and ``error_bit`` in every
-    clock, even while the decoder around them is held in reset), so they are valid one clock
-    after their inputs settle. The "- 1" and "+ 1" are folded into tables on the flag bits
-    (modulo ``2**WORD_INDEX_WIDTH``): a field end of 0, which only an invalid ``data_bits`` of 0
-    gives, becomes ``2**WORD_INDEX_WIDTH - 1``, which a bit index never reaches inside a word.
+
+class FieldEnds(wiring.Component):
+    """The field boundaries of the word the decoder is in, and of the word after it, as
+    registers: the decoder compares its bit index with them and never adds in front of a
+    compare.
+
+    One word: ``current`` is registered from word 0's configuration in every clock (not
+    reset: it follows ``words``, ``crc_widths`` and ``error_bit`` even while the decoder
+    around it is held in reset), valid one clock after its inputs settle.
+
+    More words (issue 27: two sets of registers, not one per word): ``begin`` loads word 0's
+    ends into ``current`` and word 1's into ``following``; ``advance`` (at a word's last bit,
+    when another word follows) moves ``following`` into ``current`` and loads the ends of word
+    ``index + 2``. Both are valid in the clock after, so a word may begin in the clock after
+    the one before ended (one sample per clock). The configuration must be stable from
+    ``begin`` to the frame's end (the master's is latched for the cycle); ``following`` is
+    meaningless in the last word.
 
     Parameters
     ----------
@@ -84,8 +117,14 @@ class FieldEnds(wiring.Component):
         Each word's settings and its resolved CRC width.
     error_bit : In(1)
         Word 0 has an SSI error bit (SSI builds: ``ssi & ssi_error``).
-    ends : Out(ArrayLayout(FIELD_ENDS, words))
-        Each word's field ends (registered).
+    begin, advance : In(1)
+        Builds of more than one word: word 0 begins; the decoder moves on to the next word.
+    index : In(range(words))
+        Builds of more than one word: the word the decoder is in (read with ``advance``).
+    current : Out(FIELD_ENDS)
+        The current word's field ends (registered).
+    following : Out(FIELD_ENDS)
+        Builds of more than one word: the next word's (registered).
     """
 
     def __init__(self, words, error_bit=False, word_layout=WORD_CONFIG):
@@ -95,32 +134,34 @@ class FieldEnds(wiring.Component):
             "words": In(data.ArrayLayout(word_layout, words)),
             "crc_widths": In(data.ArrayLayout(range(CRC_MAX_WIDTH + 1), words)),
             **({"error_bit": In(1)} if error_bit else {}),
-            "ends": Out(data.ArrayLayout(FIELD_ENDS, words)),
+            **({"begin": In(1), "advance": In(1), "index": In(range(words)),
+                "following": Out(FIELD_ENDS)} if words > 1 else {}),
+            "current": Out(FIELD_ENDS),
         })
 
     def elaborate(self, platform):
         m = Module()
-        iw = WORD_INDEX_WIDTH
-        for w in range(self._words):
-            err = self.error_bit if (w == 0 and self._error_bit) else None
-            wcfg, wcrc = self.words[w], self.crc_widths[w]
-            regs = Signal(FIELD_ENDS, name=f"w{w}_ends", reset_less=True)
-            m.d.comb += self.ends[w].eq(regs)
-            # The flag fields' lengths: nE/nW (or the SSI error bit), and those plus LC.
-            nenw_bits = _flag_table(wcfg, err, 2, lambda n, lc, e: flag_bits(n, 0, e))
-            nenw_lc_bits = _flag_table(wcfg, err, 4, flag_bits)
-            nenw_m1 = _flag_table(wcfg, err, iw, lambda n, lc, e: flag_bits(n, 0, e) - 1)
-            nenw_lc_m1 = _flag_table(wcfg, err, iw, lambda *f: flag_bits(*f) - 1)
-            m.d.sync += [
-                regs.data_end_p1.eq(wcfg.data_bits + 1),
-                regs.data_end_m1.eq((wcfg.data_bits + C(2**iw - 1, iw))[:iw]),
-                regs.nenw_end_m1.eq((wcfg.data_bits + nenw_m1)[:iw]),
-                regs.lc_end_m1.eq((wcfg.data_bits + nenw_lc_m1)[:iw]),
-                # data_bits >= 1, so "- 1" folded into the table (modulo 2**iw) never wraps.
-                regs.word_end_m1.eq((wcfg.data_bits + tail_bits(wcfg, wcrc, extra=-1,
-                                                               error_bit=err))[:iw]),
-                regs.data_at0.eq(wcfg.data_bits != 0),
-                regs.lc_at0.eq((wcfg.data_bits + nenw_bits == 0)
-                               & (wcfg.data_bits + nenw_lc_bits != 0)),
-            ]
+        n = self._words
+        err = self.error_bit if self._error_bit else None
+        current = Signal(FIELD_ENDS, name="current_ends", reset_less=True)
+        first = field_ends(self.words[0], self.crc_widths[0], err)
+        m.d.comb += self.current.eq(current)
+        if n == 1:
+            m.d.sync += [current[k].eq(v) for k, v in first.items()]
+            return m
+        following = Signal(FIELD_ENDS, name="following_ends", reset_less=True)
+        m.d.comb += self.following.eq(following)
+        # The word whose ends go into ``following``: word 1 with ``begin``, else two after the
+        # current one (never word 0: only word 0 has the SSI error bit). One multiplexer on the
+        # settings, then one computation of the ends.
+        pick = Signal(range(n), name="following_word")
+        m.d.comb += pick.eq(Mux(self.begin, 1, (self.index + 2)[:len(pick)]))
+        chosen = field_ends(Array(self.words[w] for w in range(n))[pick],
+                            Array(self.crc_widths[w] for w in range(n))[pick])
+        with m.If(self.begin):
+            m.d.sync += [current[k].eq(v) for k, v in first.items()]
+            m.d.sync += [following[k].eq(v) for k, v in chosen.items()]
+        with m.Elif(self.advance):
+            m.d.sync += current.eq(following)
+            m.d.sync += [following[k].eq(v) for k, v in chosen.items()]
         return m

@@ -9,7 +9,7 @@ from ..params import (CHAIN_FIRST_WORD, CRC_MAX_WIDTH, CRC_SETTINGS, SLOT_WIDTH,
                       WORD_INDEX_WIDTH, word_config)
 from .chain_results import CHAIN_INDEX_BITS
 from .crc_engine import CrcEngine
-from .field_ends import FieldEnds
+from .field_ends import FieldEnds, field_ends as field_ends_of
 from .ssi_copy import SsiCopyCompare
 from .. import protocol
 
@@ -108,27 +108,25 @@ class FrameDecoder(wiring.Component):
         # Where the current bit sits: word ``word``, bit ``idx`` of that word.
         word = Signal(range(p.words), name="word") if p.words > 1 else C(0, 1)   # none in one-word builds
         idx = Signal(WORD_INDEX_WIDTH)
-        # Field boundaries of each word, registered from the configuration (no adders in front
-        # of the ``idx`` compares), valid one clock after ``words`` settles; the first word bit
-        # comes at least three samples (Ack, Start, CDS) after that (SSI: see above).
+        # Field boundaries of the current word and the next, as registers (no adders in front
+        # of the ``idx`` compares): loaded as word 0 begins and as each word ends (one-word
+        # builds: registered from the configuration in every clock, valid one clock after
+        # ``words`` settles; the first word bit comes at least three samples (Ack, Start, CDS)
+        # after that; SSI: see above).
         m.submodules.field_ends = field_ends = FieldEnds(p.words, error_bit=p.ssi,
                                                          word_layout=word_config(p))
         m.d.comb += [field_ends.words.eq(self.words), field_ends.crc_widths.eq(self.crc_widths)]
+        if p.words > 1:
+            m.d.comb += field_ends.index.eq(word)
         if p.ssi:
             # Word 0's SSI error bit: a flag bit after the data, like nE.
             error_bit = self.ssi & self.ssi_error
             m.d.comb += field_ends.error_bit.eq(error_bit)
-        ends = [field_ends.ends[w] for w in range(p.words)]
+        current = field_ends.current
+        # Word 0's first-bit flags as ``begin_words`` loads them (with the ends themselves).
+        first = field_ends_of(self.words[0], self.crc_widths[0], error_bit if p.ssi else None)
 
-        def end(name, of=word):
-            """A field end of word ``of`` (the current word by default)."""
-            if p.words == 1:
-                return ends[0][name]
-            if p.words == 2:
-                return Mux(of, ends[1][name], ends[0][name])
-            return Array(e[name] for e in ends)[of]
-
-        word_end_m1 = end("word_end_m1")
+        word_end_m1 = current.word_end_m1
 
         # Which fields the current bit (``idx``) belongs to, as flip-flops: set for the
         # word's first bit, then updated with each sample from ``idx`` and the registered
@@ -148,9 +146,10 @@ class FrameDecoder(wiring.Component):
         def begin_words():
             """Word 0 begins with the next sample (the CRC engine loads its start value)."""
             m.d.comb += at_cds.eq(1)
-            m.d.sync += [idx.eq(0), in_data.eq(ends[0]["data_at0"]),
-                         in_lc.eq(ends[0]["lc_at0"]), in_crc.eq(0)]
+            m.d.sync += [idx.eq(0), in_data.eq(first["data_at0"]),
+                         in_lc.eq(first["lc_at0"]), in_crc.eq(0)]
             if p.words > 1:
+                m.d.comb += field_ends.begin.eq(1)
                 m.d.sync += [in_top.eq(self.words[1].data_bits != 0), word.eq(0)]
             m.next = "WORD"
 
@@ -189,22 +188,20 @@ class FrameDecoder(wiring.Component):
                 with m.If(self.sample):
                     m.d.sync += [
                         idx.eq(idx + 1),
-                        in_data.eq(in_data & (idx != end("data_end_m1"))),
-                        in_lc.eq((in_lc | (idx == end("nenw_end_m1")))
-                                 & (idx != end("lc_end_m1"))),
-                        in_crc.eq((in_crc | (idx == end("lc_end_m1"))) & (idx != word_end_m1)),
+                        in_data.eq(in_data & (idx != current.data_end_m1)),
+                        in_lc.eq((in_lc | (idx == current.nenw_end_m1))
+                                 & (idx != current.lc_end_m1)),
+                        in_crc.eq((in_crc | (idx == current.lc_end_m1)) & (idx != word_end_m1)),
                     ]
                     if p.words > 1:
-                        m.d.sync += in_top.eq(in_top & (idx != ends[1]["data_end_m1"]))
+                        # In word 0: word 1's ends are the following ones.
+                        m.d.sync += in_top.eq(in_top & (idx != field_ends.following.data_end_m1))
                     with m.If(idx == word_end_m1):
                         m.d.sync += idx.eq(0)
                         # The next word starts (after the last one nothing is read).
-                        if p.words <= 2:
-                            next_word = C(p.words - 1, 1)
-                        else:
-                            next_word = (word + 1)[:len(word)]
-                        m.d.sync += [in_data.eq(end("data_at0", next_word)),
-                                     in_lc.eq(end("lc_at0", next_word)), in_top.eq(0)]
+                        following = field_ends.following if p.words > 1 else current
+                        m.d.sync += [in_data.eq(following.data_at0),
+                                     in_lc.eq(following.lc_at0), in_top.eq(0)]
                         with m.If(word == last_word):
                             if p.ssi:
                                 with m.If(ssi & self.ssi_double):
@@ -216,6 +213,7 @@ class FrameDecoder(wiring.Component):
                         if p.words > 1:
                             with m.Else():
                                 m.d.sync += word.eq(word + 1)
+                                m.d.comb += field_ends.advance.eq(1)
             if p.ssi:
                 with m.State("SEPARATOR"):
                     m.d.comb += copy.separator.eq(self.sample)
@@ -266,14 +264,14 @@ class FrameDecoder(wiring.Component):
                     m.d.sync += self.ne[w].eq(self.bit ^ (error_bit & ~self.ssi_error_low))
                 with m.If(~nenw):
                     m.d.sync += self.nw[w].eq(1)
-                with m.Elif(this_word & (idx == ends[w]["data_end_p1"])):
+                with m.Elif(this_word & (idx == current.data_end_p1)):
                     m.d.sync += self.nw[w].eq(self.bit)
             else:
                 with m.If(~nenw):
                     m.d.sync += [self.ne[w].eq(1), self.nw[w].eq(1)]
                 with m.Elif(this_word & (idx == self.words[w].data_bits)):
                     m.d.sync += self.ne[w].eq(self.bit)
-                with m.Elif(this_word & (idx == ends[w]["data_end_p1"])):
+                with m.Elif(this_word & (idx == current.data_end_p1)):
                     m.d.sync += self.nw[w].eq(self.bit)
         if p.chain_words_in_memory:
             self._chain_register(m, word, first_bit, in_word & in_data,

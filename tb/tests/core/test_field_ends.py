@@ -1,4 +1,5 @@
-"""FieldEnds on Amaranth's simulator: each word's field ends, registered from its settings.
+"""FieldEnds on Amaranth's simulator: the current and the following word's field ends,
+registered from their settings.
 
 Cycle conventions and where expected values come from: ``block_sim.py``. A word on the line is
 its data bits, nE and nW (or, word 0 in SSI mode, one error bit), LC, CRC (docs/ports.md,
@@ -40,32 +41,72 @@ def _random_word(rng, top):
                                       CustomCrc(rng.randint(1, 16), 1))))
 
 
-@pytest.mark.parametrize("words, error_bit", [(1, False), (3, False), (2, True)],
-                         ids=["one_word", "three_words", "two_words_ssi"])
-def test_field_ends_one_clock_after_the_settings(words, error_bit):
-    rng = random.Random(7900 + words)
-    dut = FieldEnds(words, error_bit=error_bit)
+def _ends(raw):
+    return unpack(FIELD_ENDS, raw)
+
+
+def test_field_ends_one_word_one_clock_after_the_settings():
+    """One word: ``current`` follows the settings one clock later, in every clock."""
+    rng = random.Random(7901)
     steps, wanted = [], []
-    for _ in range(60):
+    for _ in range(80):
+        wf = _random_word(rng, 63)
+        steps.append({"words": [_word(wf)], "crc_widths": [crc_settings(wf.crc)["width"]]})
+        wanted.append(expected(wf))
+    trace = run_clocks(FieldEnds(1), steps, ["current"])
+    for t in range(1, len(steps)):
+        assert _ends(trace[t]["current"]) == wanted[t - 1], t
+
+
+@pytest.mark.parametrize("words, error_bit", [(2, False), (3, False), (8, False), (2, True)],
+                         ids=["two_words", "three_words", "eight_words", "two_words_ssi"])
+def test_field_ends_current_and_following_word_through_frames(words, error_bit):
+    """More words: ``begin`` loads word 0 and word 1; each ``advance`` (with ``index`` = the
+    word that ended) moves on by one; both hold between (junk on ``index``), and are valid in
+    the clock after, so words may follow each other in consecutive clocks. Random settings per
+    frame, frames of 1..``words`` words, 0..2 clocks between events."""
+    rng = random.Random(7900 + words + 10 * error_bit)
+    dut = FieldEnds(words, error_bit=error_bit)
+    steps, wanted = [], []          # wanted[t]: (current, following or None) after step t
+    for _ in range(40):
         wfs = [_random_word(rng, 63) for _ in range(words)]
         error = int(error_bit and not wfs[0].nenw and rng.random() < 0.5)
-        step = {"words": [_word(wf) for wf in wfs],
-                "crc_widths": [crc_settings(wf.crc)["width"] for wf in wfs]}
-        if error_bit:
-            step["error_bit"] = error
-        steps.append(step)
-        wanted.append([expected(wf, error if w == 0 else 0) for w, wf in enumerate(wfs)])
-    trace = run_clocks(dut, steps, ["ends"])
+        base = {"words": [_word(wf) for wf in wfs],
+                "crc_widths": [crc_settings(wf.crc)["width"] for wf in wfs],
+                **({"error_bit": error} if error_bit else {}),
+                "begin": 0, "advance": 0}
+        ends = [expected(wf, error if w == 0 else 0) for w, wf in enumerate(wfs)]
+
+        def state(k):
+            return ends[k], (ends[k + 1] if k + 1 < words else None)
+
+        for _ in range(rng.randrange(3)):       # settings change while no frame runs
+            steps.append(dict(base, index=rng.randrange(words)))
+            wanted.append(None)
+        steps.append(dict(base, begin=1, index=rng.randrange(words)))
+        wanted.append(state(0))
+        for k in range(rng.randint(1, words) - 1):
+            for _ in range(rng.randrange(3)):
+                steps.append(dict(base, index=rng.randrange(words)))
+                wanted.append(state(k))
+            steps.append(dict(base, advance=1, index=k))
+            wanted.append(state(k + 1))
+    trace = run_clocks(dut, steps, ["current", "following"])
+    checked = 0
     for t in range(1, len(steps)):
-        raw = trace[t]["ends"]
-        got = [unpack(FIELD_ENDS, raw >> (w * FIELD_ENDS.size) & (2**FIELD_ENDS.size - 1))
-               for w in range(words)]
-        assert got == wanted[t - 1], t
+        if wanted[t - 1] is None:
+            continue
+        current, following = wanted[t - 1]
+        assert _ends(trace[t]["current"]) == current, t
+        if following is not None:
+            assert _ends(trace[t]["following"]) == following, t
+        checked += 1
+    assert checked >= 60
 
 
 def test_field_ends_longest_word_fits_the_index():
     """63 data bits, nE/nW, LC and CRC-16: 87 bits, the last at index 86."""
     wf = WordFormat(63, lc=True, crc=CRC16)
     step = {"words": [_word(wf)], "crc_widths": [crc_settings(CRC16)["width"]]}
-    trace = run_clocks(FieldEnds(1), [step] * 2, ["ends"])
-    assert unpack(FIELD_ENDS, trace[1]["ends"])["word_end_m1"] == 86 == wf.total_bits - 1
+    trace = run_clocks(FieldEnds(1), [step] * 2, ["current"])
+    assert _ends(trace[1]["current"])["word_end_m1"] == 86 == wf.total_bits - 1
