@@ -346,8 +346,11 @@ class BissMaster(wiring.Component):
             m.d.comb += [b.decoder.words[w].eq(word), b.ma_stop.words[w].eq(word)]
         m.d.comb += [b.decoder.crc_widths.eq(b.config.crc_widths),
                      b.ma_stop.crc_widths.eq(b.config.crc_widths)]
-        for w, custom in enumerate(config_custom_crcs(b.cycle, p)):
-            m.d.comb += b.decoder.customs[w].eq(custom)
+        if p.words == 1:
+            m.d.comb += b.decoder.crc.eq(b.config.crc)
+        else:
+            for w, custom in enumerate(config_custom_crcs(b.cycle, p)):
+                m.d.comb += b.decoder.customs[w].eq(custom)
         m.d.comb += b.ma_stop.enables.eq(Cat(*config_enables(b.cycle, p)))
         if two:
             m.d.comb += [

@@ -1177,8 +1177,12 @@ class DecoderCrcHarness(Harness):
                  for name in ("data_bits", "nenw", "lc", "crc")}
             m.d.comb += [getattr(dut.words[w], name).eq(v) for name, v in c.items()]
             # Named CRCs only (the custom settings are left 0): the width as the master's
-            # configuration resolves it; the engine resolves the rest itself.
-            m.d.comb += dut.crc_widths[w].eq(_engine_settings(c["crc"])["width"])
+            # configuration resolves it; the engine resolves the rest itself (a one-word
+            # decoder gets the whole CRC resolved).
+            settings = _engine_settings(c["crc"])
+            m.d.comb += dut.crc_widths[w].eq(settings["width"])
+            if p.words == 1:
+                m.d.comb += [getattr(dut.crc, name).eq(v) for name, v in settings.items()]
             _assume_word_config(m, c, p, w)
             cfg.append(c)
         count = self.any_const(m, len(dut.word_count), "word_count")

@@ -6,7 +6,7 @@ from amaranth.lib.wiring import In, Out
 
 from .. import protocol
 from ..layouts import config_custom_crcs, config_enables, config_layout, config_words
-from ..params import CRC_MAX_WIDTH, HALF_PERIOD_WIDTH, QUIET_WIDTH, Crc
+from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, HALF_PERIOD_WIDTH, QUIET_WIDTH, Crc
 from .crc_engine import crc_settings
 
 
@@ -56,10 +56,15 @@ class Configuration(wiring.Component):
     word_count : Out(range(1, words + 1))
         Words in the cycle's frame.
     crc_widths : Out(ArrayLayout(range(CRC_MAX_WIDTH + 1), words))
-        Each word's CRC width for the cycle, its code resolved from ``cycle`` (combinational):
-        a named CRC's width, a custom CRC's ``cfg_wN_crc_width``, 0 for none. Its readers
-        (the field ends, the frame length) register what they compute from it. (The rest of a
-        word's CRC is resolved by the CRC engine, one word at a time.)
+        Each word's CRC width for the cycle, its code resolved: a named CRC's width, a custom
+        CRC's ``cfg_wN_crc_width``, 0 for none. Builds of 2+ words resolve it from ``cycle``
+        (combinational; its readers, the field ends and the frame length, register what they
+        compute from it, and the CRC engine resolves the rest of a word's CRC as the word
+        begins); one-word builds take it from ``crc``.
+    crc : Out(CRC_SETTINGS)
+        One-word builds: the word's CRC resolved (width, polynomial, start, inversion), latched
+        with ``cycle``: the CRC engine reads flip-flops, and the copy of the raw custom
+        settings in ``cycle`` goes unread.
     """
 
     def __init__(self, params):
@@ -78,6 +83,7 @@ class Configuration(wiring.Component):
             "no_start_limit": Out(p.cycle_timer_width),
             "word_count": Out(range(1, p.words + 1)),
             "crc_widths": Out(data.ArrayLayout(range(CRC_MAX_WIDTH + 1), p.words)),
+            **({"crc": Out(CRC_SETTINGS)} if p.words == 1 else {}),
         })
 
     def valid(self, cfg):
@@ -154,10 +160,16 @@ class Configuration(wiring.Component):
         # controller sees Start one clock later after its decision than the Ack's (the register
         # between sampler and decoder), so the same decisions pass as with the Ack limit alone.
         m.d.sync += self.no_start_limit.eq(self.ack_limit + Cat(C(1, 1), cycle.ma_half_period))
-        customs = config_custom_crcs(cycle, p) or [None] * p.words
-        for w, word in enumerate(config_words(cycle, p)):
-            m.d.comb += self.crc_widths[w].eq(
-                crc_settings(word.crc, customs[w], p.word_crcs[w]).width)
+        if p.words == 1:
+            customs = config_custom_crcs(live, p) or [None]
+            with m.If(self.idle):
+                m.d.sync += self.crc.eq(crc_settings(live.w0.crc, customs[0], p.word_crcs[0]))
+            m.d.comb += self.crc_widths[0].eq(self.crc.width)
+        else:
+            customs = config_custom_crcs(cycle, p) or [None] * p.words
+            for w, word in enumerate(config_words(cycle, p)):
+                m.d.comb += self.crc_widths[w].eq(
+                    crc_settings(word.crc, customs[w], p.word_crcs[w]).width)
         # The words in the frame: word 0 and the enabled ones after it (in order: a gap is
         # refused above).
         m.d.comb += self.word_count.eq(sum(config_enables(cycle, p)))

@@ -45,8 +45,8 @@ class CrcEngine(wiring.Component):
     value and holds the width, polynomial and inversion in ``settings`` for the word's bits.
     So a word's CRC is read from the configuration once per word, through one multiplexer, and
     no resolved copy per word is kept (issue 27: that was a resolution per word). A one-word
-    engine has no ``settings``: it reads ``codes`` and ``customs`` at every bit, so they must
-    be held from ``load`` to the word's last bit (the master's are latched for the cycle).
+    engine takes its word's CRC resolved instead (``crc``, held by the master's configuration
+    for the cycle, as cheap as it gets with one word) and has no ``settings``.
 
     Every bit of the word *before* its CRC field (``cover``: data, nE, nW, LC) goes through
     the textbook shift register (MSB first, not reflected): feedback = register MSB xor bit,
@@ -65,9 +65,12 @@ class CrcEngine(wiring.Component):
     Attributes
     ----------
     codes : In(ArrayLayout(Crc, words))
-        Each word's CRC code (``cfg_wN_crc``), held for the cycle.
+        Each word's CRC code (``cfg_wN_crc``), held for the cycle (engines of 2+ words).
     customs : In(ArrayLayout(CRC_SETTINGS, words))
-        Each word's custom CRC (``cfg_wN_crc_*``), held for the cycle (builds with custom CRCs).
+        Each word's custom CRC (``cfg_wN_crc_*``), held for the cycle (engines of 2+ words
+        with custom CRCs).
+    crc : In(CRC_SETTINGS)
+        One-word engines: the word's CRC, resolved, held from ``load`` to its last bit.
     index : In(range(words))
         The word the current bit belongs to (builds of more than one word).
     load : In(1)
@@ -90,13 +93,18 @@ class CrcEngine(wiring.Component):
 
     def __init__(self, words, kinds=tuple(NAMED_CRCS), custom=True):
         """``kinds``: the named CRCs any word of the build may have; ``custom``: the build has
-        custom CRCs (``customs``)."""
+        custom CRCs (``customs``). Both are unused by a one-word engine."""
         self._words = words
         self._kinds = tuple(kinds)
         self._custom = custom
+        if words == 1:
+            settings = {"crc": In(CRC_SETTINGS)}
+        else:
+            settings = {"codes": In(data.ArrayLayout(Crc, words)),
+                        **({"customs": In(data.ArrayLayout(CRC_SETTINGS, words))}
+                           if custom else {})}
         super().__init__({
-            "codes": In(data.ArrayLayout(Crc, words)),
-            **({"customs": In(data.ArrayLayout(CRC_SETTINGS, words))} if custom else {}),
+            **settings,
             **({"index": In(range(words)), "load_index": In(range(words))} if words > 1 else {}),
             "load": In(1),
             "cover": In(1),
@@ -111,19 +119,17 @@ class CrcEngine(wiring.Component):
         n = self._words
         word = self.index if n > 1 else C(0, 1)
 
-        def of_load_word(values):
-            return values[0] if n == 1 else Array(values[w] for w in range(n))[self.load_index]
-
-        load_crc = crc_settings(of_load_word(self.codes),
-                                of_load_word(self.customs) if self._custom else None,
-                                self._kinds)
-        # The current word's width, polynomial and inversion (its start value went into the
-        # register at ``load``). A one-word engine reads its word's settings directly: they
-        # are the configuration's latch for the cycle, and a register here would hold them a
-        # second time (22 FF in the `biss-c` preset).
         if n == 1:
-            crc = load_crc
+            load_crc = crc = self.crc
         else:
+            def of_load_word(values):
+                return Array(values[w] for w in range(n))[self.load_index]
+
+            load_crc = crc_settings(of_load_word(self.codes),
+                                    of_load_word(self.customs) if self._custom else None,
+                                    self._kinds)
+            # The current word's width, polynomial and inversion (its start value went into
+            # the register at ``load``).
             crc = Signal(CRC_SETTINGS, name="settings")
 
         reg = Signal(CRC_MAX_WIDTH)

@@ -25,9 +25,9 @@ class FrameDecoder(wiring.Component):
     master may look for SLO high again.
 
     One :class:`~bissmaster.core.crc_engine.CrcEngine` checks every word's CRC in turn, each
-    with its own settings (its code in ``words``, ``customs``, ``crc_widths``). ``crc_ok``
-    comes from the engine's flip-flops: valid in
-    the clock after the word's last bit was sampled, and held until the next frame.
+    with its own settings (its code in ``words``, ``customs``, ``crc_widths``; a one-word
+    build's resolved ``crc``). ``crc_ok`` comes from the engine's flip-flops: valid in the
+    clock after the word's last bit was sampled, and held until the next frame.
 
     The master holds it in reset between cycles (``ResetInserter``), which also clears the
     data registers, so data fields are right-justified (zeros above an unsigned field).
@@ -70,11 +70,13 @@ class FrameDecoder(wiring.Component):
             "sample": In(1),
             "bit": In(1),
             "words": In(data.ArrayLayout(word_config(params), words)),
-            # Each word's resolved CRC width (Configuration.crc_widths) and, in builds with
-            # custom CRCs, its ``cfg_wN_crc_*`` settings.
+            # Each word's resolved CRC width (Configuration.crc_widths); in builds of 2+ words
+            # with custom CRCs, each word's ``cfg_wN_crc_*`` settings; in one-word builds, the
+            # word's CRC resolved (Configuration.crc).
             "crc_widths": In(data.ArrayLayout(range(CRC_MAX_WIDTH + 1), words)),
-            **({"customs": In(data.ArrayLayout(CRC_SETTINGS, words))}
-               if params.custom_crc else {}),
+            **({"crc": In(CRC_SETTINGS)} if words == 1 else
+               {"customs": In(data.ArrayLayout(CRC_SETTINGS, words))} if params.custom_crc
+               else {}),
             "word_count": In(range(1, words + 1)),
             "started": Out(1),
             "start_slot": Out(SLOT_WIDTH),
@@ -123,8 +125,13 @@ class FrameDecoder(wiring.Component):
             error_bit = self.ssi & self.ssi_error
             m.d.comb += field_ends.error_bit.eq(error_bit)
         current = field_ends.current
-        # Word 0's first-bit flags as ``begin_words`` loads them (with the ends themselves).
-        first = field_ends_of(self.words[0], self.crc_widths[0], error_bit if p.ssi else None)
+        # Word 0's first-bit flags as ``begin_words`` reads them: a one-word build's registers
+        # hold them already; with more words they are loaded with the ends themselves.
+        if p.words == 1:
+            first = current
+        else:
+            first = field_ends_of(self.words[0], self.crc_widths[0],
+                                  error_bit if p.ssi else None)
 
         word_end_m1 = current.word_end_m1
 
@@ -293,9 +300,12 @@ class FrameDecoder(wiring.Component):
         # One CRC engine for every word in turn, fed each bit of the word (data and the CRC).
         kinds = sorted({kind for crcs in p.word_crcs for kind in crcs})
         m.submodules.crc = engine = CrcEngine(p.words, kinds=kinds, custom=p.custom_crc)
-        m.d.comb += [engine.codes[w].eq(self.words[w].crc) for w in range(p.words)]
-        if p.custom_crc:
-            m.d.comb += engine.customs.eq(self.customs)
+        if p.words == 1:
+            m.d.comb += engine.crc.eq(self.crc)
+        else:
+            m.d.comb += [engine.codes[w].eq(self.words[w].crc) for w in range(p.words)]
+            if p.custom_crc:
+                m.d.comb += engine.customs.eq(self.customs)
         m.d.comb += [
             engine.load.eq(at_cds | (in_word & (idx == word_end_m1))),
             engine.cover.eq(in_word & ~in_crc),

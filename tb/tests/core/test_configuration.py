@@ -322,16 +322,18 @@ def test_configuration_no_start_limit_one_clock_after_the_latch():
                                                     4000 + 2 * 65535 + 1]
 
 
-#: The named CRCs' widths as docs/protocol.md section 6 gives them.
-NAMED_WIDTHS = {CRC_CODE["crc6"]: 6, CRC_CODE["crc16"]: 16}
+#: The named CRCs as docs/protocol.md section 6 gives them: (width, register polynomial, start,
+#: sent inverted).
+NAMED = {CRC_CODE["crc6"]: (6, 0x03, 0, 1), CRC_CODE["crc16"]: (16, 0x90D9, 0, 1)}
 
 
 @pytest.mark.parametrize("build", BUILDS)
 def test_configuration_crc_widths_resolved_from_the_code_and_latched_while_idle(build):
     """``crc_widths``: per word the width of the CRC the engine runs. A named code gives its
     protocol CRC's width, code 3 the word's ``cfg_wN_crc_width`` (in builds with custom CRCs),
-    code 0 width 0; latched while idle like ``cycle``. (The rest of a word's CRC is resolved
-    by the engine: test_crc_engine.py.)"""
+    code 0 width 0; latched while idle like ``cycle``. One-word builds: ``crc``, the whole CRC
+    resolved (width, polynomial, start, inversion), latched alike. (Builds of more words: the
+    engine resolves the rest, test_crc_engine.py.)"""
     p = BUILDS[build]
     layout = config_layout(p)
     rng = random.Random(7300 + len(build))
@@ -343,7 +345,8 @@ def test_configuration_crc_widths_resolved_from_the_code_and_latched_while_idle(
                                              + ([CRC_CODE["custom"]] if build in CUSTOM else []))
         idle = 1 if t < 2 else int(rng.random() < 0.6)
         steps.append({"live": pack(layout, cfg), "idle": idle})
-    trace = run_clocks(Configuration(p), steps, ["crc_widths"])
+    one_word = p.words == 1
+    trace = run_clocks(Configuration(p), steps, ["crc_widths"] + (["crc"] if one_word else []))
     latched = None
     for t in range(1, len(steps)):
         if steps[t - 1]["idle"]:
@@ -352,10 +355,16 @@ def test_configuration_crc_widths_resolved_from_the_code_and_latched_while_idle(
         for w in range(p.words):
             code = latched[f"w{w}"]["crc"]
             if code == CRC_CODE["custom"]:
-                want = latched[f"w{w}_crc"]["width"]
+                c = latched[f"w{w}_crc"]
+                want = (c["width"], c["poly"], c["start"], c["inverted"])
             else:
-                want = NAMED_WIDTHS.get(code, 0)
-            assert (got >> (5 * w)) & 31 == want, (t, w)
+                want = NAMED.get(code, (0, 0, 0, 0))
+            assert (got >> (5 * w)) & 31 == want[0], (t, w)
+            if one_word:
+                # The whole CRC, resolved (width, polynomial, start, inverted).
+                entry = trace[t]["crc"]
+                assert (entry & 31, (entry >> 5) & 0xFFFF, (entry >> 21) & 0xFFFF, entry >> 37) \
+                    == want, t
 
 
 @pytest.mark.parametrize("ack_limit, half_period", ((65535, 65535), (60000, 40000), (1000, 65535)))

@@ -45,15 +45,24 @@ def _settings(width, poly, start, inverted):
     return {"width": width, "poly": poly, "start": start, "inverted": int(inverted)}
 
 
+#: What a named code runs (the BiSS CRCs above), and code 0: no CRC.
+NAMED_SETTINGS = {CRC_CODE["crc6"]: _settings(*BISS[0][1:4], True),
+                  CRC_CODE["crc16"]: _settings(*BISS[1][1:4], True),
+                  CRC_CODE["none"]: _settings(0, 0, 0, False)}
+
+
 def _run(words, jobs, seed):
     """Each job is (word index, settings, covered bits, received CRC bits); settings are a
-    custom CRC (a :func:`_settings` dict: the word's code is "custom") or a named CRC's code.
+    custom CRC (a :func:`_settings` dict: the word's code is "custom") or a named CRC's code
+    (a one-word engine gets the CRC resolved: the dict, or the named CRC's settings from
+    ``NAMED_SETTINGS``).
     The engine loads the job's word before its first bit, either in a clock of its own or with
     the last bit of the job before (as the decoder does after CDS and between words); the bits
     come one per 1..3 clocks with junk between. The word's code and custom settings are set
     before its load; with more than one word, in about a third of the jobs they are then
     overwritten with junk, which the engine must not read (it takes a word's settings at its
-    load; a one-word engine reads them at every bit: the master holds them for the cycle).
+    load; a one-word engine reads its resolved CRC at every bit: the master holds it for the
+    cycle).
     Returns per job (ok[word] the clock after its last bit, ok[word] two clocks later)."""
     rng = random.Random(seed)
     dut = CrcEngine(words)
@@ -62,6 +71,9 @@ def _run(words, jobs, seed):
     results = []
 
     def put(ctx, word, settings):
+        if words == 1:
+            ctx.set(dut.crc, settings if isinstance(settings, dict) else NAMED_SETTINGS[settings])
+            return
         if isinstance(settings, dict):
             codes[word], customs[word] = CRC_CODE["custom"], settings
         else:

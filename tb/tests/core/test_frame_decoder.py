@@ -24,10 +24,11 @@ def _cfg(wf):
 
 
 def _crc(wf):
-    """The word's CRC as the decoder gets it: its resolved width (Configuration.crc_widths)
-    and its custom settings (``cfg_wN_crc_*``, 0 for a named CRC)."""
+    """The word's CRC as the decoder gets it: its resolved settings (a one-word build's
+    ``crc``; the width alone in ``crc_widths``) and its custom settings (``cfg_wN_crc_*``, 0
+    for a named CRC)."""
     crc = "none" if wf is None else wf.crc
-    return crc_settings(crc)["width"], crc_config(crc)[1]
+    return crc_settings(crc), crc_config(crc)[1]
 
 
 def _random_values(fmt, rng):
@@ -61,8 +62,10 @@ def _decode(params, fmt, values, *, acks, faults=None, hw_word1=None, seed=0, fr
 
     async def tb(ctx):
         ctx.set(dut.words, cfgs)
-        ctx.set(dut.crc_widths, [width for width, _ in crcs])
-        if params.custom_crc:
+        ctx.set(dut.crc_widths, [resolved["width"] for resolved, _ in crcs])
+        if params.words == 1:
+            ctx.set(dut.crc, crcs[0][0])
+        elif params.custom_crc:
             ctx.set(dut.customs, [custom for _, custom in crcs])
         ctx.set(dut.word_count, len(fmt.words))
         cycle = 0
