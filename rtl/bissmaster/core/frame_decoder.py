@@ -26,7 +26,7 @@ class FrameDecoder(wiring.Component):
 
     One :class:`~bissmaster.core.crc_engine.CrcEngine` checks every word's CRC in turn, each
     with its own settings (its code in ``words``, ``customs``, ``crc_widths``; a one-word
-    build's resolved ``crc``). ``crc_ok`` comes from the engine's flip-flops: valid in the
+    build's resolved ``word0_crc``). ``crc_ok`` comes from the engine's flip-flops: valid in the
     clock after the word's last bit was sampled, and held until the next frame.
 
     The master holds it in reset between cycles (``ResetInserter``), which also clears the
@@ -74,7 +74,7 @@ class FrameDecoder(wiring.Component):
             # with custom CRCs, each word's ``cfg_wN_crc_*`` settings; in one-word builds, the
             # word's CRC resolved (Configuration.crc).
             "crc_widths": In(data.ArrayLayout(range(CRC_MAX_WIDTH + 1), words)),
-            **({"crc": In(CRC_SETTINGS)} if words == 1 else
+            **({"word0_crc": In(CRC_SETTINGS)} if words == 1 else
                {"customs": In(data.ArrayLayout(CRC_SETTINGS, words))} if params.custom_crc
                else {}),
             "word_count": In(range(1, words + 1)),
@@ -301,7 +301,7 @@ class FrameDecoder(wiring.Component):
         kinds = sorted({kind for crcs in p.word_crcs for kind in crcs})
         m.submodules.crc = engine = CrcEngine(p.words, kinds=kinds, custom=p.custom_crc)
         if p.words == 1:
-            m.d.comb += engine.crc.eq(self.crc)
+            m.d.comb += engine.word_crc.eq(self.word0_crc)
         else:
             m.d.comb += [engine.codes[w].eq(self.words[w].crc) for w in range(p.words)]
             if p.custom_crc:

@@ -72,7 +72,8 @@ def _run(words, jobs, seed):
 
     def put(ctx, word, settings):
         if words == 1:
-            ctx.set(dut.crc, settings if isinstance(settings, dict) else NAMED_SETTINGS[settings])
+            ctx.set(dut.word_crc, settings if isinstance(settings, dict)
+                    else NAMED_SETTINGS[settings])
             return
         if isinstance(settings, dict):
             codes[word], customs[word] = CRC_CODE["custom"], settings

@@ -64,7 +64,7 @@ def _decode(params, fmt, values, *, acks, faults=None, hw_word1=None, seed=0, fr
         ctx.set(dut.words, cfgs)
         ctx.set(dut.crc_widths, [resolved["width"] for resolved, _ in crcs])
         if params.words == 1:
-            ctx.set(dut.crc, crcs[0][0])
+            ctx.set(dut.word0_crc, crcs[0][0])
         elif params.custom_crc:
             ctx.set(dut.customs, [custom for _, custom in crcs])
         ctx.set(dut.word_count, len(fmt.words))

@@ -331,6 +331,31 @@ def test_equiv_proves_a_rewrite_and_rejects_a_change(new_logic, proven, tmp_path
     assert equiv.equivalent(old, new) is proven
 
 
+#: A register whose value depends on every clock so far, seen only through its top bit: a
+#: rename of it leaves the output unproven unless the two are paired.
+ACCUMULATOR = """module biss_master(clk, a, y);
+  input clk;
+  input [3:0] a;
+  output y;
+  reg [3:0] total = 4'h0;
+  always @(posedge clk) total <= total + a;
+  assign y = total[3];
+endmodule
+"""
+
+
+@pytest.mark.parametrize("renames, proven", [
+    ((), False),                                    # the renamed register is unmatched
+    ((("total", "sum"),), True),                    # paired: proven
+    ((("total", "nothing"),), False),               # a wrong pair proves nothing
+])
+def test_equiv_pairs_a_renamed_register(renames, proven, tmp_path):
+    old, new = tmp_path / "old.v", tmp_path / "new.v"
+    old.write_text(ACCUMULATOR)
+    new.write_text(ACCUMULATOR.replace("total", "sum"))
+    assert equiv.equivalent(old, new, renames=renames) is proven
+
+
 # -- synth.py: a design that does not fit ---------------------------------------------------------
 
 #: nextpnr's utilisation report and error, as nextpnr-ice40 prints them (the lines synth.py
