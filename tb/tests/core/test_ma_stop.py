@@ -125,12 +125,18 @@ def test_ma_stop_start_seen_after_the_rises_it_needs():
     assert _first(trace) == 4 + 40 + 2
 
 
-def test_ma_stop_clear_forces_zero():
-    words = RSH
-    steps, _ = scenario(words, 1, 2, step=1, started_at=5, extra=10)
-    steps[-5] = {**steps[-5], "clear": 1}
-    trace = _run(2, steps)
-    assert trace[-8:] == [1, 1, 1, 1, 0, 1, 1, 1]
+def test_ma_stop_clear_forces_zero_and_restarts_the_sum():
+    """A clear forces ``enough`` to 0 from the next clock and, in a build of N >= 2 words,
+    restarts the frame's sum: one word per clock, two stages, then one clock for the target,
+    so ``enough`` is back N + 4 clocks after the clear (one-word builds: the next clock but
+    one)."""
+    for n, words in ((2, RSH), (1, RSH[:1])):
+        steps, _ = scenario(words, 1 if n == 2 else 0, 2, step=1, started_at=5, extra=14)
+        c = len(steps) - 10
+        steps[c] = {**steps[c], "clear": 1}
+        trace = _run(n, steps)
+        back = c + (n + 4 if n > 1 else 2)
+        assert trace[c] == 1 and not any(trace[c + 1:back]) and all(trace[back:]), (n, trace[c:])
 
 
 def test_ma_stop_random_formats_back_to_back():
@@ -220,3 +226,27 @@ def test_ma_stop_eight_longest_words():
     assert max(targets) == 8 * 87 + RISES_AROUND_WORDS
     trace = _run(8, steps)
     assert trace == reference(steps, targets)
+
+
+@pytest.mark.parametrize("n", (2, 3, 8))
+def test_ma_stop_reads_no_partial_sum(n):
+    """The frame's length is summed one word per clock after the clear: with every rise
+    already there and Start seen from the first clock (not possible on a line: the sum is
+    ready long before; docs in MaStop._sum_words), ``enough`` still waits for the whole sum,
+    N + 3 clocks after the clear drops, so a partial (shorter) sum never stops MA early."""
+    words = tuple(WordFormat(63, lc=True, crc=CRC16) for _ in range(n))
+    cfg = {"words": [_word_cfg(wf) for wf in words], "enables": 2**n - 1,
+           "crc_widths": [crc_settings(wf.crc)["width"] for wf in words]}
+    target = 1 + n * 87 + RISES_AROUND_WORDS
+    steps = [{**cfg, "clear": 1, "rises": 0, "started": 0, "start_slot": 0}] * 3
+    steps += [{**cfg, "clear": 0, "rises": rises, "started": 1, "start_slot": 1}
+              for rises in [target - 1] * (n + 5) + [target] * 4]
+    trace = _run(n, steps)
+    drop = 3
+    # The whole target is one more than the rises until they reach it: never enough before.
+    assert not any(trace[:drop + n + 5]), trace
+    assert trace[drop + n + 6:] == [1] * 3, trace
+    # And with the rises at the target from the start: enough exactly N + 3 clocks after.
+    steps = steps[:drop] + [{**s, "rises": target} for s in steps[drop:]]
+    trace = _run(n, steps)
+    assert trace.index(1) == drop + n + 3, trace
