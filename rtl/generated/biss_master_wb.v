@@ -1072,12 +1072,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$7602$0 (\$10 ),
-    .\port$7613$0 (\$11 ),
-    .\port$7690$0 (\$12 ),
-    .\port$8151$0 (\$13 ),
-    .\port$8162$0 (\$14 ),
-    .\port$8239$0 (\$15 ),
+    .\port$7974$0 (\$10 ),
+    .\port$7985$0 (\$11 ),
+    .\port$8062$0 (\$12 ),
+    .\port$8523$0 (\$13 ),
+    .\port$8534$0 (\$14 ),
+    .\port$8611$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1153,9 +1153,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$7602$0 (\$10 ),
-    .\port$7613$0 (\$11 ),
-    .\port$7690$0 (\$12 ),
+    .\port$7974$0 (\$10 ),
+    .\port$7985$0 (\$11 ),
+    .\port$8062$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1230,9 +1230,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(\regs__count_en$767 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$791 ),
-    .\port$8151$0 (\$13 ),
-    .\port$8162$0 (\$14 ),
-    .\port$8239$0 (\$15 ),
+    .\port$8523$0 (\$13 ),
+    .\port$8534$0 (\$14 ),
+    .\port$8611$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$455 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1992,7 +1992,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start
 , ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray
 , ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double
-, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7602$0 , \port$7613$0 , ch0__ca_done, \port$7690$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$8151$0 , \port$8162$0 , ch1__ca_done, \port$8239$0 
+, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7974$0 , \port$7985$0 , ch0__ca_done, \port$8062$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$8523$0 , \port$8534$0 , ch1__ca_done, \port$8611$0 
 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
@@ -4118,18 +4118,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$7602$0 ;
-  wire [186:0] \port$7602$0 ;
-  input [79:0] \port$7613$0 ;
-  wire [79:0] \port$7613$0 ;
-  input [9:0] \port$7690$0 ;
-  wire [9:0] \port$7690$0 ;
-  input [186:0] \port$8151$0 ;
-  wire [186:0] \port$8151$0 ;
-  input [79:0] \port$8162$0 ;
-  wire [79:0] \port$8162$0 ;
-  input [9:0] \port$8239$0 ;
-  wire [9:0] \port$8239$0 ;
+  input [186:0] \port$7974$0 ;
+  wire [186:0] \port$7974$0 ;
+  input [79:0] \port$7985$0 ;
+  wire [79:0] \port$7985$0 ;
+  input [9:0] \port$8062$0 ;
+  wire [9:0] \port$8062$0 ;
+  input [186:0] \port$8523$0 ;
+  wire [186:0] \port$8523$0 ;
+  input [79:0] \port$8534$0 ;
+  wire [79:0] \port$8534$0 ;
+  input [9:0] \port$8611$0 ;
+  wire [9:0] \port$8611$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
@@ -4367,7 +4367,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$160  = \$158  | \$159 ;
   assign \$161  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$7602$0 [182:177], 4'h0, \port$7602$0 [186:183], 1'h0, \port$7602$0 [176:174], 1'h0, \port$7602$0 [133:131], 3'h0, \port$7602$0 [49], \port$7602$0 [3:0] } : 32'd0;
+  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$7974$0 [182:177], 4'h0, \port$7974$0 [186:183], 1'h0, \port$7974$0 [176:174], 1'h0, \port$7974$0 [133:131], 3'h0, \port$7974$0 [49], \port$7974$0 [3:0] } : 32'd0;
   assign \$168  = \$166  | \$167 ;
   assign \$169  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$170  = \$168  | \$169 ;
@@ -4383,13 +4383,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$180  = \$178  | \$179 ;
   assign \$181  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$7690$0 [9:3], 1'h0, \port$7690$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$8062$0 [9:3], 1'h0, \port$8062$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$228  = \$226  | \$227 ;
-  assign \$229  = ch0_read_select_c3 ? \port$7613$0 [31:0] : 32'd0;
+  assign \$229  = ch0_read_select_c3 ? \port$7985$0 [31:0] : 32'd0;
   assign \$230  = \$228  | \$229 ;
-  assign \$231  = ch0_read_select_c4 ? \port$7613$0 [63:32] : 32'd0;
+  assign \$231  = ch0_read_select_c4 ? \port$7985$0 [63:32] : 32'd0;
   assign \$232  = \$230  | \$231 ;
-  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$7613$0 [79:64] } : 32'd0;
+  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$7985$0 [79:64] } : 32'd0;
   assign \$234  = \$232  | \$233 ;
   assign \$237  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$238  = \$236  | \$237 ;
@@ -4538,7 +4538,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$384  = \$382  | \$383 ;
   assign \$385  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$386  = \$384  | \$385 ;
-  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$8151$0 [182:177], 4'h0, \port$8151$0 [186:183], 1'h0, \port$8151$0 [176:174], 1'h0, \port$8151$0 [133:131], 3'h0, \port$8151$0 [49], \port$8151$0 [3:0] } : 32'd0;
+  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$8523$0 [182:177], 4'h0, \port$8523$0 [186:183], 1'h0, \port$8523$0 [176:174], 1'h0, \port$8523$0 [133:131], 3'h0, \port$8523$0 [49], \port$8523$0 [3:0] } : 32'd0;
   assign \$392  = \$390  | \$391 ;
   assign \$393  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$394  = \$392  | \$393 ;
@@ -4554,13 +4554,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$404  = \$402  | \$403 ;
   assign \$405  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$406  = \$404  | \$405 ;
-  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$8239$0 [9:3], 1'h0, \port$8239$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$8611$0 [9:3], 1'h0, \port$8611$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$452  = \$450  | \$451 ;
-  assign \$453  = ch1_read_select_143 ? \port$8162$0 [31:0] : 32'd0;
+  assign \$453  = ch1_read_select_143 ? \port$8534$0 [31:0] : 32'd0;
   assign \$454  = \$452  | \$453 ;
-  assign \$455  = ch1_read_select_144 ? \port$8162$0 [63:32] : 32'd0;
+  assign \$455  = ch1_read_select_144 ? \port$8534$0 [63:32] : 32'd0;
   assign \$456  = \$454  | \$455 ;
-  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$8162$0 [79:64] } : 32'd0;
+  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$8534$0 [79:64] } : 32'd0;
   assign \$458  = \$456  | \$457 ;
   assign \$461  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$462  = \$460  | \$461 ;
@@ -6969,7 +6969,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$809  = ch0_result_status_status_snapshot;
     if (\$146 ) begin
-      \$809  = \port$7602$0 [3:0];
+      \$809  = \port$7974$0 [3:0];
     end
     if (rst) begin
       \$809  = 4'h0;
@@ -6979,7 +6979,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$810  = ch0_result_status_cds_snapshot;
     if (\$146 ) begin
-      \$810  = \port$7602$0 [49];
+      \$810  = \port$7974$0 [49];
     end
     if (rst) begin
       \$810  = 1'h0;
@@ -6989,7 +6989,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$811  = ch0_result_status_w0_ne_snapshot;
     if (\$146 ) begin
-      \$811  = \port$7602$0 [131];
+      \$811  = \port$7974$0 [131];
     end
     if (rst) begin
       \$811  = 1'h0;
@@ -6999,7 +6999,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$812  = ch0_result_status_w0_nw_snapshot;
     if (\$146 ) begin
-      \$812  = \port$7602$0 [132];
+      \$812  = \port$7974$0 [132];
     end
     if (rst) begin
       \$812  = 1'h0;
@@ -7009,7 +7009,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$813  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$146 ) begin
-      \$813  = \port$7602$0 [133];
+      \$813  = \port$7974$0 [133];
     end
     if (rst) begin
       \$813  = 1'h0;
@@ -7019,7 +7019,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$814  = ch0_result_status_w1_ne_snapshot;
     if (\$146 ) begin
-      \$814  = \port$7602$0 [174];
+      \$814  = \port$7974$0 [174];
     end
     if (rst) begin
       \$814  = 1'h0;
@@ -7029,7 +7029,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$815  = ch0_result_status_w1_nw_snapshot;
     if (\$146 ) begin
-      \$815  = \port$7602$0 [175];
+      \$815  = \port$7974$0 [175];
     end
     if (rst) begin
       \$815  = 1'h0;
@@ -7039,7 +7039,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$816  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$146 ) begin
-      \$816  = \port$7602$0 [176];
+      \$816  = \port$7974$0 [176];
     end
     if (rst) begin
       \$816  = 1'h0;
@@ -7049,7 +7049,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$817  = ch0_result_status_lc_repeat_snapshot;
     if (\$146 ) begin
-      \$817  = \port$7602$0 [183];
+      \$817  = \port$7974$0 [183];
     end
     if (rst) begin
       \$817  = 1'h0;
@@ -7059,7 +7059,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$818  = ch0_result_status_lc_skip_snapshot;
     if (\$146 ) begin
-      \$818  = \port$7602$0 [184];
+      \$818  = \port$7974$0 [184];
     end
     if (rst) begin
       \$818  = 1'h0;
@@ -7069,7 +7069,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$819  = ch0_result_status_lc_zero_snapshot;
     if (\$146 ) begin
-      \$819  = \port$7602$0 [185];
+      \$819  = \port$7974$0 [185];
     end
     if (rst) begin
       \$819  = 1'h0;
@@ -7079,7 +7079,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$820  = ch0_result_status_spw_mismatch_snapshot;
     if (\$146 ) begin
-      \$820  = \port$7602$0 [186];
+      \$820  = \port$7974$0 [186];
     end
     if (rst) begin
       \$820  = 1'h0;
@@ -7089,7 +7089,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$821  = ch0_result_status_lc_snapshot;
     if (\$146 ) begin
-      \$821  = \port$7602$0 [182:177];
+      \$821  = \port$7974$0 [182:177];
     end
     if (rst) begin
       \$821  = 6'h00;
@@ -7109,7 +7109,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$823  = ch0_result_seq_line_delay_snapshot;
     if (\$146 ) begin
-      \$823  = \port$7602$0 [48:36];
+      \$823  = \port$7974$0 [48:36];
     end
     if (rst) begin
       \$823  = 13'h0000;
@@ -7119,7 +7119,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$824  = ch0_result_w0_lo_data_snapshot;
     if (\$146 ) begin
-      \$824  = \port$7602$0 [107:76];
+      \$824  = \port$7974$0 [107:76];
     end
     if (rst) begin
       \$824  = 32'd0;
@@ -7129,7 +7129,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$825  = ch0_result_w0_hi_data_snapshot;
     if (\$146 ) begin
-      \$825  = \port$7602$0 [130:108];
+      \$825  = \port$7974$0 [130:108];
     end
     if (rst) begin
       \$825  = 23'h000000;
@@ -7139,7 +7139,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$826  = ch0_result_w1_lo_data_snapshot;
     if (\$146 ) begin
-      \$826  = \port$7602$0 [165:134];
+      \$826  = \port$7974$0 [165:134];
     end
     if (rst) begin
       \$826  = 32'd0;
@@ -7149,7 +7149,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$827  = ch0_result_w1_hi_data_snapshot;
     if (\$146 ) begin
-      \$827  = \port$7602$0 [173:166];
+      \$827  = \port$7974$0 [173:166];
     end
     if (rst) begin
       \$827  = 8'h00;
@@ -7159,7 +7159,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$828  = ch0_result_timestamp_time_snapshot;
     if (\$146 ) begin
-      \$828  = \port$7602$0 [35:4];
+      \$828  = \port$7974$0 [35:4];
     end
     if (rst) begin
       \$828  = 32'd0;
@@ -7169,7 +7169,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$829  = ch0_result_line_noise_events_snapshot;
     if (\$146 ) begin
-      \$829  = \port$7602$0 [53:50];
+      \$829  = \port$7974$0 [53:50];
     end
     if (rst) begin
       \$829  = 4'h0;
@@ -7179,7 +7179,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$830  = ch0_result_line_delay_settled_snapshot;
     if (\$146 ) begin
-      \$830  = \port$7602$0 [54];
+      \$830  = \port$7974$0 [54];
     end
     if (rst) begin
       \$830  = 1'h0;
@@ -7189,7 +7189,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$831  = ch0_result_line_delay_spread_snapshot;
     if (\$146 ) begin
-      \$831  = \port$7602$0 [75:68];
+      \$831  = \port$7974$0 [75:68];
     end
     if (rst) begin
       \$831  = 8'h00;
@@ -7199,7 +7199,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$832  = ch0_result_line_settled_delay_snapshot;
     if (\$146 ) begin
-      \$832  = \port$7602$0 [67:55];
+      \$832  = \port$7974$0 [67:55];
     end
     if (rst) begin
       \$832  = 13'h0000;
@@ -8526,7 +8526,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$971  = ch1_result_status_status_snapshot;
     if (\$370 ) begin
-      \$971  = \port$8151$0 [3:0];
+      \$971  = \port$8523$0 [3:0];
     end
     if (rst) begin
       \$971  = 4'h0;
@@ -8536,7 +8536,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$972  = ch1_result_status_cds_snapshot;
     if (\$370 ) begin
-      \$972  = \port$8151$0 [49];
+      \$972  = \port$8523$0 [49];
     end
     if (rst) begin
       \$972  = 1'h0;
@@ -8546,7 +8546,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$973  = ch1_result_status_w0_ne_snapshot;
     if (\$370 ) begin
-      \$973  = \port$8151$0 [131];
+      \$973  = \port$8523$0 [131];
     end
     if (rst) begin
       \$973  = 1'h0;
@@ -8556,7 +8556,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$974  = ch1_result_status_w0_nw_snapshot;
     if (\$370 ) begin
-      \$974  = \port$8151$0 [132];
+      \$974  = \port$8523$0 [132];
     end
     if (rst) begin
       \$974  = 1'h0;
@@ -8566,7 +8566,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$975  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$370 ) begin
-      \$975  = \port$8151$0 [133];
+      \$975  = \port$8523$0 [133];
     end
     if (rst) begin
       \$975  = 1'h0;
@@ -8576,7 +8576,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$976  = ch1_result_status_w1_ne_snapshot;
     if (\$370 ) begin
-      \$976  = \port$8151$0 [174];
+      \$976  = \port$8523$0 [174];
     end
     if (rst) begin
       \$976  = 1'h0;
@@ -8586,7 +8586,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$977  = ch1_result_status_w1_nw_snapshot;
     if (\$370 ) begin
-      \$977  = \port$8151$0 [175];
+      \$977  = \port$8523$0 [175];
     end
     if (rst) begin
       \$977  = 1'h0;
@@ -8596,7 +8596,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$978  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$370 ) begin
-      \$978  = \port$8151$0 [176];
+      \$978  = \port$8523$0 [176];
     end
     if (rst) begin
       \$978  = 1'h0;
@@ -8606,7 +8606,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$979  = ch1_result_status_lc_repeat_snapshot;
     if (\$370 ) begin
-      \$979  = \port$8151$0 [183];
+      \$979  = \port$8523$0 [183];
     end
     if (rst) begin
       \$979  = 1'h0;
@@ -8616,7 +8616,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$980  = ch1_result_status_lc_skip_snapshot;
     if (\$370 ) begin
-      \$980  = \port$8151$0 [184];
+      \$980  = \port$8523$0 [184];
     end
     if (rst) begin
       \$980  = 1'h0;
@@ -8626,7 +8626,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$981  = ch1_result_status_lc_zero_snapshot;
     if (\$370 ) begin
-      \$981  = \port$8151$0 [185];
+      \$981  = \port$8523$0 [185];
     end
     if (rst) begin
       \$981  = 1'h0;
@@ -8636,7 +8636,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$982  = ch1_result_status_spw_mismatch_snapshot;
     if (\$370 ) begin
-      \$982  = \port$8151$0 [186];
+      \$982  = \port$8523$0 [186];
     end
     if (rst) begin
       \$982  = 1'h0;
@@ -8646,7 +8646,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$983  = ch1_result_status_lc_snapshot;
     if (\$370 ) begin
-      \$983  = \port$8151$0 [182:177];
+      \$983  = \port$8523$0 [182:177];
     end
     if (rst) begin
       \$983  = 6'h00;
@@ -8666,7 +8666,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$985  = ch1_result_seq_line_delay_snapshot;
     if (\$370 ) begin
-      \$985  = \port$8151$0 [48:36];
+      \$985  = \port$8523$0 [48:36];
     end
     if (rst) begin
       \$985  = 13'h0000;
@@ -8676,7 +8676,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$986  = ch1_result_w0_lo_data_snapshot;
     if (\$370 ) begin
-      \$986  = \port$8151$0 [107:76];
+      \$986  = \port$8523$0 [107:76];
     end
     if (rst) begin
       \$986  = 32'd0;
@@ -8686,7 +8686,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$987  = ch1_result_w0_hi_data_snapshot;
     if (\$370 ) begin
-      \$987  = \port$8151$0 [130:108];
+      \$987  = \port$8523$0 [130:108];
     end
     if (rst) begin
       \$987  = 23'h000000;
@@ -8696,7 +8696,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$988  = ch1_result_w1_lo_data_snapshot;
     if (\$370 ) begin
-      \$988  = \port$8151$0 [165:134];
+      \$988  = \port$8523$0 [165:134];
     end
     if (rst) begin
       \$988  = 32'd0;
@@ -8706,7 +8706,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$989  = ch1_result_w1_hi_data_snapshot;
     if (\$370 ) begin
-      \$989  = \port$8151$0 [173:166];
+      \$989  = \port$8523$0 [173:166];
     end
     if (rst) begin
       \$989  = 8'h00;
@@ -8716,7 +8716,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$990  = ch1_result_timestamp_time_snapshot;
     if (\$370 ) begin
-      \$990  = \port$8151$0 [35:4];
+      \$990  = \port$8523$0 [35:4];
     end
     if (rst) begin
       \$990  = 32'd0;
@@ -8726,7 +8726,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$991  = ch1_result_line_noise_events_snapshot;
     if (\$370 ) begin
-      \$991  = \port$8151$0 [53:50];
+      \$991  = \port$8523$0 [53:50];
     end
     if (rst) begin
       \$991  = 4'h0;
@@ -8736,7 +8736,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$992  = ch1_result_line_delay_settled_snapshot;
     if (\$370 ) begin
-      \$992  = \port$8151$0 [54];
+      \$992  = \port$8523$0 [54];
     end
     if (rst) begin
       \$992  = 1'h0;
@@ -8746,7 +8746,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$993  = ch1_result_line_delay_spread_snapshot;
     if (\$370 ) begin
-      \$993  = \port$8151$0 [75:68];
+      \$993  = \port$8523$0 [75:68];
     end
     if (rst) begin
       \$993  = 8'h00;
@@ -8756,7 +8756,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$994  = ch1_result_line_settled_delay_snapshot;
     if (\$370 ) begin
-      \$994  = \port$8151$0 [67:55];
+      \$994  = \port$8523$0 [67:55];
     end
     if (rst) begin
       \$994  = 13'h0000;
@@ -8959,27 +8959,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$7602$0 [3:0];
-  assign ch0__cds = \port$7602$0 [49];
-  assign ch0__word0_ne = \port$7602$0 [131];
-  assign ch0__word0_nw = \port$7602$0 [132];
-  assign ch0__word0_crc_ok = \port$7602$0 [133];
-  assign ch0__word1_ne = \port$7602$0 [174];
-  assign ch0__word1_nw = \port$7602$0 [175];
-  assign ch0__word1_crc_ok = \port$7602$0 [176];
-  assign ch0__lc_repeat = \port$7602$0 [183];
-  assign ch0__lc_skip = \port$7602$0 [184];
-  assign ch0__lc_zero = \port$7602$0 [185];
-  assign ch0__spw_mismatch = \port$7602$0 [186];
-  assign ch0__lc = \port$7602$0 [182:177];
-  assign ch0__line_delay = \port$7602$0 [48:36];
-  assign ch0__word0_position = \port$7602$0 [130:76];
-  assign ch0__word1_position = \port$7602$0 [173:134];
-  assign ch0__timestamp = \port$7602$0 [35:4];
-  assign ch0__noise_events = \port$7602$0 [53:50];
-  assign ch0__delay_settled = \port$7602$0 [54];
-  assign ch0__delay_spread = \port$7602$0 [75:68];
-  assign ch0__settled_delay = \port$7602$0 [67:55];
+  assign ch0__status = \port$7974$0 [3:0];
+  assign ch0__cds = \port$7974$0 [49];
+  assign ch0__word0_ne = \port$7974$0 [131];
+  assign ch0__word0_nw = \port$7974$0 [132];
+  assign ch0__word0_crc_ok = \port$7974$0 [133];
+  assign ch0__word1_ne = \port$7974$0 [174];
+  assign ch0__word1_nw = \port$7974$0 [175];
+  assign ch0__word1_crc_ok = \port$7974$0 [176];
+  assign ch0__lc_repeat = \port$7974$0 [183];
+  assign ch0__lc_skip = \port$7974$0 [184];
+  assign ch0__lc_zero = \port$7974$0 [185];
+  assign ch0__spw_mismatch = \port$7974$0 [186];
+  assign ch0__lc = \port$7974$0 [182:177];
+  assign ch0__line_delay = \port$7974$0 [48:36];
+  assign ch0__word0_position = \port$7974$0 [130:76];
+  assign ch0__word1_position = \port$7974$0 [173:134];
+  assign ch0__timestamp = \port$7974$0 [35:4];
+  assign ch0__noise_events = \port$7974$0 [53:50];
+  assign ch0__delay_settled = \port$7974$0 [54];
+  assign ch0__delay_spread = \port$7974$0 [75:68];
+  assign ch0__settled_delay = \port$7974$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9000,13 +9000,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$7690$0 [2:0];
-  assign ch0__ca_bytes_done = \port$7690$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$7613$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$7613$0 [31:16];
-  assign ch0__count_ca_refused = \port$7613$0 [47:32];
-  assign ch0__count_ca_aborted = \port$7613$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$7613$0 [79:64];
+  assign ch0__ca_status = \port$8062$0 [2:0];
+  assign ch0__ca_bytes_done = \port$8062$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$7985$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$7985$0 [31:16];
+  assign ch0__count_ca_refused = \port$7985$0 [47:32];
+  assign ch0__count_ca_aborted = \port$7985$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$7985$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9026,27 +9026,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$8151$0 [3:0];
-  assign ch1__cds = \port$8151$0 [49];
-  assign ch1__word0_ne = \port$8151$0 [131];
-  assign ch1__word0_nw = \port$8151$0 [132];
-  assign ch1__word0_crc_ok = \port$8151$0 [133];
-  assign ch1__word1_ne = \port$8151$0 [174];
-  assign ch1__word1_nw = \port$8151$0 [175];
-  assign ch1__word1_crc_ok = \port$8151$0 [176];
-  assign ch1__lc_repeat = \port$8151$0 [183];
-  assign ch1__lc_skip = \port$8151$0 [184];
-  assign ch1__lc_zero = \port$8151$0 [185];
-  assign ch1__spw_mismatch = \port$8151$0 [186];
-  assign ch1__lc = \port$8151$0 [182:177];
-  assign ch1__line_delay = \port$8151$0 [48:36];
-  assign ch1__word0_position = \port$8151$0 [130:76];
-  assign ch1__word1_position = \port$8151$0 [173:134];
-  assign ch1__timestamp = \port$8151$0 [35:4];
-  assign ch1__noise_events = \port$8151$0 [53:50];
-  assign ch1__delay_settled = \port$8151$0 [54];
-  assign ch1__delay_spread = \port$8151$0 [75:68];
-  assign ch1__settled_delay = \port$8151$0 [67:55];
+  assign ch1__status = \port$8523$0 [3:0];
+  assign ch1__cds = \port$8523$0 [49];
+  assign ch1__word0_ne = \port$8523$0 [131];
+  assign ch1__word0_nw = \port$8523$0 [132];
+  assign ch1__word0_crc_ok = \port$8523$0 [133];
+  assign ch1__word1_ne = \port$8523$0 [174];
+  assign ch1__word1_nw = \port$8523$0 [175];
+  assign ch1__word1_crc_ok = \port$8523$0 [176];
+  assign ch1__lc_repeat = \port$8523$0 [183];
+  assign ch1__lc_skip = \port$8523$0 [184];
+  assign ch1__lc_zero = \port$8523$0 [185];
+  assign ch1__spw_mismatch = \port$8523$0 [186];
+  assign ch1__lc = \port$8523$0 [182:177];
+  assign ch1__line_delay = \port$8523$0 [48:36];
+  assign ch1__word0_position = \port$8523$0 [130:76];
+  assign ch1__word1_position = \port$8523$0 [173:134];
+  assign ch1__timestamp = \port$8523$0 [35:4];
+  assign ch1__noise_events = \port$8523$0 [53:50];
+  assign ch1__delay_settled = \port$8523$0 [54];
+  assign ch1__delay_spread = \port$8523$0 [75:68];
+  assign ch1__settled_delay = \port$8523$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9067,13 +9067,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$8239$0 [2:0];
-  assign ch1__ca_bytes_done = \port$8239$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$8162$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$8162$0 [31:16];
-  assign ch1__count_ca_refused = \port$8162$0 [47:32];
-  assign ch1__count_ca_aborted = \port$8162$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$8162$0 [79:64];
+  assign ch1__ca_status = \port$8611$0 [2:0];
+  assign ch1__ca_bytes_done = \port$8611$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$8534$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$8534$0 [31:16];
+  assign ch1__count_ca_refused = \port$8534$0 [47:32];
+  assign ch1__count_ca_aborted = \port$8534$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$8534$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9582,7 +9582,7 @@ endmodule
 module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7602$0 , \port$7613$0 , regs__ca_done, \port$7690$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7974$0 , \port$7985$0 , regs__ca_done, \port$8062$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -9766,12 +9766,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7602$0 ;
-  wire [186:0] \port$7602$0 ;
-  output [79:0] \port$7613$0 ;
-  wire [79:0] \port$7613$0 ;
-  output [9:0] \port$7690$0 ;
-  wire [9:0] \port$7690$0 ;
+  output [186:0] \port$7974$0 ;
+  wire [186:0] \port$7974$0 ;
+  output [79:0] \port$7985$0 ;
+  wire [79:0] \port$7985$0 ;
+  output [9:0] \port$8062$0 ;
+  wire [9:0] \port$8062$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10260,9 +10260,9 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$7602$0  = \$20 ;
-  assign \port$7613$0  = \$21 ;
-  assign \port$7690$0  = \$22 ;
+  assign \port$7974$0  = \$20 ;
+  assign \port$7985$0  = \$21 ;
+  assign \port$8062$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -11327,7 +11327,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7242$272 (cycle[274:272]),
+    .\port$7614$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -11387,7 +11387,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$7242$199 (cycle[199]),
+    .\port$7614$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -11438,7 +11438,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7242$259 (cycle[271:259]),
+    .\port$7614$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -11462,7 +11462,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7230$0 (\bit ),
+    .\port$7602$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -11530,7 +11530,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$3030$0 (\$28 ),
+    .\port$3216$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -15558,7 +15558,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$7242$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$7614$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -16274,8 +16274,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7242$272 ;
-  wire [2:0] \port$7242$272 ;
+  input [2:0] \port$7614$272 ;
+  wire [2:0] \port$7614$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -16585,7 +16585,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$7242$272 [0];
+  assign error_bit = ssi & \port$7614$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -16616,19 +16616,19 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$7242$272 [0];
+  assign \$24  = ssi & \port$7614$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$7242$272 [0];
+  assign \$28  = ssi & \port$7614$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$7242$272 [0];
+  assign \$35  = ssi & \port$7614$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$7242$272 [0];
+  assign \$39  = ssi & \port$7614$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -16649,7 +16649,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$7242$272 [2];
+  assign \$61  = ssi & \port$7614$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -16935,15 +16935,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$7242$272 [0];
+  assign \$347  = ssi & \port$7614$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$7242$272 [0];
-  assign \$355  = ~ \port$7242$272 [1];
+  assign \$354  = ssi & \port$7614$272 [0];
+  assign \$355  = ~ \port$7614$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -17680,7 +17680,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$7242$272 [0];
+  assign ssi_error = \port$7614$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -17690,8 +17690,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$7242$272 [2];
-  assign ssi_error_low = \port$7242$272 [1];
+  assign ssi_double = \port$7614$272 [2];
+  assign ssi_error_low = \port$7614$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -17837,73 +17837,137 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, load_index, customs, \bit , receiver_clear, codes, index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
-  reg [1:0] \$1 ;
+  wire \$1 ;
   wire [37:0] \$10 ;
-  reg [1:0] \$11 ;
+  wire [1:0] \$100 ;
+  wire \$101 ;
+  wire [37:0] \$102 ;
+  wire [37:0] \$103 ;
+  wire [37:0] \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire [15:0] \$107 ;
+  wire [15:0] \$108 ;
+  wire \$109 ;
+  wire [37:0] \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
-  reg [37:0] \$13 ;
-  reg [1:0] \$14 ;
-  wire \$15 ;
-  reg [1:0] \$16 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  reg [15:0] \$128 ;
+  reg \$129 ;
+  wire [1:0] \$13 ;
+  reg [37:0] \$130 ;
+  reg [1:0] \$131 ;
+  wire \$14 ;
+  wire [1:0] \$15 ;
+  wire [1:0] \$16 ;
   wire \$17 ;
-  wire [37:0] \$18 ;
-  wire [37:0] \$19 ;
-  wire \$2 ;
-  wire [37:0] \$20 ;
-  reg [1:0] \$21 ;
-  wire \$22 ;
-  reg [37:0] \$23 ;
-  reg [1:0] \$24 ;
-  wire \$25 ;
-  reg [1:0] \$26 ;
+  wire \$18 ;
+  wire [1:0] \$19 ;
+  wire [1:0] \$2 ;
+  wire \$20 ;
+  wire [1:0] \$21 ;
+  wire [1:0] \$22 ;
+  wire \$23 ;
+  wire [37:0] \$24 ;
+  wire [37:0] \$25 ;
+  wire [37:0] \$26 ;
   wire \$27 ;
-  wire [37:0] \$28 ;
-  wire [37:0] \$29 ;
-  reg [37:0] \$3 ;
-  wire [37:0] \$30 ;
-  reg [1:0] \$31 ;
+  wire [1:0] \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire [1:0] \$30 ;
+  wire [1:0] \$31 ;
   wire \$32 ;
-  reg [37:0] \$33 ;
-  reg [1:0] \$34 ;
+  wire \$33 ;
+  wire [37:0] \$34 ;
   wire \$35 ;
-  reg [1:0] \$36 ;
-  wire \$37 ;
-  wire [37:0] \$38 ;
-  wire [37:0] \$39 ;
-  reg [1:0] \$4 ;
-  wire [37:0] \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire [15:0] \$43 ;
-  wire [15:0] \$44 ;
-  wire \$45 ;
+  wire [37:0] \$36 ;
+  wire [37:0] \$37 ;
+  wire \$38 ;
+  wire [1:0] \$39 ;
+  wire [1:0] \$4 ;
+  wire \$40 ;
+  wire [1:0] \$41 ;
+  wire [1:0] \$42 ;
+  wire \$43 ;
+  wire \$44 ;
+  wire [1:0] \$45 ;
   wire \$46 ;
-  wire \$47 ;
-  wire \$48 ;
+  wire [1:0] \$47 ;
+  wire [1:0] \$48 ;
   wire \$49 ;
-  wire \$5 ;
-  wire \$50 ;
-  wire \$51 ;
-  wire \$52 ;
+  wire [1:0] \$5 ;
+  wire [37:0] \$50 ;
+  wire [37:0] \$51 ;
+  wire [37:0] \$52 ;
   wire \$53 ;
-  wire \$54 ;
+  wire [1:0] \$54 ;
   wire \$55 ;
-  wire \$56 ;
-  wire \$57 ;
+  wire [1:0] \$56 ;
+  wire [1:0] \$57 ;
   wire \$58 ;
   wire \$59 ;
-  reg [1:0] \$6 ;
-  wire \$60 ;
+  wire \$6 ;
+  wire [37:0] \$60 ;
   wire \$61 ;
-  wire \$62 ;
-  wire \$63 ;
-  reg [15:0] \$64 ;
-  reg \$65 ;
-  reg [37:0] \$66 ;
-  reg [1:0] \$67 ;
+  wire [37:0] \$62 ;
+  wire [37:0] \$63 ;
+  wire \$64 ;
+  wire [1:0] \$65 ;
+  wire \$66 ;
+  wire [1:0] \$67 ;
+  wire [1:0] \$68 ;
+  wire \$69 ;
   wire \$7 ;
+  wire \$70 ;
+  wire [1:0] \$71 ;
+  wire \$72 ;
+  wire [1:0] \$73 ;
+  wire [1:0] \$74 ;
+  wire \$75 ;
+  wire [37:0] \$76 ;
+  wire [37:0] \$77 ;
+  wire [37:0] \$78 ;
+  wire \$79 ;
   wire [37:0] \$8 ;
-  wire [37:0] \$9 ;
+  wire [1:0] \$80 ;
+  wire \$81 ;
+  wire [1:0] \$82 ;
+  wire [1:0] \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire [37:0] \$86 ;
+  wire \$87 ;
+  wire [37:0] \$88 ;
+  wire [37:0] \$89 ;
+  wire \$9 ;
+  wire \$90 ;
+  wire [1:0] \$91 ;
+  wire \$92 ;
+  wire [1:0] \$93 ;
+  wire [1:0] \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire [1:0] \$97 ;
+  wire \$98 ;
+  wire [1:0] \$99 ;
   input \bit ;
   wire \bit ;
   input check;
@@ -17959,286 +18023,190 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   wire [15:0] \settings.poly ;
   wire [15:0] \settings.start ;
   wire [4:0] \settings.width ;
-  assign \$35  = \$34  == 2'h2;
-  assign \$37  = \$36  == 1'h1;
-  assign \$38  = \$37  ? 38'h2000000066 : 38'h0000000000;
-  assign \$39  = \$35  ? 38'h2000121b30 : \$38 ;
-  assign \$40  = \$32  ? \$33  : \$39 ;
-  assign \$41  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$42  = \$41  ^ \bit ;
-  assign \$43  = \$42  ? settings[20:5] : 16'h0000;
-  assign \$44  = { \reg [14:0], 1'h0 } ^ \$43 ;
-  assign \$45  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$46  = \bit  ^ \$45 ;
-  assign \$47  = \$46  ^ settings[37];
-  assign \$48  = check & \$47 ;
-  assign \$49  = mismatch | \$48 ;
-  assign \$50  = ! index;
-  assign \$51  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$52  = \bit  ^ \$51 ;
-  assign \$53  = \$52  ^ settings[37];
-  assign \$54  = check & \$53 ;
-  assign \$55  = mismatch | \$54 ;
-  assign \$56  = ~ \$55 ;
-  assign \$58  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$59  = \bit  ^ \$58 ;
-  assign \$60  = \$59  ^ settings[37];
-  assign \$61  = check & \$60 ;
-  assign \$62  = mismatch | \$61 ;
-  assign \$63  = ~ \$62 ;
-  always @(posedge clk)
-    \reg  <= \$64 ;
-  always @(posedge clk)
-    mismatch <= \$65 ;
-  always @(posedge clk)
-    settings <= \$66 ;
-  always @(posedge clk)
-    ok <= \$67 ;
-  assign \$2  = \$1  == 2'h3;
-  assign \$5  = \$4  == 2'h2;
-  assign \$7  = \$6  == 1'h1;
-  assign \$8  = \$7  ? 38'h2000000066 : 38'h0000000000;
-  assign \$9  = \$5  ? 38'h2000121b30 : \$8 ;
-  assign \$10  = \$2  ? \$3  : \$9 ;
-  assign \$12  = \$11  == 2'h3;
-  assign \$15  = \$14  == 2'h2;
-  assign \$17  = \$16  == 1'h1;
-  assign \$18  = \$17  ? 38'h2000000066 : 38'h0000000000;
-  assign \$19  = \$15  ? 38'h2000121b30 : \$18 ;
-  assign \$20  = \$12  ? \$13  : \$19 ;
-  assign \$22  = \$21  == 2'h3;
-  assign \$25  = \$24  == 2'h2;
-  assign \$27  = \$26  == 1'h1;
-  assign \$28  = \$27  ? 38'h2000000066 : 38'h0000000000;
-  assign \$29  = \$25  ? 38'h2000121b30 : \$28 ;
-  assign \$30  = \$22  ? \$23  : \$29 ;
+  assign \$1  = ! load_index;
+  assign \$2  = load_index ? 2'h0 : codes[1:0];
+  assign \$4  = \$3  ? codes[3:2] : 2'h0;
+  assign \$5  = \$2  | \$4 ;
+  assign \$6  = \$5  == 2'h3;
+  assign \$7  = ! load_index;
+  assign \$8  = load_index ? 38'h0000000000 : customs[37:0];
+  assign \$10  = \$9  ? customs[75:38] : 38'h0000000000;
+  assign \$11  = \$8  | \$10 ;
+  assign \$12  = ! load_index;
+  assign \$13  = load_index ? 2'h0 : codes[1:0];
+  assign \$15  = \$14  ? codes[3:2] : 2'h0;
+  assign \$16  = \$13  | \$15 ;
+  assign \$17  = \$16  == 2'h2;
+  assign \$18  = ! load_index;
+  assign \$19  = load_index ? 2'h0 : codes[1:0];
+  assign \$21  = \$20  ? codes[3:2] : 2'h0;
+  assign \$22  = \$19  | \$21 ;
+  assign \$23  = \$22  == 1'h1;
+  assign \$24  = \$23  ? 38'h2000000066 : 38'h0000000000;
+  assign \$25  = \$17  ? 38'h2000121b30 : \$24 ;
+  assign \$26  = \$6  ? \$11  : \$25 ;
+  assign \$27  = ! load_index;
+  assign \$28  = load_index ? 2'h0 : codes[1:0];
+  assign \$30  = \$29  ? codes[3:2] : 2'h0;
+  assign \$31  = \$28  | \$30 ;
   assign \$32  = \$31  == 2'h3;
+  assign \$33  = ! load_index;
+  assign \$34  = load_index ? 38'h0000000000 : customs[37:0];
+  assign \$36  = \$35  ? customs[75:38] : 38'h0000000000;
+  assign \$37  = \$34  | \$36 ;
+  assign \$38  = ! load_index;
+  assign \$39  = load_index ? 2'h0 : codes[1:0];
+  assign \$41  = \$40  ? codes[3:2] : 2'h0;
+  assign \$42  = \$39  | \$41 ;
+  assign \$43  = \$42  == 2'h2;
+  assign \$44  = ! load_index;
+  assign \$45  = load_index ? 2'h0 : codes[1:0];
+  assign \$47  = \$46  ? codes[3:2] : 2'h0;
+  assign \$48  = \$45  | \$47 ;
+  assign \$49  = \$48  == 1'h1;
+  assign \$50  = \$49  ? 38'h2000000066 : 38'h0000000000;
+  assign \$51  = \$43  ? 38'h2000121b30 : \$50 ;
+  assign \$52  = \$32  ? \$37  : \$51 ;
+  assign \$53  = ! load_index;
+  assign \$54  = load_index ? 2'h0 : codes[1:0];
+  assign \$56  = \$55  ? codes[3:2] : 2'h0;
+  assign \$57  = \$54  | \$56 ;
+  assign \$58  = \$57  == 2'h3;
+  assign \$59  = ! load_index;
+  assign \$60  = load_index ? 38'h0000000000 : customs[37:0];
+  assign \$62  = \$61  ? customs[75:38] : 38'h0000000000;
+  assign \$63  = \$60  | \$62 ;
+  assign \$64  = ! load_index;
+  assign \$65  = load_index ? 2'h0 : codes[1:0];
+  assign \$67  = \$66  ? codes[3:2] : 2'h0;
+  assign \$68  = \$65  | \$67 ;
+  assign \$69  = \$68  == 2'h2;
+  assign \$70  = ! load_index;
+  assign \$71  = load_index ? 2'h0 : codes[1:0];
+  assign \$73  = \$72  ? codes[3:2] : 2'h0;
+  assign \$74  = \$71  | \$73 ;
+  assign \$75  = \$74  == 1'h1;
+  assign \$76  = \$75  ? 38'h2000000066 : 38'h0000000000;
+  assign \$77  = \$69  ? 38'h2000121b30 : \$76 ;
+  assign \$78  = \$58  ? \$63  : \$77 ;
+  assign \$79  = ! load_index;
+  assign \$80  = load_index ? 2'h0 : codes[1:0];
+  assign \$82  = \$81  ? codes[3:2] : 2'h0;
+  assign \$83  = \$80  | \$82 ;
+  assign \$84  = \$83  == 2'h3;
+  assign \$85  = ! load_index;
+  assign \$86  = load_index ? 38'h0000000000 : customs[37:0];
+  assign \$88  = \$87  ? customs[75:38] : 38'h0000000000;
+  assign \$89  = \$86  | \$88 ;
+  assign \$90  = ! load_index;
+  assign \$91  = load_index ? 2'h0 : codes[1:0];
+  assign \$93  = \$92  ? codes[3:2] : 2'h0;
+  assign \$94  = \$91  | \$93 ;
+  assign \$95  = \$94  == 2'h2;
+  assign \$96  = ! load_index;
+  assign \$97  = load_index ? 2'h0 : codes[1:0];
+  assign \$99  = \$98  ? codes[3:2] : 2'h0;
+  assign \$100  = \$97  | \$99 ;
+  assign \$101  = \$100  == 1'h1;
+  assign \$102  = \$101  ? 38'h2000000066 : 38'h0000000000;
+  assign \$103  = \$95  ? 38'h2000121b30 : \$102 ;
+  assign \$104  = \$84  ? \$89  : \$103 ;
+  assign \$105  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$106  = \$105  ^ \bit ;
+  assign \$107  = \$106  ? settings[20:5] : 16'h0000;
+  assign \$108  = { \reg [14:0], 1'h0 } ^ \$107 ;
+  assign \$109  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$110  = \bit  ^ \$109 ;
+  assign \$111  = \$110  ^ settings[37];
+  assign \$112  = check & \$111 ;
+  assign \$113  = mismatch | \$112 ;
+  assign \$114  = ! index;
+  assign \$115  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$116  = \bit  ^ \$115 ;
+  assign \$117  = \$116  ^ settings[37];
+  assign \$118  = check & \$117 ;
+  assign \$119  = mismatch | \$118 ;
+  assign \$120  = ~ \$119 ;
+  assign \$122  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$123  = \bit  ^ \$122 ;
+  assign \$124  = \$123  ^ settings[37];
+  assign \$125  = check & \$124 ;
+  assign \$126  = mismatch | \$125 ;
+  assign \$127  = ~ \$126 ;
+  always @(posedge clk)
+    \reg  <= \$128 ;
+  always @(posedge clk)
+    mismatch <= \$129 ;
+  always @(posedge clk)
+    settings <= \$130 ;
+  always @(posedge clk)
+    ok <= \$131 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$33  = customs[37:0];
-      1'h1:
-          \$33  = customs[75:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$34  = codes[1:0];
-      1'h1:
-          \$34  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$36  = codes[1:0];
-      1'h1:
-          \$36  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$64  = \reg ;
+    \$128  = \reg ;
     if (load) begin
-      \$64  = \$10 [36:21];
+      \$128  = \$26 [36:21];
     end else if (\cover ) begin
-      \$64  = \$44 ;
+      \$128  = \$108 ;
     end else if (check) begin
-      \$64  = { \reg [14:0], 1'h0 };
+      \$128  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$64  = 16'h0000;
+      \$128  = 16'h0000;
     end
     if (rst) begin
-      \$64  = 16'h0000;
+      \$128  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$65  = mismatch;
+    \$129  = mismatch;
     if (load) begin
-      \$65  = 1'h0;
+      \$129  = 1'h0;
     end else if (\cover ) begin
     end else if (check) begin
-      \$65  = \$49 ;
+      \$129  = \$113 ;
     end
     if (receiver_clear) begin
-      \$65  = 1'h0;
+      \$129  = 1'h0;
     end
     if (rst) begin
-      \$65  = 1'h0;
+      \$129  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$66  = settings;
+    \$130  = settings;
     if (load) begin
-      \$66 [4:0] = \$20 [4:0];
-      \$66 [20:5] = \$30 [20:5];
-      \$66 [37] = \$40 [37];
+      \$130 [4:0] = \$52 [4:0];
+      \$130 [20:5] = \$78 [20:5];
+      \$130 [37] = \$104 [37];
     end
     if (receiver_clear) begin
-      \$66 [20:0] = 21'h000000;
-      \$66 [37] = 1'h0;
+      \$130 [20:0] = 21'h000000;
+      \$130 [37] = 1'h0;
     end
     if (rst) begin
-      \$66  = 38'h0000000000;
+      \$130  = 38'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$67  = ok;
+    \$131  = ok;
     if (last) begin
-      if (\$50 ) begin
-        \$67 [0] = \$56 ;
+      if (\$114 ) begin
+        \$131 [0] = \$120 ;
       end
-      if (\$57 ) begin
-        \$67 [1] = \$63 ;
+      if (\$121 ) begin
+        \$131 [1] = \$127 ;
       end
     end
     if (receiver_clear) begin
-      \$67  = 2'h3;
+      \$131  = 2'h3;
     end
     if (rst) begin
-      \$67  = 2'h3;
+      \$131  = 2'h3;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$1  = codes[1:0];
-      1'h1:
-          \$1  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$3  = customs[37:0];
-      1'h1:
-          \$3  = customs[75:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$4  = codes[1:0];
-      1'h1:
-          \$4  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$6  = codes[1:0];
-      1'h1:
-          \$6  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$11  = codes[1:0];
-      1'h1:
-          \$11  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$13  = customs[37:0];
-      1'h1:
-          \$13  = customs[75:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$14  = codes[1:0];
-      1'h1:
-          \$14  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$16  = codes[1:0];
-      1'h1:
-          \$16  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$21  = codes[1:0];
-      1'h1:
-          \$21  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$23  = customs[37:0];
-      1'h1:
-          \$23  = customs[75:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$24  = codes[1:0];
-      1'h1:
-          \$24  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$26  = codes[1:0];
-      1'h1:
-          \$26  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$31  = codes[1:0];
-      1'h1:
-          \$31  = codes[3:2];
-    endcase
   end
   assign \codes[0]  = codes[1:0];
   assign \codes[1]  = codes[3:2];
@@ -18256,7 +18224,23 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   assign \settings.poly  = settings[20:5];
   assign \settings.start  = settings[36:21];
   assign \settings.inverted  = settings[37];
-  assign \$57  = index;
+  assign \$3  = load_index;
+  assign \$9  = load_index;
+  assign \$14  = load_index;
+  assign \$20  = load_index;
+  assign \$29  = load_index;
+  assign \$35  = load_index;
+  assign \$40  = load_index;
+  assign \$46  = load_index;
+  assign \$55  = load_index;
+  assign \$61  = load_index;
+  assign \$66  = load_index;
+  assign \$72  = load_index;
+  assign \$81  = load_index;
+  assign \$87  = load_index;
+  assign \$92  = load_index;
+  assign \$98  = load_index;
+  assign \$121  = index;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -18264,96 +18248,248 @@ module \biss_master_wb.ch0.core.decoder.field_ends (rst, error_bit, words, crc_w
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire [2:0] \$1 ;
   wire [7:0] \$10 ;
+  wire [11:0] \$100 ;
+  wire \$101 ;
+  wire [11:0] \$102 ;
+  wire [11:0] \$103 ;
+  wire \$104 ;
+  wire [11:0] \$105 ;
+  wire \$106 ;
+  wire [11:0] \$107 ;
+  wire [11:0] \$108 ;
+  reg [1:0] \$109 ;
   wire \$11 ;
+  wire [6:0] \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire [11:0] \$113 ;
+  wire \$114 ;
+  wire [11:0] \$115 ;
+  wire [11:0] \$116 ;
+  wire \$117 ;
+  wire [11:0] \$118 ;
+  wire \$119 ;
   reg [1:0] \$12 ;
+  wire [11:0] \$120 ;
+  wire [11:0] \$121 ;
+  wire \$122 ;
+  wire [11:0] \$123 ;
+  wire \$124 ;
+  wire [11:0] \$125 ;
+  wire [11:0] \$126 ;
+  reg [3:0] \$127 ;
+  wire [6:0] \$128 ;
+  wire \$129 ;
   wire [6:0] \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire [11:0] \$132 ;
+  wire \$133 ;
+  wire [11:0] \$134 ;
+  wire [11:0] \$135 ;
+  wire [6:0] \$136 ;
+  wire \$137 ;
+  wire [11:0] \$138 ;
+  wire \$139 ;
   wire \$14 ;
+  wire [11:0] \$140 ;
+  wire [11:0] \$141 ;
+  wire [7:0] \$142 ;
+  wire \$143 ;
+  wire [11:0] \$144 ;
+  wire \$145 ;
+  wire [11:0] \$146 ;
+  wire [11:0] \$147 ;
+  wire \$148 ;
+  wire [11:0] \$149 ;
   reg [3:0] \$15 ;
+  wire \$150 ;
+  wire [11:0] \$151 ;
+  wire [11:0] \$152 ;
+  wire \$153 ;
+  wire [11:0] \$154 ;
+  wire \$155 ;
+  wire [11:0] \$156 ;
+  wire [11:0] \$157 ;
+  reg [6:0] \$158 ;
+  wire [7:0] \$159 ;
   wire [6:0] \$16 ;
+  wire \$160 ;
+  wire [11:0] \$161 ;
+  wire \$162 ;
+  wire [11:0] \$163 ;
+  wire [11:0] \$164 ;
+  wire \$165 ;
+  wire [11:0] \$166 ;
+  wire \$167 ;
+  wire [11:0] \$168 ;
+  wire [11:0] \$169 ;
   wire \$17 ;
+  wire \$170 ;
+  wire [11:0] \$171 ;
+  wire \$172 ;
+  wire [11:0] \$173 ;
+  wire [11:0] \$174 ;
+  reg [6:0] \$175 ;
+  wire [7:0] \$176 ;
+  wire \$177 ;
+  wire [11:0] \$178 ;
+  wire \$179 ;
   wire \$18 ;
-  reg [5:0] \$19 ;
+  wire [11:0] \$180 ;
+  wire [11:0] \$181 ;
+  wire \$182 ;
+  wire [11:0] \$183 ;
+  wire \$184 ;
+  wire [11:0] \$185 ;
+  wire [11:0] \$186 ;
+  wire \$187 ;
+  wire [11:0] \$188 ;
+  wire \$189 ;
+  wire \$19 ;
+  wire [11:0] \$190 ;
+  wire [11:0] \$191 ;
+  reg [6:0] \$192 ;
+  wire \$193 ;
+  wire [4:0] \$194 ;
+  wire \$195 ;
+  wire [4:0] \$196 ;
+  wire [4:0] \$197 ;
+  wire [7:0] \$198 ;
+  wire [7:0] \$199 ;
   wire [6:0] \$2 ;
-  wire [6:0] \$20 ;
-  reg [5:0] \$21 ;
-  wire [7:0] \$22 ;
-  reg [5:0] \$23 ;
-  reg \$24 ;
-  reg \$25 ;
-  reg [6:0] \$26 ;
-  wire [7:0] \$27 ;
-  reg [5:0] \$28 ;
-  reg \$29 ;
+  wire [11:0] \$20 ;
+  wire \$200 ;
+  wire [11:0] \$201 ;
+  wire \$202 ;
+  wire [11:0] \$203 ;
+  wire [11:0] \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire [11:0] \$207 ;
+  wire \$208 ;
+  wire [11:0] \$209 ;
+  wire \$21 ;
+  wire [11:0] \$210 ;
+  wire \$211 ;
+  wire [11:0] \$212 ;
+  wire \$213 ;
+  wire [11:0] \$214 ;
+  wire [11:0] \$215 ;
+  wire \$216 ;
+  wire [11:0] \$217 ;
+  wire \$218 ;
+  wire [11:0] \$219 ;
+  wire [11:0] \$22 ;
+  wire [11:0] \$220 ;
+  reg [1:0] \$221 ;
+  wire [6:0] \$222 ;
+  wire \$223 ;
+  wire \$224 ;
+  wire [11:0] \$225 ;
+  wire \$226 ;
+  wire [11:0] \$227 ;
+  wire [11:0] \$228 ;
+  wire \$229 ;
+  wire [11:0] \$23 ;
+  wire [11:0] \$230 ;
+  wire \$231 ;
+  wire [11:0] \$232 ;
+  wire [11:0] \$233 ;
+  wire \$234 ;
+  wire [11:0] \$235 ;
+  wire \$236 ;
+  wire [11:0] \$237 ;
+  wire [11:0] \$238 ;
+  reg [3:0] \$239 ;
+  wire [6:0] \$24 ;
+  wire [6:0] \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  reg [36:0] \$243 ;
+  reg [36:0] \$244 ;
+  wire \$25 ;
+  wire [11:0] \$26 ;
+  wire \$27 ;
+  wire [11:0] \$28 ;
+  wire [11:0] \$29 ;
   wire [7:0] \$3 ;
-  reg \$30 ;
-  reg [6:0] \$31 ;
-  wire [7:0] \$32 ;
-  reg [5:0] \$33 ;
-  reg \$34 ;
-  reg \$35 ;
-  reg [6:0] \$36 ;
-  reg [4:0] \$37 ;
-  wire [7:0] \$38 ;
-  wire [7:0] \$39 ;
+  wire [7:0] \$30 ;
+  wire \$31 ;
+  wire [11:0] \$32 ;
+  wire \$33 ;
+  wire [11:0] \$34 ;
+  wire [11:0] \$35 ;
+  wire \$36 ;
+  wire [11:0] \$37 ;
+  wire \$38 ;
+  wire [11:0] \$39 ;
   reg [6:0] \$4 ;
-  reg [5:0] \$40 ;
+  wire [11:0] \$40 ;
   wire \$41 ;
-  reg [5:0] \$42 ;
-  reg \$43 ;
-  reg \$44 ;
-  reg [1:0] \$45 ;
-  wire [6:0] \$46 ;
-  wire \$47 ;
-  reg [5:0] \$48 ;
-  reg \$49 ;
+  wire [11:0] \$42 ;
+  wire \$43 ;
+  wire [11:0] \$44 ;
+  wire [11:0] \$45 ;
+  reg [6:0] \$46 ;
+  wire [7:0] \$47 ;
+  wire \$48 ;
+  wire [11:0] \$49 ;
   wire [7:0] \$5 ;
-  reg \$50 ;
-  reg [3:0] \$51 ;
-  wire [6:0] \$52 ;
+  wire \$50 ;
+  wire [11:0] \$51 ;
+  wire [11:0] \$52 ;
   wire \$53 ;
-  wire \$54 ;
-  reg [5:0] \$55 ;
-  wire [6:0] \$56 ;
-  reg [5:0] \$57 ;
-  wire [7:0] \$58 ;
-  reg [5:0] \$59 ;
+  wire [11:0] \$54 ;
+  wire \$55 ;
+  wire [11:0] \$56 ;
+  wire [11:0] \$57 ;
+  wire \$58 ;
+  wire [11:0] \$59 ;
   reg [6:0] \$6 ;
-  reg \$60 ;
-  reg \$61 ;
-  reg [6:0] \$62 ;
-  wire [7:0] \$63 ;
-  reg [5:0] \$64 ;
-  reg \$65 ;
-  reg \$66 ;
-  reg [6:0] \$67 ;
-  wire [7:0] \$68 ;
-  reg [5:0] \$69 ;
+  wire \$60 ;
+  wire [11:0] \$61 ;
+  wire [11:0] \$62 ;
+  reg [6:0] \$63 ;
+  wire [7:0] \$64 ;
+  wire \$65 ;
+  wire [11:0] \$66 ;
+  wire \$67 ;
+  wire [11:0] \$68 ;
+  wire [11:0] \$69 ;
   wire [7:0] \$7 ;
-  reg \$70 ;
-  reg \$71 ;
-  reg [6:0] \$72 ;
-  reg [4:0] \$73 ;
-  wire [7:0] \$74 ;
-  wire [7:0] \$75 ;
-  reg [5:0] \$76 ;
+  wire \$70 ;
+  wire [11:0] \$71 ;
+  wire \$72 ;
+  wire [11:0] \$73 ;
+  wire [11:0] \$74 ;
+  wire \$75 ;
+  wire [11:0] \$76 ;
   wire \$77 ;
-  reg [5:0] \$78 ;
-  reg \$79 ;
+  wire [11:0] \$78 ;
+  wire [11:0] \$79 ;
   reg [6:0] \$8 ;
-  reg \$80 ;
-  reg [1:0] \$81 ;
-  wire [6:0] \$82 ;
+  reg [6:0] \$80 ;
+  wire \$81 ;
+  wire [4:0] \$82 ;
   wire \$83 ;
-  reg [5:0] \$84 ;
-  reg \$85 ;
-  reg \$86 ;
-  reg [3:0] \$87 ;
-  wire [6:0] \$88 ;
-  wire \$89 ;
+  wire [4:0] \$84 ;
+  wire [4:0] \$85 ;
+  wire [7:0] \$86 ;
+  wire [7:0] \$87 ;
+  wire \$88 ;
+  wire [11:0] \$89 ;
   wire [7:0] \$9 ;
   wire \$90 ;
-  reg [36:0] \$91 ;
-  reg [36:0] \$92 ;
+  wire [11:0] \$91 ;
+  wire [11:0] \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire [11:0] \$95 ;
+  wire \$96 ;
+  wire [11:0] \$97 ;
+  wire [11:0] \$98 ;
+  wire \$99 ;
   input advance;
   wire advance;
   input \begin ;
@@ -18435,6 +18571,11 @@ module \biss_master_wb.ch0.core.decoder.field_ends (rst, error_bit, words, crc_w
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
+  assign \$1  = index + 2'h2;
+  assign following_word = \begin  ? 1'h1 : \$1 [0];
+  assign \$2  = words[5:0] + 1'h1;
+  assign \$3  = words[5:0] + 7'h7f;
+  assign \$5  = words[5:0] + \$4 ;
   assign \$7  = words[5:0] + \$6 ;
   assign \$9  = \$8  + crc_widths[4:0];
   assign \$10  = words[5:0] + \$9 [6:0];
@@ -18444,39 +18585,230 @@ module \biss_master_wb.ch0.core.decoder.field_ends (rst, error_bit, words, crc_w
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = | \$16 ;
   assign \$18  = \$14  & \$17 ;
-  assign \$20  = \$19  + 1'h1;
-  assign \$22  = \$21  + 7'h7f;
-  assign \$27  = \$23  + \$26 ;
-  assign \$32  = \$28  + \$31 ;
-  assign \$38  = \$36  + \$37 ;
-  assign \$39  = \$33  + \$38 [6:0];
-  assign \$41  = | \$40 ;
-  assign \$46  = \$42  + \$45 ;
-  assign \$47  = ! \$46 ;
-  assign \$52  = \$48  + \$51 ;
-  assign \$53  = | \$52 ;
-  assign \$54  = \$47  & \$53 ;
-  assign \$56  = \$55  + 1'h1;
-  assign \$58  = \$57  + 7'h7f;
-  assign \$63  = \$59  + \$62 ;
-  assign \$68  = \$64  + \$67 ;
-  assign \$74  = \$72  + \$73 ;
-  assign \$75  = \$69  + \$74 [6:0];
-  assign \$77  = | \$76 ;
-  assign \$82  = \$78  + \$81 ;
-  assign \$83  = ! \$82 ;
-  assign \$88  = \$84  + \$87 ;
-  assign \$89  = | \$88 ;
-  assign \$90  = \$83  & \$89 ;
+  assign \$19  = ! following_word;
+  assign \$20  = following_word ? 12'h000 : words[11:0];
+  assign \$22  = \$21  ? words[23:12] : 12'h000;
+  assign \$23  = \$20  | \$22 ;
+  assign \$24  = \$23 [5:0] + 1'h1;
+  assign \$25  = ! following_word;
+  assign \$26  = following_word ? 12'h000 : words[11:0];
+  assign \$28  = \$27  ? words[23:12] : 12'h000;
+  assign \$29  = \$26  | \$28 ;
+  assign \$30  = \$29 [5:0] + 7'h7f;
+  assign \$31  = ! following_word;
+  assign \$32  = following_word ? 12'h000 : words[11:0];
+  assign \$34  = \$33  ? words[23:12] : 12'h000;
+  assign \$35  = \$32  | \$34 ;
+  assign \$36  = ! following_word;
+  assign \$37  = following_word ? 12'h000 : words[11:0];
+  assign \$39  = \$38  ? words[23:12] : 12'h000;
+  assign \$40  = \$37  | \$39 ;
+  assign \$41  = ! following_word;
+  assign \$42  = following_word ? 12'h000 : words[11:0];
+  assign \$44  = \$43  ? words[23:12] : 12'h000;
+  assign \$45  = \$42  | \$44 ;
+  assign \$47  = \$35 [5:0] + \$46 ;
+  assign \$48  = ! following_word;
+  assign \$49  = following_word ? 12'h000 : words[11:0];
+  assign \$51  = \$50  ? words[23:12] : 12'h000;
+  assign \$52  = \$49  | \$51 ;
+  assign \$53  = ! following_word;
+  assign \$54  = following_word ? 12'h000 : words[11:0];
+  assign \$56  = \$55  ? words[23:12] : 12'h000;
+  assign \$57  = \$54  | \$56 ;
+  assign \$58  = ! following_word;
+  assign \$59  = following_word ? 12'h000 : words[11:0];
+  assign \$61  = \$60  ? words[23:12] : 12'h000;
+  assign \$62  = \$59  | \$61 ;
+  assign \$64  = \$52 [5:0] + \$63 ;
+  assign \$65  = ! following_word;
+  assign \$66  = following_word ? 12'h000 : words[11:0];
+  assign \$68  = \$67  ? words[23:12] : 12'h000;
+  assign \$69  = \$66  | \$68 ;
+  assign \$70  = ! following_word;
+  assign \$71  = following_word ? 12'h000 : words[11:0];
+  assign \$73  = \$72  ? words[23:12] : 12'h000;
+  assign \$74  = \$71  | \$73 ;
+  assign \$75  = ! following_word;
+  assign \$76  = following_word ? 12'h000 : words[11:0];
+  assign \$78  = \$77  ? words[23:12] : 12'h000;
+  assign \$79  = \$76  | \$78 ;
+  assign \$81  = ! following_word;
+  assign \$82  = following_word ? 5'h00 : crc_widths[4:0];
+  assign \$84  = \$83  ? crc_widths[9:5] : 5'h00;
+  assign \$85  = \$82  | \$84 ;
+  assign \$86  = \$80  + \$85 ;
+  assign \$87  = \$69 [5:0] + \$86 [6:0];
+  assign \$88  = ! following_word;
+  assign \$89  = following_word ? 12'h000 : words[11:0];
+  assign \$91  = \$90  ? words[23:12] : 12'h000;
+  assign \$92  = \$89  | \$91 ;
+  assign \$93  = | \$92 [5:0];
+  assign \$94  = ! following_word;
+  assign \$95  = following_word ? 12'h000 : words[11:0];
+  assign \$97  = \$96  ? words[23:12] : 12'h000;
+  assign \$98  = \$95  | \$97 ;
+  assign \$99  = ! following_word;
+  assign \$100  = following_word ? 12'h000 : words[11:0];
+  assign \$102  = \$101  ? words[23:12] : 12'h000;
+  assign \$103  = \$100  | \$102 ;
+  assign \$104  = ! following_word;
+  assign \$105  = following_word ? 12'h000 : words[11:0];
+  assign \$107  = \$106  ? words[23:12] : 12'h000;
+  assign \$108  = \$105  | \$107 ;
+  assign \$110  = \$98 [5:0] + \$109 ;
+  assign \$111  = ! \$110 ;
+  assign \$112  = ! following_word;
+  assign \$113  = following_word ? 12'h000 : words[11:0];
+  assign \$115  = \$114  ? words[23:12] : 12'h000;
+  assign \$116  = \$113  | \$115 ;
+  assign \$117  = ! following_word;
+  assign \$118  = following_word ? 12'h000 : words[11:0];
+  assign \$120  = \$119  ? words[23:12] : 12'h000;
+  assign \$121  = \$118  | \$120 ;
+  assign \$122  = ! following_word;
+  assign \$123  = following_word ? 12'h000 : words[11:0];
+  assign \$125  = \$124  ? words[23:12] : 12'h000;
+  assign \$126  = \$123  | \$125 ;
+  assign \$128  = \$116 [5:0] + \$127 ;
+  assign \$129  = | \$128 ;
+  assign \$130  = \$111  & \$129 ;
+  assign \$131  = ! following_word;
+  assign \$132  = following_word ? 12'h000 : words[11:0];
+  assign \$134  = \$133  ? words[23:12] : 12'h000;
+  assign \$135  = \$132  | \$134 ;
+  assign \$136  = \$135 [5:0] + 1'h1;
+  assign \$137  = ! following_word;
+  assign \$138  = following_word ? 12'h000 : words[11:0];
+  assign \$140  = \$139  ? words[23:12] : 12'h000;
+  assign \$141  = \$138  | \$140 ;
+  assign \$142  = \$141 [5:0] + 7'h7f;
+  assign \$143  = ! following_word;
+  assign \$144  = following_word ? 12'h000 : words[11:0];
+  assign \$146  = \$145  ? words[23:12] : 12'h000;
+  assign \$147  = \$144  | \$146 ;
+  assign \$148  = ! following_word;
+  assign \$149  = following_word ? 12'h000 : words[11:0];
+  assign \$151  = \$150  ? words[23:12] : 12'h000;
+  assign \$152  = \$149  | \$151 ;
+  assign \$153  = ! following_word;
+  assign \$154  = following_word ? 12'h000 : words[11:0];
+  assign \$156  = \$155  ? words[23:12] : 12'h000;
+  assign \$157  = \$154  | \$156 ;
+  assign \$159  = \$147 [5:0] + \$158 ;
+  assign \$160  = ! following_word;
+  assign \$161  = following_word ? 12'h000 : words[11:0];
+  assign \$163  = \$162  ? words[23:12] : 12'h000;
+  assign \$164  = \$161  | \$163 ;
+  assign \$165  = ! following_word;
+  assign \$166  = following_word ? 12'h000 : words[11:0];
+  assign \$168  = \$167  ? words[23:12] : 12'h000;
+  assign \$169  = \$166  | \$168 ;
+  assign \$170  = ! following_word;
+  assign \$171  = following_word ? 12'h000 : words[11:0];
+  assign \$173  = \$172  ? words[23:12] : 12'h000;
+  assign \$174  = \$171  | \$173 ;
+  assign \$176  = \$164 [5:0] + \$175 ;
+  assign \$177  = ! following_word;
+  assign \$178  = following_word ? 12'h000 : words[11:0];
+  assign \$180  = \$179  ? words[23:12] : 12'h000;
+  assign \$181  = \$178  | \$180 ;
+  assign \$182  = ! following_word;
+  assign \$183  = following_word ? 12'h000 : words[11:0];
+  assign \$185  = \$184  ? words[23:12] : 12'h000;
+  assign \$186  = \$183  | \$185 ;
+  assign \$187  = ! following_word;
+  assign \$188  = following_word ? 12'h000 : words[11:0];
+  assign \$190  = \$189  ? words[23:12] : 12'h000;
+  assign \$191  = \$188  | \$190 ;
+  assign \$193  = ! following_word;
+  assign \$194  = following_word ? 5'h00 : crc_widths[4:0];
+  assign \$196  = \$195  ? crc_widths[9:5] : 5'h00;
+  assign \$197  = \$194  | \$196 ;
+  assign \$198  = \$192  + \$197 ;
+  assign \$199  = \$181 [5:0] + \$198 [6:0];
+  assign \$200  = ! following_word;
+  assign \$201  = following_word ? 12'h000 : words[11:0];
+  assign \$203  = \$202  ? words[23:12] : 12'h000;
+  assign \$204  = \$201  | \$203 ;
+  assign \$205  = | \$204 [5:0];
+  assign \$206  = ! following_word;
+  assign \$207  = following_word ? 12'h000 : words[11:0];
+  assign \$209  = \$208  ? words[23:12] : 12'h000;
+  assign \$210  = \$207  | \$209 ;
+  assign \$211  = ! following_word;
+  assign \$212  = following_word ? 12'h000 : words[11:0];
+  assign \$214  = \$213  ? words[23:12] : 12'h000;
+  assign \$215  = \$212  | \$214 ;
+  assign \$216  = ! following_word;
+  assign \$217  = following_word ? 12'h000 : words[11:0];
+  assign \$219  = \$218  ? words[23:12] : 12'h000;
+  assign \$220  = \$217  | \$219 ;
+  assign \$222  = \$210 [5:0] + \$221 ;
+  assign \$223  = ! \$222 ;
+  assign \$224  = ! following_word;
+  assign \$225  = following_word ? 12'h000 : words[11:0];
+  assign \$227  = \$226  ? words[23:12] : 12'h000;
+  assign \$228  = \$225  | \$227 ;
+  assign \$229  = ! following_word;
+  assign \$230  = following_word ? 12'h000 : words[11:0];
+  assign \$232  = \$231  ? words[23:12] : 12'h000;
+  assign \$233  = \$230  | \$232 ;
+  assign \$234  = ! following_word;
+  assign \$235  = following_word ? 12'h000 : words[11:0];
+  assign \$237  = \$236  ? words[23:12] : 12'h000;
+  assign \$238  = \$235  | \$237 ;
+  assign \$240  = \$228 [5:0] + \$239 ;
+  assign \$241  = | \$240 ;
+  assign \$242  = \$223  & \$241 ;
   always @(posedge clk)
-    current <= \$91 ;
+    current <= \$243 ;
   always @(posedge clk)
-    following <= \$92 ;
-  assign \$1  = index + 2'h2;
-  assign following_word = \begin  ? 1'h1 : \$1 [0];
-  assign \$2  = words[5:0] + 1'h1;
-  assign \$3  = words[5:0] + 7'h7f;
-  assign \$5  = words[5:0] + \$4 ;
+    following <= \$244 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ error_bit, words[7:6] })
+      3'h0:
+          \$4  = 7'h7f;
+      3'h1:
+          \$4  = 7'h01;
+      3'h2:
+          \$4  = 7'h7f;
+      3'h3:
+          \$4  = 7'h01;
+      3'h4:
+          \$4  = 7'h00;
+      3'h5:
+          \$4  = 7'h02;
+      3'h6:
+          \$4  = 7'h00;
+      3'h7:
+          \$4  = 7'h02;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ error_bit, words[7:6] })
+      3'h0:
+          \$6  = 7'h7f;
+      3'h1:
+          \$6  = 7'h01;
+      3'h2:
+          \$6  = 7'h05;
+      3'h3:
+          \$6  = 7'h07;
+      3'h4:
+          \$6  = 7'h00;
+      3'h5:
+          \$6  = 7'h02;
+      3'h6:
+          \$6  = 7'h06;
+      3'h7:
+          \$6  = 7'h08;
+    endcase
+  end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
@@ -18546,602 +18878,178 @@ module \biss_master_wb.ch0.core.decoder.field_ends (rst, error_bit, words, crc_w
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$19  = words[5:0];
-      1'h1:
-          \$19  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$21  = words[5:0];
-      1'h1:
-          \$21  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$23  = words[5:0];
-      1'h1:
-          \$23  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$24  = words[6];
-      1'h1:
-          \$24  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$25  = words[7];
-      1'h1:
-          \$25  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$25 , \$24  })
+    casez ({ \$45 [7], \$40 [6] })
       2'h0:
-          \$26  = 7'h7f;
+          \$46  = 7'h7f;
       2'h1:
-          \$26  = 7'h01;
+          \$46  = 7'h01;
       2'h2:
-          \$26  = 7'h7f;
+          \$46  = 7'h7f;
       2'h3:
-          \$26  = 7'h01;
+          \$46  = 7'h01;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$28  = words[5:0];
-      1'h1:
-          \$28  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$29  = words[6];
-      1'h1:
-          \$29  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$30  = words[7];
-      1'h1:
-          \$30  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$30 , \$29  })
+    casez ({ \$62 [7], \$57 [6] })
       2'h0:
-          \$31  = 7'h7f;
+          \$63  = 7'h7f;
       2'h1:
-          \$31  = 7'h01;
+          \$63  = 7'h01;
       2'h2:
-          \$31  = 7'h05;
+          \$63  = 7'h05;
       2'h3:
-          \$31  = 7'h07;
+          \$63  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$33  = words[5:0];
-      1'h1:
-          \$33  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$34  = words[6];
-      1'h1:
-          \$34  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$35  = words[7];
-      1'h1:
-          \$35  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$35 , \$34  })
+    casez ({ \$79 [7], \$74 [6] })
       2'h0:
-          \$36  = 7'h7f;
+          \$80  = 7'h7f;
       2'h1:
-          \$36  = 7'h01;
+          \$80  = 7'h01;
       2'h2:
-          \$36  = 7'h05;
+          \$80  = 7'h05;
       2'h3:
-          \$36  = 7'h07;
+          \$80  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$37  = crc_widths[4:0];
-      1'h1:
-          \$37  = crc_widths[9:5];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$40  = words[5:0];
-      1'h1:
-          \$40  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$42  = words[5:0];
-      1'h1:
-          \$42  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$43  = words[6];
-      1'h1:
-          \$43  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$44  = words[7];
-      1'h1:
-          \$44  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$44 , \$43  })
+    casez ({ \$108 [7], \$103 [6] })
       2'h0:
-          \$45  = 2'h0;
+          \$109  = 2'h0;
       2'h1:
-          \$45  = 2'h2;
+          \$109  = 2'h2;
       2'h2:
-          \$45  = 2'h0;
+          \$109  = 2'h0;
       2'h3:
-          \$45  = 2'h2;
+          \$109  = 2'h2;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$48  = words[5:0];
-      1'h1:
-          \$48  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$49  = words[6];
-      1'h1:
-          \$49  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$50  = words[7];
-      1'h1:
-          \$50  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$50 , \$49  })
+    casez ({ \$126 [7], \$121 [6] })
       2'h0:
-          \$51  = 4'h0;
+          \$127  = 4'h0;
       2'h1:
-          \$51  = 4'h2;
+          \$127  = 4'h2;
       2'h2:
-          \$51  = 4'h6;
+          \$127  = 4'h6;
       2'h3:
-          \$51  = 4'h8;
+          \$127  = 4'h8;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$55  = words[5:0];
-      1'h1:
-          \$55  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$57  = words[5:0];
-      1'h1:
-          \$57  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$59  = words[5:0];
-      1'h1:
-          \$59  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$60  = words[6];
-      1'h1:
-          \$60  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$61  = words[7];
-      1'h1:
-          \$61  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$61 , \$60  })
+    casez ({ \$157 [7], \$152 [6] })
       2'h0:
-          \$62  = 7'h7f;
+          \$158  = 7'h7f;
       2'h1:
-          \$62  = 7'h01;
+          \$158  = 7'h01;
       2'h2:
-          \$62  = 7'h7f;
+          \$158  = 7'h7f;
       2'h3:
-          \$62  = 7'h01;
+          \$158  = 7'h01;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$64  = words[5:0];
-      1'h1:
-          \$64  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$65  = words[6];
-      1'h1:
-          \$65  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$66  = words[7];
-      1'h1:
-          \$66  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$66 , \$65  })
+    casez ({ \$174 [7], \$169 [6] })
       2'h0:
-          \$67  = 7'h7f;
+          \$175  = 7'h7f;
       2'h1:
-          \$67  = 7'h01;
+          \$175  = 7'h01;
       2'h2:
-          \$67  = 7'h05;
+          \$175  = 7'h05;
       2'h3:
-          \$67  = 7'h07;
+          \$175  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$69  = words[5:0];
-      1'h1:
-          \$69  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$70  = words[6];
-      1'h1:
-          \$70  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$71  = words[7];
-      1'h1:
-          \$71  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$71 , \$70  })
+    casez ({ \$191 [7], \$186 [6] })
       2'h0:
-          \$72  = 7'h7f;
+          \$192  = 7'h7f;
       2'h1:
-          \$72  = 7'h01;
+          \$192  = 7'h01;
       2'h2:
-          \$72  = 7'h05;
+          \$192  = 7'h05;
       2'h3:
-          \$72  = 7'h07;
+          \$192  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$73  = crc_widths[4:0];
-      1'h1:
-          \$73  = crc_widths[9:5];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$76  = words[5:0];
-      1'h1:
-          \$76  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$78  = words[5:0];
-      1'h1:
-          \$78  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$79  = words[6];
-      1'h1:
-          \$79  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$80  = words[7];
-      1'h1:
-          \$80  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$80 , \$79  })
+    casez ({ \$220 [7], \$215 [6] })
       2'h0:
-          \$81  = 2'h0;
+          \$221  = 2'h0;
       2'h1:
-          \$81  = 2'h2;
+          \$221  = 2'h2;
       2'h2:
-          \$81  = 2'h0;
+          \$221  = 2'h0;
       2'h3:
-          \$81  = 2'h2;
+          \$221  = 2'h2;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$84  = words[5:0];
-      1'h1:
-          \$84  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$85  = words[6];
-      1'h1:
-          \$85  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$86  = words[7];
-      1'h1:
-          \$86  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$86 , \$85  })
+    casez ({ \$238 [7], \$233 [6] })
       2'h0:
-          \$87  = 4'h0;
+          \$239  = 4'h0;
       2'h1:
-          \$87  = 4'h2;
+          \$239  = 4'h2;
       2'h2:
-          \$87  = 4'h6;
+          \$239  = 4'h6;
       2'h3:
-          \$87  = 4'h8;
+          \$239  = 4'h8;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$91  = current;
+    \$243  = current;
     if (\begin ) begin
-      \$91 [6:0] = \$2 ;
-      \$91 [13:7] = \$3 [6:0];
-      \$91 [20:14] = \$5 [6:0];
-      \$91 [27:21] = \$7 [6:0];
-      \$91 [34:28] = \$10 [6:0];
-      \$91 [35] = \$11 ;
-      \$91 [36] = \$18 ;
+      \$243 [6:0] = \$2 ;
+      \$243 [13:7] = \$3 [6:0];
+      \$243 [20:14] = \$5 [6:0];
+      \$243 [27:21] = \$7 [6:0];
+      \$243 [34:28] = \$10 [6:0];
+      \$243 [35] = \$11 ;
+      \$243 [36] = \$18 ;
     end else if (advance) begin
-      \$91  = following;
+      \$243  = following;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    \$92  = following;
+    \$244  = following;
     if (\begin ) begin
-      \$92 [6:0] = \$20 ;
-      \$92 [13:7] = \$22 [6:0];
-      \$92 [20:14] = \$27 [6:0];
-      \$92 [27:21] = \$32 [6:0];
-      \$92 [34:28] = \$39 [6:0];
-      \$92 [35] = \$41 ;
-      \$92 [36] = \$54 ;
+      \$244 [6:0] = \$24 ;
+      \$244 [13:7] = \$30 [6:0];
+      \$244 [20:14] = \$47 [6:0];
+      \$244 [27:21] = \$64 [6:0];
+      \$244 [34:28] = \$87 [6:0];
+      \$244 [35] = \$93 ;
+      \$244 [36] = \$130 ;
     end else if (advance) begin
-      \$92 [6:0] = \$56 ;
-      \$92 [13:7] = \$58 [6:0];
-      \$92 [20:14] = \$63 [6:0];
-      \$92 [27:21] = \$68 [6:0];
-      \$92 [34:28] = \$75 [6:0];
-      \$92 [35] = \$77 ;
-      \$92 [36] = \$90 ;
+      \$244 [6:0] = \$136 ;
+      \$244 [13:7] = \$142 [6:0];
+      \$244 [20:14] = \$159 [6:0];
+      \$244 [27:21] = \$176 [6:0];
+      \$244 [34:28] = \$199 [6:0];
+      \$244 [35] = \$205 ;
+      \$244 [36] = \$242 ;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ error_bit, words[7:6] })
-      3'h0:
-          \$4  = 7'h7f;
-      3'h1:
-          \$4  = 7'h01;
-      3'h2:
-          \$4  = 7'h7f;
-      3'h3:
-          \$4  = 7'h01;
-      3'h4:
-          \$4  = 7'h00;
-      3'h5:
-          \$4  = 7'h02;
-      3'h6:
-          \$4  = 7'h00;
-      3'h7:
-          \$4  = 7'h02;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ error_bit, words[7:6] })
-      3'h0:
-          \$6  = 7'h7f;
-      3'h1:
-          \$6  = 7'h01;
-      3'h2:
-          \$6  = 7'h05;
-      3'h3:
-          \$6  = 7'h07;
-      3'h4:
-          \$6  = 7'h00;
-      3'h5:
-          \$6  = 7'h02;
-      3'h6:
-          \$6  = 7'h06;
-      3'h7:
-          \$6  = 7'h08;
-    endcase
   end
   assign current_ends = current;
   assign following_ends = following;
@@ -19189,6 +19097,44 @@ module \biss_master_wb.ch0.core.decoder.field_ends (rst, error_bit, words, crc_w
   assign \words[1].signed  = words[23];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
+  assign \$21  = following_word;
+  assign \$27  = following_word;
+  assign \$33  = following_word;
+  assign \$38  = following_word;
+  assign \$43  = following_word;
+  assign \$50  = following_word;
+  assign \$55  = following_word;
+  assign \$60  = following_word;
+  assign \$67  = following_word;
+  assign \$72  = following_word;
+  assign \$77  = following_word;
+  assign \$83  = following_word;
+  assign \$90  = following_word;
+  assign \$96  = following_word;
+  assign \$101  = following_word;
+  assign \$106  = following_word;
+  assign \$114  = following_word;
+  assign \$119  = following_word;
+  assign \$124  = following_word;
+  assign \$133  = following_word;
+  assign \$139  = following_word;
+  assign \$145  = following_word;
+  assign \$150  = following_word;
+  assign \$155  = following_word;
+  assign \$162  = following_word;
+  assign \$167  = following_word;
+  assign \$172  = following_word;
+  assign \$179  = following_word;
+  assign \$184  = following_word;
+  assign \$189  = following_word;
+  assign \$195  = following_word;
+  assign \$202  = following_word;
+  assign \$208  = following_word;
+  assign \$213  = following_word;
+  assign \$218  = following_word;
+  assign \$226  = following_word;
+  assign \$231  = following_word;
+  assign \$236  = following_word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -20044,7 +19990,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$7242$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$7614$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20135,8 +20081,8 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$7242$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$7242$199 ;
-  wire \port$7242$199 ;
+  input \port$7614$199 ;
+  wire \port$7614$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20259,7 +20205,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$7242$199 , ssi, ssi_e
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$7242$199  : 1'h0;
+  assign \$14  = \$13  ? \port$7614$199  : 1'h0;
   assign \$16  = \$10  | \$15 ;
   assign \$17  = ! sum_word;
   assign \$18  = sum_word ? 12'h000 : words[11:0];
@@ -20424,7 +20370,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$7242$199 , ssi, ssi_e
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$7242$199 , 1'h1 };
+  assign enables = { \port$7614$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22566,7 +22512,7 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7242$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7614$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -22700,8 +22646,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7242$259 ;
-  wire [12:0] \port$7242$259 ;
+  input [12:0] \port$7614$259 ;
+  wire [12:0] \port$7614$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -22726,7 +22672,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7242$259 [12:1] + 1'h1;
+  assign \$11  = \port$7614$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -22851,7 +22797,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7242$259 [0]),
+    .clear_high(\port$7614$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -22994,7 +22940,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7242$259 [0]) begin
+            if (\port$7614$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -23079,7 +23025,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7242$259 [0]) begin
+            if (\port$7614$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -23118,7 +23064,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7242$259 [12:1] };
+            \$85  = { 1'h0, \port$7614$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -23503,11 +23449,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7242$259 [12:1] };
-  assign fixed = \port$7242$259 [0];
+  assign fixed_delay = { 1'h0, \port$7614$259 [12:1] };
+  assign fixed = \port$7614$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7242$259 [0];
+  assign clear_high = \port$7614$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -23914,7 +23860,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$7230$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$7602$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -23956,8 +23902,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7230$0 ;
-  wire \port$7230$0 ;
+  input \port$7602$0 ;
+  wire \port$7602$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -23971,9 +23917,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7230$0  };
-  assign \$2  = { lc[4:0], \port$7230$0  } == last;
-  assign \$3  = { lc[4:0], \port$7230$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7602$0  };
+  assign \$2  = { lc[4:0], \port$7602$0  } == last;
+  assign \$3  = { lc[4:0], \port$7602$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -24083,7 +24029,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7230$0  };
+  assign lc_next = { lc[4:0], \port$7602$0  };
   assign zero = is_zero;
 endmodule
 
@@ -24647,7 +24593,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$3030$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$3216$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -24825,8 +24771,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$3030$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$3030$0 ;
-  wire \port$3030$0 ;
+  output \port$3216$0 ;
+  wire \port$3216$0 ;
   output report;
   wire report;
   input report_frame;
@@ -24944,7 +24890,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$3030$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3030$0  = \$2 ;
+  assign \port$3216$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -25001,7 +24947,7 @@ endmodule
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$8151$0 , \port$8162$0 , regs__ca_done, \port$8239$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$8523$0 , \port$8534$0 , regs__ca_done, \port$8611$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -25185,12 +25131,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$8151$0 ;
-  wire [186:0] \port$8151$0 ;
-  output [79:0] \port$8162$0 ;
-  wire [79:0] \port$8162$0 ;
-  output [9:0] \port$8239$0 ;
-  wire [9:0] \port$8239$0 ;
+  output [186:0] \port$8523$0 ;
+  wire [186:0] \port$8523$0 ;
+  output [79:0] \port$8534$0 ;
+  wire [79:0] \port$8534$0 ;
+  output [9:0] \port$8611$0 ;
+  wire [9:0] \port$8611$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -25679,9 +25625,9 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$8151$0  = \$20 ;
-  assign \port$8162$0  = \$21 ;
-  assign \port$8239$0  = \$22 ;
+  assign \port$8523$0  = \$20 ;
+  assign \port$8534$0  = \$21 ;
+  assign \port$8611$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -26746,7 +26692,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7791$272 (cycle[274:272]),
+    .\port$8163$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -26806,7 +26752,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$7791$199 (cycle[199]),
+    .\port$8163$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -26857,7 +26803,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7791$259 (cycle[271:259]),
+    .\port$8163$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -26881,7 +26827,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7779$0 (\bit ),
+    .\port$8151$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -26949,7 +26895,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5701$0 (\$28 ),
+    .\port$6073$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -30977,7 +30923,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$7791$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$8163$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -31693,8 +31639,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7791$272 ;
-  wire [2:0] \port$7791$272 ;
+  input [2:0] \port$8163$272 ;
+  wire [2:0] \port$8163$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -32004,7 +31950,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$7791$272 [0];
+  assign error_bit = ssi & \port$8163$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -32035,19 +31981,19 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$7791$272 [0];
+  assign \$24  = ssi & \port$8163$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$7791$272 [0];
+  assign \$28  = ssi & \port$8163$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$7791$272 [0];
+  assign \$35  = ssi & \port$8163$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$7791$272 [0];
+  assign \$39  = ssi & \port$8163$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -32068,7 +32014,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$7791$272 [2];
+  assign \$61  = ssi & \port$8163$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -32354,15 +32300,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$7791$272 [0];
+  assign \$347  = ssi & \port$8163$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$7791$272 [0];
-  assign \$355  = ~ \port$7791$272 [1];
+  assign \$354  = ssi & \port$8163$272 [0];
+  assign \$355  = ~ \port$8163$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -33099,7 +33045,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$7791$272 [0];
+  assign ssi_error = \port$8163$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -33109,8 +33055,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$7791$272 [2];
-  assign ssi_error_low = \port$7791$272 [1];
+  assign ssi_double = \port$8163$272 [2];
+  assign ssi_error_low = \port$8163$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -33256,73 +33202,137 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, load_index, customs, \bit , receiver_clear, codes, index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
-  reg [1:0] \$1 ;
+  wire \$1 ;
   wire [37:0] \$10 ;
-  reg [1:0] \$11 ;
+  wire [1:0] \$100 ;
+  wire \$101 ;
+  wire [37:0] \$102 ;
+  wire [37:0] \$103 ;
+  wire [37:0] \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire [15:0] \$107 ;
+  wire [15:0] \$108 ;
+  wire \$109 ;
+  wire [37:0] \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
-  reg [37:0] \$13 ;
-  reg [1:0] \$14 ;
-  wire \$15 ;
-  reg [1:0] \$16 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  reg [15:0] \$128 ;
+  reg \$129 ;
+  wire [1:0] \$13 ;
+  reg [37:0] \$130 ;
+  reg [1:0] \$131 ;
+  wire \$14 ;
+  wire [1:0] \$15 ;
+  wire [1:0] \$16 ;
   wire \$17 ;
-  wire [37:0] \$18 ;
-  wire [37:0] \$19 ;
-  wire \$2 ;
-  wire [37:0] \$20 ;
-  reg [1:0] \$21 ;
-  wire \$22 ;
-  reg [37:0] \$23 ;
-  reg [1:0] \$24 ;
-  wire \$25 ;
-  reg [1:0] \$26 ;
+  wire \$18 ;
+  wire [1:0] \$19 ;
+  wire [1:0] \$2 ;
+  wire \$20 ;
+  wire [1:0] \$21 ;
+  wire [1:0] \$22 ;
+  wire \$23 ;
+  wire [37:0] \$24 ;
+  wire [37:0] \$25 ;
+  wire [37:0] \$26 ;
   wire \$27 ;
-  wire [37:0] \$28 ;
-  wire [37:0] \$29 ;
-  reg [37:0] \$3 ;
-  wire [37:0] \$30 ;
-  reg [1:0] \$31 ;
+  wire [1:0] \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire [1:0] \$30 ;
+  wire [1:0] \$31 ;
   wire \$32 ;
-  reg [37:0] \$33 ;
-  reg [1:0] \$34 ;
+  wire \$33 ;
+  wire [37:0] \$34 ;
   wire \$35 ;
-  reg [1:0] \$36 ;
-  wire \$37 ;
-  wire [37:0] \$38 ;
-  wire [37:0] \$39 ;
-  reg [1:0] \$4 ;
-  wire [37:0] \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  wire [15:0] \$43 ;
-  wire [15:0] \$44 ;
-  wire \$45 ;
+  wire [37:0] \$36 ;
+  wire [37:0] \$37 ;
+  wire \$38 ;
+  wire [1:0] \$39 ;
+  wire [1:0] \$4 ;
+  wire \$40 ;
+  wire [1:0] \$41 ;
+  wire [1:0] \$42 ;
+  wire \$43 ;
+  wire \$44 ;
+  wire [1:0] \$45 ;
   wire \$46 ;
-  wire \$47 ;
-  wire \$48 ;
+  wire [1:0] \$47 ;
+  wire [1:0] \$48 ;
   wire \$49 ;
-  wire \$5 ;
-  wire \$50 ;
-  wire \$51 ;
-  wire \$52 ;
+  wire [1:0] \$5 ;
+  wire [37:0] \$50 ;
+  wire [37:0] \$51 ;
+  wire [37:0] \$52 ;
   wire \$53 ;
-  wire \$54 ;
+  wire [1:0] \$54 ;
   wire \$55 ;
-  wire \$56 ;
-  wire \$57 ;
+  wire [1:0] \$56 ;
+  wire [1:0] \$57 ;
   wire \$58 ;
   wire \$59 ;
-  reg [1:0] \$6 ;
-  wire \$60 ;
+  wire \$6 ;
+  wire [37:0] \$60 ;
   wire \$61 ;
-  wire \$62 ;
-  wire \$63 ;
-  reg [15:0] \$64 ;
-  reg \$65 ;
-  reg [37:0] \$66 ;
-  reg [1:0] \$67 ;
+  wire [37:0] \$62 ;
+  wire [37:0] \$63 ;
+  wire \$64 ;
+  wire [1:0] \$65 ;
+  wire \$66 ;
+  wire [1:0] \$67 ;
+  wire [1:0] \$68 ;
+  wire \$69 ;
   wire \$7 ;
+  wire \$70 ;
+  wire [1:0] \$71 ;
+  wire \$72 ;
+  wire [1:0] \$73 ;
+  wire [1:0] \$74 ;
+  wire \$75 ;
+  wire [37:0] \$76 ;
+  wire [37:0] \$77 ;
+  wire [37:0] \$78 ;
+  wire \$79 ;
   wire [37:0] \$8 ;
-  wire [37:0] \$9 ;
+  wire [1:0] \$80 ;
+  wire \$81 ;
+  wire [1:0] \$82 ;
+  wire [1:0] \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire [37:0] \$86 ;
+  wire \$87 ;
+  wire [37:0] \$88 ;
+  wire [37:0] \$89 ;
+  wire \$9 ;
+  wire \$90 ;
+  wire [1:0] \$91 ;
+  wire \$92 ;
+  wire [1:0] \$93 ;
+  wire [1:0] \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire [1:0] \$97 ;
+  wire \$98 ;
+  wire [1:0] \$99 ;
   input \bit ;
   wire \bit ;
   input check;
@@ -33378,286 +33388,190 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   wire [15:0] \settings.poly ;
   wire [15:0] \settings.start ;
   wire [4:0] \settings.width ;
-  assign \$35  = \$34  == 2'h2;
-  assign \$37  = \$36  == 1'h1;
-  assign \$38  = \$37  ? 38'h2000000066 : 38'h0000000000;
-  assign \$39  = \$35  ? 38'h2000121b30 : \$38 ;
-  assign \$40  = \$32  ? \$33  : \$39 ;
-  assign \$41  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$42  = \$41  ^ \bit ;
-  assign \$43  = \$42  ? settings[20:5] : 16'h0000;
-  assign \$44  = { \reg [14:0], 1'h0 } ^ \$43 ;
-  assign \$45  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$46  = \bit  ^ \$45 ;
-  assign \$47  = \$46  ^ settings[37];
-  assign \$48  = check & \$47 ;
-  assign \$49  = mismatch | \$48 ;
-  assign \$50  = ! index;
-  assign \$51  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$52  = \bit  ^ \$51 ;
-  assign \$53  = \$52  ^ settings[37];
-  assign \$54  = check & \$53 ;
-  assign \$55  = mismatch | \$54 ;
-  assign \$56  = ~ \$55 ;
-  assign \$58  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$59  = \bit  ^ \$58 ;
-  assign \$60  = \$59  ^ settings[37];
-  assign \$61  = check & \$60 ;
-  assign \$62  = mismatch | \$61 ;
-  assign \$63  = ~ \$62 ;
-  always @(posedge clk)
-    \reg  <= \$64 ;
-  always @(posedge clk)
-    mismatch <= \$65 ;
-  always @(posedge clk)
-    settings <= \$66 ;
-  always @(posedge clk)
-    ok <= \$67 ;
-  assign \$2  = \$1  == 2'h3;
-  assign \$5  = \$4  == 2'h2;
-  assign \$7  = \$6  == 1'h1;
-  assign \$8  = \$7  ? 38'h2000000066 : 38'h0000000000;
-  assign \$9  = \$5  ? 38'h2000121b30 : \$8 ;
-  assign \$10  = \$2  ? \$3  : \$9 ;
-  assign \$12  = \$11  == 2'h3;
-  assign \$15  = \$14  == 2'h2;
-  assign \$17  = \$16  == 1'h1;
-  assign \$18  = \$17  ? 38'h2000000066 : 38'h0000000000;
-  assign \$19  = \$15  ? 38'h2000121b30 : \$18 ;
-  assign \$20  = \$12  ? \$13  : \$19 ;
-  assign \$22  = \$21  == 2'h3;
-  assign \$25  = \$24  == 2'h2;
-  assign \$27  = \$26  == 1'h1;
-  assign \$28  = \$27  ? 38'h2000000066 : 38'h0000000000;
-  assign \$29  = \$25  ? 38'h2000121b30 : \$28 ;
-  assign \$30  = \$22  ? \$23  : \$29 ;
+  assign \$1  = ! load_index;
+  assign \$2  = load_index ? 2'h0 : codes[1:0];
+  assign \$4  = \$3  ? codes[3:2] : 2'h0;
+  assign \$5  = \$2  | \$4 ;
+  assign \$6  = \$5  == 2'h3;
+  assign \$7  = ! load_index;
+  assign \$8  = load_index ? 38'h0000000000 : customs[37:0];
+  assign \$10  = \$9  ? customs[75:38] : 38'h0000000000;
+  assign \$11  = \$8  | \$10 ;
+  assign \$12  = ! load_index;
+  assign \$13  = load_index ? 2'h0 : codes[1:0];
+  assign \$15  = \$14  ? codes[3:2] : 2'h0;
+  assign \$16  = \$13  | \$15 ;
+  assign \$17  = \$16  == 2'h2;
+  assign \$18  = ! load_index;
+  assign \$19  = load_index ? 2'h0 : codes[1:0];
+  assign \$21  = \$20  ? codes[3:2] : 2'h0;
+  assign \$22  = \$19  | \$21 ;
+  assign \$23  = \$22  == 1'h1;
+  assign \$24  = \$23  ? 38'h2000000066 : 38'h0000000000;
+  assign \$25  = \$17  ? 38'h2000121b30 : \$24 ;
+  assign \$26  = \$6  ? \$11  : \$25 ;
+  assign \$27  = ! load_index;
+  assign \$28  = load_index ? 2'h0 : codes[1:0];
+  assign \$30  = \$29  ? codes[3:2] : 2'h0;
+  assign \$31  = \$28  | \$30 ;
   assign \$32  = \$31  == 2'h3;
+  assign \$33  = ! load_index;
+  assign \$34  = load_index ? 38'h0000000000 : customs[37:0];
+  assign \$36  = \$35  ? customs[75:38] : 38'h0000000000;
+  assign \$37  = \$34  | \$36 ;
+  assign \$38  = ! load_index;
+  assign \$39  = load_index ? 2'h0 : codes[1:0];
+  assign \$41  = \$40  ? codes[3:2] : 2'h0;
+  assign \$42  = \$39  | \$41 ;
+  assign \$43  = \$42  == 2'h2;
+  assign \$44  = ! load_index;
+  assign \$45  = load_index ? 2'h0 : codes[1:0];
+  assign \$47  = \$46  ? codes[3:2] : 2'h0;
+  assign \$48  = \$45  | \$47 ;
+  assign \$49  = \$48  == 1'h1;
+  assign \$50  = \$49  ? 38'h2000000066 : 38'h0000000000;
+  assign \$51  = \$43  ? 38'h2000121b30 : \$50 ;
+  assign \$52  = \$32  ? \$37  : \$51 ;
+  assign \$53  = ! load_index;
+  assign \$54  = load_index ? 2'h0 : codes[1:0];
+  assign \$56  = \$55  ? codes[3:2] : 2'h0;
+  assign \$57  = \$54  | \$56 ;
+  assign \$58  = \$57  == 2'h3;
+  assign \$59  = ! load_index;
+  assign \$60  = load_index ? 38'h0000000000 : customs[37:0];
+  assign \$62  = \$61  ? customs[75:38] : 38'h0000000000;
+  assign \$63  = \$60  | \$62 ;
+  assign \$64  = ! load_index;
+  assign \$65  = load_index ? 2'h0 : codes[1:0];
+  assign \$67  = \$66  ? codes[3:2] : 2'h0;
+  assign \$68  = \$65  | \$67 ;
+  assign \$69  = \$68  == 2'h2;
+  assign \$70  = ! load_index;
+  assign \$71  = load_index ? 2'h0 : codes[1:0];
+  assign \$73  = \$72  ? codes[3:2] : 2'h0;
+  assign \$74  = \$71  | \$73 ;
+  assign \$75  = \$74  == 1'h1;
+  assign \$76  = \$75  ? 38'h2000000066 : 38'h0000000000;
+  assign \$77  = \$69  ? 38'h2000121b30 : \$76 ;
+  assign \$78  = \$58  ? \$63  : \$77 ;
+  assign \$79  = ! load_index;
+  assign \$80  = load_index ? 2'h0 : codes[1:0];
+  assign \$82  = \$81  ? codes[3:2] : 2'h0;
+  assign \$83  = \$80  | \$82 ;
+  assign \$84  = \$83  == 2'h3;
+  assign \$85  = ! load_index;
+  assign \$86  = load_index ? 38'h0000000000 : customs[37:0];
+  assign \$88  = \$87  ? customs[75:38] : 38'h0000000000;
+  assign \$89  = \$86  | \$88 ;
+  assign \$90  = ! load_index;
+  assign \$91  = load_index ? 2'h0 : codes[1:0];
+  assign \$93  = \$92  ? codes[3:2] : 2'h0;
+  assign \$94  = \$91  | \$93 ;
+  assign \$95  = \$94  == 2'h2;
+  assign \$96  = ! load_index;
+  assign \$97  = load_index ? 2'h0 : codes[1:0];
+  assign \$99  = \$98  ? codes[3:2] : 2'h0;
+  assign \$100  = \$97  | \$99 ;
+  assign \$101  = \$100  == 1'h1;
+  assign \$102  = \$101  ? 38'h2000000066 : 38'h0000000000;
+  assign \$103  = \$95  ? 38'h2000121b30 : \$102 ;
+  assign \$104  = \$84  ? \$89  : \$103 ;
+  assign \$105  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$106  = \$105  ^ \bit ;
+  assign \$107  = \$106  ? settings[20:5] : 16'h0000;
+  assign \$108  = { \reg [14:0], 1'h0 } ^ \$107 ;
+  assign \$109  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$110  = \bit  ^ \$109 ;
+  assign \$111  = \$110  ^ settings[37];
+  assign \$112  = check & \$111 ;
+  assign \$113  = mismatch | \$112 ;
+  assign \$114  = ! index;
+  assign \$115  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$116  = \bit  ^ \$115 ;
+  assign \$117  = \$116  ^ settings[37];
+  assign \$118  = check & \$117 ;
+  assign \$119  = mismatch | \$118 ;
+  assign \$120  = ~ \$119 ;
+  assign \$122  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$123  = \bit  ^ \$122 ;
+  assign \$124  = \$123  ^ settings[37];
+  assign \$125  = check & \$124 ;
+  assign \$126  = mismatch | \$125 ;
+  assign \$127  = ~ \$126 ;
+  always @(posedge clk)
+    \reg  <= \$128 ;
+  always @(posedge clk)
+    mismatch <= \$129 ;
+  always @(posedge clk)
+    settings <= \$130 ;
+  always @(posedge clk)
+    ok <= \$131 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$33  = customs[37:0];
-      1'h1:
-          \$33  = customs[75:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$34  = codes[1:0];
-      1'h1:
-          \$34  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$36  = codes[1:0];
-      1'h1:
-          \$36  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$64  = \reg ;
+    \$128  = \reg ;
     if (load) begin
-      \$64  = \$10 [36:21];
+      \$128  = \$26 [36:21];
     end else if (\cover ) begin
-      \$64  = \$44 ;
+      \$128  = \$108 ;
     end else if (check) begin
-      \$64  = { \reg [14:0], 1'h0 };
+      \$128  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$64  = 16'h0000;
+      \$128  = 16'h0000;
     end
     if (rst) begin
-      \$64  = 16'h0000;
+      \$128  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$65  = mismatch;
+    \$129  = mismatch;
     if (load) begin
-      \$65  = 1'h0;
+      \$129  = 1'h0;
     end else if (\cover ) begin
     end else if (check) begin
-      \$65  = \$49 ;
+      \$129  = \$113 ;
     end
     if (receiver_clear) begin
-      \$65  = 1'h0;
+      \$129  = 1'h0;
     end
     if (rst) begin
-      \$65  = 1'h0;
+      \$129  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$66  = settings;
+    \$130  = settings;
     if (load) begin
-      \$66 [4:0] = \$20 [4:0];
-      \$66 [20:5] = \$30 [20:5];
-      \$66 [37] = \$40 [37];
+      \$130 [4:0] = \$52 [4:0];
+      \$130 [20:5] = \$78 [20:5];
+      \$130 [37] = \$104 [37];
     end
     if (receiver_clear) begin
-      \$66 [20:0] = 21'h000000;
-      \$66 [37] = 1'h0;
+      \$130 [20:0] = 21'h000000;
+      \$130 [37] = 1'h0;
     end
     if (rst) begin
-      \$66  = 38'h0000000000;
+      \$130  = 38'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$67  = ok;
+    \$131  = ok;
     if (last) begin
-      if (\$50 ) begin
-        \$67 [0] = \$56 ;
+      if (\$114 ) begin
+        \$131 [0] = \$120 ;
       end
-      if (\$57 ) begin
-        \$67 [1] = \$63 ;
+      if (\$121 ) begin
+        \$131 [1] = \$127 ;
       end
     end
     if (receiver_clear) begin
-      \$67  = 2'h3;
+      \$131  = 2'h3;
     end
     if (rst) begin
-      \$67  = 2'h3;
+      \$131  = 2'h3;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$1  = codes[1:0];
-      1'h1:
-          \$1  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$3  = customs[37:0];
-      1'h1:
-          \$3  = customs[75:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$4  = codes[1:0];
-      1'h1:
-          \$4  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$6  = codes[1:0];
-      1'h1:
-          \$6  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$11  = codes[1:0];
-      1'h1:
-          \$11  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$13  = customs[37:0];
-      1'h1:
-          \$13  = customs[75:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$14  = codes[1:0];
-      1'h1:
-          \$14  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$16  = codes[1:0];
-      1'h1:
-          \$16  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$21  = codes[1:0];
-      1'h1:
-          \$21  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$23  = customs[37:0];
-      1'h1:
-          \$23  = customs[75:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$24  = codes[1:0];
-      1'h1:
-          \$24  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$26  = codes[1:0];
-      1'h1:
-          \$26  = codes[3:2];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    (* full_case = 32'd1 *)
-    casez (load_index)
-      1'h0:
-          \$31  = codes[1:0];
-      1'h1:
-          \$31  = codes[3:2];
-    endcase
   end
   assign \codes[0]  = codes[1:0];
   assign \codes[1]  = codes[3:2];
@@ -33675,7 +33589,23 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   assign \settings.poly  = settings[20:5];
   assign \settings.start  = settings[36:21];
   assign \settings.inverted  = settings[37];
-  assign \$57  = index;
+  assign \$3  = load_index;
+  assign \$9  = load_index;
+  assign \$14  = load_index;
+  assign \$20  = load_index;
+  assign \$29  = load_index;
+  assign \$35  = load_index;
+  assign \$40  = load_index;
+  assign \$46  = load_index;
+  assign \$55  = load_index;
+  assign \$61  = load_index;
+  assign \$66  = load_index;
+  assign \$72  = load_index;
+  assign \$81  = load_index;
+  assign \$87  = load_index;
+  assign \$92  = load_index;
+  assign \$98  = load_index;
+  assign \$121  = index;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -33683,96 +33613,248 @@ module \biss_master_wb.ch1.core.decoder.field_ends (rst, error_bit, words, crc_w
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire [2:0] \$1 ;
   wire [7:0] \$10 ;
+  wire [11:0] \$100 ;
+  wire \$101 ;
+  wire [11:0] \$102 ;
+  wire [11:0] \$103 ;
+  wire \$104 ;
+  wire [11:0] \$105 ;
+  wire \$106 ;
+  wire [11:0] \$107 ;
+  wire [11:0] \$108 ;
+  reg [1:0] \$109 ;
   wire \$11 ;
+  wire [6:0] \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire [11:0] \$113 ;
+  wire \$114 ;
+  wire [11:0] \$115 ;
+  wire [11:0] \$116 ;
+  wire \$117 ;
+  wire [11:0] \$118 ;
+  wire \$119 ;
   reg [1:0] \$12 ;
+  wire [11:0] \$120 ;
+  wire [11:0] \$121 ;
+  wire \$122 ;
+  wire [11:0] \$123 ;
+  wire \$124 ;
+  wire [11:0] \$125 ;
+  wire [11:0] \$126 ;
+  reg [3:0] \$127 ;
+  wire [6:0] \$128 ;
+  wire \$129 ;
   wire [6:0] \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire [11:0] \$132 ;
+  wire \$133 ;
+  wire [11:0] \$134 ;
+  wire [11:0] \$135 ;
+  wire [6:0] \$136 ;
+  wire \$137 ;
+  wire [11:0] \$138 ;
+  wire \$139 ;
   wire \$14 ;
+  wire [11:0] \$140 ;
+  wire [11:0] \$141 ;
+  wire [7:0] \$142 ;
+  wire \$143 ;
+  wire [11:0] \$144 ;
+  wire \$145 ;
+  wire [11:0] \$146 ;
+  wire [11:0] \$147 ;
+  wire \$148 ;
+  wire [11:0] \$149 ;
   reg [3:0] \$15 ;
+  wire \$150 ;
+  wire [11:0] \$151 ;
+  wire [11:0] \$152 ;
+  wire \$153 ;
+  wire [11:0] \$154 ;
+  wire \$155 ;
+  wire [11:0] \$156 ;
+  wire [11:0] \$157 ;
+  reg [6:0] \$158 ;
+  wire [7:0] \$159 ;
   wire [6:0] \$16 ;
+  wire \$160 ;
+  wire [11:0] \$161 ;
+  wire \$162 ;
+  wire [11:0] \$163 ;
+  wire [11:0] \$164 ;
+  wire \$165 ;
+  wire [11:0] \$166 ;
+  wire \$167 ;
+  wire [11:0] \$168 ;
+  wire [11:0] \$169 ;
   wire \$17 ;
+  wire \$170 ;
+  wire [11:0] \$171 ;
+  wire \$172 ;
+  wire [11:0] \$173 ;
+  wire [11:0] \$174 ;
+  reg [6:0] \$175 ;
+  wire [7:0] \$176 ;
+  wire \$177 ;
+  wire [11:0] \$178 ;
+  wire \$179 ;
   wire \$18 ;
-  reg [5:0] \$19 ;
+  wire [11:0] \$180 ;
+  wire [11:0] \$181 ;
+  wire \$182 ;
+  wire [11:0] \$183 ;
+  wire \$184 ;
+  wire [11:0] \$185 ;
+  wire [11:0] \$186 ;
+  wire \$187 ;
+  wire [11:0] \$188 ;
+  wire \$189 ;
+  wire \$19 ;
+  wire [11:0] \$190 ;
+  wire [11:0] \$191 ;
+  reg [6:0] \$192 ;
+  wire \$193 ;
+  wire [4:0] \$194 ;
+  wire \$195 ;
+  wire [4:0] \$196 ;
+  wire [4:0] \$197 ;
+  wire [7:0] \$198 ;
+  wire [7:0] \$199 ;
   wire [6:0] \$2 ;
-  wire [6:0] \$20 ;
-  reg [5:0] \$21 ;
-  wire [7:0] \$22 ;
-  reg [5:0] \$23 ;
-  reg \$24 ;
-  reg \$25 ;
-  reg [6:0] \$26 ;
-  wire [7:0] \$27 ;
-  reg [5:0] \$28 ;
-  reg \$29 ;
+  wire [11:0] \$20 ;
+  wire \$200 ;
+  wire [11:0] \$201 ;
+  wire \$202 ;
+  wire [11:0] \$203 ;
+  wire [11:0] \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire [11:0] \$207 ;
+  wire \$208 ;
+  wire [11:0] \$209 ;
+  wire \$21 ;
+  wire [11:0] \$210 ;
+  wire \$211 ;
+  wire [11:0] \$212 ;
+  wire \$213 ;
+  wire [11:0] \$214 ;
+  wire [11:0] \$215 ;
+  wire \$216 ;
+  wire [11:0] \$217 ;
+  wire \$218 ;
+  wire [11:0] \$219 ;
+  wire [11:0] \$22 ;
+  wire [11:0] \$220 ;
+  reg [1:0] \$221 ;
+  wire [6:0] \$222 ;
+  wire \$223 ;
+  wire \$224 ;
+  wire [11:0] \$225 ;
+  wire \$226 ;
+  wire [11:0] \$227 ;
+  wire [11:0] \$228 ;
+  wire \$229 ;
+  wire [11:0] \$23 ;
+  wire [11:0] \$230 ;
+  wire \$231 ;
+  wire [11:0] \$232 ;
+  wire [11:0] \$233 ;
+  wire \$234 ;
+  wire [11:0] \$235 ;
+  wire \$236 ;
+  wire [11:0] \$237 ;
+  wire [11:0] \$238 ;
+  reg [3:0] \$239 ;
+  wire [6:0] \$24 ;
+  wire [6:0] \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  reg [36:0] \$243 ;
+  reg [36:0] \$244 ;
+  wire \$25 ;
+  wire [11:0] \$26 ;
+  wire \$27 ;
+  wire [11:0] \$28 ;
+  wire [11:0] \$29 ;
   wire [7:0] \$3 ;
-  reg \$30 ;
-  reg [6:0] \$31 ;
-  wire [7:0] \$32 ;
-  reg [5:0] \$33 ;
-  reg \$34 ;
-  reg \$35 ;
-  reg [6:0] \$36 ;
-  reg [4:0] \$37 ;
-  wire [7:0] \$38 ;
-  wire [7:0] \$39 ;
+  wire [7:0] \$30 ;
+  wire \$31 ;
+  wire [11:0] \$32 ;
+  wire \$33 ;
+  wire [11:0] \$34 ;
+  wire [11:0] \$35 ;
+  wire \$36 ;
+  wire [11:0] \$37 ;
+  wire \$38 ;
+  wire [11:0] \$39 ;
   reg [6:0] \$4 ;
-  reg [5:0] \$40 ;
+  wire [11:0] \$40 ;
   wire \$41 ;
-  reg [5:0] \$42 ;
-  reg \$43 ;
-  reg \$44 ;
-  reg [1:0] \$45 ;
-  wire [6:0] \$46 ;
-  wire \$47 ;
-  reg [5:0] \$48 ;
-  reg \$49 ;
+  wire [11:0] \$42 ;
+  wire \$43 ;
+  wire [11:0] \$44 ;
+  wire [11:0] \$45 ;
+  reg [6:0] \$46 ;
+  wire [7:0] \$47 ;
+  wire \$48 ;
+  wire [11:0] \$49 ;
   wire [7:0] \$5 ;
-  reg \$50 ;
-  reg [3:0] \$51 ;
-  wire [6:0] \$52 ;
+  wire \$50 ;
+  wire [11:0] \$51 ;
+  wire [11:0] \$52 ;
   wire \$53 ;
-  wire \$54 ;
-  reg [5:0] \$55 ;
-  wire [6:0] \$56 ;
-  reg [5:0] \$57 ;
-  wire [7:0] \$58 ;
-  reg [5:0] \$59 ;
+  wire [11:0] \$54 ;
+  wire \$55 ;
+  wire [11:0] \$56 ;
+  wire [11:0] \$57 ;
+  wire \$58 ;
+  wire [11:0] \$59 ;
   reg [6:0] \$6 ;
-  reg \$60 ;
-  reg \$61 ;
-  reg [6:0] \$62 ;
-  wire [7:0] \$63 ;
-  reg [5:0] \$64 ;
-  reg \$65 ;
-  reg \$66 ;
-  reg [6:0] \$67 ;
-  wire [7:0] \$68 ;
-  reg [5:0] \$69 ;
+  wire \$60 ;
+  wire [11:0] \$61 ;
+  wire [11:0] \$62 ;
+  reg [6:0] \$63 ;
+  wire [7:0] \$64 ;
+  wire \$65 ;
+  wire [11:0] \$66 ;
+  wire \$67 ;
+  wire [11:0] \$68 ;
+  wire [11:0] \$69 ;
   wire [7:0] \$7 ;
-  reg \$70 ;
-  reg \$71 ;
-  reg [6:0] \$72 ;
-  reg [4:0] \$73 ;
-  wire [7:0] \$74 ;
-  wire [7:0] \$75 ;
-  reg [5:0] \$76 ;
+  wire \$70 ;
+  wire [11:0] \$71 ;
+  wire \$72 ;
+  wire [11:0] \$73 ;
+  wire [11:0] \$74 ;
+  wire \$75 ;
+  wire [11:0] \$76 ;
   wire \$77 ;
-  reg [5:0] \$78 ;
-  reg \$79 ;
+  wire [11:0] \$78 ;
+  wire [11:0] \$79 ;
   reg [6:0] \$8 ;
-  reg \$80 ;
-  reg [1:0] \$81 ;
-  wire [6:0] \$82 ;
+  reg [6:0] \$80 ;
+  wire \$81 ;
+  wire [4:0] \$82 ;
   wire \$83 ;
-  reg [5:0] \$84 ;
-  reg \$85 ;
-  reg \$86 ;
-  reg [3:0] \$87 ;
-  wire [6:0] \$88 ;
-  wire \$89 ;
+  wire [4:0] \$84 ;
+  wire [4:0] \$85 ;
+  wire [7:0] \$86 ;
+  wire [7:0] \$87 ;
+  wire \$88 ;
+  wire [11:0] \$89 ;
   wire [7:0] \$9 ;
   wire \$90 ;
-  reg [36:0] \$91 ;
-  reg [36:0] \$92 ;
+  wire [11:0] \$91 ;
+  wire [11:0] \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire [11:0] \$95 ;
+  wire \$96 ;
+  wire [11:0] \$97 ;
+  wire [11:0] \$98 ;
+  wire \$99 ;
   input advance;
   wire advance;
   input \begin ;
@@ -33854,6 +33936,11 @@ module \biss_master_wb.ch1.core.decoder.field_ends (rst, error_bit, words, crc_w
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
+  assign \$1  = index + 2'h2;
+  assign following_word = \begin  ? 1'h1 : \$1 [0];
+  assign \$2  = words[5:0] + 1'h1;
+  assign \$3  = words[5:0] + 7'h7f;
+  assign \$5  = words[5:0] + \$4 ;
   assign \$7  = words[5:0] + \$6 ;
   assign \$9  = \$8  + crc_widths[4:0];
   assign \$10  = words[5:0] + \$9 [6:0];
@@ -33863,39 +33950,230 @@ module \biss_master_wb.ch1.core.decoder.field_ends (rst, error_bit, words, crc_w
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = | \$16 ;
   assign \$18  = \$14  & \$17 ;
-  assign \$20  = \$19  + 1'h1;
-  assign \$22  = \$21  + 7'h7f;
-  assign \$27  = \$23  + \$26 ;
-  assign \$32  = \$28  + \$31 ;
-  assign \$38  = \$36  + \$37 ;
-  assign \$39  = \$33  + \$38 [6:0];
-  assign \$41  = | \$40 ;
-  assign \$46  = \$42  + \$45 ;
-  assign \$47  = ! \$46 ;
-  assign \$52  = \$48  + \$51 ;
-  assign \$53  = | \$52 ;
-  assign \$54  = \$47  & \$53 ;
-  assign \$56  = \$55  + 1'h1;
-  assign \$58  = \$57  + 7'h7f;
-  assign \$63  = \$59  + \$62 ;
-  assign \$68  = \$64  + \$67 ;
-  assign \$74  = \$72  + \$73 ;
-  assign \$75  = \$69  + \$74 [6:0];
-  assign \$77  = | \$76 ;
-  assign \$82  = \$78  + \$81 ;
-  assign \$83  = ! \$82 ;
-  assign \$88  = \$84  + \$87 ;
-  assign \$89  = | \$88 ;
-  assign \$90  = \$83  & \$89 ;
+  assign \$19  = ! following_word;
+  assign \$20  = following_word ? 12'h000 : words[11:0];
+  assign \$22  = \$21  ? words[23:12] : 12'h000;
+  assign \$23  = \$20  | \$22 ;
+  assign \$24  = \$23 [5:0] + 1'h1;
+  assign \$25  = ! following_word;
+  assign \$26  = following_word ? 12'h000 : words[11:0];
+  assign \$28  = \$27  ? words[23:12] : 12'h000;
+  assign \$29  = \$26  | \$28 ;
+  assign \$30  = \$29 [5:0] + 7'h7f;
+  assign \$31  = ! following_word;
+  assign \$32  = following_word ? 12'h000 : words[11:0];
+  assign \$34  = \$33  ? words[23:12] : 12'h000;
+  assign \$35  = \$32  | \$34 ;
+  assign \$36  = ! following_word;
+  assign \$37  = following_word ? 12'h000 : words[11:0];
+  assign \$39  = \$38  ? words[23:12] : 12'h000;
+  assign \$40  = \$37  | \$39 ;
+  assign \$41  = ! following_word;
+  assign \$42  = following_word ? 12'h000 : words[11:0];
+  assign \$44  = \$43  ? words[23:12] : 12'h000;
+  assign \$45  = \$42  | \$44 ;
+  assign \$47  = \$35 [5:0] + \$46 ;
+  assign \$48  = ! following_word;
+  assign \$49  = following_word ? 12'h000 : words[11:0];
+  assign \$51  = \$50  ? words[23:12] : 12'h000;
+  assign \$52  = \$49  | \$51 ;
+  assign \$53  = ! following_word;
+  assign \$54  = following_word ? 12'h000 : words[11:0];
+  assign \$56  = \$55  ? words[23:12] : 12'h000;
+  assign \$57  = \$54  | \$56 ;
+  assign \$58  = ! following_word;
+  assign \$59  = following_word ? 12'h000 : words[11:0];
+  assign \$61  = \$60  ? words[23:12] : 12'h000;
+  assign \$62  = \$59  | \$61 ;
+  assign \$64  = \$52 [5:0] + \$63 ;
+  assign \$65  = ! following_word;
+  assign \$66  = following_word ? 12'h000 : words[11:0];
+  assign \$68  = \$67  ? words[23:12] : 12'h000;
+  assign \$69  = \$66  | \$68 ;
+  assign \$70  = ! following_word;
+  assign \$71  = following_word ? 12'h000 : words[11:0];
+  assign \$73  = \$72  ? words[23:12] : 12'h000;
+  assign \$74  = \$71  | \$73 ;
+  assign \$75  = ! following_word;
+  assign \$76  = following_word ? 12'h000 : words[11:0];
+  assign \$78  = \$77  ? words[23:12] : 12'h000;
+  assign \$79  = \$76  | \$78 ;
+  assign \$81  = ! following_word;
+  assign \$82  = following_word ? 5'h00 : crc_widths[4:0];
+  assign \$84  = \$83  ? crc_widths[9:5] : 5'h00;
+  assign \$85  = \$82  | \$84 ;
+  assign \$86  = \$80  + \$85 ;
+  assign \$87  = \$69 [5:0] + \$86 [6:0];
+  assign \$88  = ! following_word;
+  assign \$89  = following_word ? 12'h000 : words[11:0];
+  assign \$91  = \$90  ? words[23:12] : 12'h000;
+  assign \$92  = \$89  | \$91 ;
+  assign \$93  = | \$92 [5:0];
+  assign \$94  = ! following_word;
+  assign \$95  = following_word ? 12'h000 : words[11:0];
+  assign \$97  = \$96  ? words[23:12] : 12'h000;
+  assign \$98  = \$95  | \$97 ;
+  assign \$99  = ! following_word;
+  assign \$100  = following_word ? 12'h000 : words[11:0];
+  assign \$102  = \$101  ? words[23:12] : 12'h000;
+  assign \$103  = \$100  | \$102 ;
+  assign \$104  = ! following_word;
+  assign \$105  = following_word ? 12'h000 : words[11:0];
+  assign \$107  = \$106  ? words[23:12] : 12'h000;
+  assign \$108  = \$105  | \$107 ;
+  assign \$110  = \$98 [5:0] + \$109 ;
+  assign \$111  = ! \$110 ;
+  assign \$112  = ! following_word;
+  assign \$113  = following_word ? 12'h000 : words[11:0];
+  assign \$115  = \$114  ? words[23:12] : 12'h000;
+  assign \$116  = \$113  | \$115 ;
+  assign \$117  = ! following_word;
+  assign \$118  = following_word ? 12'h000 : words[11:0];
+  assign \$120  = \$119  ? words[23:12] : 12'h000;
+  assign \$121  = \$118  | \$120 ;
+  assign \$122  = ! following_word;
+  assign \$123  = following_word ? 12'h000 : words[11:0];
+  assign \$125  = \$124  ? words[23:12] : 12'h000;
+  assign \$126  = \$123  | \$125 ;
+  assign \$128  = \$116 [5:0] + \$127 ;
+  assign \$129  = | \$128 ;
+  assign \$130  = \$111  & \$129 ;
+  assign \$131  = ! following_word;
+  assign \$132  = following_word ? 12'h000 : words[11:0];
+  assign \$134  = \$133  ? words[23:12] : 12'h000;
+  assign \$135  = \$132  | \$134 ;
+  assign \$136  = \$135 [5:0] + 1'h1;
+  assign \$137  = ! following_word;
+  assign \$138  = following_word ? 12'h000 : words[11:0];
+  assign \$140  = \$139  ? words[23:12] : 12'h000;
+  assign \$141  = \$138  | \$140 ;
+  assign \$142  = \$141 [5:0] + 7'h7f;
+  assign \$143  = ! following_word;
+  assign \$144  = following_word ? 12'h000 : words[11:0];
+  assign \$146  = \$145  ? words[23:12] : 12'h000;
+  assign \$147  = \$144  | \$146 ;
+  assign \$148  = ! following_word;
+  assign \$149  = following_word ? 12'h000 : words[11:0];
+  assign \$151  = \$150  ? words[23:12] : 12'h000;
+  assign \$152  = \$149  | \$151 ;
+  assign \$153  = ! following_word;
+  assign \$154  = following_word ? 12'h000 : words[11:0];
+  assign \$156  = \$155  ? words[23:12] : 12'h000;
+  assign \$157  = \$154  | \$156 ;
+  assign \$159  = \$147 [5:0] + \$158 ;
+  assign \$160  = ! following_word;
+  assign \$161  = following_word ? 12'h000 : words[11:0];
+  assign \$163  = \$162  ? words[23:12] : 12'h000;
+  assign \$164  = \$161  | \$163 ;
+  assign \$165  = ! following_word;
+  assign \$166  = following_word ? 12'h000 : words[11:0];
+  assign \$168  = \$167  ? words[23:12] : 12'h000;
+  assign \$169  = \$166  | \$168 ;
+  assign \$170  = ! following_word;
+  assign \$171  = following_word ? 12'h000 : words[11:0];
+  assign \$173  = \$172  ? words[23:12] : 12'h000;
+  assign \$174  = \$171  | \$173 ;
+  assign \$176  = \$164 [5:0] + \$175 ;
+  assign \$177  = ! following_word;
+  assign \$178  = following_word ? 12'h000 : words[11:0];
+  assign \$180  = \$179  ? words[23:12] : 12'h000;
+  assign \$181  = \$178  | \$180 ;
+  assign \$182  = ! following_word;
+  assign \$183  = following_word ? 12'h000 : words[11:0];
+  assign \$185  = \$184  ? words[23:12] : 12'h000;
+  assign \$186  = \$183  | \$185 ;
+  assign \$187  = ! following_word;
+  assign \$188  = following_word ? 12'h000 : words[11:0];
+  assign \$190  = \$189  ? words[23:12] : 12'h000;
+  assign \$191  = \$188  | \$190 ;
+  assign \$193  = ! following_word;
+  assign \$194  = following_word ? 5'h00 : crc_widths[4:0];
+  assign \$196  = \$195  ? crc_widths[9:5] : 5'h00;
+  assign \$197  = \$194  | \$196 ;
+  assign \$198  = \$192  + \$197 ;
+  assign \$199  = \$181 [5:0] + \$198 [6:0];
+  assign \$200  = ! following_word;
+  assign \$201  = following_word ? 12'h000 : words[11:0];
+  assign \$203  = \$202  ? words[23:12] : 12'h000;
+  assign \$204  = \$201  | \$203 ;
+  assign \$205  = | \$204 [5:0];
+  assign \$206  = ! following_word;
+  assign \$207  = following_word ? 12'h000 : words[11:0];
+  assign \$209  = \$208  ? words[23:12] : 12'h000;
+  assign \$210  = \$207  | \$209 ;
+  assign \$211  = ! following_word;
+  assign \$212  = following_word ? 12'h000 : words[11:0];
+  assign \$214  = \$213  ? words[23:12] : 12'h000;
+  assign \$215  = \$212  | \$214 ;
+  assign \$216  = ! following_word;
+  assign \$217  = following_word ? 12'h000 : words[11:0];
+  assign \$219  = \$218  ? words[23:12] : 12'h000;
+  assign \$220  = \$217  | \$219 ;
+  assign \$222  = \$210 [5:0] + \$221 ;
+  assign \$223  = ! \$222 ;
+  assign \$224  = ! following_word;
+  assign \$225  = following_word ? 12'h000 : words[11:0];
+  assign \$227  = \$226  ? words[23:12] : 12'h000;
+  assign \$228  = \$225  | \$227 ;
+  assign \$229  = ! following_word;
+  assign \$230  = following_word ? 12'h000 : words[11:0];
+  assign \$232  = \$231  ? words[23:12] : 12'h000;
+  assign \$233  = \$230  | \$232 ;
+  assign \$234  = ! following_word;
+  assign \$235  = following_word ? 12'h000 : words[11:0];
+  assign \$237  = \$236  ? words[23:12] : 12'h000;
+  assign \$238  = \$235  | \$237 ;
+  assign \$240  = \$228 [5:0] + \$239 ;
+  assign \$241  = | \$240 ;
+  assign \$242  = \$223  & \$241 ;
   always @(posedge clk)
-    current <= \$91 ;
+    current <= \$243 ;
   always @(posedge clk)
-    following <= \$92 ;
-  assign \$1  = index + 2'h2;
-  assign following_word = \begin  ? 1'h1 : \$1 [0];
-  assign \$2  = words[5:0] + 1'h1;
-  assign \$3  = words[5:0] + 7'h7f;
-  assign \$5  = words[5:0] + \$4 ;
+    following <= \$244 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ error_bit, words[7:6] })
+      3'h0:
+          \$4  = 7'h7f;
+      3'h1:
+          \$4  = 7'h01;
+      3'h2:
+          \$4  = 7'h7f;
+      3'h3:
+          \$4  = 7'h01;
+      3'h4:
+          \$4  = 7'h00;
+      3'h5:
+          \$4  = 7'h02;
+      3'h6:
+          \$4  = 7'h00;
+      3'h7:
+          \$4  = 7'h02;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ error_bit, words[7:6] })
+      3'h0:
+          \$6  = 7'h7f;
+      3'h1:
+          \$6  = 7'h01;
+      3'h2:
+          \$6  = 7'h05;
+      3'h3:
+          \$6  = 7'h07;
+      3'h4:
+          \$6  = 7'h00;
+      3'h5:
+          \$6  = 7'h02;
+      3'h6:
+          \$6  = 7'h06;
+      3'h7:
+          \$6  = 7'h08;
+    endcase
+  end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
@@ -33965,602 +34243,178 @@ module \biss_master_wb.ch1.core.decoder.field_ends (rst, error_bit, words, crc_w
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$19  = words[5:0];
-      1'h1:
-          \$19  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$21  = words[5:0];
-      1'h1:
-          \$21  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$23  = words[5:0];
-      1'h1:
-          \$23  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$24  = words[6];
-      1'h1:
-          \$24  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$25  = words[7];
-      1'h1:
-          \$25  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$25 , \$24  })
+    casez ({ \$45 [7], \$40 [6] })
       2'h0:
-          \$26  = 7'h7f;
+          \$46  = 7'h7f;
       2'h1:
-          \$26  = 7'h01;
+          \$46  = 7'h01;
       2'h2:
-          \$26  = 7'h7f;
+          \$46  = 7'h7f;
       2'h3:
-          \$26  = 7'h01;
+          \$46  = 7'h01;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$28  = words[5:0];
-      1'h1:
-          \$28  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$29  = words[6];
-      1'h1:
-          \$29  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$30  = words[7];
-      1'h1:
-          \$30  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$30 , \$29  })
+    casez ({ \$62 [7], \$57 [6] })
       2'h0:
-          \$31  = 7'h7f;
+          \$63  = 7'h7f;
       2'h1:
-          \$31  = 7'h01;
+          \$63  = 7'h01;
       2'h2:
-          \$31  = 7'h05;
+          \$63  = 7'h05;
       2'h3:
-          \$31  = 7'h07;
+          \$63  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$33  = words[5:0];
-      1'h1:
-          \$33  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$34  = words[6];
-      1'h1:
-          \$34  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$35  = words[7];
-      1'h1:
-          \$35  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$35 , \$34  })
+    casez ({ \$79 [7], \$74 [6] })
       2'h0:
-          \$36  = 7'h7f;
+          \$80  = 7'h7f;
       2'h1:
-          \$36  = 7'h01;
+          \$80  = 7'h01;
       2'h2:
-          \$36  = 7'h05;
+          \$80  = 7'h05;
       2'h3:
-          \$36  = 7'h07;
+          \$80  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$37  = crc_widths[4:0];
-      1'h1:
-          \$37  = crc_widths[9:5];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$40  = words[5:0];
-      1'h1:
-          \$40  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$42  = words[5:0];
-      1'h1:
-          \$42  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$43  = words[6];
-      1'h1:
-          \$43  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$44  = words[7];
-      1'h1:
-          \$44  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$44 , \$43  })
+    casez ({ \$108 [7], \$103 [6] })
       2'h0:
-          \$45  = 2'h0;
+          \$109  = 2'h0;
       2'h1:
-          \$45  = 2'h2;
+          \$109  = 2'h2;
       2'h2:
-          \$45  = 2'h0;
+          \$109  = 2'h0;
       2'h3:
-          \$45  = 2'h2;
+          \$109  = 2'h2;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$48  = words[5:0];
-      1'h1:
-          \$48  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$49  = words[6];
-      1'h1:
-          \$49  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$50  = words[7];
-      1'h1:
-          \$50  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$50 , \$49  })
+    casez ({ \$126 [7], \$121 [6] })
       2'h0:
-          \$51  = 4'h0;
+          \$127  = 4'h0;
       2'h1:
-          \$51  = 4'h2;
+          \$127  = 4'h2;
       2'h2:
-          \$51  = 4'h6;
+          \$127  = 4'h6;
       2'h3:
-          \$51  = 4'h8;
+          \$127  = 4'h8;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$55  = words[5:0];
-      1'h1:
-          \$55  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$57  = words[5:0];
-      1'h1:
-          \$57  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$59  = words[5:0];
-      1'h1:
-          \$59  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$60  = words[6];
-      1'h1:
-          \$60  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$61  = words[7];
-      1'h1:
-          \$61  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$61 , \$60  })
+    casez ({ \$157 [7], \$152 [6] })
       2'h0:
-          \$62  = 7'h7f;
+          \$158  = 7'h7f;
       2'h1:
-          \$62  = 7'h01;
+          \$158  = 7'h01;
       2'h2:
-          \$62  = 7'h7f;
+          \$158  = 7'h7f;
       2'h3:
-          \$62  = 7'h01;
+          \$158  = 7'h01;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$64  = words[5:0];
-      1'h1:
-          \$64  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$65  = words[6];
-      1'h1:
-          \$65  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$66  = words[7];
-      1'h1:
-          \$66  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$66 , \$65  })
+    casez ({ \$174 [7], \$169 [6] })
       2'h0:
-          \$67  = 7'h7f;
+          \$175  = 7'h7f;
       2'h1:
-          \$67  = 7'h01;
+          \$175  = 7'h01;
       2'h2:
-          \$67  = 7'h05;
+          \$175  = 7'h05;
       2'h3:
-          \$67  = 7'h07;
+          \$175  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$69  = words[5:0];
-      1'h1:
-          \$69  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$70  = words[6];
-      1'h1:
-          \$70  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$71  = words[7];
-      1'h1:
-          \$71  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$71 , \$70  })
+    casez ({ \$191 [7], \$186 [6] })
       2'h0:
-          \$72  = 7'h7f;
+          \$192  = 7'h7f;
       2'h1:
-          \$72  = 7'h01;
+          \$192  = 7'h01;
       2'h2:
-          \$72  = 7'h05;
+          \$192  = 7'h05;
       2'h3:
-          \$72  = 7'h07;
+          \$192  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$73  = crc_widths[4:0];
-      1'h1:
-          \$73  = crc_widths[9:5];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$76  = words[5:0];
-      1'h1:
-          \$76  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$78  = words[5:0];
-      1'h1:
-          \$78  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$79  = words[6];
-      1'h1:
-          \$79  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$80  = words[7];
-      1'h1:
-          \$80  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$80 , \$79  })
+    casez ({ \$220 [7], \$215 [6] })
       2'h0:
-          \$81  = 2'h0;
+          \$221  = 2'h0;
       2'h1:
-          \$81  = 2'h2;
+          \$221  = 2'h2;
       2'h2:
-          \$81  = 2'h0;
+          \$221  = 2'h0;
       2'h3:
-          \$81  = 2'h2;
+          \$221  = 2'h2;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$84  = words[5:0];
-      1'h1:
-          \$84  = words[17:12];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$85  = words[6];
-      1'h1:
-          \$85  = words[18];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez (following_word)
-      1'h0:
-          \$86  = words[7];
-      1'h1:
-          \$86  = words[19];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$86 , \$85  })
+    casez ({ \$238 [7], \$233 [6] })
       2'h0:
-          \$87  = 4'h0;
+          \$239  = 4'h0;
       2'h1:
-          \$87  = 4'h2;
+          \$239  = 4'h2;
       2'h2:
-          \$87  = 4'h6;
+          \$239  = 4'h6;
       2'h3:
-          \$87  = 4'h8;
+          \$239  = 4'h8;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    \$91  = current;
+    \$243  = current;
     if (\begin ) begin
-      \$91 [6:0] = \$2 ;
-      \$91 [13:7] = \$3 [6:0];
-      \$91 [20:14] = \$5 [6:0];
-      \$91 [27:21] = \$7 [6:0];
-      \$91 [34:28] = \$10 [6:0];
-      \$91 [35] = \$11 ;
-      \$91 [36] = \$18 ;
+      \$243 [6:0] = \$2 ;
+      \$243 [13:7] = \$3 [6:0];
+      \$243 [20:14] = \$5 [6:0];
+      \$243 [27:21] = \$7 [6:0];
+      \$243 [34:28] = \$10 [6:0];
+      \$243 [35] = \$11 ;
+      \$243 [36] = \$18 ;
     end else if (advance) begin
-      \$91  = following;
+      \$243  = following;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    \$92  = following;
+    \$244  = following;
     if (\begin ) begin
-      \$92 [6:0] = \$20 ;
-      \$92 [13:7] = \$22 [6:0];
-      \$92 [20:14] = \$27 [6:0];
-      \$92 [27:21] = \$32 [6:0];
-      \$92 [34:28] = \$39 [6:0];
-      \$92 [35] = \$41 ;
-      \$92 [36] = \$54 ;
+      \$244 [6:0] = \$24 ;
+      \$244 [13:7] = \$30 [6:0];
+      \$244 [20:14] = \$47 [6:0];
+      \$244 [27:21] = \$64 [6:0];
+      \$244 [34:28] = \$87 [6:0];
+      \$244 [35] = \$93 ;
+      \$244 [36] = \$130 ;
     end else if (advance) begin
-      \$92 [6:0] = \$56 ;
-      \$92 [13:7] = \$58 [6:0];
-      \$92 [20:14] = \$63 [6:0];
-      \$92 [27:21] = \$68 [6:0];
-      \$92 [34:28] = \$75 [6:0];
-      \$92 [35] = \$77 ;
-      \$92 [36] = \$90 ;
+      \$244 [6:0] = \$136 ;
+      \$244 [13:7] = \$142 [6:0];
+      \$244 [20:14] = \$159 [6:0];
+      \$244 [27:21] = \$176 [6:0];
+      \$244 [34:28] = \$199 [6:0];
+      \$244 [35] = \$205 ;
+      \$244 [36] = \$242 ;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ error_bit, words[7:6] })
-      3'h0:
-          \$4  = 7'h7f;
-      3'h1:
-          \$4  = 7'h01;
-      3'h2:
-          \$4  = 7'h7f;
-      3'h3:
-          \$4  = 7'h01;
-      3'h4:
-          \$4  = 7'h00;
-      3'h5:
-          \$4  = 7'h02;
-      3'h6:
-          \$4  = 7'h00;
-      3'h7:
-          \$4  = 7'h02;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ error_bit, words[7:6] })
-      3'h0:
-          \$6  = 7'h7f;
-      3'h1:
-          \$6  = 7'h01;
-      3'h2:
-          \$6  = 7'h05;
-      3'h3:
-          \$6  = 7'h07;
-      3'h4:
-          \$6  = 7'h00;
-      3'h5:
-          \$6  = 7'h02;
-      3'h6:
-          \$6  = 7'h06;
-      3'h7:
-          \$6  = 7'h08;
-    endcase
   end
   assign current_ends = current;
   assign following_ends = following;
@@ -34608,6 +34462,44 @@ module \biss_master_wb.ch1.core.decoder.field_ends (rst, error_bit, words, crc_w
   assign \words[1].signed  = words[23];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
+  assign \$21  = following_word;
+  assign \$27  = following_word;
+  assign \$33  = following_word;
+  assign \$38  = following_word;
+  assign \$43  = following_word;
+  assign \$50  = following_word;
+  assign \$55  = following_word;
+  assign \$60  = following_word;
+  assign \$67  = following_word;
+  assign \$72  = following_word;
+  assign \$77  = following_word;
+  assign \$83  = following_word;
+  assign \$90  = following_word;
+  assign \$96  = following_word;
+  assign \$101  = following_word;
+  assign \$106  = following_word;
+  assign \$114  = following_word;
+  assign \$119  = following_word;
+  assign \$124  = following_word;
+  assign \$133  = following_word;
+  assign \$139  = following_word;
+  assign \$145  = following_word;
+  assign \$150  = following_word;
+  assign \$155  = following_word;
+  assign \$162  = following_word;
+  assign \$167  = following_word;
+  assign \$172  = following_word;
+  assign \$179  = following_word;
+  assign \$184  = following_word;
+  assign \$189  = following_word;
+  assign \$195  = following_word;
+  assign \$202  = following_word;
+  assign \$208  = following_word;
+  assign \$213  = following_word;
+  assign \$218  = following_word;
+  assign \$226  = following_word;
+  assign \$231  = following_word;
+  assign \$236  = following_word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -35463,7 +35355,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7791$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$8163$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -35554,8 +35446,8 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7791$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$7791$199 ;
-  wire \port$7791$199 ;
+  input \port$8163$199 ;
+  wire \port$8163$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -35678,7 +35570,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7791$199 , ssi, ssi_e
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$7791$199  : 1'h0;
+  assign \$14  = \$13  ? \port$8163$199  : 1'h0;
   assign \$16  = \$10  | \$15 ;
   assign \$17  = ! sum_word;
   assign \$18  = sum_word ? 12'h000 : words[11:0];
@@ -35843,7 +35735,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7791$199 , ssi, ssi_e
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$7791$199 , 1'h1 };
+  assign enables = { \port$8163$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -37985,7 +37877,7 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7791$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$8163$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -38119,8 +38011,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7791$259 ;
-  wire [12:0] \port$7791$259 ;
+  input [12:0] \port$8163$259 ;
+  wire [12:0] \port$8163$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -38145,7 +38037,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7791$259 [12:1] + 1'h1;
+  assign \$11  = \port$8163$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -38270,7 +38162,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7791$259 [0]),
+    .clear_high(\port$8163$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -38413,7 +38305,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7791$259 [0]) begin
+            if (\port$8163$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -38498,7 +38390,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7791$259 [0]) begin
+            if (\port$8163$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -38537,7 +38429,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7791$259 [12:1] };
+            \$85  = { 1'h0, \port$8163$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -38922,11 +38814,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7791$259 [12:1] };
-  assign fixed = \port$7791$259 [0];
+  assign fixed_delay = { 1'h0, \port$8163$259 [12:1] };
+  assign fixed = \port$8163$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7791$259 [0];
+  assign clear_high = \port$8163$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -39333,7 +39225,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7779$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$8151$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -39375,8 +39267,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7779$0 ;
-  wire \port$7779$0 ;
+  input \port$8151$0 ;
+  wire \port$8151$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -39390,9 +39282,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7779$0  };
-  assign \$2  = { lc[4:0], \port$7779$0  } == last;
-  assign \$3  = { lc[4:0], \port$7779$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$8151$0  };
+  assign \$2  = { lc[4:0], \port$8151$0  } == last;
+  assign \$3  = { lc[4:0], \port$8151$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -39502,7 +39394,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7779$0  };
+  assign lc_next = { lc[4:0], \port$8151$0  };
   assign zero = is_zero;
 endmodule
 
@@ -40066,7 +39958,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5701$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$6073$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -40244,8 +40136,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5701$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$5701$0 ;
-  wire \port$5701$0 ;
+  output \port$6073$0 ;
+  wire \port$6073$0 ;
   output report;
   wire report;
   input report_frame;
@@ -40363,7 +40255,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5701$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5701$0  = \$2 ;
+  assign \port$6073$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

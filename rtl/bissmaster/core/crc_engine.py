@@ -6,6 +6,7 @@ from amaranth.lib.wiring import In, Out
 
 from .. import protocol
 from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, Crc
+from .word_select import select_word
 
 
 #: The named CRCs as the engine runs them: start 0, sent inverted (docs/protocol.md, section 6).
@@ -123,7 +124,7 @@ class CrcEngine(wiring.Component):
             load_crc = crc = self.word_crc
         else:
             def of_load_word(values):
-                return Array(values[w] for w in range(n))[self.load_index]
+                return select_word(self.load_index, [values[w] for w in range(n)])
 
             load_crc = crc_settings(of_load_word(self.codes),
                                     of_load_word(self.customs) if self._custom else None,

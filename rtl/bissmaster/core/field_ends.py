@@ -6,6 +6,7 @@ from amaranth.lib.wiring import In, Out
 
 from .. import protocol
 from ..params import CRC_MAX_WIDTH, WORD_CONFIG, WORD_INDEX_WIDTH
+from .word_select import select_word
 
 
 def _table(index, values, width):
@@ -156,8 +157,8 @@ class FieldEnds(wiring.Component):
         # settings, then one computation of the ends.
         pick = Signal(range(n), name="following_word")
         m.d.comb += pick.eq(Mux(self.begin, 1, (self.index + 2)[:len(pick)]))
-        chosen = field_ends(Array(self.words[w] for w in range(n))[pick],
-                            Array(self.crc_widths[w] for w in range(n))[pick])
+        chosen = field_ends(select_word(pick, [self.words[w] for w in range(n)]),
+                            select_word(pick, [self.crc_widths[w] for w in range(n)]))
         with m.If(self.begin):
             m.d.sync += [current[k].eq(v) for k, v in first.items()]
             m.d.sync += [following[k].eq(v) for k, v in chosen.items()]

@@ -5,6 +5,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 from .field_ends import word_length
+from .word_select import select_word
 from ..params import CRC_MAX_WIDTH, SLOT_WIDTH, WORD_CONFIG, frame_length_width
 
 
@@ -16,14 +17,6 @@ RISES_BEYOND_WORDS = 4
 #: from a good encoder) at rise ``N + 1``; a double transmission is ``N`` bits, one separator,
 #: ``N`` bits and that last bit: ``2 N + 2`` rises.
 SSI_RISES_BEYOND_WORD = 1
-
-
-def _or_all(values):
-    """The OR of ``values`` (an AND-OR multiplexer when each is a compare-gated choice)."""
-    out = None
-    for v in values:
-        out = v if out is None else out | v
-    return out
 
 
 class MaStop(wiring.Component):
@@ -158,15 +151,12 @@ class MaStop(wiring.Component):
         adding = Signal(name="sum_adding")          # ``picked`` holds a word to add
         done = Signal(name="sum_done")
         summed = Signal(name="summed")
-        # Word ``k``'s settings chosen by compares with ``k``, not an Array: Icarus runs an
-        # Array's case block only once an input changes, so the first pick (``k`` = 0 from
-        # reset, settings written long before) would read X there (as in 723f240).
-        def select(values):
-            return _or_all(Mux(k == w, v, 0) for w, v in enumerate(values))
-
-        pick = self.words[0].shape()(select([self.words[w].as_value() for w in range(n_words)]))
-        pick_crc = select([self.crc_widths[w] for w in range(n_words)])
-        pick_on = (k == 0) | select([C(0, 1)] + [self.enables[w] for w in range(1, n_words)])
+        # Word ``k``'s settings (``k`` = 0 from reset reads settings written long before:
+        # select_word, not an Array).
+        pick = select_word(k, [self.words[w] for w in range(n_words)])
+        pick_crc = select_word(k, [self.crc_widths[w] for w in range(n_words)])
+        pick_on = (k == 0) | select_word(k, [C(0, 1)] + [self.enables[w]
+                                                         for w in range(1, n_words)])
         m.d.sync += [
             picked.eq(Mux(pick_on, word_length(pick, pick_crc, width=width + 1), 0)),
             picked_first.eq(k == 0),
