@@ -30,14 +30,21 @@ class SpwCheck(wiring.Component):
         m = Module()
         width = self._width
 
+        # With ``d`` = (cpw_top - spw) mod 2**bits: d <= tolerance or (-d) mod 2**bits <=
+        # tolerance exactly when (d + tolerance) mod 2**bits <= 2 * tolerance (the window
+        # -tolerance .. +tolerance shifted to 0 .. 2 * tolerance; with 2 * tolerance >=
+        # 2**bits - 1 every distance matches, both ways). One adder chain and a short compare
+        # instead of two differences and two compares (issue 27).
         mask = Cat(*(self.bits > i for i in range(width)))     # 2**bits - 1
-        ahead = Signal(width)
-        behind = Signal(width)
-        tolerance = Signal(8)
+        shifted = Signal(width)
+        double_tolerance = Signal(9)
         m.d.sync += [
-            ahead.eq((self.cpw_top - self.spw)[:width] & mask),
-            behind.eq((self.spw - self.cpw_top)[:width] & mask),
-            tolerance.eq(self.tolerance),
-            self.match.eq((ahead <= tolerance) | (behind <= tolerance)),
+            shifted.eq((self.cpw_top - self.spw + self.tolerance)[:width] & mask),
+            double_tolerance.eq(Cat(C(0, 1), self.tolerance)),
         ]
+        low = min(width, len(double_tolerance))
+        within = shifted[:low] <= double_tolerance
+        if width > low:
+            within &= ~shifted[low:].any()
+        m.d.sync += self.match.eq(within)
         return m
