@@ -1,6 +1,8 @@
 """Frame decoder: Ack, Start, CDS, then the frame's data words (one slave's, a Safety
 encoder's CPW and SPW, or a chain's words back to back)."""
 
+from types import SimpleNamespace
+
 from amaranth.hdl import *
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
@@ -105,11 +107,44 @@ class FrameDecoder(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         p = self._params
-        last_word = self.word_count - 1
-
+        # What the parts below share: where the current bit sits and which fields it is in.
+        s = SimpleNamespace()
         # Where the current bit sits: word ``word``, bit ``idx`` of that word.
-        word = Signal(range(p.words), name="word") if p.words > 1 else C(0, 1)   # none in one-word builds
-        idx = Signal(WORD_INDEX_WIDTH)
+        s.word = Signal(range(p.words), name="word") if p.words > 1 else C(0, 1)   # none in one-word builds
+        s.idx = Signal(WORD_INDEX_WIDTH, name="idx")
+        self._field_ends(m, s)
+        # Which fields the current bit (``idx``) belongs to, as flip-flops: set for the
+        # word's first bit, then updated with each sample from ``idx`` and the registered
+        # field ends (``idx`` only ever counts up by one inside a word). No magnitude compare
+        # sits in front of the shift enables.
+        s.in_data = Signal(name="in_data")      # idx < data_bits of this word
+        s.in_lc = Signal(name="in_lc")          # nenw_end <= idx < lc_end of this word
+        s.in_top = Signal(name="in_top")        # word 0 and idx < data_bits of word 1 (cpw_top)
+        s.in_crc = Signal(name="in_crc")        # lc_end <= idx: the word's received CRC bits
+        s.at_cds = Signal(name="at_cds")        # the CDS bit is sampled: word 0 begins next
+        s.in_word = Signal(name="in_word")
+        m.d.sync += [self.done.eq(0), self.stopped.eq(0)]
+
+        with m.If(self.sample & ~self.slots_full):
+            m.d.sync += [self.slots.eq(self.slots + 1), self.slots_full.eq(self.slots == 2**SLOT_WIDTH - 2)]
+
+        s.ssi = self.ssi if p.ssi else C(0)
+        m.d.comb += self.frame_end.eq(Mux(s.ssi, self.stopped, self.done))
+        # SSI double transmission: the second copy compared with the first as it arrives.
+        if p.ssi:
+            m.submodules.copy = s.copy = SsiCopyCompare(
+                p.max_data_bits[0] + protocol.NE_NW_BITS + CRC_MAX_WIDTH)
+            m.d.comb += [s.copy.bit.eq(self.bit), s.copy.index.eq(s.current.word_end_m1),
+                         self.mismatch.eq(s.copy.mismatch)]
+        self._word_fsm(m, s)
+        self._route_bits(m, s)
+        self._crc_engine(m, s)
+        return m
+
+    def _field_ends(self, m, s):
+        """The field ends of the current word and the next (``s.field_ends``, ``s.current``),
+        word 0's first-bit flags (``s.first``) and the SSI error bit (``s.error_bit``)."""
+        p = self._params
         # Field boundaries of the current word and the next, as registers (no adders in front
         # of the ``idx`` compares): loaded as word 0 begins and as each word ends (one-word
         # builds: registered from the configuration in every clock, valid one clock after
@@ -119,42 +154,34 @@ class FrameDecoder(wiring.Component):
                                                          word_layout=word_config(p))
         m.d.comb += [field_ends.words.eq(self.words), field_ends.crc_widths.eq(self.crc_widths)]
         if p.words > 1:
-            m.d.comb += field_ends.index.eq(word)
+            m.d.comb += field_ends.index.eq(s.word)
+        s.error_bit = None
         if p.ssi:
             # Word 0's SSI error bit: a flag bit after the data, like nE.
-            error_bit = self.ssi & self.ssi_error
-            m.d.comb += field_ends.error_bit.eq(error_bit)
-        current = field_ends.current
+            s.error_bit = self.ssi & self.ssi_error
+            m.d.comb += field_ends.error_bit.eq(s.error_bit)
+        s.field_ends, s.current = field_ends, field_ends.current
         # Word 0's first-bit flags as ``begin_words`` reads them: a one-word build's registers
         # hold them already; with more words they are loaded with the ends themselves.
         if p.words == 1:
-            first = current
+            s.first = s.current
         else:
-            first = field_ends_of(self.words[0], self.crc_widths[0],
-                                  error_bit if p.ssi else None)
+            s.first = field_ends_of(self.words[0], self.crc_widths[0], s.error_bit)
 
+    def _word_fsm(self, m, s):
+        """Ack, Start, CDS, the words bit by bit (the field flags updated with each sample),
+        an SSI double transmission's separator and copy, the stop bit."""
+        p = self._params
+        idx, word, current, field_ends = s.idx, s.word, s.current, s.field_ends
+        in_data, in_lc, in_top, in_crc = s.in_data, s.in_lc, s.in_top, s.in_crc
         word_end_m1 = current.word_end_m1
-
-        # Which fields the current bit (``idx``) belongs to, as flip-flops: set for the
-        # word's first bit, then updated with each sample from ``idx`` and the registered
-        # field ends (``idx`` only ever counts up by one inside a word). No magnitude compare
-        # sits in front of the shift enables.
-        in_data = Signal()      # idx < data_bits of this word
-        in_lc = Signal()        # nenw_end <= idx < lc_end of this word
-        in_top = Signal()       # word 0 and idx < data_bits of word 1 (cpw_top)
-        in_crc = Signal()       # lc_end <= idx: the word's received CRC bits
-        at_cds = Signal()       # the CDS bit is sampled: word 0 begins next
-        in_word = Signal()
-        m.d.sync += [self.done.eq(0), self.stopped.eq(0)]
-
-        with m.If(self.sample & ~self.slots_full):
-            m.d.sync += [self.slots.eq(self.slots + 1), self.slots_full.eq(self.slots == 2**SLOT_WIDTH - 2)]
+        last_word = self.word_count - 1
 
         def begin_words():
             """Word 0 begins with the next sample (the CRC engine loads its start value)."""
-            m.d.comb += at_cds.eq(1)
-            m.d.sync += [idx.eq(0), in_data.eq(first["data_at0"]),
-                         in_lc.eq(first["lc_at0"]), in_crc.eq(0)]
+            m.d.comb += s.at_cds.eq(1)
+            m.d.sync += [idx.eq(0), in_data.eq(s.first["data_at0"]),
+                         in_lc.eq(s.first["lc_at0"]), in_crc.eq(0)]
             if p.words > 1:
                 m.d.comb += field_ends.begin.eq(1)
                 m.d.sync += [in_top.eq(self.words[1].data_bits != 0), word.eq(0)]
@@ -165,18 +192,9 @@ class FrameDecoder(wiring.Component):
             m.d.sync += self.done.eq(1)
             m.next = "STOP"
 
-        ssi = self.ssi if p.ssi else C(0)
-        m.d.comb += self.frame_end.eq(Mux(ssi, self.stopped, self.done))
-        # SSI double transmission: the second copy compared with the first as it arrives.
-        if p.ssi:
-            m.submodules.copy = copy = SsiCopyCompare(
-                p.max_data_bits[0] + protocol.NE_NW_BITS + CRC_MAX_WIDTH)
-            m.d.comb += [copy.bit.eq(self.bit), copy.index.eq(word_end_m1),
-                         self.mismatch.eq(copy.mismatch)]
-
         with m.FSM(name="decoder_fsm"):
             with m.State("ACK"):
-                with m.If(ssi):
+                with m.If(s.ssi):
                     # SSI: no Ack, Start or CDS; slot 0 is word 0's first bit (``started``
                     # with its decision, in WORD).
                     begin_words()
@@ -188,7 +206,7 @@ class FrameDecoder(wiring.Component):
                     m.d.sync += self.cds.eq(self.bit)
                     begin_words()
             with m.State("WORD"):
-                m.d.comb += in_word.eq(self.sample)
+                m.d.comb += s.in_word.eq(self.sample)
                 if p.ssi:
                     with m.If(self.sample):
                         m.d.sync += self.started.eq(1)      # SSI: slot 0 (BiSS: set already)
@@ -211,7 +229,7 @@ class FrameDecoder(wiring.Component):
                                      in_lc.eq(following.lc_at0), in_top.eq(0)]
                         with m.If(word == last_word):
                             if p.ssi:
-                                with m.If(ssi & self.ssi_double):
+                                with m.If(s.ssi & self.ssi_double):
                                     m.next = "SEPARATOR"
                                 with m.Else():
                                     end_words()
@@ -223,11 +241,11 @@ class FrameDecoder(wiring.Component):
                                 m.d.comb += field_ends.advance.eq(1)
             if p.ssi:
                 with m.State("SEPARATOR"):
-                    m.d.comb += copy.separator.eq(self.sample)
+                    m.d.comb += s.copy.separator.eq(self.sample)
                     with m.If(self.sample):
                         m.next = "COPY"
                 with m.State("COPY"):
-                    m.d.comb += copy.second.eq(self.sample)
+                    m.d.comb += s.copy.second.eq(self.sample)
                     with m.If(self.sample):
                         m.d.sync += idx.eq(idx + 1)
                         with m.If(idx == word_end_m1):
@@ -239,7 +257,11 @@ class FrameDecoder(wiring.Component):
             with m.State("END"):
                 pass
 
-        # Route each bit of a word to its field.
+    def _route_bits(self, m, s):
+        """Each bit of a word to its field: the data registers, nE / nW, LC, ``cpw_top``, the
+        chain register."""
+        p = self._params
+        idx, word, current, in_word = s.idx, s.word, s.current, s.in_word
         # Gray-coded data: each binary bit is the received bit xor the binary bit before it
         # (MSB first), which is the register's bit 0 (0 before the first: the decoder is reset
         # between cycles). The CRC engine gets the bits as sent.
@@ -259,16 +281,16 @@ class FrameDecoder(wiring.Component):
                 if p.signed_words:
                     shifted |= (self.words[w].signed & first_bit
                                 & decoded[w]).replicate(len(data_w))
-                with m.If(this_word & in_data):
+                with m.If(this_word & s.in_data):
                     m.d.sync += data_w.eq(shifted)
             # A word without nE/nW reads as "no error, no warning" (both high); an SSI error
             # bit (word 0) is read as nE is: 0 when active (inverted when active high).
             nenw = self.words[w].nenw
             if w == 0 and p.ssi:
-                with m.If(~nenw & ~error_bit):
+                with m.If(~nenw & ~s.error_bit):
                     m.d.sync += self.ne[w].eq(1)
                 with m.Elif(this_word & (idx == self.words[w].data_bits)):
-                    m.d.sync += self.ne[w].eq(self.bit ^ (error_bit & ~self.ssi_error_low))
+                    m.d.sync += self.ne[w].eq(self.bit ^ (s.error_bit & ~self.ssi_error_low))
                 with m.If(~nenw):
                     m.d.sync += self.nw[w].eq(1)
                 with m.Elif(this_word & (idx == current.data_end_p1)):
@@ -281,23 +303,27 @@ class FrameDecoder(wiring.Component):
                 with m.Elif(this_word & (idx == current.data_end_p1)):
                     m.d.sync += self.nw[w].eq(self.bit)
         if p.chain_words_in_memory:
-            self._chain_register(m, word, first_bit, in_word & in_data,
-                                 in_word & (idx == word_end_m1))
+            self._chain_register(m, word, first_bit, in_word & s.in_data,
+                                 in_word & (idx == current.word_end_m1))
         if p.ssi:
             # The first copy of an SSI double transmission, as sent (word 0 is the only word).
-            m.d.comb += copy.first.eq(in_word & ssi)
+            m.d.comb += s.copy.first.eq(in_word & s.ssi)
         m.d.comb += [
-            self.lc_load.eq(in_word & in_lc),
+            self.lc_load.eq(in_word & s.in_lc),
             self.lc_next.eq(Cat(self.bit, self.lc)),
         ]
         with m.If(self.lc_load):
             m.d.sync += self.lc.eq(self.lc_next)
         if p.words >= 2:
             # Word 0's leading bits, as many as word 1 has: the CPW with its extra low bits dropped.
-            with m.If(in_word & in_top):
+            with m.If(in_word & s.in_top):
                 m.d.sync += self.cpw_top.eq(Cat(decoded[0], self.cpw_top))
 
-        # One CRC engine for every word in turn, fed each bit of the word (data and the CRC).
+    def _crc_engine(self, m, s):
+        """One CRC engine for every word in turn, fed each bit of the word (data and the
+        CRC)."""
+        p = self._params
+        in_word, last_bit = s.in_word, s.idx == s.current.word_end_m1
         kinds = sorted({kind for crcs in p.word_crcs for kind in crcs})
         m.submodules.crc = engine = CrcEngine(p.words, kinds=kinds, custom=p.custom_crc)
         if p.words == 1:
@@ -307,17 +333,16 @@ class FrameDecoder(wiring.Component):
             if p.custom_crc:
                 m.d.comb += engine.customs.eq(self.customs)
         m.d.comb += [
-            engine.load.eq(at_cds | (in_word & (idx == word_end_m1))),
-            engine.cover.eq(in_word & ~in_crc),
-            engine.check.eq(in_word & in_crc),
-            engine.last.eq(in_word & (idx == word_end_m1)),
+            engine.load.eq(s.at_cds | (in_word & last_bit)),
+            engine.cover.eq(in_word & ~s.in_crc),
+            engine.check.eq(in_word & s.in_crc),
+            engine.last.eq(in_word & last_bit),
             engine.bit.eq(self.bit),
             self.crc_ok.eq(engine.ok),
         ]
         if p.words > 1:
-            m.d.comb += [engine.index.eq(word), engine.load_index.eq(Mux(at_cds, 0, word + 1))]
-
-        return m
+            m.d.comb += [engine.index.eq(s.word),
+                         engine.load_index.eq(Mux(s.at_cds, 0, s.word + 1))]
 
     def _chain_register(self, m, word, first_bit, data_bit, word_last_bit):
         """Words 2..7 through one register (``chain_data``), for the chain memory: each
