@@ -1,5 +1,7 @@
 """SLO receiver with line-delay compensation."""
 
+from types import SimpleNamespace
+
 from amaranth.hdl import *
 from amaranth.lib import cdc, wiring
 from amaranth.lib.wiring import In, Out
@@ -142,18 +144,48 @@ class SloSampler(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        hp = self.half_period
-
+        # What the parts below share: the line, the slot timing, the votes and the decision.
+        s = SimpleNamespace()
         if self._synchronizer:
             m.submodules.sync = cdc.FFSynchronizer(self.slo, self.level, init=1, stages=2)
         else:
             m.d.comb += self.level.eq(self.slo)
-        slo = self.level
+        s.slo = slo = self.level
 
-        slo_prev = Signal(init=1)
-        m.d.sync += slo_prev.eq(slo)
-        fell = slo_prev & ~slo
+        s.slo_prev = Signal(init=1, name="slo_prev")
+        m.d.sync += s.slo_prev.eq(slo)
+        s.fell = s.slo_prev & ~slo
 
+        self._slot_timing(m, s)
+        self._midpoint(m, s)
+
+        s.elapsed = Signal(self._delay_width, name="elapsed")   # clocks since arm
+        # clocks to the slot's next event, minus one
+        s.slot_left = Signal(HALF_PERIOD_WIDTH + 1, name="slot_left")
+        # ``slot_left == 0`` kept as a register, written wherever ``slot_left`` is, from the
+        # value written: the event strobe needs no wide compare.
+        s.slot_zero = Signal(init=1, name="slot_zero")
+        s.phase = Signal(2, name="phase")           # next event: 0 first vote, 1 centre, 2 third
+        s.first_slot = Signal(name="first_slot")    # slot 0 (inside the Ack) not decided yet
+        s.vote1 = Signal(name="vote1")              # the slot's first vote
+        s.vote2 = Signal(name="vote2")              # its centre
+        # After SLO went high again right after the edge: the next fall within ``v`` clocks is
+        # ambiguous (the slot timer counts the window down).
+        s.gap = Signal(name="gap")
+
+        s.majority = (s.vote1 & s.vote2) | (s.vote1 & slo) | (s.vote2 & slo)
+        s.decided = Signal(name="decided")          # a slot's decision in this clock
+        s.decision = Mux(s.single, slo, s.majority)
+        m.d.comb += [self.sample.eq(s.decided & ~s.first_slot), self.bit.eq(s.decision)]
+
+        self._noise(m, s)
+        self._fsm(m, s)
+        return m
+
+    def _slot_timing(self, m, s):
+        """The vote spacing ``v`` and the slot timer's reload values (``s.vote``, ``s.single``,
+        ``s.first_load``, ``s.vote_load``, ``s.vote_one``, ``s.period_load``)."""
+        hp = self.half_period
         # The vote spacing ``v`` and the slot timer's reload values, from the cycle's half
         # period (constant within a cycle): reset-less registers that follow it in every clock,
         # valid a few clocks after the configuration latch, long before the first edge. With
@@ -165,73 +197,75 @@ class SloSampler(wiring.Component):
         # subtracter in front of ``first_load``: the core's critical path without it); ``2u - 1``
         # is wiring (``u - 1`` with a 1 below it).
         vw = HALF_PERIOD_WIDTH - 1
-        vote = Signal(vw, reset_less=True)
-        single = Signal(reset_less=True)                        # one sample per slot (hp = 2)
-        first_load = Signal(HALF_PERIOD_WIDTH, reset_less=True)  # u - 1: edge to first vote
-        vote_load = Signal(vw, reset_less=True)                  # v - 1: vote to vote
-        vote_one = Signal(reset_less=True)                       # v == 1: vote_load is 0
-        period_load = Cat(C(1, 1), first_load)                   # 2u - 1: third to first
+        s.vote = vote = Signal(vw, reset_less=True, name="vote")
+        # one sample per slot (hp = 2)
+        s.single = Signal(reset_less=True, name="single")
+        # u - 1: edge to first vote
+        s.first_load = Signal(HALF_PERIOD_WIDTH, reset_less=True, name="first_load")
+        s.vote_load = Signal(vw, reset_less=True, name="vote_load")      # v - 1: vote to vote
+        s.vote_one = Signal(reset_less=True, name="vote_one")            # v == 1: vote_load is 0
+        s.period_load = Cat(C(1, 1), s.first_load)                       # 2u - 1: third to first
         m.d.sync += [
             vote.eq(Mux(hp >= 3, hp[1:], 0)),
-            single.eq(hp < 3),
-            first_load.eq(hp - vote - 1),
-            vote_load.eq(vote - 1),
-            vote_one.eq(vote == 1),
+            s.single.eq(hp < 3),
+            s.first_load.eq(hp - vote - 1),
+            s.vote_load.eq(vote - 1),
+            s.vote_one.eq(vote == 1),
         ]
 
-        elapsed = Signal(self._delay_width)        # clocks since arm
-        delay_max = (1 << self._delay_width) - 1
-        slot_left = Signal(HALF_PERIOD_WIDTH + 1)  # clocks to the slot's next event, minus one
-        # ``slot_left == 0`` kept as a register, written wherever ``slot_left`` is, from the
-        # value written: the event strobe needs no wide compare.
-        slot_zero = Signal(init=1)
-        phase = Signal(2)                           # next event: 0 first vote, 1 centre, 2 third
-        first_slot = Signal()                       # slot 0 (inside the Ack) not decided yet
-        vote1 = Signal()                            # the slot's first vote
-        vote2 = Signal()                            # its centre
-        # After SLO went high again right after the edge: the next fall within ``v`` clocks is
-        # ambiguous (the slot timer counts the window down).
-        gap = Signal()
+    def _midpoint(self, m, s):
+        """The edge halfway between the last fall and now (``s.mid_slot``, ``s.mid_delay``,
+        ``s.odd``)."""
         # The edge halfway between the last fall and now, kept up to date clock by clock (so
         # that no arithmetic sits between the fall and the registers it loads): with ``span``
         # clocks since that fall, ``mid_slot`` = hp - 1 - ceil(span / 2) (the timer to the
         # slot's centre had the edge been halfway) and ``mid_delay`` = its delay + floor(span /
         # 2); ``odd`` = span % 2.
-        mid_slot = Signal(HALF_PERIOD_WIDTH + 1)
-        mid_delay = Signal(self._delay_width)
-        odd = Signal()
-        with m.If(odd):
-            m.d.sync += mid_delay.eq(mid_delay + 1)
+        s.mid_slot = Signal(HALF_PERIOD_WIDTH + 1, name="mid_slot")
+        s.mid_delay = Signal(self._delay_width, name="mid_delay")
+        s.odd = Signal(name="odd")
+        with m.If(s.odd):
+            m.d.sync += s.mid_delay.eq(s.mid_delay + 1)
         with m.Else():
-            m.d.sync += mid_slot.eq(mid_slot - 1)
-        m.d.sync += odd.eq(~odd)
+            m.d.sync += s.mid_slot.eq(s.mid_slot - 1)
+        m.d.sync += s.odd.eq(~s.odd)
+
+    def _noise(self, m, s):
+        """The vote patterns and edges a clean line cannot give (see the docstring), judged by
+        SlotNoise at each decision; an edge the sampler drops is noise too (``s.dropped``,
+        ``s.centre``, ``s.clear``: set by the state machine)."""
+        m.submodules.slot_noise = slot_noise = SlotNoise()
+        s.dropped = Signal(name="dropped")          # an edge dropped in this clock
+        s.centre = Signal(name="centre")            # the centre vote is taken in this clock
+        s.clear = Signal(name="clear")              # an Ack edge is taken in this clock
+        m.d.comb += [
+            slot_noise.level.eq(s.slo),
+            slot_noise.edge.eq(s.slo != s.slo_prev),
+            slot_noise.clear.eq(s.clear),
+            slot_noise.clear_high.eq(self.fixed if self._fixed else 0),
+            slot_noise.centre.eq(s.centre),
+            slot_noise.decided.eq(s.decided & ~s.single),
+            slot_noise.vote1.eq(s.vote1),
+            slot_noise.vote2.eq(s.vote2),
+            slot_noise.majority.eq(s.majority),
+            self.noise.eq(s.dropped | slot_noise.odd),
+        ]
+
+    def _fsm(self, m, s):
+        """IDLE -> MEASURE (the Ack edge, the round trip) -> SAMPLE (the slots), or FIXED (SSI:
+        the configured round trip) -> SAMPLE."""
+        hp = self.half_period
+        slo, fell, elapsed = s.slo, s.fell, s.elapsed
+        slot_left, slot_zero, phase, first_slot = s.slot_left, s.slot_zero, s.phase, s.first_slot
+        vote1, vote2, gap, decided, decision = s.vote1, s.vote2, s.gap, s.decided, s.decision
+        mid_slot, mid_delay, odd = s.mid_slot, s.mid_delay, s.odd
+        first_load, vote_load, vote_one = s.first_load, s.vote_load, s.vote_one
+        period_load, single = s.period_load, s.single
+        dropped, centre, clear = s.dropped, s.centre, s.clear
+        delay_max = (1 << self._delay_width) - 1
 
         def load(value, zero):
             m.d.sync += [slot_left.eq(value), slot_zero.eq(zero)]
-
-        majority = (vote1 & vote2) | (vote1 & slo) | (vote2 & slo)
-        decided = Signal()                          # a slot's decision in this clock
-        decision = Mux(single, slo, majority)
-        m.d.comb += [self.sample.eq(decided & ~first_slot), self.bit.eq(decision)]
-
-        # Noise: the vote patterns and edges a clean line cannot give (see the docstring),
-        # judged by SlotNoise at each decision; an edge the sampler drops is noise too.
-        m.submodules.slot_noise = slot_noise = SlotNoise()
-        dropped = Signal()                          # an edge dropped in this clock
-        centre = Signal()                           # the centre vote is taken in this clock
-        clear = Signal()                            # an Ack edge is taken in this clock
-        m.d.comb += [
-            slot_noise.level.eq(slo),
-            slot_noise.edge.eq(slo != slo_prev),
-            slot_noise.clear.eq(clear),
-            slot_noise.clear_high.eq(self.fixed if self._fixed else 0),
-            slot_noise.centre.eq(centre),
-            slot_noise.decided.eq(decided & ~single),
-            slot_noise.vote1.eq(vote1),
-            slot_noise.vote2.eq(vote2),
-            slot_noise.majority.eq(majority),
-            self.noise.eq(dropped | slot_noise.odd),
-        ]
 
         with m.FSM(name="sampler_fsm"):
             with m.State("IDLE"):
@@ -345,5 +379,3 @@ class SloSampler(wiring.Component):
                     with m.Else():
                         m.d.sync += [first_slot.eq(0), self.locked.eq(1)]
                         m.d.comb += self.sample.eq(1)
-
-        return m
