@@ -1124,7 +1124,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$2575$272 (cycle[274:272]),
+    .\port$2730$272 (cycle[274:272]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(sample),
@@ -1184,7 +1184,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$2575$199 (cycle[199]),
+    .\port$2730$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -1235,7 +1235,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$2575$259 (cycle[271:259]),
+    .\port$2730$259 (cycle[271:259]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(\sample$349 ),
@@ -1258,7 +1258,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$213 ),
     .load(load),
-    .\port$2563$0 (\bit ),
+    .\port$2718$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1325,7 +1325,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$1995$0 (\$28 ),
+    .\port$2150$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -5533,7 +5533,7 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$2575$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$2730$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
@@ -6249,8 +6249,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$2575$272 ;
-  wire [2:0] \port$2575$272 ;
+  input [2:0] \port$2730$272 ;
+  wire [2:0] \port$2730$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -6560,7 +6560,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$2575$272 [0];
+  assign error_bit = ssi & \port$2730$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -6591,19 +6591,19 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$2575$272 [0];
+  assign \$24  = ssi & \port$2730$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$2575$272 [0];
+  assign \$28  = ssi & \port$2730$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$2575$272 [0];
+  assign \$35  = ssi & \port$2730$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$2575$272 [0];
+  assign \$39  = ssi & \port$2730$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -6624,7 +6624,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$2575$272 [2];
+  assign \$61  = ssi & \port$2730$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -6910,15 +6910,15 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$2575$272 [0];
+  assign \$347  = ssi & \port$2730$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$2575$272 [0];
-  assign \$355  = ~ \port$2575$272 [1];
+  assign \$354  = ssi & \port$2730$272 [0];
+  assign \$355  = ~ \port$2730$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -7655,7 +7655,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$2575$272 [0];
+  assign ssi_error = \port$2730$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -7665,8 +7665,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$2575$272 [2];
-  assign ssi_error_low = \port$2575$272 [1];
+  assign ssi_double = \port$2730$272 [2];
+  assign ssi_error_low = \port$2730$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -9965,7 +9965,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_stop (rst, words, \port$2575$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master.ma_stop (rst, words, \port$2730$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10056,8 +10056,8 @@ module \biss_master.ma_stop (rst, words, \port$2575$199 , ssi, ssi_error, ssi_do
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$2575$199 ;
-  wire \port$2575$199 ;
+  input \port$2730$199 ;
+  wire \port$2730$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -10180,7 +10180,7 @@ module \biss_master.ma_stop (rst, words, \port$2575$199 , ssi, ssi_error, ssi_do
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$2575$199  : 1'h0;
+  assign \$14  = \$13  ? \port$2730$199  : 1'h0;
   assign \$16  = \$10  | \$15 ;
   assign \$17  = ! sum_word;
   assign \$18  = sum_word ? 12'h000 : words[11:0];
@@ -10345,7 +10345,7 @@ module \biss_master.ma_stop (rst, words, \port$2575$199 , ssi, ssi_error, ssi_do
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$2575$199 , 1'h1 };
+  assign enables = { \port$2730$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -12487,7 +12487,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2575$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2730$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -12621,8 +12621,8 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$257
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$2575$259 ;
-  wire [12:0] \port$2575$259 ;
+  input [12:0] \port$2730$259 ;
+  wire [12:0] \port$2730$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -12647,7 +12647,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$257
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$2575$259 [12:1] + 1'h1;
+  assign \$11  = \port$2730$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -12772,7 +12772,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$257
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$2575$259 [0]),
+    .clear_high(\port$2730$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -12915,7 +12915,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$257
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$2575$259 [0]) begin
+            if (\port$2730$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -13000,7 +13000,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$257
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$2575$259 [0]) begin
+            if (\port$2730$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -13039,7 +13039,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$257
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$2575$259 [12:1] };
+            \$85  = { 1'h0, \port$2730$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -13424,11 +13424,11 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$257
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$2575$259 [12:1] };
-  assign fixed = \port$2575$259 [0];
+  assign fixed_delay = { 1'h0, \port$2730$259 [12:1] };
+  assign fixed = \port$2730$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$2575$259 [0];
+  assign clear_high = \port$2730$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -13835,7 +13835,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2563$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2718$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -13877,8 +13877,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2563$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2563$0 ;
-  wire \port$2563$0 ;
+  input \port$2718$0 ;
+  wire \port$2718$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -13892,9 +13892,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2563$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2563$0  };
-  assign \$2  = { lc[4:0], \port$2563$0  } == last;
-  assign \$3  = { lc[4:0], \port$2563$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2718$0  };
+  assign \$2  = { lc[4:0], \port$2718$0  } == last;
+  assign \$3  = { lc[4:0], \port$2718$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -14004,7 +14004,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2563$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2563$0  };
+  assign lc_next = { lc[4:0], \port$2718$0  };
   assign zero = is_zero;
 endmodule
 
@@ -14013,17 +14013,123 @@ module \biss_master.spw_check (rst, bits, tolerance, spw, cpw_top, match, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
   wire \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   wire \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire \$15 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
   wire \$16 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire \$17 ;
+  wire \$170 ;
+  wire \$171 ;
+  wire \$172 ;
+  wire \$173 ;
+  wire \$174 ;
+  wire \$175 ;
+  wire \$176 ;
+  wire \$177 ;
+  wire \$178 ;
+  wire \$179 ;
   wire \$18 ;
+  wire \$180 ;
+  wire \$181 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
+  wire \$189 ;
   wire \$19 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire [39:0] \$198 ;
+  wire \$199 ;
   wire [41:0] \$2 ;
   wire \$20 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  reg [39:0] \$203 ;
+  reg [8:0] \$204 ;
+  reg \$205 ;
   wire \$21 ;
   wire \$22 ;
   wire \$23 ;
@@ -14048,19 +14154,68 @@ module \biss_master.spw_check (rst, bits, tolerance, spw, cpw_top, match, clk);
   wire \$40 ;
   wire \$41 ;
   wire \$42 ;
-  wire [39:0] \$43 ;
+  wire \$43 ;
   wire \$44 ;
   wire \$45 ;
   wire \$46 ;
   wire \$47 ;
-  reg [39:0] \$48 ;
-  reg [8:0] \$49 ;
+  wire \$48 ;
+  wire \$49 ;
   wire \$5 ;
-  reg \$50 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  wire \$55 ;
+  wire \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
   wire \$6 ;
+  wire \$60 ;
+  wire \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
   wire \$7 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
   wire \$8 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
   wire \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   input [5:0] bits;
   wire [5:0] bits;
   input clk;
@@ -14077,80 +14232,235 @@ module \biss_master.spw_check (rst, bits, tolerance, spw, cpw_top, match, clk);
   wire [39:0] spw;
   input [7:0] tolerance;
   wire [7:0] tolerance;
-  always @(posedge clk)
-    double_tolerance <= \$49 ;
-  always @(posedge clk)
-    match <= \$50 ;
   assign \$1  = cpw_top - spw;
   assign \$2  = $signed(\$1 ) + $signed({ 1'h0, tolerance });
-  assign \$3  = bits > 1'h0;
-  assign \$4  = bits > 1'h1;
-  assign \$5  = bits > 2'h2;
-  assign \$6  = bits > 2'h3;
-  assign \$7  = bits > 3'h4;
-  assign \$8  = bits > 3'h5;
-  assign \$9  = bits > 3'h6;
-  assign \$10  = bits > 3'h7;
-  assign \$11  = bits > 4'h8;
-  assign \$12  = bits > 4'h9;
-  assign \$13  = bits > 4'ha;
-  assign \$14  = bits > 4'hb;
-  assign \$15  = bits > 4'hc;
-  assign \$16  = bits > 4'hd;
-  assign \$17  = bits > 4'he;
-  assign \$18  = bits > 4'hf;
-  assign \$19  = bits > 5'h10;
-  assign \$20  = bits > 5'h11;
-  assign \$21  = bits > 5'h12;
-  assign \$22  = bits > 5'h13;
-  assign \$23  = bits > 5'h14;
-  assign \$24  = bits > 5'h15;
-  assign \$25  = bits > 5'h16;
-  assign \$26  = bits > 5'h17;
-  assign \$27  = bits > 5'h18;
-  assign \$28  = bits > 5'h19;
-  assign \$29  = bits > 5'h1a;
-  assign \$30  = bits > 5'h1b;
-  assign \$31  = bits > 5'h1c;
-  assign \$32  = bits > 5'h1d;
-  assign \$33  = bits > 5'h1e;
-  assign \$34  = bits > 5'h1f;
-  assign \$35  = bits > 6'h20;
-  assign \$36  = bits > 6'h21;
-  assign \$37  = bits > 6'h22;
-  assign \$38  = bits > 6'h23;
-  assign \$39  = bits > 6'h24;
-  assign \$40  = bits > 6'h25;
-  assign \$41  = bits > 6'h26;
-  assign \$42  = bits > 6'h27;
-  assign \$43  = \$2 [39:0] & { \$42 , \$41 , \$40 , \$39 , \$38 , \$37 , \$36 , \$35 , \$34 , \$33 , \$32 , \$31 , \$30 , \$29 , \$28 , \$27 , \$26 , \$25 , \$24 , \$23 , \$22 , \$21 , \$20 , \$19 , \$18 , \$17 , \$16 , \$15 , \$14 , \$13 , \$12 , \$11 , \$10 , \$9 , \$8 , \$7 , \$6 , \$5 , \$4 , \$3  };
-  assign \$44  = shifted[8:0] <= double_tolerance;
-  assign \$45  = | shifted[39:9];
-  assign \$46  = ~ \$45 ;
-  assign \$47  = \$44  & \$46 ;
+  assign \$3  = bits[5:3] > 1'h0;
+  assign \$4  = ! bits[5:3];
+  assign \$5  = bits[2:0] > 1'h0;
+  assign \$6  = \$4  & \$5 ;
+  assign \$7  = \$3  | \$6 ;
+  assign \$8  = bits[5:3] > 1'h0;
+  assign \$9  = ! bits[5:3];
+  assign \$10  = bits[2:0] > 1'h1;
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = \$8  | \$11 ;
+  assign \$13  = bits[5:3] > 1'h0;
+  assign \$14  = ! bits[5:3];
+  assign \$15  = bits[2:0] > 2'h2;
+  assign \$16  = \$14  & \$15 ;
+  assign \$17  = \$13  | \$16 ;
+  assign \$18  = bits[5:3] > 1'h0;
+  assign \$19  = ! bits[5:3];
+  assign \$20  = bits[2:0] > 2'h3;
+  assign \$21  = \$19  & \$20 ;
+  assign \$22  = \$18  | \$21 ;
+  assign \$23  = bits[5:3] > 1'h0;
+  assign \$24  = ! bits[5:3];
+  assign \$25  = bits[2:0] > 3'h4;
+  assign \$26  = \$24  & \$25 ;
+  assign \$27  = \$23  | \$26 ;
+  assign \$28  = bits[5:3] > 1'h0;
+  assign \$29  = ! bits[5:3];
+  assign \$30  = bits[2:0] > 3'h5;
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = \$28  | \$31 ;
+  assign \$33  = bits[5:3] > 1'h0;
+  assign \$34  = ! bits[5:3];
+  assign \$35  = bits[2:0] > 3'h6;
+  assign \$36  = \$34  & \$35 ;
+  assign \$37  = \$33  | \$36 ;
+  assign \$38  = bits[5:3] > 1'h0;
+  assign \$39  = ! bits[5:3];
+  assign \$42  = bits[5:3] > 1'h1;
+  assign \$43  = bits[5:3] == 1'h1;
+  assign \$44  = bits[2:0] > 1'h0;
+  assign \$45  = \$43  & \$44 ;
+  assign \$46  = \$42  | \$45 ;
+  assign \$47  = bits[5:3] > 1'h1;
+  assign \$48  = bits[5:3] == 1'h1;
+  assign \$49  = bits[2:0] > 1'h1;
+  assign \$50  = \$48  & \$49 ;
+  assign \$51  = \$47  | \$50 ;
+  assign \$52  = bits[5:3] > 1'h1;
+  assign \$53  = bits[5:3] == 1'h1;
+  assign \$54  = bits[2:0] > 2'h2;
+  assign \$55  = \$53  & \$54 ;
+  assign \$56  = \$52  | \$55 ;
+  assign \$57  = bits[5:3] > 1'h1;
+  assign \$58  = bits[5:3] == 1'h1;
+  assign \$59  = bits[2:0] > 2'h3;
+  assign \$60  = \$58  & \$59 ;
+  assign \$61  = \$57  | \$60 ;
+  assign \$62  = bits[5:3] > 1'h1;
+  assign \$63  = bits[5:3] == 1'h1;
+  assign \$64  = bits[2:0] > 3'h4;
+  assign \$65  = \$63  & \$64 ;
+  assign \$66  = \$62  | \$65 ;
+  assign \$67  = bits[5:3] > 1'h1;
+  assign \$68  = bits[5:3] == 1'h1;
+  assign \$69  = bits[2:0] > 3'h5;
+  assign \$70  = \$68  & \$69 ;
+  assign \$71  = \$67  | \$70 ;
+  assign \$72  = bits[5:3] > 1'h1;
+  assign \$73  = bits[5:3] == 1'h1;
+  assign \$74  = bits[2:0] > 3'h6;
+  assign \$75  = \$73  & \$74 ;
+  assign \$76  = \$72  | \$75 ;
+  assign \$77  = bits[5:3] > 1'h1;
+  assign \$78  = bits[5:3] == 1'h1;
+  assign \$81  = bits[5:3] > 2'h2;
+  assign \$82  = bits[5:3] == 2'h2;
+  assign \$83  = bits[2:0] > 1'h0;
+  assign \$84  = \$82  & \$83 ;
+  assign \$85  = \$81  | \$84 ;
+  assign \$86  = bits[5:3] > 2'h2;
+  assign \$87  = bits[5:3] == 2'h2;
+  assign \$88  = bits[2:0] > 1'h1;
+  assign \$89  = \$87  & \$88 ;
+  assign \$90  = \$86  | \$89 ;
+  assign \$91  = bits[5:3] > 2'h2;
+  assign \$92  = bits[5:3] == 2'h2;
+  assign \$93  = bits[2:0] > 2'h2;
+  assign \$94  = \$92  & \$93 ;
+  assign \$95  = \$91  | \$94 ;
+  assign \$96  = bits[5:3] > 2'h2;
+  assign \$97  = bits[5:3] == 2'h2;
+  assign \$98  = bits[2:0] > 2'h3;
+  assign \$99  = \$97  & \$98 ;
+  assign \$100  = \$96  | \$99 ;
+  assign \$101  = bits[5:3] > 2'h2;
+  assign \$102  = bits[5:3] == 2'h2;
+  assign \$103  = bits[2:0] > 3'h4;
+  assign \$104  = \$102  & \$103 ;
+  assign \$105  = \$101  | \$104 ;
+  assign \$106  = bits[5:3] > 2'h2;
+  assign \$107  = bits[5:3] == 2'h2;
+  assign \$108  = bits[2:0] > 3'h5;
+  assign \$109  = \$107  & \$108 ;
+  assign \$110  = \$106  | \$109 ;
+  assign \$111  = bits[5:3] > 2'h2;
+  assign \$112  = bits[5:3] == 2'h2;
+  assign \$113  = bits[2:0] > 3'h6;
+  assign \$114  = \$112  & \$113 ;
+  assign \$115  = \$111  | \$114 ;
+  assign \$116  = bits[5:3] > 2'h2;
+  assign \$117  = bits[5:3] == 2'h2;
+  assign \$120  = bits[5:3] > 2'h3;
+  assign \$121  = bits[5:3] == 2'h3;
+  assign \$122  = bits[2:0] > 1'h0;
+  assign \$123  = \$121  & \$122 ;
+  assign \$124  = \$120  | \$123 ;
+  assign \$125  = bits[5:3] > 2'h3;
+  assign \$126  = bits[5:3] == 2'h3;
+  assign \$127  = bits[2:0] > 1'h1;
+  assign \$128  = \$126  & \$127 ;
+  assign \$129  = \$125  | \$128 ;
+  assign \$130  = bits[5:3] > 2'h3;
+  assign \$131  = bits[5:3] == 2'h3;
+  assign \$132  = bits[2:0] > 2'h2;
+  assign \$133  = \$131  & \$132 ;
+  assign \$134  = \$130  | \$133 ;
+  assign \$135  = bits[5:3] > 2'h3;
+  assign \$136  = bits[5:3] == 2'h3;
+  assign \$137  = bits[2:0] > 2'h3;
+  assign \$138  = \$136  & \$137 ;
+  assign \$139  = \$135  | \$138 ;
+  assign \$140  = bits[5:3] > 2'h3;
+  assign \$141  = bits[5:3] == 2'h3;
+  assign \$142  = bits[2:0] > 3'h4;
+  assign \$143  = \$141  & \$142 ;
+  assign \$144  = \$140  | \$143 ;
+  assign \$145  = bits[5:3] > 2'h3;
+  assign \$146  = bits[5:3] == 2'h3;
+  assign \$147  = bits[2:0] > 3'h5;
+  assign \$148  = \$146  & \$147 ;
+  assign \$149  = \$145  | \$148 ;
+  assign \$150  = bits[5:3] > 2'h3;
+  assign \$151  = bits[5:3] == 2'h3;
+  assign \$152  = bits[2:0] > 3'h6;
+  assign \$153  = \$151  & \$152 ;
+  assign \$154  = \$150  | \$153 ;
+  assign \$155  = bits[5:3] > 2'h3;
+  assign \$156  = bits[5:3] == 2'h3;
+  assign \$159  = bits[5:3] > 3'h4;
+  assign \$160  = bits[5:3] == 3'h4;
+  assign \$161  = bits[2:0] > 1'h0;
+  assign \$162  = \$160  & \$161 ;
+  assign \$163  = \$159  | \$162 ;
+  assign \$164  = bits[5:3] > 3'h4;
+  assign \$165  = bits[5:3] == 3'h4;
+  assign \$166  = bits[2:0] > 1'h1;
+  assign \$167  = \$165  & \$166 ;
+  assign \$168  = \$164  | \$167 ;
+  assign \$169  = bits[5:3] > 3'h4;
+  assign \$170  = bits[5:3] == 3'h4;
+  assign \$171  = bits[2:0] > 2'h2;
+  assign \$172  = \$170  & \$171 ;
+  assign \$173  = \$169  | \$172 ;
+  assign \$174  = bits[5:3] > 3'h4;
+  assign \$175  = bits[5:3] == 3'h4;
+  assign \$176  = bits[2:0] > 2'h3;
+  assign \$177  = \$175  & \$176 ;
+  assign \$178  = \$174  | \$177 ;
+  assign \$179  = bits[5:3] > 3'h4;
+  assign \$180  = bits[5:3] == 3'h4;
+  assign \$181  = bits[2:0] > 3'h4;
+  assign \$182  = \$180  & \$181 ;
+  assign \$183  = \$179  | \$182 ;
+  assign \$184  = bits[5:3] > 3'h4;
+  assign \$185  = bits[5:3] == 3'h4;
+  assign \$186  = bits[2:0] > 3'h5;
+  assign \$187  = \$185  & \$186 ;
+  assign \$188  = \$184  | \$187 ;
+  assign \$189  = bits[5:3] > 3'h4;
+  assign \$190  = bits[5:3] == 3'h4;
+  assign \$191  = bits[2:0] > 3'h6;
+  assign \$192  = \$190  & \$191 ;
+  assign \$193  = \$189  | \$192 ;
+  assign \$194  = bits[5:3] > 3'h4;
+  assign \$195  = bits[5:3] == 3'h4;
+  assign \$198  = \$2 [39:0] & { \$197 , \$193 , \$188 , \$183 , \$178 , \$173 , \$168 , \$163 , \$158 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$115 , \$110 , \$105 , \$100 , \$95 , \$90 , \$85 , \$80 , \$76 , \$71 , \$66 , \$61 , \$56 , \$51 , \$46 , \$41 , \$37 , \$32 , \$27 , \$22 , \$17 , \$12 , \$7  };
+  assign \$199  = shifted[8:0] <= double_tolerance;
+  assign \$200  = | shifted[39:9];
+  assign \$201  = ~ \$200 ;
+  assign \$202  = \$199  & \$201 ;
   always @(posedge clk)
-    shifted <= \$48 ;
+    shifted <= \$203 ;
+  always @(posedge clk)
+    double_tolerance <= \$204 ;
+  always @(posedge clk)
+    match <= \$205 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$49  = { tolerance, 1'h0 };
+    \$203  = \$198 ;
     if (rst) begin
-      \$49  = 9'h000;
+      \$203  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$50  = \$47 ;
+    \$204  = { tolerance, 1'h0 };
     if (rst) begin
-      \$50  = 1'h0;
+      \$204  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$48  = \$43 ;
+    \$205  = \$202 ;
     if (rst) begin
-      \$48  = 40'h0000000000;
+      \$205  = 1'h0;
     end
   end
+  assign \$40  = 1'h0;
+  assign \$41  = \$38 ;
+  assign \$79  = 1'h0;
+  assign \$80  = \$77 ;
+  assign \$118  = 1'h0;
+  assign \$119  = \$116 ;
+  assign \$157  = 1'h0;
+  assign \$158  = \$155 ;
+  assign \$196  = 1'h0;
+  assign \$197  = \$194 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -14488,7 +14798,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1995$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master.verdict (lc_skip_seen, noisy, \port$2150$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
@@ -14666,8 +14976,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1995$0 , lc_check, lc_re
   wire noisy;
   output passed;
   wire passed;
-  output \port$1995$0 ;
-  wire \port$1995$0 ;
+  output \port$2150$0 ;
+  wire \port$2150$0 ;
   output report;
   wire report;
   input report_frame;
@@ -14785,7 +15095,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1995$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1995$0  = \$2 ;
+  assign \port$2150$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

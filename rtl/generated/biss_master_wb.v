@@ -1072,12 +1072,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$7892$0 (\$10 ),
-    .\port$7903$0 (\$11 ),
-    .\port$7980$0 (\$12 ),
-    .\port$8439$0 (\$13 ),
-    .\port$8450$0 (\$14 ),
-    .\port$8527$0 (\$15 ),
+    .\port$8202$0 (\$10 ),
+    .\port$8213$0 (\$11 ),
+    .\port$8290$0 (\$12 ),
+    .\port$8749$0 (\$13 ),
+    .\port$8760$0 (\$14 ),
+    .\port$8837$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1153,9 +1153,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$7892$0 (\$10 ),
-    .\port$7903$0 (\$11 ),
-    .\port$7980$0 (\$12 ),
+    .\port$8202$0 (\$10 ),
+    .\port$8213$0 (\$11 ),
+    .\port$8290$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1230,9 +1230,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(\regs__count_en$767 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$791 ),
-    .\port$8439$0 (\$13 ),
-    .\port$8450$0 (\$14 ),
-    .\port$8527$0 (\$15 ),
+    .\port$8749$0 (\$13 ),
+    .\port$8760$0 (\$14 ),
+    .\port$8837$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$455 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1992,7 +1992,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start
 , ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray
 , ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double
-, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7892$0 , \port$7903$0 , ch0__ca_done, \port$7980$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$8439$0 , \port$8450$0 , ch1__ca_done, \port$8527$0 
+, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$8202$0 , \port$8213$0 , ch0__ca_done, \port$8290$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$8749$0 , \port$8760$0 , ch1__ca_done, \port$8837$0 
 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
@@ -4118,18 +4118,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$7892$0 ;
-  wire [186:0] \port$7892$0 ;
-  input [79:0] \port$7903$0 ;
-  wire [79:0] \port$7903$0 ;
-  input [9:0] \port$7980$0 ;
-  wire [9:0] \port$7980$0 ;
-  input [186:0] \port$8439$0 ;
-  wire [186:0] \port$8439$0 ;
-  input [79:0] \port$8450$0 ;
-  wire [79:0] \port$8450$0 ;
-  input [9:0] \port$8527$0 ;
-  wire [9:0] \port$8527$0 ;
+  input [186:0] \port$8202$0 ;
+  wire [186:0] \port$8202$0 ;
+  input [79:0] \port$8213$0 ;
+  wire [79:0] \port$8213$0 ;
+  input [9:0] \port$8290$0 ;
+  wire [9:0] \port$8290$0 ;
+  input [186:0] \port$8749$0 ;
+  wire [186:0] \port$8749$0 ;
+  input [79:0] \port$8760$0 ;
+  wire [79:0] \port$8760$0 ;
+  input [9:0] \port$8837$0 ;
+  wire [9:0] \port$8837$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
@@ -4367,7 +4367,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$160  = \$158  | \$159 ;
   assign \$161  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$7892$0 [182:177], 4'h0, \port$7892$0 [186:183], 1'h0, \port$7892$0 [176:174], 1'h0, \port$7892$0 [133:131], 3'h0, \port$7892$0 [49], \port$7892$0 [3:0] } : 32'd0;
+  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$8202$0 [182:177], 4'h0, \port$8202$0 [186:183], 1'h0, \port$8202$0 [176:174], 1'h0, \port$8202$0 [133:131], 3'h0, \port$8202$0 [49], \port$8202$0 [3:0] } : 32'd0;
   assign \$168  = \$166  | \$167 ;
   assign \$169  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$170  = \$168  | \$169 ;
@@ -4383,13 +4383,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$180  = \$178  | \$179 ;
   assign \$181  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$7980$0 [9:3], 1'h0, \port$7980$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$8290$0 [9:3], 1'h0, \port$8290$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$228  = \$226  | \$227 ;
-  assign \$229  = ch0_read_select_c3 ? \port$7903$0 [31:0] : 32'd0;
+  assign \$229  = ch0_read_select_c3 ? \port$8213$0 [31:0] : 32'd0;
   assign \$230  = \$228  | \$229 ;
-  assign \$231  = ch0_read_select_c4 ? \port$7903$0 [63:32] : 32'd0;
+  assign \$231  = ch0_read_select_c4 ? \port$8213$0 [63:32] : 32'd0;
   assign \$232  = \$230  | \$231 ;
-  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$7903$0 [79:64] } : 32'd0;
+  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$8213$0 [79:64] } : 32'd0;
   assign \$234  = \$232  | \$233 ;
   assign \$237  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$238  = \$236  | \$237 ;
@@ -4538,7 +4538,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$384  = \$382  | \$383 ;
   assign \$385  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$386  = \$384  | \$385 ;
-  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$8439$0 [182:177], 4'h0, \port$8439$0 [186:183], 1'h0, \port$8439$0 [176:174], 1'h0, \port$8439$0 [133:131], 3'h0, \port$8439$0 [49], \port$8439$0 [3:0] } : 32'd0;
+  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$8749$0 [182:177], 4'h0, \port$8749$0 [186:183], 1'h0, \port$8749$0 [176:174], 1'h0, \port$8749$0 [133:131], 3'h0, \port$8749$0 [49], \port$8749$0 [3:0] } : 32'd0;
   assign \$392  = \$390  | \$391 ;
   assign \$393  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$394  = \$392  | \$393 ;
@@ -4554,13 +4554,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$404  = \$402  | \$403 ;
   assign \$405  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$406  = \$404  | \$405 ;
-  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$8527$0 [9:3], 1'h0, \port$8527$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$8837$0 [9:3], 1'h0, \port$8837$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$452  = \$450  | \$451 ;
-  assign \$453  = ch1_read_select_143 ? \port$8450$0 [31:0] : 32'd0;
+  assign \$453  = ch1_read_select_143 ? \port$8760$0 [31:0] : 32'd0;
   assign \$454  = \$452  | \$453 ;
-  assign \$455  = ch1_read_select_144 ? \port$8450$0 [63:32] : 32'd0;
+  assign \$455  = ch1_read_select_144 ? \port$8760$0 [63:32] : 32'd0;
   assign \$456  = \$454  | \$455 ;
-  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$8450$0 [79:64] } : 32'd0;
+  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$8760$0 [79:64] } : 32'd0;
   assign \$458  = \$456  | \$457 ;
   assign \$461  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$462  = \$460  | \$461 ;
@@ -6969,7 +6969,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$809  = ch0_result_status_status_snapshot;
     if (\$146 ) begin
-      \$809  = \port$7892$0 [3:0];
+      \$809  = \port$8202$0 [3:0];
     end
     if (rst) begin
       \$809  = 4'h0;
@@ -6979,7 +6979,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$810  = ch0_result_status_cds_snapshot;
     if (\$146 ) begin
-      \$810  = \port$7892$0 [49];
+      \$810  = \port$8202$0 [49];
     end
     if (rst) begin
       \$810  = 1'h0;
@@ -6989,7 +6989,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$811  = ch0_result_status_w0_ne_snapshot;
     if (\$146 ) begin
-      \$811  = \port$7892$0 [131];
+      \$811  = \port$8202$0 [131];
     end
     if (rst) begin
       \$811  = 1'h0;
@@ -6999,7 +6999,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$812  = ch0_result_status_w0_nw_snapshot;
     if (\$146 ) begin
-      \$812  = \port$7892$0 [132];
+      \$812  = \port$8202$0 [132];
     end
     if (rst) begin
       \$812  = 1'h0;
@@ -7009,7 +7009,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$813  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$146 ) begin
-      \$813  = \port$7892$0 [133];
+      \$813  = \port$8202$0 [133];
     end
     if (rst) begin
       \$813  = 1'h0;
@@ -7019,7 +7019,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$814  = ch0_result_status_w1_ne_snapshot;
     if (\$146 ) begin
-      \$814  = \port$7892$0 [174];
+      \$814  = \port$8202$0 [174];
     end
     if (rst) begin
       \$814  = 1'h0;
@@ -7029,7 +7029,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$815  = ch0_result_status_w1_nw_snapshot;
     if (\$146 ) begin
-      \$815  = \port$7892$0 [175];
+      \$815  = \port$8202$0 [175];
     end
     if (rst) begin
       \$815  = 1'h0;
@@ -7039,7 +7039,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$816  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$146 ) begin
-      \$816  = \port$7892$0 [176];
+      \$816  = \port$8202$0 [176];
     end
     if (rst) begin
       \$816  = 1'h0;
@@ -7049,7 +7049,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$817  = ch0_result_status_lc_repeat_snapshot;
     if (\$146 ) begin
-      \$817  = \port$7892$0 [183];
+      \$817  = \port$8202$0 [183];
     end
     if (rst) begin
       \$817  = 1'h0;
@@ -7059,7 +7059,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$818  = ch0_result_status_lc_skip_snapshot;
     if (\$146 ) begin
-      \$818  = \port$7892$0 [184];
+      \$818  = \port$8202$0 [184];
     end
     if (rst) begin
       \$818  = 1'h0;
@@ -7069,7 +7069,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$819  = ch0_result_status_lc_zero_snapshot;
     if (\$146 ) begin
-      \$819  = \port$7892$0 [185];
+      \$819  = \port$8202$0 [185];
     end
     if (rst) begin
       \$819  = 1'h0;
@@ -7079,7 +7079,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$820  = ch0_result_status_spw_mismatch_snapshot;
     if (\$146 ) begin
-      \$820  = \port$7892$0 [186];
+      \$820  = \port$8202$0 [186];
     end
     if (rst) begin
       \$820  = 1'h0;
@@ -7089,7 +7089,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$821  = ch0_result_status_lc_snapshot;
     if (\$146 ) begin
-      \$821  = \port$7892$0 [182:177];
+      \$821  = \port$8202$0 [182:177];
     end
     if (rst) begin
       \$821  = 6'h00;
@@ -7109,7 +7109,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$823  = ch0_result_seq_line_delay_snapshot;
     if (\$146 ) begin
-      \$823  = \port$7892$0 [48:36];
+      \$823  = \port$8202$0 [48:36];
     end
     if (rst) begin
       \$823  = 13'h0000;
@@ -7119,7 +7119,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$824  = ch0_result_w0_lo_data_snapshot;
     if (\$146 ) begin
-      \$824  = \port$7892$0 [107:76];
+      \$824  = \port$8202$0 [107:76];
     end
     if (rst) begin
       \$824  = 32'd0;
@@ -7129,7 +7129,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$825  = ch0_result_w0_hi_data_snapshot;
     if (\$146 ) begin
-      \$825  = \port$7892$0 [130:108];
+      \$825  = \port$8202$0 [130:108];
     end
     if (rst) begin
       \$825  = 23'h000000;
@@ -7139,7 +7139,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$826  = ch0_result_w1_lo_data_snapshot;
     if (\$146 ) begin
-      \$826  = \port$7892$0 [165:134];
+      \$826  = \port$8202$0 [165:134];
     end
     if (rst) begin
       \$826  = 32'd0;
@@ -7149,7 +7149,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$827  = ch0_result_w1_hi_data_snapshot;
     if (\$146 ) begin
-      \$827  = \port$7892$0 [173:166];
+      \$827  = \port$8202$0 [173:166];
     end
     if (rst) begin
       \$827  = 8'h00;
@@ -7159,7 +7159,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$828  = ch0_result_timestamp_time_snapshot;
     if (\$146 ) begin
-      \$828  = \port$7892$0 [35:4];
+      \$828  = \port$8202$0 [35:4];
     end
     if (rst) begin
       \$828  = 32'd0;
@@ -7169,7 +7169,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$829  = ch0_result_line_noise_events_snapshot;
     if (\$146 ) begin
-      \$829  = \port$7892$0 [53:50];
+      \$829  = \port$8202$0 [53:50];
     end
     if (rst) begin
       \$829  = 4'h0;
@@ -7179,7 +7179,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$830  = ch0_result_line_delay_settled_snapshot;
     if (\$146 ) begin
-      \$830  = \port$7892$0 [54];
+      \$830  = \port$8202$0 [54];
     end
     if (rst) begin
       \$830  = 1'h0;
@@ -7189,7 +7189,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$831  = ch0_result_line_delay_spread_snapshot;
     if (\$146 ) begin
-      \$831  = \port$7892$0 [75:68];
+      \$831  = \port$8202$0 [75:68];
     end
     if (rst) begin
       \$831  = 8'h00;
@@ -7199,7 +7199,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$832  = ch0_result_line_settled_delay_snapshot;
     if (\$146 ) begin
-      \$832  = \port$7892$0 [67:55];
+      \$832  = \port$8202$0 [67:55];
     end
     if (rst) begin
       \$832  = 13'h0000;
@@ -8526,7 +8526,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$971  = ch1_result_status_status_snapshot;
     if (\$370 ) begin
-      \$971  = \port$8439$0 [3:0];
+      \$971  = \port$8749$0 [3:0];
     end
     if (rst) begin
       \$971  = 4'h0;
@@ -8536,7 +8536,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$972  = ch1_result_status_cds_snapshot;
     if (\$370 ) begin
-      \$972  = \port$8439$0 [49];
+      \$972  = \port$8749$0 [49];
     end
     if (rst) begin
       \$972  = 1'h0;
@@ -8546,7 +8546,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$973  = ch1_result_status_w0_ne_snapshot;
     if (\$370 ) begin
-      \$973  = \port$8439$0 [131];
+      \$973  = \port$8749$0 [131];
     end
     if (rst) begin
       \$973  = 1'h0;
@@ -8556,7 +8556,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$974  = ch1_result_status_w0_nw_snapshot;
     if (\$370 ) begin
-      \$974  = \port$8439$0 [132];
+      \$974  = \port$8749$0 [132];
     end
     if (rst) begin
       \$974  = 1'h0;
@@ -8566,7 +8566,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$975  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$370 ) begin
-      \$975  = \port$8439$0 [133];
+      \$975  = \port$8749$0 [133];
     end
     if (rst) begin
       \$975  = 1'h0;
@@ -8576,7 +8576,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$976  = ch1_result_status_w1_ne_snapshot;
     if (\$370 ) begin
-      \$976  = \port$8439$0 [174];
+      \$976  = \port$8749$0 [174];
     end
     if (rst) begin
       \$976  = 1'h0;
@@ -8586,7 +8586,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$977  = ch1_result_status_w1_nw_snapshot;
     if (\$370 ) begin
-      \$977  = \port$8439$0 [175];
+      \$977  = \port$8749$0 [175];
     end
     if (rst) begin
       \$977  = 1'h0;
@@ -8596,7 +8596,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$978  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$370 ) begin
-      \$978  = \port$8439$0 [176];
+      \$978  = \port$8749$0 [176];
     end
     if (rst) begin
       \$978  = 1'h0;
@@ -8606,7 +8606,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$979  = ch1_result_status_lc_repeat_snapshot;
     if (\$370 ) begin
-      \$979  = \port$8439$0 [183];
+      \$979  = \port$8749$0 [183];
     end
     if (rst) begin
       \$979  = 1'h0;
@@ -8616,7 +8616,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$980  = ch1_result_status_lc_skip_snapshot;
     if (\$370 ) begin
-      \$980  = \port$8439$0 [184];
+      \$980  = \port$8749$0 [184];
     end
     if (rst) begin
       \$980  = 1'h0;
@@ -8626,7 +8626,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$981  = ch1_result_status_lc_zero_snapshot;
     if (\$370 ) begin
-      \$981  = \port$8439$0 [185];
+      \$981  = \port$8749$0 [185];
     end
     if (rst) begin
       \$981  = 1'h0;
@@ -8636,7 +8636,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$982  = ch1_result_status_spw_mismatch_snapshot;
     if (\$370 ) begin
-      \$982  = \port$8439$0 [186];
+      \$982  = \port$8749$0 [186];
     end
     if (rst) begin
       \$982  = 1'h0;
@@ -8646,7 +8646,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$983  = ch1_result_status_lc_snapshot;
     if (\$370 ) begin
-      \$983  = \port$8439$0 [182:177];
+      \$983  = \port$8749$0 [182:177];
     end
     if (rst) begin
       \$983  = 6'h00;
@@ -8666,7 +8666,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$985  = ch1_result_seq_line_delay_snapshot;
     if (\$370 ) begin
-      \$985  = \port$8439$0 [48:36];
+      \$985  = \port$8749$0 [48:36];
     end
     if (rst) begin
       \$985  = 13'h0000;
@@ -8676,7 +8676,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$986  = ch1_result_w0_lo_data_snapshot;
     if (\$370 ) begin
-      \$986  = \port$8439$0 [107:76];
+      \$986  = \port$8749$0 [107:76];
     end
     if (rst) begin
       \$986  = 32'd0;
@@ -8686,7 +8686,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$987  = ch1_result_w0_hi_data_snapshot;
     if (\$370 ) begin
-      \$987  = \port$8439$0 [130:108];
+      \$987  = \port$8749$0 [130:108];
     end
     if (rst) begin
       \$987  = 23'h000000;
@@ -8696,7 +8696,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$988  = ch1_result_w1_lo_data_snapshot;
     if (\$370 ) begin
-      \$988  = \port$8439$0 [165:134];
+      \$988  = \port$8749$0 [165:134];
     end
     if (rst) begin
       \$988  = 32'd0;
@@ -8706,7 +8706,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$989  = ch1_result_w1_hi_data_snapshot;
     if (\$370 ) begin
-      \$989  = \port$8439$0 [173:166];
+      \$989  = \port$8749$0 [173:166];
     end
     if (rst) begin
       \$989  = 8'h00;
@@ -8716,7 +8716,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$990  = ch1_result_timestamp_time_snapshot;
     if (\$370 ) begin
-      \$990  = \port$8439$0 [35:4];
+      \$990  = \port$8749$0 [35:4];
     end
     if (rst) begin
       \$990  = 32'd0;
@@ -8726,7 +8726,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$991  = ch1_result_line_noise_events_snapshot;
     if (\$370 ) begin
-      \$991  = \port$8439$0 [53:50];
+      \$991  = \port$8749$0 [53:50];
     end
     if (rst) begin
       \$991  = 4'h0;
@@ -8736,7 +8736,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$992  = ch1_result_line_delay_settled_snapshot;
     if (\$370 ) begin
-      \$992  = \port$8439$0 [54];
+      \$992  = \port$8749$0 [54];
     end
     if (rst) begin
       \$992  = 1'h0;
@@ -8746,7 +8746,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$993  = ch1_result_line_delay_spread_snapshot;
     if (\$370 ) begin
-      \$993  = \port$8439$0 [75:68];
+      \$993  = \port$8749$0 [75:68];
     end
     if (rst) begin
       \$993  = 8'h00;
@@ -8756,7 +8756,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$994  = ch1_result_line_settled_delay_snapshot;
     if (\$370 ) begin
-      \$994  = \port$8439$0 [67:55];
+      \$994  = \port$8749$0 [67:55];
     end
     if (rst) begin
       \$994  = 13'h0000;
@@ -8959,27 +8959,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$7892$0 [3:0];
-  assign ch0__cds = \port$7892$0 [49];
-  assign ch0__word0_ne = \port$7892$0 [131];
-  assign ch0__word0_nw = \port$7892$0 [132];
-  assign ch0__word0_crc_ok = \port$7892$0 [133];
-  assign ch0__word1_ne = \port$7892$0 [174];
-  assign ch0__word1_nw = \port$7892$0 [175];
-  assign ch0__word1_crc_ok = \port$7892$0 [176];
-  assign ch0__lc_repeat = \port$7892$0 [183];
-  assign ch0__lc_skip = \port$7892$0 [184];
-  assign ch0__lc_zero = \port$7892$0 [185];
-  assign ch0__spw_mismatch = \port$7892$0 [186];
-  assign ch0__lc = \port$7892$0 [182:177];
-  assign ch0__line_delay = \port$7892$0 [48:36];
-  assign ch0__word0_position = \port$7892$0 [130:76];
-  assign ch0__word1_position = \port$7892$0 [173:134];
-  assign ch0__timestamp = \port$7892$0 [35:4];
-  assign ch0__noise_events = \port$7892$0 [53:50];
-  assign ch0__delay_settled = \port$7892$0 [54];
-  assign ch0__delay_spread = \port$7892$0 [75:68];
-  assign ch0__settled_delay = \port$7892$0 [67:55];
+  assign ch0__status = \port$8202$0 [3:0];
+  assign ch0__cds = \port$8202$0 [49];
+  assign ch0__word0_ne = \port$8202$0 [131];
+  assign ch0__word0_nw = \port$8202$0 [132];
+  assign ch0__word0_crc_ok = \port$8202$0 [133];
+  assign ch0__word1_ne = \port$8202$0 [174];
+  assign ch0__word1_nw = \port$8202$0 [175];
+  assign ch0__word1_crc_ok = \port$8202$0 [176];
+  assign ch0__lc_repeat = \port$8202$0 [183];
+  assign ch0__lc_skip = \port$8202$0 [184];
+  assign ch0__lc_zero = \port$8202$0 [185];
+  assign ch0__spw_mismatch = \port$8202$0 [186];
+  assign ch0__lc = \port$8202$0 [182:177];
+  assign ch0__line_delay = \port$8202$0 [48:36];
+  assign ch0__word0_position = \port$8202$0 [130:76];
+  assign ch0__word1_position = \port$8202$0 [173:134];
+  assign ch0__timestamp = \port$8202$0 [35:4];
+  assign ch0__noise_events = \port$8202$0 [53:50];
+  assign ch0__delay_settled = \port$8202$0 [54];
+  assign ch0__delay_spread = \port$8202$0 [75:68];
+  assign ch0__settled_delay = \port$8202$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9000,13 +9000,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$7980$0 [2:0];
-  assign ch0__ca_bytes_done = \port$7980$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$7903$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$7903$0 [31:16];
-  assign ch0__count_ca_refused = \port$7903$0 [47:32];
-  assign ch0__count_ca_aborted = \port$7903$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$7903$0 [79:64];
+  assign ch0__ca_status = \port$8290$0 [2:0];
+  assign ch0__ca_bytes_done = \port$8290$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$8213$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$8213$0 [31:16];
+  assign ch0__count_ca_refused = \port$8213$0 [47:32];
+  assign ch0__count_ca_aborted = \port$8213$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$8213$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9026,27 +9026,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$8439$0 [3:0];
-  assign ch1__cds = \port$8439$0 [49];
-  assign ch1__word0_ne = \port$8439$0 [131];
-  assign ch1__word0_nw = \port$8439$0 [132];
-  assign ch1__word0_crc_ok = \port$8439$0 [133];
-  assign ch1__word1_ne = \port$8439$0 [174];
-  assign ch1__word1_nw = \port$8439$0 [175];
-  assign ch1__word1_crc_ok = \port$8439$0 [176];
-  assign ch1__lc_repeat = \port$8439$0 [183];
-  assign ch1__lc_skip = \port$8439$0 [184];
-  assign ch1__lc_zero = \port$8439$0 [185];
-  assign ch1__spw_mismatch = \port$8439$0 [186];
-  assign ch1__lc = \port$8439$0 [182:177];
-  assign ch1__line_delay = \port$8439$0 [48:36];
-  assign ch1__word0_position = \port$8439$0 [130:76];
-  assign ch1__word1_position = \port$8439$0 [173:134];
-  assign ch1__timestamp = \port$8439$0 [35:4];
-  assign ch1__noise_events = \port$8439$0 [53:50];
-  assign ch1__delay_settled = \port$8439$0 [54];
-  assign ch1__delay_spread = \port$8439$0 [75:68];
-  assign ch1__settled_delay = \port$8439$0 [67:55];
+  assign ch1__status = \port$8749$0 [3:0];
+  assign ch1__cds = \port$8749$0 [49];
+  assign ch1__word0_ne = \port$8749$0 [131];
+  assign ch1__word0_nw = \port$8749$0 [132];
+  assign ch1__word0_crc_ok = \port$8749$0 [133];
+  assign ch1__word1_ne = \port$8749$0 [174];
+  assign ch1__word1_nw = \port$8749$0 [175];
+  assign ch1__word1_crc_ok = \port$8749$0 [176];
+  assign ch1__lc_repeat = \port$8749$0 [183];
+  assign ch1__lc_skip = \port$8749$0 [184];
+  assign ch1__lc_zero = \port$8749$0 [185];
+  assign ch1__spw_mismatch = \port$8749$0 [186];
+  assign ch1__lc = \port$8749$0 [182:177];
+  assign ch1__line_delay = \port$8749$0 [48:36];
+  assign ch1__word0_position = \port$8749$0 [130:76];
+  assign ch1__word1_position = \port$8749$0 [173:134];
+  assign ch1__timestamp = \port$8749$0 [35:4];
+  assign ch1__noise_events = \port$8749$0 [53:50];
+  assign ch1__delay_settled = \port$8749$0 [54];
+  assign ch1__delay_spread = \port$8749$0 [75:68];
+  assign ch1__settled_delay = \port$8749$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9067,13 +9067,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$8527$0 [2:0];
-  assign ch1__ca_bytes_done = \port$8527$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$8450$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$8450$0 [31:16];
-  assign ch1__count_ca_refused = \port$8450$0 [47:32];
-  assign ch1__count_ca_aborted = \port$8450$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$8450$0 [79:64];
+  assign ch1__ca_status = \port$8837$0 [2:0];
+  assign ch1__ca_bytes_done = \port$8837$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$8760$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$8760$0 [31:16];
+  assign ch1__count_ca_refused = \port$8760$0 [47:32];
+  assign ch1__count_ca_aborted = \port$8760$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$8760$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9582,7 +9582,7 @@ endmodule
 module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7892$0 , \port$7903$0 , regs__ca_done, \port$7980$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$8202$0 , \port$8213$0 , regs__ca_done, \port$8290$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -9766,12 +9766,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7892$0 ;
-  wire [186:0] \port$7892$0 ;
-  output [79:0] \port$7903$0 ;
-  wire [79:0] \port$7903$0 ;
-  output [9:0] \port$7980$0 ;
-  wire [9:0] \port$7980$0 ;
+  output [186:0] \port$8202$0 ;
+  wire [186:0] \port$8202$0 ;
+  output [79:0] \port$8213$0 ;
+  wire [79:0] \port$8213$0 ;
+  output [9:0] \port$8290$0 ;
+  wire [9:0] \port$8290$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10260,9 +10260,9 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$7892$0  = \$20 ;
-  assign \port$7903$0  = \$21 ;
-  assign \port$7980$0  = \$22 ;
+  assign \port$8202$0  = \$20 ;
+  assign \port$8213$0  = \$21 ;
+  assign \port$8290$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -11327,7 +11327,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7534$272 (cycle[274:272]),
+    .\port$7844$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -11387,7 +11387,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$7534$199 (cycle[199]),
+    .\port$7844$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -11438,7 +11438,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7534$259 (cycle[271:259]),
+    .\port$7844$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -11462,7 +11462,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7522$0 (\bit ),
+    .\port$7832$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -11530,7 +11530,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$3176$0 (\$28 ),
+    .\port$3331$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -15558,7 +15558,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$7534$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$7844$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -16274,8 +16274,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7534$272 ;
-  wire [2:0] \port$7534$272 ;
+  input [2:0] \port$7844$272 ;
+  wire [2:0] \port$7844$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -16585,7 +16585,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$7534$272 [0];
+  assign error_bit = ssi & \port$7844$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -16616,19 +16616,19 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$7534$272 [0];
+  assign \$24  = ssi & \port$7844$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$7534$272 [0];
+  assign \$28  = ssi & \port$7844$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$7534$272 [0];
+  assign \$35  = ssi & \port$7844$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$7534$272 [0];
+  assign \$39  = ssi & \port$7844$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -16649,7 +16649,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$7534$272 [2];
+  assign \$61  = ssi & \port$7844$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -16935,15 +16935,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$7534$272 [0];
+  assign \$347  = ssi & \port$7844$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$7534$272 [0];
-  assign \$355  = ~ \port$7534$272 [1];
+  assign \$354  = ssi & \port$7844$272 [0];
+  assign \$355  = ~ \port$7844$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -17680,7 +17680,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$7534$272 [0];
+  assign ssi_error = \port$7844$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -17690,8 +17690,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$7534$272 [2];
-  assign ssi_error_low = \port$7534$272 [1];
+  assign ssi_double = \port$7844$272 [2];
+  assign ssi_error_low = \port$7844$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -19990,7 +19990,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$7534$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$7844$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20081,8 +20081,8 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$7534$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$7534$199 ;
-  wire \port$7534$199 ;
+  input \port$7844$199 ;
+  wire \port$7844$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20205,7 +20205,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$7534$199 , ssi, ssi_e
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$7534$199  : 1'h0;
+  assign \$14  = \$13  ? \port$7844$199  : 1'h0;
   assign \$16  = \$10  | \$15 ;
   assign \$17  = ! sum_word;
   assign \$18  = sum_word ? 12'h000 : words[11:0];
@@ -20370,7 +20370,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$7534$199 , ssi, ssi_e
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$7534$199 , 1'h1 };
+  assign enables = { \port$7844$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22512,7 +22512,7 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7534$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7844$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -22646,8 +22646,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7534$259 ;
-  wire [12:0] \port$7534$259 ;
+  input [12:0] \port$7844$259 ;
+  wire [12:0] \port$7844$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -22672,7 +22672,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7534$259 [12:1] + 1'h1;
+  assign \$11  = \port$7844$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -22797,7 +22797,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7534$259 [0]),
+    .clear_high(\port$7844$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -22940,7 +22940,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7534$259 [0]) begin
+            if (\port$7844$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -23025,7 +23025,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7534$259 [0]) begin
+            if (\port$7844$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -23064,7 +23064,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7534$259 [12:1] };
+            \$85  = { 1'h0, \port$7844$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -23449,11 +23449,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7534$259 [12:1] };
-  assign fixed = \port$7534$259 [0];
+  assign fixed_delay = { 1'h0, \port$7844$259 [12:1] };
+  assign fixed = \port$7844$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7534$259 [0];
+  assign clear_high = \port$7844$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -23860,7 +23860,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$7522$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$7832$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -23902,8 +23902,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7522$0 ;
-  wire \port$7522$0 ;
+  input \port$7832$0 ;
+  wire \port$7832$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -23917,9 +23917,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7522$0  };
-  assign \$2  = { lc[4:0], \port$7522$0  } == last;
-  assign \$3  = { lc[4:0], \port$7522$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7832$0  };
+  assign \$2  = { lc[4:0], \port$7832$0  } == last;
+  assign \$3  = { lc[4:0], \port$7832$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -24029,7 +24029,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7522$0  };
+  assign lc_next = { lc[4:0], \port$7832$0  };
   assign zero = is_zero;
 endmodule
 
@@ -24038,17 +24038,123 @@ module \biss_master_wb.ch0.core.spw_check (rst, bits, tolerance, spw, cpw_top, m
   reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
   wire \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   wire \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire \$15 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
   wire \$16 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire \$17 ;
+  wire \$170 ;
+  wire \$171 ;
+  wire \$172 ;
+  wire \$173 ;
+  wire \$174 ;
+  wire \$175 ;
+  wire \$176 ;
+  wire \$177 ;
+  wire \$178 ;
+  wire \$179 ;
   wire \$18 ;
+  wire \$180 ;
+  wire \$181 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
+  wire \$189 ;
   wire \$19 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire [39:0] \$198 ;
+  wire \$199 ;
   wire [41:0] \$2 ;
   wire \$20 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  reg [39:0] \$203 ;
+  reg [8:0] \$204 ;
+  reg \$205 ;
   wire \$21 ;
   wire \$22 ;
   wire \$23 ;
@@ -24073,19 +24179,68 @@ module \biss_master_wb.ch0.core.spw_check (rst, bits, tolerance, spw, cpw_top, m
   wire \$40 ;
   wire \$41 ;
   wire \$42 ;
-  wire [39:0] \$43 ;
+  wire \$43 ;
   wire \$44 ;
   wire \$45 ;
   wire \$46 ;
   wire \$47 ;
-  reg [39:0] \$48 ;
-  reg [8:0] \$49 ;
+  wire \$48 ;
+  wire \$49 ;
   wire \$5 ;
-  reg \$50 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  wire \$55 ;
+  wire \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
   wire \$6 ;
+  wire \$60 ;
+  wire \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
   wire \$7 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
   wire \$8 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
   wire \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   input [5:0] bits;
   wire [5:0] bits;
   input clk;
@@ -24102,80 +24257,235 @@ module \biss_master_wb.ch0.core.spw_check (rst, bits, tolerance, spw, cpw_top, m
   wire [39:0] spw;
   input [7:0] tolerance;
   wire [7:0] tolerance;
-  always @(posedge clk)
-    double_tolerance <= \$49 ;
-  always @(posedge clk)
-    match <= \$50 ;
   assign \$1  = cpw_top - spw;
   assign \$2  = $signed(\$1 ) + $signed({ 1'h0, tolerance });
-  assign \$3  = bits > 1'h0;
-  assign \$4  = bits > 1'h1;
-  assign \$5  = bits > 2'h2;
-  assign \$6  = bits > 2'h3;
-  assign \$7  = bits > 3'h4;
-  assign \$8  = bits > 3'h5;
-  assign \$9  = bits > 3'h6;
-  assign \$10  = bits > 3'h7;
-  assign \$11  = bits > 4'h8;
-  assign \$12  = bits > 4'h9;
-  assign \$13  = bits > 4'ha;
-  assign \$14  = bits > 4'hb;
-  assign \$15  = bits > 4'hc;
-  assign \$16  = bits > 4'hd;
-  assign \$17  = bits > 4'he;
-  assign \$18  = bits > 4'hf;
-  assign \$19  = bits > 5'h10;
-  assign \$20  = bits > 5'h11;
-  assign \$21  = bits > 5'h12;
-  assign \$22  = bits > 5'h13;
-  assign \$23  = bits > 5'h14;
-  assign \$24  = bits > 5'h15;
-  assign \$25  = bits > 5'h16;
-  assign \$26  = bits > 5'h17;
-  assign \$27  = bits > 5'h18;
-  assign \$28  = bits > 5'h19;
-  assign \$29  = bits > 5'h1a;
-  assign \$30  = bits > 5'h1b;
-  assign \$31  = bits > 5'h1c;
-  assign \$32  = bits > 5'h1d;
-  assign \$33  = bits > 5'h1e;
-  assign \$34  = bits > 5'h1f;
-  assign \$35  = bits > 6'h20;
-  assign \$36  = bits > 6'h21;
-  assign \$37  = bits > 6'h22;
-  assign \$38  = bits > 6'h23;
-  assign \$39  = bits > 6'h24;
-  assign \$40  = bits > 6'h25;
-  assign \$41  = bits > 6'h26;
-  assign \$42  = bits > 6'h27;
-  assign \$43  = \$2 [39:0] & { \$42 , \$41 , \$40 , \$39 , \$38 , \$37 , \$36 , \$35 , \$34 , \$33 , \$32 , \$31 , \$30 , \$29 , \$28 , \$27 , \$26 , \$25 , \$24 , \$23 , \$22 , \$21 , \$20 , \$19 , \$18 , \$17 , \$16 , \$15 , \$14 , \$13 , \$12 , \$11 , \$10 , \$9 , \$8 , \$7 , \$6 , \$5 , \$4 , \$3  };
-  assign \$44  = shifted[8:0] <= double_tolerance;
-  assign \$45  = | shifted[39:9];
-  assign \$46  = ~ \$45 ;
-  assign \$47  = \$44  & \$46 ;
+  assign \$3  = bits[5:3] > 1'h0;
+  assign \$4  = ! bits[5:3];
+  assign \$5  = bits[2:0] > 1'h0;
+  assign \$6  = \$4  & \$5 ;
+  assign \$7  = \$3  | \$6 ;
+  assign \$8  = bits[5:3] > 1'h0;
+  assign \$9  = ! bits[5:3];
+  assign \$10  = bits[2:0] > 1'h1;
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = \$8  | \$11 ;
+  assign \$13  = bits[5:3] > 1'h0;
+  assign \$14  = ! bits[5:3];
+  assign \$15  = bits[2:0] > 2'h2;
+  assign \$16  = \$14  & \$15 ;
+  assign \$17  = \$13  | \$16 ;
+  assign \$18  = bits[5:3] > 1'h0;
+  assign \$19  = ! bits[5:3];
+  assign \$20  = bits[2:0] > 2'h3;
+  assign \$21  = \$19  & \$20 ;
+  assign \$22  = \$18  | \$21 ;
+  assign \$23  = bits[5:3] > 1'h0;
+  assign \$24  = ! bits[5:3];
+  assign \$25  = bits[2:0] > 3'h4;
+  assign \$26  = \$24  & \$25 ;
+  assign \$27  = \$23  | \$26 ;
+  assign \$28  = bits[5:3] > 1'h0;
+  assign \$29  = ! bits[5:3];
+  assign \$30  = bits[2:0] > 3'h5;
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = \$28  | \$31 ;
+  assign \$33  = bits[5:3] > 1'h0;
+  assign \$34  = ! bits[5:3];
+  assign \$35  = bits[2:0] > 3'h6;
+  assign \$36  = \$34  & \$35 ;
+  assign \$37  = \$33  | \$36 ;
+  assign \$38  = bits[5:3] > 1'h0;
+  assign \$39  = ! bits[5:3];
+  assign \$42  = bits[5:3] > 1'h1;
+  assign \$43  = bits[5:3] == 1'h1;
+  assign \$44  = bits[2:0] > 1'h0;
+  assign \$45  = \$43  & \$44 ;
+  assign \$46  = \$42  | \$45 ;
+  assign \$47  = bits[5:3] > 1'h1;
+  assign \$48  = bits[5:3] == 1'h1;
+  assign \$49  = bits[2:0] > 1'h1;
+  assign \$50  = \$48  & \$49 ;
+  assign \$51  = \$47  | \$50 ;
+  assign \$52  = bits[5:3] > 1'h1;
+  assign \$53  = bits[5:3] == 1'h1;
+  assign \$54  = bits[2:0] > 2'h2;
+  assign \$55  = \$53  & \$54 ;
+  assign \$56  = \$52  | \$55 ;
+  assign \$57  = bits[5:3] > 1'h1;
+  assign \$58  = bits[5:3] == 1'h1;
+  assign \$59  = bits[2:0] > 2'h3;
+  assign \$60  = \$58  & \$59 ;
+  assign \$61  = \$57  | \$60 ;
+  assign \$62  = bits[5:3] > 1'h1;
+  assign \$63  = bits[5:3] == 1'h1;
+  assign \$64  = bits[2:0] > 3'h4;
+  assign \$65  = \$63  & \$64 ;
+  assign \$66  = \$62  | \$65 ;
+  assign \$67  = bits[5:3] > 1'h1;
+  assign \$68  = bits[5:3] == 1'h1;
+  assign \$69  = bits[2:0] > 3'h5;
+  assign \$70  = \$68  & \$69 ;
+  assign \$71  = \$67  | \$70 ;
+  assign \$72  = bits[5:3] > 1'h1;
+  assign \$73  = bits[5:3] == 1'h1;
+  assign \$74  = bits[2:0] > 3'h6;
+  assign \$75  = \$73  & \$74 ;
+  assign \$76  = \$72  | \$75 ;
+  assign \$77  = bits[5:3] > 1'h1;
+  assign \$78  = bits[5:3] == 1'h1;
+  assign \$81  = bits[5:3] > 2'h2;
+  assign \$82  = bits[5:3] == 2'h2;
+  assign \$83  = bits[2:0] > 1'h0;
+  assign \$84  = \$82  & \$83 ;
+  assign \$85  = \$81  | \$84 ;
+  assign \$86  = bits[5:3] > 2'h2;
+  assign \$87  = bits[5:3] == 2'h2;
+  assign \$88  = bits[2:0] > 1'h1;
+  assign \$89  = \$87  & \$88 ;
+  assign \$90  = \$86  | \$89 ;
+  assign \$91  = bits[5:3] > 2'h2;
+  assign \$92  = bits[5:3] == 2'h2;
+  assign \$93  = bits[2:0] > 2'h2;
+  assign \$94  = \$92  & \$93 ;
+  assign \$95  = \$91  | \$94 ;
+  assign \$96  = bits[5:3] > 2'h2;
+  assign \$97  = bits[5:3] == 2'h2;
+  assign \$98  = bits[2:0] > 2'h3;
+  assign \$99  = \$97  & \$98 ;
+  assign \$100  = \$96  | \$99 ;
+  assign \$101  = bits[5:3] > 2'h2;
+  assign \$102  = bits[5:3] == 2'h2;
+  assign \$103  = bits[2:0] > 3'h4;
+  assign \$104  = \$102  & \$103 ;
+  assign \$105  = \$101  | \$104 ;
+  assign \$106  = bits[5:3] > 2'h2;
+  assign \$107  = bits[5:3] == 2'h2;
+  assign \$108  = bits[2:0] > 3'h5;
+  assign \$109  = \$107  & \$108 ;
+  assign \$110  = \$106  | \$109 ;
+  assign \$111  = bits[5:3] > 2'h2;
+  assign \$112  = bits[5:3] == 2'h2;
+  assign \$113  = bits[2:0] > 3'h6;
+  assign \$114  = \$112  & \$113 ;
+  assign \$115  = \$111  | \$114 ;
+  assign \$116  = bits[5:3] > 2'h2;
+  assign \$117  = bits[5:3] == 2'h2;
+  assign \$120  = bits[5:3] > 2'h3;
+  assign \$121  = bits[5:3] == 2'h3;
+  assign \$122  = bits[2:0] > 1'h0;
+  assign \$123  = \$121  & \$122 ;
+  assign \$124  = \$120  | \$123 ;
+  assign \$125  = bits[5:3] > 2'h3;
+  assign \$126  = bits[5:3] == 2'h3;
+  assign \$127  = bits[2:0] > 1'h1;
+  assign \$128  = \$126  & \$127 ;
+  assign \$129  = \$125  | \$128 ;
+  assign \$130  = bits[5:3] > 2'h3;
+  assign \$131  = bits[5:3] == 2'h3;
+  assign \$132  = bits[2:0] > 2'h2;
+  assign \$133  = \$131  & \$132 ;
+  assign \$134  = \$130  | \$133 ;
+  assign \$135  = bits[5:3] > 2'h3;
+  assign \$136  = bits[5:3] == 2'h3;
+  assign \$137  = bits[2:0] > 2'h3;
+  assign \$138  = \$136  & \$137 ;
+  assign \$139  = \$135  | \$138 ;
+  assign \$140  = bits[5:3] > 2'h3;
+  assign \$141  = bits[5:3] == 2'h3;
+  assign \$142  = bits[2:0] > 3'h4;
+  assign \$143  = \$141  & \$142 ;
+  assign \$144  = \$140  | \$143 ;
+  assign \$145  = bits[5:3] > 2'h3;
+  assign \$146  = bits[5:3] == 2'h3;
+  assign \$147  = bits[2:0] > 3'h5;
+  assign \$148  = \$146  & \$147 ;
+  assign \$149  = \$145  | \$148 ;
+  assign \$150  = bits[5:3] > 2'h3;
+  assign \$151  = bits[5:3] == 2'h3;
+  assign \$152  = bits[2:0] > 3'h6;
+  assign \$153  = \$151  & \$152 ;
+  assign \$154  = \$150  | \$153 ;
+  assign \$155  = bits[5:3] > 2'h3;
+  assign \$156  = bits[5:3] == 2'h3;
+  assign \$159  = bits[5:3] > 3'h4;
+  assign \$160  = bits[5:3] == 3'h4;
+  assign \$161  = bits[2:0] > 1'h0;
+  assign \$162  = \$160  & \$161 ;
+  assign \$163  = \$159  | \$162 ;
+  assign \$164  = bits[5:3] > 3'h4;
+  assign \$165  = bits[5:3] == 3'h4;
+  assign \$166  = bits[2:0] > 1'h1;
+  assign \$167  = \$165  & \$166 ;
+  assign \$168  = \$164  | \$167 ;
+  assign \$169  = bits[5:3] > 3'h4;
+  assign \$170  = bits[5:3] == 3'h4;
+  assign \$171  = bits[2:0] > 2'h2;
+  assign \$172  = \$170  & \$171 ;
+  assign \$173  = \$169  | \$172 ;
+  assign \$174  = bits[5:3] > 3'h4;
+  assign \$175  = bits[5:3] == 3'h4;
+  assign \$176  = bits[2:0] > 2'h3;
+  assign \$177  = \$175  & \$176 ;
+  assign \$178  = \$174  | \$177 ;
+  assign \$179  = bits[5:3] > 3'h4;
+  assign \$180  = bits[5:3] == 3'h4;
+  assign \$181  = bits[2:0] > 3'h4;
+  assign \$182  = \$180  & \$181 ;
+  assign \$183  = \$179  | \$182 ;
+  assign \$184  = bits[5:3] > 3'h4;
+  assign \$185  = bits[5:3] == 3'h4;
+  assign \$186  = bits[2:0] > 3'h5;
+  assign \$187  = \$185  & \$186 ;
+  assign \$188  = \$184  | \$187 ;
+  assign \$189  = bits[5:3] > 3'h4;
+  assign \$190  = bits[5:3] == 3'h4;
+  assign \$191  = bits[2:0] > 3'h6;
+  assign \$192  = \$190  & \$191 ;
+  assign \$193  = \$189  | \$192 ;
+  assign \$194  = bits[5:3] > 3'h4;
+  assign \$195  = bits[5:3] == 3'h4;
+  assign \$198  = \$2 [39:0] & { \$197 , \$193 , \$188 , \$183 , \$178 , \$173 , \$168 , \$163 , \$158 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$115 , \$110 , \$105 , \$100 , \$95 , \$90 , \$85 , \$80 , \$76 , \$71 , \$66 , \$61 , \$56 , \$51 , \$46 , \$41 , \$37 , \$32 , \$27 , \$22 , \$17 , \$12 , \$7  };
+  assign \$199  = shifted[8:0] <= double_tolerance;
+  assign \$200  = | shifted[39:9];
+  assign \$201  = ~ \$200 ;
+  assign \$202  = \$199  & \$201 ;
   always @(posedge clk)
-    shifted <= \$48 ;
+    shifted <= \$203 ;
+  always @(posedge clk)
+    double_tolerance <= \$204 ;
+  always @(posedge clk)
+    match <= \$205 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$49  = { tolerance, 1'h0 };
+    \$203  = \$198 ;
     if (rst) begin
-      \$49  = 9'h000;
+      \$203  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$50  = \$47 ;
+    \$204  = { tolerance, 1'h0 };
     if (rst) begin
-      \$50  = 1'h0;
+      \$204  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$48  = \$43 ;
+    \$205  = \$202 ;
     if (rst) begin
-      \$48  = 40'h0000000000;
+      \$205  = 1'h0;
     end
   end
+  assign \$40  = 1'h0;
+  assign \$41  = \$38 ;
+  assign \$79  = 1'h0;
+  assign \$80  = \$77 ;
+  assign \$118  = 1'h0;
+  assign \$119  = \$116 ;
+  assign \$157  = 1'h0;
+  assign \$158  = \$155 ;
+  assign \$196  = 1'h0;
+  assign \$197  = \$194 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -24502,7 +24812,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$3176$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$3331$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -24680,8 +24990,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$3176$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$3176$0 ;
-  wire \port$3176$0 ;
+  output \port$3331$0 ;
+  wire \port$3331$0 ;
   output report;
   wire report;
   input report_frame;
@@ -24799,7 +25109,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$3176$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3176$0  = \$2 ;
+  assign \port$3331$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -24856,7 +25166,7 @@ endmodule
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$8439$0 , \port$8450$0 , regs__ca_done, \port$8527$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$8749$0 , \port$8760$0 , regs__ca_done, \port$8837$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -25040,12 +25350,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$8439$0 ;
-  wire [186:0] \port$8439$0 ;
-  output [79:0] \port$8450$0 ;
-  wire [79:0] \port$8450$0 ;
-  output [9:0] \port$8527$0 ;
-  wire [9:0] \port$8527$0 ;
+  output [186:0] \port$8749$0 ;
+  wire [186:0] \port$8749$0 ;
+  output [79:0] \port$8760$0 ;
+  wire [79:0] \port$8760$0 ;
+  output [9:0] \port$8837$0 ;
+  wire [9:0] \port$8837$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -25534,9 +25844,9 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$8439$0  = \$20 ;
-  assign \port$8450$0  = \$21 ;
-  assign \port$8527$0  = \$22 ;
+  assign \port$8749$0  = \$20 ;
+  assign \port$8760$0  = \$21 ;
+  assign \port$8837$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -26601,7 +26911,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$8081$272 (cycle[274:272]),
+    .\port$8391$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -26661,7 +26971,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$8081$199 (cycle[199]),
+    .\port$8391$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -26712,7 +27022,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$8081$259 (cycle[271:259]),
+    .\port$8391$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -26736,7 +27046,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$8069$0 (\bit ),
+    .\port$8379$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -26804,7 +27114,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5993$0 (\$28 ),
+    .\port$6303$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -30832,7 +31142,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$8081$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$8391$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -31548,8 +31858,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$8081$272 ;
-  wire [2:0] \port$8081$272 ;
+  input [2:0] \port$8391$272 ;
+  wire [2:0] \port$8391$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -31859,7 +32169,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$8081$272 [0];
+  assign error_bit = ssi & \port$8391$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -31890,19 +32200,19 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$8081$272 [0];
+  assign \$24  = ssi & \port$8391$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$8081$272 [0];
+  assign \$28  = ssi & \port$8391$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$8081$272 [0];
+  assign \$35  = ssi & \port$8391$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$8081$272 [0];
+  assign \$39  = ssi & \port$8391$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -31923,7 +32233,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$8081$272 [2];
+  assign \$61  = ssi & \port$8391$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -32209,15 +32519,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$8081$272 [0];
+  assign \$347  = ssi & \port$8391$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$8081$272 [0];
-  assign \$355  = ~ \port$8081$272 [1];
+  assign \$354  = ssi & \port$8391$272 [0];
+  assign \$355  = ~ \port$8391$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -32954,7 +33264,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$8081$272 [0];
+  assign ssi_error = \port$8391$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -32964,8 +33274,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$8081$272 [2];
-  assign ssi_error_low = \port$8081$272 [1];
+  assign ssi_double = \port$8391$272 [2];
+  assign ssi_error_low = \port$8391$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -35264,7 +35574,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$8081$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$8391$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -35355,8 +35665,8 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$8081$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$8081$199 ;
-  wire \port$8081$199 ;
+  input \port$8391$199 ;
+  wire \port$8391$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -35479,7 +35789,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$8081$199 , ssi, ssi_e
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$8081$199  : 1'h0;
+  assign \$14  = \$13  ? \port$8391$199  : 1'h0;
   assign \$16  = \$10  | \$15 ;
   assign \$17  = ! sum_word;
   assign \$18  = sum_word ? 12'h000 : words[11:0];
@@ -35644,7 +35954,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$8081$199 , ssi, ssi_e
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$8081$199 , 1'h1 };
+  assign enables = { \port$8391$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -37786,7 +38096,7 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$8081$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$8391$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -37920,8 +38230,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$8081$259 ;
-  wire [12:0] \port$8081$259 ;
+  input [12:0] \port$8391$259 ;
+  wire [12:0] \port$8391$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -37946,7 +38256,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$8081$259 [12:1] + 1'h1;
+  assign \$11  = \port$8391$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -38071,7 +38381,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$8081$259 [0]),
+    .clear_high(\port$8391$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -38214,7 +38524,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$8081$259 [0]) begin
+            if (\port$8391$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -38299,7 +38609,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$8081$259 [0]) begin
+            if (\port$8391$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -38338,7 +38648,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$8081$259 [12:1] };
+            \$85  = { 1'h0, \port$8391$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -38723,11 +39033,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$8081$259 [12:1] };
-  assign fixed = \port$8081$259 [0];
+  assign fixed_delay = { 1'h0, \port$8391$259 [12:1] };
+  assign fixed = \port$8391$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$8081$259 [0];
+  assign clear_high = \port$8391$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -39134,7 +39444,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$8069$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$8379$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -39176,8 +39486,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$8069$0 ;
-  wire \port$8069$0 ;
+  input \port$8379$0 ;
+  wire \port$8379$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -39191,9 +39501,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$8069$0  };
-  assign \$2  = { lc[4:0], \port$8069$0  } == last;
-  assign \$3  = { lc[4:0], \port$8069$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$8379$0  };
+  assign \$2  = { lc[4:0], \port$8379$0  } == last;
+  assign \$3  = { lc[4:0], \port$8379$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -39303,7 +39613,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$8069$0  };
+  assign lc_next = { lc[4:0], \port$8379$0  };
   assign zero = is_zero;
 endmodule
 
@@ -39312,17 +39622,123 @@ module \biss_master_wb.ch1.core.spw_check (rst, bits, tolerance, spw, cpw_top, m
   reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
   wire \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   wire \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire \$15 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
   wire \$16 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire \$17 ;
+  wire \$170 ;
+  wire \$171 ;
+  wire \$172 ;
+  wire \$173 ;
+  wire \$174 ;
+  wire \$175 ;
+  wire \$176 ;
+  wire \$177 ;
+  wire \$178 ;
+  wire \$179 ;
   wire \$18 ;
+  wire \$180 ;
+  wire \$181 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
+  wire \$189 ;
   wire \$19 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire [39:0] \$198 ;
+  wire \$199 ;
   wire [41:0] \$2 ;
   wire \$20 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  reg [39:0] \$203 ;
+  reg [8:0] \$204 ;
+  reg \$205 ;
   wire \$21 ;
   wire \$22 ;
   wire \$23 ;
@@ -39347,19 +39763,68 @@ module \biss_master_wb.ch1.core.spw_check (rst, bits, tolerance, spw, cpw_top, m
   wire \$40 ;
   wire \$41 ;
   wire \$42 ;
-  wire [39:0] \$43 ;
+  wire \$43 ;
   wire \$44 ;
   wire \$45 ;
   wire \$46 ;
   wire \$47 ;
-  reg [39:0] \$48 ;
-  reg [8:0] \$49 ;
+  wire \$48 ;
+  wire \$49 ;
   wire \$5 ;
-  reg \$50 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
+  wire \$53 ;
+  wire \$54 ;
+  wire \$55 ;
+  wire \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  wire \$59 ;
   wire \$6 ;
+  wire \$60 ;
+  wire \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
   wire \$7 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
   wire \$8 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
   wire \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   input [5:0] bits;
   wire [5:0] bits;
   input clk;
@@ -39376,80 +39841,235 @@ module \biss_master_wb.ch1.core.spw_check (rst, bits, tolerance, spw, cpw_top, m
   wire [39:0] spw;
   input [7:0] tolerance;
   wire [7:0] tolerance;
-  always @(posedge clk)
-    double_tolerance <= \$49 ;
-  always @(posedge clk)
-    match <= \$50 ;
   assign \$1  = cpw_top - spw;
   assign \$2  = $signed(\$1 ) + $signed({ 1'h0, tolerance });
-  assign \$3  = bits > 1'h0;
-  assign \$4  = bits > 1'h1;
-  assign \$5  = bits > 2'h2;
-  assign \$6  = bits > 2'h3;
-  assign \$7  = bits > 3'h4;
-  assign \$8  = bits > 3'h5;
-  assign \$9  = bits > 3'h6;
-  assign \$10  = bits > 3'h7;
-  assign \$11  = bits > 4'h8;
-  assign \$12  = bits > 4'h9;
-  assign \$13  = bits > 4'ha;
-  assign \$14  = bits > 4'hb;
-  assign \$15  = bits > 4'hc;
-  assign \$16  = bits > 4'hd;
-  assign \$17  = bits > 4'he;
-  assign \$18  = bits > 4'hf;
-  assign \$19  = bits > 5'h10;
-  assign \$20  = bits > 5'h11;
-  assign \$21  = bits > 5'h12;
-  assign \$22  = bits > 5'h13;
-  assign \$23  = bits > 5'h14;
-  assign \$24  = bits > 5'h15;
-  assign \$25  = bits > 5'h16;
-  assign \$26  = bits > 5'h17;
-  assign \$27  = bits > 5'h18;
-  assign \$28  = bits > 5'h19;
-  assign \$29  = bits > 5'h1a;
-  assign \$30  = bits > 5'h1b;
-  assign \$31  = bits > 5'h1c;
-  assign \$32  = bits > 5'h1d;
-  assign \$33  = bits > 5'h1e;
-  assign \$34  = bits > 5'h1f;
-  assign \$35  = bits > 6'h20;
-  assign \$36  = bits > 6'h21;
-  assign \$37  = bits > 6'h22;
-  assign \$38  = bits > 6'h23;
-  assign \$39  = bits > 6'h24;
-  assign \$40  = bits > 6'h25;
-  assign \$41  = bits > 6'h26;
-  assign \$42  = bits > 6'h27;
-  assign \$43  = \$2 [39:0] & { \$42 , \$41 , \$40 , \$39 , \$38 , \$37 , \$36 , \$35 , \$34 , \$33 , \$32 , \$31 , \$30 , \$29 , \$28 , \$27 , \$26 , \$25 , \$24 , \$23 , \$22 , \$21 , \$20 , \$19 , \$18 , \$17 , \$16 , \$15 , \$14 , \$13 , \$12 , \$11 , \$10 , \$9 , \$8 , \$7 , \$6 , \$5 , \$4 , \$3  };
-  assign \$44  = shifted[8:0] <= double_tolerance;
-  assign \$45  = | shifted[39:9];
-  assign \$46  = ~ \$45 ;
-  assign \$47  = \$44  & \$46 ;
+  assign \$3  = bits[5:3] > 1'h0;
+  assign \$4  = ! bits[5:3];
+  assign \$5  = bits[2:0] > 1'h0;
+  assign \$6  = \$4  & \$5 ;
+  assign \$7  = \$3  | \$6 ;
+  assign \$8  = bits[5:3] > 1'h0;
+  assign \$9  = ! bits[5:3];
+  assign \$10  = bits[2:0] > 1'h1;
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = \$8  | \$11 ;
+  assign \$13  = bits[5:3] > 1'h0;
+  assign \$14  = ! bits[5:3];
+  assign \$15  = bits[2:0] > 2'h2;
+  assign \$16  = \$14  & \$15 ;
+  assign \$17  = \$13  | \$16 ;
+  assign \$18  = bits[5:3] > 1'h0;
+  assign \$19  = ! bits[5:3];
+  assign \$20  = bits[2:0] > 2'h3;
+  assign \$21  = \$19  & \$20 ;
+  assign \$22  = \$18  | \$21 ;
+  assign \$23  = bits[5:3] > 1'h0;
+  assign \$24  = ! bits[5:3];
+  assign \$25  = bits[2:0] > 3'h4;
+  assign \$26  = \$24  & \$25 ;
+  assign \$27  = \$23  | \$26 ;
+  assign \$28  = bits[5:3] > 1'h0;
+  assign \$29  = ! bits[5:3];
+  assign \$30  = bits[2:0] > 3'h5;
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = \$28  | \$31 ;
+  assign \$33  = bits[5:3] > 1'h0;
+  assign \$34  = ! bits[5:3];
+  assign \$35  = bits[2:0] > 3'h6;
+  assign \$36  = \$34  & \$35 ;
+  assign \$37  = \$33  | \$36 ;
+  assign \$38  = bits[5:3] > 1'h0;
+  assign \$39  = ! bits[5:3];
+  assign \$42  = bits[5:3] > 1'h1;
+  assign \$43  = bits[5:3] == 1'h1;
+  assign \$44  = bits[2:0] > 1'h0;
+  assign \$45  = \$43  & \$44 ;
+  assign \$46  = \$42  | \$45 ;
+  assign \$47  = bits[5:3] > 1'h1;
+  assign \$48  = bits[5:3] == 1'h1;
+  assign \$49  = bits[2:0] > 1'h1;
+  assign \$50  = \$48  & \$49 ;
+  assign \$51  = \$47  | \$50 ;
+  assign \$52  = bits[5:3] > 1'h1;
+  assign \$53  = bits[5:3] == 1'h1;
+  assign \$54  = bits[2:0] > 2'h2;
+  assign \$55  = \$53  & \$54 ;
+  assign \$56  = \$52  | \$55 ;
+  assign \$57  = bits[5:3] > 1'h1;
+  assign \$58  = bits[5:3] == 1'h1;
+  assign \$59  = bits[2:0] > 2'h3;
+  assign \$60  = \$58  & \$59 ;
+  assign \$61  = \$57  | \$60 ;
+  assign \$62  = bits[5:3] > 1'h1;
+  assign \$63  = bits[5:3] == 1'h1;
+  assign \$64  = bits[2:0] > 3'h4;
+  assign \$65  = \$63  & \$64 ;
+  assign \$66  = \$62  | \$65 ;
+  assign \$67  = bits[5:3] > 1'h1;
+  assign \$68  = bits[5:3] == 1'h1;
+  assign \$69  = bits[2:0] > 3'h5;
+  assign \$70  = \$68  & \$69 ;
+  assign \$71  = \$67  | \$70 ;
+  assign \$72  = bits[5:3] > 1'h1;
+  assign \$73  = bits[5:3] == 1'h1;
+  assign \$74  = bits[2:0] > 3'h6;
+  assign \$75  = \$73  & \$74 ;
+  assign \$76  = \$72  | \$75 ;
+  assign \$77  = bits[5:3] > 1'h1;
+  assign \$78  = bits[5:3] == 1'h1;
+  assign \$81  = bits[5:3] > 2'h2;
+  assign \$82  = bits[5:3] == 2'h2;
+  assign \$83  = bits[2:0] > 1'h0;
+  assign \$84  = \$82  & \$83 ;
+  assign \$85  = \$81  | \$84 ;
+  assign \$86  = bits[5:3] > 2'h2;
+  assign \$87  = bits[5:3] == 2'h2;
+  assign \$88  = bits[2:0] > 1'h1;
+  assign \$89  = \$87  & \$88 ;
+  assign \$90  = \$86  | \$89 ;
+  assign \$91  = bits[5:3] > 2'h2;
+  assign \$92  = bits[5:3] == 2'h2;
+  assign \$93  = bits[2:0] > 2'h2;
+  assign \$94  = \$92  & \$93 ;
+  assign \$95  = \$91  | \$94 ;
+  assign \$96  = bits[5:3] > 2'h2;
+  assign \$97  = bits[5:3] == 2'h2;
+  assign \$98  = bits[2:0] > 2'h3;
+  assign \$99  = \$97  & \$98 ;
+  assign \$100  = \$96  | \$99 ;
+  assign \$101  = bits[5:3] > 2'h2;
+  assign \$102  = bits[5:3] == 2'h2;
+  assign \$103  = bits[2:0] > 3'h4;
+  assign \$104  = \$102  & \$103 ;
+  assign \$105  = \$101  | \$104 ;
+  assign \$106  = bits[5:3] > 2'h2;
+  assign \$107  = bits[5:3] == 2'h2;
+  assign \$108  = bits[2:0] > 3'h5;
+  assign \$109  = \$107  & \$108 ;
+  assign \$110  = \$106  | \$109 ;
+  assign \$111  = bits[5:3] > 2'h2;
+  assign \$112  = bits[5:3] == 2'h2;
+  assign \$113  = bits[2:0] > 3'h6;
+  assign \$114  = \$112  & \$113 ;
+  assign \$115  = \$111  | \$114 ;
+  assign \$116  = bits[5:3] > 2'h2;
+  assign \$117  = bits[5:3] == 2'h2;
+  assign \$120  = bits[5:3] > 2'h3;
+  assign \$121  = bits[5:3] == 2'h3;
+  assign \$122  = bits[2:0] > 1'h0;
+  assign \$123  = \$121  & \$122 ;
+  assign \$124  = \$120  | \$123 ;
+  assign \$125  = bits[5:3] > 2'h3;
+  assign \$126  = bits[5:3] == 2'h3;
+  assign \$127  = bits[2:0] > 1'h1;
+  assign \$128  = \$126  & \$127 ;
+  assign \$129  = \$125  | \$128 ;
+  assign \$130  = bits[5:3] > 2'h3;
+  assign \$131  = bits[5:3] == 2'h3;
+  assign \$132  = bits[2:0] > 2'h2;
+  assign \$133  = \$131  & \$132 ;
+  assign \$134  = \$130  | \$133 ;
+  assign \$135  = bits[5:3] > 2'h3;
+  assign \$136  = bits[5:3] == 2'h3;
+  assign \$137  = bits[2:0] > 2'h3;
+  assign \$138  = \$136  & \$137 ;
+  assign \$139  = \$135  | \$138 ;
+  assign \$140  = bits[5:3] > 2'h3;
+  assign \$141  = bits[5:3] == 2'h3;
+  assign \$142  = bits[2:0] > 3'h4;
+  assign \$143  = \$141  & \$142 ;
+  assign \$144  = \$140  | \$143 ;
+  assign \$145  = bits[5:3] > 2'h3;
+  assign \$146  = bits[5:3] == 2'h3;
+  assign \$147  = bits[2:0] > 3'h5;
+  assign \$148  = \$146  & \$147 ;
+  assign \$149  = \$145  | \$148 ;
+  assign \$150  = bits[5:3] > 2'h3;
+  assign \$151  = bits[5:3] == 2'h3;
+  assign \$152  = bits[2:0] > 3'h6;
+  assign \$153  = \$151  & \$152 ;
+  assign \$154  = \$150  | \$153 ;
+  assign \$155  = bits[5:3] > 2'h3;
+  assign \$156  = bits[5:3] == 2'h3;
+  assign \$159  = bits[5:3] > 3'h4;
+  assign \$160  = bits[5:3] == 3'h4;
+  assign \$161  = bits[2:0] > 1'h0;
+  assign \$162  = \$160  & \$161 ;
+  assign \$163  = \$159  | \$162 ;
+  assign \$164  = bits[5:3] > 3'h4;
+  assign \$165  = bits[5:3] == 3'h4;
+  assign \$166  = bits[2:0] > 1'h1;
+  assign \$167  = \$165  & \$166 ;
+  assign \$168  = \$164  | \$167 ;
+  assign \$169  = bits[5:3] > 3'h4;
+  assign \$170  = bits[5:3] == 3'h4;
+  assign \$171  = bits[2:0] > 2'h2;
+  assign \$172  = \$170  & \$171 ;
+  assign \$173  = \$169  | \$172 ;
+  assign \$174  = bits[5:3] > 3'h4;
+  assign \$175  = bits[5:3] == 3'h4;
+  assign \$176  = bits[2:0] > 2'h3;
+  assign \$177  = \$175  & \$176 ;
+  assign \$178  = \$174  | \$177 ;
+  assign \$179  = bits[5:3] > 3'h4;
+  assign \$180  = bits[5:3] == 3'h4;
+  assign \$181  = bits[2:0] > 3'h4;
+  assign \$182  = \$180  & \$181 ;
+  assign \$183  = \$179  | \$182 ;
+  assign \$184  = bits[5:3] > 3'h4;
+  assign \$185  = bits[5:3] == 3'h4;
+  assign \$186  = bits[2:0] > 3'h5;
+  assign \$187  = \$185  & \$186 ;
+  assign \$188  = \$184  | \$187 ;
+  assign \$189  = bits[5:3] > 3'h4;
+  assign \$190  = bits[5:3] == 3'h4;
+  assign \$191  = bits[2:0] > 3'h6;
+  assign \$192  = \$190  & \$191 ;
+  assign \$193  = \$189  | \$192 ;
+  assign \$194  = bits[5:3] > 3'h4;
+  assign \$195  = bits[5:3] == 3'h4;
+  assign \$198  = \$2 [39:0] & { \$197 , \$193 , \$188 , \$183 , \$178 , \$173 , \$168 , \$163 , \$158 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$115 , \$110 , \$105 , \$100 , \$95 , \$90 , \$85 , \$80 , \$76 , \$71 , \$66 , \$61 , \$56 , \$51 , \$46 , \$41 , \$37 , \$32 , \$27 , \$22 , \$17 , \$12 , \$7  };
+  assign \$199  = shifted[8:0] <= double_tolerance;
+  assign \$200  = | shifted[39:9];
+  assign \$201  = ~ \$200 ;
+  assign \$202  = \$199  & \$201 ;
   always @(posedge clk)
-    shifted <= \$48 ;
+    shifted <= \$203 ;
+  always @(posedge clk)
+    double_tolerance <= \$204 ;
+  always @(posedge clk)
+    match <= \$205 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
-    \$49  = { tolerance, 1'h0 };
+    \$203  = \$198 ;
     if (rst) begin
-      \$49  = 9'h000;
+      \$203  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
-    \$50  = \$47 ;
+    \$204  = { tolerance, 1'h0 };
     if (rst) begin
-      \$50  = 1'h0;
+      \$204  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
-    \$48  = \$43 ;
+    \$205  = \$202 ;
     if (rst) begin
-      \$48  = 40'h0000000000;
+      \$205  = 1'h0;
     end
   end
+  assign \$40  = 1'h0;
+  assign \$41  = \$38 ;
+  assign \$79  = 1'h0;
+  assign \$80  = \$77 ;
+  assign \$118  = 1'h0;
+  assign \$119  = \$116 ;
+  assign \$157  = 1'h0;
+  assign \$158  = \$155 ;
+  assign \$196  = 1'h0;
+  assign \$197  = \$194 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -39776,7 +40396,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5993$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$6303$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -39954,8 +40574,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5993$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$5993$0 ;
-  wire \port$5993$0 ;
+  output \port$6303$0 ;
+  wire \port$6303$0 ;
   output report;
   wire report;
   input report_frame;
@@ -40073,7 +40693,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5993$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5993$0  = \$2 ;
+  assign \port$6303$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -7,7 +7,9 @@ import random
 
 import pytest
 
-from bissmaster.core.spw_check import SpwCheck
+from amaranth.hdl import Elaboratable, Module, Signal
+
+from bissmaster.core.spw_check import SpwCheck, _below
 
 from testkit.block_sim import simulate
 
@@ -82,6 +84,32 @@ def test_spw_check_every_case_of_a_3_bit_build():
 
     simulate(dut, tb)
     assert got[2:2 + len(vectors)] == [_spw_ref(*v) for v in vectors]
+
+
+@pytest.mark.parametrize("width", (3, 8, 9, 40, 64))
+def test_spw_check_mask_is_two_to_the_bits_minus_one(width):
+    # The SPW range's mask, decoded in two levels (groups of 8): every SPW width of the build.
+    class Mask(Elaboratable):
+        def __init__(self):
+            self.bits = Signal(range(width + 1))
+            self.mask = Signal(width)
+
+        def elaborate(self, platform):
+            m = Module()
+            m.d.comb += self.mask.eq(_below(self.bits, width))
+            return m
+
+    dut = Mask()
+    got = {}
+
+    async def tb(ctx):
+        for bits in range(width + 1):
+            ctx.set(dut.bits, bits)
+            got[bits] = ctx.get(dut.mask)
+            await ctx.tick()
+
+    simulate(dut, tb)
+    assert got == {bits: 2**bits - 1 for bits in range(width + 1)}
 
 
 def _spw_stream(seq, width=28):
