@@ -96,6 +96,9 @@ BUS_CONFIGS = {
     "axil-chain-4": ("axil", 1, "chain", ("ecp5",), CHAIN_4_OPTIONS),
     # one channel of eight long words: what each channel of issue 27's axil-8 target costs
     "axil-chain-8": ("axil", 1, "chain", ("ecp5",), CHAIN_8_OPTIONS),
+    # issue 27's target itself: eight such channels. nextpnr packs it and reports the
+    # device's share it needs (it does not fit the 25F: "does not fit", with the counts).
+    "axil-8": ("axil", 8, "chain", ("ecp5",), CHAIN_8_OPTIONS),
 }
 #: The control for the bus tops' Fmax: N copies of a preset core side by side in one harness,
 #: no bus (name -> (copies, core preset, archs)). Four cores fill the device about as much as
@@ -192,7 +195,12 @@ def log(msg):
 
 
 class DoesNotFit(Exception):
-    """nextpnr found the design too large for the device (the message: its first ERROR line)."""
+    """nextpnr found the design too large for the device (the message: its first ERROR line;
+    ``usage``: cell class -> (used, available) as nextpnr counted them)."""
+
+    def __init__(self, message, usage=None):
+        super().__init__(message)
+        self.usage = usage or {}
 
 
 class ToolFailed(Exception):
@@ -215,7 +223,8 @@ def run(cmd, cwd, logfile, may_not_fit=False, may_fail=False):
         crowded = any("Unable to find legal placement" in e for e in errors)
         if full or crowded:
             usage = full or [f"{c} {u}/{n} ({pct} %)" for c, u, n, pct in over if int(pct) >= 90]
-            raise DoesNotFit(", ".join(usage) + (f" ({errors[0]})" if errors else ""))
+            raise DoesNotFit(", ".join(usage) + (f" ({errors[0]})" if errors else ""),
+                             {c: (int(u), int(n)) for c, u, n, _ in over})
     if r.returncode != 0 and may_fail:
         # the first ERROR line of the output or of the tool's own log (``-l``), if named
         logs = [cwd / logfile] + [cwd / cmd[i + 1] for i, a in enumerate(cmd[:-1]) if a == "-l"]
@@ -449,6 +458,8 @@ def _place_and_route_variant(cfg_dir, arch, seeds, in_bits, variant):
             "seconds": round(time.monotonic() - t0, 1),
             "critical_path": summarize_path(path, in_bits),
             "utilization": {k: v["used"] for k, v in r.get("utilization", {}).items() if v["used"]},
+            "available": {k: v["available"] for k, v in r.get("utilization", {}).items()
+                          if v["used"]},
         })
         log(f"    {arch}{'' if variant == 1 else f' variant {variant}'} seed {seed}: "
             f"{results[-1]['fmax_mhz']:.1f} MHz ({results[-1]['seconds']:.0f} s)")
@@ -529,7 +540,8 @@ def table(rows):
 def bus_table(rows):
     """The bus tops: area, per channel, one core as built inside, the bus's own share, Fmax
     against the core's (when the core's preset was measured in the same run)."""
-    head = ["config", "arch", "LUT4 / FF / carry", "RAM", "per channel", "one core inside (alone)",
+    head = ["config", "arch", "LUT4 / FF / carry", "RAM", "logic cells / FF as placed",
+            "per channel", "one core inside (alone)",
             "bus share = top - N x core", "bus share per channel", "Fmax seeds (MHz)",
             "median Fmax", "core's median Fmax (same run)", "bus top - core",
             "as many cores without the bus (same run)"]
@@ -551,10 +563,37 @@ def bus_table(rows):
                   f"{cores:.1f} MHz ({r['fmax_median'] - cores:+.1f} MHz)" if cores else
                   ("-" if n == 1 else "(not run)")]
         lines.append("| " + " | ".join([
-            r["config"], r["arch"], trio(r), ram_cell(r["ram"], r["ram_cells"]), trio(r, n),
+            r["config"], r["arch"], trio(r), ram_cell(r["ram"], r["ram_cells"]),
+            placed_cell(r.get("placed")), trio(r, n),
             trio(r["core"]), trio(r["bus_share"]),
             trio(r["bus_share"], n), *fm]) + " |")
     return "\n".join(lines)
+
+
+#: The cell classes of "as placed": nextpnr's names for logic cells and flip-flops.
+PLACED_CLASSES = {"ecp5": ("TRELLIS_COMB", "TRELLIS_FF"), "ice40": ("ICESTORM_LC",)}
+
+
+def placed_counts(pr, arch):
+    """``{class: (used, available)}`` of :data:`PLACED_CLASSES` for a placed run (its first
+    seed) or a design that did not fit (nextpnr's counts before it gave up)."""
+    classes = PLACED_CLASSES.get(arch, ())
+    if pr.get("seeds"):
+        run0 = pr["seeds"][0]
+        return {c: (run0["utilization"][c], run0["available"][c])
+                for c in classes if c in run0.get("utilization", {})}
+    usage = pr.get("usage", {})
+    return {c: usage[c] for c in classes if c in usage}
+
+
+def placed_cell(placed):
+    """The logic cells and flip-flops nextpnr placed, with the device's counts: on ECP5 a
+    TRELLIS_COMB is one LUT4 site, so a carry cell (CCU2C) takes two and a distributed RAM
+    its LUTs too; this, not Yosys's LUT4 count, is what must fit the device."""
+    if not placed:
+        return "-"
+    return ", ".join(f"{used:,} / {total:,} {cls} ({100 * used / total:.0f} %)"
+                     for cls, (used, total) in placed.items())
 
 
 def multi_table(rows):
@@ -731,7 +770,7 @@ def main(argv=None):
                 pr = place_and_route(cfg_dir, arch, seeds, in_bits, args.variants)
             except DoesNotFit as e:
                 log(f"    {arch}: does not fit: {e}")
-                pr = {"does_not_fit": str(e), "seeds": []}
+                pr = {"does_not_fit": str(e), "seeds": [], "usage": e.usage}
             fmaxes = [s["fmax_mhz"] for s in pr["seeds"]]
             median = statistics.median(fmaxes) if fmaxes else None
             details[name]["arch"][arch] = {"area": ar, "pnr": pr,
@@ -755,6 +794,7 @@ def main(argv=None):
                                    for k in ("lut", "ff", "carry")} if core_in else None),
                     "fmax_seeds": fmaxes, "fmax_median": median,
                     "does_not_fit": pr.get("does_not_fit"),
+                    "placed": placed_counts(pr, arch),
                 })
                 continue
             budget = AREA_BUDGET.get(name, 1.0)
