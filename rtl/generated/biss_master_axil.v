@@ -1098,12 +1098,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$8231$0 (\$10 ),
-    .\port$8242$0 (\$11 ),
-    .\port$8319$0 (\$12 ),
-    .\port$8778$0 (\$13 ),
-    .\port$8789$0 (\$14 ),
-    .\port$8866$0 (\$15 ),
+    .\port$8755$0 (\$10 ),
+    .\port$8766$0 (\$11 ),
+    .\port$8843$0 (\$12 ),
+    .\port$9302$0 (\$13 ),
+    .\port$9313$0 (\$14 ),
+    .\port$9390$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1188,9 +1188,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$8231$0 (\$10 ),
-    .\port$8242$0 (\$11 ),
-    .\port$8319$0 (\$12 ),
+    .\port$8755$0 (\$10 ),
+    .\port$8766$0 (\$11 ),
+    .\port$8843$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1265,9 +1265,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(\regs__count_en$783 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$807 ),
-    .\port$8778$0 (\$13 ),
-    .\port$8789$0 (\$14 ),
-    .\port$8866$0 (\$15 ),
+    .\port$9302$0 (\$13 ),
+    .\port$9313$0 (\$14 ),
+    .\port$9390$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$471 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -2034,8 +2034,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort
 , ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc
 , ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low
-, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$8231$0 , \port$8242$0 , ch0__ca_done, \port$8319$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$8778$0 , \port$8789$0 , ch1__ca_done
-, \port$8866$0 , bus__r_addr);
+, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$8755$0 , \port$8766$0 , ch0__ca_done, \port$8843$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$9302$0 , \port$9313$0 , ch1__ca_done
+, \port$9390$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -4161,18 +4161,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$8231$0 ;
-  wire [186:0] \port$8231$0 ;
-  input [79:0] \port$8242$0 ;
-  wire [79:0] \port$8242$0 ;
-  input [9:0] \port$8319$0 ;
-  wire [9:0] \port$8319$0 ;
-  input [186:0] \port$8778$0 ;
-  wire [186:0] \port$8778$0 ;
-  input [79:0] \port$8789$0 ;
-  wire [79:0] \port$8789$0 ;
-  input [9:0] \port$8866$0 ;
-  wire [9:0] \port$8866$0 ;
+  input [186:0] \port$8755$0 ;
+  wire [186:0] \port$8755$0 ;
+  input [79:0] \port$8766$0 ;
+  wire [79:0] \port$8766$0 ;
+  input [9:0] \port$8843$0 ;
+  wire [9:0] \port$8843$0 ;
+  input [186:0] \port$9302$0 ;
+  wire [186:0] \port$9302$0 ;
+  input [79:0] \port$9313$0 ;
+  wire [79:0] \port$9313$0 ;
+  input [9:0] \port$9390$0 ;
+  wire [9:0] \port$9390$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
@@ -4410,7 +4410,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$160  = \$158  | \$159 ;
   assign \$161  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$8231$0 [182:177], 4'h0, \port$8231$0 [186:183], 1'h0, \port$8231$0 [176:174], 1'h0, \port$8231$0 [133:131], 3'h0, \port$8231$0 [49], \port$8231$0 [3:0] } : 32'd0;
+  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$8755$0 [182:177], 4'h0, \port$8755$0 [186:183], 1'h0, \port$8755$0 [176:174], 1'h0, \port$8755$0 [133:131], 3'h0, \port$8755$0 [49], \port$8755$0 [3:0] } : 32'd0;
   assign \$168  = \$166  | \$167 ;
   assign \$169  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$170  = \$168  | \$169 ;
@@ -4426,13 +4426,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$180  = \$178  | \$179 ;
   assign \$181  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$8319$0 [9:3], 1'h0, \port$8319$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$8843$0 [9:3], 1'h0, \port$8843$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$228  = \$226  | \$227 ;
-  assign \$229  = ch0_read_select_c3 ? \port$8242$0 [31:0] : 32'd0;
+  assign \$229  = ch0_read_select_c3 ? \port$8766$0 [31:0] : 32'd0;
   assign \$230  = \$228  | \$229 ;
-  assign \$231  = ch0_read_select_c4 ? \port$8242$0 [63:32] : 32'd0;
+  assign \$231  = ch0_read_select_c4 ? \port$8766$0 [63:32] : 32'd0;
   assign \$232  = \$230  | \$231 ;
-  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$8242$0 [79:64] } : 32'd0;
+  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$8766$0 [79:64] } : 32'd0;
   assign \$234  = \$232  | \$233 ;
   assign \$237  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$238  = \$236  | \$237 ;
@@ -4581,7 +4581,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$384  = \$382  | \$383 ;
   assign \$385  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$386  = \$384  | \$385 ;
-  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$8778$0 [182:177], 4'h0, \port$8778$0 [186:183], 1'h0, \port$8778$0 [176:174], 1'h0, \port$8778$0 [133:131], 3'h0, \port$8778$0 [49], \port$8778$0 [3:0] } : 32'd0;
+  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$9302$0 [182:177], 4'h0, \port$9302$0 [186:183], 1'h0, \port$9302$0 [176:174], 1'h0, \port$9302$0 [133:131], 3'h0, \port$9302$0 [49], \port$9302$0 [3:0] } : 32'd0;
   assign \$392  = \$390  | \$391 ;
   assign \$393  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$394  = \$392  | \$393 ;
@@ -4597,13 +4597,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$404  = \$402  | \$403 ;
   assign \$405  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$406  = \$404  | \$405 ;
-  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$8866$0 [9:3], 1'h0, \port$8866$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$9390$0 [9:3], 1'h0, \port$9390$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$452  = \$450  | \$451 ;
-  assign \$453  = ch1_read_select_143 ? \port$8789$0 [31:0] : 32'd0;
+  assign \$453  = ch1_read_select_143 ? \port$9313$0 [31:0] : 32'd0;
   assign \$454  = \$452  | \$453 ;
-  assign \$455  = ch1_read_select_144 ? \port$8789$0 [63:32] : 32'd0;
+  assign \$455  = ch1_read_select_144 ? \port$9313$0 [63:32] : 32'd0;
   assign \$456  = \$454  | \$455 ;
-  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$8789$0 [79:64] } : 32'd0;
+  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$9313$0 [79:64] } : 32'd0;
   assign \$458  = \$456  | \$457 ;
   assign \$461  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$462  = \$460  | \$461 ;
@@ -7012,7 +7012,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$809  = ch0_result_status_status_snapshot;
     if (\$146 ) begin
-      \$809  = \port$8231$0 [3:0];
+      \$809  = \port$8755$0 [3:0];
     end
     if (rst) begin
       \$809  = 4'h0;
@@ -7022,7 +7022,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$810  = ch0_result_status_cds_snapshot;
     if (\$146 ) begin
-      \$810  = \port$8231$0 [49];
+      \$810  = \port$8755$0 [49];
     end
     if (rst) begin
       \$810  = 1'h0;
@@ -7032,7 +7032,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$811  = ch0_result_status_w0_ne_snapshot;
     if (\$146 ) begin
-      \$811  = \port$8231$0 [131];
+      \$811  = \port$8755$0 [131];
     end
     if (rst) begin
       \$811  = 1'h0;
@@ -7042,7 +7042,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$812  = ch0_result_status_w0_nw_snapshot;
     if (\$146 ) begin
-      \$812  = \port$8231$0 [132];
+      \$812  = \port$8755$0 [132];
     end
     if (rst) begin
       \$812  = 1'h0;
@@ -7052,7 +7052,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$813  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$146 ) begin
-      \$813  = \port$8231$0 [133];
+      \$813  = \port$8755$0 [133];
     end
     if (rst) begin
       \$813  = 1'h0;
@@ -7062,7 +7062,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$814  = ch0_result_status_w1_ne_snapshot;
     if (\$146 ) begin
-      \$814  = \port$8231$0 [174];
+      \$814  = \port$8755$0 [174];
     end
     if (rst) begin
       \$814  = 1'h0;
@@ -7072,7 +7072,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$815  = ch0_result_status_w1_nw_snapshot;
     if (\$146 ) begin
-      \$815  = \port$8231$0 [175];
+      \$815  = \port$8755$0 [175];
     end
     if (rst) begin
       \$815  = 1'h0;
@@ -7082,7 +7082,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$816  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$146 ) begin
-      \$816  = \port$8231$0 [176];
+      \$816  = \port$8755$0 [176];
     end
     if (rst) begin
       \$816  = 1'h0;
@@ -7092,7 +7092,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$817  = ch0_result_status_lc_repeat_snapshot;
     if (\$146 ) begin
-      \$817  = \port$8231$0 [183];
+      \$817  = \port$8755$0 [183];
     end
     if (rst) begin
       \$817  = 1'h0;
@@ -7102,7 +7102,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$818  = ch0_result_status_lc_skip_snapshot;
     if (\$146 ) begin
-      \$818  = \port$8231$0 [184];
+      \$818  = \port$8755$0 [184];
     end
     if (rst) begin
       \$818  = 1'h0;
@@ -7112,7 +7112,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$819  = ch0_result_status_lc_zero_snapshot;
     if (\$146 ) begin
-      \$819  = \port$8231$0 [185];
+      \$819  = \port$8755$0 [185];
     end
     if (rst) begin
       \$819  = 1'h0;
@@ -7122,7 +7122,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$820  = ch0_result_status_spw_mismatch_snapshot;
     if (\$146 ) begin
-      \$820  = \port$8231$0 [186];
+      \$820  = \port$8755$0 [186];
     end
     if (rst) begin
       \$820  = 1'h0;
@@ -7132,7 +7132,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$821  = ch0_result_status_lc_snapshot;
     if (\$146 ) begin
-      \$821  = \port$8231$0 [182:177];
+      \$821  = \port$8755$0 [182:177];
     end
     if (rst) begin
       \$821  = 6'h00;
@@ -7152,7 +7152,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$823  = ch0_result_seq_line_delay_snapshot;
     if (\$146 ) begin
-      \$823  = \port$8231$0 [48:36];
+      \$823  = \port$8755$0 [48:36];
     end
     if (rst) begin
       \$823  = 13'h0000;
@@ -7162,7 +7162,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$824  = ch0_result_w0_lo_data_snapshot;
     if (\$146 ) begin
-      \$824  = \port$8231$0 [107:76];
+      \$824  = \port$8755$0 [107:76];
     end
     if (rst) begin
       \$824  = 32'd0;
@@ -7172,7 +7172,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$825  = ch0_result_w0_hi_data_snapshot;
     if (\$146 ) begin
-      \$825  = \port$8231$0 [130:108];
+      \$825  = \port$8755$0 [130:108];
     end
     if (rst) begin
       \$825  = 23'h000000;
@@ -7182,7 +7182,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$826  = ch0_result_w1_lo_data_snapshot;
     if (\$146 ) begin
-      \$826  = \port$8231$0 [165:134];
+      \$826  = \port$8755$0 [165:134];
     end
     if (rst) begin
       \$826  = 32'd0;
@@ -7192,7 +7192,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$827  = ch0_result_w1_hi_data_snapshot;
     if (\$146 ) begin
-      \$827  = \port$8231$0 [173:166];
+      \$827  = \port$8755$0 [173:166];
     end
     if (rst) begin
       \$827  = 8'h00;
@@ -7202,7 +7202,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$828  = ch0_result_timestamp_time_snapshot;
     if (\$146 ) begin
-      \$828  = \port$8231$0 [35:4];
+      \$828  = \port$8755$0 [35:4];
     end
     if (rst) begin
       \$828  = 32'd0;
@@ -7212,7 +7212,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$829  = ch0_result_line_noise_events_snapshot;
     if (\$146 ) begin
-      \$829  = \port$8231$0 [53:50];
+      \$829  = \port$8755$0 [53:50];
     end
     if (rst) begin
       \$829  = 4'h0;
@@ -7222,7 +7222,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$830  = ch0_result_line_delay_settled_snapshot;
     if (\$146 ) begin
-      \$830  = \port$8231$0 [54];
+      \$830  = \port$8755$0 [54];
     end
     if (rst) begin
       \$830  = 1'h0;
@@ -7232,7 +7232,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$831  = ch0_result_line_delay_spread_snapshot;
     if (\$146 ) begin
-      \$831  = \port$8231$0 [75:68];
+      \$831  = \port$8755$0 [75:68];
     end
     if (rst) begin
       \$831  = 8'h00;
@@ -7242,7 +7242,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$832  = ch0_result_line_settled_delay_snapshot;
     if (\$146 ) begin
-      \$832  = \port$8231$0 [67:55];
+      \$832  = \port$8755$0 [67:55];
     end
     if (rst) begin
       \$832  = 13'h0000;
@@ -8569,7 +8569,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$971  = ch1_result_status_status_snapshot;
     if (\$370 ) begin
-      \$971  = \port$8778$0 [3:0];
+      \$971  = \port$9302$0 [3:0];
     end
     if (rst) begin
       \$971  = 4'h0;
@@ -8579,7 +8579,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$972  = ch1_result_status_cds_snapshot;
     if (\$370 ) begin
-      \$972  = \port$8778$0 [49];
+      \$972  = \port$9302$0 [49];
     end
     if (rst) begin
       \$972  = 1'h0;
@@ -8589,7 +8589,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$973  = ch1_result_status_w0_ne_snapshot;
     if (\$370 ) begin
-      \$973  = \port$8778$0 [131];
+      \$973  = \port$9302$0 [131];
     end
     if (rst) begin
       \$973  = 1'h0;
@@ -8599,7 +8599,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$974  = ch1_result_status_w0_nw_snapshot;
     if (\$370 ) begin
-      \$974  = \port$8778$0 [132];
+      \$974  = \port$9302$0 [132];
     end
     if (rst) begin
       \$974  = 1'h0;
@@ -8609,7 +8609,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$975  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$370 ) begin
-      \$975  = \port$8778$0 [133];
+      \$975  = \port$9302$0 [133];
     end
     if (rst) begin
       \$975  = 1'h0;
@@ -8619,7 +8619,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$976  = ch1_result_status_w1_ne_snapshot;
     if (\$370 ) begin
-      \$976  = \port$8778$0 [174];
+      \$976  = \port$9302$0 [174];
     end
     if (rst) begin
       \$976  = 1'h0;
@@ -8629,7 +8629,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$977  = ch1_result_status_w1_nw_snapshot;
     if (\$370 ) begin
-      \$977  = \port$8778$0 [175];
+      \$977  = \port$9302$0 [175];
     end
     if (rst) begin
       \$977  = 1'h0;
@@ -8639,7 +8639,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$978  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$370 ) begin
-      \$978  = \port$8778$0 [176];
+      \$978  = \port$9302$0 [176];
     end
     if (rst) begin
       \$978  = 1'h0;
@@ -8649,7 +8649,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$979  = ch1_result_status_lc_repeat_snapshot;
     if (\$370 ) begin
-      \$979  = \port$8778$0 [183];
+      \$979  = \port$9302$0 [183];
     end
     if (rst) begin
       \$979  = 1'h0;
@@ -8659,7 +8659,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$980  = ch1_result_status_lc_skip_snapshot;
     if (\$370 ) begin
-      \$980  = \port$8778$0 [184];
+      \$980  = \port$9302$0 [184];
     end
     if (rst) begin
       \$980  = 1'h0;
@@ -8669,7 +8669,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$981  = ch1_result_status_lc_zero_snapshot;
     if (\$370 ) begin
-      \$981  = \port$8778$0 [185];
+      \$981  = \port$9302$0 [185];
     end
     if (rst) begin
       \$981  = 1'h0;
@@ -8679,7 +8679,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$982  = ch1_result_status_spw_mismatch_snapshot;
     if (\$370 ) begin
-      \$982  = \port$8778$0 [186];
+      \$982  = \port$9302$0 [186];
     end
     if (rst) begin
       \$982  = 1'h0;
@@ -8689,7 +8689,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$983  = ch1_result_status_lc_snapshot;
     if (\$370 ) begin
-      \$983  = \port$8778$0 [182:177];
+      \$983  = \port$9302$0 [182:177];
     end
     if (rst) begin
       \$983  = 6'h00;
@@ -8709,7 +8709,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$985  = ch1_result_seq_line_delay_snapshot;
     if (\$370 ) begin
-      \$985  = \port$8778$0 [48:36];
+      \$985  = \port$9302$0 [48:36];
     end
     if (rst) begin
       \$985  = 13'h0000;
@@ -8719,7 +8719,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$986  = ch1_result_w0_lo_data_snapshot;
     if (\$370 ) begin
-      \$986  = \port$8778$0 [107:76];
+      \$986  = \port$9302$0 [107:76];
     end
     if (rst) begin
       \$986  = 32'd0;
@@ -8729,7 +8729,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$987  = ch1_result_w0_hi_data_snapshot;
     if (\$370 ) begin
-      \$987  = \port$8778$0 [130:108];
+      \$987  = \port$9302$0 [130:108];
     end
     if (rst) begin
       \$987  = 23'h000000;
@@ -8739,7 +8739,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$988  = ch1_result_w1_lo_data_snapshot;
     if (\$370 ) begin
-      \$988  = \port$8778$0 [165:134];
+      \$988  = \port$9302$0 [165:134];
     end
     if (rst) begin
       \$988  = 32'd0;
@@ -8749,7 +8749,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$989  = ch1_result_w1_hi_data_snapshot;
     if (\$370 ) begin
-      \$989  = \port$8778$0 [173:166];
+      \$989  = \port$9302$0 [173:166];
     end
     if (rst) begin
       \$989  = 8'h00;
@@ -8759,7 +8759,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$990  = ch1_result_timestamp_time_snapshot;
     if (\$370 ) begin
-      \$990  = \port$8778$0 [35:4];
+      \$990  = \port$9302$0 [35:4];
     end
     if (rst) begin
       \$990  = 32'd0;
@@ -8769,7 +8769,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$991  = ch1_result_line_noise_events_snapshot;
     if (\$370 ) begin
-      \$991  = \port$8778$0 [53:50];
+      \$991  = \port$9302$0 [53:50];
     end
     if (rst) begin
       \$991  = 4'h0;
@@ -8779,7 +8779,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$992  = ch1_result_line_delay_settled_snapshot;
     if (\$370 ) begin
-      \$992  = \port$8778$0 [54];
+      \$992  = \port$9302$0 [54];
     end
     if (rst) begin
       \$992  = 1'h0;
@@ -8789,7 +8789,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$993  = ch1_result_line_delay_spread_snapshot;
     if (\$370 ) begin
-      \$993  = \port$8778$0 [75:68];
+      \$993  = \port$9302$0 [75:68];
     end
     if (rst) begin
       \$993  = 8'h00;
@@ -8799,7 +8799,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$994  = ch1_result_line_settled_delay_snapshot;
     if (\$370 ) begin
-      \$994  = \port$8778$0 [67:55];
+      \$994  = \port$9302$0 [67:55];
     end
     if (rst) begin
       \$994  = 13'h0000;
@@ -9001,27 +9001,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$8231$0 [3:0];
-  assign ch0__cds = \port$8231$0 [49];
-  assign ch0__word0_ne = \port$8231$0 [131];
-  assign ch0__word0_nw = \port$8231$0 [132];
-  assign ch0__word0_crc_ok = \port$8231$0 [133];
-  assign ch0__word1_ne = \port$8231$0 [174];
-  assign ch0__word1_nw = \port$8231$0 [175];
-  assign ch0__word1_crc_ok = \port$8231$0 [176];
-  assign ch0__lc_repeat = \port$8231$0 [183];
-  assign ch0__lc_skip = \port$8231$0 [184];
-  assign ch0__lc_zero = \port$8231$0 [185];
-  assign ch0__spw_mismatch = \port$8231$0 [186];
-  assign ch0__lc = \port$8231$0 [182:177];
-  assign ch0__line_delay = \port$8231$0 [48:36];
-  assign ch0__word0_position = \port$8231$0 [130:76];
-  assign ch0__word1_position = \port$8231$0 [173:134];
-  assign ch0__timestamp = \port$8231$0 [35:4];
-  assign ch0__noise_events = \port$8231$0 [53:50];
-  assign ch0__delay_settled = \port$8231$0 [54];
-  assign ch0__delay_spread = \port$8231$0 [75:68];
-  assign ch0__settled_delay = \port$8231$0 [67:55];
+  assign ch0__status = \port$8755$0 [3:0];
+  assign ch0__cds = \port$8755$0 [49];
+  assign ch0__word0_ne = \port$8755$0 [131];
+  assign ch0__word0_nw = \port$8755$0 [132];
+  assign ch0__word0_crc_ok = \port$8755$0 [133];
+  assign ch0__word1_ne = \port$8755$0 [174];
+  assign ch0__word1_nw = \port$8755$0 [175];
+  assign ch0__word1_crc_ok = \port$8755$0 [176];
+  assign ch0__lc_repeat = \port$8755$0 [183];
+  assign ch0__lc_skip = \port$8755$0 [184];
+  assign ch0__lc_zero = \port$8755$0 [185];
+  assign ch0__spw_mismatch = \port$8755$0 [186];
+  assign ch0__lc = \port$8755$0 [182:177];
+  assign ch0__line_delay = \port$8755$0 [48:36];
+  assign ch0__word0_position = \port$8755$0 [130:76];
+  assign ch0__word1_position = \port$8755$0 [173:134];
+  assign ch0__timestamp = \port$8755$0 [35:4];
+  assign ch0__noise_events = \port$8755$0 [53:50];
+  assign ch0__delay_settled = \port$8755$0 [54];
+  assign ch0__delay_spread = \port$8755$0 [75:68];
+  assign ch0__settled_delay = \port$8755$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9042,13 +9042,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$8319$0 [2:0];
-  assign ch0__ca_bytes_done = \port$8319$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$8242$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$8242$0 [31:16];
-  assign ch0__count_ca_refused = \port$8242$0 [47:32];
-  assign ch0__count_ca_aborted = \port$8242$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$8242$0 [79:64];
+  assign ch0__ca_status = \port$8843$0 [2:0];
+  assign ch0__ca_bytes_done = \port$8843$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$8766$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$8766$0 [31:16];
+  assign ch0__count_ca_refused = \port$8766$0 [47:32];
+  assign ch0__count_ca_aborted = \port$8766$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$8766$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9068,27 +9068,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$8778$0 [3:0];
-  assign ch1__cds = \port$8778$0 [49];
-  assign ch1__word0_ne = \port$8778$0 [131];
-  assign ch1__word0_nw = \port$8778$0 [132];
-  assign ch1__word0_crc_ok = \port$8778$0 [133];
-  assign ch1__word1_ne = \port$8778$0 [174];
-  assign ch1__word1_nw = \port$8778$0 [175];
-  assign ch1__word1_crc_ok = \port$8778$0 [176];
-  assign ch1__lc_repeat = \port$8778$0 [183];
-  assign ch1__lc_skip = \port$8778$0 [184];
-  assign ch1__lc_zero = \port$8778$0 [185];
-  assign ch1__spw_mismatch = \port$8778$0 [186];
-  assign ch1__lc = \port$8778$0 [182:177];
-  assign ch1__line_delay = \port$8778$0 [48:36];
-  assign ch1__word0_position = \port$8778$0 [130:76];
-  assign ch1__word1_position = \port$8778$0 [173:134];
-  assign ch1__timestamp = \port$8778$0 [35:4];
-  assign ch1__noise_events = \port$8778$0 [53:50];
-  assign ch1__delay_settled = \port$8778$0 [54];
-  assign ch1__delay_spread = \port$8778$0 [75:68];
-  assign ch1__settled_delay = \port$8778$0 [67:55];
+  assign ch1__status = \port$9302$0 [3:0];
+  assign ch1__cds = \port$9302$0 [49];
+  assign ch1__word0_ne = \port$9302$0 [131];
+  assign ch1__word0_nw = \port$9302$0 [132];
+  assign ch1__word0_crc_ok = \port$9302$0 [133];
+  assign ch1__word1_ne = \port$9302$0 [174];
+  assign ch1__word1_nw = \port$9302$0 [175];
+  assign ch1__word1_crc_ok = \port$9302$0 [176];
+  assign ch1__lc_repeat = \port$9302$0 [183];
+  assign ch1__lc_skip = \port$9302$0 [184];
+  assign ch1__lc_zero = \port$9302$0 [185];
+  assign ch1__spw_mismatch = \port$9302$0 [186];
+  assign ch1__lc = \port$9302$0 [182:177];
+  assign ch1__line_delay = \port$9302$0 [48:36];
+  assign ch1__word0_position = \port$9302$0 [130:76];
+  assign ch1__word1_position = \port$9302$0 [173:134];
+  assign ch1__timestamp = \port$9302$0 [35:4];
+  assign ch1__noise_events = \port$9302$0 [53:50];
+  assign ch1__delay_settled = \port$9302$0 [54];
+  assign ch1__delay_spread = \port$9302$0 [75:68];
+  assign ch1__settled_delay = \port$9302$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9109,13 +9109,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$8866$0 [2:0];
-  assign ch1__ca_bytes_done = \port$8866$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$8789$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$8789$0 [31:16];
-  assign ch1__count_ca_refused = \port$8789$0 [47:32];
-  assign ch1__count_ca_aborted = \port$8789$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$8789$0 [79:64];
+  assign ch1__ca_status = \port$9390$0 [2:0];
+  assign ch1__ca_bytes_done = \port$9390$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$9313$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$9313$0 [31:16];
+  assign ch1__count_ca_refused = \port$9313$0 [47:32];
+  assign ch1__count_ca_aborted = \port$9313$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$9313$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9754,7 +9754,7 @@ endmodule
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$8231$0 , \port$8242$0 , regs__ca_done, \port$8319$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$8755$0 , \port$8766$0 , regs__ca_done, \port$8843$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -9938,12 +9938,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$8231$0 ;
-  wire [186:0] \port$8231$0 ;
-  output [79:0] \port$8242$0 ;
-  wire [79:0] \port$8242$0 ;
-  output [9:0] \port$8319$0 ;
-  wire [9:0] \port$8319$0 ;
+  output [186:0] \port$8755$0 ;
+  wire [186:0] \port$8755$0 ;
+  output [79:0] \port$8766$0 ;
+  wire [79:0] \port$8766$0 ;
+  output [9:0] \port$8843$0 ;
+  wire [9:0] \port$8843$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10432,9 +10432,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$8231$0  = \$20 ;
-  assign \port$8242$0  = \$21 ;
-  assign \port$8319$0  = \$22 ;
+  assign \port$8755$0  = \$20 ;
+  assign \port$8766$0  = \$21 ;
+  assign \port$8843$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -11499,7 +11499,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7873$272 (cycle[274:272]),
+    .\port$8397$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -11559,7 +11559,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$7873$199 (cycle[199]),
+    .\port$8397$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -11610,7 +11610,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7873$259 (cycle[271:259]),
+    .\port$8397$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -11634,7 +11634,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7861$0 (\bit ),
+    .\port$8385$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -11702,7 +11702,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$3348$0 (\$28 ),
+    .\port$3610$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -12272,11 +12272,62 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
   wire \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire [23:0] \$118 ;
+  wire \$119 ;
   wire \$12 ;
+  wire [23:0] \$120 ;
+  wire \$121 ;
+  wire [11:0] \$122 ;
+  wire \$123 ;
+  wire [11:0] \$124 ;
+  wire \$125 ;
+  wire [3:0] \$126 ;
+  wire [16:0] \$127 ;
+  wire [24:0] \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire [37:0] \$132 ;
+  wire [37:0] \$133 ;
+  wire [37:0] \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire [37:0] \$138 ;
+  wire [37:0] \$139 ;
   wire \$14 ;
+  wire [37:0] \$140 ;
+  wire [1:0] \$141 ;
+  wire [2:0] \$142 ;
+  reg \$143 ;
+  reg [274:0] \$144 ;
+  reg [23:0] \$145 ;
+  reg [23:0] \$146 ;
+  reg [11:0] \$147 ;
+  reg [11:0] \$148 ;
+  reg [16:0] \$149 ;
   wire \$15 ;
+  reg [24:0] \$150 ;
   wire \$16 ;
   wire \$17 ;
   wire \$18 ;
@@ -12321,43 +12372,54 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire \$53 ;
   wire \$54 ;
   wire \$55 ;
-  wire [23:0] \$56 ;
+  wire \$56 ;
   wire \$57 ;
-  wire [23:0] \$58 ;
+  wire \$58 ;
   wire \$59 ;
   wire \$6 ;
-  wire [11:0] \$60 ;
+  wire \$60 ;
   wire \$61 ;
-  wire [11:0] \$62 ;
+  wire \$62 ;
   wire \$63 ;
-  wire [3:0] \$64 ;
-  wire [16:0] \$65 ;
-  wire [24:0] \$66 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
   wire \$7 ;
-  wire [37:0] \$70 ;
-  wire [37:0] \$71 ;
-  wire [37:0] \$72 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire \$72 ;
   wire \$73 ;
   wire \$74 ;
   wire \$75 ;
-  wire [37:0] \$76 ;
-  wire [37:0] \$77 ;
-  wire [37:0] \$78 ;
-  wire [1:0] \$79 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
   wire \$8 ;
-  wire [2:0] \$80 ;
-  reg \$81 ;
-  reg [274:0] \$82 ;
-  reg [23:0] \$83 ;
-  reg [23:0] \$84 ;
-  reg [11:0] \$85 ;
-  reg [11:0] \$86 ;
-  reg [16:0] \$87 ;
-  reg [24:0] \$88 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
   wire \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   output [23:0] ack_limit;
   reg [23:0] ack_limit = 24'h000000;
   input clk;
@@ -12494,175 +12556,237 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
-  assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[165:161] <= 5'h10;
-  assign \$14  = \$12  & \$13 ;
-  assign \$15  = \$9  | \$14 ;
-  assign \$16  = \$4  & \$15 ;
-  assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[199];
-  assign \$19  = | live[205:200];
-  assign \$20  = live[205:200] <= 6'h28;
-  assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[209:208];
-  assign \$23  = live[209:208] == 1'h1;
-  assign \$24  = \$22  | \$23 ;
-  assign \$25  = live[209:208] == 2'h2;
-  assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[209:208] == 2'h3;
-  assign \$28  = | live[216:212];
-  assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[216:212] <= 5'h10;
-  assign \$31  = \$29  & \$30 ;
-  assign \$32  = \$26  | \$31 ;
-  assign \$33  = \$21  & \$32 ;
-  assign \$34  = \$18  | \$33 ;
-  assign \$35  = \$17  & \$34 ;
-  assign \$37  = live[199] & live[207];
-  assign \$38  = \$36  & \$37 ;
-  assign \$39  = ~ \$38 ;
-  assign \$40  = \$35  & \$39 ;
-  assign \$41  = ~ live[250];
-  assign \$42  = live[205:200] <= live[154:149];
-  assign \$43  = live[199] & \$42 ;
-  assign \$44  = | live[209:208];
-  assign \$45  = \$43  & \$44 ;
-  assign \$46  = \$41  | \$45 ;
-  assign \$47  = \$40  & \$46 ;
-  assign \$48  = live[272] & live[155];
-  assign \$49  = live[156] | \$48 ;
-  assign \$50  = \$49  | live[250];
-  assign \$51  = \$50  | live[199];
-  assign \$52  = live[259] & \$51 ;
-  assign \$53  = ~ \$52 ;
-  assign \$54  = \$47  & \$53 ;
-  assign \$55  = ! live[87:64];
-  assign \$56  = \$55  ? 24'h000fa0 : live[87:64];
-  assign \$57  = ! live[111:88];
-  assign \$58  = \$57  ? 24'h001f40 : live[111:88];
-  assign \$59  = ! live[123:112];
-  assign \$60  = \$59  ? 12'hfff : live[123:112];
-  assign \$61  = ! live[136:125];
-  assign \$62  = \$61  ? 12'h064 : live[136:125];
-  assign \$63  = ! live[144:141];
-  assign \$64  = \$63  ? 4'h2 : live[144:141];
-  assign \$65  = live[15:0] + \$64 ;
-  assign \$66  = ack_limit + { cycle[15:0], 1'h1 };
-  assign \$67  = cycle[158:157] == 2'h3;
-  assign \$68  = cycle[158:157] == 2'h2;
-  assign \$69  = cycle[158:157] == 1'h1;
-  assign \$70  = \$69  ? 38'h2000000066 : 38'h0000000000;
-  assign \$71  = \$68  ? 38'h2000121b30 : \$70 ;
-  assign \$72  = \$67  ? cycle[198:161] : \$71 ;
-  assign \$73  = cycle[209:208] == 2'h3;
-  assign \$74  = cycle[209:208] == 2'h2;
-  assign \$75  = cycle[209:208] == 1'h1;
-  assign \$76  = \$75  ? 38'h2000000066 : 38'h0000000000;
-  assign \$77  = \$74  ? 38'h2000121b30 : \$76 ;
-  assign \$78  = \$73  ? cycle[249:212] : \$77 ;
-  assign \$80  = 2'h1 + cycle[199];
-  always @(posedge clk)
-    ok <= \$81 ;
-  always @(posedge clk)
-    cycle <= \$82 ;
-  always @(posedge clk)
-    ack_limit <= \$83 ;
-  always @(posedge clk)
-    timeout_limit <= \$84 ;
-  always @(posedge clk)
-    delay_limit <= \$85 ;
-  always @(posedge clk)
-    quiet_time <= \$86 ;
-  always @(posedge clk)
-    delay_tolerance <= \$87 ;
-  always @(posedge clk)
-    no_start_limit <= \$88 ;
   assign \$1  = | live[15:1];
   assign \$2  = | live[154:149];
-  assign \$3  = live[154:149] <= 6'h37;
-  assign \$4  = \$2  & \$3 ;
-  assign \$5  = ! live[158:157];
-  assign \$6  = live[158:157] == 1'h1;
-  assign \$7  = \$5  | \$6 ;
-  assign \$8  = live[158:157] == 2'h2;
+  assign \$3  = live[152] & live[153];
+  assign \$4  = \$3  & live[154];
+  assign \$5  = ~ \$4 ;
+  assign \$6  = \$2  & \$5 ;
+  assign \$7  = ! live[158:157];
+  assign \$8  = live[158:157] == 1'h1;
   assign \$9  = \$7  | \$8 ;
-  assign \$10  = live[158:157] == 2'h3;
-  assign \$11  = | live[165:161];
+  assign \$10  = live[158:157] == 2'h2;
+  assign \$11  = \$9  | \$10 ;
+  assign \$12  = live[158:157] == 2'h3;
+  assign \$13  = | live[165:161];
+  assign \$14  = \$12  & \$13 ;
+  assign \$15  = ~ live[162];
+  assign \$16  = live[161] & \$15 ;
+  assign \$17  = ~ live[163];
+  assign \$18  = \$16  & \$17 ;
+  assign \$19  = ~ live[164];
+  assign \$20  = \$18  & \$19 ;
+  assign \$21  = \$20  & live[165];
+  assign \$22  = ~ live[163];
+  assign \$23  = live[162] & \$22 ;
+  assign \$24  = ~ live[164];
+  assign \$25  = \$23  & \$24 ;
+  assign \$26  = \$25  & live[165];
+  assign \$27  = \$21  | \$26 ;
+  assign \$28  = ~ live[164];
+  assign \$29  = live[163] & \$28 ;
+  assign \$30  = \$29  & live[165];
+  assign \$31  = \$27  | \$30 ;
+  assign \$32  = live[164] & live[165];
+  assign \$33  = \$31  | \$32 ;
+  assign \$34  = ~ \$33 ;
+  assign \$35  = \$14  & \$34 ;
+  assign \$36  = \$11  | \$35 ;
+  assign \$37  = \$6  & \$36 ;
+  assign \$38  = \$1  & \$37 ;
+  assign \$39  = ~ live[199];
+  assign \$40  = | live[205:200];
+  assign \$41  = ~ live[201];
+  assign \$42  = live[200] & \$41 ;
+  assign \$43  = ~ live[202];
+  assign \$44  = \$42  & \$43 ;
+  assign \$45  = \$44  & live[203];
+  assign \$46  = ~ live[204];
+  assign \$47  = \$45  & \$46 ;
+  assign \$48  = \$47  & live[205];
+  assign \$49  = ~ live[202];
+  assign \$50  = live[201] & \$49 ;
+  assign \$51  = \$50  & live[203];
+  assign \$52  = ~ live[204];
+  assign \$53  = \$51  & \$52 ;
+  assign \$54  = \$53  & live[205];
+  assign \$55  = \$48  | \$54 ;
+  assign \$56  = live[202] & live[203];
+  assign \$57  = ~ live[204];
+  assign \$58  = \$56  & \$57 ;
+  assign \$59  = \$58  & live[205];
+  assign \$60  = \$55  | \$59 ;
+  assign \$61  = live[204] & live[205];
+  assign \$62  = \$60  | \$61 ;
+  assign \$63  = ~ \$62 ;
+  assign \$64  = \$40  & \$63 ;
+  assign \$65  = ! live[209:208];
+  assign \$66  = live[209:208] == 1'h1;
+  assign \$67  = \$65  | \$66 ;
+  assign \$68  = live[209:208] == 2'h2;
+  assign \$69  = \$67  | \$68 ;
+  assign \$70  = live[209:208] == 2'h3;
+  assign \$71  = | live[216:212];
+  assign \$72  = \$70  & \$71 ;
+  assign \$73  = ~ live[213];
+  assign \$74  = live[212] & \$73 ;
+  assign \$75  = ~ live[214];
+  assign \$76  = \$74  & \$75 ;
+  assign \$77  = ~ live[215];
+  assign \$78  = \$76  & \$77 ;
+  assign \$79  = \$78  & live[216];
+  assign \$80  = ~ live[214];
+  assign \$81  = live[213] & \$80 ;
+  assign \$82  = ~ live[215];
+  assign \$83  = \$81  & \$82 ;
+  assign \$84  = \$83  & live[216];
+  assign \$85  = \$79  | \$84 ;
+  assign \$86  = ~ live[215];
+  assign \$87  = live[214] & \$86 ;
+  assign \$88  = \$87  & live[216];
+  assign \$89  = \$85  | \$88 ;
+  assign \$90  = live[215] & live[216];
+  assign \$91  = \$89  | \$90 ;
+  assign \$92  = ~ \$91 ;
+  assign \$93  = \$72  & \$92 ;
+  assign \$94  = \$69  | \$93 ;
+  assign \$95  = \$64  & \$94 ;
+  assign \$96  = \$39  | \$95 ;
+  assign \$97  = \$38  & \$96 ;
+  assign \$99  = live[199] & live[207];
+  assign \$100  = \$98  & \$99 ;
+  assign \$101  = ~ \$100 ;
+  assign \$102  = \$97  & \$101 ;
+  assign \$103  = ~ live[250];
+  assign \$104  = live[205:200] <= live[154:149];
+  assign \$105  = live[199] & \$104 ;
+  assign \$106  = | live[209:208];
+  assign \$107  = \$105  & \$106 ;
+  assign \$108  = \$103  | \$107 ;
+  assign \$109  = \$102  & \$108 ;
+  assign \$110  = live[272] & live[155];
+  assign \$111  = live[156] | \$110 ;
+  assign \$112  = \$111  | live[250];
+  assign \$113  = \$112  | live[199];
+  assign \$114  = live[259] & \$113 ;
+  assign \$115  = ~ \$114 ;
+  assign \$116  = \$109  & \$115 ;
+  assign \$117  = ! live[87:64];
+  assign \$118  = \$117  ? 24'h000fa0 : live[87:64];
+  assign \$119  = ! live[111:88];
+  assign \$120  = \$119  ? 24'h001f40 : live[111:88];
+  assign \$121  = ! live[123:112];
+  assign \$122  = \$121  ? 12'hfff : live[123:112];
+  assign \$123  = ! live[136:125];
+  assign \$124  = \$123  ? 12'h064 : live[136:125];
+  assign \$125  = ! live[144:141];
+  assign \$126  = \$125  ? 4'h2 : live[144:141];
+  assign \$127  = live[15:0] + \$126 ;
+  assign \$128  = ack_limit + { cycle[15:0], 1'h1 };
+  assign \$129  = cycle[158:157] == 2'h3;
+  assign \$130  = cycle[158:157] == 2'h2;
+  assign \$131  = cycle[158:157] == 1'h1;
+  assign \$132  = \$131  ? 38'h2000000066 : 38'h0000000000;
+  assign \$133  = \$130  ? 38'h2000121b30 : \$132 ;
+  assign \$134  = \$129  ? cycle[198:161] : \$133 ;
+  assign \$135  = cycle[209:208] == 2'h3;
+  assign \$136  = cycle[209:208] == 2'h2;
+  assign \$137  = cycle[209:208] == 1'h1;
+  assign \$138  = \$137  ? 38'h2000000066 : 38'h0000000000;
+  assign \$139  = \$136  ? 38'h2000121b30 : \$138 ;
+  assign \$140  = \$135  ? cycle[249:212] : \$139 ;
+  assign \$142  = 2'h1 + cycle[199];
+  always @(posedge clk)
+    ok <= \$143 ;
+  always @(posedge clk)
+    cycle <= \$144 ;
+  always @(posedge clk)
+    ack_limit <= \$145 ;
+  always @(posedge clk)
+    timeout_limit <= \$146 ;
+  always @(posedge clk)
+    delay_limit <= \$147 ;
+  always @(posedge clk)
+    quiet_time <= \$148 ;
+  always @(posedge clk)
+    delay_tolerance <= \$149 ;
+  always @(posedge clk)
+    no_start_limit <= \$150 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$81  = \$54 ;
+    \$143  = \$116 ;
     if (rst) begin
-      \$81  = 1'h0;
+      \$143  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$82  = cycle;
+    \$144  = cycle;
     if (idle) begin
-      \$82  = live;
+      \$144  = live;
     end
     if (rst) begin
-      \$82  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
+      \$144  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$83  = ack_limit;
+    \$145  = ack_limit;
     if (idle) begin
-      \$83  = \$56 ;
+      \$145  = \$118 ;
     end
     if (rst) begin
-      \$83  = 24'h000000;
+      \$145  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$84  = timeout_limit;
+    \$146  = timeout_limit;
     if (idle) begin
-      \$84  = \$58 ;
+      \$146  = \$120 ;
     end
     if (rst) begin
-      \$84  = 24'h000000;
+      \$146  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$85  = delay_limit;
+    \$147  = delay_limit;
     if (idle) begin
-      \$85  = \$60 ;
+      \$147  = \$122 ;
     end
     if (rst) begin
-      \$85  = 12'h000;
+      \$147  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$86  = quiet_time;
+    \$148  = quiet_time;
     if (idle) begin
-      \$86  = \$62 ;
+      \$148  = \$124 ;
     end
     if (rst) begin
-      \$86  = 12'h000;
+      \$148  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$87  = delay_tolerance;
+    \$149  = delay_tolerance;
     if (idle) begin
-      \$87  = \$65 ;
+      \$149  = \$127 ;
     end
     if (rst) begin
-      \$87  = 17'h00000;
+      \$149  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$88  = \$66 ;
+    \$150  = \$128 ;
     if (rst) begin
-      \$88  = 25'h0000000;
+      \$150  = 25'h0000000;
     end
   end
-  assign word_count = \$80 [1:0];
+  assign word_count = \$142 [1:0];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -12751,10 +12875,10 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.ssi_double  = cycle[274];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign crc_widths[9:5] = \$78 [4:0];
-  assign crc_widths[4:0] = \$72 [4:0];
-  assign \$36  = live[156];
-  assign \$79  = 2'h1;
+  assign crc_widths[9:5] = \$140 [4:0];
+  assign crc_widths[4:0] = \$134 [4:0];
+  assign \$98  = live[156];
+  assign \$141  = 2'h1;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -15730,7 +15854,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$7873$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$8397$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -16446,8 +16570,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7873$272 ;
-  wire [2:0] \port$7873$272 ;
+  input [2:0] \port$8397$272 ;
+  wire [2:0] \port$8397$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -16757,7 +16881,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$7873$272 [0];
+  assign error_bit = ssi & \port$8397$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -16788,19 +16912,19 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$7873$272 [0];
+  assign \$24  = ssi & \port$8397$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$7873$272 [0];
+  assign \$28  = ssi & \port$8397$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$7873$272 [0];
+  assign \$35  = ssi & \port$8397$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$7873$272 [0];
+  assign \$39  = ssi & \port$8397$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -16821,7 +16945,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$7873$272 [2];
+  assign \$61  = ssi & \port$8397$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -17107,15 +17231,15 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$7873$272 [0];
+  assign \$347  = ssi & \port$8397$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$7873$272 [0];
-  assign \$355  = ~ \port$7873$272 [1];
+  assign \$354  = ssi & \port$8397$272 [0];
+  assign \$355  = ~ \port$8397$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -17852,7 +17976,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$7873$272 [0];
+  assign ssi_error = \port$8397$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -17862,8 +17986,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$7873$272 [2];
-  assign ssi_error_low = \port$7873$272 [1];
+  assign ssi_double = \port$8397$272 [2];
+  assign ssi_error_low = \port$8397$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -20162,7 +20286,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$7873$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$8397$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20253,8 +20377,8 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$7873$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$7873$199 ;
-  wire \port$7873$199 ;
+  input \port$8397$199 ;
+  wire \port$8397$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20377,7 +20501,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$7873$199 , ssi, ssi
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$7873$199  : 1'h0;
+  assign \$14  = \$13  ? \port$8397$199  : 1'h0;
   assign \$16  = \$10  | \$15 ;
   assign \$17  = ! sum_word;
   assign \$18  = sum_word ? 12'h000 : words[11:0];
@@ -20542,7 +20666,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$7873$199 , ssi, ssi
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$7873$199 , 1'h1 };
+  assign enables = { \port$8397$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22684,7 +22808,7 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7873$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$8397$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -22818,8 +22942,8 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7873$259 ;
-  wire [12:0] \port$7873$259 ;
+  input [12:0] \port$8397$259 ;
+  wire [12:0] \port$8397$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -22844,7 +22968,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7873$259 [12:1] + 1'h1;
+  assign \$11  = \port$8397$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -22969,7 +23093,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7873$259 [0]),
+    .clear_high(\port$8397$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -23112,7 +23236,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7873$259 [0]) begin
+            if (\port$8397$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -23197,7 +23321,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7873$259 [0]) begin
+            if (\port$8397$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -23236,7 +23360,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7873$259 [12:1] };
+            \$85  = { 1'h0, \port$8397$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -23621,11 +23745,11 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7873$259 [12:1] };
-  assign fixed = \port$7873$259 [0];
+  assign fixed_delay = { 1'h0, \port$8397$259 [12:1] };
+  assign fixed = \port$8397$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7873$259 [0];
+  assign clear_high = \port$8397$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -24032,7 +24156,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$7861$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$8385$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -24074,8 +24198,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7861$0 ;
-  wire \port$7861$0 ;
+  input \port$8385$0 ;
+  wire \port$8385$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -24089,9 +24213,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7861$0  };
-  assign \$2  = { lc[4:0], \port$7861$0  } == last;
-  assign \$3  = { lc[4:0], \port$7861$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$8385$0  };
+  assign \$2  = { lc[4:0], \port$8385$0  } == last;
+  assign \$3  = { lc[4:0], \port$8385$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -24201,7 +24325,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7861$0  };
+  assign lc_next = { lc[4:0], \port$8385$0  };
   assign zero = is_zero;
 endmodule
 
@@ -24317,38 +24441,238 @@ module \biss_master_axil.ch0.core.spw_check (rst, bits, tolerance, spw, cpw_top,
   wire \$195 ;
   wire \$196 ;
   wire \$197 ;
-  wire [39:0] \$198 ;
+  wire \$198 ;
   wire \$199 ;
   wire [41:0] \$2 ;
   wire \$20 ;
   wire \$200 ;
   wire \$201 ;
   wire \$202 ;
-  reg [39:0] \$203 ;
-  reg [8:0] \$204 ;
-  reg \$205 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire \$21 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
+  wire \$213 ;
+  wire \$214 ;
+  wire \$215 ;
+  wire \$216 ;
+  wire \$217 ;
+  wire \$218 ;
+  wire \$219 ;
   wire \$22 ;
+  wire \$220 ;
+  wire \$221 ;
+  wire \$222 ;
+  wire \$223 ;
+  wire \$224 ;
+  wire \$225 ;
+  wire \$226 ;
+  wire \$227 ;
+  wire \$228 ;
+  wire \$229 ;
   wire \$23 ;
+  wire \$230 ;
+  wire \$231 ;
+  wire \$232 ;
+  wire \$233 ;
+  wire \$234 ;
+  wire \$235 ;
+  wire \$236 ;
+  wire \$237 ;
+  wire \$238 ;
+  wire \$239 ;
   wire \$24 ;
+  wire \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  wire \$243 ;
+  wire \$244 ;
+  wire \$245 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
   wire \$25 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
   wire \$26 ;
+  wire \$260 ;
+  wire \$261 ;
+  wire \$262 ;
+  wire \$263 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire \$269 ;
   wire \$27 ;
+  wire \$270 ;
+  wire \$271 ;
+  wire \$272 ;
+  wire \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
   wire \$28 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
   wire \$29 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   wire \$3 ;
   wire \$30 ;
+  wire \$300 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
   wire \$31 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
   wire \$32 ;
+  wire \$320 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
   wire \$33 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  wire \$337 ;
+  wire \$338 ;
+  wire \$339 ;
   wire \$34 ;
+  wire \$340 ;
+  wire \$341 ;
+  wire \$342 ;
+  wire \$343 ;
+  wire \$344 ;
+  wire \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire \$349 ;
   wire \$35 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire \$352 ;
+  wire \$353 ;
+  wire \$354 ;
+  wire \$355 ;
+  wire \$356 ;
+  wire \$357 ;
+  wire \$358 ;
+  wire \$359 ;
   wire \$36 ;
+  wire \$360 ;
+  wire \$361 ;
+  wire \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
   wire \$37 ;
+  wire \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire \$378 ;
+  wire \$379 ;
   wire \$38 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
   wire \$39 ;
+  wire \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire \$394 ;
+  wire \$395 ;
+  wire \$396 ;
+  wire \$397 ;
+  wire [39:0] \$398 ;
+  wire \$399 ;
   wire \$4 ;
   wire \$40 ;
+  wire \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  reg [39:0] \$403 ;
+  reg [8:0] \$404 ;
+  reg \$405 ;
   wire \$41 ;
   wire \$42 ;
   wire \$43 ;
@@ -24431,233 +24755,433 @@ module \biss_master_axil.ch0.core.spw_check (rst, bits, tolerance, spw, cpw_top,
   wire [7:0] tolerance;
   assign \$1  = cpw_top - spw;
   assign \$2  = $signed(\$1 ) + $signed({ 1'h0, tolerance });
-  assign \$3  = bits[5:3] > 1'h0;
-  assign \$4  = ! bits[5:3];
-  assign \$5  = bits[2:0] > 1'h0;
+  assign \$3  = ~ bits[4];
+  assign \$4  = bits[3] & \$3 ;
+  assign \$5  = ~ bits[5];
   assign \$6  = \$4  & \$5 ;
-  assign \$7  = \$3  | \$6 ;
-  assign \$8  = bits[5:3] > 1'h0;
-  assign \$9  = ! bits[5:3];
-  assign \$10  = bits[2:0] > 1'h1;
-  assign \$11  = \$9  & \$10 ;
-  assign \$12  = \$8  | \$11 ;
-  assign \$13  = bits[5:3] > 1'h0;
-  assign \$14  = ! bits[5:3];
-  assign \$15  = bits[2:0] > 2'h2;
-  assign \$16  = \$14  & \$15 ;
-  assign \$17  = \$13  | \$16 ;
-  assign \$18  = bits[5:3] > 1'h0;
-  assign \$19  = ! bits[5:3];
-  assign \$20  = bits[2:0] > 2'h3;
-  assign \$21  = \$19  & \$20 ;
-  assign \$22  = \$18  | \$21 ;
-  assign \$23  = bits[5:3] > 1'h0;
-  assign \$24  = ! bits[5:3];
-  assign \$25  = bits[2:0] > 3'h4;
-  assign \$26  = \$24  & \$25 ;
-  assign \$27  = \$23  | \$26 ;
-  assign \$28  = bits[5:3] > 1'h0;
-  assign \$29  = ! bits[5:3];
-  assign \$30  = bits[2:0] > 3'h5;
-  assign \$31  = \$29  & \$30 ;
-  assign \$32  = \$28  | \$31 ;
-  assign \$33  = bits[5:3] > 1'h0;
-  assign \$34  = ! bits[5:3];
-  assign \$35  = bits[2:0] > 3'h6;
-  assign \$36  = \$34  & \$35 ;
-  assign \$37  = \$33  | \$36 ;
-  assign \$38  = bits[5:3] > 1'h0;
-  assign \$39  = ! bits[5:3];
-  assign \$42  = bits[5:3] > 1'h1;
-  assign \$43  = bits[5:3] == 1'h1;
-  assign \$44  = bits[2:0] > 1'h0;
-  assign \$45  = \$43  & \$44 ;
-  assign \$46  = \$42  | \$45 ;
-  assign \$47  = bits[5:3] > 1'h1;
-  assign \$48  = bits[5:3] == 1'h1;
-  assign \$49  = bits[2:0] > 1'h1;
-  assign \$50  = \$48  & \$49 ;
-  assign \$51  = \$47  | \$50 ;
-  assign \$52  = bits[5:3] > 1'h1;
-  assign \$53  = bits[5:3] == 1'h1;
-  assign \$54  = bits[2:0] > 2'h2;
-  assign \$55  = \$53  & \$54 ;
-  assign \$56  = \$52  | \$55 ;
-  assign \$57  = bits[5:3] > 1'h1;
-  assign \$58  = bits[5:3] == 1'h1;
-  assign \$59  = bits[2:0] > 2'h3;
-  assign \$60  = \$58  & \$59 ;
-  assign \$61  = \$57  | \$60 ;
-  assign \$62  = bits[5:3] > 1'h1;
-  assign \$63  = bits[5:3] == 1'h1;
-  assign \$64  = bits[2:0] > 3'h4;
+  assign \$7  = ~ bits[5];
+  assign \$8  = bits[4] & \$7 ;
+  assign \$9  = \$6  | \$8 ;
+  assign \$10  = \$9  | bits[5];
+  assign \$11  = ! bits[5:3];
+  assign \$12  = ~ bits[1];
+  assign \$13  = bits[0] & \$12 ;
+  assign \$14  = ~ bits[2];
+  assign \$15  = \$13  & \$14 ;
+  assign \$16  = ~ bits[2];
+  assign \$17  = bits[1] & \$16 ;
+  assign \$18  = \$15  | \$17 ;
+  assign \$19  = \$18  | bits[2];
+  assign \$20  = \$11  & \$19 ;
+  assign \$21  = \$10  | \$20 ;
+  assign \$22  = ~ bits[4];
+  assign \$23  = bits[3] & \$22 ;
+  assign \$24  = ~ bits[5];
+  assign \$25  = \$23  & \$24 ;
+  assign \$26  = ~ bits[5];
+  assign \$27  = bits[4] & \$26 ;
+  assign \$28  = \$25  | \$27 ;
+  assign \$29  = \$28  | bits[5];
+  assign \$30  = ! bits[5:3];
+  assign \$31  = ~ bits[2];
+  assign \$32  = bits[1] & \$31 ;
+  assign \$33  = \$32  | bits[2];
+  assign \$34  = \$30  & \$33 ;
+  assign \$35  = \$29  | \$34 ;
+  assign \$36  = ~ bits[4];
+  assign \$37  = bits[3] & \$36 ;
+  assign \$38  = ~ bits[5];
+  assign \$39  = \$37  & \$38 ;
+  assign \$40  = ~ bits[5];
+  assign \$41  = bits[4] & \$40 ;
+  assign \$42  = \$39  | \$41 ;
+  assign \$43  = \$42  | bits[5];
+  assign \$44  = ! bits[5:3];
+  assign \$45  = bits[0] & bits[1];
+  assign \$46  = ~ bits[2];
+  assign \$47  = \$45  & \$46 ;
+  assign \$48  = \$47  | bits[2];
+  assign \$49  = \$44  & \$48 ;
+  assign \$50  = \$43  | \$49 ;
+  assign \$51  = ~ bits[4];
+  assign \$52  = bits[3] & \$51 ;
+  assign \$53  = ~ bits[5];
+  assign \$54  = \$52  & \$53 ;
+  assign \$55  = ~ bits[5];
+  assign \$56  = bits[4] & \$55 ;
+  assign \$57  = \$54  | \$56 ;
+  assign \$58  = \$57  | bits[5];
+  assign \$59  = ! bits[5:3];
+  assign \$60  = \$59  & bits[2];
+  assign \$61  = \$58  | \$60 ;
+  assign \$62  = ~ bits[4];
+  assign \$63  = bits[3] & \$62 ;
+  assign \$64  = ~ bits[5];
   assign \$65  = \$63  & \$64 ;
-  assign \$66  = \$62  | \$65 ;
-  assign \$67  = bits[5:3] > 1'h1;
-  assign \$68  = bits[5:3] == 1'h1;
-  assign \$69  = bits[2:0] > 3'h5;
-  assign \$70  = \$68  & \$69 ;
-  assign \$71  = \$67  | \$70 ;
-  assign \$72  = bits[5:3] > 1'h1;
-  assign \$73  = bits[5:3] == 1'h1;
-  assign \$74  = bits[2:0] > 3'h6;
-  assign \$75  = \$73  & \$74 ;
-  assign \$76  = \$72  | \$75 ;
-  assign \$77  = bits[5:3] > 1'h1;
-  assign \$78  = bits[5:3] == 1'h1;
-  assign \$81  = bits[5:3] > 2'h2;
-  assign \$82  = bits[5:3] == 2'h2;
-  assign \$83  = bits[2:0] > 1'h0;
-  assign \$84  = \$82  & \$83 ;
-  assign \$85  = \$81  | \$84 ;
-  assign \$86  = bits[5:3] > 2'h2;
-  assign \$87  = bits[5:3] == 2'h2;
-  assign \$88  = bits[2:0] > 1'h1;
-  assign \$89  = \$87  & \$88 ;
-  assign \$90  = \$86  | \$89 ;
-  assign \$91  = bits[5:3] > 2'h2;
-  assign \$92  = bits[5:3] == 2'h2;
-  assign \$93  = bits[2:0] > 2'h2;
-  assign \$94  = \$92  & \$93 ;
-  assign \$95  = \$91  | \$94 ;
-  assign \$96  = bits[5:3] > 2'h2;
-  assign \$97  = bits[5:3] == 2'h2;
-  assign \$98  = bits[2:0] > 2'h3;
-  assign \$99  = \$97  & \$98 ;
-  assign \$100  = \$96  | \$99 ;
-  assign \$101  = bits[5:3] > 2'h2;
-  assign \$102  = bits[5:3] == 2'h2;
-  assign \$103  = bits[2:0] > 3'h4;
-  assign \$104  = \$102  & \$103 ;
-  assign \$105  = \$101  | \$104 ;
-  assign \$106  = bits[5:3] > 2'h2;
-  assign \$107  = bits[5:3] == 2'h2;
-  assign \$108  = bits[2:0] > 3'h5;
-  assign \$109  = \$107  & \$108 ;
-  assign \$110  = \$106  | \$109 ;
-  assign \$111  = bits[5:3] > 2'h2;
-  assign \$112  = bits[5:3] == 2'h2;
-  assign \$113  = bits[2:0] > 3'h6;
-  assign \$114  = \$112  & \$113 ;
-  assign \$115  = \$111  | \$114 ;
-  assign \$116  = bits[5:3] > 2'h2;
-  assign \$117  = bits[5:3] == 2'h2;
-  assign \$120  = bits[5:3] > 2'h3;
-  assign \$121  = bits[5:3] == 2'h3;
-  assign \$122  = bits[2:0] > 1'h0;
-  assign \$123  = \$121  & \$122 ;
-  assign \$124  = \$120  | \$123 ;
-  assign \$125  = bits[5:3] > 2'h3;
-  assign \$126  = bits[5:3] == 2'h3;
-  assign \$127  = bits[2:0] > 1'h1;
-  assign \$128  = \$126  & \$127 ;
-  assign \$129  = \$125  | \$128 ;
-  assign \$130  = bits[5:3] > 2'h3;
-  assign \$131  = bits[5:3] == 2'h3;
-  assign \$132  = bits[2:0] > 2'h2;
-  assign \$133  = \$131  & \$132 ;
-  assign \$134  = \$130  | \$133 ;
-  assign \$135  = bits[5:3] > 2'h3;
-  assign \$136  = bits[5:3] == 2'h3;
-  assign \$137  = bits[2:0] > 2'h3;
-  assign \$138  = \$136  & \$137 ;
-  assign \$139  = \$135  | \$138 ;
-  assign \$140  = bits[5:3] > 2'h3;
-  assign \$141  = bits[5:3] == 2'h3;
-  assign \$142  = bits[2:0] > 3'h4;
+  assign \$66  = ~ bits[5];
+  assign \$67  = bits[4] & \$66 ;
+  assign \$68  = \$65  | \$67 ;
+  assign \$69  = \$68  | bits[5];
+  assign \$70  = ! bits[5:3];
+  assign \$71  = ~ bits[1];
+  assign \$72  = bits[0] & \$71 ;
+  assign \$73  = \$72  & bits[2];
+  assign \$74  = bits[1] & bits[2];
+  assign \$75  = \$73  | \$74 ;
+  assign \$76  = \$70  & \$75 ;
+  assign \$77  = \$69  | \$76 ;
+  assign \$78  = ~ bits[4];
+  assign \$79  = bits[3] & \$78 ;
+  assign \$80  = ~ bits[5];
+  assign \$81  = \$79  & \$80 ;
+  assign \$82  = ~ bits[5];
+  assign \$83  = bits[4] & \$82 ;
+  assign \$84  = \$81  | \$83 ;
+  assign \$85  = \$84  | bits[5];
+  assign \$86  = ! bits[5:3];
+  assign \$87  = bits[1] & bits[2];
+  assign \$88  = \$86  & \$87 ;
+  assign \$89  = \$85  | \$88 ;
+  assign \$90  = ~ bits[4];
+  assign \$91  = bits[3] & \$90 ;
+  assign \$92  = ~ bits[5];
+  assign \$93  = \$91  & \$92 ;
+  assign \$94  = ~ bits[5];
+  assign \$95  = bits[4] & \$94 ;
+  assign \$96  = \$93  | \$95 ;
+  assign \$97  = \$96  | bits[5];
+  assign \$98  = ! bits[5:3];
+  assign \$99  = bits[0] & bits[1];
+  assign \$100  = \$99  & bits[2];
+  assign \$101  = \$98  & \$100 ;
+  assign \$102  = \$97  | \$101 ;
+  assign \$103  = ~ bits[4];
+  assign \$104  = bits[3] & \$103 ;
+  assign \$105  = ~ bits[5];
+  assign \$106  = \$104  & \$105 ;
+  assign \$107  = ~ bits[5];
+  assign \$108  = bits[4] & \$107 ;
+  assign \$109  = \$106  | \$108 ;
+  assign \$110  = \$109  | bits[5];
+  assign \$111  = ! bits[5:3];
+  assign \$114  = ~ bits[5];
+  assign \$115  = bits[4] & \$114 ;
+  assign \$116  = \$115  | bits[5];
+  assign \$117  = bits[5:3] == 1'h1;
+  assign \$118  = ~ bits[1];
+  assign \$119  = bits[0] & \$118 ;
+  assign \$120  = ~ bits[2];
+  assign \$121  = \$119  & \$120 ;
+  assign \$122  = ~ bits[2];
+  assign \$123  = bits[1] & \$122 ;
+  assign \$124  = \$121  | \$123 ;
+  assign \$125  = \$124  | bits[2];
+  assign \$126  = \$117  & \$125 ;
+  assign \$127  = \$116  | \$126 ;
+  assign \$128  = ~ bits[5];
+  assign \$129  = bits[4] & \$128 ;
+  assign \$130  = \$129  | bits[5];
+  assign \$131  = bits[5:3] == 1'h1;
+  assign \$132  = ~ bits[2];
+  assign \$133  = bits[1] & \$132 ;
+  assign \$134  = \$133  | bits[2];
+  assign \$135  = \$131  & \$134 ;
+  assign \$136  = \$130  | \$135 ;
+  assign \$137  = ~ bits[5];
+  assign \$138  = bits[4] & \$137 ;
+  assign \$139  = \$138  | bits[5];
+  assign \$140  = bits[5:3] == 1'h1;
+  assign \$141  = bits[0] & bits[1];
+  assign \$142  = ~ bits[2];
   assign \$143  = \$141  & \$142 ;
-  assign \$144  = \$140  | \$143 ;
-  assign \$145  = bits[5:3] > 2'h3;
-  assign \$146  = bits[5:3] == 2'h3;
-  assign \$147  = bits[2:0] > 3'h5;
-  assign \$148  = \$146  & \$147 ;
-  assign \$149  = \$145  | \$148 ;
-  assign \$150  = bits[5:3] > 2'h3;
-  assign \$151  = bits[5:3] == 2'h3;
-  assign \$152  = bits[2:0] > 3'h6;
-  assign \$153  = \$151  & \$152 ;
-  assign \$154  = \$150  | \$153 ;
-  assign \$155  = bits[5:3] > 2'h3;
-  assign \$156  = bits[5:3] == 2'h3;
-  assign \$159  = bits[5:3] > 3'h4;
-  assign \$160  = bits[5:3] == 3'h4;
-  assign \$161  = bits[2:0] > 1'h0;
-  assign \$162  = \$160  & \$161 ;
-  assign \$163  = \$159  | \$162 ;
-  assign \$164  = bits[5:3] > 3'h4;
-  assign \$165  = bits[5:3] == 3'h4;
-  assign \$166  = bits[2:0] > 1'h1;
-  assign \$167  = \$165  & \$166 ;
-  assign \$168  = \$164  | \$167 ;
-  assign \$169  = bits[5:3] > 3'h4;
-  assign \$170  = bits[5:3] == 3'h4;
-  assign \$171  = bits[2:0] > 2'h2;
-  assign \$172  = \$170  & \$171 ;
-  assign \$173  = \$169  | \$172 ;
-  assign \$174  = bits[5:3] > 3'h4;
-  assign \$175  = bits[5:3] == 3'h4;
-  assign \$176  = bits[2:0] > 2'h3;
-  assign \$177  = \$175  & \$176 ;
-  assign \$178  = \$174  | \$177 ;
-  assign \$179  = bits[5:3] > 3'h4;
-  assign \$180  = bits[5:3] == 3'h4;
-  assign \$181  = bits[2:0] > 3'h4;
-  assign \$182  = \$180  & \$181 ;
-  assign \$183  = \$179  | \$182 ;
-  assign \$184  = bits[5:3] > 3'h4;
-  assign \$185  = bits[5:3] == 3'h4;
-  assign \$186  = bits[2:0] > 3'h5;
+  assign \$144  = \$143  | bits[2];
+  assign \$145  = \$140  & \$144 ;
+  assign \$146  = \$139  | \$145 ;
+  assign \$147  = ~ bits[5];
+  assign \$148  = bits[4] & \$147 ;
+  assign \$149  = \$148  | bits[5];
+  assign \$150  = bits[5:3] == 1'h1;
+  assign \$151  = \$150  & bits[2];
+  assign \$152  = \$149  | \$151 ;
+  assign \$153  = ~ bits[5];
+  assign \$154  = bits[4] & \$153 ;
+  assign \$155  = \$154  | bits[5];
+  assign \$156  = bits[5:3] == 1'h1;
+  assign \$157  = ~ bits[1];
+  assign \$158  = bits[0] & \$157 ;
+  assign \$159  = \$158  & bits[2];
+  assign \$160  = bits[1] & bits[2];
+  assign \$161  = \$159  | \$160 ;
+  assign \$162  = \$156  & \$161 ;
+  assign \$163  = \$155  | \$162 ;
+  assign \$164  = ~ bits[5];
+  assign \$165  = bits[4] & \$164 ;
+  assign \$166  = \$165  | bits[5];
+  assign \$167  = bits[5:3] == 1'h1;
+  assign \$168  = bits[1] & bits[2];
+  assign \$169  = \$167  & \$168 ;
+  assign \$170  = \$166  | \$169 ;
+  assign \$171  = ~ bits[5];
+  assign \$172  = bits[4] & \$171 ;
+  assign \$173  = \$172  | bits[5];
+  assign \$174  = bits[5:3] == 1'h1;
+  assign \$175  = bits[0] & bits[1];
+  assign \$176  = \$175  & bits[2];
+  assign \$177  = \$174  & \$176 ;
+  assign \$178  = \$173  | \$177 ;
+  assign \$179  = ~ bits[5];
+  assign \$180  = bits[4] & \$179 ;
+  assign \$181  = \$180  | bits[5];
+  assign \$182  = bits[5:3] == 1'h1;
+  assign \$185  = bits[3] & bits[4];
+  assign \$186  = ~ bits[5];
   assign \$187  = \$185  & \$186 ;
-  assign \$188  = \$184  | \$187 ;
-  assign \$189  = bits[5:3] > 3'h4;
-  assign \$190  = bits[5:3] == 3'h4;
-  assign \$191  = bits[2:0] > 3'h6;
-  assign \$192  = \$190  & \$191 ;
-  assign \$193  = \$189  | \$192 ;
-  assign \$194  = bits[5:3] > 3'h4;
-  assign \$195  = bits[5:3] == 3'h4;
-  assign \$198  = \$2 [39:0] & { \$197 , \$193 , \$188 , \$183 , \$178 , \$173 , \$168 , \$163 , \$158 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$115 , \$110 , \$105 , \$100 , \$95 , \$90 , \$85 , \$80 , \$76 , \$71 , \$66 , \$61 , \$56 , \$51 , \$46 , \$41 , \$37 , \$32 , \$27 , \$22 , \$17 , \$12 , \$7  };
-  assign \$199  = shifted[8:0] <= double_tolerance;
-  assign \$200  = | shifted[39:9];
-  assign \$201  = ~ \$200 ;
-  assign \$202  = \$199  & \$201 ;
+  assign \$188  = \$187  | bits[5];
+  assign \$189  = bits[5:3] == 2'h2;
+  assign \$190  = ~ bits[1];
+  assign \$191  = bits[0] & \$190 ;
+  assign \$192  = ~ bits[2];
+  assign \$193  = \$191  & \$192 ;
+  assign \$194  = ~ bits[2];
+  assign \$195  = bits[1] & \$194 ;
+  assign \$196  = \$193  | \$195 ;
+  assign \$197  = \$196  | bits[2];
+  assign \$198  = \$189  & \$197 ;
+  assign \$199  = \$188  | \$198 ;
+  assign \$200  = bits[3] & bits[4];
+  assign \$201  = ~ bits[5];
+  assign \$202  = \$200  & \$201 ;
+  assign \$203  = \$202  | bits[5];
+  assign \$204  = bits[5:3] == 2'h2;
+  assign \$205  = ~ bits[2];
+  assign \$206  = bits[1] & \$205 ;
+  assign \$207  = \$206  | bits[2];
+  assign \$208  = \$204  & \$207 ;
+  assign \$209  = \$203  | \$208 ;
+  assign \$210  = bits[3] & bits[4];
+  assign \$211  = ~ bits[5];
+  assign \$212  = \$210  & \$211 ;
+  assign \$213  = \$212  | bits[5];
+  assign \$214  = bits[5:3] == 2'h2;
+  assign \$215  = bits[0] & bits[1];
+  assign \$216  = ~ bits[2];
+  assign \$217  = \$215  & \$216 ;
+  assign \$218  = \$217  | bits[2];
+  assign \$219  = \$214  & \$218 ;
+  assign \$220  = \$213  | \$219 ;
+  assign \$221  = bits[3] & bits[4];
+  assign \$222  = ~ bits[5];
+  assign \$223  = \$221  & \$222 ;
+  assign \$224  = \$223  | bits[5];
+  assign \$225  = bits[5:3] == 2'h2;
+  assign \$226  = \$225  & bits[2];
+  assign \$227  = \$224  | \$226 ;
+  assign \$228  = bits[3] & bits[4];
+  assign \$229  = ~ bits[5];
+  assign \$230  = \$228  & \$229 ;
+  assign \$231  = \$230  | bits[5];
+  assign \$232  = bits[5:3] == 2'h2;
+  assign \$233  = ~ bits[1];
+  assign \$234  = bits[0] & \$233 ;
+  assign \$235  = \$234  & bits[2];
+  assign \$236  = bits[1] & bits[2];
+  assign \$237  = \$235  | \$236 ;
+  assign \$238  = \$232  & \$237 ;
+  assign \$239  = \$231  | \$238 ;
+  assign \$240  = bits[3] & bits[4];
+  assign \$241  = ~ bits[5];
+  assign \$242  = \$240  & \$241 ;
+  assign \$243  = \$242  | bits[5];
+  assign \$244  = bits[5:3] == 2'h2;
+  assign \$245  = bits[1] & bits[2];
+  assign \$246  = \$244  & \$245 ;
+  assign \$247  = \$243  | \$246 ;
+  assign \$248  = bits[3] & bits[4];
+  assign \$249  = ~ bits[5];
+  assign \$250  = \$248  & \$249 ;
+  assign \$251  = \$250  | bits[5];
+  assign \$252  = bits[5:3] == 2'h2;
+  assign \$253  = bits[0] & bits[1];
+  assign \$254  = \$253  & bits[2];
+  assign \$255  = \$252  & \$254 ;
+  assign \$256  = \$251  | \$255 ;
+  assign \$257  = bits[3] & bits[4];
+  assign \$258  = ~ bits[5];
+  assign \$259  = \$257  & \$258 ;
+  assign \$260  = \$259  | bits[5];
+  assign \$261  = bits[5:3] == 2'h2;
+  assign \$264  = bits[5:3] == 2'h3;
+  assign \$265  = ~ bits[1];
+  assign \$266  = bits[0] & \$265 ;
+  assign \$267  = ~ bits[2];
+  assign \$268  = \$266  & \$267 ;
+  assign \$269  = ~ bits[2];
+  assign \$270  = bits[1] & \$269 ;
+  assign \$271  = \$268  | \$270 ;
+  assign \$272  = \$271  | bits[2];
+  assign \$273  = \$264  & \$272 ;
+  assign \$274  = bits[5] | \$273 ;
+  assign \$275  = bits[5:3] == 2'h3;
+  assign \$276  = ~ bits[2];
+  assign \$277  = bits[1] & \$276 ;
+  assign \$278  = \$277  | bits[2];
+  assign \$279  = \$275  & \$278 ;
+  assign \$280  = bits[5] | \$279 ;
+  assign \$281  = bits[5:3] == 2'h3;
+  assign \$282  = bits[0] & bits[1];
+  assign \$283  = ~ bits[2];
+  assign \$284  = \$282  & \$283 ;
+  assign \$285  = \$284  | bits[2];
+  assign \$286  = \$281  & \$285 ;
+  assign \$287  = bits[5] | \$286 ;
+  assign \$288  = bits[5:3] == 2'h3;
+  assign \$289  = \$288  & bits[2];
+  assign \$290  = bits[5] | \$289 ;
+  assign \$291  = bits[5:3] == 2'h3;
+  assign \$292  = ~ bits[1];
+  assign \$293  = bits[0] & \$292 ;
+  assign \$294  = \$293  & bits[2];
+  assign \$295  = bits[1] & bits[2];
+  assign \$296  = \$294  | \$295 ;
+  assign \$297  = \$291  & \$296 ;
+  assign \$298  = bits[5] | \$297 ;
+  assign \$299  = bits[5:3] == 2'h3;
+  assign \$300  = bits[1] & bits[2];
+  assign \$301  = \$299  & \$300 ;
+  assign \$302  = bits[5] | \$301 ;
+  assign \$303  = bits[5:3] == 2'h3;
+  assign \$304  = bits[0] & bits[1];
+  assign \$305  = \$304  & bits[2];
+  assign \$306  = \$303  & \$305 ;
+  assign \$307  = bits[5] | \$306 ;
+  assign \$308  = bits[5:3] == 2'h3;
+  assign \$311  = ~ bits[4];
+  assign \$312  = bits[3] & \$311 ;
+  assign \$313  = \$312  & bits[5];
+  assign \$314  = bits[4] & bits[5];
+  assign \$315  = \$313  | \$314 ;
+  assign \$316  = bits[5:3] == 3'h4;
+  assign \$317  = ~ bits[1];
+  assign \$318  = bits[0] & \$317 ;
+  assign \$319  = ~ bits[2];
+  assign \$320  = \$318  & \$319 ;
+  assign \$321  = ~ bits[2];
+  assign \$322  = bits[1] & \$321 ;
+  assign \$323  = \$320  | \$322 ;
+  assign \$324  = \$323  | bits[2];
+  assign \$325  = \$316  & \$324 ;
+  assign \$326  = \$315  | \$325 ;
+  assign \$327  = ~ bits[4];
+  assign \$328  = bits[3] & \$327 ;
+  assign \$329  = \$328  & bits[5];
+  assign \$330  = bits[4] & bits[5];
+  assign \$331  = \$329  | \$330 ;
+  assign \$332  = bits[5:3] == 3'h4;
+  assign \$333  = ~ bits[2];
+  assign \$334  = bits[1] & \$333 ;
+  assign \$335  = \$334  | bits[2];
+  assign \$336  = \$332  & \$335 ;
+  assign \$337  = \$331  | \$336 ;
+  assign \$338  = ~ bits[4];
+  assign \$339  = bits[3] & \$338 ;
+  assign \$340  = \$339  & bits[5];
+  assign \$341  = bits[4] & bits[5];
+  assign \$342  = \$340  | \$341 ;
+  assign \$343  = bits[5:3] == 3'h4;
+  assign \$344  = bits[0] & bits[1];
+  assign \$345  = ~ bits[2];
+  assign \$346  = \$344  & \$345 ;
+  assign \$347  = \$346  | bits[2];
+  assign \$348  = \$343  & \$347 ;
+  assign \$349  = \$342  | \$348 ;
+  assign \$350  = ~ bits[4];
+  assign \$351  = bits[3] & \$350 ;
+  assign \$352  = \$351  & bits[5];
+  assign \$353  = bits[4] & bits[5];
+  assign \$354  = \$352  | \$353 ;
+  assign \$355  = bits[5:3] == 3'h4;
+  assign \$356  = \$355  & bits[2];
+  assign \$357  = \$354  | \$356 ;
+  assign \$358  = ~ bits[4];
+  assign \$359  = bits[3] & \$358 ;
+  assign \$360  = \$359  & bits[5];
+  assign \$361  = bits[4] & bits[5];
+  assign \$362  = \$360  | \$361 ;
+  assign \$363  = bits[5:3] == 3'h4;
+  assign \$364  = ~ bits[1];
+  assign \$365  = bits[0] & \$364 ;
+  assign \$366  = \$365  & bits[2];
+  assign \$367  = bits[1] & bits[2];
+  assign \$368  = \$366  | \$367 ;
+  assign \$369  = \$363  & \$368 ;
+  assign \$370  = \$362  | \$369 ;
+  assign \$371  = ~ bits[4];
+  assign \$372  = bits[3] & \$371 ;
+  assign \$373  = \$372  & bits[5];
+  assign \$374  = bits[4] & bits[5];
+  assign \$375  = \$373  | \$374 ;
+  assign \$376  = bits[5:3] == 3'h4;
+  assign \$377  = bits[1] & bits[2];
+  assign \$378  = \$376  & \$377 ;
+  assign \$379  = \$375  | \$378 ;
+  assign \$380  = ~ bits[4];
+  assign \$381  = bits[3] & \$380 ;
+  assign \$382  = \$381  & bits[5];
+  assign \$383  = bits[4] & bits[5];
+  assign \$384  = \$382  | \$383 ;
+  assign \$385  = bits[5:3] == 3'h4;
+  assign \$386  = bits[0] & bits[1];
+  assign \$387  = \$386  & bits[2];
+  assign \$388  = \$385  & \$387 ;
+  assign \$389  = \$384  | \$388 ;
+  assign \$390  = ~ bits[4];
+  assign \$391  = bits[3] & \$390 ;
+  assign \$392  = \$391  & bits[5];
+  assign \$393  = bits[4] & bits[5];
+  assign \$394  = \$392  | \$393 ;
+  assign \$395  = bits[5:3] == 3'h4;
+  assign \$398  = \$2 [39:0] & { \$397 , \$389 , \$379 , \$370 , \$357 , \$349 , \$337 , \$326 , \$310 , \$307 , \$302 , \$298 , \$290 , \$287 , \$280 , \$274 , \$263 , \$256 , \$247 , \$239 , \$227 , \$220 , \$209 , \$199 , \$184 , \$178 , \$170 , \$163 , \$152 , \$146 , \$136 , \$127 , \$113 , \$102 , \$89 , \$77 , \$61 , \$50 , \$35 , \$21  };
+  assign \$399  = shifted[8:0] <= double_tolerance;
+  assign \$400  = | shifted[39:9];
+  assign \$401  = ~ \$400 ;
+  assign \$402  = \$399  & \$401 ;
   always @(posedge clk)
-    shifted <= \$203 ;
+    shifted <= \$403 ;
   always @(posedge clk)
-    double_tolerance <= \$204 ;
+    double_tolerance <= \$404 ;
   always @(posedge clk)
-    match <= \$205 ;
+    match <= \$405 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$203  = \$198 ;
+    \$403  = \$398 ;
     if (rst) begin
-      \$203  = 40'h0000000000;
+      \$403  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$204  = { tolerance, 1'h0 };
+    \$404  = { tolerance, 1'h0 };
     if (rst) begin
-      \$204  = 9'h000;
+      \$404  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$205  = \$202 ;
+    \$405  = \$402 ;
     if (rst) begin
-      \$205  = 1'h0;
+      \$405  = 1'h0;
     end
   end
-  assign \$40  = 1'h0;
-  assign \$41  = \$38 ;
-  assign \$79  = 1'h0;
-  assign \$80  = \$77 ;
-  assign \$118  = 1'h0;
-  assign \$119  = \$116 ;
-  assign \$157  = 1'h0;
-  assign \$158  = \$155 ;
-  assign \$196  = 1'h0;
-  assign \$197  = \$194 ;
+  assign \$112  = 1'h0;
+  assign \$113  = \$110 ;
+  assign \$183  = 1'h0;
+  assign \$184  = \$181 ;
+  assign \$262  = 1'h0;
+  assign \$263  = \$260 ;
+  assign \$309  = 1'h0;
+  assign \$310  = bits[5];
+  assign \$396  = 1'h0;
+  assign \$397  = \$394 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -24984,7 +25508,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$3348$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$3610$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -25162,8 +25686,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$3348$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$3348$0 ;
-  wire \port$3348$0 ;
+  output \port$3610$0 ;
+  wire \port$3610$0 ;
   output report;
   wire report;
   input report_frame;
@@ -25281,7 +25805,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$3348$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3348$0  = \$2 ;
+  assign \port$3610$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -25338,7 +25862,7 @@ endmodule
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$8778$0 , \port$8789$0 , regs__ca_done, \port$8866$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$9302$0 , \port$9313$0 , regs__ca_done, \port$9390$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -25522,12 +26046,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$8778$0 ;
-  wire [186:0] \port$8778$0 ;
-  output [79:0] \port$8789$0 ;
-  wire [79:0] \port$8789$0 ;
-  output [9:0] \port$8866$0 ;
-  wire [9:0] \port$8866$0 ;
+  output [186:0] \port$9302$0 ;
+  wire [186:0] \port$9302$0 ;
+  output [79:0] \port$9313$0 ;
+  wire [79:0] \port$9313$0 ;
+  output [9:0] \port$9390$0 ;
+  wire [9:0] \port$9390$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -26016,9 +26540,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$8778$0  = \$20 ;
-  assign \port$8789$0  = \$21 ;
-  assign \port$8866$0  = \$22 ;
+  assign \port$9302$0  = \$20 ;
+  assign \port$9313$0  = \$21 ;
+  assign \port$9390$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -27083,7 +27607,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$8420$272 (cycle[274:272]),
+    .\port$8944$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -27143,7 +27667,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$8420$199 (cycle[199]),
+    .\port$8944$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -27194,7 +27718,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$8420$259 (cycle[271:259]),
+    .\port$8944$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -27218,7 +27742,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$8408$0 (\bit ),
+    .\port$8932$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -27286,7 +27810,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$6320$0 (\$28 ),
+    .\port$6844$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -27856,11 +28380,62 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
   wire \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire [23:0] \$118 ;
+  wire \$119 ;
   wire \$12 ;
+  wire [23:0] \$120 ;
+  wire \$121 ;
+  wire [11:0] \$122 ;
+  wire \$123 ;
+  wire [11:0] \$124 ;
+  wire \$125 ;
+  wire [3:0] \$126 ;
+  wire [16:0] \$127 ;
+  wire [24:0] \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire [37:0] \$132 ;
+  wire [37:0] \$133 ;
+  wire [37:0] \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire [37:0] \$138 ;
+  wire [37:0] \$139 ;
   wire \$14 ;
+  wire [37:0] \$140 ;
+  wire [1:0] \$141 ;
+  wire [2:0] \$142 ;
+  reg \$143 ;
+  reg [274:0] \$144 ;
+  reg [23:0] \$145 ;
+  reg [23:0] \$146 ;
+  reg [11:0] \$147 ;
+  reg [11:0] \$148 ;
+  reg [16:0] \$149 ;
   wire \$15 ;
+  reg [24:0] \$150 ;
   wire \$16 ;
   wire \$17 ;
   wire \$18 ;
@@ -27905,43 +28480,54 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire \$53 ;
   wire \$54 ;
   wire \$55 ;
-  wire [23:0] \$56 ;
+  wire \$56 ;
   wire \$57 ;
-  wire [23:0] \$58 ;
+  wire \$58 ;
   wire \$59 ;
   wire \$6 ;
-  wire [11:0] \$60 ;
+  wire \$60 ;
   wire \$61 ;
-  wire [11:0] \$62 ;
+  wire \$62 ;
   wire \$63 ;
-  wire [3:0] \$64 ;
-  wire [16:0] \$65 ;
-  wire [24:0] \$66 ;
+  wire \$64 ;
+  wire \$65 ;
+  wire \$66 ;
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
   wire \$7 ;
-  wire [37:0] \$70 ;
-  wire [37:0] \$71 ;
-  wire [37:0] \$72 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire \$72 ;
   wire \$73 ;
   wire \$74 ;
   wire \$75 ;
-  wire [37:0] \$76 ;
-  wire [37:0] \$77 ;
-  wire [37:0] \$78 ;
-  wire [1:0] \$79 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
   wire \$8 ;
-  wire [2:0] \$80 ;
-  reg \$81 ;
-  reg [274:0] \$82 ;
-  reg [23:0] \$83 ;
-  reg [23:0] \$84 ;
-  reg [11:0] \$85 ;
-  reg [11:0] \$86 ;
-  reg [16:0] \$87 ;
-  reg [24:0] \$88 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
   wire \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   output [23:0] ack_limit;
   reg [23:0] ack_limit = 24'h000000;
   input clk;
@@ -28078,175 +28664,237 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
-  assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[165:161] <= 5'h10;
-  assign \$14  = \$12  & \$13 ;
-  assign \$15  = \$9  | \$14 ;
-  assign \$16  = \$4  & \$15 ;
-  assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[199];
-  assign \$19  = | live[205:200];
-  assign \$20  = live[205:200] <= 6'h28;
-  assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[209:208];
-  assign \$23  = live[209:208] == 1'h1;
-  assign \$24  = \$22  | \$23 ;
-  assign \$25  = live[209:208] == 2'h2;
-  assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[209:208] == 2'h3;
-  assign \$28  = | live[216:212];
-  assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[216:212] <= 5'h10;
-  assign \$31  = \$29  & \$30 ;
-  assign \$32  = \$26  | \$31 ;
-  assign \$33  = \$21  & \$32 ;
-  assign \$34  = \$18  | \$33 ;
-  assign \$35  = \$17  & \$34 ;
-  assign \$37  = live[199] & live[207];
-  assign \$38  = \$36  & \$37 ;
-  assign \$39  = ~ \$38 ;
-  assign \$40  = \$35  & \$39 ;
-  assign \$41  = ~ live[250];
-  assign \$42  = live[205:200] <= live[154:149];
-  assign \$43  = live[199] & \$42 ;
-  assign \$44  = | live[209:208];
-  assign \$45  = \$43  & \$44 ;
-  assign \$46  = \$41  | \$45 ;
-  assign \$47  = \$40  & \$46 ;
-  assign \$48  = live[272] & live[155];
-  assign \$49  = live[156] | \$48 ;
-  assign \$50  = \$49  | live[250];
-  assign \$51  = \$50  | live[199];
-  assign \$52  = live[259] & \$51 ;
-  assign \$53  = ~ \$52 ;
-  assign \$54  = \$47  & \$53 ;
-  assign \$55  = ! live[87:64];
-  assign \$56  = \$55  ? 24'h000fa0 : live[87:64];
-  assign \$57  = ! live[111:88];
-  assign \$58  = \$57  ? 24'h001f40 : live[111:88];
-  assign \$59  = ! live[123:112];
-  assign \$60  = \$59  ? 12'hfff : live[123:112];
-  assign \$61  = ! live[136:125];
-  assign \$62  = \$61  ? 12'h064 : live[136:125];
-  assign \$63  = ! live[144:141];
-  assign \$64  = \$63  ? 4'h2 : live[144:141];
-  assign \$65  = live[15:0] + \$64 ;
-  assign \$66  = ack_limit + { cycle[15:0], 1'h1 };
-  assign \$67  = cycle[158:157] == 2'h3;
-  assign \$68  = cycle[158:157] == 2'h2;
-  assign \$69  = cycle[158:157] == 1'h1;
-  assign \$70  = \$69  ? 38'h2000000066 : 38'h0000000000;
-  assign \$71  = \$68  ? 38'h2000121b30 : \$70 ;
-  assign \$72  = \$67  ? cycle[198:161] : \$71 ;
-  assign \$73  = cycle[209:208] == 2'h3;
-  assign \$74  = cycle[209:208] == 2'h2;
-  assign \$75  = cycle[209:208] == 1'h1;
-  assign \$76  = \$75  ? 38'h2000000066 : 38'h0000000000;
-  assign \$77  = \$74  ? 38'h2000121b30 : \$76 ;
-  assign \$78  = \$73  ? cycle[249:212] : \$77 ;
-  assign \$80  = 2'h1 + cycle[199];
-  always @(posedge clk)
-    ok <= \$81 ;
-  always @(posedge clk)
-    cycle <= \$82 ;
-  always @(posedge clk)
-    ack_limit <= \$83 ;
-  always @(posedge clk)
-    timeout_limit <= \$84 ;
-  always @(posedge clk)
-    delay_limit <= \$85 ;
-  always @(posedge clk)
-    quiet_time <= \$86 ;
-  always @(posedge clk)
-    delay_tolerance <= \$87 ;
-  always @(posedge clk)
-    no_start_limit <= \$88 ;
   assign \$1  = | live[15:1];
   assign \$2  = | live[154:149];
-  assign \$3  = live[154:149] <= 6'h37;
-  assign \$4  = \$2  & \$3 ;
-  assign \$5  = ! live[158:157];
-  assign \$6  = live[158:157] == 1'h1;
-  assign \$7  = \$5  | \$6 ;
-  assign \$8  = live[158:157] == 2'h2;
+  assign \$3  = live[152] & live[153];
+  assign \$4  = \$3  & live[154];
+  assign \$5  = ~ \$4 ;
+  assign \$6  = \$2  & \$5 ;
+  assign \$7  = ! live[158:157];
+  assign \$8  = live[158:157] == 1'h1;
   assign \$9  = \$7  | \$8 ;
-  assign \$10  = live[158:157] == 2'h3;
-  assign \$11  = | live[165:161];
+  assign \$10  = live[158:157] == 2'h2;
+  assign \$11  = \$9  | \$10 ;
+  assign \$12  = live[158:157] == 2'h3;
+  assign \$13  = | live[165:161];
+  assign \$14  = \$12  & \$13 ;
+  assign \$15  = ~ live[162];
+  assign \$16  = live[161] & \$15 ;
+  assign \$17  = ~ live[163];
+  assign \$18  = \$16  & \$17 ;
+  assign \$19  = ~ live[164];
+  assign \$20  = \$18  & \$19 ;
+  assign \$21  = \$20  & live[165];
+  assign \$22  = ~ live[163];
+  assign \$23  = live[162] & \$22 ;
+  assign \$24  = ~ live[164];
+  assign \$25  = \$23  & \$24 ;
+  assign \$26  = \$25  & live[165];
+  assign \$27  = \$21  | \$26 ;
+  assign \$28  = ~ live[164];
+  assign \$29  = live[163] & \$28 ;
+  assign \$30  = \$29  & live[165];
+  assign \$31  = \$27  | \$30 ;
+  assign \$32  = live[164] & live[165];
+  assign \$33  = \$31  | \$32 ;
+  assign \$34  = ~ \$33 ;
+  assign \$35  = \$14  & \$34 ;
+  assign \$36  = \$11  | \$35 ;
+  assign \$37  = \$6  & \$36 ;
+  assign \$38  = \$1  & \$37 ;
+  assign \$39  = ~ live[199];
+  assign \$40  = | live[205:200];
+  assign \$41  = ~ live[201];
+  assign \$42  = live[200] & \$41 ;
+  assign \$43  = ~ live[202];
+  assign \$44  = \$42  & \$43 ;
+  assign \$45  = \$44  & live[203];
+  assign \$46  = ~ live[204];
+  assign \$47  = \$45  & \$46 ;
+  assign \$48  = \$47  & live[205];
+  assign \$49  = ~ live[202];
+  assign \$50  = live[201] & \$49 ;
+  assign \$51  = \$50  & live[203];
+  assign \$52  = ~ live[204];
+  assign \$53  = \$51  & \$52 ;
+  assign \$54  = \$53  & live[205];
+  assign \$55  = \$48  | \$54 ;
+  assign \$56  = live[202] & live[203];
+  assign \$57  = ~ live[204];
+  assign \$58  = \$56  & \$57 ;
+  assign \$59  = \$58  & live[205];
+  assign \$60  = \$55  | \$59 ;
+  assign \$61  = live[204] & live[205];
+  assign \$62  = \$60  | \$61 ;
+  assign \$63  = ~ \$62 ;
+  assign \$64  = \$40  & \$63 ;
+  assign \$65  = ! live[209:208];
+  assign \$66  = live[209:208] == 1'h1;
+  assign \$67  = \$65  | \$66 ;
+  assign \$68  = live[209:208] == 2'h2;
+  assign \$69  = \$67  | \$68 ;
+  assign \$70  = live[209:208] == 2'h3;
+  assign \$71  = | live[216:212];
+  assign \$72  = \$70  & \$71 ;
+  assign \$73  = ~ live[213];
+  assign \$74  = live[212] & \$73 ;
+  assign \$75  = ~ live[214];
+  assign \$76  = \$74  & \$75 ;
+  assign \$77  = ~ live[215];
+  assign \$78  = \$76  & \$77 ;
+  assign \$79  = \$78  & live[216];
+  assign \$80  = ~ live[214];
+  assign \$81  = live[213] & \$80 ;
+  assign \$82  = ~ live[215];
+  assign \$83  = \$81  & \$82 ;
+  assign \$84  = \$83  & live[216];
+  assign \$85  = \$79  | \$84 ;
+  assign \$86  = ~ live[215];
+  assign \$87  = live[214] & \$86 ;
+  assign \$88  = \$87  & live[216];
+  assign \$89  = \$85  | \$88 ;
+  assign \$90  = live[215] & live[216];
+  assign \$91  = \$89  | \$90 ;
+  assign \$92  = ~ \$91 ;
+  assign \$93  = \$72  & \$92 ;
+  assign \$94  = \$69  | \$93 ;
+  assign \$95  = \$64  & \$94 ;
+  assign \$96  = \$39  | \$95 ;
+  assign \$97  = \$38  & \$96 ;
+  assign \$99  = live[199] & live[207];
+  assign \$100  = \$98  & \$99 ;
+  assign \$101  = ~ \$100 ;
+  assign \$102  = \$97  & \$101 ;
+  assign \$103  = ~ live[250];
+  assign \$104  = live[205:200] <= live[154:149];
+  assign \$105  = live[199] & \$104 ;
+  assign \$106  = | live[209:208];
+  assign \$107  = \$105  & \$106 ;
+  assign \$108  = \$103  | \$107 ;
+  assign \$109  = \$102  & \$108 ;
+  assign \$110  = live[272] & live[155];
+  assign \$111  = live[156] | \$110 ;
+  assign \$112  = \$111  | live[250];
+  assign \$113  = \$112  | live[199];
+  assign \$114  = live[259] & \$113 ;
+  assign \$115  = ~ \$114 ;
+  assign \$116  = \$109  & \$115 ;
+  assign \$117  = ! live[87:64];
+  assign \$118  = \$117  ? 24'h000fa0 : live[87:64];
+  assign \$119  = ! live[111:88];
+  assign \$120  = \$119  ? 24'h001f40 : live[111:88];
+  assign \$121  = ! live[123:112];
+  assign \$122  = \$121  ? 12'hfff : live[123:112];
+  assign \$123  = ! live[136:125];
+  assign \$124  = \$123  ? 12'h064 : live[136:125];
+  assign \$125  = ! live[144:141];
+  assign \$126  = \$125  ? 4'h2 : live[144:141];
+  assign \$127  = live[15:0] + \$126 ;
+  assign \$128  = ack_limit + { cycle[15:0], 1'h1 };
+  assign \$129  = cycle[158:157] == 2'h3;
+  assign \$130  = cycle[158:157] == 2'h2;
+  assign \$131  = cycle[158:157] == 1'h1;
+  assign \$132  = \$131  ? 38'h2000000066 : 38'h0000000000;
+  assign \$133  = \$130  ? 38'h2000121b30 : \$132 ;
+  assign \$134  = \$129  ? cycle[198:161] : \$133 ;
+  assign \$135  = cycle[209:208] == 2'h3;
+  assign \$136  = cycle[209:208] == 2'h2;
+  assign \$137  = cycle[209:208] == 1'h1;
+  assign \$138  = \$137  ? 38'h2000000066 : 38'h0000000000;
+  assign \$139  = \$136  ? 38'h2000121b30 : \$138 ;
+  assign \$140  = \$135  ? cycle[249:212] : \$139 ;
+  assign \$142  = 2'h1 + cycle[199];
+  always @(posedge clk)
+    ok <= \$143 ;
+  always @(posedge clk)
+    cycle <= \$144 ;
+  always @(posedge clk)
+    ack_limit <= \$145 ;
+  always @(posedge clk)
+    timeout_limit <= \$146 ;
+  always @(posedge clk)
+    delay_limit <= \$147 ;
+  always @(posedge clk)
+    quiet_time <= \$148 ;
+  always @(posedge clk)
+    delay_tolerance <= \$149 ;
+  always @(posedge clk)
+    no_start_limit <= \$150 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$81  = \$54 ;
+    \$143  = \$116 ;
     if (rst) begin
-      \$81  = 1'h0;
+      \$143  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$82  = cycle;
+    \$144  = cycle;
     if (idle) begin
-      \$82  = live;
+      \$144  = live;
     end
     if (rst) begin
-      \$82  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
+      \$144  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$83  = ack_limit;
+    \$145  = ack_limit;
     if (idle) begin
-      \$83  = \$56 ;
+      \$145  = \$118 ;
     end
     if (rst) begin
-      \$83  = 24'h000000;
+      \$145  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$84  = timeout_limit;
+    \$146  = timeout_limit;
     if (idle) begin
-      \$84  = \$58 ;
+      \$146  = \$120 ;
     end
     if (rst) begin
-      \$84  = 24'h000000;
+      \$146  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$85  = delay_limit;
+    \$147  = delay_limit;
     if (idle) begin
-      \$85  = \$60 ;
+      \$147  = \$122 ;
     end
     if (rst) begin
-      \$85  = 12'h000;
+      \$147  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$86  = quiet_time;
+    \$148  = quiet_time;
     if (idle) begin
-      \$86  = \$62 ;
+      \$148  = \$124 ;
     end
     if (rst) begin
-      \$86  = 12'h000;
+      \$148  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$87  = delay_tolerance;
+    \$149  = delay_tolerance;
     if (idle) begin
-      \$87  = \$65 ;
+      \$149  = \$127 ;
     end
     if (rst) begin
-      \$87  = 17'h00000;
+      \$149  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$88  = \$66 ;
+    \$150  = \$128 ;
     if (rst) begin
-      \$88  = 25'h0000000;
+      \$150  = 25'h0000000;
     end
   end
-  assign word_count = \$80 [1:0];
+  assign word_count = \$142 [1:0];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -28335,10 +28983,10 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.ssi_double  = cycle[274];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign crc_widths[9:5] = \$78 [4:0];
-  assign crc_widths[4:0] = \$72 [4:0];
-  assign \$36  = live[156];
-  assign \$79  = 2'h1;
+  assign crc_widths[9:5] = \$140 [4:0];
+  assign crc_widths[4:0] = \$134 [4:0];
+  assign \$98  = live[156];
+  assign \$141  = 2'h1;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -31314,7 +31962,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$8420$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$8944$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -32030,8 +32678,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$8420$272 ;
-  wire [2:0] \port$8420$272 ;
+  input [2:0] \port$8944$272 ;
+  wire [2:0] \port$8944$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -32341,7 +32989,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$8420$272 [0];
+  assign error_bit = ssi & \port$8944$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -32372,19 +33020,19 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$8420$272 [0];
+  assign \$24  = ssi & \port$8944$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$8420$272 [0];
+  assign \$28  = ssi & \port$8944$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$8420$272 [0];
+  assign \$35  = ssi & \port$8944$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$8420$272 [0];
+  assign \$39  = ssi & \port$8944$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -32405,7 +33053,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$8420$272 [2];
+  assign \$61  = ssi & \port$8944$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -32691,15 +33339,15 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$8420$272 [0];
+  assign \$347  = ssi & \port$8944$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$8420$272 [0];
-  assign \$355  = ~ \port$8420$272 [1];
+  assign \$354  = ssi & \port$8944$272 [0];
+  assign \$355  = ~ \port$8944$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -33436,7 +34084,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$8420$272 [0];
+  assign ssi_error = \port$8944$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -33446,8 +34094,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$8420$272 [2];
-  assign ssi_error_low = \port$8420$272 [1];
+  assign ssi_double = \port$8944$272 [2];
+  assign ssi_error_low = \port$8944$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -35746,7 +36394,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$8420$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$8944$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -35837,8 +36485,8 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$8420$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$8420$199 ;
-  wire \port$8420$199 ;
+  input \port$8944$199 ;
+  wire \port$8944$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -35961,7 +36609,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$8420$199 , ssi, ssi
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$8420$199  : 1'h0;
+  assign \$14  = \$13  ? \port$8944$199  : 1'h0;
   assign \$16  = \$10  | \$15 ;
   assign \$17  = ! sum_word;
   assign \$18  = sum_word ? 12'h000 : words[11:0];
@@ -36126,7 +36774,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$8420$199 , ssi, ssi
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$8420$199 , 1'h1 };
+  assign enables = { \port$8944$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -38268,7 +38916,7 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$8420$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$8944$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -38402,8 +39050,8 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$8420$259 ;
-  wire [12:0] \port$8420$259 ;
+  input [12:0] \port$8944$259 ;
+  wire [12:0] \port$8944$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -38428,7 +39076,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$8420$259 [12:1] + 1'h1;
+  assign \$11  = \port$8944$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -38553,7 +39201,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$8420$259 [0]),
+    .clear_high(\port$8944$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -38696,7 +39344,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$8420$259 [0]) begin
+            if (\port$8944$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -38781,7 +39429,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$8420$259 [0]) begin
+            if (\port$8944$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -38820,7 +39468,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$8420$259 [12:1] };
+            \$85  = { 1'h0, \port$8944$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -39205,11 +39853,11 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$8420$259 [12:1] };
-  assign fixed = \port$8420$259 [0];
+  assign fixed_delay = { 1'h0, \port$8944$259 [12:1] };
+  assign fixed = \port$8944$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$8420$259 [0];
+  assign clear_high = \port$8944$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -39616,7 +40264,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$8408$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$8932$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -39658,8 +40306,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$8408$0 ;
-  wire \port$8408$0 ;
+  input \port$8932$0 ;
+  wire \port$8932$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -39673,9 +40321,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$8408$0  };
-  assign \$2  = { lc[4:0], \port$8408$0  } == last;
-  assign \$3  = { lc[4:0], \port$8408$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$8932$0  };
+  assign \$2  = { lc[4:0], \port$8932$0  } == last;
+  assign \$3  = { lc[4:0], \port$8932$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -39785,7 +40433,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$8408$0  };
+  assign lc_next = { lc[4:0], \port$8932$0  };
   assign zero = is_zero;
 endmodule
 
@@ -39901,38 +40549,238 @@ module \biss_master_axil.ch1.core.spw_check (rst, bits, tolerance, spw, cpw_top,
   wire \$195 ;
   wire \$196 ;
   wire \$197 ;
-  wire [39:0] \$198 ;
+  wire \$198 ;
   wire \$199 ;
   wire [41:0] \$2 ;
   wire \$20 ;
   wire \$200 ;
   wire \$201 ;
   wire \$202 ;
-  reg [39:0] \$203 ;
-  reg [8:0] \$204 ;
-  reg \$205 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire \$21 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
+  wire \$213 ;
+  wire \$214 ;
+  wire \$215 ;
+  wire \$216 ;
+  wire \$217 ;
+  wire \$218 ;
+  wire \$219 ;
   wire \$22 ;
+  wire \$220 ;
+  wire \$221 ;
+  wire \$222 ;
+  wire \$223 ;
+  wire \$224 ;
+  wire \$225 ;
+  wire \$226 ;
+  wire \$227 ;
+  wire \$228 ;
+  wire \$229 ;
   wire \$23 ;
+  wire \$230 ;
+  wire \$231 ;
+  wire \$232 ;
+  wire \$233 ;
+  wire \$234 ;
+  wire \$235 ;
+  wire \$236 ;
+  wire \$237 ;
+  wire \$238 ;
+  wire \$239 ;
   wire \$24 ;
+  wire \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  wire \$243 ;
+  wire \$244 ;
+  wire \$245 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
   wire \$25 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
   wire \$26 ;
+  wire \$260 ;
+  wire \$261 ;
+  wire \$262 ;
+  wire \$263 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire \$269 ;
   wire \$27 ;
+  wire \$270 ;
+  wire \$271 ;
+  wire \$272 ;
+  wire \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
   wire \$28 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
   wire \$29 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   wire \$3 ;
   wire \$30 ;
+  wire \$300 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
   wire \$31 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
   wire \$32 ;
+  wire \$320 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
   wire \$33 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  wire \$337 ;
+  wire \$338 ;
+  wire \$339 ;
   wire \$34 ;
+  wire \$340 ;
+  wire \$341 ;
+  wire \$342 ;
+  wire \$343 ;
+  wire \$344 ;
+  wire \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire \$349 ;
   wire \$35 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire \$352 ;
+  wire \$353 ;
+  wire \$354 ;
+  wire \$355 ;
+  wire \$356 ;
+  wire \$357 ;
+  wire \$358 ;
+  wire \$359 ;
   wire \$36 ;
+  wire \$360 ;
+  wire \$361 ;
+  wire \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
   wire \$37 ;
+  wire \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire \$378 ;
+  wire \$379 ;
   wire \$38 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
   wire \$39 ;
+  wire \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire \$394 ;
+  wire \$395 ;
+  wire \$396 ;
+  wire \$397 ;
+  wire [39:0] \$398 ;
+  wire \$399 ;
   wire \$4 ;
   wire \$40 ;
+  wire \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  reg [39:0] \$403 ;
+  reg [8:0] \$404 ;
+  reg \$405 ;
   wire \$41 ;
   wire \$42 ;
   wire \$43 ;
@@ -40015,233 +40863,433 @@ module \biss_master_axil.ch1.core.spw_check (rst, bits, tolerance, spw, cpw_top,
   wire [7:0] tolerance;
   assign \$1  = cpw_top - spw;
   assign \$2  = $signed(\$1 ) + $signed({ 1'h0, tolerance });
-  assign \$3  = bits[5:3] > 1'h0;
-  assign \$4  = ! bits[5:3];
-  assign \$5  = bits[2:0] > 1'h0;
+  assign \$3  = ~ bits[4];
+  assign \$4  = bits[3] & \$3 ;
+  assign \$5  = ~ bits[5];
   assign \$6  = \$4  & \$5 ;
-  assign \$7  = \$3  | \$6 ;
-  assign \$8  = bits[5:3] > 1'h0;
-  assign \$9  = ! bits[5:3];
-  assign \$10  = bits[2:0] > 1'h1;
-  assign \$11  = \$9  & \$10 ;
-  assign \$12  = \$8  | \$11 ;
-  assign \$13  = bits[5:3] > 1'h0;
-  assign \$14  = ! bits[5:3];
-  assign \$15  = bits[2:0] > 2'h2;
-  assign \$16  = \$14  & \$15 ;
-  assign \$17  = \$13  | \$16 ;
-  assign \$18  = bits[5:3] > 1'h0;
-  assign \$19  = ! bits[5:3];
-  assign \$20  = bits[2:0] > 2'h3;
-  assign \$21  = \$19  & \$20 ;
-  assign \$22  = \$18  | \$21 ;
-  assign \$23  = bits[5:3] > 1'h0;
-  assign \$24  = ! bits[5:3];
-  assign \$25  = bits[2:0] > 3'h4;
-  assign \$26  = \$24  & \$25 ;
-  assign \$27  = \$23  | \$26 ;
-  assign \$28  = bits[5:3] > 1'h0;
-  assign \$29  = ! bits[5:3];
-  assign \$30  = bits[2:0] > 3'h5;
-  assign \$31  = \$29  & \$30 ;
-  assign \$32  = \$28  | \$31 ;
-  assign \$33  = bits[5:3] > 1'h0;
-  assign \$34  = ! bits[5:3];
-  assign \$35  = bits[2:0] > 3'h6;
-  assign \$36  = \$34  & \$35 ;
-  assign \$37  = \$33  | \$36 ;
-  assign \$38  = bits[5:3] > 1'h0;
-  assign \$39  = ! bits[5:3];
-  assign \$42  = bits[5:3] > 1'h1;
-  assign \$43  = bits[5:3] == 1'h1;
-  assign \$44  = bits[2:0] > 1'h0;
-  assign \$45  = \$43  & \$44 ;
-  assign \$46  = \$42  | \$45 ;
-  assign \$47  = bits[5:3] > 1'h1;
-  assign \$48  = bits[5:3] == 1'h1;
-  assign \$49  = bits[2:0] > 1'h1;
-  assign \$50  = \$48  & \$49 ;
-  assign \$51  = \$47  | \$50 ;
-  assign \$52  = bits[5:3] > 1'h1;
-  assign \$53  = bits[5:3] == 1'h1;
-  assign \$54  = bits[2:0] > 2'h2;
-  assign \$55  = \$53  & \$54 ;
-  assign \$56  = \$52  | \$55 ;
-  assign \$57  = bits[5:3] > 1'h1;
-  assign \$58  = bits[5:3] == 1'h1;
-  assign \$59  = bits[2:0] > 2'h3;
-  assign \$60  = \$58  & \$59 ;
-  assign \$61  = \$57  | \$60 ;
-  assign \$62  = bits[5:3] > 1'h1;
-  assign \$63  = bits[5:3] == 1'h1;
-  assign \$64  = bits[2:0] > 3'h4;
+  assign \$7  = ~ bits[5];
+  assign \$8  = bits[4] & \$7 ;
+  assign \$9  = \$6  | \$8 ;
+  assign \$10  = \$9  | bits[5];
+  assign \$11  = ! bits[5:3];
+  assign \$12  = ~ bits[1];
+  assign \$13  = bits[0] & \$12 ;
+  assign \$14  = ~ bits[2];
+  assign \$15  = \$13  & \$14 ;
+  assign \$16  = ~ bits[2];
+  assign \$17  = bits[1] & \$16 ;
+  assign \$18  = \$15  | \$17 ;
+  assign \$19  = \$18  | bits[2];
+  assign \$20  = \$11  & \$19 ;
+  assign \$21  = \$10  | \$20 ;
+  assign \$22  = ~ bits[4];
+  assign \$23  = bits[3] & \$22 ;
+  assign \$24  = ~ bits[5];
+  assign \$25  = \$23  & \$24 ;
+  assign \$26  = ~ bits[5];
+  assign \$27  = bits[4] & \$26 ;
+  assign \$28  = \$25  | \$27 ;
+  assign \$29  = \$28  | bits[5];
+  assign \$30  = ! bits[5:3];
+  assign \$31  = ~ bits[2];
+  assign \$32  = bits[1] & \$31 ;
+  assign \$33  = \$32  | bits[2];
+  assign \$34  = \$30  & \$33 ;
+  assign \$35  = \$29  | \$34 ;
+  assign \$36  = ~ bits[4];
+  assign \$37  = bits[3] & \$36 ;
+  assign \$38  = ~ bits[5];
+  assign \$39  = \$37  & \$38 ;
+  assign \$40  = ~ bits[5];
+  assign \$41  = bits[4] & \$40 ;
+  assign \$42  = \$39  | \$41 ;
+  assign \$43  = \$42  | bits[5];
+  assign \$44  = ! bits[5:3];
+  assign \$45  = bits[0] & bits[1];
+  assign \$46  = ~ bits[2];
+  assign \$47  = \$45  & \$46 ;
+  assign \$48  = \$47  | bits[2];
+  assign \$49  = \$44  & \$48 ;
+  assign \$50  = \$43  | \$49 ;
+  assign \$51  = ~ bits[4];
+  assign \$52  = bits[3] & \$51 ;
+  assign \$53  = ~ bits[5];
+  assign \$54  = \$52  & \$53 ;
+  assign \$55  = ~ bits[5];
+  assign \$56  = bits[4] & \$55 ;
+  assign \$57  = \$54  | \$56 ;
+  assign \$58  = \$57  | bits[5];
+  assign \$59  = ! bits[5:3];
+  assign \$60  = \$59  & bits[2];
+  assign \$61  = \$58  | \$60 ;
+  assign \$62  = ~ bits[4];
+  assign \$63  = bits[3] & \$62 ;
+  assign \$64  = ~ bits[5];
   assign \$65  = \$63  & \$64 ;
-  assign \$66  = \$62  | \$65 ;
-  assign \$67  = bits[5:3] > 1'h1;
-  assign \$68  = bits[5:3] == 1'h1;
-  assign \$69  = bits[2:0] > 3'h5;
-  assign \$70  = \$68  & \$69 ;
-  assign \$71  = \$67  | \$70 ;
-  assign \$72  = bits[5:3] > 1'h1;
-  assign \$73  = bits[5:3] == 1'h1;
-  assign \$74  = bits[2:0] > 3'h6;
-  assign \$75  = \$73  & \$74 ;
-  assign \$76  = \$72  | \$75 ;
-  assign \$77  = bits[5:3] > 1'h1;
-  assign \$78  = bits[5:3] == 1'h1;
-  assign \$81  = bits[5:3] > 2'h2;
-  assign \$82  = bits[5:3] == 2'h2;
-  assign \$83  = bits[2:0] > 1'h0;
-  assign \$84  = \$82  & \$83 ;
-  assign \$85  = \$81  | \$84 ;
-  assign \$86  = bits[5:3] > 2'h2;
-  assign \$87  = bits[5:3] == 2'h2;
-  assign \$88  = bits[2:0] > 1'h1;
-  assign \$89  = \$87  & \$88 ;
-  assign \$90  = \$86  | \$89 ;
-  assign \$91  = bits[5:3] > 2'h2;
-  assign \$92  = bits[5:3] == 2'h2;
-  assign \$93  = bits[2:0] > 2'h2;
-  assign \$94  = \$92  & \$93 ;
-  assign \$95  = \$91  | \$94 ;
-  assign \$96  = bits[5:3] > 2'h2;
-  assign \$97  = bits[5:3] == 2'h2;
-  assign \$98  = bits[2:0] > 2'h3;
-  assign \$99  = \$97  & \$98 ;
-  assign \$100  = \$96  | \$99 ;
-  assign \$101  = bits[5:3] > 2'h2;
-  assign \$102  = bits[5:3] == 2'h2;
-  assign \$103  = bits[2:0] > 3'h4;
-  assign \$104  = \$102  & \$103 ;
-  assign \$105  = \$101  | \$104 ;
-  assign \$106  = bits[5:3] > 2'h2;
-  assign \$107  = bits[5:3] == 2'h2;
-  assign \$108  = bits[2:0] > 3'h5;
-  assign \$109  = \$107  & \$108 ;
-  assign \$110  = \$106  | \$109 ;
-  assign \$111  = bits[5:3] > 2'h2;
-  assign \$112  = bits[5:3] == 2'h2;
-  assign \$113  = bits[2:0] > 3'h6;
-  assign \$114  = \$112  & \$113 ;
-  assign \$115  = \$111  | \$114 ;
-  assign \$116  = bits[5:3] > 2'h2;
-  assign \$117  = bits[5:3] == 2'h2;
-  assign \$120  = bits[5:3] > 2'h3;
-  assign \$121  = bits[5:3] == 2'h3;
-  assign \$122  = bits[2:0] > 1'h0;
-  assign \$123  = \$121  & \$122 ;
-  assign \$124  = \$120  | \$123 ;
-  assign \$125  = bits[5:3] > 2'h3;
-  assign \$126  = bits[5:3] == 2'h3;
-  assign \$127  = bits[2:0] > 1'h1;
-  assign \$128  = \$126  & \$127 ;
-  assign \$129  = \$125  | \$128 ;
-  assign \$130  = bits[5:3] > 2'h3;
-  assign \$131  = bits[5:3] == 2'h3;
-  assign \$132  = bits[2:0] > 2'h2;
-  assign \$133  = \$131  & \$132 ;
-  assign \$134  = \$130  | \$133 ;
-  assign \$135  = bits[5:3] > 2'h3;
-  assign \$136  = bits[5:3] == 2'h3;
-  assign \$137  = bits[2:0] > 2'h3;
-  assign \$138  = \$136  & \$137 ;
-  assign \$139  = \$135  | \$138 ;
-  assign \$140  = bits[5:3] > 2'h3;
-  assign \$141  = bits[5:3] == 2'h3;
-  assign \$142  = bits[2:0] > 3'h4;
+  assign \$66  = ~ bits[5];
+  assign \$67  = bits[4] & \$66 ;
+  assign \$68  = \$65  | \$67 ;
+  assign \$69  = \$68  | bits[5];
+  assign \$70  = ! bits[5:3];
+  assign \$71  = ~ bits[1];
+  assign \$72  = bits[0] & \$71 ;
+  assign \$73  = \$72  & bits[2];
+  assign \$74  = bits[1] & bits[2];
+  assign \$75  = \$73  | \$74 ;
+  assign \$76  = \$70  & \$75 ;
+  assign \$77  = \$69  | \$76 ;
+  assign \$78  = ~ bits[4];
+  assign \$79  = bits[3] & \$78 ;
+  assign \$80  = ~ bits[5];
+  assign \$81  = \$79  & \$80 ;
+  assign \$82  = ~ bits[5];
+  assign \$83  = bits[4] & \$82 ;
+  assign \$84  = \$81  | \$83 ;
+  assign \$85  = \$84  | bits[5];
+  assign \$86  = ! bits[5:3];
+  assign \$87  = bits[1] & bits[2];
+  assign \$88  = \$86  & \$87 ;
+  assign \$89  = \$85  | \$88 ;
+  assign \$90  = ~ bits[4];
+  assign \$91  = bits[3] & \$90 ;
+  assign \$92  = ~ bits[5];
+  assign \$93  = \$91  & \$92 ;
+  assign \$94  = ~ bits[5];
+  assign \$95  = bits[4] & \$94 ;
+  assign \$96  = \$93  | \$95 ;
+  assign \$97  = \$96  | bits[5];
+  assign \$98  = ! bits[5:3];
+  assign \$99  = bits[0] & bits[1];
+  assign \$100  = \$99  & bits[2];
+  assign \$101  = \$98  & \$100 ;
+  assign \$102  = \$97  | \$101 ;
+  assign \$103  = ~ bits[4];
+  assign \$104  = bits[3] & \$103 ;
+  assign \$105  = ~ bits[5];
+  assign \$106  = \$104  & \$105 ;
+  assign \$107  = ~ bits[5];
+  assign \$108  = bits[4] & \$107 ;
+  assign \$109  = \$106  | \$108 ;
+  assign \$110  = \$109  | bits[5];
+  assign \$111  = ! bits[5:3];
+  assign \$114  = ~ bits[5];
+  assign \$115  = bits[4] & \$114 ;
+  assign \$116  = \$115  | bits[5];
+  assign \$117  = bits[5:3] == 1'h1;
+  assign \$118  = ~ bits[1];
+  assign \$119  = bits[0] & \$118 ;
+  assign \$120  = ~ bits[2];
+  assign \$121  = \$119  & \$120 ;
+  assign \$122  = ~ bits[2];
+  assign \$123  = bits[1] & \$122 ;
+  assign \$124  = \$121  | \$123 ;
+  assign \$125  = \$124  | bits[2];
+  assign \$126  = \$117  & \$125 ;
+  assign \$127  = \$116  | \$126 ;
+  assign \$128  = ~ bits[5];
+  assign \$129  = bits[4] & \$128 ;
+  assign \$130  = \$129  | bits[5];
+  assign \$131  = bits[5:3] == 1'h1;
+  assign \$132  = ~ bits[2];
+  assign \$133  = bits[1] & \$132 ;
+  assign \$134  = \$133  | bits[2];
+  assign \$135  = \$131  & \$134 ;
+  assign \$136  = \$130  | \$135 ;
+  assign \$137  = ~ bits[5];
+  assign \$138  = bits[4] & \$137 ;
+  assign \$139  = \$138  | bits[5];
+  assign \$140  = bits[5:3] == 1'h1;
+  assign \$141  = bits[0] & bits[1];
+  assign \$142  = ~ bits[2];
   assign \$143  = \$141  & \$142 ;
-  assign \$144  = \$140  | \$143 ;
-  assign \$145  = bits[5:3] > 2'h3;
-  assign \$146  = bits[5:3] == 2'h3;
-  assign \$147  = bits[2:0] > 3'h5;
-  assign \$148  = \$146  & \$147 ;
-  assign \$149  = \$145  | \$148 ;
-  assign \$150  = bits[5:3] > 2'h3;
-  assign \$151  = bits[5:3] == 2'h3;
-  assign \$152  = bits[2:0] > 3'h6;
-  assign \$153  = \$151  & \$152 ;
-  assign \$154  = \$150  | \$153 ;
-  assign \$155  = bits[5:3] > 2'h3;
-  assign \$156  = bits[5:3] == 2'h3;
-  assign \$159  = bits[5:3] > 3'h4;
-  assign \$160  = bits[5:3] == 3'h4;
-  assign \$161  = bits[2:0] > 1'h0;
-  assign \$162  = \$160  & \$161 ;
-  assign \$163  = \$159  | \$162 ;
-  assign \$164  = bits[5:3] > 3'h4;
-  assign \$165  = bits[5:3] == 3'h4;
-  assign \$166  = bits[2:0] > 1'h1;
-  assign \$167  = \$165  & \$166 ;
-  assign \$168  = \$164  | \$167 ;
-  assign \$169  = bits[5:3] > 3'h4;
-  assign \$170  = bits[5:3] == 3'h4;
-  assign \$171  = bits[2:0] > 2'h2;
-  assign \$172  = \$170  & \$171 ;
-  assign \$173  = \$169  | \$172 ;
-  assign \$174  = bits[5:3] > 3'h4;
-  assign \$175  = bits[5:3] == 3'h4;
-  assign \$176  = bits[2:0] > 2'h3;
-  assign \$177  = \$175  & \$176 ;
-  assign \$178  = \$174  | \$177 ;
-  assign \$179  = bits[5:3] > 3'h4;
-  assign \$180  = bits[5:3] == 3'h4;
-  assign \$181  = bits[2:0] > 3'h4;
-  assign \$182  = \$180  & \$181 ;
-  assign \$183  = \$179  | \$182 ;
-  assign \$184  = bits[5:3] > 3'h4;
-  assign \$185  = bits[5:3] == 3'h4;
-  assign \$186  = bits[2:0] > 3'h5;
+  assign \$144  = \$143  | bits[2];
+  assign \$145  = \$140  & \$144 ;
+  assign \$146  = \$139  | \$145 ;
+  assign \$147  = ~ bits[5];
+  assign \$148  = bits[4] & \$147 ;
+  assign \$149  = \$148  | bits[5];
+  assign \$150  = bits[5:3] == 1'h1;
+  assign \$151  = \$150  & bits[2];
+  assign \$152  = \$149  | \$151 ;
+  assign \$153  = ~ bits[5];
+  assign \$154  = bits[4] & \$153 ;
+  assign \$155  = \$154  | bits[5];
+  assign \$156  = bits[5:3] == 1'h1;
+  assign \$157  = ~ bits[1];
+  assign \$158  = bits[0] & \$157 ;
+  assign \$159  = \$158  & bits[2];
+  assign \$160  = bits[1] & bits[2];
+  assign \$161  = \$159  | \$160 ;
+  assign \$162  = \$156  & \$161 ;
+  assign \$163  = \$155  | \$162 ;
+  assign \$164  = ~ bits[5];
+  assign \$165  = bits[4] & \$164 ;
+  assign \$166  = \$165  | bits[5];
+  assign \$167  = bits[5:3] == 1'h1;
+  assign \$168  = bits[1] & bits[2];
+  assign \$169  = \$167  & \$168 ;
+  assign \$170  = \$166  | \$169 ;
+  assign \$171  = ~ bits[5];
+  assign \$172  = bits[4] & \$171 ;
+  assign \$173  = \$172  | bits[5];
+  assign \$174  = bits[5:3] == 1'h1;
+  assign \$175  = bits[0] & bits[1];
+  assign \$176  = \$175  & bits[2];
+  assign \$177  = \$174  & \$176 ;
+  assign \$178  = \$173  | \$177 ;
+  assign \$179  = ~ bits[5];
+  assign \$180  = bits[4] & \$179 ;
+  assign \$181  = \$180  | bits[5];
+  assign \$182  = bits[5:3] == 1'h1;
+  assign \$185  = bits[3] & bits[4];
+  assign \$186  = ~ bits[5];
   assign \$187  = \$185  & \$186 ;
-  assign \$188  = \$184  | \$187 ;
-  assign \$189  = bits[5:3] > 3'h4;
-  assign \$190  = bits[5:3] == 3'h4;
-  assign \$191  = bits[2:0] > 3'h6;
-  assign \$192  = \$190  & \$191 ;
-  assign \$193  = \$189  | \$192 ;
-  assign \$194  = bits[5:3] > 3'h4;
-  assign \$195  = bits[5:3] == 3'h4;
-  assign \$198  = \$2 [39:0] & { \$197 , \$193 , \$188 , \$183 , \$178 , \$173 , \$168 , \$163 , \$158 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$115 , \$110 , \$105 , \$100 , \$95 , \$90 , \$85 , \$80 , \$76 , \$71 , \$66 , \$61 , \$56 , \$51 , \$46 , \$41 , \$37 , \$32 , \$27 , \$22 , \$17 , \$12 , \$7  };
-  assign \$199  = shifted[8:0] <= double_tolerance;
-  assign \$200  = | shifted[39:9];
-  assign \$201  = ~ \$200 ;
-  assign \$202  = \$199  & \$201 ;
+  assign \$188  = \$187  | bits[5];
+  assign \$189  = bits[5:3] == 2'h2;
+  assign \$190  = ~ bits[1];
+  assign \$191  = bits[0] & \$190 ;
+  assign \$192  = ~ bits[2];
+  assign \$193  = \$191  & \$192 ;
+  assign \$194  = ~ bits[2];
+  assign \$195  = bits[1] & \$194 ;
+  assign \$196  = \$193  | \$195 ;
+  assign \$197  = \$196  | bits[2];
+  assign \$198  = \$189  & \$197 ;
+  assign \$199  = \$188  | \$198 ;
+  assign \$200  = bits[3] & bits[4];
+  assign \$201  = ~ bits[5];
+  assign \$202  = \$200  & \$201 ;
+  assign \$203  = \$202  | bits[5];
+  assign \$204  = bits[5:3] == 2'h2;
+  assign \$205  = ~ bits[2];
+  assign \$206  = bits[1] & \$205 ;
+  assign \$207  = \$206  | bits[2];
+  assign \$208  = \$204  & \$207 ;
+  assign \$209  = \$203  | \$208 ;
+  assign \$210  = bits[3] & bits[4];
+  assign \$211  = ~ bits[5];
+  assign \$212  = \$210  & \$211 ;
+  assign \$213  = \$212  | bits[5];
+  assign \$214  = bits[5:3] == 2'h2;
+  assign \$215  = bits[0] & bits[1];
+  assign \$216  = ~ bits[2];
+  assign \$217  = \$215  & \$216 ;
+  assign \$218  = \$217  | bits[2];
+  assign \$219  = \$214  & \$218 ;
+  assign \$220  = \$213  | \$219 ;
+  assign \$221  = bits[3] & bits[4];
+  assign \$222  = ~ bits[5];
+  assign \$223  = \$221  & \$222 ;
+  assign \$224  = \$223  | bits[5];
+  assign \$225  = bits[5:3] == 2'h2;
+  assign \$226  = \$225  & bits[2];
+  assign \$227  = \$224  | \$226 ;
+  assign \$228  = bits[3] & bits[4];
+  assign \$229  = ~ bits[5];
+  assign \$230  = \$228  & \$229 ;
+  assign \$231  = \$230  | bits[5];
+  assign \$232  = bits[5:3] == 2'h2;
+  assign \$233  = ~ bits[1];
+  assign \$234  = bits[0] & \$233 ;
+  assign \$235  = \$234  & bits[2];
+  assign \$236  = bits[1] & bits[2];
+  assign \$237  = \$235  | \$236 ;
+  assign \$238  = \$232  & \$237 ;
+  assign \$239  = \$231  | \$238 ;
+  assign \$240  = bits[3] & bits[4];
+  assign \$241  = ~ bits[5];
+  assign \$242  = \$240  & \$241 ;
+  assign \$243  = \$242  | bits[5];
+  assign \$244  = bits[5:3] == 2'h2;
+  assign \$245  = bits[1] & bits[2];
+  assign \$246  = \$244  & \$245 ;
+  assign \$247  = \$243  | \$246 ;
+  assign \$248  = bits[3] & bits[4];
+  assign \$249  = ~ bits[5];
+  assign \$250  = \$248  & \$249 ;
+  assign \$251  = \$250  | bits[5];
+  assign \$252  = bits[5:3] == 2'h2;
+  assign \$253  = bits[0] & bits[1];
+  assign \$254  = \$253  & bits[2];
+  assign \$255  = \$252  & \$254 ;
+  assign \$256  = \$251  | \$255 ;
+  assign \$257  = bits[3] & bits[4];
+  assign \$258  = ~ bits[5];
+  assign \$259  = \$257  & \$258 ;
+  assign \$260  = \$259  | bits[5];
+  assign \$261  = bits[5:3] == 2'h2;
+  assign \$264  = bits[5:3] == 2'h3;
+  assign \$265  = ~ bits[1];
+  assign \$266  = bits[0] & \$265 ;
+  assign \$267  = ~ bits[2];
+  assign \$268  = \$266  & \$267 ;
+  assign \$269  = ~ bits[2];
+  assign \$270  = bits[1] & \$269 ;
+  assign \$271  = \$268  | \$270 ;
+  assign \$272  = \$271  | bits[2];
+  assign \$273  = \$264  & \$272 ;
+  assign \$274  = bits[5] | \$273 ;
+  assign \$275  = bits[5:3] == 2'h3;
+  assign \$276  = ~ bits[2];
+  assign \$277  = bits[1] & \$276 ;
+  assign \$278  = \$277  | bits[2];
+  assign \$279  = \$275  & \$278 ;
+  assign \$280  = bits[5] | \$279 ;
+  assign \$281  = bits[5:3] == 2'h3;
+  assign \$282  = bits[0] & bits[1];
+  assign \$283  = ~ bits[2];
+  assign \$284  = \$282  & \$283 ;
+  assign \$285  = \$284  | bits[2];
+  assign \$286  = \$281  & \$285 ;
+  assign \$287  = bits[5] | \$286 ;
+  assign \$288  = bits[5:3] == 2'h3;
+  assign \$289  = \$288  & bits[2];
+  assign \$290  = bits[5] | \$289 ;
+  assign \$291  = bits[5:3] == 2'h3;
+  assign \$292  = ~ bits[1];
+  assign \$293  = bits[0] & \$292 ;
+  assign \$294  = \$293  & bits[2];
+  assign \$295  = bits[1] & bits[2];
+  assign \$296  = \$294  | \$295 ;
+  assign \$297  = \$291  & \$296 ;
+  assign \$298  = bits[5] | \$297 ;
+  assign \$299  = bits[5:3] == 2'h3;
+  assign \$300  = bits[1] & bits[2];
+  assign \$301  = \$299  & \$300 ;
+  assign \$302  = bits[5] | \$301 ;
+  assign \$303  = bits[5:3] == 2'h3;
+  assign \$304  = bits[0] & bits[1];
+  assign \$305  = \$304  & bits[2];
+  assign \$306  = \$303  & \$305 ;
+  assign \$307  = bits[5] | \$306 ;
+  assign \$308  = bits[5:3] == 2'h3;
+  assign \$311  = ~ bits[4];
+  assign \$312  = bits[3] & \$311 ;
+  assign \$313  = \$312  & bits[5];
+  assign \$314  = bits[4] & bits[5];
+  assign \$315  = \$313  | \$314 ;
+  assign \$316  = bits[5:3] == 3'h4;
+  assign \$317  = ~ bits[1];
+  assign \$318  = bits[0] & \$317 ;
+  assign \$319  = ~ bits[2];
+  assign \$320  = \$318  & \$319 ;
+  assign \$321  = ~ bits[2];
+  assign \$322  = bits[1] & \$321 ;
+  assign \$323  = \$320  | \$322 ;
+  assign \$324  = \$323  | bits[2];
+  assign \$325  = \$316  & \$324 ;
+  assign \$326  = \$315  | \$325 ;
+  assign \$327  = ~ bits[4];
+  assign \$328  = bits[3] & \$327 ;
+  assign \$329  = \$328  & bits[5];
+  assign \$330  = bits[4] & bits[5];
+  assign \$331  = \$329  | \$330 ;
+  assign \$332  = bits[5:3] == 3'h4;
+  assign \$333  = ~ bits[2];
+  assign \$334  = bits[1] & \$333 ;
+  assign \$335  = \$334  | bits[2];
+  assign \$336  = \$332  & \$335 ;
+  assign \$337  = \$331  | \$336 ;
+  assign \$338  = ~ bits[4];
+  assign \$339  = bits[3] & \$338 ;
+  assign \$340  = \$339  & bits[5];
+  assign \$341  = bits[4] & bits[5];
+  assign \$342  = \$340  | \$341 ;
+  assign \$343  = bits[5:3] == 3'h4;
+  assign \$344  = bits[0] & bits[1];
+  assign \$345  = ~ bits[2];
+  assign \$346  = \$344  & \$345 ;
+  assign \$347  = \$346  | bits[2];
+  assign \$348  = \$343  & \$347 ;
+  assign \$349  = \$342  | \$348 ;
+  assign \$350  = ~ bits[4];
+  assign \$351  = bits[3] & \$350 ;
+  assign \$352  = \$351  & bits[5];
+  assign \$353  = bits[4] & bits[5];
+  assign \$354  = \$352  | \$353 ;
+  assign \$355  = bits[5:3] == 3'h4;
+  assign \$356  = \$355  & bits[2];
+  assign \$357  = \$354  | \$356 ;
+  assign \$358  = ~ bits[4];
+  assign \$359  = bits[3] & \$358 ;
+  assign \$360  = \$359  & bits[5];
+  assign \$361  = bits[4] & bits[5];
+  assign \$362  = \$360  | \$361 ;
+  assign \$363  = bits[5:3] == 3'h4;
+  assign \$364  = ~ bits[1];
+  assign \$365  = bits[0] & \$364 ;
+  assign \$366  = \$365  & bits[2];
+  assign \$367  = bits[1] & bits[2];
+  assign \$368  = \$366  | \$367 ;
+  assign \$369  = \$363  & \$368 ;
+  assign \$370  = \$362  | \$369 ;
+  assign \$371  = ~ bits[4];
+  assign \$372  = bits[3] & \$371 ;
+  assign \$373  = \$372  & bits[5];
+  assign \$374  = bits[4] & bits[5];
+  assign \$375  = \$373  | \$374 ;
+  assign \$376  = bits[5:3] == 3'h4;
+  assign \$377  = bits[1] & bits[2];
+  assign \$378  = \$376  & \$377 ;
+  assign \$379  = \$375  | \$378 ;
+  assign \$380  = ~ bits[4];
+  assign \$381  = bits[3] & \$380 ;
+  assign \$382  = \$381  & bits[5];
+  assign \$383  = bits[4] & bits[5];
+  assign \$384  = \$382  | \$383 ;
+  assign \$385  = bits[5:3] == 3'h4;
+  assign \$386  = bits[0] & bits[1];
+  assign \$387  = \$386  & bits[2];
+  assign \$388  = \$385  & \$387 ;
+  assign \$389  = \$384  | \$388 ;
+  assign \$390  = ~ bits[4];
+  assign \$391  = bits[3] & \$390 ;
+  assign \$392  = \$391  & bits[5];
+  assign \$393  = bits[4] & bits[5];
+  assign \$394  = \$392  | \$393 ;
+  assign \$395  = bits[5:3] == 3'h4;
+  assign \$398  = \$2 [39:0] & { \$397 , \$389 , \$379 , \$370 , \$357 , \$349 , \$337 , \$326 , \$310 , \$307 , \$302 , \$298 , \$290 , \$287 , \$280 , \$274 , \$263 , \$256 , \$247 , \$239 , \$227 , \$220 , \$209 , \$199 , \$184 , \$178 , \$170 , \$163 , \$152 , \$146 , \$136 , \$127 , \$113 , \$102 , \$89 , \$77 , \$61 , \$50 , \$35 , \$21  };
+  assign \$399  = shifted[8:0] <= double_tolerance;
+  assign \$400  = | shifted[39:9];
+  assign \$401  = ~ \$400 ;
+  assign \$402  = \$399  & \$401 ;
   always @(posedge clk)
-    shifted <= \$203 ;
+    shifted <= \$403 ;
   always @(posedge clk)
-    double_tolerance <= \$204 ;
+    double_tolerance <= \$404 ;
   always @(posedge clk)
-    match <= \$205 ;
+    match <= \$405 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
-    \$203  = \$198 ;
+    \$403  = \$398 ;
     if (rst) begin
-      \$203  = 40'h0000000000;
+      \$403  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
-    \$204  = { tolerance, 1'h0 };
+    \$404  = { tolerance, 1'h0 };
     if (rst) begin
-      \$204  = 9'h000;
+      \$404  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
-    \$205  = \$202 ;
+    \$405  = \$402 ;
     if (rst) begin
-      \$205  = 1'h0;
+      \$405  = 1'h0;
     end
   end
-  assign \$40  = 1'h0;
-  assign \$41  = \$38 ;
-  assign \$79  = 1'h0;
-  assign \$80  = \$77 ;
-  assign \$118  = 1'h0;
-  assign \$119  = \$116 ;
-  assign \$157  = 1'h0;
-  assign \$158  = \$155 ;
-  assign \$196  = 1'h0;
-  assign \$197  = \$194 ;
+  assign \$112  = 1'h0;
+  assign \$113  = \$110 ;
+  assign \$183  = 1'h0;
+  assign \$184  = \$181 ;
+  assign \$262  = 1'h0;
+  assign \$263  = \$260 ;
+  assign \$309  = 1'h0;
+  assign \$310  = bits[5];
+  assign \$396  = 1'h0;
+  assign \$397  = \$394 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -40568,7 +41616,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$6320$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$6844$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -40746,8 +41794,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$6320$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$6320$0 ;
-  wire \port$6320$0 ;
+  output \port$6844$0 ;
+  wire \port$6844$0 ;
   output report;
   wire report;
   input report_frame;
@@ -40865,7 +41913,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$6320$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$6320$0  = \$2 ;
+  assign \port$6844$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

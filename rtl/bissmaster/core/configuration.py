@@ -7,6 +7,7 @@ from amaranth.lib.wiring import In, Out
 from .. import protocol
 from ..layouts import config_custom_crcs, config_enables, config_layout, config_words
 from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, HALF_PERIOD_WIDTH, QUIET_WIDTH, Crc
+from .const_compare import above, at_most
 from .crc_engine import crc_settings
 
 
@@ -98,14 +99,16 @@ class Configuration(wiring.Component):
                 crc_ok |= word.crc == kind
             if p.custom_crc:
                 width = customs[w].width
-                crc_ok |= (word.crc == Crc.CUSTOM) & (width != 0) & (width <= CRC_MAX_WIDTH)
-            return word.data_bits.any() & (word.data_bits <= p.max_data_bits[w]) & crc_ok
+                crc_ok |= (word.crc == Crc.CUSTOM) & (width != 0) & at_most(width, CRC_MAX_WIDTH)
+            # Compares with constants as logic (const_compare: no carry chain each).
+            return (word.data_bits.any() & at_most(word.data_bits, p.max_data_bits[w])
+                    & crc_ok)
 
         words = config_words(cfg, p)
         assert protocol.MA_HALF_PERIOD_MIN == 2
         ok = cfg.ma_half_period[1:].any() & word_ok(words[0], 0)        # half period >= 2
         if p.max_line_delay < 2**p.delay_limit_width - 1:
-            ok &= cfg.delay_limit <= p.max_line_delay
+            ok &= at_most(cfg.delay_limit, p.max_line_delay)
         enables = config_enables(cfg, p)
         for w in range(1, p.words):
             ok &= ~enables[w] | word_ok(words[w], w)
@@ -131,7 +134,7 @@ class Configuration(wiring.Component):
             for w in range(1, p.words):
                 ssi_bad |= enables[w]
             if p.max_line_delay < 2**p.delay_limit_width - 1:
-                ssi_bad |= cfg.ssi_delay > p.max_line_delay
+                ssi_bad |= above(cfg.ssi_delay, p.max_line_delay)
             ok &= ~(cfg.ssi & ssi_bad)
         return ok
 

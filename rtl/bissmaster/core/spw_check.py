@@ -4,22 +4,19 @@ from amaranth.hdl import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from .const_compare import above
+
 
 def _below(bits, width):
     """``width`` bits, bit ``i`` set when ``i < bits`` (``2**bits - 1``), from a two-level decode:
     ``bits``' high part against each group of 8, its low 3 bits against each place in a group.
     Written out because ``Cat(bits > i for i in range(width))`` maps each compare to a carry
     chain of its own on ECP5 (Yosys's ``$alu`` for every ``$gt``): 70 of the check's 94 carry
-    cells at 40 bits, against about 10 LUT4 for this decode (issue 27)."""
+    cells at 40 bits, against about 10 LUT4 for this decode (issue 27; ``const_compare``)."""
     hi, lo = bits[3:], bits[:3]
     groups = (width + 7) // 8
 
-    def above(value, k):
-        """``value > k``, the constant 0 where ``value`` cannot exceed ``k`` (no constant
-        compare left in the Verilog: Verilator's CMPCONST)."""
-        return value > k if k < 2**len(value) - 1 else C(0, 1)
-
-    hi_above = [above(hi, g) for g in range(groups)]    # small: 3 bits against a constant
+    hi_above = [above(hi, g) for g in range(groups)]
     hi_at = [hi == g if len(hi) else C(g == 0, 1) for g in range(groups)]
     lo_above = [above(lo, q) for q in range(8)]
     return Cat(hi_above[i // 8] | (hi_at[i // 8] & lo_above[i % 8]) for i in range(width))
