@@ -426,6 +426,22 @@ def place_and_route(cfg_dir, arch, seeds, in_bits, variants=1):
             "variants": variants, "seeds": results}
 
 
+def check_fits(cfg_dir, arch, net, tag=""):
+    """Pack ``net`` with nextpnr (no placement) and raise :class:`DoesNotFit` if any cell class
+    exceeds the device: its placer would otherwise search for hours with 150 % of the logic
+    cells (axil-8 on the 25F), where packing answers in seconds."""
+    a = ARCHS[arch]
+    pack_log = f"pack_{arch}{tag}.log"
+    run([tool(a["nextpnr"]), *a["device"], "--json", net, "--pack-only", "--log", pack_log],
+        cfg_dir, f"pack_{arch}{tag}.stdout")
+    usage = re.findall(r"^Info:\s+(\w+):\s+(\d+)/\s*(\d+)\s+(\d+)%",
+                       (cfg_dir / pack_log).read_text(), re.M)
+    full = [f"{c} {u}/{n}" for c, u, n, _ in usage if int(u) > int(n)]
+    if full:
+        raise DoesNotFit(", ".join(full) + " (packed)",
+                         {c: (int(u), int(n)) for c, u, n, _ in usage})
+
+
 def _place_and_route_variant(cfg_dir, arch, seeds, in_bits, variant):
     a = ARCHS[arch]
     # Variant 1 keeps the file names the flow always had.
@@ -440,6 +456,7 @@ def _place_and_route_variant(cfg_dir, arch, seeds, in_bits, variant):
          f"read_verilog {core} harness.v; {a['synth']} -top synth_top -json {net}; "
          f"tee -q -o harness_{arch}{tag}_stat.json stat -json"],
         cfg_dir, f"harness_{arch}{tag}.stdout")
+    check_fits(cfg_dir, arch, net, tag)
     results = []
     for seed in seeds:
         report = f"pnr_{arch}{tag}_seed{seed}.json"

