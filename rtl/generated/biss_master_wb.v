@@ -1072,12 +1072,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$8726$0 (\$10 ),
-    .\port$8737$0 (\$11 ),
-    .\port$8814$0 (\$12 ),
-    .\port$9273$0 (\$13 ),
-    .\port$9284$0 (\$14 ),
-    .\port$9361$0 (\$15 ),
+    .\port$13352$0 (\$10 ),
+    .\port$13363$0 (\$11 ),
+    .\port$13440$0 (\$12 ),
+    .\port$13899$0 (\$13 ),
+    .\port$13910$0 (\$14 ),
+    .\port$13987$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1153,9 +1153,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$8726$0 (\$10 ),
-    .\port$8737$0 (\$11 ),
-    .\port$8814$0 (\$12 ),
+    .\port$13352$0 (\$10 ),
+    .\port$13363$0 (\$11 ),
+    .\port$13440$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1230,9 +1230,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(\regs__count_en$767 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$791 ),
-    .\port$9273$0 (\$13 ),
-    .\port$9284$0 (\$14 ),
-    .\port$9361$0 (\$15 ),
+    .\port$13899$0 (\$13 ),
+    .\port$13910$0 (\$14 ),
+    .\port$13987$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$455 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1992,7 +1992,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start
 , ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray
 , ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double
-, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$8726$0 , \port$8737$0 , ch0__ca_done, \port$8814$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$9273$0 , \port$9284$0 , ch1__ca_done, \port$9361$0 
+, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13352$0 , \port$13363$0 , ch0__ca_done, \port$13440$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$13899$0 , \port$13910$0 , ch1__ca_done, \port$13987$0 
 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
@@ -4118,18 +4118,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$8726$0 ;
-  wire [186:0] \port$8726$0 ;
-  input [79:0] \port$8737$0 ;
-  wire [79:0] \port$8737$0 ;
-  input [9:0] \port$8814$0 ;
-  wire [9:0] \port$8814$0 ;
-  input [186:0] \port$9273$0 ;
-  wire [186:0] \port$9273$0 ;
-  input [79:0] \port$9284$0 ;
-  wire [79:0] \port$9284$0 ;
-  input [9:0] \port$9361$0 ;
-  wire [9:0] \port$9361$0 ;
+  input [186:0] \port$13352$0 ;
+  wire [186:0] \port$13352$0 ;
+  input [79:0] \port$13363$0 ;
+  wire [79:0] \port$13363$0 ;
+  input [9:0] \port$13440$0 ;
+  wire [9:0] \port$13440$0 ;
+  input [186:0] \port$13899$0 ;
+  wire [186:0] \port$13899$0 ;
+  input [79:0] \port$13910$0 ;
+  wire [79:0] \port$13910$0 ;
+  input [9:0] \port$13987$0 ;
+  wire [9:0] \port$13987$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
@@ -4367,7 +4367,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$160  = \$158  | \$159 ;
   assign \$161  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$8726$0 [182:177], 4'h0, \port$8726$0 [186:183], 1'h0, \port$8726$0 [176:174], 1'h0, \port$8726$0 [133:131], 3'h0, \port$8726$0 [49], \port$8726$0 [3:0] } : 32'd0;
+  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$13352$0 [182:177], 4'h0, \port$13352$0 [186:183], 1'h0, \port$13352$0 [176:174], 1'h0, \port$13352$0 [133:131], 3'h0, \port$13352$0 [49], \port$13352$0 [3:0] } : 32'd0;
   assign \$168  = \$166  | \$167 ;
   assign \$169  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$170  = \$168  | \$169 ;
@@ -4383,13 +4383,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$180  = \$178  | \$179 ;
   assign \$181  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$8814$0 [9:3], 1'h0, \port$8814$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$13440$0 [9:3], 1'h0, \port$13440$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$228  = \$226  | \$227 ;
-  assign \$229  = ch0_read_select_c3 ? \port$8737$0 [31:0] : 32'd0;
+  assign \$229  = ch0_read_select_c3 ? \port$13363$0 [31:0] : 32'd0;
   assign \$230  = \$228  | \$229 ;
-  assign \$231  = ch0_read_select_c4 ? \port$8737$0 [63:32] : 32'd0;
+  assign \$231  = ch0_read_select_c4 ? \port$13363$0 [63:32] : 32'd0;
   assign \$232  = \$230  | \$231 ;
-  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$8737$0 [79:64] } : 32'd0;
+  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$13363$0 [79:64] } : 32'd0;
   assign \$234  = \$232  | \$233 ;
   assign \$237  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$238  = \$236  | \$237 ;
@@ -4538,7 +4538,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$384  = \$382  | \$383 ;
   assign \$385  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$386  = \$384  | \$385 ;
-  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$9273$0 [182:177], 4'h0, \port$9273$0 [186:183], 1'h0, \port$9273$0 [176:174], 1'h0, \port$9273$0 [133:131], 3'h0, \port$9273$0 [49], \port$9273$0 [3:0] } : 32'd0;
+  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$13899$0 [182:177], 4'h0, \port$13899$0 [186:183], 1'h0, \port$13899$0 [176:174], 1'h0, \port$13899$0 [133:131], 3'h0, \port$13899$0 [49], \port$13899$0 [3:0] } : 32'd0;
   assign \$392  = \$390  | \$391 ;
   assign \$393  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$394  = \$392  | \$393 ;
@@ -4554,13 +4554,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$404  = \$402  | \$403 ;
   assign \$405  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$406  = \$404  | \$405 ;
-  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$9361$0 [9:3], 1'h0, \port$9361$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$13987$0 [9:3], 1'h0, \port$13987$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$452  = \$450  | \$451 ;
-  assign \$453  = ch1_read_select_143 ? \port$9284$0 [31:0] : 32'd0;
+  assign \$453  = ch1_read_select_143 ? \port$13910$0 [31:0] : 32'd0;
   assign \$454  = \$452  | \$453 ;
-  assign \$455  = ch1_read_select_144 ? \port$9284$0 [63:32] : 32'd0;
+  assign \$455  = ch1_read_select_144 ? \port$13910$0 [63:32] : 32'd0;
   assign \$456  = \$454  | \$455 ;
-  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$9284$0 [79:64] } : 32'd0;
+  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$13910$0 [79:64] } : 32'd0;
   assign \$458  = \$456  | \$457 ;
   assign \$461  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$462  = \$460  | \$461 ;
@@ -6969,7 +6969,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$809  = ch0_result_status_status_snapshot;
     if (\$146 ) begin
-      \$809  = \port$8726$0 [3:0];
+      \$809  = \port$13352$0 [3:0];
     end
     if (rst) begin
       \$809  = 4'h0;
@@ -6979,7 +6979,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$810  = ch0_result_status_cds_snapshot;
     if (\$146 ) begin
-      \$810  = \port$8726$0 [49];
+      \$810  = \port$13352$0 [49];
     end
     if (rst) begin
       \$810  = 1'h0;
@@ -6989,7 +6989,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$811  = ch0_result_status_w0_ne_snapshot;
     if (\$146 ) begin
-      \$811  = \port$8726$0 [131];
+      \$811  = \port$13352$0 [131];
     end
     if (rst) begin
       \$811  = 1'h0;
@@ -6999,7 +6999,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$812  = ch0_result_status_w0_nw_snapshot;
     if (\$146 ) begin
-      \$812  = \port$8726$0 [132];
+      \$812  = \port$13352$0 [132];
     end
     if (rst) begin
       \$812  = 1'h0;
@@ -7009,7 +7009,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$813  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$146 ) begin
-      \$813  = \port$8726$0 [133];
+      \$813  = \port$13352$0 [133];
     end
     if (rst) begin
       \$813  = 1'h0;
@@ -7019,7 +7019,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$814  = ch0_result_status_w1_ne_snapshot;
     if (\$146 ) begin
-      \$814  = \port$8726$0 [174];
+      \$814  = \port$13352$0 [174];
     end
     if (rst) begin
       \$814  = 1'h0;
@@ -7029,7 +7029,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$815  = ch0_result_status_w1_nw_snapshot;
     if (\$146 ) begin
-      \$815  = \port$8726$0 [175];
+      \$815  = \port$13352$0 [175];
     end
     if (rst) begin
       \$815  = 1'h0;
@@ -7039,7 +7039,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$816  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$146 ) begin
-      \$816  = \port$8726$0 [176];
+      \$816  = \port$13352$0 [176];
     end
     if (rst) begin
       \$816  = 1'h0;
@@ -7049,7 +7049,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$817  = ch0_result_status_lc_repeat_snapshot;
     if (\$146 ) begin
-      \$817  = \port$8726$0 [183];
+      \$817  = \port$13352$0 [183];
     end
     if (rst) begin
       \$817  = 1'h0;
@@ -7059,7 +7059,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$818  = ch0_result_status_lc_skip_snapshot;
     if (\$146 ) begin
-      \$818  = \port$8726$0 [184];
+      \$818  = \port$13352$0 [184];
     end
     if (rst) begin
       \$818  = 1'h0;
@@ -7069,7 +7069,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$819  = ch0_result_status_lc_zero_snapshot;
     if (\$146 ) begin
-      \$819  = \port$8726$0 [185];
+      \$819  = \port$13352$0 [185];
     end
     if (rst) begin
       \$819  = 1'h0;
@@ -7079,7 +7079,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$820  = ch0_result_status_spw_mismatch_snapshot;
     if (\$146 ) begin
-      \$820  = \port$8726$0 [186];
+      \$820  = \port$13352$0 [186];
     end
     if (rst) begin
       \$820  = 1'h0;
@@ -7089,7 +7089,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$821  = ch0_result_status_lc_snapshot;
     if (\$146 ) begin
-      \$821  = \port$8726$0 [182:177];
+      \$821  = \port$13352$0 [182:177];
     end
     if (rst) begin
       \$821  = 6'h00;
@@ -7109,7 +7109,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$823  = ch0_result_seq_line_delay_snapshot;
     if (\$146 ) begin
-      \$823  = \port$8726$0 [48:36];
+      \$823  = \port$13352$0 [48:36];
     end
     if (rst) begin
       \$823  = 13'h0000;
@@ -7119,7 +7119,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$824  = ch0_result_w0_lo_data_snapshot;
     if (\$146 ) begin
-      \$824  = \port$8726$0 [107:76];
+      \$824  = \port$13352$0 [107:76];
     end
     if (rst) begin
       \$824  = 32'd0;
@@ -7129,7 +7129,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$825  = ch0_result_w0_hi_data_snapshot;
     if (\$146 ) begin
-      \$825  = \port$8726$0 [130:108];
+      \$825  = \port$13352$0 [130:108];
     end
     if (rst) begin
       \$825  = 23'h000000;
@@ -7139,7 +7139,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$826  = ch0_result_w1_lo_data_snapshot;
     if (\$146 ) begin
-      \$826  = \port$8726$0 [165:134];
+      \$826  = \port$13352$0 [165:134];
     end
     if (rst) begin
       \$826  = 32'd0;
@@ -7149,7 +7149,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$827  = ch0_result_w1_hi_data_snapshot;
     if (\$146 ) begin
-      \$827  = \port$8726$0 [173:166];
+      \$827  = \port$13352$0 [173:166];
     end
     if (rst) begin
       \$827  = 8'h00;
@@ -7159,7 +7159,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$828  = ch0_result_timestamp_time_snapshot;
     if (\$146 ) begin
-      \$828  = \port$8726$0 [35:4];
+      \$828  = \port$13352$0 [35:4];
     end
     if (rst) begin
       \$828  = 32'd0;
@@ -7169,7 +7169,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$829  = ch0_result_line_noise_events_snapshot;
     if (\$146 ) begin
-      \$829  = \port$8726$0 [53:50];
+      \$829  = \port$13352$0 [53:50];
     end
     if (rst) begin
       \$829  = 4'h0;
@@ -7179,7 +7179,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$830  = ch0_result_line_delay_settled_snapshot;
     if (\$146 ) begin
-      \$830  = \port$8726$0 [54];
+      \$830  = \port$13352$0 [54];
     end
     if (rst) begin
       \$830  = 1'h0;
@@ -7189,7 +7189,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$831  = ch0_result_line_delay_spread_snapshot;
     if (\$146 ) begin
-      \$831  = \port$8726$0 [75:68];
+      \$831  = \port$13352$0 [75:68];
     end
     if (rst) begin
       \$831  = 8'h00;
@@ -7199,7 +7199,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$832  = ch0_result_line_settled_delay_snapshot;
     if (\$146 ) begin
-      \$832  = \port$8726$0 [67:55];
+      \$832  = \port$13352$0 [67:55];
     end
     if (rst) begin
       \$832  = 13'h0000;
@@ -8526,7 +8526,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$971  = ch1_result_status_status_snapshot;
     if (\$370 ) begin
-      \$971  = \port$9273$0 [3:0];
+      \$971  = \port$13899$0 [3:0];
     end
     if (rst) begin
       \$971  = 4'h0;
@@ -8536,7 +8536,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$972  = ch1_result_status_cds_snapshot;
     if (\$370 ) begin
-      \$972  = \port$9273$0 [49];
+      \$972  = \port$13899$0 [49];
     end
     if (rst) begin
       \$972  = 1'h0;
@@ -8546,7 +8546,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$973  = ch1_result_status_w0_ne_snapshot;
     if (\$370 ) begin
-      \$973  = \port$9273$0 [131];
+      \$973  = \port$13899$0 [131];
     end
     if (rst) begin
       \$973  = 1'h0;
@@ -8556,7 +8556,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$974  = ch1_result_status_w0_nw_snapshot;
     if (\$370 ) begin
-      \$974  = \port$9273$0 [132];
+      \$974  = \port$13899$0 [132];
     end
     if (rst) begin
       \$974  = 1'h0;
@@ -8566,7 +8566,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$975  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$370 ) begin
-      \$975  = \port$9273$0 [133];
+      \$975  = \port$13899$0 [133];
     end
     if (rst) begin
       \$975  = 1'h0;
@@ -8576,7 +8576,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$976  = ch1_result_status_w1_ne_snapshot;
     if (\$370 ) begin
-      \$976  = \port$9273$0 [174];
+      \$976  = \port$13899$0 [174];
     end
     if (rst) begin
       \$976  = 1'h0;
@@ -8586,7 +8586,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$977  = ch1_result_status_w1_nw_snapshot;
     if (\$370 ) begin
-      \$977  = \port$9273$0 [175];
+      \$977  = \port$13899$0 [175];
     end
     if (rst) begin
       \$977  = 1'h0;
@@ -8596,7 +8596,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$978  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$370 ) begin
-      \$978  = \port$9273$0 [176];
+      \$978  = \port$13899$0 [176];
     end
     if (rst) begin
       \$978  = 1'h0;
@@ -8606,7 +8606,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$979  = ch1_result_status_lc_repeat_snapshot;
     if (\$370 ) begin
-      \$979  = \port$9273$0 [183];
+      \$979  = \port$13899$0 [183];
     end
     if (rst) begin
       \$979  = 1'h0;
@@ -8616,7 +8616,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$980  = ch1_result_status_lc_skip_snapshot;
     if (\$370 ) begin
-      \$980  = \port$9273$0 [184];
+      \$980  = \port$13899$0 [184];
     end
     if (rst) begin
       \$980  = 1'h0;
@@ -8626,7 +8626,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$981  = ch1_result_status_lc_zero_snapshot;
     if (\$370 ) begin
-      \$981  = \port$9273$0 [185];
+      \$981  = \port$13899$0 [185];
     end
     if (rst) begin
       \$981  = 1'h0;
@@ -8636,7 +8636,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$982  = ch1_result_status_spw_mismatch_snapshot;
     if (\$370 ) begin
-      \$982  = \port$9273$0 [186];
+      \$982  = \port$13899$0 [186];
     end
     if (rst) begin
       \$982  = 1'h0;
@@ -8646,7 +8646,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$983  = ch1_result_status_lc_snapshot;
     if (\$370 ) begin
-      \$983  = \port$9273$0 [182:177];
+      \$983  = \port$13899$0 [182:177];
     end
     if (rst) begin
       \$983  = 6'h00;
@@ -8666,7 +8666,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$985  = ch1_result_seq_line_delay_snapshot;
     if (\$370 ) begin
-      \$985  = \port$9273$0 [48:36];
+      \$985  = \port$13899$0 [48:36];
     end
     if (rst) begin
       \$985  = 13'h0000;
@@ -8676,7 +8676,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$986  = ch1_result_w0_lo_data_snapshot;
     if (\$370 ) begin
-      \$986  = \port$9273$0 [107:76];
+      \$986  = \port$13899$0 [107:76];
     end
     if (rst) begin
       \$986  = 32'd0;
@@ -8686,7 +8686,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$987  = ch1_result_w0_hi_data_snapshot;
     if (\$370 ) begin
-      \$987  = \port$9273$0 [130:108];
+      \$987  = \port$13899$0 [130:108];
     end
     if (rst) begin
       \$987  = 23'h000000;
@@ -8696,7 +8696,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$988  = ch1_result_w1_lo_data_snapshot;
     if (\$370 ) begin
-      \$988  = \port$9273$0 [165:134];
+      \$988  = \port$13899$0 [165:134];
     end
     if (rst) begin
       \$988  = 32'd0;
@@ -8706,7 +8706,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$989  = ch1_result_w1_hi_data_snapshot;
     if (\$370 ) begin
-      \$989  = \port$9273$0 [173:166];
+      \$989  = \port$13899$0 [173:166];
     end
     if (rst) begin
       \$989  = 8'h00;
@@ -8716,7 +8716,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$990  = ch1_result_timestamp_time_snapshot;
     if (\$370 ) begin
-      \$990  = \port$9273$0 [35:4];
+      \$990  = \port$13899$0 [35:4];
     end
     if (rst) begin
       \$990  = 32'd0;
@@ -8726,7 +8726,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$991  = ch1_result_line_noise_events_snapshot;
     if (\$370 ) begin
-      \$991  = \port$9273$0 [53:50];
+      \$991  = \port$13899$0 [53:50];
     end
     if (rst) begin
       \$991  = 4'h0;
@@ -8736,7 +8736,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$992  = ch1_result_line_delay_settled_snapshot;
     if (\$370 ) begin
-      \$992  = \port$9273$0 [54];
+      \$992  = \port$13899$0 [54];
     end
     if (rst) begin
       \$992  = 1'h0;
@@ -8746,7 +8746,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$993  = ch1_result_line_delay_spread_snapshot;
     if (\$370 ) begin
-      \$993  = \port$9273$0 [75:68];
+      \$993  = \port$13899$0 [75:68];
     end
     if (rst) begin
       \$993  = 8'h00;
@@ -8756,7 +8756,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$994  = ch1_result_line_settled_delay_snapshot;
     if (\$370 ) begin
-      \$994  = \port$9273$0 [67:55];
+      \$994  = \port$13899$0 [67:55];
     end
     if (rst) begin
       \$994  = 13'h0000;
@@ -8959,27 +8959,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$8726$0 [3:0];
-  assign ch0__cds = \port$8726$0 [49];
-  assign ch0__word0_ne = \port$8726$0 [131];
-  assign ch0__word0_nw = \port$8726$0 [132];
-  assign ch0__word0_crc_ok = \port$8726$0 [133];
-  assign ch0__word1_ne = \port$8726$0 [174];
-  assign ch0__word1_nw = \port$8726$0 [175];
-  assign ch0__word1_crc_ok = \port$8726$0 [176];
-  assign ch0__lc_repeat = \port$8726$0 [183];
-  assign ch0__lc_skip = \port$8726$0 [184];
-  assign ch0__lc_zero = \port$8726$0 [185];
-  assign ch0__spw_mismatch = \port$8726$0 [186];
-  assign ch0__lc = \port$8726$0 [182:177];
-  assign ch0__line_delay = \port$8726$0 [48:36];
-  assign ch0__word0_position = \port$8726$0 [130:76];
-  assign ch0__word1_position = \port$8726$0 [173:134];
-  assign ch0__timestamp = \port$8726$0 [35:4];
-  assign ch0__noise_events = \port$8726$0 [53:50];
-  assign ch0__delay_settled = \port$8726$0 [54];
-  assign ch0__delay_spread = \port$8726$0 [75:68];
-  assign ch0__settled_delay = \port$8726$0 [67:55];
+  assign ch0__status = \port$13352$0 [3:0];
+  assign ch0__cds = \port$13352$0 [49];
+  assign ch0__word0_ne = \port$13352$0 [131];
+  assign ch0__word0_nw = \port$13352$0 [132];
+  assign ch0__word0_crc_ok = \port$13352$0 [133];
+  assign ch0__word1_ne = \port$13352$0 [174];
+  assign ch0__word1_nw = \port$13352$0 [175];
+  assign ch0__word1_crc_ok = \port$13352$0 [176];
+  assign ch0__lc_repeat = \port$13352$0 [183];
+  assign ch0__lc_skip = \port$13352$0 [184];
+  assign ch0__lc_zero = \port$13352$0 [185];
+  assign ch0__spw_mismatch = \port$13352$0 [186];
+  assign ch0__lc = \port$13352$0 [182:177];
+  assign ch0__line_delay = \port$13352$0 [48:36];
+  assign ch0__word0_position = \port$13352$0 [130:76];
+  assign ch0__word1_position = \port$13352$0 [173:134];
+  assign ch0__timestamp = \port$13352$0 [35:4];
+  assign ch0__noise_events = \port$13352$0 [53:50];
+  assign ch0__delay_settled = \port$13352$0 [54];
+  assign ch0__delay_spread = \port$13352$0 [75:68];
+  assign ch0__settled_delay = \port$13352$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9000,13 +9000,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$8814$0 [2:0];
-  assign ch0__ca_bytes_done = \port$8814$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$8737$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$8737$0 [31:16];
-  assign ch0__count_ca_refused = \port$8737$0 [47:32];
-  assign ch0__count_ca_aborted = \port$8737$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$8737$0 [79:64];
+  assign ch0__ca_status = \port$13440$0 [2:0];
+  assign ch0__ca_bytes_done = \port$13440$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$13363$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$13363$0 [31:16];
+  assign ch0__count_ca_refused = \port$13363$0 [47:32];
+  assign ch0__count_ca_aborted = \port$13363$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$13363$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9026,27 +9026,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$9273$0 [3:0];
-  assign ch1__cds = \port$9273$0 [49];
-  assign ch1__word0_ne = \port$9273$0 [131];
-  assign ch1__word0_nw = \port$9273$0 [132];
-  assign ch1__word0_crc_ok = \port$9273$0 [133];
-  assign ch1__word1_ne = \port$9273$0 [174];
-  assign ch1__word1_nw = \port$9273$0 [175];
-  assign ch1__word1_crc_ok = \port$9273$0 [176];
-  assign ch1__lc_repeat = \port$9273$0 [183];
-  assign ch1__lc_skip = \port$9273$0 [184];
-  assign ch1__lc_zero = \port$9273$0 [185];
-  assign ch1__spw_mismatch = \port$9273$0 [186];
-  assign ch1__lc = \port$9273$0 [182:177];
-  assign ch1__line_delay = \port$9273$0 [48:36];
-  assign ch1__word0_position = \port$9273$0 [130:76];
-  assign ch1__word1_position = \port$9273$0 [173:134];
-  assign ch1__timestamp = \port$9273$0 [35:4];
-  assign ch1__noise_events = \port$9273$0 [53:50];
-  assign ch1__delay_settled = \port$9273$0 [54];
-  assign ch1__delay_spread = \port$9273$0 [75:68];
-  assign ch1__settled_delay = \port$9273$0 [67:55];
+  assign ch1__status = \port$13899$0 [3:0];
+  assign ch1__cds = \port$13899$0 [49];
+  assign ch1__word0_ne = \port$13899$0 [131];
+  assign ch1__word0_nw = \port$13899$0 [132];
+  assign ch1__word0_crc_ok = \port$13899$0 [133];
+  assign ch1__word1_ne = \port$13899$0 [174];
+  assign ch1__word1_nw = \port$13899$0 [175];
+  assign ch1__word1_crc_ok = \port$13899$0 [176];
+  assign ch1__lc_repeat = \port$13899$0 [183];
+  assign ch1__lc_skip = \port$13899$0 [184];
+  assign ch1__lc_zero = \port$13899$0 [185];
+  assign ch1__spw_mismatch = \port$13899$0 [186];
+  assign ch1__lc = \port$13899$0 [182:177];
+  assign ch1__line_delay = \port$13899$0 [48:36];
+  assign ch1__word0_position = \port$13899$0 [130:76];
+  assign ch1__word1_position = \port$13899$0 [173:134];
+  assign ch1__timestamp = \port$13899$0 [35:4];
+  assign ch1__noise_events = \port$13899$0 [53:50];
+  assign ch1__delay_settled = \port$13899$0 [54];
+  assign ch1__delay_spread = \port$13899$0 [75:68];
+  assign ch1__settled_delay = \port$13899$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9067,13 +9067,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$9361$0 [2:0];
-  assign ch1__ca_bytes_done = \port$9361$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$9284$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$9284$0 [31:16];
-  assign ch1__count_ca_refused = \port$9284$0 [47:32];
-  assign ch1__count_ca_aborted = \port$9284$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$9284$0 [79:64];
+  assign ch1__ca_status = \port$13987$0 [2:0];
+  assign ch1__ca_bytes_done = \port$13987$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$13910$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$13910$0 [31:16];
+  assign ch1__count_ca_refused = \port$13910$0 [47:32];
+  assign ch1__count_ca_aborted = \port$13910$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$13910$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9582,7 +9582,7 @@ endmodule
 module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$8726$0 , \port$8737$0 , regs__ca_done, \port$8814$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13352$0 , \port$13363$0 , regs__ca_done, \port$13440$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -9766,12 +9766,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$8726$0 ;
-  wire [186:0] \port$8726$0 ;
-  output [79:0] \port$8737$0 ;
-  wire [79:0] \port$8737$0 ;
-  output [9:0] \port$8814$0 ;
-  wire [9:0] \port$8814$0 ;
+  output [186:0] \port$13352$0 ;
+  wire [186:0] \port$13352$0 ;
+  output [79:0] \port$13363$0 ;
+  wire [79:0] \port$13363$0 ;
+  output [9:0] \port$13440$0 ;
+  wire [9:0] \port$13440$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10260,9 +10260,9 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$8726$0  = \$20 ;
-  assign \port$8737$0  = \$21 ;
-  assign \port$8814$0  = \$22 ;
+  assign \port$13352$0  = \$20 ;
+  assign \port$13363$0  = \$21 ;
+  assign \port$13440$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -11327,7 +11327,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$8368$272 (cycle[274:272]),
+    .\port$12994$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -11387,7 +11387,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$8368$199 (cycle[199]),
+    .\port$12994$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -11438,7 +11438,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$8368$259 (cycle[271:259]),
+    .\port$12994$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -11462,7 +11462,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$8356$0 (\bit ),
+    .\port$12982$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -11530,7 +11530,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$3593$0 (\$28 ),
+    .\port$5906$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -15682,7 +15682,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$8368$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$12994$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -16398,8 +16398,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$8368$272 ;
-  wire [2:0] \port$8368$272 ;
+  input [2:0] \port$12994$272 ;
+  wire [2:0] \port$12994$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -16709,7 +16709,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$8368$272 [0];
+  assign error_bit = ssi & \port$12994$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -16740,19 +16740,19 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$8368$272 [0];
+  assign \$24  = ssi & \port$12994$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$8368$272 [0];
+  assign \$28  = ssi & \port$12994$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$8368$272 [0];
+  assign \$35  = ssi & \port$12994$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$8368$272 [0];
+  assign \$39  = ssi & \port$12994$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -16773,7 +16773,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$8368$272 [2];
+  assign \$61  = ssi & \port$12994$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -17059,15 +17059,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$8368$272 [0];
+  assign \$347  = ssi & \port$12994$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$8368$272 [0];
-  assign \$355  = ~ \port$8368$272 [1];
+  assign \$354  = ssi & \port$12994$272 [0];
+  assign \$355  = ~ \port$12994$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -17804,7 +17804,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$8368$272 [0];
+  assign ssi_error = \port$12994$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -17814,8 +17814,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$8368$272 [2];
-  assign ssi_error_low = \port$8368$272 [1];
+  assign ssi_double = \port$12994$272 [2];
+  assign ssi_error_low = \port$12994$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -20114,7 +20114,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$8368$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$12994$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20205,8 +20205,8 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$8368$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$8368$199 ;
-  wire \port$8368$199 ;
+  input \port$12994$199 ;
+  wire \port$12994$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20329,7 +20329,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$8368$199 , ssi, ssi_e
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$8368$199  : 1'h0;
+  assign \$14  = \$13  ? \port$12994$199  : 1'h0;
   assign \$16  = \$10  | \$15 ;
   assign \$17  = ! sum_word;
   assign \$18  = sum_word ? 12'h000 : words[11:0];
@@ -20494,7 +20494,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$8368$199 , ssi, ssi_e
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$8368$199 , 1'h1 };
+  assign enables = { \port$12994$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22636,64 +22636,505 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$8368$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$12994$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
-  wire [13:0] \$11 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
+  wire \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
-  wire [13:0] \$13 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
+  wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   wire \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire \$15 ;
-  wire [13:0] \$16 ;
-  wire [17:0] \$17 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
+  wire \$16 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
+  wire \$17 ;
+  wire \$170 ;
+  wire \$171 ;
+  wire \$172 ;
+  wire \$173 ;
+  wire \$174 ;
+  wire \$175 ;
+  wire \$176 ;
+  wire \$177 ;
+  wire \$178 ;
+  wire \$179 ;
   wire \$18 ;
+  wire \$180 ;
+  wire \$181 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
+  wire \$189 ;
   wire \$19 ;
-  wire [14:0] \$2 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire \$198 ;
+  wire \$199 ;
+  wire \$2 ;
   wire \$20 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire \$21 ;
-  wire [12:0] \$22 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
+  wire \$213 ;
+  wire \$214 ;
+  wire \$215 ;
+  wire \$216 ;
+  wire \$217 ;
+  wire \$218 ;
+  wire \$219 ;
+  wire \$22 ;
+  wire \$220 ;
+  wire \$221 ;
+  wire \$222 ;
+  wire \$223 ;
+  wire \$224 ;
+  wire \$225 ;
+  wire [14:0] \$226 ;
+  wire \$227 ;
+  wire \$228 ;
+  wire \$229 ;
   wire \$23 ;
+  wire \$230 ;
+  wire \$231 ;
+  wire \$232 ;
+  wire \$233 ;
+  wire \$234 ;
+  wire \$235 ;
+  wire \$236 ;
+  wire \$237 ;
+  wire \$238 ;
+  wire \$239 ;
   wire \$24 ;
-  wire [13:0] \$25 ;
-  wire [13:0] \$26 ;
-  wire [16:0] \$27 ;
+  wire \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  wire \$243 ;
+  wire \$244 ;
+  wire \$245 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
+  wire \$25 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
+  wire \$26 ;
+  wire \$260 ;
+  wire \$261 ;
+  wire \$262 ;
+  wire \$263 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire \$269 ;
+  wire \$27 ;
+  wire \$270 ;
+  wire \$271 ;
+  wire \$272 ;
+  wire \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
   wire \$28 ;
-  wire [13:0] \$29 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
+  wire \$29 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   wire \$3 ;
-  wire [13:0] \$30 ;
+  wire \$30 ;
+  wire \$300 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
   wire \$31 ;
-  wire [13:0] \$32 ;
-  wire [17:0] \$33 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
+  wire \$32 ;
+  wire \$320 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
+  wire \$33 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  wire \$337 ;
+  wire \$338 ;
+  wire \$339 ;
   wire \$34 ;
+  wire \$340 ;
+  wire \$341 ;
+  wire \$342 ;
+  wire \$343 ;
+  wire \$344 ;
+  wire \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire \$349 ;
   wire \$35 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire \$352 ;
+  wire \$353 ;
+  wire \$354 ;
+  wire \$355 ;
+  wire \$356 ;
+  wire \$357 ;
+  wire \$358 ;
+  wire \$359 ;
   wire \$36 ;
+  wire \$360 ;
+  wire \$361 ;
+  wire \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
   wire \$37 ;
+  wire \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire \$378 ;
+  wire \$379 ;
   wire \$38 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
   wire \$39 ;
-  wire [16:0] \$4 ;
+  wire \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire \$394 ;
+  wire \$395 ;
+  wire \$396 ;
+  wire \$397 ;
+  wire \$398 ;
+  wire \$399 ;
+  wire \$4 ;
   wire \$40 ;
+  wire \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  wire \$403 ;
+  wire \$404 ;
+  wire \$405 ;
+  wire \$406 ;
+  wire \$407 ;
+  wire \$408 ;
+  wire \$409 ;
   wire \$41 ;
+  wire \$410 ;
+  wire \$411 ;
+  wire \$412 ;
+  wire \$413 ;
+  wire \$414 ;
+  wire \$415 ;
+  wire \$416 ;
+  wire \$417 ;
+  wire \$418 ;
+  wire \$419 ;
   wire \$42 ;
+  wire \$420 ;
+  wire \$421 ;
+  wire \$422 ;
+  wire \$423 ;
+  wire \$424 ;
+  wire \$425 ;
+  wire \$426 ;
+  wire \$427 ;
+  wire \$428 ;
+  wire \$429 ;
   wire \$43 ;
+  wire \$430 ;
+  wire \$431 ;
+  wire \$432 ;
+  wire \$433 ;
+  wire \$434 ;
+  wire \$435 ;
+  wire \$436 ;
+  wire \$437 ;
+  wire \$438 ;
+  wire \$439 ;
   wire \$44 ;
+  wire \$440 ;
+  wire \$441 ;
+  wire \$442 ;
+  wire \$443 ;
+  wire \$444 ;
+  wire \$445 ;
+  wire \$446 ;
+  wire \$447 ;
+  wire \$448 ;
+  wire \$449 ;
   wire \$45 ;
+  wire \$450 ;
+  wire \$451 ;
+  wire \$452 ;
+  wire [16:0] \$453 ;
+  wire [17:0] \$454 ;
+  wire [15:0] \$455 ;
+  wire \$456 ;
+  wire [13:0] \$457 ;
+  wire [17:0] \$458 ;
+  wire \$459 ;
   wire \$46 ;
+  wire [13:0] \$460 ;
+  wire \$461 ;
+  wire [13:0] \$462 ;
+  wire \$463 ;
+  wire \$464 ;
+  wire [13:0] \$465 ;
+  wire [17:0] \$466 ;
+  wire \$467 ;
+  wire \$468 ;
+  wire \$469 ;
   wire \$47 ;
+  wire \$470 ;
+  wire [12:0] \$471 ;
+  wire \$472 ;
+  wire \$473 ;
+  wire [13:0] \$474 ;
+  wire [13:0] \$475 ;
+  wire [16:0] \$476 ;
+  wire \$477 ;
+  wire [13:0] \$478 ;
+  wire [13:0] \$479 ;
   wire \$48 ;
+  wire \$480 ;
+  wire [13:0] \$481 ;
+  wire [17:0] \$482 ;
+  wire \$483 ;
+  wire \$484 ;
+  wire \$485 ;
+  wire \$486 ;
+  wire \$487 ;
+  wire \$488 ;
+  wire \$489 ;
   wire \$49 ;
-  wire [17:0] \$5 ;
+  wire \$490 ;
+  wire \$491 ;
+  wire \$492 ;
+  wire \$493 ;
+  wire \$494 ;
+  wire \$495 ;
+  wire \$496 ;
+  wire \$497 ;
+  wire \$498 ;
+  wire \$499 ;
+  wire \$5 ;
   wire \$50 ;
+  wire \$500 ;
+  wire \$501 ;
+  wire \$502 ;
+  wire \$503 ;
+  wire \$504 ;
+  wire \$505 ;
+  wire \$506 ;
+  wire \$507 ;
+  wire \$508 ;
+  wire \$509 ;
   wire \$51 ;
+  wire \$510 ;
+  wire \$511 ;
+  wire \$512 ;
+  wire \$513 ;
+  wire \$514 ;
+  wire \$515 ;
+  wire \$516 ;
+  wire \$517 ;
+  wire \$518 ;
+  wire \$519 ;
   wire \$52 ;
+  wire \$520 ;
+  wire \$521 ;
+  wire \$522 ;
+  wire \$523 ;
+  wire \$524 ;
+  reg \$525 ;
+  reg [12:0] \$526 ;
+  reg [16:0] \$527 ;
+  reg \$528 ;
+  reg [12:0] \$529 ;
   wire \$53 ;
+  reg \$530 ;
+  reg \$531 ;
+  reg \$532 ;
+  reg [1:0] \$533 ;
+  reg [12:0] \$534 ;
+  reg \$535 ;
+  reg \$536 ;
+  reg \$537 ;
+  reg [1:0] \$538 ;
+  reg [16:0] \$539 ;
   wire \$54 ;
+  reg \$540 ;
   wire \$55 ;
   wire \$56 ;
   wire \$57 ;
   wire \$58 ;
   wire \$59 ;
-  wire [15:0] \$6 ;
+  wire \$6 ;
   wire \$60 ;
   wire \$61 ;
   wire \$62 ;
@@ -22711,24 +23152,32 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   wire \$73 ;
   wire \$74 ;
   wire \$75 ;
-  reg \$76 ;
-  reg [12:0] \$77 ;
-  reg [16:0] \$78 ;
-  reg \$79 ;
-  wire [13:0] \$8 ;
-  reg [12:0] \$80 ;
-  reg \$81 ;
-  reg \$82 ;
-  reg \$83 ;
-  reg [1:0] \$84 ;
-  reg [12:0] \$85 ;
-  reg \$86 ;
-  reg \$87 ;
-  reg \$88 ;
-  reg [1:0] \$89 ;
-  wire [17:0] \$9 ;
-  reg [16:0] \$90 ;
-  reg \$91 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
+  wire \$8 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
+  wire \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   input arm;
   wire arm;
   output \bit ;
@@ -22770,8 +23219,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$8368$259 ;
-  wire [12:0] \port$8368$259 ;
+  input [12:0] \port$12994$259 ;
+  wire [12:0] \port$12994$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -22794,134 +23243,583 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$9  = mid_slot - 1'h1;
-  assign \$10  = ~ odd;
-  assign \$11  = \port$8368$259 [12:1] + 1'h1;
-  assign \$12  = ~ level;
-  assign \$13  = elapsed + 1'h1;
-  assign \$14  = elapsed == fixed_at;
-  assign \$15  = elapsed != 13'h1fff;
-  assign \$16  = elapsed + 1'h1;
-  assign \$17  = slot_left - 1'h1;
-  assign \$18  = slot_left == 1'h1;
-  assign \$19  = ~ level;
-  assign \$20  = slo_prev & \$19 ;
-  assign \$21  = elapsed == 13'h1fff;
-  assign \$22  = \$21  ? 13'h1fff : mid_delay;
-  assign \$23  = ! mid_slot;
-  assign \$24  = elapsed == 13'h1fff;
-  assign \$25  = elapsed - 1'h1;
-  assign \$26  = \$24  ? 14'h1fff : \$25 ;
-  assign \$27  = half_period - 2'h2;
-  assign \$28  = elapsed == 13'h1fff;
-  assign \$29  = elapsed - 1'h1;
-  assign \$30  = \$28  ? 14'h1fff : \$29 ;
-  assign \$31  = elapsed != 13'h1fff;
-  assign \$32  = elapsed + 1'h1;
-  assign \$33  = slot_left - 1'h1;
-  assign \$34  = slot_left == 1'h1;
-  assign \$35  = ! phase;
-  assign \$36  = first_slot & \$35 ;
-  assign \$37  = \$36  & level;
-  assign \$38  = ~ single;
-  assign \$39  = decided & first_slot;
-  assign \$40  = vote1 & vote2;
-  assign \$41  = vote1 & level;
-  assign \$42  = \$40  | \$41 ;
-  assign \$43  = vote2 & level;
-  assign \$44  = \$42  | \$43 ;
-  assign \$45  = single ? level : \$44 ;
-  assign \$46  = ~ first_slot;
-  assign \$47  = decided & \$46 ;
-  assign \$48  = vote1 & vote2;
-  assign \$49  = vote1 & level;
-  assign \$50  = \$48  | \$49 ;
-  assign \$51  = vote2 & level;
-  assign \$52  = \$50  | \$51 ;
-  assign \bit  = single ? level : \$52 ;
+  assign \$460  = \port$12994$259 [12:1] + 1'h1;
+  assign \$461  = ~ level;
+  assign \$462  = elapsed + 1'h1;
+  assign \$463  = elapsed == fixed_at;
+  assign \$464  = elapsed != 13'h1fff;
+  assign \$465  = elapsed + 1'h1;
+  assign \$466  = slot_left - 1'h1;
+  assign \$467  = slot_left == 1'h1;
+  assign \$468  = ~ level;
+  assign \$469  = slo_prev & \$468 ;
+  assign \$470  = elapsed == 13'h1fff;
+  assign \$471  = \$470  ? 13'h1fff : mid_delay;
+  assign \$472  = ! mid_slot;
+  assign \$473  = elapsed == 13'h1fff;
+  assign \$474  = elapsed - 1'h1;
+  assign \$475  = \$473  ? 14'h1fff : \$474 ;
+  assign \$476  = half_period - 2'h2;
+  assign \$477  = elapsed == 13'h1fff;
+  assign \$478  = elapsed - 1'h1;
+  assign \$479  = \$477  ? 14'h1fff : \$478 ;
+  assign \$480  = elapsed != 13'h1fff;
+  assign \$481  = elapsed + 1'h1;
+  assign \$482  = slot_left - 1'h1;
+  assign \$483  = slot_left == 1'h1;
+  assign \$484  = ! phase;
+  assign \$485  = first_slot & \$484 ;
+  assign \$486  = \$485  & level;
+  assign \$487  = ~ single;
+  assign \$488  = decided & first_slot;
+  assign \$489  = vote1 & vote2;
+  assign \$490  = vote1 & level;
+  assign \$491  = \$489  | \$490 ;
+  assign \$492  = vote2 & level;
+  assign \$493  = \$491  | \$492 ;
+  assign \$494  = single ? level : \$493 ;
+  assign \$495  = ~ first_slot;
+  assign \$496  = decided & \$495 ;
+  assign \$497  = vote1 & vote2;
+  assign \$498  = vote1 & level;
+  assign \$499  = \$497  | \$498 ;
+  assign \$500  = vote2 & level;
+  assign \$501  = \$499  | \$500 ;
+  assign \bit  = single ? level : \$501 ;
   assign \edge  = level != slo_prev;
-  assign \$53  = ~ single;
-  assign \decided$40  = decided & \$53 ;
-  assign \$54  = vote1 & vote2;
-  assign \$55  = vote1 & level;
-  assign \$56  = \$54  | \$55 ;
-  assign \$57  = vote2 & level;
-  assign majority = \$56  | \$57 ;
+  assign \$502  = ~ single;
+  assign \decided$40  = decided & \$502 ;
+  assign \$503  = vote1 & vote2;
+  assign \$504  = vote1 & level;
+  assign \$505  = \$503  | \$504 ;
+  assign \$506  = vote2 & level;
+  assign majority = \$505  | \$506 ;
   assign noise = dropped | \odd$46 ;
-  assign \$58  = elapsed == fixed_at;
-  assign \$59  = ~ level;
-  assign \$60  = slo_prev & \$59 ;
-  assign \$61  = ! phase;
-  assign \$62  = first_slot & \$61 ;
-  assign \$63  = \$62  & level;
-  assign \$64  = ~ single;
-  assign \$65  = decided & first_slot;
-  assign \$66  = vote1 & vote2;
-  assign \$67  = vote1 & level;
-  assign \$68  = \$66  | \$67 ;
-  assign \$69  = vote2 & level;
-  assign \$70  = \$68  | \$69 ;
-  assign \$71  = single ? level : \$70 ;
-  assign \$72  = ! sampler_fsm_state;
-  assign \$73  = sampler_fsm_state == 1'h1;
-  assign \$74  = sampler_fsm_state == 2'h2;
-  assign \$75  = sampler_fsm_state == 2'h3;
+  assign \$507  = elapsed == fixed_at;
+  assign \$508  = ~ level;
+  assign \$509  = slo_prev & \$508 ;
+  assign \$510  = ! phase;
+  assign \$511  = first_slot & \$510 ;
+  assign \$512  = \$511  & level;
+  assign \$513  = ~ single;
+  assign \$514  = decided & first_slot;
+  assign \$515  = vote1 & vote2;
+  assign \$516  = vote1 & level;
+  assign \$517  = \$515  | \$516 ;
+  assign \$518  = vote2 & level;
+  assign \$519  = \$517  | \$518 ;
+  assign \$520  = single ? level : \$519 ;
+  assign \$521  = ! sampler_fsm_state;
+  assign \$522  = sampler_fsm_state == 1'h1;
+  assign \$523  = sampler_fsm_state == 2'h2;
+  assign \$524  = sampler_fsm_state == 2'h3;
   always @(posedge clk)
-    slo_prev <= \$76 ;
+    slo_prev <= \$525 ;
   always @(posedge clk)
-    vote <= \$2 ;
+    vote <= \$226 ;
   always @(posedge clk)
-    single <= \$3 ;
+    single <= \$452 ;
   always @(posedge clk)
-    first_load <= \$5 [15:0];
+    first_load <= \$454 [15:0];
   always @(posedge clk)
-    vote_load <= \$6 [14:0];
+    vote_load <= \$455 [14:0];
   always @(posedge clk)
-    vote_one <= \$7 ;
+    vote_one <= \$456 ;
   always @(posedge clk)
-    mid_delay <= \$77 ;
+    mid_delay <= \$526 ;
   always @(posedge clk)
-    mid_slot <= \$78 ;
+    mid_slot <= \$527 ;
   always @(posedge clk)
-    odd <= \$79 ;
+    odd <= \$528 ;
   always @(posedge clk)
-    fixed_at <= \$11 [12:0];
+    fixed_at <= \$460 [12:0];
   always @(posedge clk)
-    elapsed <= \$80 ;
+    elapsed <= \$529 ;
   always @(posedge clk)
-    early <= \$81 ;
+    early <= \$530 ;
   always @(posedge clk)
-    locked <= \$82 ;
+    locked <= \$531 ;
   always @(posedge clk)
-    gap <= \$83 ;
+    gap <= \$532 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$84 ;
+    sampler_fsm_state <= \$533 ;
   always @(posedge clk)
-    delay <= \$85 ;
+    delay <= \$534 ;
   always @(posedge clk)
-    vote1 <= \$86 ;
+    vote1 <= \$535 ;
   always @(posedge clk)
-    vote2 <= \$87 ;
+    vote2 <= \$536 ;
   always @(posedge clk)
-    first_slot <= \$88 ;
+    first_slot <= \$537 ;
   always @(posedge clk)
-    phase <= \$89 ;
+    phase <= \$538 ;
   always @(posedge clk)
-    slot_left <= \$90 ;
+    slot_left <= \$539 ;
   always @(posedge clk)
-    slot_zero <= \$91 ;
-  assign \$1  = half_period >= 2'h3;
-  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
-  assign \$3  = half_period < 2'h3;
-  assign \$4  = half_period - vote;
-  assign \$5  = $signed(\$4 ) - $signed(2'h1);
-  assign \$6  = vote - 1'h1;
-  assign \$7  = vote == 1'h1;
-  assign \$8  = mid_delay + 1'h1;
+    slot_zero <= \$540 ;
+  assign \$1  = half_period[0] & half_period[1];
+  assign \$2  = ~ half_period[2];
+  assign \$3  = \$1  & \$2 ;
+  assign \$4  = ~ half_period[3];
+  assign \$5  = \$3  & \$4 ;
+  assign \$6  = ~ half_period[4];
+  assign \$7  = \$5  & \$6 ;
+  assign \$8  = ~ half_period[5];
+  assign \$9  = \$7  & \$8 ;
+  assign \$10  = ~ half_period[6];
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = ~ half_period[7];
+  assign \$13  = \$11  & \$12 ;
+  assign \$14  = ~ half_period[8];
+  assign \$15  = \$13  & \$14 ;
+  assign \$16  = ~ half_period[9];
+  assign \$17  = \$15  & \$16 ;
+  assign \$18  = ~ half_period[10];
+  assign \$19  = \$17  & \$18 ;
+  assign \$20  = ~ half_period[11];
+  assign \$21  = \$19  & \$20 ;
+  assign \$22  = ~ half_period[12];
+  assign \$23  = \$21  & \$22 ;
+  assign \$24  = ~ half_period[13];
+  assign \$25  = \$23  & \$24 ;
+  assign \$26  = ~ half_period[14];
+  assign \$27  = \$25  & \$26 ;
+  assign \$28  = ~ half_period[15];
+  assign \$29  = \$27  & \$28 ;
+  assign \$30  = ~ half_period[3];
+  assign \$31  = half_period[2] & \$30 ;
+  assign \$32  = ~ half_period[4];
+  assign \$33  = \$31  & \$32 ;
+  assign \$34  = ~ half_period[5];
+  assign \$35  = \$33  & \$34 ;
+  assign \$36  = ~ half_period[6];
+  assign \$37  = \$35  & \$36 ;
+  assign \$38  = ~ half_period[7];
+  assign \$39  = \$37  & \$38 ;
+  assign \$40  = ~ half_period[8];
+  assign \$41  = \$39  & \$40 ;
+  assign \$42  = ~ half_period[9];
+  assign \$43  = \$41  & \$42 ;
+  assign \$44  = ~ half_period[10];
+  assign \$45  = \$43  & \$44 ;
+  assign \$46  = ~ half_period[11];
+  assign \$47  = \$45  & \$46 ;
+  assign \$48  = ~ half_period[12];
+  assign \$49  = \$47  & \$48 ;
+  assign \$50  = ~ half_period[13];
+  assign \$51  = \$49  & \$50 ;
+  assign \$52  = ~ half_period[14];
+  assign \$53  = \$51  & \$52 ;
+  assign \$54  = ~ half_period[15];
+  assign \$55  = \$53  & \$54 ;
+  assign \$56  = \$29  | \$55 ;
+  assign \$57  = ~ half_period[4];
+  assign \$58  = half_period[3] & \$57 ;
+  assign \$59  = ~ half_period[5];
+  assign \$60  = \$58  & \$59 ;
+  assign \$61  = ~ half_period[6];
+  assign \$62  = \$60  & \$61 ;
+  assign \$63  = ~ half_period[7];
+  assign \$64  = \$62  & \$63 ;
+  assign \$65  = ~ half_period[8];
+  assign \$66  = \$64  & \$65 ;
+  assign \$67  = ~ half_period[9];
+  assign \$68  = \$66  & \$67 ;
+  assign \$69  = ~ half_period[10];
+  assign \$70  = \$68  & \$69 ;
+  assign \$71  = ~ half_period[11];
+  assign \$72  = \$70  & \$71 ;
+  assign \$73  = ~ half_period[12];
+  assign \$74  = \$72  & \$73 ;
+  assign \$75  = ~ half_period[13];
+  assign \$76  = \$74  & \$75 ;
+  assign \$77  = ~ half_period[14];
+  assign \$78  = \$76  & \$77 ;
+  assign \$79  = ~ half_period[15];
+  assign \$80  = \$78  & \$79 ;
+  assign \$81  = \$56  | \$80 ;
+  assign \$82  = ~ half_period[5];
+  assign \$83  = half_period[4] & \$82 ;
+  assign \$84  = ~ half_period[6];
+  assign \$85  = \$83  & \$84 ;
+  assign \$86  = ~ half_period[7];
+  assign \$87  = \$85  & \$86 ;
+  assign \$88  = ~ half_period[8];
+  assign \$89  = \$87  & \$88 ;
+  assign \$90  = ~ half_period[9];
+  assign \$91  = \$89  & \$90 ;
+  assign \$92  = ~ half_period[10];
+  assign \$93  = \$91  & \$92 ;
+  assign \$94  = ~ half_period[11];
+  assign \$95  = \$93  & \$94 ;
+  assign \$96  = ~ half_period[12];
+  assign \$97  = \$95  & \$96 ;
+  assign \$98  = ~ half_period[13];
+  assign \$99  = \$97  & \$98 ;
+  assign \$100  = ~ half_period[14];
+  assign \$101  = \$99  & \$100 ;
+  assign \$102  = ~ half_period[15];
+  assign \$103  = \$101  & \$102 ;
+  assign \$104  = \$81  | \$103 ;
+  assign \$105  = ~ half_period[6];
+  assign \$106  = half_period[5] & \$105 ;
+  assign \$107  = ~ half_period[7];
+  assign \$108  = \$106  & \$107 ;
+  assign \$109  = ~ half_period[8];
+  assign \$110  = \$108  & \$109 ;
+  assign \$111  = ~ half_period[9];
+  assign \$112  = \$110  & \$111 ;
+  assign \$113  = ~ half_period[10];
+  assign \$114  = \$112  & \$113 ;
+  assign \$115  = ~ half_period[11];
+  assign \$116  = \$114  & \$115 ;
+  assign \$117  = ~ half_period[12];
+  assign \$118  = \$116  & \$117 ;
+  assign \$119  = ~ half_period[13];
+  assign \$120  = \$118  & \$119 ;
+  assign \$121  = ~ half_period[14];
+  assign \$122  = \$120  & \$121 ;
+  assign \$123  = ~ half_period[15];
+  assign \$124  = \$122  & \$123 ;
+  assign \$125  = \$104  | \$124 ;
+  assign \$126  = ~ half_period[7];
+  assign \$127  = half_period[6] & \$126 ;
+  assign \$128  = ~ half_period[8];
+  assign \$129  = \$127  & \$128 ;
+  assign \$130  = ~ half_period[9];
+  assign \$131  = \$129  & \$130 ;
+  assign \$132  = ~ half_period[10];
+  assign \$133  = \$131  & \$132 ;
+  assign \$134  = ~ half_period[11];
+  assign \$135  = \$133  & \$134 ;
+  assign \$136  = ~ half_period[12];
+  assign \$137  = \$135  & \$136 ;
+  assign \$138  = ~ half_period[13];
+  assign \$139  = \$137  & \$138 ;
+  assign \$140  = ~ half_period[14];
+  assign \$141  = \$139  & \$140 ;
+  assign \$142  = ~ half_period[15];
+  assign \$143  = \$141  & \$142 ;
+  assign \$144  = \$125  | \$143 ;
+  assign \$145  = ~ half_period[8];
+  assign \$146  = half_period[7] & \$145 ;
+  assign \$147  = ~ half_period[9];
+  assign \$148  = \$146  & \$147 ;
+  assign \$149  = ~ half_period[10];
+  assign \$150  = \$148  & \$149 ;
+  assign \$151  = ~ half_period[11];
+  assign \$152  = \$150  & \$151 ;
+  assign \$153  = ~ half_period[12];
+  assign \$154  = \$152  & \$153 ;
+  assign \$155  = ~ half_period[13];
+  assign \$156  = \$154  & \$155 ;
+  assign \$157  = ~ half_period[14];
+  assign \$158  = \$156  & \$157 ;
+  assign \$159  = ~ half_period[15];
+  assign \$160  = \$158  & \$159 ;
+  assign \$161  = \$144  | \$160 ;
+  assign \$162  = ~ half_period[9];
+  assign \$163  = half_period[8] & \$162 ;
+  assign \$164  = ~ half_period[10];
+  assign \$165  = \$163  & \$164 ;
+  assign \$166  = ~ half_period[11];
+  assign \$167  = \$165  & \$166 ;
+  assign \$168  = ~ half_period[12];
+  assign \$169  = \$167  & \$168 ;
+  assign \$170  = ~ half_period[13];
+  assign \$171  = \$169  & \$170 ;
+  assign \$172  = ~ half_period[14];
+  assign \$173  = \$171  & \$172 ;
+  assign \$174  = ~ half_period[15];
+  assign \$175  = \$173  & \$174 ;
+  assign \$176  = \$161  | \$175 ;
+  assign \$177  = ~ half_period[10];
+  assign \$178  = half_period[9] & \$177 ;
+  assign \$179  = ~ half_period[11];
+  assign \$180  = \$178  & \$179 ;
+  assign \$181  = ~ half_period[12];
+  assign \$182  = \$180  & \$181 ;
+  assign \$183  = ~ half_period[13];
+  assign \$184  = \$182  & \$183 ;
+  assign \$185  = ~ half_period[14];
+  assign \$186  = \$184  & \$185 ;
+  assign \$187  = ~ half_period[15];
+  assign \$188  = \$186  & \$187 ;
+  assign \$189  = \$176  | \$188 ;
+  assign \$190  = ~ half_period[11];
+  assign \$191  = half_period[10] & \$190 ;
+  assign \$192  = ~ half_period[12];
+  assign \$193  = \$191  & \$192 ;
+  assign \$194  = ~ half_period[13];
+  assign \$195  = \$193  & \$194 ;
+  assign \$196  = ~ half_period[14];
+  assign \$197  = \$195  & \$196 ;
+  assign \$198  = ~ half_period[15];
+  assign \$199  = \$197  & \$198 ;
+  assign \$200  = \$189  | \$199 ;
+  assign \$201  = ~ half_period[12];
+  assign \$202  = half_period[11] & \$201 ;
+  assign \$203  = ~ half_period[13];
+  assign \$204  = \$202  & \$203 ;
+  assign \$205  = ~ half_period[14];
+  assign \$206  = \$204  & \$205 ;
+  assign \$207  = ~ half_period[15];
+  assign \$208  = \$206  & \$207 ;
+  assign \$209  = \$200  | \$208 ;
+  assign \$210  = ~ half_period[13];
+  assign \$211  = half_period[12] & \$210 ;
+  assign \$212  = ~ half_period[14];
+  assign \$213  = \$211  & \$212 ;
+  assign \$214  = ~ half_period[15];
+  assign \$215  = \$213  & \$214 ;
+  assign \$216  = \$209  | \$215 ;
+  assign \$217  = ~ half_period[14];
+  assign \$218  = half_period[13] & \$217 ;
+  assign \$219  = ~ half_period[15];
+  assign \$220  = \$218  & \$219 ;
+  assign \$221  = \$216  | \$220 ;
+  assign \$222  = ~ half_period[15];
+  assign \$223  = half_period[14] & \$222 ;
+  assign \$224  = \$221  | \$223 ;
+  assign \$225  = \$224  | half_period[15];
+  assign \$226  = \$225  ? half_period[15:1] : 15'h0000;
+  assign \$227  = half_period[0] & half_period[1];
+  assign \$228  = ~ half_period[2];
+  assign \$229  = \$227  & \$228 ;
+  assign \$230  = ~ half_period[3];
+  assign \$231  = \$229  & \$230 ;
+  assign \$232  = ~ half_period[4];
+  assign \$233  = \$231  & \$232 ;
+  assign \$234  = ~ half_period[5];
+  assign \$235  = \$233  & \$234 ;
+  assign \$236  = ~ half_period[6];
+  assign \$237  = \$235  & \$236 ;
+  assign \$238  = ~ half_period[7];
+  assign \$239  = \$237  & \$238 ;
+  assign \$240  = ~ half_period[8];
+  assign \$241  = \$239  & \$240 ;
+  assign \$242  = ~ half_period[9];
+  assign \$243  = \$241  & \$242 ;
+  assign \$244  = ~ half_period[10];
+  assign \$245  = \$243  & \$244 ;
+  assign \$246  = ~ half_period[11];
+  assign \$247  = \$245  & \$246 ;
+  assign \$248  = ~ half_period[12];
+  assign \$249  = \$247  & \$248 ;
+  assign \$250  = ~ half_period[13];
+  assign \$251  = \$249  & \$250 ;
+  assign \$252  = ~ half_period[14];
+  assign \$253  = \$251  & \$252 ;
+  assign \$254  = ~ half_period[15];
+  assign \$255  = \$253  & \$254 ;
+  assign \$256  = ~ half_period[3];
+  assign \$257  = half_period[2] & \$256 ;
+  assign \$258  = ~ half_period[4];
+  assign \$259  = \$257  & \$258 ;
+  assign \$260  = ~ half_period[5];
+  assign \$261  = \$259  & \$260 ;
+  assign \$262  = ~ half_period[6];
+  assign \$263  = \$261  & \$262 ;
+  assign \$264  = ~ half_period[7];
+  assign \$265  = \$263  & \$264 ;
+  assign \$266  = ~ half_period[8];
+  assign \$267  = \$265  & \$266 ;
+  assign \$268  = ~ half_period[9];
+  assign \$269  = \$267  & \$268 ;
+  assign \$270  = ~ half_period[10];
+  assign \$271  = \$269  & \$270 ;
+  assign \$272  = ~ half_period[11];
+  assign \$273  = \$271  & \$272 ;
+  assign \$274  = ~ half_period[12];
+  assign \$275  = \$273  & \$274 ;
+  assign \$276  = ~ half_period[13];
+  assign \$277  = \$275  & \$276 ;
+  assign \$278  = ~ half_period[14];
+  assign \$279  = \$277  & \$278 ;
+  assign \$280  = ~ half_period[15];
+  assign \$281  = \$279  & \$280 ;
+  assign \$282  = \$255  | \$281 ;
+  assign \$283  = ~ half_period[4];
+  assign \$284  = half_period[3] & \$283 ;
+  assign \$285  = ~ half_period[5];
+  assign \$286  = \$284  & \$285 ;
+  assign \$287  = ~ half_period[6];
+  assign \$288  = \$286  & \$287 ;
+  assign \$289  = ~ half_period[7];
+  assign \$290  = \$288  & \$289 ;
+  assign \$291  = ~ half_period[8];
+  assign \$292  = \$290  & \$291 ;
+  assign \$293  = ~ half_period[9];
+  assign \$294  = \$292  & \$293 ;
+  assign \$295  = ~ half_period[10];
+  assign \$296  = \$294  & \$295 ;
+  assign \$297  = ~ half_period[11];
+  assign \$298  = \$296  & \$297 ;
+  assign \$299  = ~ half_period[12];
+  assign \$300  = \$298  & \$299 ;
+  assign \$301  = ~ half_period[13];
+  assign \$302  = \$300  & \$301 ;
+  assign \$303  = ~ half_period[14];
+  assign \$304  = \$302  & \$303 ;
+  assign \$305  = ~ half_period[15];
+  assign \$306  = \$304  & \$305 ;
+  assign \$307  = \$282  | \$306 ;
+  assign \$308  = ~ half_period[5];
+  assign \$309  = half_period[4] & \$308 ;
+  assign \$310  = ~ half_period[6];
+  assign \$311  = \$309  & \$310 ;
+  assign \$312  = ~ half_period[7];
+  assign \$313  = \$311  & \$312 ;
+  assign \$314  = ~ half_period[8];
+  assign \$315  = \$313  & \$314 ;
+  assign \$316  = ~ half_period[9];
+  assign \$317  = \$315  & \$316 ;
+  assign \$318  = ~ half_period[10];
+  assign \$319  = \$317  & \$318 ;
+  assign \$320  = ~ half_period[11];
+  assign \$321  = \$319  & \$320 ;
+  assign \$322  = ~ half_period[12];
+  assign \$323  = \$321  & \$322 ;
+  assign \$324  = ~ half_period[13];
+  assign \$325  = \$323  & \$324 ;
+  assign \$326  = ~ half_period[14];
+  assign \$327  = \$325  & \$326 ;
+  assign \$328  = ~ half_period[15];
+  assign \$329  = \$327  & \$328 ;
+  assign \$330  = \$307  | \$329 ;
+  assign \$331  = ~ half_period[6];
+  assign \$332  = half_period[5] & \$331 ;
+  assign \$333  = ~ half_period[7];
+  assign \$334  = \$332  & \$333 ;
+  assign \$335  = ~ half_period[8];
+  assign \$336  = \$334  & \$335 ;
+  assign \$337  = ~ half_period[9];
+  assign \$338  = \$336  & \$337 ;
+  assign \$339  = ~ half_period[10];
+  assign \$340  = \$338  & \$339 ;
+  assign \$341  = ~ half_period[11];
+  assign \$342  = \$340  & \$341 ;
+  assign \$343  = ~ half_period[12];
+  assign \$344  = \$342  & \$343 ;
+  assign \$345  = ~ half_period[13];
+  assign \$346  = \$344  & \$345 ;
+  assign \$347  = ~ half_period[14];
+  assign \$348  = \$346  & \$347 ;
+  assign \$349  = ~ half_period[15];
+  assign \$350  = \$348  & \$349 ;
+  assign \$351  = \$330  | \$350 ;
+  assign \$352  = ~ half_period[7];
+  assign \$353  = half_period[6] & \$352 ;
+  assign \$354  = ~ half_period[8];
+  assign \$355  = \$353  & \$354 ;
+  assign \$356  = ~ half_period[9];
+  assign \$357  = \$355  & \$356 ;
+  assign \$358  = ~ half_period[10];
+  assign \$359  = \$357  & \$358 ;
+  assign \$360  = ~ half_period[11];
+  assign \$361  = \$359  & \$360 ;
+  assign \$362  = ~ half_period[12];
+  assign \$363  = \$361  & \$362 ;
+  assign \$364  = ~ half_period[13];
+  assign \$365  = \$363  & \$364 ;
+  assign \$366  = ~ half_period[14];
+  assign \$367  = \$365  & \$366 ;
+  assign \$368  = ~ half_period[15];
+  assign \$369  = \$367  & \$368 ;
+  assign \$370  = \$351  | \$369 ;
+  assign \$371  = ~ half_period[8];
+  assign \$372  = half_period[7] & \$371 ;
+  assign \$373  = ~ half_period[9];
+  assign \$374  = \$372  & \$373 ;
+  assign \$375  = ~ half_period[10];
+  assign \$376  = \$374  & \$375 ;
+  assign \$377  = ~ half_period[11];
+  assign \$378  = \$376  & \$377 ;
+  assign \$379  = ~ half_period[12];
+  assign \$380  = \$378  & \$379 ;
+  assign \$381  = ~ half_period[13];
+  assign \$382  = \$380  & \$381 ;
+  assign \$383  = ~ half_period[14];
+  assign \$384  = \$382  & \$383 ;
+  assign \$385  = ~ half_period[15];
+  assign \$386  = \$384  & \$385 ;
+  assign \$387  = \$370  | \$386 ;
+  assign \$388  = ~ half_period[9];
+  assign \$389  = half_period[8] & \$388 ;
+  assign \$390  = ~ half_period[10];
+  assign \$391  = \$389  & \$390 ;
+  assign \$392  = ~ half_period[11];
+  assign \$393  = \$391  & \$392 ;
+  assign \$394  = ~ half_period[12];
+  assign \$395  = \$393  & \$394 ;
+  assign \$396  = ~ half_period[13];
+  assign \$397  = \$395  & \$396 ;
+  assign \$398  = ~ half_period[14];
+  assign \$399  = \$397  & \$398 ;
+  assign \$400  = ~ half_period[15];
+  assign \$401  = \$399  & \$400 ;
+  assign \$402  = \$387  | \$401 ;
+  assign \$403  = ~ half_period[10];
+  assign \$404  = half_period[9] & \$403 ;
+  assign \$405  = ~ half_period[11];
+  assign \$406  = \$404  & \$405 ;
+  assign \$407  = ~ half_period[12];
+  assign \$408  = \$406  & \$407 ;
+  assign \$409  = ~ half_period[13];
+  assign \$410  = \$408  & \$409 ;
+  assign \$411  = ~ half_period[14];
+  assign \$412  = \$410  & \$411 ;
+  assign \$413  = ~ half_period[15];
+  assign \$414  = \$412  & \$413 ;
+  assign \$415  = \$402  | \$414 ;
+  assign \$416  = ~ half_period[11];
+  assign \$417  = half_period[10] & \$416 ;
+  assign \$418  = ~ half_period[12];
+  assign \$419  = \$417  & \$418 ;
+  assign \$420  = ~ half_period[13];
+  assign \$421  = \$419  & \$420 ;
+  assign \$422  = ~ half_period[14];
+  assign \$423  = \$421  & \$422 ;
+  assign \$424  = ~ half_period[15];
+  assign \$425  = \$423  & \$424 ;
+  assign \$426  = \$415  | \$425 ;
+  assign \$427  = ~ half_period[12];
+  assign \$428  = half_period[11] & \$427 ;
+  assign \$429  = ~ half_period[13];
+  assign \$430  = \$428  & \$429 ;
+  assign \$431  = ~ half_period[14];
+  assign \$432  = \$430  & \$431 ;
+  assign \$433  = ~ half_period[15];
+  assign \$434  = \$432  & \$433 ;
+  assign \$435  = \$426  | \$434 ;
+  assign \$436  = ~ half_period[13];
+  assign \$437  = half_period[12] & \$436 ;
+  assign \$438  = ~ half_period[14];
+  assign \$439  = \$437  & \$438 ;
+  assign \$440  = ~ half_period[15];
+  assign \$441  = \$439  & \$440 ;
+  assign \$442  = \$435  | \$441 ;
+  assign \$443  = ~ half_period[14];
+  assign \$444  = half_period[13] & \$443 ;
+  assign \$445  = ~ half_period[15];
+  assign \$446  = \$444  & \$445 ;
+  assign \$447  = \$442  | \$446 ;
+  assign \$448  = ~ half_period[15];
+  assign \$449  = half_period[14] & \$448 ;
+  assign \$450  = \$447  | \$449 ;
+  assign \$451  = \$450  | half_period[15];
+  assign \$452  = ~ \$451 ;
+  assign \$453  = half_period - vote;
+  assign \$454  = $signed(\$453 ) - $signed(2'h1);
+  assign \$455  = vote - 1'h1;
+  assign \$456  = vote == 1'h1;
+  assign \$457  = mid_delay + 1'h1;
+  assign \$458  = mid_slot - 1'h1;
+  assign \$459  = ~ odd;
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$8368$259 [0]),
+    .clear_high(\port$12994$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -22942,19 +23840,19 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$76  = level;
+    \$525  = level;
     if (receiver_clear) begin
-      \$76  = 1'h1;
+      \$525  = 1'h1;
     end
     if (rst) begin
-      \$76  = 1'h1;
+      \$525  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$77  = mid_delay;
+    \$526  = mid_delay;
     if (odd) begin
-      \$77  = \$8 [12:0];
+      \$526  = \$457 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
@@ -22962,28 +23860,28 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h2:
           /* empty */;
       2'h1:
-          if (\$20 ) begin
+          if (\$469 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$77  = \$30 [12:0];
+              \$526  = \$479 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$77  = 13'h0000;
+      \$526  = 13'h0000;
     end
     if (rst) begin
-      \$77  = 13'h0000;
+      \$526  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$78  = mid_slot;
+    \$527  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$78  = \$9 [16:0];
+      \$527  = \$458 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
@@ -22991,130 +23889,130 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h2:
           /* empty */;
       2'h1:
-          if (\$20 ) begin
+          if (\$469 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$78  = \$27 ;
+              \$527  = \$476 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$78  = 17'h00000;
+      \$527  = 17'h00000;
     end
     if (rst) begin
-      \$78  = 17'h00000;
+      \$527  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$79  = \$10 ;
+    \$528  = \$459 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
           /* empty */;
       2'h1:
-          if (\$20 ) begin
+          if (\$469 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$79  = 1'h1;
+              \$528  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$79  = 1'h0;
+      \$528  = 1'h0;
     end
     if (rst) begin
-      \$79  = 1'h0;
+      \$528  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$80  = elapsed;
+    \$529  = elapsed;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$80  = 13'h0001;
+            \$529  = 13'h0001;
           end
       2'h2:
-          \$80  = \$13 [12:0];
+          \$529  = \$462 [12:0];
       2'h1:
-          if (\$15 ) begin
-            \$80  = \$16 [12:0];
+          if (\$464 ) begin
+            \$529  = \$465 [12:0];
           end
       2'h3:
-          if (\$31 ) begin
-            \$80  = \$32 [12:0];
+          if (\$480 ) begin
+            \$529  = \$481 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$80  = 13'h0000;
+      \$529  = 13'h0000;
     end
     if (rst) begin
-      \$80  = 13'h0000;
+      \$529  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$81  = early;
+    \$530  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$81  = \$12 ;
-            if (\port$8368$259 [0]) begin
-              \$81  = 1'h0;
+            \$530  = \$461 ;
+            if (\port$12994$259 [0]) begin
+              \$530  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$81  = 1'h0;
+      \$530  = 1'h0;
     end
     if (rst) begin
-      \$81  = 1'h0;
+      \$530  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$82  = locked;
+    \$531  = locked;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$82  = 1'h0;
+            \$531  = 1'h0;
           end
       2'h2:
-          if (\$14 ) begin
-            \$82  = 1'h1;
+          if (\$463 ) begin
+            \$531  = 1'h1;
           end
       2'h1:
           /* empty */;
       2'h3:
-          if (\$39 ) begin
+          if (\$488 ) begin
             (* full_case = 32'd1 *)
-            if (\$45 ) begin
+            if (\$494 ) begin
             end else begin
-              \$82  = 1'h1;
+              \$531  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$82  = 1'h0;
+      \$531  = 1'h0;
     end
     if (rst) begin
-      \$82  = 1'h0;
+      \$531  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$83  = gap;
+    \$532  = gap;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$83  = 1'h0;
+            \$532  = 1'h0;
           end
       2'h2:
           /* empty */;
@@ -23122,212 +24020,212 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$83  = 1'h0;
+              \$532  = 1'h0;
             end
           end
-          if (\$20 ) begin
-            \$83  = 1'h0;
+          if (\$469 ) begin
+            \$532  = 1'h0;
           end
         end
       2'h3:
-          if (\$37 ) begin
-            \$83  = \$38 ;
+          if (\$486 ) begin
+            \$532  = \$487 ;
           end
     endcase
     if (receiver_clear) begin
-      \$83  = 1'h0;
+      \$532  = 1'h0;
     end
     if (rst) begin
-      \$83  = 1'h0;
+      \$532  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$84  = sampler_fsm_state;
+    \$533  = sampler_fsm_state;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$84  = 2'h1;
-            if (\port$8368$259 [0]) begin
-              \$84  = 2'h2;
+            \$533  = 2'h1;
+            if (\port$12994$259 [0]) begin
+              \$533  = 2'h2;
             end
           end
       2'h2:
-          if (\$14 ) begin
-            \$84  = 2'h3;
+          if (\$463 ) begin
+            \$533  = 2'h3;
           end
       2'h1:
-          if (\$20 ) begin
-            \$84  = 2'h3;
+          if (\$469 ) begin
+            \$533  = 2'h3;
           end
       2'h3:
         begin
-          if (\$37 ) begin
-            \$84  = 2'h1;
+          if (\$486 ) begin
+            \$533  = 2'h1;
           end
-          if (\$39 ) begin
-            if (\$45 ) begin
-              \$84  = 2'h1;
+          if (\$488 ) begin
+            if (\$494 ) begin
+              \$533  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$84  = 2'h0;
+      \$533  = 2'h0;
     end
     if (rst) begin
-      \$84  = 2'h0;
+      \$533  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$85  = delay;
+    \$534  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            \$85  = { 1'h0, \port$8368$259 [12:1] };
+          if (\$463 ) begin
+            \$534  = { 1'h0, \port$12994$259 [12:1] };
           end
       2'h1:
-          if (\$20 ) begin
+          if (\$469 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$85  = \$22 ;
+              \$534  = \$471 ;
             end else begin
-              \$85  = \$26 [12:0];
+              \$534  = \$475 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$85  = 13'h0000;
+      \$534  = 13'h0000;
     end
     if (rst) begin
-      \$85  = 13'h0000;
+      \$534  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$86  = vote1;
+    \$535  = vote1;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            \$86  = 1'h0;
+          if (\$463 ) begin
+            \$535  = 1'h0;
           end
       2'h1:
-          if (\$20 ) begin
-            \$86  = 1'h0;
+          if (\$469 ) begin
+            \$535  = 1'h0;
           end
       2'h3:
-          if (\$37 ) begin
+          if (\$486 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$86  = level;
+                    \$535  = level;
                   end
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$86  = 1'h0;
+      \$535  = 1'h0;
     end
     if (rst) begin
-      \$86  = 1'h0;
+      \$535  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$87  = vote2;
+    \$536  = vote2;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            \$87  = 1'h0;
+          if (\$463 ) begin
+            \$536  = 1'h0;
           end
       2'h1:
-          if (\$20 ) begin
-            \$87  = 1'h0;
+          if (\$469 ) begin
+            \$536  = 1'h0;
           end
       2'h3:
-          if (\$37 ) begin
+          if (\$486 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  \$87  = level;
+                  \$536  = level;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$87  = 1'h0;
+      \$536  = 1'h0;
     end
     if (rst) begin
-      \$87  = 1'h0;
+      \$536  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$88  = first_slot;
+    \$537  = first_slot;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            \$88  = 1'h0;
+          if (\$463 ) begin
+            \$537  = 1'h0;
           end
       2'h1:
-          if (\$20 ) begin
-            \$88  = 1'h1;
+          if (\$469 ) begin
+            \$537  = 1'h1;
           end
       2'h3:
-          if (\$39 ) begin
+          if (\$488 ) begin
             (* full_case = 32'd1 *)
-            if (\$45 ) begin
+            if (\$494 ) begin
             end else begin
-              \$88  = 1'h0;
+              \$537  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$88  = 1'h0;
+      \$537  = 1'h0;
     end
     if (rst) begin
-      \$88  = 1'h0;
+      \$537  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$89  = phase;
+    \$538  = phase;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            \$89  = 2'h0;
+          if (\$463 ) begin
+            \$538  = 2'h0;
           end
       2'h1:
-          if (\$20 ) begin
+          if (\$469 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$89  = 2'h1;
+              \$538  = 2'h1;
             end else begin
-              \$89  = 2'h0;
+              \$538  = 2'h0;
             end
           end
       2'h3:
-          if (\$37 ) begin
+          if (\$486 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -23335,135 +24233,135 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$89  = 2'h1;
+                    \$538  = 2'h1;
                   end
               2'h1:
-                  \$89  = 2'h2;
+                  \$538  = 2'h2;
               default:
-                  \$89  = 2'h0;
+                  \$538  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$89  = 2'h0;
+      \$538  = 2'h0;
     end
     if (rst) begin
-      \$89  = 2'h0;
+      \$538  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$90  = slot_left;
+    \$539  = slot_left;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            \$90  = { 1'h0, first_load };
+          if (\$463 ) begin
+            \$539  = { 1'h0, first_load };
           end
       2'h1:
         begin
           if (gap) begin
-            \$90  = \$17 [16:0];
+            \$539  = \$466 [16:0];
           end
-          if (\$20 ) begin
+          if (\$469 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$90  = mid_slot;
+              \$539  = mid_slot;
             end else begin
-              \$90  = { 1'h0, first_load };
+              \$539  = { 1'h0, first_load };
             end
           end
         end
       2'h3:
         begin
-          \$90  = \$33 [16:0];
-          if (\$37 ) begin
-            \$90  = { 2'h0, vote_load };
+          \$539  = \$482 [16:0];
+          if (\$486 ) begin
+            \$539  = { 2'h0, vote_load };
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$90  = { first_load, 1'h1 };
+                    \$539  = { first_load, 1'h1 };
                   end else begin
-                    \$90  = { 2'h0, vote_load };
+                    \$539  = { 2'h0, vote_load };
                   end
               2'h1:
-                  \$90  = { 2'h0, vote_load };
+                  \$539  = { 2'h0, vote_load };
               default:
-                  \$90  = { first_load, 1'h1 };
+                  \$539  = { first_load, 1'h1 };
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$90  = 17'h00000;
+      \$539  = 17'h00000;
     end
     if (rst) begin
-      \$90  = 17'h00000;
+      \$539  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$91  = slot_zero;
+    \$540  = slot_zero;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            \$91  = 1'h0;
+          if (\$463 ) begin
+            \$540  = 1'h0;
           end
       2'h1:
         begin
           if (gap) begin
-            \$91  = \$18 ;
+            \$540  = \$467 ;
           end
-          if (\$20 ) begin
+          if (\$469 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$91  = \$23 ;
+              \$540  = \$472 ;
             end else begin
-              \$91  = 1'h0;
+              \$540  = 1'h0;
             end
           end
         end
       2'h3:
         begin
-          \$91  = \$34 ;
-          if (\$37 ) begin
-            \$91  = vote_one;
+          \$540  = \$483 ;
+          if (\$486 ) begin
+            \$540  = vote_one;
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$91  = 1'h0;
+                    \$540  = 1'h0;
                   end else begin
-                    \$91  = vote_one;
+                    \$540  = vote_one;
                   end
               2'h1:
-                  \$91  = vote_one;
+                  \$540  = vote_one;
               default:
-                  \$91  = 1'h0;
+                  \$540  = 1'h0;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$91  = 1'h1;
+      \$540  = 1'h1;
     end
     if (rst) begin
-      \$91  = 1'h1;
+      \$540  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    sample = \$47 ;
+    sample = \$496 ;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
@@ -23473,9 +24371,9 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h1:
           /* empty */;
       2'h3:
-          if (\$65 ) begin
+          if (\$514 ) begin
             (* full_case = 32'd1 *)
-            if (\$71 ) begin
+            if (\$520 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -23489,11 +24387,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           /* empty */;
       2'h2:
-          if (\$58 ) begin
+          if (\$507 ) begin
             clear = 1'h1;
           end
       2'h1:
-          if (\$60 ) begin
+          if (\$509 ) begin
             clear = 1'h1;
           end
     endcase
@@ -23511,11 +24409,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h3:
         begin
-          if (\$63 ) begin
+          if (\$512 ) begin
             dropped = 1'h1;
           end
-          if (\$65 ) begin
-            if (\$71 ) begin
+          if (\$514 ) begin
+            if (\$520 ) begin
               dropped = 1'h1;
             end
           end
@@ -23534,7 +24432,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h1:
           /* empty */;
       2'h3:
-          if (\$63 ) begin
+          if (\$512 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -23562,22 +24460,22 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h1:
           /* empty */;
       2'h3:
-          if (\$63 ) begin
+          if (\$512 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  centre = \$64 ;
+                  centre = \$513 ;
             endcase
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$8368$259 [12:1] };
-  assign fixed = \port$8368$259 [0];
+  assign fixed_delay = { 1'h0, \port$12994$259 [12:1] };
+  assign fixed = \port$12994$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$8368$259 [0];
+  assign clear_high = \port$12994$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -23841,36 +24739,1093 @@ endmodule
 module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
-  wire [25:0] \$10 ;
+  wire \$10 ;
+  wire \$100 ;
+  wire \$1000 ;
+  wire \$1001 ;
+  wire \$1002 ;
+  wire \$1003 ;
+  wire \$1004 ;
+  wire \$1005 ;
+  wire \$1006 ;
+  wire \$1007 ;
+  wire \$1008 ;
+  wire \$1009 ;
+  wire \$101 ;
+  wire \$1010 ;
+  wire \$1011 ;
+  wire \$1012 ;
+  wire \$1013 ;
+  wire \$1014 ;
+  wire \$1015 ;
+  wire \$1016 ;
+  wire \$1017 ;
+  wire \$1018 ;
+  wire \$1019 ;
+  wire \$102 ;
+  wire \$1020 ;
+  wire \$1021 ;
+  wire \$1022 ;
+  wire \$1023 ;
+  wire \$1024 ;
+  wire \$1025 ;
+  wire \$1026 ;
+  wire \$1027 ;
+  wire \$1028 ;
+  wire \$1029 ;
+  wire \$103 ;
+  wire \$1030 ;
+  wire \$1031 ;
+  wire \$1032 ;
+  wire \$1033 ;
+  wire \$1034 ;
+  wire \$1035 ;
+  wire \$1036 ;
+  wire \$1037 ;
+  wire \$1038 ;
+  wire \$1039 ;
+  wire \$104 ;
+  wire \$1040 ;
+  wire \$1041 ;
+  wire \$1042 ;
+  wire \$1043 ;
+  wire \$1044 ;
+  wire \$1045 ;
+  wire \$1046 ;
+  wire \$1047 ;
+  wire \$1048 ;
+  wire \$1049 ;
+  wire \$105 ;
+  wire \$1050 ;
+  wire \$1051 ;
+  wire \$1052 ;
+  wire \$1053 ;
+  wire \$1054 ;
+  wire \$1055 ;
+  wire \$1056 ;
+  wire \$1057 ;
+  wire \$1058 ;
+  wire \$1059 ;
+  wire \$106 ;
+  wire \$1060 ;
+  wire \$1061 ;
+  wire \$1062 ;
+  wire \$1063 ;
+  wire \$1064 ;
+  wire \$1065 ;
+  wire \$1066 ;
+  wire [25:0] \$1067 ;
+  wire \$1068 ;
+  wire \$1069 ;
+  wire \$107 ;
+  wire \$1070 ;
+  wire \$1071 ;
+  wire \$1072 ;
+  wire \$1073 ;
+  wire \$1074 ;
+  wire \$1075 ;
+  wire \$1076 ;
+  wire \$1077 ;
+  wire \$1078 ;
+  wire \$1079 ;
+  wire \$108 ;
+  wire \$1080 ;
+  wire \$1081 ;
+  wire \$1082 ;
+  wire \$1083 ;
+  wire \$1084 ;
+  reg \$1085 ;
+  reg [24:0] \$1086 ;
+  reg \$1087 ;
+  reg \$1088 ;
+  wire \$109 ;
   wire \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   wire \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire \$15 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
   wire \$16 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire \$17 ;
+  wire \$170 ;
+  wire \$171 ;
+  wire \$172 ;
+  wire \$173 ;
+  wire \$174 ;
+  wire \$175 ;
+  wire \$176 ;
+  wire \$177 ;
+  wire \$178 ;
+  wire \$179 ;
   wire \$18 ;
+  wire \$180 ;
+  wire \$181 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
+  wire \$189 ;
   wire \$19 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire \$198 ;
+  wire \$199 ;
   wire \$2 ;
   wire \$20 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire \$21 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
+  wire \$213 ;
+  wire \$214 ;
+  wire \$215 ;
+  wire \$216 ;
+  wire \$217 ;
+  wire \$218 ;
+  wire \$219 ;
   wire \$22 ;
+  wire \$220 ;
+  wire \$221 ;
+  wire \$222 ;
+  wire \$223 ;
+  wire \$224 ;
+  wire \$225 ;
+  wire \$226 ;
+  wire \$227 ;
+  wire \$228 ;
+  wire \$229 ;
   wire \$23 ;
+  wire \$230 ;
+  wire \$231 ;
+  wire \$232 ;
+  wire \$233 ;
+  wire \$234 ;
+  wire \$235 ;
+  wire \$236 ;
+  wire \$237 ;
+  wire \$238 ;
+  wire \$239 ;
   wire \$24 ;
+  wire \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  wire \$243 ;
+  wire \$244 ;
+  wire \$245 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
   wire \$25 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
   wire \$26 ;
+  wire \$260 ;
+  wire \$261 ;
+  wire \$262 ;
+  wire \$263 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire \$269 ;
   wire \$27 ;
-  reg \$28 ;
-  reg [24:0] \$29 ;
+  wire \$270 ;
+  wire \$271 ;
+  wire \$272 ;
+  wire \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
+  wire \$28 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
+  wire \$29 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   wire \$3 ;
-  reg \$30 ;
-  reg \$31 ;
+  wire \$30 ;
+  wire \$300 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
+  wire \$31 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
+  wire \$32 ;
+  wire \$320 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
+  wire \$33 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  wire \$337 ;
+  wire \$338 ;
+  wire \$339 ;
+  wire \$34 ;
+  wire \$340 ;
+  wire \$341 ;
+  wire \$342 ;
+  wire \$343 ;
+  wire \$344 ;
+  wire \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire \$349 ;
+  wire \$35 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire \$352 ;
+  wire \$353 ;
+  wire \$354 ;
+  wire \$355 ;
+  wire \$356 ;
+  wire \$357 ;
+  wire \$358 ;
+  wire \$359 ;
+  wire \$36 ;
+  wire \$360 ;
+  wire \$361 ;
+  wire \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
+  wire \$37 ;
+  wire \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire \$378 ;
+  wire \$379 ;
+  wire \$38 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
+  wire \$39 ;
+  wire \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire \$394 ;
+  wire \$395 ;
+  wire \$396 ;
+  wire \$397 ;
+  wire \$398 ;
+  wire \$399 ;
   wire \$4 ;
+  wire \$40 ;
+  wire \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  wire \$403 ;
+  wire \$404 ;
+  wire \$405 ;
+  wire \$406 ;
+  wire \$407 ;
+  wire \$408 ;
+  wire \$409 ;
+  wire \$41 ;
+  wire \$410 ;
+  wire \$411 ;
+  wire \$412 ;
+  wire \$413 ;
+  wire \$414 ;
+  wire \$415 ;
+  wire \$416 ;
+  wire \$417 ;
+  wire \$418 ;
+  wire \$419 ;
+  wire \$42 ;
+  wire \$420 ;
+  wire \$421 ;
+  wire \$422 ;
+  wire \$423 ;
+  wire \$424 ;
+  wire \$425 ;
+  wire \$426 ;
+  wire \$427 ;
+  wire \$428 ;
+  wire \$429 ;
+  wire \$43 ;
+  wire \$430 ;
+  wire \$431 ;
+  wire \$432 ;
+  wire \$433 ;
+  wire \$434 ;
+  wire \$435 ;
+  wire \$436 ;
+  wire \$437 ;
+  wire \$438 ;
+  wire \$439 ;
+  wire \$44 ;
+  wire \$440 ;
+  wire \$441 ;
+  wire \$442 ;
+  wire \$443 ;
+  wire \$444 ;
+  wire \$445 ;
+  wire \$446 ;
+  wire \$447 ;
+  wire \$448 ;
+  wire \$449 ;
+  wire \$45 ;
+  wire \$450 ;
+  wire \$451 ;
+  wire \$452 ;
+  wire \$453 ;
+  wire \$454 ;
+  wire \$455 ;
+  wire \$456 ;
+  wire \$457 ;
+  wire \$458 ;
+  wire \$459 ;
+  wire \$46 ;
+  wire \$460 ;
+  wire \$461 ;
+  wire \$462 ;
+  wire \$463 ;
+  wire \$464 ;
+  wire \$465 ;
+  wire \$466 ;
+  wire \$467 ;
+  wire \$468 ;
+  wire \$469 ;
+  wire \$47 ;
+  wire \$470 ;
+  wire \$471 ;
+  wire \$472 ;
+  wire \$473 ;
+  wire \$474 ;
+  wire \$475 ;
+  wire \$476 ;
+  wire \$477 ;
+  wire \$478 ;
+  wire \$479 ;
+  wire \$48 ;
+  wire \$480 ;
+  wire \$481 ;
+  wire \$482 ;
+  wire \$483 ;
+  wire \$484 ;
+  wire \$485 ;
+  wire \$486 ;
+  wire \$487 ;
+  wire \$488 ;
+  wire \$489 ;
+  wire \$49 ;
+  wire \$490 ;
+  wire \$491 ;
+  wire \$492 ;
+  wire \$493 ;
+  wire \$494 ;
+  wire \$495 ;
+  wire \$496 ;
+  wire \$497 ;
+  wire \$498 ;
+  wire \$499 ;
   wire \$5 ;
+  wire \$50 ;
+  wire \$500 ;
+  wire \$501 ;
+  wire \$502 ;
+  wire \$503 ;
+  wire \$504 ;
+  wire \$505 ;
+  wire \$506 ;
+  wire \$507 ;
+  wire \$508 ;
+  wire \$509 ;
+  wire \$51 ;
+  wire \$510 ;
+  wire \$511 ;
+  wire \$512 ;
+  wire \$513 ;
+  wire \$514 ;
+  wire \$515 ;
+  wire \$516 ;
+  wire \$517 ;
+  wire \$518 ;
+  wire \$519 ;
+  wire \$52 ;
+  wire \$520 ;
+  wire \$521 ;
+  wire \$522 ;
+  wire \$523 ;
+  wire \$524 ;
+  wire \$525 ;
+  wire \$526 ;
+  wire \$527 ;
+  wire \$528 ;
+  wire \$529 ;
+  wire \$53 ;
+  wire \$530 ;
+  wire \$531 ;
+  wire \$532 ;
+  wire \$533 ;
+  wire \$534 ;
+  wire \$535 ;
+  wire \$536 ;
+  wire \$537 ;
+  wire \$538 ;
+  wire \$539 ;
+  wire \$54 ;
+  wire \$540 ;
+  wire \$541 ;
+  wire \$542 ;
+  wire \$543 ;
+  wire \$544 ;
+  wire \$545 ;
+  wire \$546 ;
+  wire \$547 ;
+  wire \$548 ;
+  wire \$549 ;
+  wire \$55 ;
+  wire \$550 ;
+  wire \$551 ;
+  wire \$552 ;
+  wire \$553 ;
+  wire \$554 ;
+  wire \$555 ;
+  wire \$556 ;
+  wire \$557 ;
+  wire \$558 ;
+  wire \$559 ;
+  wire \$56 ;
+  wire \$560 ;
+  wire \$561 ;
+  wire \$562 ;
+  wire \$563 ;
+  wire \$564 ;
+  wire \$565 ;
+  wire \$566 ;
+  wire \$567 ;
+  wire \$568 ;
+  wire \$569 ;
+  wire \$57 ;
+  wire \$570 ;
+  wire \$571 ;
+  wire \$572 ;
+  wire \$573 ;
+  wire \$574 ;
+  wire \$575 ;
+  wire \$576 ;
+  wire \$577 ;
+  wire \$578 ;
+  wire \$579 ;
+  wire \$58 ;
+  wire \$580 ;
+  wire \$581 ;
+  wire \$582 ;
+  wire \$583 ;
+  wire \$584 ;
+  wire \$585 ;
+  wire \$586 ;
+  wire \$587 ;
+  wire \$588 ;
+  wire \$589 ;
+  wire \$59 ;
+  wire \$590 ;
+  wire \$591 ;
+  wire \$592 ;
+  wire \$593 ;
+  wire \$594 ;
+  wire \$595 ;
+  wire \$596 ;
+  wire \$597 ;
+  wire \$598 ;
+  wire \$599 ;
   wire \$6 ;
+  wire \$60 ;
+  wire \$600 ;
+  wire \$601 ;
+  wire \$602 ;
+  wire \$603 ;
+  wire \$604 ;
+  wire \$605 ;
+  wire \$606 ;
+  wire \$607 ;
+  wire \$608 ;
+  wire \$609 ;
+  wire \$61 ;
+  wire \$610 ;
+  wire \$611 ;
+  wire \$612 ;
+  wire \$613 ;
+  wire \$614 ;
+  wire \$615 ;
+  wire \$616 ;
+  wire \$617 ;
+  wire \$618 ;
+  wire \$619 ;
+  wire \$62 ;
+  wire \$620 ;
+  wire \$621 ;
+  wire \$622 ;
+  wire \$623 ;
+  wire \$624 ;
+  wire \$625 ;
+  wire \$626 ;
+  wire \$627 ;
+  wire \$628 ;
+  wire \$629 ;
+  wire \$63 ;
+  wire \$630 ;
+  wire \$631 ;
+  wire \$632 ;
+  wire \$633 ;
+  wire \$634 ;
+  wire \$635 ;
+  wire \$636 ;
+  wire \$637 ;
+  wire \$638 ;
+  wire \$639 ;
+  wire \$64 ;
+  wire \$640 ;
+  wire \$641 ;
+  wire \$642 ;
+  wire \$643 ;
+  wire \$644 ;
+  wire \$645 ;
+  wire \$646 ;
+  wire \$647 ;
+  wire \$648 ;
+  wire \$649 ;
+  wire \$65 ;
+  wire \$650 ;
+  wire \$651 ;
+  wire \$652 ;
+  wire \$653 ;
+  wire \$654 ;
+  wire \$655 ;
+  wire \$656 ;
+  wire \$657 ;
+  wire \$658 ;
+  wire \$659 ;
+  wire \$66 ;
+  wire \$660 ;
+  wire \$661 ;
+  wire \$662 ;
+  wire \$663 ;
+  wire \$664 ;
+  wire \$665 ;
+  wire \$666 ;
+  wire \$667 ;
+  wire \$668 ;
+  wire \$669 ;
+  wire \$67 ;
+  wire \$670 ;
+  wire \$671 ;
+  wire \$672 ;
+  wire \$673 ;
+  wire \$674 ;
+  wire \$675 ;
+  wire \$676 ;
+  wire \$677 ;
+  wire \$678 ;
+  wire \$679 ;
+  wire \$68 ;
+  wire \$680 ;
+  wire \$681 ;
+  wire \$682 ;
+  wire \$683 ;
+  wire \$684 ;
+  wire \$685 ;
+  wire \$686 ;
+  wire \$687 ;
+  wire \$688 ;
+  wire \$689 ;
+  wire \$69 ;
+  wire \$690 ;
+  wire \$691 ;
+  wire \$692 ;
+  wire \$693 ;
+  wire \$694 ;
+  wire \$695 ;
+  wire \$696 ;
+  wire \$697 ;
+  wire \$698 ;
+  wire \$699 ;
   wire \$7 ;
+  wire \$70 ;
+  wire \$700 ;
+  wire \$701 ;
+  wire \$702 ;
+  wire \$703 ;
+  wire \$704 ;
+  wire \$705 ;
+  wire \$706 ;
+  wire \$707 ;
+  wire \$708 ;
+  wire \$709 ;
+  wire \$71 ;
+  wire \$710 ;
+  wire \$711 ;
+  wire \$712 ;
+  wire \$713 ;
+  wire \$714 ;
+  wire \$715 ;
+  wire \$716 ;
+  wire \$717 ;
+  wire \$718 ;
+  wire \$719 ;
+  wire \$72 ;
+  wire \$720 ;
+  wire \$721 ;
+  wire \$722 ;
+  wire \$723 ;
+  wire \$724 ;
+  wire \$725 ;
+  wire \$726 ;
+  wire \$727 ;
+  wire \$728 ;
+  wire \$729 ;
+  wire \$73 ;
+  wire \$730 ;
+  wire \$731 ;
+  wire \$732 ;
+  wire \$733 ;
+  wire \$734 ;
+  wire \$735 ;
+  wire \$736 ;
+  wire \$737 ;
+  wire \$738 ;
+  wire \$739 ;
+  wire \$74 ;
+  wire \$740 ;
+  wire \$741 ;
+  wire \$742 ;
+  wire \$743 ;
+  wire \$744 ;
+  wire \$745 ;
+  wire \$746 ;
+  wire \$747 ;
+  wire \$748 ;
+  wire \$749 ;
+  wire \$75 ;
+  wire \$750 ;
+  wire \$751 ;
+  wire \$752 ;
+  wire \$753 ;
+  wire \$754 ;
+  wire \$755 ;
+  wire \$756 ;
+  wire \$757 ;
+  wire \$758 ;
+  wire \$759 ;
+  wire \$76 ;
+  wire \$760 ;
+  wire \$761 ;
+  wire \$762 ;
+  wire \$763 ;
+  wire \$764 ;
+  wire \$765 ;
+  wire \$766 ;
+  wire \$767 ;
+  wire \$768 ;
+  wire \$769 ;
+  wire \$77 ;
+  wire \$770 ;
+  wire \$771 ;
+  wire \$772 ;
+  wire \$773 ;
+  wire \$774 ;
+  wire \$775 ;
+  wire \$776 ;
+  wire \$777 ;
+  wire \$778 ;
+  wire \$779 ;
+  wire \$78 ;
+  wire \$780 ;
+  wire \$781 ;
+  wire \$782 ;
+  wire \$783 ;
+  wire \$784 ;
+  wire \$785 ;
+  wire \$786 ;
+  wire \$787 ;
+  wire \$788 ;
+  wire \$789 ;
+  wire \$79 ;
+  wire \$790 ;
+  wire \$791 ;
+  wire \$792 ;
+  wire \$793 ;
+  wire \$794 ;
+  wire \$795 ;
+  wire \$796 ;
+  wire \$797 ;
+  wire \$798 ;
+  wire \$799 ;
   wire \$8 ;
+  wire \$80 ;
+  wire \$800 ;
+  wire \$801 ;
+  wire \$802 ;
+  wire \$803 ;
+  wire \$804 ;
+  wire \$805 ;
+  wire \$806 ;
+  wire \$807 ;
+  wire \$808 ;
+  wire \$809 ;
+  wire \$81 ;
+  wire \$810 ;
+  wire \$811 ;
+  wire \$812 ;
+  wire \$813 ;
+  wire \$814 ;
+  wire \$815 ;
+  wire \$816 ;
+  wire \$817 ;
+  wire \$818 ;
+  wire \$819 ;
+  wire \$82 ;
+  wire \$820 ;
+  wire \$821 ;
+  wire \$822 ;
+  wire \$823 ;
+  wire \$824 ;
+  wire \$825 ;
+  wire \$826 ;
+  wire \$827 ;
+  wire \$828 ;
+  wire \$829 ;
+  wire \$83 ;
+  wire \$830 ;
+  wire \$831 ;
+  wire \$832 ;
+  wire \$833 ;
+  wire \$834 ;
+  wire \$835 ;
+  wire \$836 ;
+  wire \$837 ;
+  wire \$838 ;
+  wire \$839 ;
+  wire \$84 ;
+  wire \$840 ;
+  wire \$841 ;
+  wire \$842 ;
+  wire \$843 ;
+  wire \$844 ;
+  wire \$845 ;
+  wire \$846 ;
+  wire \$847 ;
+  wire \$848 ;
+  wire \$849 ;
+  wire \$85 ;
+  wire \$850 ;
+  wire \$851 ;
+  wire \$852 ;
+  wire \$853 ;
+  wire \$854 ;
+  wire \$855 ;
+  wire \$856 ;
+  wire \$857 ;
+  wire \$858 ;
+  wire \$859 ;
+  wire \$86 ;
+  wire \$860 ;
+  wire \$861 ;
+  wire \$862 ;
+  wire \$863 ;
+  wire \$864 ;
+  wire \$865 ;
+  wire \$866 ;
+  wire \$867 ;
+  wire \$868 ;
+  wire \$869 ;
+  wire \$87 ;
+  wire \$870 ;
+  wire \$871 ;
+  wire \$872 ;
+  wire \$873 ;
+  wire \$874 ;
+  wire \$875 ;
+  wire \$876 ;
+  wire \$877 ;
+  wire \$878 ;
+  wire \$879 ;
+  wire \$88 ;
+  wire \$880 ;
+  wire \$881 ;
+  wire \$882 ;
+  wire \$883 ;
+  wire \$884 ;
+  wire \$885 ;
+  wire \$886 ;
+  wire \$887 ;
+  wire \$888 ;
+  wire \$889 ;
+  wire \$89 ;
+  wire \$890 ;
+  wire \$891 ;
+  wire \$892 ;
+  wire \$893 ;
+  wire \$894 ;
+  wire \$895 ;
+  wire \$896 ;
+  wire \$897 ;
+  wire \$898 ;
+  wire \$899 ;
   wire \$9 ;
+  wire \$90 ;
+  wire \$900 ;
+  wire \$901 ;
+  wire \$902 ;
+  wire \$903 ;
+  wire \$904 ;
+  wire \$905 ;
+  wire \$906 ;
+  wire \$907 ;
+  wire \$908 ;
+  wire \$909 ;
+  wire \$91 ;
+  wire \$910 ;
+  wire \$911 ;
+  wire \$912 ;
+  wire \$913 ;
+  wire \$914 ;
+  wire \$915 ;
+  wire \$916 ;
+  wire \$917 ;
+  wire \$918 ;
+  wire \$919 ;
+  wire \$92 ;
+  wire \$920 ;
+  wire \$921 ;
+  wire \$922 ;
+  wire \$923 ;
+  wire \$924 ;
+  wire \$925 ;
+  wire \$926 ;
+  wire \$927 ;
+  wire \$928 ;
+  wire \$929 ;
+  wire \$93 ;
+  wire \$930 ;
+  wire \$931 ;
+  wire \$932 ;
+  wire \$933 ;
+  wire \$934 ;
+  wire \$935 ;
+  wire \$936 ;
+  wire \$937 ;
+  wire \$938 ;
+  wire \$939 ;
+  wire \$94 ;
+  wire \$940 ;
+  wire \$941 ;
+  wire \$942 ;
+  wire \$943 ;
+  wire \$944 ;
+  wire \$945 ;
+  wire \$946 ;
+  wire \$947 ;
+  wire \$948 ;
+  wire \$949 ;
+  wire \$95 ;
+  wire \$950 ;
+  wire \$951 ;
+  wire \$952 ;
+  wire \$953 ;
+  wire \$954 ;
+  wire \$955 ;
+  wire \$956 ;
+  wire \$957 ;
+  wire \$958 ;
+  wire \$959 ;
+  wire \$96 ;
+  wire \$960 ;
+  wire \$961 ;
+  wire \$962 ;
+  wire \$963 ;
+  wire \$964 ;
+  wire \$965 ;
+  wire \$966 ;
+  wire \$967 ;
+  wire \$968 ;
+  wire \$969 ;
+  wire \$97 ;
+  wire \$970 ;
+  wire \$971 ;
+  wire \$972 ;
+  wire \$973 ;
+  wire \$974 ;
+  wire \$975 ;
+  wire \$976 ;
+  wire \$977 ;
+  wire \$978 ;
+  wire \$979 ;
+  wire \$98 ;
+  wire \$980 ;
+  wire \$981 ;
+  wire \$982 ;
+  wire \$983 ;
+  wire \$984 ;
+  wire \$985 ;
+  wire \$986 ;
+  wire \$987 ;
+  wire \$988 ;
+  wire \$989 ;
+  wire \$99 ;
+  wire \$990 ;
+  wire \$991 ;
+  wire \$992 ;
+  wire \$993 ;
+  wire \$994 ;
+  wire \$995 ;
+  wire \$996 ;
+  wire \$997 ;
+  wire \$998 ;
+  wire \$999 ;
   input abort;
   wire abort;
   input clk;
@@ -23902,89 +25857,1146 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
   assign \$5  = wrap & \$4 ;
   assign \$6  = \$2  | \$5 ;
   assign \$7  = periodic & period_zero;
-  assign \$8  = period <= 1'h1;
-  assign \$9  = period <= 2'h2;
-  assign \$10  = count_p2 + 1'h1;
-  assign \$11  = count_p2 >= period;
-  assign \$12  = start | trigger;
-  assign \$13  = periodic & period_zero;
-  assign \$14  = ~ \$13 ;
-  assign \$15  = periodic & \$14 ;
-  assign \$16  = \$15  & period_start;
-  assign \$17  = \$12  | \$16 ;
-  assign \$18  = periodic & period_zero;
-  assign request = \$17  | \$18 ;
-  assign \$19  = start | trigger;
-  assign \$20  = periodic & period_zero;
-  assign \$21  = ~ \$20 ;
-  assign \$22  = periodic & \$21 ;
-  assign \$23  = \$22  & period_start;
-  assign \$24  = \$19  | \$23 ;
-  assign \$25  = ~ abort;
-  assign \$26  = idle & \$25 ;
-  assign \$27  = ~ \$26 ;
-  assign overrun = \$24  & \$27 ;
+  assign \$8  = ~ period[2];
+  assign \$9  = period[1] & \$8 ;
+  assign \$10  = ~ period[3];
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = ~ period[4];
+  assign \$13  = \$11  & \$12 ;
+  assign \$14  = ~ period[5];
+  assign \$15  = \$13  & \$14 ;
+  assign \$16  = ~ period[6];
+  assign \$17  = \$15  & \$16 ;
+  assign \$18  = ~ period[7];
+  assign \$19  = \$17  & \$18 ;
+  assign \$20  = ~ period[8];
+  assign \$21  = \$19  & \$20 ;
+  assign \$22  = ~ period[9];
+  assign \$23  = \$21  & \$22 ;
+  assign \$24  = ~ period[10];
+  assign \$25  = \$23  & \$24 ;
+  assign \$26  = ~ period[11];
+  assign \$27  = \$25  & \$26 ;
+  assign \$28  = ~ period[12];
+  assign \$29  = \$27  & \$28 ;
+  assign \$30  = ~ period[13];
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = ~ period[14];
+  assign \$33  = \$31  & \$32 ;
+  assign \$34  = ~ period[15];
+  assign \$35  = \$33  & \$34 ;
+  assign \$36  = ~ period[16];
+  assign \$37  = \$35  & \$36 ;
+  assign \$38  = ~ period[17];
+  assign \$39  = \$37  & \$38 ;
+  assign \$40  = ~ period[18];
+  assign \$41  = \$39  & \$40 ;
+  assign \$42  = ~ period[19];
+  assign \$43  = \$41  & \$42 ;
+  assign \$44  = ~ period[20];
+  assign \$45  = \$43  & \$44 ;
+  assign \$46  = ~ period[21];
+  assign \$47  = \$45  & \$46 ;
+  assign \$48  = ~ period[22];
+  assign \$49  = \$47  & \$48 ;
+  assign \$50  = ~ period[23];
+  assign \$51  = \$49  & \$50 ;
+  assign \$52  = ~ period[3];
+  assign \$53  = period[2] & \$52 ;
+  assign \$54  = ~ period[4];
+  assign \$55  = \$53  & \$54 ;
+  assign \$56  = ~ period[5];
+  assign \$57  = \$55  & \$56 ;
+  assign \$58  = ~ period[6];
+  assign \$59  = \$57  & \$58 ;
+  assign \$60  = ~ period[7];
+  assign \$61  = \$59  & \$60 ;
+  assign \$62  = ~ period[8];
+  assign \$63  = \$61  & \$62 ;
+  assign \$64  = ~ period[9];
+  assign \$65  = \$63  & \$64 ;
+  assign \$66  = ~ period[10];
+  assign \$67  = \$65  & \$66 ;
+  assign \$68  = ~ period[11];
+  assign \$69  = \$67  & \$68 ;
+  assign \$70  = ~ period[12];
+  assign \$71  = \$69  & \$70 ;
+  assign \$72  = ~ period[13];
+  assign \$73  = \$71  & \$72 ;
+  assign \$74  = ~ period[14];
+  assign \$75  = \$73  & \$74 ;
+  assign \$76  = ~ period[15];
+  assign \$77  = \$75  & \$76 ;
+  assign \$78  = ~ period[16];
+  assign \$79  = \$77  & \$78 ;
+  assign \$80  = ~ period[17];
+  assign \$81  = \$79  & \$80 ;
+  assign \$82  = ~ period[18];
+  assign \$83  = \$81  & \$82 ;
+  assign \$84  = ~ period[19];
+  assign \$85  = \$83  & \$84 ;
+  assign \$86  = ~ period[20];
+  assign \$87  = \$85  & \$86 ;
+  assign \$88  = ~ period[21];
+  assign \$89  = \$87  & \$88 ;
+  assign \$90  = ~ period[22];
+  assign \$91  = \$89  & \$90 ;
+  assign \$92  = ~ period[23];
+  assign \$93  = \$91  & \$92 ;
+  assign \$94  = \$51  | \$93 ;
+  assign \$95  = ~ period[4];
+  assign \$96  = period[3] & \$95 ;
+  assign \$97  = ~ period[5];
+  assign \$98  = \$96  & \$97 ;
+  assign \$99  = ~ period[6];
+  assign \$100  = \$98  & \$99 ;
+  assign \$101  = ~ period[7];
+  assign \$102  = \$100  & \$101 ;
+  assign \$103  = ~ period[8];
+  assign \$104  = \$102  & \$103 ;
+  assign \$105  = ~ period[9];
+  assign \$106  = \$104  & \$105 ;
+  assign \$107  = ~ period[10];
+  assign \$108  = \$106  & \$107 ;
+  assign \$109  = ~ period[11];
+  assign \$110  = \$108  & \$109 ;
+  assign \$111  = ~ period[12];
+  assign \$112  = \$110  & \$111 ;
+  assign \$113  = ~ period[13];
+  assign \$114  = \$112  & \$113 ;
+  assign \$115  = ~ period[14];
+  assign \$116  = \$114  & \$115 ;
+  assign \$117  = ~ period[15];
+  assign \$118  = \$116  & \$117 ;
+  assign \$119  = ~ period[16];
+  assign \$120  = \$118  & \$119 ;
+  assign \$121  = ~ period[17];
+  assign \$122  = \$120  & \$121 ;
+  assign \$123  = ~ period[18];
+  assign \$124  = \$122  & \$123 ;
+  assign \$125  = ~ period[19];
+  assign \$126  = \$124  & \$125 ;
+  assign \$127  = ~ period[20];
+  assign \$128  = \$126  & \$127 ;
+  assign \$129  = ~ period[21];
+  assign \$130  = \$128  & \$129 ;
+  assign \$131  = ~ period[22];
+  assign \$132  = \$130  & \$131 ;
+  assign \$133  = ~ period[23];
+  assign \$134  = \$132  & \$133 ;
+  assign \$135  = \$94  | \$134 ;
+  assign \$136  = ~ period[5];
+  assign \$137  = period[4] & \$136 ;
+  assign \$138  = ~ period[6];
+  assign \$139  = \$137  & \$138 ;
+  assign \$140  = ~ period[7];
+  assign \$141  = \$139  & \$140 ;
+  assign \$142  = ~ period[8];
+  assign \$143  = \$141  & \$142 ;
+  assign \$144  = ~ period[9];
+  assign \$145  = \$143  & \$144 ;
+  assign \$146  = ~ period[10];
+  assign \$147  = \$145  & \$146 ;
+  assign \$148  = ~ period[11];
+  assign \$149  = \$147  & \$148 ;
+  assign \$150  = ~ period[12];
+  assign \$151  = \$149  & \$150 ;
+  assign \$152  = ~ period[13];
+  assign \$153  = \$151  & \$152 ;
+  assign \$154  = ~ period[14];
+  assign \$155  = \$153  & \$154 ;
+  assign \$156  = ~ period[15];
+  assign \$157  = \$155  & \$156 ;
+  assign \$158  = ~ period[16];
+  assign \$159  = \$157  & \$158 ;
+  assign \$160  = ~ period[17];
+  assign \$161  = \$159  & \$160 ;
+  assign \$162  = ~ period[18];
+  assign \$163  = \$161  & \$162 ;
+  assign \$164  = ~ period[19];
+  assign \$165  = \$163  & \$164 ;
+  assign \$166  = ~ period[20];
+  assign \$167  = \$165  & \$166 ;
+  assign \$168  = ~ period[21];
+  assign \$169  = \$167  & \$168 ;
+  assign \$170  = ~ period[22];
+  assign \$171  = \$169  & \$170 ;
+  assign \$172  = ~ period[23];
+  assign \$173  = \$171  & \$172 ;
+  assign \$174  = \$135  | \$173 ;
+  assign \$175  = ~ period[6];
+  assign \$176  = period[5] & \$175 ;
+  assign \$177  = ~ period[7];
+  assign \$178  = \$176  & \$177 ;
+  assign \$179  = ~ period[8];
+  assign \$180  = \$178  & \$179 ;
+  assign \$181  = ~ period[9];
+  assign \$182  = \$180  & \$181 ;
+  assign \$183  = ~ period[10];
+  assign \$184  = \$182  & \$183 ;
+  assign \$185  = ~ period[11];
+  assign \$186  = \$184  & \$185 ;
+  assign \$187  = ~ period[12];
+  assign \$188  = \$186  & \$187 ;
+  assign \$189  = ~ period[13];
+  assign \$190  = \$188  & \$189 ;
+  assign \$191  = ~ period[14];
+  assign \$192  = \$190  & \$191 ;
+  assign \$193  = ~ period[15];
+  assign \$194  = \$192  & \$193 ;
+  assign \$195  = ~ period[16];
+  assign \$196  = \$194  & \$195 ;
+  assign \$197  = ~ period[17];
+  assign \$198  = \$196  & \$197 ;
+  assign \$199  = ~ period[18];
+  assign \$200  = \$198  & \$199 ;
+  assign \$201  = ~ period[19];
+  assign \$202  = \$200  & \$201 ;
+  assign \$203  = ~ period[20];
+  assign \$204  = \$202  & \$203 ;
+  assign \$205  = ~ period[21];
+  assign \$206  = \$204  & \$205 ;
+  assign \$207  = ~ period[22];
+  assign \$208  = \$206  & \$207 ;
+  assign \$209  = ~ period[23];
+  assign \$210  = \$208  & \$209 ;
+  assign \$211  = \$174  | \$210 ;
+  assign \$212  = ~ period[7];
+  assign \$213  = period[6] & \$212 ;
+  assign \$214  = ~ period[8];
+  assign \$215  = \$213  & \$214 ;
+  assign \$216  = ~ period[9];
+  assign \$217  = \$215  & \$216 ;
+  assign \$218  = ~ period[10];
+  assign \$219  = \$217  & \$218 ;
+  assign \$220  = ~ period[11];
+  assign \$221  = \$219  & \$220 ;
+  assign \$222  = ~ period[12];
+  assign \$223  = \$221  & \$222 ;
+  assign \$224  = ~ period[13];
+  assign \$225  = \$223  & \$224 ;
+  assign \$226  = ~ period[14];
+  assign \$227  = \$225  & \$226 ;
+  assign \$228  = ~ period[15];
+  assign \$229  = \$227  & \$228 ;
+  assign \$230  = ~ period[16];
+  assign \$231  = \$229  & \$230 ;
+  assign \$232  = ~ period[17];
+  assign \$233  = \$231  & \$232 ;
+  assign \$234  = ~ period[18];
+  assign \$235  = \$233  & \$234 ;
+  assign \$236  = ~ period[19];
+  assign \$237  = \$235  & \$236 ;
+  assign \$238  = ~ period[20];
+  assign \$239  = \$237  & \$238 ;
+  assign \$240  = ~ period[21];
+  assign \$241  = \$239  & \$240 ;
+  assign \$242  = ~ period[22];
+  assign \$243  = \$241  & \$242 ;
+  assign \$244  = ~ period[23];
+  assign \$245  = \$243  & \$244 ;
+  assign \$246  = \$211  | \$245 ;
+  assign \$247  = ~ period[8];
+  assign \$248  = period[7] & \$247 ;
+  assign \$249  = ~ period[9];
+  assign \$250  = \$248  & \$249 ;
+  assign \$251  = ~ period[10];
+  assign \$252  = \$250  & \$251 ;
+  assign \$253  = ~ period[11];
+  assign \$254  = \$252  & \$253 ;
+  assign \$255  = ~ period[12];
+  assign \$256  = \$254  & \$255 ;
+  assign \$257  = ~ period[13];
+  assign \$258  = \$256  & \$257 ;
+  assign \$259  = ~ period[14];
+  assign \$260  = \$258  & \$259 ;
+  assign \$261  = ~ period[15];
+  assign \$262  = \$260  & \$261 ;
+  assign \$263  = ~ period[16];
+  assign \$264  = \$262  & \$263 ;
+  assign \$265  = ~ period[17];
+  assign \$266  = \$264  & \$265 ;
+  assign \$267  = ~ period[18];
+  assign \$268  = \$266  & \$267 ;
+  assign \$269  = ~ period[19];
+  assign \$270  = \$268  & \$269 ;
+  assign \$271  = ~ period[20];
+  assign \$272  = \$270  & \$271 ;
+  assign \$273  = ~ period[21];
+  assign \$274  = \$272  & \$273 ;
+  assign \$275  = ~ period[22];
+  assign \$276  = \$274  & \$275 ;
+  assign \$277  = ~ period[23];
+  assign \$278  = \$276  & \$277 ;
+  assign \$279  = \$246  | \$278 ;
+  assign \$280  = ~ period[9];
+  assign \$281  = period[8] & \$280 ;
+  assign \$282  = ~ period[10];
+  assign \$283  = \$281  & \$282 ;
+  assign \$284  = ~ period[11];
+  assign \$285  = \$283  & \$284 ;
+  assign \$286  = ~ period[12];
+  assign \$287  = \$285  & \$286 ;
+  assign \$288  = ~ period[13];
+  assign \$289  = \$287  & \$288 ;
+  assign \$290  = ~ period[14];
+  assign \$291  = \$289  & \$290 ;
+  assign \$292  = ~ period[15];
+  assign \$293  = \$291  & \$292 ;
+  assign \$294  = ~ period[16];
+  assign \$295  = \$293  & \$294 ;
+  assign \$296  = ~ period[17];
+  assign \$297  = \$295  & \$296 ;
+  assign \$298  = ~ period[18];
+  assign \$299  = \$297  & \$298 ;
+  assign \$300  = ~ period[19];
+  assign \$301  = \$299  & \$300 ;
+  assign \$302  = ~ period[20];
+  assign \$303  = \$301  & \$302 ;
+  assign \$304  = ~ period[21];
+  assign \$305  = \$303  & \$304 ;
+  assign \$306  = ~ period[22];
+  assign \$307  = \$305  & \$306 ;
+  assign \$308  = ~ period[23];
+  assign \$309  = \$307  & \$308 ;
+  assign \$310  = \$279  | \$309 ;
+  assign \$311  = ~ period[10];
+  assign \$312  = period[9] & \$311 ;
+  assign \$313  = ~ period[11];
+  assign \$314  = \$312  & \$313 ;
+  assign \$315  = ~ period[12];
+  assign \$316  = \$314  & \$315 ;
+  assign \$317  = ~ period[13];
+  assign \$318  = \$316  & \$317 ;
+  assign \$319  = ~ period[14];
+  assign \$320  = \$318  & \$319 ;
+  assign \$321  = ~ period[15];
+  assign \$322  = \$320  & \$321 ;
+  assign \$323  = ~ period[16];
+  assign \$324  = \$322  & \$323 ;
+  assign \$325  = ~ period[17];
+  assign \$326  = \$324  & \$325 ;
+  assign \$327  = ~ period[18];
+  assign \$328  = \$326  & \$327 ;
+  assign \$329  = ~ period[19];
+  assign \$330  = \$328  & \$329 ;
+  assign \$331  = ~ period[20];
+  assign \$332  = \$330  & \$331 ;
+  assign \$333  = ~ period[21];
+  assign \$334  = \$332  & \$333 ;
+  assign \$335  = ~ period[22];
+  assign \$336  = \$334  & \$335 ;
+  assign \$337  = ~ period[23];
+  assign \$338  = \$336  & \$337 ;
+  assign \$339  = \$310  | \$338 ;
+  assign \$340  = ~ period[11];
+  assign \$341  = period[10] & \$340 ;
+  assign \$342  = ~ period[12];
+  assign \$343  = \$341  & \$342 ;
+  assign \$344  = ~ period[13];
+  assign \$345  = \$343  & \$344 ;
+  assign \$346  = ~ period[14];
+  assign \$347  = \$345  & \$346 ;
+  assign \$348  = ~ period[15];
+  assign \$349  = \$347  & \$348 ;
+  assign \$350  = ~ period[16];
+  assign \$351  = \$349  & \$350 ;
+  assign \$352  = ~ period[17];
+  assign \$353  = \$351  & \$352 ;
+  assign \$354  = ~ period[18];
+  assign \$355  = \$353  & \$354 ;
+  assign \$356  = ~ period[19];
+  assign \$357  = \$355  & \$356 ;
+  assign \$358  = ~ period[20];
+  assign \$359  = \$357  & \$358 ;
+  assign \$360  = ~ period[21];
+  assign \$361  = \$359  & \$360 ;
+  assign \$362  = ~ period[22];
+  assign \$363  = \$361  & \$362 ;
+  assign \$364  = ~ period[23];
+  assign \$365  = \$363  & \$364 ;
+  assign \$366  = \$339  | \$365 ;
+  assign \$367  = ~ period[12];
+  assign \$368  = period[11] & \$367 ;
+  assign \$369  = ~ period[13];
+  assign \$370  = \$368  & \$369 ;
+  assign \$371  = ~ period[14];
+  assign \$372  = \$370  & \$371 ;
+  assign \$373  = ~ period[15];
+  assign \$374  = \$372  & \$373 ;
+  assign \$375  = ~ period[16];
+  assign \$376  = \$374  & \$375 ;
+  assign \$377  = ~ period[17];
+  assign \$378  = \$376  & \$377 ;
+  assign \$379  = ~ period[18];
+  assign \$380  = \$378  & \$379 ;
+  assign \$381  = ~ period[19];
+  assign \$382  = \$380  & \$381 ;
+  assign \$383  = ~ period[20];
+  assign \$384  = \$382  & \$383 ;
+  assign \$385  = ~ period[21];
+  assign \$386  = \$384  & \$385 ;
+  assign \$387  = ~ period[22];
+  assign \$388  = \$386  & \$387 ;
+  assign \$389  = ~ period[23];
+  assign \$390  = \$388  & \$389 ;
+  assign \$391  = \$366  | \$390 ;
+  assign \$392  = ~ period[13];
+  assign \$393  = period[12] & \$392 ;
+  assign \$394  = ~ period[14];
+  assign \$395  = \$393  & \$394 ;
+  assign \$396  = ~ period[15];
+  assign \$397  = \$395  & \$396 ;
+  assign \$398  = ~ period[16];
+  assign \$399  = \$397  & \$398 ;
+  assign \$400  = ~ period[17];
+  assign \$401  = \$399  & \$400 ;
+  assign \$402  = ~ period[18];
+  assign \$403  = \$401  & \$402 ;
+  assign \$404  = ~ period[19];
+  assign \$405  = \$403  & \$404 ;
+  assign \$406  = ~ period[20];
+  assign \$407  = \$405  & \$406 ;
+  assign \$408  = ~ period[21];
+  assign \$409  = \$407  & \$408 ;
+  assign \$410  = ~ period[22];
+  assign \$411  = \$409  & \$410 ;
+  assign \$412  = ~ period[23];
+  assign \$413  = \$411  & \$412 ;
+  assign \$414  = \$391  | \$413 ;
+  assign \$415  = ~ period[14];
+  assign \$416  = period[13] & \$415 ;
+  assign \$417  = ~ period[15];
+  assign \$418  = \$416  & \$417 ;
+  assign \$419  = ~ period[16];
+  assign \$420  = \$418  & \$419 ;
+  assign \$421  = ~ period[17];
+  assign \$422  = \$420  & \$421 ;
+  assign \$423  = ~ period[18];
+  assign \$424  = \$422  & \$423 ;
+  assign \$425  = ~ period[19];
+  assign \$426  = \$424  & \$425 ;
+  assign \$427  = ~ period[20];
+  assign \$428  = \$426  & \$427 ;
+  assign \$429  = ~ period[21];
+  assign \$430  = \$428  & \$429 ;
+  assign \$431  = ~ period[22];
+  assign \$432  = \$430  & \$431 ;
+  assign \$433  = ~ period[23];
+  assign \$434  = \$432  & \$433 ;
+  assign \$435  = \$414  | \$434 ;
+  assign \$436  = ~ period[15];
+  assign \$437  = period[14] & \$436 ;
+  assign \$438  = ~ period[16];
+  assign \$439  = \$437  & \$438 ;
+  assign \$440  = ~ period[17];
+  assign \$441  = \$439  & \$440 ;
+  assign \$442  = ~ period[18];
+  assign \$443  = \$441  & \$442 ;
+  assign \$444  = ~ period[19];
+  assign \$445  = \$443  & \$444 ;
+  assign \$446  = ~ period[20];
+  assign \$447  = \$445  & \$446 ;
+  assign \$448  = ~ period[21];
+  assign \$449  = \$447  & \$448 ;
+  assign \$450  = ~ period[22];
+  assign \$451  = \$449  & \$450 ;
+  assign \$452  = ~ period[23];
+  assign \$453  = \$451  & \$452 ;
+  assign \$454  = \$435  | \$453 ;
+  assign \$455  = ~ period[16];
+  assign \$456  = period[15] & \$455 ;
+  assign \$457  = ~ period[17];
+  assign \$458  = \$456  & \$457 ;
+  assign \$459  = ~ period[18];
+  assign \$460  = \$458  & \$459 ;
+  assign \$461  = ~ period[19];
+  assign \$462  = \$460  & \$461 ;
+  assign \$463  = ~ period[20];
+  assign \$464  = \$462  & \$463 ;
+  assign \$465  = ~ period[21];
+  assign \$466  = \$464  & \$465 ;
+  assign \$467  = ~ period[22];
+  assign \$468  = \$466  & \$467 ;
+  assign \$469  = ~ period[23];
+  assign \$470  = \$468  & \$469 ;
+  assign \$471  = \$454  | \$470 ;
+  assign \$472  = ~ period[17];
+  assign \$473  = period[16] & \$472 ;
+  assign \$474  = ~ period[18];
+  assign \$475  = \$473  & \$474 ;
+  assign \$476  = ~ period[19];
+  assign \$477  = \$475  & \$476 ;
+  assign \$478  = ~ period[20];
+  assign \$479  = \$477  & \$478 ;
+  assign \$480  = ~ period[21];
+  assign \$481  = \$479  & \$480 ;
+  assign \$482  = ~ period[22];
+  assign \$483  = \$481  & \$482 ;
+  assign \$484  = ~ period[23];
+  assign \$485  = \$483  & \$484 ;
+  assign \$486  = \$471  | \$485 ;
+  assign \$487  = ~ period[18];
+  assign \$488  = period[17] & \$487 ;
+  assign \$489  = ~ period[19];
+  assign \$490  = \$488  & \$489 ;
+  assign \$491  = ~ period[20];
+  assign \$492  = \$490  & \$491 ;
+  assign \$493  = ~ period[21];
+  assign \$494  = \$492  & \$493 ;
+  assign \$495  = ~ period[22];
+  assign \$496  = \$494  & \$495 ;
+  assign \$497  = ~ period[23];
+  assign \$498  = \$496  & \$497 ;
+  assign \$499  = \$486  | \$498 ;
+  assign \$500  = ~ period[19];
+  assign \$501  = period[18] & \$500 ;
+  assign \$502  = ~ period[20];
+  assign \$503  = \$501  & \$502 ;
+  assign \$504  = ~ period[21];
+  assign \$505  = \$503  & \$504 ;
+  assign \$506  = ~ period[22];
+  assign \$507  = \$505  & \$506 ;
+  assign \$508  = ~ period[23];
+  assign \$509  = \$507  & \$508 ;
+  assign \$510  = \$499  | \$509 ;
+  assign \$511  = ~ period[20];
+  assign \$512  = period[19] & \$511 ;
+  assign \$513  = ~ period[21];
+  assign \$514  = \$512  & \$513 ;
+  assign \$515  = ~ period[22];
+  assign \$516  = \$514  & \$515 ;
+  assign \$517  = ~ period[23];
+  assign \$518  = \$516  & \$517 ;
+  assign \$519  = \$510  | \$518 ;
+  assign \$520  = ~ period[21];
+  assign \$521  = period[20] & \$520 ;
+  assign \$522  = ~ period[22];
+  assign \$523  = \$521  & \$522 ;
+  assign \$524  = ~ period[23];
+  assign \$525  = \$523  & \$524 ;
+  assign \$526  = \$519  | \$525 ;
+  assign \$527  = ~ period[22];
+  assign \$528  = period[21] & \$527 ;
+  assign \$529  = ~ period[23];
+  assign \$530  = \$528  & \$529 ;
+  assign \$531  = \$526  | \$530 ;
+  assign \$532  = ~ period[23];
+  assign \$533  = period[22] & \$532 ;
+  assign \$534  = \$531  | \$533 ;
+  assign \$535  = \$534  | period[23];
+  assign \$536  = ~ \$535 ;
+  assign \$537  = period[0] & period[1];
+  assign \$538  = ~ period[2];
+  assign \$539  = \$537  & \$538 ;
+  assign \$540  = ~ period[3];
+  assign \$541  = \$539  & \$540 ;
+  assign \$542  = ~ period[4];
+  assign \$543  = \$541  & \$542 ;
+  assign \$544  = ~ period[5];
+  assign \$545  = \$543  & \$544 ;
+  assign \$546  = ~ period[6];
+  assign \$547  = \$545  & \$546 ;
+  assign \$548  = ~ period[7];
+  assign \$549  = \$547  & \$548 ;
+  assign \$550  = ~ period[8];
+  assign \$551  = \$549  & \$550 ;
+  assign \$552  = ~ period[9];
+  assign \$553  = \$551  & \$552 ;
+  assign \$554  = ~ period[10];
+  assign \$555  = \$553  & \$554 ;
+  assign \$556  = ~ period[11];
+  assign \$557  = \$555  & \$556 ;
+  assign \$558  = ~ period[12];
+  assign \$559  = \$557  & \$558 ;
+  assign \$560  = ~ period[13];
+  assign \$561  = \$559  & \$560 ;
+  assign \$562  = ~ period[14];
+  assign \$563  = \$561  & \$562 ;
+  assign \$564  = ~ period[15];
+  assign \$565  = \$563  & \$564 ;
+  assign \$566  = ~ period[16];
+  assign \$567  = \$565  & \$566 ;
+  assign \$568  = ~ period[17];
+  assign \$569  = \$567  & \$568 ;
+  assign \$570  = ~ period[18];
+  assign \$571  = \$569  & \$570 ;
+  assign \$572  = ~ period[19];
+  assign \$573  = \$571  & \$572 ;
+  assign \$574  = ~ period[20];
+  assign \$575  = \$573  & \$574 ;
+  assign \$576  = ~ period[21];
+  assign \$577  = \$575  & \$576 ;
+  assign \$578  = ~ period[22];
+  assign \$579  = \$577  & \$578 ;
+  assign \$580  = ~ period[23];
+  assign \$581  = \$579  & \$580 ;
+  assign \$582  = ~ period[3];
+  assign \$583  = period[2] & \$582 ;
+  assign \$584  = ~ period[4];
+  assign \$585  = \$583  & \$584 ;
+  assign \$586  = ~ period[5];
+  assign \$587  = \$585  & \$586 ;
+  assign \$588  = ~ period[6];
+  assign \$589  = \$587  & \$588 ;
+  assign \$590  = ~ period[7];
+  assign \$591  = \$589  & \$590 ;
+  assign \$592  = ~ period[8];
+  assign \$593  = \$591  & \$592 ;
+  assign \$594  = ~ period[9];
+  assign \$595  = \$593  & \$594 ;
+  assign \$596  = ~ period[10];
+  assign \$597  = \$595  & \$596 ;
+  assign \$598  = ~ period[11];
+  assign \$599  = \$597  & \$598 ;
+  assign \$600  = ~ period[12];
+  assign \$601  = \$599  & \$600 ;
+  assign \$602  = ~ period[13];
+  assign \$603  = \$601  & \$602 ;
+  assign \$604  = ~ period[14];
+  assign \$605  = \$603  & \$604 ;
+  assign \$606  = ~ period[15];
+  assign \$607  = \$605  & \$606 ;
+  assign \$608  = ~ period[16];
+  assign \$609  = \$607  & \$608 ;
+  assign \$610  = ~ period[17];
+  assign \$611  = \$609  & \$610 ;
+  assign \$612  = ~ period[18];
+  assign \$613  = \$611  & \$612 ;
+  assign \$614  = ~ period[19];
+  assign \$615  = \$613  & \$614 ;
+  assign \$616  = ~ period[20];
+  assign \$617  = \$615  & \$616 ;
+  assign \$618  = ~ period[21];
+  assign \$619  = \$617  & \$618 ;
+  assign \$620  = ~ period[22];
+  assign \$621  = \$619  & \$620 ;
+  assign \$622  = ~ period[23];
+  assign \$623  = \$621  & \$622 ;
+  assign \$624  = \$581  | \$623 ;
+  assign \$625  = ~ period[4];
+  assign \$626  = period[3] & \$625 ;
+  assign \$627  = ~ period[5];
+  assign \$628  = \$626  & \$627 ;
+  assign \$629  = ~ period[6];
+  assign \$630  = \$628  & \$629 ;
+  assign \$631  = ~ period[7];
+  assign \$632  = \$630  & \$631 ;
+  assign \$633  = ~ period[8];
+  assign \$634  = \$632  & \$633 ;
+  assign \$635  = ~ period[9];
+  assign \$636  = \$634  & \$635 ;
+  assign \$637  = ~ period[10];
+  assign \$638  = \$636  & \$637 ;
+  assign \$639  = ~ period[11];
+  assign \$640  = \$638  & \$639 ;
+  assign \$641  = ~ period[12];
+  assign \$642  = \$640  & \$641 ;
+  assign \$643  = ~ period[13];
+  assign \$644  = \$642  & \$643 ;
+  assign \$645  = ~ period[14];
+  assign \$646  = \$644  & \$645 ;
+  assign \$647  = ~ period[15];
+  assign \$648  = \$646  & \$647 ;
+  assign \$649  = ~ period[16];
+  assign \$650  = \$648  & \$649 ;
+  assign \$651  = ~ period[17];
+  assign \$652  = \$650  & \$651 ;
+  assign \$653  = ~ period[18];
+  assign \$654  = \$652  & \$653 ;
+  assign \$655  = ~ period[19];
+  assign \$656  = \$654  & \$655 ;
+  assign \$657  = ~ period[20];
+  assign \$658  = \$656  & \$657 ;
+  assign \$659  = ~ period[21];
+  assign \$660  = \$658  & \$659 ;
+  assign \$661  = ~ period[22];
+  assign \$662  = \$660  & \$661 ;
+  assign \$663  = ~ period[23];
+  assign \$664  = \$662  & \$663 ;
+  assign \$665  = \$624  | \$664 ;
+  assign \$666  = ~ period[5];
+  assign \$667  = period[4] & \$666 ;
+  assign \$668  = ~ period[6];
+  assign \$669  = \$667  & \$668 ;
+  assign \$670  = ~ period[7];
+  assign \$671  = \$669  & \$670 ;
+  assign \$672  = ~ period[8];
+  assign \$673  = \$671  & \$672 ;
+  assign \$674  = ~ period[9];
+  assign \$675  = \$673  & \$674 ;
+  assign \$676  = ~ period[10];
+  assign \$677  = \$675  & \$676 ;
+  assign \$678  = ~ period[11];
+  assign \$679  = \$677  & \$678 ;
+  assign \$680  = ~ period[12];
+  assign \$681  = \$679  & \$680 ;
+  assign \$682  = ~ period[13];
+  assign \$683  = \$681  & \$682 ;
+  assign \$684  = ~ period[14];
+  assign \$685  = \$683  & \$684 ;
+  assign \$686  = ~ period[15];
+  assign \$687  = \$685  & \$686 ;
+  assign \$688  = ~ period[16];
+  assign \$689  = \$687  & \$688 ;
+  assign \$690  = ~ period[17];
+  assign \$691  = \$689  & \$690 ;
+  assign \$692  = ~ period[18];
+  assign \$693  = \$691  & \$692 ;
+  assign \$694  = ~ period[19];
+  assign \$695  = \$693  & \$694 ;
+  assign \$696  = ~ period[20];
+  assign \$697  = \$695  & \$696 ;
+  assign \$698  = ~ period[21];
+  assign \$699  = \$697  & \$698 ;
+  assign \$700  = ~ period[22];
+  assign \$701  = \$699  & \$700 ;
+  assign \$702  = ~ period[23];
+  assign \$703  = \$701  & \$702 ;
+  assign \$704  = \$665  | \$703 ;
+  assign \$705  = ~ period[6];
+  assign \$706  = period[5] & \$705 ;
+  assign \$707  = ~ period[7];
+  assign \$708  = \$706  & \$707 ;
+  assign \$709  = ~ period[8];
+  assign \$710  = \$708  & \$709 ;
+  assign \$711  = ~ period[9];
+  assign \$712  = \$710  & \$711 ;
+  assign \$713  = ~ period[10];
+  assign \$714  = \$712  & \$713 ;
+  assign \$715  = ~ period[11];
+  assign \$716  = \$714  & \$715 ;
+  assign \$717  = ~ period[12];
+  assign \$718  = \$716  & \$717 ;
+  assign \$719  = ~ period[13];
+  assign \$720  = \$718  & \$719 ;
+  assign \$721  = ~ period[14];
+  assign \$722  = \$720  & \$721 ;
+  assign \$723  = ~ period[15];
+  assign \$724  = \$722  & \$723 ;
+  assign \$725  = ~ period[16];
+  assign \$726  = \$724  & \$725 ;
+  assign \$727  = ~ period[17];
+  assign \$728  = \$726  & \$727 ;
+  assign \$729  = ~ period[18];
+  assign \$730  = \$728  & \$729 ;
+  assign \$731  = ~ period[19];
+  assign \$732  = \$730  & \$731 ;
+  assign \$733  = ~ period[20];
+  assign \$734  = \$732  & \$733 ;
+  assign \$735  = ~ period[21];
+  assign \$736  = \$734  & \$735 ;
+  assign \$737  = ~ period[22];
+  assign \$738  = \$736  & \$737 ;
+  assign \$739  = ~ period[23];
+  assign \$740  = \$738  & \$739 ;
+  assign \$741  = \$704  | \$740 ;
+  assign \$742  = ~ period[7];
+  assign \$743  = period[6] & \$742 ;
+  assign \$744  = ~ period[8];
+  assign \$745  = \$743  & \$744 ;
+  assign \$746  = ~ period[9];
+  assign \$747  = \$745  & \$746 ;
+  assign \$748  = ~ period[10];
+  assign \$749  = \$747  & \$748 ;
+  assign \$750  = ~ period[11];
+  assign \$751  = \$749  & \$750 ;
+  assign \$752  = ~ period[12];
+  assign \$753  = \$751  & \$752 ;
+  assign \$754  = ~ period[13];
+  assign \$755  = \$753  & \$754 ;
+  assign \$756  = ~ period[14];
+  assign \$757  = \$755  & \$756 ;
+  assign \$758  = ~ period[15];
+  assign \$759  = \$757  & \$758 ;
+  assign \$760  = ~ period[16];
+  assign \$761  = \$759  & \$760 ;
+  assign \$762  = ~ period[17];
+  assign \$763  = \$761  & \$762 ;
+  assign \$764  = ~ period[18];
+  assign \$765  = \$763  & \$764 ;
+  assign \$766  = ~ period[19];
+  assign \$767  = \$765  & \$766 ;
+  assign \$768  = ~ period[20];
+  assign \$769  = \$767  & \$768 ;
+  assign \$770  = ~ period[21];
+  assign \$771  = \$769  & \$770 ;
+  assign \$772  = ~ period[22];
+  assign \$773  = \$771  & \$772 ;
+  assign \$774  = ~ period[23];
+  assign \$775  = \$773  & \$774 ;
+  assign \$776  = \$741  | \$775 ;
+  assign \$777  = ~ period[8];
+  assign \$778  = period[7] & \$777 ;
+  assign \$779  = ~ period[9];
+  assign \$780  = \$778  & \$779 ;
+  assign \$781  = ~ period[10];
+  assign \$782  = \$780  & \$781 ;
+  assign \$783  = ~ period[11];
+  assign \$784  = \$782  & \$783 ;
+  assign \$785  = ~ period[12];
+  assign \$786  = \$784  & \$785 ;
+  assign \$787  = ~ period[13];
+  assign \$788  = \$786  & \$787 ;
+  assign \$789  = ~ period[14];
+  assign \$790  = \$788  & \$789 ;
+  assign \$791  = ~ period[15];
+  assign \$792  = \$790  & \$791 ;
+  assign \$793  = ~ period[16];
+  assign \$794  = \$792  & \$793 ;
+  assign \$795  = ~ period[17];
+  assign \$796  = \$794  & \$795 ;
+  assign \$797  = ~ period[18];
+  assign \$798  = \$796  & \$797 ;
+  assign \$799  = ~ period[19];
+  assign \$800  = \$798  & \$799 ;
+  assign \$801  = ~ period[20];
+  assign \$802  = \$800  & \$801 ;
+  assign \$803  = ~ period[21];
+  assign \$804  = \$802  & \$803 ;
+  assign \$805  = ~ period[22];
+  assign \$806  = \$804  & \$805 ;
+  assign \$807  = ~ period[23];
+  assign \$808  = \$806  & \$807 ;
+  assign \$809  = \$776  | \$808 ;
+  assign \$810  = ~ period[9];
+  assign \$811  = period[8] & \$810 ;
+  assign \$812  = ~ period[10];
+  assign \$813  = \$811  & \$812 ;
+  assign \$814  = ~ period[11];
+  assign \$815  = \$813  & \$814 ;
+  assign \$816  = ~ period[12];
+  assign \$817  = \$815  & \$816 ;
+  assign \$818  = ~ period[13];
+  assign \$819  = \$817  & \$818 ;
+  assign \$820  = ~ period[14];
+  assign \$821  = \$819  & \$820 ;
+  assign \$822  = ~ period[15];
+  assign \$823  = \$821  & \$822 ;
+  assign \$824  = ~ period[16];
+  assign \$825  = \$823  & \$824 ;
+  assign \$826  = ~ period[17];
+  assign \$827  = \$825  & \$826 ;
+  assign \$828  = ~ period[18];
+  assign \$829  = \$827  & \$828 ;
+  assign \$830  = ~ period[19];
+  assign \$831  = \$829  & \$830 ;
+  assign \$832  = ~ period[20];
+  assign \$833  = \$831  & \$832 ;
+  assign \$834  = ~ period[21];
+  assign \$835  = \$833  & \$834 ;
+  assign \$836  = ~ period[22];
+  assign \$837  = \$835  & \$836 ;
+  assign \$838  = ~ period[23];
+  assign \$839  = \$837  & \$838 ;
+  assign \$840  = \$809  | \$839 ;
+  assign \$841  = ~ period[10];
+  assign \$842  = period[9] & \$841 ;
+  assign \$843  = ~ period[11];
+  assign \$844  = \$842  & \$843 ;
+  assign \$845  = ~ period[12];
+  assign \$846  = \$844  & \$845 ;
+  assign \$847  = ~ period[13];
+  assign \$848  = \$846  & \$847 ;
+  assign \$849  = ~ period[14];
+  assign \$850  = \$848  & \$849 ;
+  assign \$851  = ~ period[15];
+  assign \$852  = \$850  & \$851 ;
+  assign \$853  = ~ period[16];
+  assign \$854  = \$852  & \$853 ;
+  assign \$855  = ~ period[17];
+  assign \$856  = \$854  & \$855 ;
+  assign \$857  = ~ period[18];
+  assign \$858  = \$856  & \$857 ;
+  assign \$859  = ~ period[19];
+  assign \$860  = \$858  & \$859 ;
+  assign \$861  = ~ period[20];
+  assign \$862  = \$860  & \$861 ;
+  assign \$863  = ~ period[21];
+  assign \$864  = \$862  & \$863 ;
+  assign \$865  = ~ period[22];
+  assign \$866  = \$864  & \$865 ;
+  assign \$867  = ~ period[23];
+  assign \$868  = \$866  & \$867 ;
+  assign \$869  = \$840  | \$868 ;
+  assign \$870  = ~ period[11];
+  assign \$871  = period[10] & \$870 ;
+  assign \$872  = ~ period[12];
+  assign \$873  = \$871  & \$872 ;
+  assign \$874  = ~ period[13];
+  assign \$875  = \$873  & \$874 ;
+  assign \$876  = ~ period[14];
+  assign \$877  = \$875  & \$876 ;
+  assign \$878  = ~ period[15];
+  assign \$879  = \$877  & \$878 ;
+  assign \$880  = ~ period[16];
+  assign \$881  = \$879  & \$880 ;
+  assign \$882  = ~ period[17];
+  assign \$883  = \$881  & \$882 ;
+  assign \$884  = ~ period[18];
+  assign \$885  = \$883  & \$884 ;
+  assign \$886  = ~ period[19];
+  assign \$887  = \$885  & \$886 ;
+  assign \$888  = ~ period[20];
+  assign \$889  = \$887  & \$888 ;
+  assign \$890  = ~ period[21];
+  assign \$891  = \$889  & \$890 ;
+  assign \$892  = ~ period[22];
+  assign \$893  = \$891  & \$892 ;
+  assign \$894  = ~ period[23];
+  assign \$895  = \$893  & \$894 ;
+  assign \$896  = \$869  | \$895 ;
+  assign \$897  = ~ period[12];
+  assign \$898  = period[11] & \$897 ;
+  assign \$899  = ~ period[13];
+  assign \$900  = \$898  & \$899 ;
+  assign \$901  = ~ period[14];
+  assign \$902  = \$900  & \$901 ;
+  assign \$903  = ~ period[15];
+  assign \$904  = \$902  & \$903 ;
+  assign \$905  = ~ period[16];
+  assign \$906  = \$904  & \$905 ;
+  assign \$907  = ~ period[17];
+  assign \$908  = \$906  & \$907 ;
+  assign \$909  = ~ period[18];
+  assign \$910  = \$908  & \$909 ;
+  assign \$911  = ~ period[19];
+  assign \$912  = \$910  & \$911 ;
+  assign \$913  = ~ period[20];
+  assign \$914  = \$912  & \$913 ;
+  assign \$915  = ~ period[21];
+  assign \$916  = \$914  & \$915 ;
+  assign \$917  = ~ period[22];
+  assign \$918  = \$916  & \$917 ;
+  assign \$919  = ~ period[23];
+  assign \$920  = \$918  & \$919 ;
+  assign \$921  = \$896  | \$920 ;
+  assign \$922  = ~ period[13];
+  assign \$923  = period[12] & \$922 ;
+  assign \$924  = ~ period[14];
+  assign \$925  = \$923  & \$924 ;
+  assign \$926  = ~ period[15];
+  assign \$927  = \$925  & \$926 ;
+  assign \$928  = ~ period[16];
+  assign \$929  = \$927  & \$928 ;
+  assign \$930  = ~ period[17];
+  assign \$931  = \$929  & \$930 ;
+  assign \$932  = ~ period[18];
+  assign \$933  = \$931  & \$932 ;
+  assign \$934  = ~ period[19];
+  assign \$935  = \$933  & \$934 ;
+  assign \$936  = ~ period[20];
+  assign \$937  = \$935  & \$936 ;
+  assign \$938  = ~ period[21];
+  assign \$939  = \$937  & \$938 ;
+  assign \$940  = ~ period[22];
+  assign \$941  = \$939  & \$940 ;
+  assign \$942  = ~ period[23];
+  assign \$943  = \$941  & \$942 ;
+  assign \$944  = \$921  | \$943 ;
+  assign \$945  = ~ period[14];
+  assign \$946  = period[13] & \$945 ;
+  assign \$947  = ~ period[15];
+  assign \$948  = \$946  & \$947 ;
+  assign \$949  = ~ period[16];
+  assign \$950  = \$948  & \$949 ;
+  assign \$951  = ~ period[17];
+  assign \$952  = \$950  & \$951 ;
+  assign \$953  = ~ period[18];
+  assign \$954  = \$952  & \$953 ;
+  assign \$955  = ~ period[19];
+  assign \$956  = \$954  & \$955 ;
+  assign \$957  = ~ period[20];
+  assign \$958  = \$956  & \$957 ;
+  assign \$959  = ~ period[21];
+  assign \$960  = \$958  & \$959 ;
+  assign \$961  = ~ period[22];
+  assign \$962  = \$960  & \$961 ;
+  assign \$963  = ~ period[23];
+  assign \$964  = \$962  & \$963 ;
+  assign \$965  = \$944  | \$964 ;
+  assign \$966  = ~ period[15];
+  assign \$967  = period[14] & \$966 ;
+  assign \$968  = ~ period[16];
+  assign \$969  = \$967  & \$968 ;
+  assign \$970  = ~ period[17];
+  assign \$971  = \$969  & \$970 ;
+  assign \$972  = ~ period[18];
+  assign \$973  = \$971  & \$972 ;
+  assign \$974  = ~ period[19];
+  assign \$975  = \$973  & \$974 ;
+  assign \$976  = ~ period[20];
+  assign \$977  = \$975  & \$976 ;
+  assign \$978  = ~ period[21];
+  assign \$979  = \$977  & \$978 ;
+  assign \$980  = ~ period[22];
+  assign \$981  = \$979  & \$980 ;
+  assign \$982  = ~ period[23];
+  assign \$983  = \$981  & \$982 ;
+  assign \$984  = \$965  | \$983 ;
+  assign \$985  = ~ period[16];
+  assign \$986  = period[15] & \$985 ;
+  assign \$987  = ~ period[17];
+  assign \$988  = \$986  & \$987 ;
+  assign \$989  = ~ period[18];
+  assign \$990  = \$988  & \$989 ;
+  assign \$991  = ~ period[19];
+  assign \$992  = \$990  & \$991 ;
+  assign \$993  = ~ period[20];
+  assign \$994  = \$992  & \$993 ;
+  assign \$995  = ~ period[21];
+  assign \$996  = \$994  & \$995 ;
+  assign \$997  = ~ period[22];
+  assign \$998  = \$996  & \$997 ;
+  assign \$999  = ~ period[23];
+  assign \$1000  = \$998  & \$999 ;
+  assign \$1001  = \$984  | \$1000 ;
+  assign \$1002  = ~ period[17];
+  assign \$1003  = period[16] & \$1002 ;
+  assign \$1004  = ~ period[18];
+  assign \$1005  = \$1003  & \$1004 ;
+  assign \$1006  = ~ period[19];
+  assign \$1007  = \$1005  & \$1006 ;
+  assign \$1008  = ~ period[20];
+  assign \$1009  = \$1007  & \$1008 ;
+  assign \$1010  = ~ period[21];
+  assign \$1011  = \$1009  & \$1010 ;
+  assign \$1012  = ~ period[22];
+  assign \$1013  = \$1011  & \$1012 ;
+  assign \$1014  = ~ period[23];
+  assign \$1015  = \$1013  & \$1014 ;
+  assign \$1016  = \$1001  | \$1015 ;
+  assign \$1017  = ~ period[18];
+  assign \$1018  = period[17] & \$1017 ;
+  assign \$1019  = ~ period[19];
+  assign \$1020  = \$1018  & \$1019 ;
+  assign \$1021  = ~ period[20];
+  assign \$1022  = \$1020  & \$1021 ;
+  assign \$1023  = ~ period[21];
+  assign \$1024  = \$1022  & \$1023 ;
+  assign \$1025  = ~ period[22];
+  assign \$1026  = \$1024  & \$1025 ;
+  assign \$1027  = ~ period[23];
+  assign \$1028  = \$1026  & \$1027 ;
+  assign \$1029  = \$1016  | \$1028 ;
+  assign \$1030  = ~ period[19];
+  assign \$1031  = period[18] & \$1030 ;
+  assign \$1032  = ~ period[20];
+  assign \$1033  = \$1031  & \$1032 ;
+  assign \$1034  = ~ period[21];
+  assign \$1035  = \$1033  & \$1034 ;
+  assign \$1036  = ~ period[22];
+  assign \$1037  = \$1035  & \$1036 ;
+  assign \$1038  = ~ period[23];
+  assign \$1039  = \$1037  & \$1038 ;
+  assign \$1040  = \$1029  | \$1039 ;
+  assign \$1041  = ~ period[20];
+  assign \$1042  = period[19] & \$1041 ;
+  assign \$1043  = ~ period[21];
+  assign \$1044  = \$1042  & \$1043 ;
+  assign \$1045  = ~ period[22];
+  assign \$1046  = \$1044  & \$1045 ;
+  assign \$1047  = ~ period[23];
+  assign \$1048  = \$1046  & \$1047 ;
+  assign \$1049  = \$1040  | \$1048 ;
+  assign \$1050  = ~ period[21];
+  assign \$1051  = period[20] & \$1050 ;
+  assign \$1052  = ~ period[22];
+  assign \$1053  = \$1051  & \$1052 ;
+  assign \$1054  = ~ period[23];
+  assign \$1055  = \$1053  & \$1054 ;
+  assign \$1056  = \$1049  | \$1055 ;
+  assign \$1057  = ~ period[22];
+  assign \$1058  = period[21] & \$1057 ;
+  assign \$1059  = ~ period[23];
+  assign \$1060  = \$1058  & \$1059 ;
+  assign \$1061  = \$1056  | \$1060 ;
+  assign \$1062  = ~ period[23];
+  assign \$1063  = period[22] & \$1062 ;
+  assign \$1064  = \$1061  | \$1063 ;
+  assign \$1065  = \$1064  | period[23];
+  assign \$1066  = ~ \$1065 ;
+  assign \$1067  = count_p2 + 1'h1;
+  assign \$1068  = count_p2 >= period;
+  assign \$1069  = start | trigger;
+  assign \$1070  = periodic & period_zero;
+  assign \$1071  = ~ \$1070 ;
+  assign \$1072  = periodic & \$1071 ;
+  assign \$1073  = \$1072  & period_start;
+  assign \$1074  = \$1069  | \$1073 ;
+  assign \$1075  = periodic & period_zero;
+  assign request = \$1074  | \$1075 ;
+  assign \$1076  = start | trigger;
+  assign \$1077  = periodic & period_zero;
+  assign \$1078  = ~ \$1077 ;
+  assign \$1079  = periodic & \$1078 ;
+  assign \$1080  = \$1079  & period_start;
+  assign \$1081  = \$1076  | \$1080 ;
+  assign \$1082  = ~ abort;
+  assign \$1083  = idle & \$1082 ;
+  assign \$1084  = ~ \$1083 ;
+  assign overrun = \$1081  & \$1084 ;
   always @(posedge clk)
-    period_zero <= \$28 ;
+    period_zero <= \$1085 ;
   always @(posedge clk)
-    count_p2 <= \$29 ;
+    count_p2 <= \$1086 ;
   always @(posedge clk)
-    period_start <= \$30 ;
+    period_start <= \$1087 ;
   always @(posedge clk)
-    wrap <= \$31 ;
+    wrap <= \$1088 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    \$28  = \$1 ;
+    \$1085  = \$1 ;
     if (rst) begin
-      \$28  = 1'h0;
+      \$1085  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$29  = 25'h0000002;
+      \$1086  = 25'h0000002;
     end else if (\$7 ) begin
-      \$29  = 25'h0000003;
+      \$1086  = 25'h0000003;
     end else begin
-      \$29  = \$10 [24:0];
+      \$1086  = \$1067 [24:0];
     end
     if (rst) begin
-      \$29  = 25'h0000002;
+      \$1086  = 25'h0000002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$30  = 1'h1;
+      \$1087  = 1'h1;
     end else if (\$7 ) begin
-      \$30  = 1'h0;
+      \$1087  = 1'h0;
     end else begin
-      \$30  = 1'h0;
+      \$1087  = 1'h0;
     end
     if (rst) begin
-      \$30  = 1'h1;
+      \$1087  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$31  = \$8 ;
+      \$1088  = \$536 ;
     end else if (\$7 ) begin
-      \$31  = \$9 ;
+      \$1088  = \$1066 ;
     end else begin
-      \$31  = \$11 ;
+      \$1088  = \$1068 ;
     end
     if (rst) begin
-      \$31  = 1'h0;
+      \$1088  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$8356$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$12982$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -24026,8 +27038,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$8356$0 ;
-  wire \port$8356$0 ;
+  input \port$12982$0 ;
+  wire \port$12982$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -24041,9 +27053,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$8356$0  };
-  assign \$2  = { lc[4:0], \port$8356$0  } == last;
-  assign \$3  = { lc[4:0], \port$8356$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$12982$0  };
+  assign \$2  = { lc[4:0], \port$12982$0  } == last;
+  assign \$3  = { lc[4:0], \port$12982$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -24153,7 +27165,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$8356$0  };
+  assign lc_next = { lc[4:0], \port$12982$0  };
   assign zero = is_zero;
 endmodule
 
@@ -25046,64 +28058,871 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
   wire \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   wire \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire \$15 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
   wire \$16 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire \$17 ;
+  wire \$170 ;
+  wire \$171 ;
+  wire \$172 ;
+  wire \$173 ;
+  wire \$174 ;
+  wire \$175 ;
+  wire \$176 ;
+  wire \$177 ;
+  wire \$178 ;
+  wire \$179 ;
   wire \$18 ;
+  wire \$180 ;
+  wire \$181 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
+  wire \$189 ;
   wire \$19 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire \$198 ;
+  wire \$199 ;
   wire \$2 ;
-  wire [13:0] \$20 ;
+  wire \$20 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire \$21 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
+  wire \$213 ;
+  wire \$214 ;
+  wire \$215 ;
+  wire \$216 ;
+  wire \$217 ;
+  wire \$218 ;
+  wire \$219 ;
   wire \$22 ;
+  wire \$220 ;
+  wire \$221 ;
+  wire \$222 ;
+  wire \$223 ;
+  wire [13:0] \$224 ;
+  wire \$225 ;
+  wire \$226 ;
+  wire \$227 ;
+  wire \$228 ;
+  wire \$229 ;
   wire \$23 ;
+  wire \$230 ;
+  wire \$231 ;
+  wire \$232 ;
+  wire \$233 ;
+  wire \$234 ;
+  wire \$235 ;
+  wire \$236 ;
+  wire \$237 ;
+  wire \$238 ;
+  wire \$239 ;
   wire \$24 ;
-  wire [11:0] \$25 ;
+  wire \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  wire \$243 ;
+  wire \$244 ;
+  wire \$245 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
+  wire \$25 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
   wire \$26 ;
+  wire \$260 ;
+  wire \$261 ;
+  wire \$262 ;
+  wire \$263 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire \$269 ;
   wire \$27 ;
-  wire [11:0] \$28 ;
+  wire \$270 ;
+  wire \$271 ;
+  wire \$272 ;
+  wire \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
+  wire \$28 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
   wire \$29 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   wire \$3 ;
   wire \$30 ;
+  wire \$300 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
   wire \$31 ;
-  wire [25:0] \$32 ;
-  wire [25:0] \$33 ;
-  wire [25:0] \$34 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
+  wire \$32 ;
+  wire \$320 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
+  wire \$33 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  wire \$337 ;
+  wire \$338 ;
+  wire \$339 ;
+  wire \$34 ;
+  wire \$340 ;
+  wire \$341 ;
+  wire \$342 ;
+  wire \$343 ;
+  wire \$344 ;
+  wire \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire [11:0] \$349 ;
   wire \$35 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire [11:0] \$352 ;
+  wire \$353 ;
+  wire [11:0] \$354 ;
+  wire \$355 ;
+  wire \$356 ;
+  wire \$357 ;
+  wire [11:0] \$358 ;
+  wire \$359 ;
   wire \$36 ;
+  wire \$360 ;
+  wire \$361 ;
+  wire [11:0] \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire [11:0] \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
   wire \$37 ;
+  wire [11:0] \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire [11:0] \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire [11:0] \$378 ;
+  wire \$379 ;
   wire \$38 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire [11:0] \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire [11:0] \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
   wire \$39 ;
+  wire [11:0] \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire [11:0] \$394 ;
+  wire \$395 ;
+  wire [11:0] \$396 ;
+  wire \$397 ;
+  wire \$398 ;
+  wire \$399 ;
   wire [25:0] \$4 ;
   wire \$40 ;
+  wire [11:0] \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  wire \$403 ;
+  wire [11:0] \$404 ;
+  wire \$405 ;
+  wire \$406 ;
+  wire \$407 ;
+  wire [11:0] \$408 ;
+  wire \$409 ;
   wire \$41 ;
+  wire \$410 ;
+  wire \$411 ;
+  wire [11:0] \$412 ;
+  wire \$413 ;
+  wire \$414 ;
+  wire \$415 ;
+  wire [11:0] \$416 ;
+  wire \$417 ;
+  wire \$418 ;
+  wire \$419 ;
   wire \$42 ;
+  wire [11:0] \$420 ;
+  wire \$421 ;
+  wire \$422 ;
+  wire \$423 ;
+  wire [11:0] \$424 ;
+  wire \$425 ;
+  wire \$426 ;
+  wire \$427 ;
+  wire [11:0] \$428 ;
+  wire \$429 ;
   wire \$43 ;
+  wire \$430 ;
+  wire \$431 ;
+  wire \$432 ;
+  wire [11:0] \$433 ;
+  wire \$434 ;
+  wire [11:0] \$435 ;
+  wire \$436 ;
+  wire \$437 ;
+  wire \$438 ;
+  wire [11:0] \$439 ;
   wire \$44 ;
+  wire \$440 ;
+  wire \$441 ;
+  wire \$442 ;
+  wire [11:0] \$443 ;
+  wire \$444 ;
+  wire \$445 ;
+  wire \$446 ;
+  wire [11:0] \$447 ;
+  wire \$448 ;
+  wire \$449 ;
   wire \$45 ;
+  wire \$450 ;
+  wire [11:0] \$451 ;
+  wire \$452 ;
+  wire \$453 ;
+  wire \$454 ;
+  wire [11:0] \$455 ;
+  wire \$456 ;
+  wire \$457 ;
+  wire \$458 ;
+  wire [11:0] \$459 ;
   wire \$46 ;
+  wire \$460 ;
+  wire \$461 ;
+  wire \$462 ;
+  wire [11:0] \$463 ;
+  wire \$464 ;
+  wire \$465 ;
+  wire \$466 ;
+  wire \$467 ;
+  wire [11:0] \$468 ;
+  wire \$469 ;
   wire \$47 ;
+  wire [11:0] \$470 ;
+  wire \$471 ;
+  wire \$472 ;
+  wire \$473 ;
+  wire [11:0] \$474 ;
+  wire \$475 ;
+  wire \$476 ;
+  wire \$477 ;
+  wire [11:0] \$478 ;
+  wire \$479 ;
   wire \$48 ;
-  reg [24:0] \$49 ;
+  wire \$480 ;
+  wire \$481 ;
+  wire [11:0] \$482 ;
+  wire \$483 ;
+  wire \$484 ;
+  wire \$485 ;
+  wire [11:0] \$486 ;
+  wire \$487 ;
+  wire \$488 ;
+  wire \$489 ;
+  wire \$49 ;
+  wire [11:0] \$490 ;
+  wire \$491 ;
+  wire \$492 ;
+  wire \$493 ;
+  wire [11:0] \$494 ;
+  wire \$495 ;
+  wire \$496 ;
+  wire \$497 ;
+  wire \$498 ;
+  wire [11:0] \$499 ;
   wire \$5 ;
-  reg \$50 ;
-  reg \$51 ;
-  reg [12:0] \$52 ;
-  reg \$53 ;
-  reg \$54 ;
-  reg [24:0] \$55 ;
-  reg \$56 ;
-  reg \$57 ;
-  reg \$58 ;
-  reg \$59 ;
+  wire \$50 ;
+  wire \$500 ;
+  wire [11:0] \$501 ;
+  wire \$502 ;
+  wire \$503 ;
+  wire \$504 ;
+  wire [11:0] \$505 ;
+  wire \$506 ;
+  wire \$507 ;
+  wire \$508 ;
+  wire [11:0] \$509 ;
+  wire \$51 ;
+  wire \$510 ;
+  wire \$511 ;
+  wire \$512 ;
+  wire [11:0] \$513 ;
+  wire \$514 ;
+  wire \$515 ;
+  wire \$516 ;
+  wire [11:0] \$517 ;
+  wire \$518 ;
+  wire \$519 ;
+  wire \$52 ;
+  wire \$520 ;
+  wire [11:0] \$521 ;
+  wire \$522 ;
+  wire \$523 ;
+  wire \$524 ;
+  wire \$525 ;
+  wire [11:0] \$526 ;
+  wire \$527 ;
+  wire [11:0] \$528 ;
+  wire \$529 ;
+  wire \$53 ;
+  wire \$530 ;
+  wire \$531 ;
+  wire [11:0] \$532 ;
+  wire \$533 ;
+  wire \$534 ;
+  wire \$535 ;
+  wire [11:0] \$536 ;
+  wire \$537 ;
+  wire \$538 ;
+  wire \$539 ;
+  wire \$54 ;
+  wire [11:0] \$540 ;
+  wire \$541 ;
+  wire \$542 ;
+  wire \$543 ;
+  wire [11:0] \$544 ;
+  wire \$545 ;
+  wire \$546 ;
+  wire \$547 ;
+  wire \$548 ;
+  wire [11:0] \$549 ;
+  wire \$55 ;
+  wire \$550 ;
+  wire [11:0] \$551 ;
+  wire \$552 ;
+  wire \$553 ;
+  wire \$554 ;
+  wire [11:0] \$555 ;
+  wire \$556 ;
+  wire \$557 ;
+  wire \$558 ;
+  wire [11:0] \$559 ;
+  wire \$56 ;
+  wire \$560 ;
+  wire \$561 ;
+  wire \$562 ;
+  wire [11:0] \$563 ;
+  wire \$564 ;
+  wire \$565 ;
+  wire \$566 ;
+  wire \$567 ;
+  wire [11:0] \$568 ;
+  wire \$569 ;
+  wire \$57 ;
+  wire [11:0] \$570 ;
+  wire \$571 ;
+  wire \$572 ;
+  wire \$573 ;
+  wire [11:0] \$574 ;
+  wire \$575 ;
+  wire \$576 ;
+  wire \$577 ;
+  wire [11:0] \$578 ;
+  wire \$579 ;
+  wire \$58 ;
+  wire \$580 ;
+  wire \$581 ;
+  wire \$582 ;
+  wire [11:0] \$583 ;
+  wire \$584 ;
+  wire [11:0] \$585 ;
+  wire \$586 ;
+  wire \$587 ;
+  wire \$588 ;
+  wire [11:0] \$589 ;
+  wire \$59 ;
+  wire \$590 ;
+  wire \$591 ;
+  wire \$592 ;
+  wire \$593 ;
+  wire [11:0] \$594 ;
+  wire \$595 ;
+  wire [11:0] \$596 ;
+  wire \$597 ;
+  wire \$598 ;
+  wire \$599 ;
   wire \$6 ;
-  reg \$60 ;
+  wire \$60 ;
+  wire \$600 ;
+  wire [11:0] \$601 ;
+  wire \$602 ;
+  wire \$603 ;
+  wire \$604 ;
+  wire \$605 ;
+  wire [25:0] \$606 ;
+  wire [25:0] \$607 ;
+  wire [25:0] \$608 ;
+  wire \$609 ;
+  wire \$61 ;
+  wire \$610 ;
+  wire \$611 ;
+  wire \$612 ;
+  wire \$613 ;
+  wire \$614 ;
+  wire \$615 ;
+  wire \$616 ;
+  wire \$617 ;
+  wire \$618 ;
+  wire \$619 ;
+  wire \$62 ;
+  wire \$620 ;
+  wire \$621 ;
+  wire \$622 ;
+  wire \$623 ;
+  wire \$624 ;
+  wire \$625 ;
+  wire \$626 ;
+  wire \$627 ;
+  wire \$628 ;
+  wire \$629 ;
+  wire \$63 ;
+  wire \$630 ;
+  wire \$631 ;
+  wire \$632 ;
+  wire \$633 ;
+  wire \$634 ;
+  wire \$635 ;
+  wire \$636 ;
+  wire \$637 ;
+  wire \$638 ;
+  wire \$639 ;
+  wire \$64 ;
+  wire \$640 ;
+  wire \$641 ;
+  wire \$642 ;
+  wire \$643 ;
+  wire \$644 ;
+  wire \$645 ;
+  wire \$646 ;
+  wire \$647 ;
+  wire \$648 ;
+  wire \$649 ;
+  wire \$65 ;
+  wire \$650 ;
+  wire \$651 ;
+  wire \$652 ;
+  wire \$653 ;
+  wire \$654 ;
+  wire \$655 ;
+  wire \$656 ;
+  wire \$657 ;
+  wire \$658 ;
+  wire \$659 ;
+  wire \$66 ;
+  wire \$660 ;
+  wire \$661 ;
+  wire \$662 ;
+  wire \$663 ;
+  wire \$664 ;
+  wire \$665 ;
+  wire \$666 ;
+  wire \$667 ;
+  wire \$668 ;
+  wire \$669 ;
+  wire \$67 ;
+  wire \$670 ;
+  wire \$671 ;
+  wire \$672 ;
+  wire \$673 ;
+  wire \$674 ;
+  wire \$675 ;
+  wire \$676 ;
+  wire \$677 ;
+  wire \$678 ;
+  wire \$679 ;
+  wire \$68 ;
+  wire \$680 ;
+  wire \$681 ;
+  wire \$682 ;
+  wire \$683 ;
+  wire \$684 ;
+  wire \$685 ;
+  wire \$686 ;
+  wire \$687 ;
+  wire \$688 ;
+  wire \$689 ;
+  wire \$69 ;
+  wire \$690 ;
+  wire \$691 ;
+  wire \$692 ;
+  wire \$693 ;
+  wire \$694 ;
+  wire \$695 ;
+  wire \$696 ;
+  wire \$697 ;
+  wire \$698 ;
+  wire \$699 ;
   wire \$7 ;
+  wire \$70 ;
+  wire \$700 ;
+  wire \$701 ;
+  wire \$702 ;
+  wire \$703 ;
+  wire \$704 ;
+  wire \$705 ;
+  wire \$706 ;
+  wire \$707 ;
+  wire \$708 ;
+  wire \$709 ;
+  wire \$71 ;
+  wire \$710 ;
+  wire \$711 ;
+  wire \$712 ;
+  wire \$713 ;
+  wire \$714 ;
+  wire \$715 ;
+  wire \$716 ;
+  wire \$717 ;
+  wire \$718 ;
+  wire \$719 ;
+  wire \$72 ;
+  wire \$720 ;
+  wire \$721 ;
+  wire \$722 ;
+  wire \$723 ;
+  wire \$724 ;
+  wire \$725 ;
+  wire \$726 ;
+  wire \$727 ;
+  wire \$728 ;
+  wire \$729 ;
+  wire \$73 ;
+  wire \$730 ;
+  wire \$731 ;
+  wire \$732 ;
+  wire \$733 ;
+  wire \$734 ;
+  wire \$735 ;
+  wire \$736 ;
+  wire \$737 ;
+  wire \$738 ;
+  wire \$739 ;
+  wire \$74 ;
+  wire \$740 ;
+  wire \$741 ;
+  wire \$742 ;
+  wire \$743 ;
+  wire \$744 ;
+  wire \$745 ;
+  wire \$746 ;
+  wire \$747 ;
+  wire \$748 ;
+  wire \$749 ;
+  wire \$75 ;
+  wire \$750 ;
+  wire \$751 ;
+  wire \$752 ;
+  wire \$753 ;
+  wire \$754 ;
+  wire \$755 ;
+  wire \$756 ;
+  wire \$757 ;
+  wire \$758 ;
+  wire \$759 ;
+  wire \$76 ;
+  wire \$760 ;
+  wire \$761 ;
+  wire \$762 ;
+  wire \$763 ;
+  wire \$764 ;
+  wire \$765 ;
+  wire \$766 ;
+  wire \$767 ;
+  wire \$768 ;
+  wire \$769 ;
+  wire \$77 ;
+  wire \$770 ;
+  wire \$771 ;
+  wire \$772 ;
+  wire \$773 ;
+  wire \$774 ;
+  wire \$775 ;
+  wire \$776 ;
+  wire \$777 ;
+  wire \$778 ;
+  wire \$779 ;
+  wire \$78 ;
+  wire \$780 ;
+  wire \$781 ;
+  wire \$782 ;
+  wire \$783 ;
+  wire \$784 ;
+  wire \$785 ;
+  wire \$786 ;
+  wire \$787 ;
+  wire \$788 ;
+  wire \$789 ;
+  wire \$79 ;
+  wire \$790 ;
+  wire \$791 ;
+  wire \$792 ;
+  wire \$793 ;
+  wire \$794 ;
+  wire \$795 ;
+  wire \$796 ;
+  wire \$797 ;
+  wire \$798 ;
+  wire \$799 ;
   wire \$8 ;
+  wire \$80 ;
+  wire \$800 ;
+  wire \$801 ;
+  wire \$802 ;
+  wire \$803 ;
+  wire \$804 ;
+  wire \$805 ;
+  wire \$806 ;
+  wire \$807 ;
+  wire \$808 ;
+  wire \$809 ;
+  wire \$81 ;
+  wire \$810 ;
+  wire \$811 ;
+  wire \$812 ;
+  wire \$813 ;
+  wire \$814 ;
+  wire \$815 ;
+  wire \$816 ;
+  wire \$817 ;
+  wire \$818 ;
+  wire \$819 ;
+  wire \$82 ;
+  wire \$820 ;
+  wire \$821 ;
+  wire \$822 ;
+  wire \$823 ;
+  wire \$824 ;
+  wire \$825 ;
+  wire \$826 ;
+  wire \$827 ;
+  wire \$828 ;
+  wire \$829 ;
+  wire \$83 ;
+  wire \$830 ;
+  wire \$831 ;
+  wire \$832 ;
+  wire \$833 ;
+  wire \$834 ;
+  wire \$835 ;
+  wire \$836 ;
+  wire \$837 ;
+  wire \$838 ;
+  wire \$839 ;
+  wire \$84 ;
+  wire \$840 ;
+  wire \$841 ;
+  wire \$842 ;
+  wire \$843 ;
+  wire \$844 ;
+  wire \$845 ;
+  wire \$846 ;
+  wire \$847 ;
+  wire \$848 ;
+  wire \$849 ;
+  wire \$85 ;
+  wire \$850 ;
+  wire \$851 ;
+  wire \$852 ;
+  wire \$853 ;
+  wire \$854 ;
+  wire \$855 ;
+  reg [24:0] \$856 ;
+  reg \$857 ;
+  reg \$858 ;
+  reg [12:0] \$859 ;
+  wire \$86 ;
+  reg \$860 ;
+  reg \$861 ;
+  reg [24:0] \$862 ;
+  reg \$863 ;
+  reg \$864 ;
+  reg \$865 ;
+  reg \$866 ;
+  reg \$867 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
   wire \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   output ack_expired;
   reg ack_expired = 1'h0;
   input [23:0] ack_limit;
@@ -25157,39 +28976,753 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
   output timeout_over;
   reg timeout_over = 1'h0;
   reg [24:0] timer = 25'h0000001;
-  assign \$40  = ~ restart;
-  assign \$41  = in_clock & \$40 ;
-  assign \$42  = timer >= ack_limit;
-  assign \$43  = \$41  & \$42 ;
-  assign \$44  = ~ restart;
-  assign \$45  = in_clock & \$44 ;
-  assign \$46  = timer >= no_start_limit;
-  assign \$47  = \$45  & \$46 ;
-  assign \$48  = delay > delay_limit;
+  assign \$133  = ~ slo_low_time_p1[23];
+  assign \$134  = \$132  & \$133 ;
+  assign \$135  = ~ slo_low_time_p1[24];
+  assign \$136  = \$134  & \$135 ;
+  assign \$137  = \$118  | \$136 ;
+  assign \$138  = ~ slo_low_time_p1[17];
+  assign \$139  = slo_low_time_p1[16] & \$138 ;
+  assign \$140  = ~ slo_low_time_p1[18];
+  assign \$141  = \$139  & \$140 ;
+  assign \$142  = ~ slo_low_time_p1[19];
+  assign \$143  = \$141  & \$142 ;
+  assign \$144  = ~ slo_low_time_p1[20];
+  assign \$145  = \$143  & \$144 ;
+  assign \$146  = ~ slo_low_time_p1[21];
+  assign \$147  = \$145  & \$146 ;
+  assign \$148  = ~ slo_low_time_p1[22];
+  assign \$149  = \$147  & \$148 ;
+  assign \$150  = ~ slo_low_time_p1[23];
+  assign \$151  = \$149  & \$150 ;
+  assign \$152  = ~ slo_low_time_p1[24];
+  assign \$153  = \$151  & \$152 ;
+  assign \$154  = \$137  | \$153 ;
+  assign \$155  = ~ slo_low_time_p1[18];
+  assign \$156  = slo_low_time_p1[17] & \$155 ;
+  assign \$157  = ~ slo_low_time_p1[19];
+  assign \$158  = \$156  & \$157 ;
+  assign \$159  = ~ slo_low_time_p1[20];
+  assign \$160  = \$158  & \$159 ;
+  assign \$161  = ~ slo_low_time_p1[21];
+  assign \$162  = \$160  & \$161 ;
+  assign \$163  = ~ slo_low_time_p1[22];
+  assign \$164  = \$162  & \$163 ;
+  assign \$165  = ~ slo_low_time_p1[23];
+  assign \$166  = \$164  & \$165 ;
+  assign \$167  = ~ slo_low_time_p1[24];
+  assign \$168  = \$166  & \$167 ;
+  assign \$169  = \$154  | \$168 ;
+  assign \$170  = ~ slo_low_time_p1[19];
+  assign \$171  = slo_low_time_p1[18] & \$170 ;
+  assign \$172  = ~ slo_low_time_p1[20];
+  assign \$173  = \$171  & \$172 ;
+  assign \$174  = ~ slo_low_time_p1[21];
+  assign \$175  = \$173  & \$174 ;
+  assign \$176  = ~ slo_low_time_p1[22];
+  assign \$177  = \$175  & \$176 ;
+  assign \$178  = ~ slo_low_time_p1[23];
+  assign \$179  = \$177  & \$178 ;
+  assign \$180  = ~ slo_low_time_p1[24];
+  assign \$181  = \$179  & \$180 ;
+  assign \$182  = \$169  | \$181 ;
+  assign \$183  = ~ slo_low_time_p1[20];
+  assign \$184  = slo_low_time_p1[19] & \$183 ;
+  assign \$185  = ~ slo_low_time_p1[21];
+  assign \$186  = \$184  & \$185 ;
+  assign \$187  = ~ slo_low_time_p1[22];
+  assign \$188  = \$186  & \$187 ;
+  assign \$189  = ~ slo_low_time_p1[23];
+  assign \$190  = \$188  & \$189 ;
+  assign \$191  = ~ slo_low_time_p1[24];
+  assign \$192  = \$190  & \$191 ;
+  assign \$193  = \$182  | \$192 ;
+  assign \$194  = ~ slo_low_time_p1[21];
+  assign \$195  = slo_low_time_p1[20] & \$194 ;
+  assign \$196  = ~ slo_low_time_p1[22];
+  assign \$197  = \$195  & \$196 ;
+  assign \$198  = ~ slo_low_time_p1[23];
+  assign \$199  = \$197  & \$198 ;
+  assign \$200  = ~ slo_low_time_p1[24];
+  assign \$201  = \$199  & \$200 ;
+  assign \$202  = \$193  | \$201 ;
+  assign \$203  = ~ slo_low_time_p1[22];
+  assign \$204  = slo_low_time_p1[21] & \$203 ;
+  assign \$205  = ~ slo_low_time_p1[23];
+  assign \$206  = \$204  & \$205 ;
+  assign \$207  = ~ slo_low_time_p1[24];
+  assign \$208  = \$206  & \$207 ;
+  assign \$209  = \$202  | \$208 ;
+  assign \$210  = ~ slo_low_time_p1[23];
+  assign \$211  = slo_low_time_p1[22] & \$210 ;
+  assign \$212  = ~ slo_low_time_p1[24];
+  assign \$213  = \$211  & \$212 ;
+  assign \$214  = \$209  | \$213 ;
+  assign \$215  = ~ slo_low_time_p1[24];
+  assign \$216  = slo_low_time_p1[23] & \$215 ;
+  assign \$217  = \$214  | \$216 ;
+  assign \$218  = \$217  | slo_low_time_p1[24];
+  assign \$219  = slo_low_time_p1 >= timeout_live;
+  assign \$220  = \$13  ? \$218  : \$219 ;
+  assign \$221  = \$12  & \$220 ;
+  assign \$222  = ~ slo;
+  assign \$223  = ~ high_p2[12];
+  assign \$224  = high_p2 + 1'h1;
+  assign \$225  = high_p2 >= quiet_limit;
+  assign \$226  = ~ quiet_limit[2];
+  assign \$227  = quiet_limit[1] & \$226 ;
+  assign \$228  = ~ quiet_limit[3];
+  assign \$229  = \$227  & \$228 ;
+  assign \$230  = ~ quiet_limit[4];
+  assign \$231  = \$229  & \$230 ;
+  assign \$232  = ~ quiet_limit[5];
+  assign \$233  = \$231  & \$232 ;
+  assign \$234  = ~ quiet_limit[6];
+  assign \$235  = \$233  & \$234 ;
+  assign \$236  = ~ quiet_limit[7];
+  assign \$237  = \$235  & \$236 ;
+  assign \$238  = ~ quiet_limit[8];
+  assign \$239  = \$237  & \$238 ;
+  assign \$240  = ~ quiet_limit[9];
+  assign \$241  = \$239  & \$240 ;
+  assign \$242  = ~ quiet_limit[10];
+  assign \$243  = \$241  & \$242 ;
+  assign \$244  = ~ quiet_limit[11];
+  assign \$245  = \$243  & \$244 ;
+  assign \$246  = ~ quiet_limit[3];
+  assign \$247  = quiet_limit[2] & \$246 ;
+  assign \$248  = ~ quiet_limit[4];
+  assign \$249  = \$247  & \$248 ;
+  assign \$250  = ~ quiet_limit[5];
+  assign \$251  = \$249  & \$250 ;
+  assign \$252  = ~ quiet_limit[6];
+  assign \$253  = \$251  & \$252 ;
+  assign \$254  = ~ quiet_limit[7];
+  assign \$255  = \$253  & \$254 ;
+  assign \$256  = ~ quiet_limit[8];
+  assign \$257  = \$255  & \$256 ;
+  assign \$258  = ~ quiet_limit[9];
+  assign \$259  = \$257  & \$258 ;
+  assign \$260  = ~ quiet_limit[10];
+  assign \$261  = \$259  & \$260 ;
+  assign \$262  = ~ quiet_limit[11];
+  assign \$263  = \$261  & \$262 ;
+  assign \$264  = \$245  | \$263 ;
+  assign \$265  = ~ quiet_limit[4];
+  assign \$266  = quiet_limit[3] & \$265 ;
+  assign \$267  = ~ quiet_limit[5];
+  assign \$268  = \$266  & \$267 ;
+  assign \$269  = ~ quiet_limit[6];
+  assign \$270  = \$268  & \$269 ;
+  assign \$271  = ~ quiet_limit[7];
+  assign \$272  = \$270  & \$271 ;
+  assign \$273  = ~ quiet_limit[8];
+  assign \$274  = \$272  & \$273 ;
+  assign \$275  = ~ quiet_limit[9];
+  assign \$276  = \$274  & \$275 ;
+  assign \$277  = ~ quiet_limit[10];
+  assign \$278  = \$276  & \$277 ;
+  assign \$279  = ~ quiet_limit[11];
+  assign \$280  = \$278  & \$279 ;
+  assign \$281  = \$264  | \$280 ;
+  assign \$282  = ~ quiet_limit[5];
+  assign \$283  = quiet_limit[4] & \$282 ;
+  assign \$284  = ~ quiet_limit[6];
+  assign \$285  = \$283  & \$284 ;
+  assign \$286  = ~ quiet_limit[7];
+  assign \$287  = \$285  & \$286 ;
+  assign \$288  = ~ quiet_limit[8];
+  assign \$289  = \$287  & \$288 ;
+  assign \$290  = ~ quiet_limit[9];
+  assign \$291  = \$289  & \$290 ;
+  assign \$292  = ~ quiet_limit[10];
+  assign \$293  = \$291  & \$292 ;
+  assign \$294  = ~ quiet_limit[11];
+  assign \$295  = \$293  & \$294 ;
+  assign \$296  = \$281  | \$295 ;
+  assign \$297  = ~ quiet_limit[6];
+  assign \$298  = quiet_limit[5] & \$297 ;
+  assign \$299  = ~ quiet_limit[7];
+  assign \$300  = \$298  & \$299 ;
+  assign \$301  = ~ quiet_limit[8];
+  assign \$302  = \$300  & \$301 ;
+  assign \$303  = ~ quiet_limit[9];
+  assign \$304  = \$302  & \$303 ;
+  assign \$305  = ~ quiet_limit[10];
+  assign \$306  = \$304  & \$305 ;
+  assign \$307  = ~ quiet_limit[11];
+  assign \$308  = \$306  & \$307 ;
+  assign \$309  = \$296  | \$308 ;
+  assign \$310  = ~ quiet_limit[7];
+  assign \$311  = quiet_limit[6] & \$310 ;
+  assign \$312  = ~ quiet_limit[8];
+  assign \$313  = \$311  & \$312 ;
+  assign \$314  = ~ quiet_limit[9];
+  assign \$315  = \$313  & \$314 ;
+  assign \$316  = ~ quiet_limit[10];
+  assign \$317  = \$315  & \$316 ;
+  assign \$318  = ~ quiet_limit[11];
+  assign \$319  = \$317  & \$318 ;
+  assign \$320  = \$309  | \$319 ;
+  assign \$321  = ~ quiet_limit[8];
+  assign \$322  = quiet_limit[7] & \$321 ;
+  assign \$323  = ~ quiet_limit[9];
+  assign \$324  = \$322  & \$323 ;
+  assign \$325  = ~ quiet_limit[10];
+  assign \$326  = \$324  & \$325 ;
+  assign \$327  = ~ quiet_limit[11];
+  assign \$328  = \$326  & \$327 ;
+  assign \$329  = \$320  | \$328 ;
+  assign \$330  = ~ quiet_limit[9];
+  assign \$331  = quiet_limit[8] & \$330 ;
+  assign \$332  = ~ quiet_limit[10];
+  assign \$333  = \$331  & \$332 ;
+  assign \$334  = ~ quiet_limit[11];
+  assign \$335  = \$333  & \$334 ;
+  assign \$336  = \$329  | \$335 ;
+  assign \$337  = ~ quiet_limit[10];
+  assign \$338  = quiet_limit[9] & \$337 ;
+  assign \$339  = ~ quiet_limit[11];
+  assign \$340  = \$338  & \$339 ;
+  assign \$341  = \$336  | \$340 ;
+  assign \$342  = ~ quiet_limit[11];
+  assign \$343  = quiet_limit[10] & \$342 ;
+  assign \$344  = \$341  | \$343 ;
+  assign \$345  = \$344  | quiet_limit[11];
+  assign \$346  = ~ \$345 ;
+  assign \$347  = slo ? \$225  : \$346 ;
+  assign \$348  = ! quiet_time_live;
+  assign \$349  = \$348  ? 12'h064 : quiet_time_live;
+  assign \$350  = high_p2 >= \$349 ;
+  assign \$351  = ! quiet_time_live;
+  assign \$352  = \$351  ? 12'h064 : quiet_time_live;
+  assign \$353  = ! quiet_time_live;
+  assign \$354  = \$353  ? 12'h064 : quiet_time_live;
+  assign \$355  = ~ \$354 [2];
+  assign \$356  = \$352 [1] & \$355 ;
+  assign \$357  = ! quiet_time_live;
+  assign \$358  = \$357  ? 12'h064 : quiet_time_live;
+  assign \$359  = ~ \$358 [3];
+  assign \$360  = \$356  & \$359 ;
+  assign \$361  = ! quiet_time_live;
+  assign \$362  = \$361  ? 12'h064 : quiet_time_live;
+  assign \$363  = ~ \$362 [4];
+  assign \$364  = \$360  & \$363 ;
+  assign \$365  = ! quiet_time_live;
+  assign \$366  = \$365  ? 12'h064 : quiet_time_live;
+  assign \$367  = ~ \$366 [5];
+  assign \$368  = \$364  & \$367 ;
+  assign \$369  = ! quiet_time_live;
+  assign \$370  = \$369  ? 12'h064 : quiet_time_live;
+  assign \$371  = ~ \$370 [6];
+  assign \$372  = \$368  & \$371 ;
+  assign \$373  = ! quiet_time_live;
+  assign \$374  = \$373  ? 12'h064 : quiet_time_live;
+  assign \$375  = ~ \$374 [7];
+  assign \$376  = \$372  & \$375 ;
+  assign \$377  = ! quiet_time_live;
+  assign \$378  = \$377  ? 12'h064 : quiet_time_live;
+  assign \$379  = ~ \$378 [8];
+  assign \$380  = \$376  & \$379 ;
+  assign \$381  = ! quiet_time_live;
+  assign \$382  = \$381  ? 12'h064 : quiet_time_live;
+  assign \$383  = ~ \$382 [9];
+  assign \$384  = \$380  & \$383 ;
+  assign \$385  = ! quiet_time_live;
+  assign \$386  = \$385  ? 12'h064 : quiet_time_live;
+  assign \$387  = ~ \$386 [10];
+  assign \$388  = \$384  & \$387 ;
+  assign \$389  = ! quiet_time_live;
+  assign \$390  = \$389  ? 12'h064 : quiet_time_live;
+  assign \$391  = ~ \$390 [11];
+  assign \$392  = \$388  & \$391 ;
+  assign \$393  = ! quiet_time_live;
+  assign \$394  = \$393  ? 12'h064 : quiet_time_live;
+  assign \$395  = ! quiet_time_live;
+  assign \$396  = \$395  ? 12'h064 : quiet_time_live;
+  assign \$397  = ~ \$396 [3];
+  assign \$398  = \$394 [2] & \$397 ;
+  assign \$399  = ! quiet_time_live;
+  assign \$400  = \$399  ? 12'h064 : quiet_time_live;
+  assign \$401  = ~ \$400 [4];
+  assign \$402  = \$398  & \$401 ;
+  assign \$403  = ! quiet_time_live;
+  assign \$404  = \$403  ? 12'h064 : quiet_time_live;
+  assign \$405  = ~ \$404 [5];
+  assign \$406  = \$402  & \$405 ;
+  assign \$407  = ! quiet_time_live;
+  assign \$408  = \$407  ? 12'h064 : quiet_time_live;
+  assign \$409  = ~ \$408 [6];
+  assign \$410  = \$406  & \$409 ;
+  assign \$411  = ! quiet_time_live;
+  assign \$412  = \$411  ? 12'h064 : quiet_time_live;
+  assign \$413  = ~ \$412 [7];
+  assign \$414  = \$410  & \$413 ;
+  assign \$415  = ! quiet_time_live;
+  assign \$416  = \$415  ? 12'h064 : quiet_time_live;
+  assign \$417  = ~ \$416 [8];
+  assign \$418  = \$414  & \$417 ;
+  assign \$419  = ! quiet_time_live;
+  assign \$420  = \$419  ? 12'h064 : quiet_time_live;
+  assign \$421  = ~ \$420 [9];
+  assign \$422  = \$418  & \$421 ;
+  assign \$423  = ! quiet_time_live;
+  assign \$424  = \$423  ? 12'h064 : quiet_time_live;
+  assign \$425  = ~ \$424 [10];
+  assign \$426  = \$422  & \$425 ;
+  assign \$427  = ! quiet_time_live;
+  assign \$428  = \$427  ? 12'h064 : quiet_time_live;
+  assign \$429  = ~ \$428 [11];
+  assign \$430  = \$426  & \$429 ;
+  assign \$431  = \$392  | \$430 ;
+  assign \$432  = ! quiet_time_live;
+  assign \$433  = \$432  ? 12'h064 : quiet_time_live;
+  assign \$434  = ! quiet_time_live;
+  assign \$435  = \$434  ? 12'h064 : quiet_time_live;
+  assign \$436  = ~ \$435 [4];
+  assign \$437  = \$433 [3] & \$436 ;
+  assign \$438  = ! quiet_time_live;
+  assign \$439  = \$438  ? 12'h064 : quiet_time_live;
+  assign \$440  = ~ \$439 [5];
+  assign \$441  = \$437  & \$440 ;
+  assign \$442  = ! quiet_time_live;
+  assign \$443  = \$442  ? 12'h064 : quiet_time_live;
+  assign \$444  = ~ \$443 [6];
+  assign \$445  = \$441  & \$444 ;
+  assign \$446  = ! quiet_time_live;
+  assign \$447  = \$446  ? 12'h064 : quiet_time_live;
+  assign \$448  = ~ \$447 [7];
+  assign \$449  = \$445  & \$448 ;
+  assign \$450  = ! quiet_time_live;
+  assign \$451  = \$450  ? 12'h064 : quiet_time_live;
+  assign \$452  = ~ \$451 [8];
+  assign \$453  = \$449  & \$452 ;
+  assign \$454  = ! quiet_time_live;
+  assign \$455  = \$454  ? 12'h064 : quiet_time_live;
+  assign \$456  = ~ \$455 [9];
+  assign \$457  = \$453  & \$456 ;
+  assign \$458  = ! quiet_time_live;
+  assign \$459  = \$458  ? 12'h064 : quiet_time_live;
+  assign \$460  = ~ \$459 [10];
+  assign \$461  = \$457  & \$460 ;
+  assign \$462  = ! quiet_time_live;
+  assign \$463  = \$462  ? 12'h064 : quiet_time_live;
+  assign \$464  = ~ \$463 [11];
+  assign \$465  = \$461  & \$464 ;
+  assign \$466  = \$431  | \$465 ;
+  assign \$467  = ! quiet_time_live;
+  assign \$468  = \$467  ? 12'h064 : quiet_time_live;
+  assign \$469  = ! quiet_time_live;
+  assign \$470  = \$469  ? 12'h064 : quiet_time_live;
+  assign \$471  = ~ \$470 [5];
+  assign \$472  = \$468 [4] & \$471 ;
+  assign \$473  = ! quiet_time_live;
+  assign \$474  = \$473  ? 12'h064 : quiet_time_live;
+  assign \$475  = ~ \$474 [6];
+  assign \$476  = \$472  & \$475 ;
+  assign \$477  = ! quiet_time_live;
+  assign \$478  = \$477  ? 12'h064 : quiet_time_live;
+  assign \$479  = ~ \$478 [7];
+  assign \$480  = \$476  & \$479 ;
+  assign \$481  = ! quiet_time_live;
+  assign \$482  = \$481  ? 12'h064 : quiet_time_live;
+  assign \$483  = ~ \$482 [8];
+  assign \$484  = \$480  & \$483 ;
+  assign \$485  = ! quiet_time_live;
+  assign \$486  = \$485  ? 12'h064 : quiet_time_live;
+  assign \$487  = ~ \$486 [9];
+  assign \$488  = \$484  & \$487 ;
+  assign \$489  = ! quiet_time_live;
+  assign \$490  = \$489  ? 12'h064 : quiet_time_live;
+  assign \$491  = ~ \$490 [10];
+  assign \$492  = \$488  & \$491 ;
+  assign \$493  = ! quiet_time_live;
+  assign \$494  = \$493  ? 12'h064 : quiet_time_live;
+  assign \$495  = ~ \$494 [11];
+  assign \$496  = \$492  & \$495 ;
+  assign \$497  = \$466  | \$496 ;
+  assign \$498  = ! quiet_time_live;
+  assign \$499  = \$498  ? 12'h064 : quiet_time_live;
+  assign \$500  = ! quiet_time_live;
+  assign \$501  = \$500  ? 12'h064 : quiet_time_live;
+  assign \$502  = ~ \$501 [6];
+  assign \$503  = \$499 [5] & \$502 ;
+  assign \$504  = ! quiet_time_live;
+  assign \$505  = \$504  ? 12'h064 : quiet_time_live;
+  assign \$506  = ~ \$505 [7];
+  assign \$507  = \$503  & \$506 ;
+  assign \$508  = ! quiet_time_live;
+  assign \$509  = \$508  ? 12'h064 : quiet_time_live;
+  assign \$510  = ~ \$509 [8];
+  assign \$511  = \$507  & \$510 ;
+  assign \$512  = ! quiet_time_live;
+  assign \$513  = \$512  ? 12'h064 : quiet_time_live;
+  assign \$514  = ~ \$513 [9];
+  assign \$515  = \$511  & \$514 ;
+  assign \$516  = ! quiet_time_live;
+  assign \$517  = \$516  ? 12'h064 : quiet_time_live;
+  assign \$518  = ~ \$517 [10];
+  assign \$519  = \$515  & \$518 ;
+  assign \$520  = ! quiet_time_live;
+  assign \$521  = \$520  ? 12'h064 : quiet_time_live;
+  assign \$522  = ~ \$521 [11];
+  assign \$523  = \$519  & \$522 ;
+  assign \$524  = \$497  | \$523 ;
+  assign \$525  = ! quiet_time_live;
+  assign \$526  = \$525  ? 12'h064 : quiet_time_live;
+  assign \$527  = ! quiet_time_live;
+  assign \$528  = \$527  ? 12'h064 : quiet_time_live;
+  assign \$529  = ~ \$528 [7];
+  assign \$530  = \$526 [6] & \$529 ;
+  assign \$531  = ! quiet_time_live;
+  assign \$532  = \$531  ? 12'h064 : quiet_time_live;
+  assign \$533  = ~ \$532 [8];
+  assign \$534  = \$530  & \$533 ;
+  assign \$535  = ! quiet_time_live;
+  assign \$536  = \$535  ? 12'h064 : quiet_time_live;
+  assign \$537  = ~ \$536 [9];
+  assign \$538  = \$534  & \$537 ;
+  assign \$539  = ! quiet_time_live;
+  assign \$540  = \$539  ? 12'h064 : quiet_time_live;
+  assign \$541  = ~ \$540 [10];
+  assign \$542  = \$538  & \$541 ;
+  assign \$543  = ! quiet_time_live;
+  assign \$544  = \$543  ? 12'h064 : quiet_time_live;
+  assign \$545  = ~ \$544 [11];
+  assign \$546  = \$542  & \$545 ;
+  assign \$547  = \$524  | \$546 ;
+  assign \$548  = ! quiet_time_live;
+  assign \$549  = \$548  ? 12'h064 : quiet_time_live;
+  assign \$550  = ! quiet_time_live;
+  assign \$551  = \$550  ? 12'h064 : quiet_time_live;
+  assign \$552  = ~ \$551 [8];
+  assign \$553  = \$549 [7] & \$552 ;
+  assign \$554  = ! quiet_time_live;
+  assign \$555  = \$554  ? 12'h064 : quiet_time_live;
+  assign \$556  = ~ \$555 [9];
+  assign \$557  = \$553  & \$556 ;
+  assign \$558  = ! quiet_time_live;
+  assign \$559  = \$558  ? 12'h064 : quiet_time_live;
+  assign \$560  = ~ \$559 [10];
+  assign \$561  = \$557  & \$560 ;
+  assign \$562  = ! quiet_time_live;
+  assign \$563  = \$562  ? 12'h064 : quiet_time_live;
+  assign \$564  = ~ \$563 [11];
+  assign \$565  = \$561  & \$564 ;
+  assign \$566  = \$547  | \$565 ;
+  assign \$567  = ! quiet_time_live;
+  assign \$568  = \$567  ? 12'h064 : quiet_time_live;
+  assign \$569  = ! quiet_time_live;
+  assign \$570  = \$569  ? 12'h064 : quiet_time_live;
+  assign \$571  = ~ \$570 [9];
+  assign \$572  = \$568 [8] & \$571 ;
+  assign \$573  = ! quiet_time_live;
+  assign \$574  = \$573  ? 12'h064 : quiet_time_live;
+  assign \$575  = ~ \$574 [10];
+  assign \$576  = \$572  & \$575 ;
+  assign \$577  = ! quiet_time_live;
+  assign \$578  = \$577  ? 12'h064 : quiet_time_live;
+  assign \$579  = ~ \$578 [11];
+  assign \$580  = \$576  & \$579 ;
+  assign \$581  = \$566  | \$580 ;
+  assign \$582  = ! quiet_time_live;
+  assign \$583  = \$582  ? 12'h064 : quiet_time_live;
+  assign \$584  = ! quiet_time_live;
+  assign \$585  = \$584  ? 12'h064 : quiet_time_live;
+  assign \$586  = ~ \$585 [10];
+  assign \$587  = \$583 [9] & \$586 ;
+  assign \$588  = ! quiet_time_live;
+  assign \$589  = \$588  ? 12'h064 : quiet_time_live;
+  assign \$590  = ~ \$589 [11];
+  assign \$591  = \$587  & \$590 ;
+  assign \$592  = \$581  | \$591 ;
+  assign \$593  = ! quiet_time_live;
+  assign \$594  = \$593  ? 12'h064 : quiet_time_live;
+  assign \$595  = ! quiet_time_live;
+  assign \$596  = \$595  ? 12'h064 : quiet_time_live;
+  assign \$597  = ~ \$596 [11];
+  assign \$598  = \$594 [10] & \$597 ;
+  assign \$599  = \$592  | \$598 ;
+  assign \$600  = ! quiet_time_live;
+  assign \$601  = \$600  ? 12'h064 : quiet_time_live;
+  assign \$602  = \$599  | \$601 [11];
+  assign \$603  = ~ \$602 ;
+  assign \$604  = slo ? \$350  : \$603 ;
+  assign \$605  = & timer;
+  assign \$606  = timer + 1'h1;
+  assign \$607  = \$605  ? { 1'h0, timer } : \$606 ;
+  assign \$608  = clear ? 26'h0000001 : \$607 ;
+  assign \$609  = ! break_time;
+  assign \$610  = ~ timer[6];
+  assign \$611  = timer[5] & \$610 ;
+  assign \$612  = \$611  & timer[7];
+  assign \$613  = \$612  & timer[8];
+  assign \$614  = \$613  & timer[9];
+  assign \$615  = \$614  & timer[10];
+  assign \$616  = \$615  & timer[11];
+  assign \$617  = ~ timer[12];
+  assign \$618  = \$616  & \$617 ;
+  assign \$619  = ~ timer[13];
+  assign \$620  = \$618  & \$619 ;
+  assign \$621  = ~ timer[14];
+  assign \$622  = \$620  & \$621 ;
+  assign \$623  = ~ timer[15];
+  assign \$624  = \$622  & \$623 ;
+  assign \$625  = ~ timer[16];
+  assign \$626  = \$624  & \$625 ;
+  assign \$627  = ~ timer[17];
+  assign \$628  = \$626  & \$627 ;
+  assign \$629  = ~ timer[18];
+  assign \$630  = \$628  & \$629 ;
+  assign \$631  = ~ timer[19];
+  assign \$632  = \$630  & \$631 ;
+  assign \$633  = ~ timer[20];
+  assign \$634  = \$632  & \$633 ;
+  assign \$635  = ~ timer[21];
+  assign \$636  = \$634  & \$635 ;
+  assign \$637  = ~ timer[22];
+  assign \$638  = \$636  & \$637 ;
+  assign \$639  = ~ timer[23];
+  assign \$640  = \$638  & \$639 ;
+  assign \$641  = ~ timer[24];
+  assign \$642  = \$640  & \$641 ;
+  assign \$643  = timer[6] & timer[7];
+  assign \$644  = \$643  & timer[8];
+  assign \$645  = \$644  & timer[9];
+  assign \$646  = \$645  & timer[10];
+  assign \$647  = \$646  & timer[11];
+  assign \$648  = ~ timer[12];
+  assign \$649  = \$647  & \$648 ;
+  assign \$650  = ~ timer[13];
+  assign \$651  = \$649  & \$650 ;
+  assign \$652  = ~ timer[14];
+  assign \$653  = \$651  & \$652 ;
+  assign \$654  = ~ timer[15];
+  assign \$655  = \$653  & \$654 ;
+  assign \$656  = ~ timer[16];
+  assign \$657  = \$655  & \$656 ;
+  assign \$658  = ~ timer[17];
+  assign \$659  = \$657  & \$658 ;
+  assign \$660  = ~ timer[18];
+  assign \$661  = \$659  & \$660 ;
+  assign \$662  = ~ timer[19];
+  assign \$663  = \$661  & \$662 ;
+  assign \$664  = ~ timer[20];
+  assign \$665  = \$663  & \$664 ;
+  assign \$666  = ~ timer[21];
+  assign \$667  = \$665  & \$666 ;
+  assign \$668  = ~ timer[22];
+  assign \$669  = \$667  & \$668 ;
+  assign \$670  = ~ timer[23];
+  assign \$671  = \$669  & \$670 ;
+  assign \$672  = ~ timer[24];
+  assign \$673  = \$671  & \$672 ;
+  assign \$674  = \$642  | \$673 ;
+  assign \$675  = ~ timer[13];
+  assign \$676  = timer[12] & \$675 ;
+  assign \$677  = ~ timer[14];
+  assign \$678  = \$676  & \$677 ;
+  assign \$679  = ~ timer[15];
+  assign \$680  = \$678  & \$679 ;
+  assign \$681  = ~ timer[16];
+  assign \$682  = \$680  & \$681 ;
+  assign \$683  = ~ timer[17];
+  assign \$684  = \$682  & \$683 ;
+  assign \$685  = ~ timer[18];
+  assign \$686  = \$684  & \$685 ;
+  assign \$687  = ~ timer[19];
+  assign \$688  = \$686  & \$687 ;
+  assign \$689  = ~ timer[20];
+  assign \$690  = \$688  & \$689 ;
+  assign \$691  = ~ timer[21];
+  assign \$692  = \$690  & \$691 ;
+  assign \$693  = ~ timer[22];
+  assign \$694  = \$692  & \$693 ;
+  assign \$695  = ~ timer[23];
+  assign \$696  = \$694  & \$695 ;
+  assign \$697  = ~ timer[24];
+  assign \$698  = \$696  & \$697 ;
+  assign \$699  = \$674  | \$698 ;
+  assign \$700  = ~ timer[14];
+  assign \$701  = timer[13] & \$700 ;
+  assign \$702  = ~ timer[15];
+  assign \$703  = \$701  & \$702 ;
+  assign \$704  = ~ timer[16];
+  assign \$705  = \$703  & \$704 ;
+  assign \$706  = ~ timer[17];
+  assign \$707  = \$705  & \$706 ;
+  assign \$708  = ~ timer[18];
+  assign \$709  = \$707  & \$708 ;
+  assign \$710  = ~ timer[19];
+  assign \$711  = \$709  & \$710 ;
+  assign \$712  = ~ timer[20];
+  assign \$713  = \$711  & \$712 ;
+  assign \$714  = ~ timer[21];
+  assign \$715  = \$713  & \$714 ;
+  assign \$716  = ~ timer[22];
+  assign \$717  = \$715  & \$716 ;
+  assign \$718  = ~ timer[23];
+  assign \$719  = \$717  & \$718 ;
+  assign \$720  = ~ timer[24];
+  assign \$721  = \$719  & \$720 ;
+  assign \$722  = \$699  | \$721 ;
+  assign \$723  = ~ timer[15];
+  assign \$724  = timer[14] & \$723 ;
+  assign \$725  = ~ timer[16];
+  assign \$726  = \$724  & \$725 ;
+  assign \$727  = ~ timer[17];
+  assign \$728  = \$726  & \$727 ;
+  assign \$729  = ~ timer[18];
+  assign \$730  = \$728  & \$729 ;
+  assign \$731  = ~ timer[19];
+  assign \$732  = \$730  & \$731 ;
+  assign \$733  = ~ timer[20];
+  assign \$734  = \$732  & \$733 ;
+  assign \$735  = ~ timer[21];
+  assign \$736  = \$734  & \$735 ;
+  assign \$737  = ~ timer[22];
+  assign \$738  = \$736  & \$737 ;
+  assign \$739  = ~ timer[23];
+  assign \$740  = \$738  & \$739 ;
+  assign \$741  = ~ timer[24];
+  assign \$742  = \$740  & \$741 ;
+  assign \$743  = \$722  | \$742 ;
+  assign \$744  = ~ timer[16];
+  assign \$745  = timer[15] & \$744 ;
+  assign \$746  = ~ timer[17];
+  assign \$747  = \$745  & \$746 ;
+  assign \$748  = ~ timer[18];
+  assign \$749  = \$747  & \$748 ;
+  assign \$750  = ~ timer[19];
+  assign \$751  = \$749  & \$750 ;
+  assign \$752  = ~ timer[20];
+  assign \$753  = \$751  & \$752 ;
+  assign \$754  = ~ timer[21];
+  assign \$755  = \$753  & \$754 ;
+  assign \$756  = ~ timer[22];
+  assign \$757  = \$755  & \$756 ;
+  assign \$758  = ~ timer[23];
+  assign \$759  = \$757  & \$758 ;
+  assign \$760  = ~ timer[24];
+  assign \$761  = \$759  & \$760 ;
+  assign \$762  = \$743  | \$761 ;
+  assign \$763  = ~ timer[17];
+  assign \$764  = timer[16] & \$763 ;
+  assign \$765  = ~ timer[18];
+  assign \$766  = \$764  & \$765 ;
+  assign \$767  = ~ timer[19];
+  assign \$768  = \$766  & \$767 ;
+  assign \$769  = ~ timer[20];
+  assign \$770  = \$768  & \$769 ;
+  assign \$771  = ~ timer[21];
+  assign \$772  = \$770  & \$771 ;
+  assign \$773  = ~ timer[22];
+  assign \$774  = \$772  & \$773 ;
+  assign \$775  = ~ timer[23];
+  assign \$776  = \$774  & \$775 ;
+  assign \$777  = ~ timer[24];
+  assign \$778  = \$776  & \$777 ;
+  assign \$779  = \$762  | \$778 ;
+  assign \$780  = ~ timer[18];
+  assign \$781  = timer[17] & \$780 ;
+  assign \$782  = ~ timer[19];
+  assign \$783  = \$781  & \$782 ;
+  assign \$784  = ~ timer[20];
+  assign \$785  = \$783  & \$784 ;
+  assign \$786  = ~ timer[21];
+  assign \$787  = \$785  & \$786 ;
+  assign \$788  = ~ timer[22];
+  assign \$789  = \$787  & \$788 ;
+  assign \$790  = ~ timer[23];
+  assign \$791  = \$789  & \$790 ;
+  assign \$792  = ~ timer[24];
+  assign \$793  = \$791  & \$792 ;
+  assign \$794  = \$779  | \$793 ;
+  assign \$795  = ~ timer[19];
+  assign \$796  = timer[18] & \$795 ;
+  assign \$797  = ~ timer[20];
+  assign \$798  = \$796  & \$797 ;
+  assign \$799  = ~ timer[21];
+  assign \$800  = \$798  & \$799 ;
+  assign \$801  = ~ timer[22];
+  assign \$802  = \$800  & \$801 ;
+  assign \$803  = ~ timer[23];
+  assign \$804  = \$802  & \$803 ;
+  assign \$805  = ~ timer[24];
+  assign \$806  = \$804  & \$805 ;
+  assign \$807  = \$794  | \$806 ;
+  assign \$808  = ~ timer[20];
+  assign \$809  = timer[19] & \$808 ;
+  assign \$810  = ~ timer[21];
+  assign \$811  = \$809  & \$810 ;
+  assign \$812  = ~ timer[22];
+  assign \$813  = \$811  & \$812 ;
+  assign \$814  = ~ timer[23];
+  assign \$815  = \$813  & \$814 ;
+  assign \$816  = ~ timer[24];
+  assign \$817  = \$815  & \$816 ;
+  assign \$818  = \$807  | \$817 ;
+  assign \$819  = ~ timer[21];
+  assign \$820  = timer[20] & \$819 ;
+  assign \$821  = ~ timer[22];
+  assign \$822  = \$820  & \$821 ;
+  assign \$823  = ~ timer[23];
+  assign \$824  = \$822  & \$823 ;
+  assign \$825  = ~ timer[24];
+  assign \$826  = \$824  & \$825 ;
+  assign \$827  = \$818  | \$826 ;
+  assign \$828  = ~ timer[22];
+  assign \$829  = timer[21] & \$828 ;
+  assign \$830  = ~ timer[23];
+  assign \$831  = \$829  & \$830 ;
+  assign \$832  = ~ timer[24];
+  assign \$833  = \$831  & \$832 ;
+  assign \$834  = \$827  | \$833 ;
+  assign \$835  = ~ timer[23];
+  assign \$836  = timer[22] & \$835 ;
+  assign \$837  = ~ timer[24];
+  assign \$838  = \$836  & \$837 ;
+  assign \$839  = \$834  | \$838 ;
+  assign \$840  = ~ timer[24];
+  assign \$841  = timer[23] & \$840 ;
+  assign \$842  = \$839  | \$841 ;
+  assign \$843  = \$842  | timer[24];
+  assign \$844  = timer >= break_time;
+  assign \$845  = \$609  ? \$843  : \$844 ;
+  assign \$846  = timer >= timeout_limit;
+  assign \$847  = ~ restart;
+  assign \$848  = in_clock & \$847 ;
+  assign \$849  = timer >= ack_limit;
+  assign \$850  = \$848  & \$849 ;
+  assign \$851  = ~ restart;
+  assign \$852  = in_clock & \$851 ;
+  assign \$853  = timer >= no_start_limit;
+  assign \$854  = \$852  & \$853 ;
+  assign \$855  = delay > delay_limit;
   always @(posedge clk)
-    slo_low_time_p1 <= \$49 ;
+    slo_low_time_p1 <= \$856 ;
   always @(posedge clk)
-    slo_stuck <= \$50 ;
+    slo_stuck <= \$857 ;
   always @(posedge clk)
-    slo_stuck_live <= \$51 ;
+    slo_stuck_live <= \$858 ;
   always @(posedge clk)
-    high_p2 <= \$52 ;
+    high_p2 <= \$859 ;
   always @(posedge clk)
-    quiet <= \$53 ;
+    quiet <= \$860 ;
   always @(posedge clk)
-    quiet_live <= \$54 ;
+    quiet_live <= \$861 ;
   always @(posedge clk)
-    timer <= \$55 ;
+    timer <= \$862 ;
   always @(posedge clk)
-    break_over <= \$56 ;
+    break_over <= \$863 ;
   always @(posedge clk)
-    timeout_over <= \$57 ;
+    timeout_over <= \$864 ;
   always @(posedge clk)
-    ack_expired <= \$58 ;
+    ack_expired <= \$865 ;
   always @(posedge clk)
-    no_start_expired <= \$59 ;
+    no_start_expired <= \$866 ;
   always @(posedge clk)
-    delay_over <= \$60 ;
+    delay_over <= \$867 ;
   assign \$1  = slo & quiet;
   assign \$2  = \$1  | ma_busy;
   assign \$3  = ~ slo_low_time_p1[24];
@@ -25203,140 +29736,233 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
   assign \$11  = \$10  | ma_busy;
   assign \$12  = ~ \$11 ;
   assign \$13  = ! timeout_live;
-  assign \$14  = slo_low_time_p1 >= 13'h1f40;
-  assign \$15  = slo_low_time_p1 >= timeout_live;
-  assign \$16  = \$13  ? \$14  : \$15 ;
-  assign \$17  = \$12  & \$16 ;
-  assign \$18  = ~ slo;
-  assign \$19  = ~ high_p2[12];
-  assign \$20  = high_p2 + 1'h1;
-  assign \$21  = high_p2 >= quiet_limit;
-  assign \$22  = quiet_limit <= 1'h1;
-  assign \$23  = slo ? \$21  : \$22 ;
-  assign \$24  = ! quiet_time_live;
-  assign \$25  = \$24  ? 12'h064 : quiet_time_live;
-  assign \$26  = high_p2 >= \$25 ;
-  assign \$27  = ! quiet_time_live;
-  assign \$28  = \$27  ? 12'h064 : quiet_time_live;
-  assign \$29  = \$28  <= 1'h1;
-  assign \$30  = slo ? \$26  : \$29 ;
-  assign \$31  = & timer;
-  assign \$32  = timer + 1'h1;
-  assign \$33  = \$31  ? { 1'h0, timer } : \$32 ;
-  assign \$34  = clear ? 26'h0000001 : \$33 ;
-  assign \$35  = ! break_time;
-  assign \$36  = timer >= 12'hfa0;
-  assign \$37  = timer >= break_time;
-  assign \$38  = \$35  ? \$36  : \$37 ;
-  assign \$39  = timer >= timeout_limit;
+  assign \$14  = ~ slo_low_time_p1[7];
+  assign \$15  = slo_low_time_p1[6] & \$14 ;
+  assign \$16  = \$15  & slo_low_time_p1[8];
+  assign \$17  = \$16  & slo_low_time_p1[9];
+  assign \$18  = \$17  & slo_low_time_p1[10];
+  assign \$19  = \$18  & slo_low_time_p1[11];
+  assign \$20  = \$19  & slo_low_time_p1[12];
+  assign \$21  = ~ slo_low_time_p1[13];
+  assign \$22  = \$20  & \$21 ;
+  assign \$23  = ~ slo_low_time_p1[14];
+  assign \$24  = \$22  & \$23 ;
+  assign \$25  = ~ slo_low_time_p1[15];
+  assign \$26  = \$24  & \$25 ;
+  assign \$27  = ~ slo_low_time_p1[16];
+  assign \$28  = \$26  & \$27 ;
+  assign \$29  = ~ slo_low_time_p1[17];
+  assign \$30  = \$28  & \$29 ;
+  assign \$31  = ~ slo_low_time_p1[18];
+  assign \$32  = \$30  & \$31 ;
+  assign \$33  = ~ slo_low_time_p1[19];
+  assign \$34  = \$32  & \$33 ;
+  assign \$35  = ~ slo_low_time_p1[20];
+  assign \$36  = \$34  & \$35 ;
+  assign \$37  = ~ slo_low_time_p1[21];
+  assign \$38  = \$36  & \$37 ;
+  assign \$39  = ~ slo_low_time_p1[22];
+  assign \$40  = \$38  & \$39 ;
+  assign \$41  = ~ slo_low_time_p1[23];
+  assign \$42  = \$40  & \$41 ;
+  assign \$43  = ~ slo_low_time_p1[24];
+  assign \$44  = \$42  & \$43 ;
+  assign \$45  = slo_low_time_p1[7] & slo_low_time_p1[8];
+  assign \$46  = \$45  & slo_low_time_p1[9];
+  assign \$47  = \$46  & slo_low_time_p1[10];
+  assign \$48  = \$47  & slo_low_time_p1[11];
+  assign \$49  = \$48  & slo_low_time_p1[12];
+  assign \$50  = ~ slo_low_time_p1[13];
+  assign \$51  = \$49  & \$50 ;
+  assign \$52  = ~ slo_low_time_p1[14];
+  assign \$53  = \$51  & \$52 ;
+  assign \$54  = ~ slo_low_time_p1[15];
+  assign \$55  = \$53  & \$54 ;
+  assign \$56  = ~ slo_low_time_p1[16];
+  assign \$57  = \$55  & \$56 ;
+  assign \$58  = ~ slo_low_time_p1[17];
+  assign \$59  = \$57  & \$58 ;
+  assign \$60  = ~ slo_low_time_p1[18];
+  assign \$61  = \$59  & \$60 ;
+  assign \$62  = ~ slo_low_time_p1[19];
+  assign \$63  = \$61  & \$62 ;
+  assign \$64  = ~ slo_low_time_p1[20];
+  assign \$65  = \$63  & \$64 ;
+  assign \$66  = ~ slo_low_time_p1[21];
+  assign \$67  = \$65  & \$66 ;
+  assign \$68  = ~ slo_low_time_p1[22];
+  assign \$69  = \$67  & \$68 ;
+  assign \$70  = ~ slo_low_time_p1[23];
+  assign \$71  = \$69  & \$70 ;
+  assign \$72  = ~ slo_low_time_p1[24];
+  assign \$73  = \$71  & \$72 ;
+  assign \$74  = \$44  | \$73 ;
+  assign \$75  = ~ slo_low_time_p1[14];
+  assign \$76  = slo_low_time_p1[13] & \$75 ;
+  assign \$77  = ~ slo_low_time_p1[15];
+  assign \$78  = \$76  & \$77 ;
+  assign \$79  = ~ slo_low_time_p1[16];
+  assign \$80  = \$78  & \$79 ;
+  assign \$81  = ~ slo_low_time_p1[17];
+  assign \$82  = \$80  & \$81 ;
+  assign \$83  = ~ slo_low_time_p1[18];
+  assign \$84  = \$82  & \$83 ;
+  assign \$85  = ~ slo_low_time_p1[19];
+  assign \$86  = \$84  & \$85 ;
+  assign \$87  = ~ slo_low_time_p1[20];
+  assign \$88  = \$86  & \$87 ;
+  assign \$89  = ~ slo_low_time_p1[21];
+  assign \$90  = \$88  & \$89 ;
+  assign \$91  = ~ slo_low_time_p1[22];
+  assign \$92  = \$90  & \$91 ;
+  assign \$93  = ~ slo_low_time_p1[23];
+  assign \$94  = \$92  & \$93 ;
+  assign \$95  = ~ slo_low_time_p1[24];
+  assign \$96  = \$94  & \$95 ;
+  assign \$97  = \$74  | \$96 ;
+  assign \$98  = ~ slo_low_time_p1[15];
+  assign \$99  = slo_low_time_p1[14] & \$98 ;
+  assign \$100  = ~ slo_low_time_p1[16];
+  assign \$101  = \$99  & \$100 ;
+  assign \$102  = ~ slo_low_time_p1[17];
+  assign \$103  = \$101  & \$102 ;
+  assign \$104  = ~ slo_low_time_p1[18];
+  assign \$105  = \$103  & \$104 ;
+  assign \$106  = ~ slo_low_time_p1[19];
+  assign \$107  = \$105  & \$106 ;
+  assign \$108  = ~ slo_low_time_p1[20];
+  assign \$109  = \$107  & \$108 ;
+  assign \$110  = ~ slo_low_time_p1[21];
+  assign \$111  = \$109  & \$110 ;
+  assign \$112  = ~ slo_low_time_p1[22];
+  assign \$113  = \$111  & \$112 ;
+  assign \$114  = ~ slo_low_time_p1[23];
+  assign \$115  = \$113  & \$114 ;
+  assign \$116  = ~ slo_low_time_p1[24];
+  assign \$117  = \$115  & \$116 ;
+  assign \$118  = \$97  | \$117 ;
+  assign \$119  = ~ slo_low_time_p1[16];
+  assign \$120  = slo_low_time_p1[15] & \$119 ;
+  assign \$121  = ~ slo_low_time_p1[17];
+  assign \$122  = \$120  & \$121 ;
+  assign \$123  = ~ slo_low_time_p1[18];
+  assign \$124  = \$122  & \$123 ;
+  assign \$125  = ~ slo_low_time_p1[19];
+  assign \$126  = \$124  & \$125 ;
+  assign \$127  = ~ slo_low_time_p1[20];
+  assign \$128  = \$126  & \$127 ;
+  assign \$129  = ~ slo_low_time_p1[21];
+  assign \$130  = \$128  & \$129 ;
+  assign \$131  = ~ slo_low_time_p1[22];
+  assign \$132  = \$130  & \$131 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$49  = slo_low_time_p1;
+    \$856  = slo_low_time_p1;
     if (\$2 ) begin
-      \$49  = 25'h0000001;
+      \$856  = 25'h0000001;
     end else if (\$3 ) begin
-      \$49  = \$4 [24:0];
+      \$856  = \$4 [24:0];
     end
     if (rst) begin
-      \$49  = 25'h0000001;
+      \$856  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$50  = \$9 ;
+    \$857  = \$9 ;
     if (rst) begin
-      \$50  = 1'h0;
+      \$857  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$51  = \$17 ;
+    \$858  = \$221 ;
     if (rst) begin
-      \$51  = 1'h0;
+      \$858  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$52  = high_p2;
-    if (\$18 ) begin
-      \$52  = 13'h0002;
-    end else if (\$19 ) begin
-      \$52  = \$20 [12:0];
+    \$859  = high_p2;
+    if (\$222 ) begin
+      \$859  = 13'h0002;
+    end else if (\$223 ) begin
+      \$859  = \$224 [12:0];
     end
     if (rst) begin
-      \$52  = 13'h0002;
+      \$859  = 13'h0002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$53  = \$23 ;
+    \$860  = \$347 ;
     if (rst) begin
-      \$53  = 1'h1;
+      \$860  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$54  = \$30 ;
+    \$861  = \$604 ;
     if (rst) begin
-      \$54  = 1'h1;
+      \$861  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$55  = \$34 [24:0];
+    \$862  = \$608 [24:0];
     if (rst) begin
-      \$55  = 25'h0000001;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear) begin
-      \$56  = 1'h0;
-    end else begin
-      \$56  = \$38 ;
-    end
-    if (rst) begin
-      \$56  = 1'h0;
+      \$862  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
-      \$57  = 1'h0;
+      \$863  = 1'h0;
     end else begin
-      \$57  = \$39 ;
+      \$863  = \$845 ;
     end
     if (rst) begin
-      \$57  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$58  = \$43 ;
-    if (rst) begin
-      \$58  = 1'h0;
+      \$863  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$59  = \$47 ;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$864  = 1'h0;
+    end else begin
+      \$864  = \$846 ;
+    end
     if (rst) begin
-      \$59  = 1'h0;
+      \$864  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$60  = \$48 ;
+    \$865  = \$850 ;
     if (rst) begin
-      \$60  = 1'h0;
+      \$865  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$866  = \$854 ;
+    if (rst) begin
+      \$866  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$867  = \$855 ;
+    if (rst) begin
+      \$867  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$3593$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$5906$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -25514,8 +30140,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$3593$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$3593$0 ;
-  wire \port$3593$0 ;
+  output \port$5906$0 ;
+  wire \port$5906$0 ;
   output report;
   wire report;
   input report_frame;
@@ -25633,7 +30259,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$3593$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3593$0  = \$2 ;
+  assign \port$5906$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -25690,7 +30316,7 @@ endmodule
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$9273$0 , \port$9284$0 , regs__ca_done, \port$9361$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13899$0 , \port$13910$0 , regs__ca_done, \port$13987$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -25874,12 +30500,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$9273$0 ;
-  wire [186:0] \port$9273$0 ;
-  output [79:0] \port$9284$0 ;
-  wire [79:0] \port$9284$0 ;
-  output [9:0] \port$9361$0 ;
-  wire [9:0] \port$9361$0 ;
+  output [186:0] \port$13899$0 ;
+  wire [186:0] \port$13899$0 ;
+  output [79:0] \port$13910$0 ;
+  wire [79:0] \port$13910$0 ;
+  output [9:0] \port$13987$0 ;
+  wire [9:0] \port$13987$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -26368,9 +30994,9 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$9273$0  = \$20 ;
-  assign \port$9284$0  = \$21 ;
-  assign \port$9361$0  = \$22 ;
+  assign \port$13899$0  = \$20 ;
+  assign \port$13910$0  = \$21 ;
+  assign \port$13987$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -27435,7 +32061,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$8915$272 (cycle[274:272]),
+    .\port$13541$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -27495,7 +32121,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$8915$199 (cycle[199]),
+    .\port$13541$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -27546,7 +32172,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$8915$259 (cycle[271:259]),
+    .\port$13541$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -27570,7 +32196,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$8903$0 (\bit ),
+    .\port$13529$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -27638,7 +32264,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$6827$0 (\$28 ),
+    .\port$11453$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -31790,7 +36416,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$8915$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$13541$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -32506,8 +37132,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$8915$272 ;
-  wire [2:0] \port$8915$272 ;
+  input [2:0] \port$13541$272 ;
+  wire [2:0] \port$13541$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -32817,7 +37443,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$8915$272 [0];
+  assign error_bit = ssi & \port$13541$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -32848,19 +37474,19 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$8915$272 [0];
+  assign \$24  = ssi & \port$13541$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$8915$272 [0];
+  assign \$28  = ssi & \port$13541$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$8915$272 [0];
+  assign \$35  = ssi & \port$13541$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$8915$272 [0];
+  assign \$39  = ssi & \port$13541$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -32881,7 +37507,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$8915$272 [2];
+  assign \$61  = ssi & \port$13541$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -33167,15 +37793,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$8915$272 [0];
+  assign \$347  = ssi & \port$13541$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$8915$272 [0];
-  assign \$355  = ~ \port$8915$272 [1];
+  assign \$354  = ssi & \port$13541$272 [0];
+  assign \$355  = ~ \port$13541$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -33912,7 +38538,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$8915$272 [0];
+  assign ssi_error = \port$13541$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -33922,8 +38548,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$8915$272 [2];
-  assign ssi_error_low = \port$8915$272 [1];
+  assign ssi_double = \port$13541$272 [2];
+  assign ssi_error_low = \port$13541$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -36222,7 +40848,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$8915$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13541$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -36313,8 +40939,8 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$8915$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$8915$199 ;
-  wire \port$8915$199 ;
+  input \port$13541$199 ;
+  wire \port$13541$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -36437,7 +41063,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$8915$199 , ssi, ssi_e
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$8915$199  : 1'h0;
+  assign \$14  = \$13  ? \port$13541$199  : 1'h0;
   assign \$16  = \$10  | \$15 ;
   assign \$17  = ! sum_word;
   assign \$18  = sum_word ? 12'h000 : words[11:0];
@@ -36602,7 +41228,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$8915$199 , ssi, ssi_e
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$8915$199 , 1'h1 };
+  assign enables = { \port$13541$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -38744,64 +43370,505 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$8915$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13541$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
-  wire [13:0] \$11 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
+  wire \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
-  wire [13:0] \$13 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
+  wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   wire \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire \$15 ;
-  wire [13:0] \$16 ;
-  wire [17:0] \$17 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
+  wire \$16 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
+  wire \$17 ;
+  wire \$170 ;
+  wire \$171 ;
+  wire \$172 ;
+  wire \$173 ;
+  wire \$174 ;
+  wire \$175 ;
+  wire \$176 ;
+  wire \$177 ;
+  wire \$178 ;
+  wire \$179 ;
   wire \$18 ;
+  wire \$180 ;
+  wire \$181 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
+  wire \$189 ;
   wire \$19 ;
-  wire [14:0] \$2 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire \$198 ;
+  wire \$199 ;
+  wire \$2 ;
   wire \$20 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire \$21 ;
-  wire [12:0] \$22 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
+  wire \$213 ;
+  wire \$214 ;
+  wire \$215 ;
+  wire \$216 ;
+  wire \$217 ;
+  wire \$218 ;
+  wire \$219 ;
+  wire \$22 ;
+  wire \$220 ;
+  wire \$221 ;
+  wire \$222 ;
+  wire \$223 ;
+  wire \$224 ;
+  wire \$225 ;
+  wire [14:0] \$226 ;
+  wire \$227 ;
+  wire \$228 ;
+  wire \$229 ;
   wire \$23 ;
+  wire \$230 ;
+  wire \$231 ;
+  wire \$232 ;
+  wire \$233 ;
+  wire \$234 ;
+  wire \$235 ;
+  wire \$236 ;
+  wire \$237 ;
+  wire \$238 ;
+  wire \$239 ;
   wire \$24 ;
-  wire [13:0] \$25 ;
-  wire [13:0] \$26 ;
-  wire [16:0] \$27 ;
+  wire \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  wire \$243 ;
+  wire \$244 ;
+  wire \$245 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
+  wire \$25 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
+  wire \$26 ;
+  wire \$260 ;
+  wire \$261 ;
+  wire \$262 ;
+  wire \$263 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire \$269 ;
+  wire \$27 ;
+  wire \$270 ;
+  wire \$271 ;
+  wire \$272 ;
+  wire \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
   wire \$28 ;
-  wire [13:0] \$29 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
+  wire \$29 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   wire \$3 ;
-  wire [13:0] \$30 ;
+  wire \$30 ;
+  wire \$300 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
   wire \$31 ;
-  wire [13:0] \$32 ;
-  wire [17:0] \$33 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
+  wire \$32 ;
+  wire \$320 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
+  wire \$33 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  wire \$337 ;
+  wire \$338 ;
+  wire \$339 ;
   wire \$34 ;
+  wire \$340 ;
+  wire \$341 ;
+  wire \$342 ;
+  wire \$343 ;
+  wire \$344 ;
+  wire \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire \$349 ;
   wire \$35 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire \$352 ;
+  wire \$353 ;
+  wire \$354 ;
+  wire \$355 ;
+  wire \$356 ;
+  wire \$357 ;
+  wire \$358 ;
+  wire \$359 ;
   wire \$36 ;
+  wire \$360 ;
+  wire \$361 ;
+  wire \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
   wire \$37 ;
+  wire \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire \$378 ;
+  wire \$379 ;
   wire \$38 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
   wire \$39 ;
-  wire [16:0] \$4 ;
+  wire \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire \$394 ;
+  wire \$395 ;
+  wire \$396 ;
+  wire \$397 ;
+  wire \$398 ;
+  wire \$399 ;
+  wire \$4 ;
   wire \$40 ;
+  wire \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  wire \$403 ;
+  wire \$404 ;
+  wire \$405 ;
+  wire \$406 ;
+  wire \$407 ;
+  wire \$408 ;
+  wire \$409 ;
   wire \$41 ;
+  wire \$410 ;
+  wire \$411 ;
+  wire \$412 ;
+  wire \$413 ;
+  wire \$414 ;
+  wire \$415 ;
+  wire \$416 ;
+  wire \$417 ;
+  wire \$418 ;
+  wire \$419 ;
   wire \$42 ;
+  wire \$420 ;
+  wire \$421 ;
+  wire \$422 ;
+  wire \$423 ;
+  wire \$424 ;
+  wire \$425 ;
+  wire \$426 ;
+  wire \$427 ;
+  wire \$428 ;
+  wire \$429 ;
   wire \$43 ;
+  wire \$430 ;
+  wire \$431 ;
+  wire \$432 ;
+  wire \$433 ;
+  wire \$434 ;
+  wire \$435 ;
+  wire \$436 ;
+  wire \$437 ;
+  wire \$438 ;
+  wire \$439 ;
   wire \$44 ;
+  wire \$440 ;
+  wire \$441 ;
+  wire \$442 ;
+  wire \$443 ;
+  wire \$444 ;
+  wire \$445 ;
+  wire \$446 ;
+  wire \$447 ;
+  wire \$448 ;
+  wire \$449 ;
   wire \$45 ;
+  wire \$450 ;
+  wire \$451 ;
+  wire \$452 ;
+  wire [16:0] \$453 ;
+  wire [17:0] \$454 ;
+  wire [15:0] \$455 ;
+  wire \$456 ;
+  wire [13:0] \$457 ;
+  wire [17:0] \$458 ;
+  wire \$459 ;
   wire \$46 ;
+  wire [13:0] \$460 ;
+  wire \$461 ;
+  wire [13:0] \$462 ;
+  wire \$463 ;
+  wire \$464 ;
+  wire [13:0] \$465 ;
+  wire [17:0] \$466 ;
+  wire \$467 ;
+  wire \$468 ;
+  wire \$469 ;
   wire \$47 ;
+  wire \$470 ;
+  wire [12:0] \$471 ;
+  wire \$472 ;
+  wire \$473 ;
+  wire [13:0] \$474 ;
+  wire [13:0] \$475 ;
+  wire [16:0] \$476 ;
+  wire \$477 ;
+  wire [13:0] \$478 ;
+  wire [13:0] \$479 ;
   wire \$48 ;
+  wire \$480 ;
+  wire [13:0] \$481 ;
+  wire [17:0] \$482 ;
+  wire \$483 ;
+  wire \$484 ;
+  wire \$485 ;
+  wire \$486 ;
+  wire \$487 ;
+  wire \$488 ;
+  wire \$489 ;
   wire \$49 ;
-  wire [17:0] \$5 ;
+  wire \$490 ;
+  wire \$491 ;
+  wire \$492 ;
+  wire \$493 ;
+  wire \$494 ;
+  wire \$495 ;
+  wire \$496 ;
+  wire \$497 ;
+  wire \$498 ;
+  wire \$499 ;
+  wire \$5 ;
   wire \$50 ;
+  wire \$500 ;
+  wire \$501 ;
+  wire \$502 ;
+  wire \$503 ;
+  wire \$504 ;
+  wire \$505 ;
+  wire \$506 ;
+  wire \$507 ;
+  wire \$508 ;
+  wire \$509 ;
   wire \$51 ;
+  wire \$510 ;
+  wire \$511 ;
+  wire \$512 ;
+  wire \$513 ;
+  wire \$514 ;
+  wire \$515 ;
+  wire \$516 ;
+  wire \$517 ;
+  wire \$518 ;
+  wire \$519 ;
   wire \$52 ;
+  wire \$520 ;
+  wire \$521 ;
+  wire \$522 ;
+  wire \$523 ;
+  wire \$524 ;
+  reg \$525 ;
+  reg [12:0] \$526 ;
+  reg [16:0] \$527 ;
+  reg \$528 ;
+  reg [12:0] \$529 ;
   wire \$53 ;
+  reg \$530 ;
+  reg \$531 ;
+  reg \$532 ;
+  reg [1:0] \$533 ;
+  reg [12:0] \$534 ;
+  reg \$535 ;
+  reg \$536 ;
+  reg \$537 ;
+  reg [1:0] \$538 ;
+  reg [16:0] \$539 ;
   wire \$54 ;
+  reg \$540 ;
   wire \$55 ;
   wire \$56 ;
   wire \$57 ;
   wire \$58 ;
   wire \$59 ;
-  wire [15:0] \$6 ;
+  wire \$6 ;
   wire \$60 ;
   wire \$61 ;
   wire \$62 ;
@@ -38819,24 +43886,32 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   wire \$73 ;
   wire \$74 ;
   wire \$75 ;
-  reg \$76 ;
-  reg [12:0] \$77 ;
-  reg [16:0] \$78 ;
-  reg \$79 ;
-  wire [13:0] \$8 ;
-  reg [12:0] \$80 ;
-  reg \$81 ;
-  reg \$82 ;
-  reg \$83 ;
-  reg [1:0] \$84 ;
-  reg [12:0] \$85 ;
-  reg \$86 ;
-  reg \$87 ;
-  reg \$88 ;
-  reg [1:0] \$89 ;
-  wire [17:0] \$9 ;
-  reg [16:0] \$90 ;
-  reg \$91 ;
+  wire \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
+  wire \$8 ;
+  wire \$80 ;
+  wire \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire \$85 ;
+  wire \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
+  wire \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   input arm;
   wire arm;
   output \bit ;
@@ -38878,8 +43953,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$8915$259 ;
-  wire [12:0] \port$8915$259 ;
+  input [12:0] \port$13541$259 ;
+  wire [12:0] \port$13541$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -38902,134 +43977,583 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$9  = mid_slot - 1'h1;
-  assign \$10  = ~ odd;
-  assign \$11  = \port$8915$259 [12:1] + 1'h1;
-  assign \$12  = ~ level;
-  assign \$13  = elapsed + 1'h1;
-  assign \$14  = elapsed == fixed_at;
-  assign \$15  = elapsed != 13'h1fff;
-  assign \$16  = elapsed + 1'h1;
-  assign \$17  = slot_left - 1'h1;
-  assign \$18  = slot_left == 1'h1;
-  assign \$19  = ~ level;
-  assign \$20  = slo_prev & \$19 ;
-  assign \$21  = elapsed == 13'h1fff;
-  assign \$22  = \$21  ? 13'h1fff : mid_delay;
-  assign \$23  = ! mid_slot;
-  assign \$24  = elapsed == 13'h1fff;
-  assign \$25  = elapsed - 1'h1;
-  assign \$26  = \$24  ? 14'h1fff : \$25 ;
-  assign \$27  = half_period - 2'h2;
-  assign \$28  = elapsed == 13'h1fff;
-  assign \$29  = elapsed - 1'h1;
-  assign \$30  = \$28  ? 14'h1fff : \$29 ;
-  assign \$31  = elapsed != 13'h1fff;
-  assign \$32  = elapsed + 1'h1;
-  assign \$33  = slot_left - 1'h1;
-  assign \$34  = slot_left == 1'h1;
-  assign \$35  = ! phase;
-  assign \$36  = first_slot & \$35 ;
-  assign \$37  = \$36  & level;
-  assign \$38  = ~ single;
-  assign \$39  = decided & first_slot;
-  assign \$40  = vote1 & vote2;
-  assign \$41  = vote1 & level;
-  assign \$42  = \$40  | \$41 ;
-  assign \$43  = vote2 & level;
-  assign \$44  = \$42  | \$43 ;
-  assign \$45  = single ? level : \$44 ;
-  assign \$46  = ~ first_slot;
-  assign \$47  = decided & \$46 ;
-  assign \$48  = vote1 & vote2;
-  assign \$49  = vote1 & level;
-  assign \$50  = \$48  | \$49 ;
-  assign \$51  = vote2 & level;
-  assign \$52  = \$50  | \$51 ;
-  assign \bit  = single ? level : \$52 ;
+  assign \$460  = \port$13541$259 [12:1] + 1'h1;
+  assign \$461  = ~ level;
+  assign \$462  = elapsed + 1'h1;
+  assign \$463  = elapsed == fixed_at;
+  assign \$464  = elapsed != 13'h1fff;
+  assign \$465  = elapsed + 1'h1;
+  assign \$466  = slot_left - 1'h1;
+  assign \$467  = slot_left == 1'h1;
+  assign \$468  = ~ level;
+  assign \$469  = slo_prev & \$468 ;
+  assign \$470  = elapsed == 13'h1fff;
+  assign \$471  = \$470  ? 13'h1fff : mid_delay;
+  assign \$472  = ! mid_slot;
+  assign \$473  = elapsed == 13'h1fff;
+  assign \$474  = elapsed - 1'h1;
+  assign \$475  = \$473  ? 14'h1fff : \$474 ;
+  assign \$476  = half_period - 2'h2;
+  assign \$477  = elapsed == 13'h1fff;
+  assign \$478  = elapsed - 1'h1;
+  assign \$479  = \$477  ? 14'h1fff : \$478 ;
+  assign \$480  = elapsed != 13'h1fff;
+  assign \$481  = elapsed + 1'h1;
+  assign \$482  = slot_left - 1'h1;
+  assign \$483  = slot_left == 1'h1;
+  assign \$484  = ! phase;
+  assign \$485  = first_slot & \$484 ;
+  assign \$486  = \$485  & level;
+  assign \$487  = ~ single;
+  assign \$488  = decided & first_slot;
+  assign \$489  = vote1 & vote2;
+  assign \$490  = vote1 & level;
+  assign \$491  = \$489  | \$490 ;
+  assign \$492  = vote2 & level;
+  assign \$493  = \$491  | \$492 ;
+  assign \$494  = single ? level : \$493 ;
+  assign \$495  = ~ first_slot;
+  assign \$496  = decided & \$495 ;
+  assign \$497  = vote1 & vote2;
+  assign \$498  = vote1 & level;
+  assign \$499  = \$497  | \$498 ;
+  assign \$500  = vote2 & level;
+  assign \$501  = \$499  | \$500 ;
+  assign \bit  = single ? level : \$501 ;
   assign \edge  = level != slo_prev;
-  assign \$53  = ~ single;
-  assign \decided$40  = decided & \$53 ;
-  assign \$54  = vote1 & vote2;
-  assign \$55  = vote1 & level;
-  assign \$56  = \$54  | \$55 ;
-  assign \$57  = vote2 & level;
-  assign majority = \$56  | \$57 ;
+  assign \$502  = ~ single;
+  assign \decided$40  = decided & \$502 ;
+  assign \$503  = vote1 & vote2;
+  assign \$504  = vote1 & level;
+  assign \$505  = \$503  | \$504 ;
+  assign \$506  = vote2 & level;
+  assign majority = \$505  | \$506 ;
   assign noise = dropped | \odd$46 ;
-  assign \$58  = elapsed == fixed_at;
-  assign \$59  = ~ level;
-  assign \$60  = slo_prev & \$59 ;
-  assign \$61  = ! phase;
-  assign \$62  = first_slot & \$61 ;
-  assign \$63  = \$62  & level;
-  assign \$64  = ~ single;
-  assign \$65  = decided & first_slot;
-  assign \$66  = vote1 & vote2;
-  assign \$67  = vote1 & level;
-  assign \$68  = \$66  | \$67 ;
-  assign \$69  = vote2 & level;
-  assign \$70  = \$68  | \$69 ;
-  assign \$71  = single ? level : \$70 ;
-  assign \$72  = ! sampler_fsm_state;
-  assign \$73  = sampler_fsm_state == 1'h1;
-  assign \$74  = sampler_fsm_state == 2'h2;
-  assign \$75  = sampler_fsm_state == 2'h3;
+  assign \$507  = elapsed == fixed_at;
+  assign \$508  = ~ level;
+  assign \$509  = slo_prev & \$508 ;
+  assign \$510  = ! phase;
+  assign \$511  = first_slot & \$510 ;
+  assign \$512  = \$511  & level;
+  assign \$513  = ~ single;
+  assign \$514  = decided & first_slot;
+  assign \$515  = vote1 & vote2;
+  assign \$516  = vote1 & level;
+  assign \$517  = \$515  | \$516 ;
+  assign \$518  = vote2 & level;
+  assign \$519  = \$517  | \$518 ;
+  assign \$520  = single ? level : \$519 ;
+  assign \$521  = ! sampler_fsm_state;
+  assign \$522  = sampler_fsm_state == 1'h1;
+  assign \$523  = sampler_fsm_state == 2'h2;
+  assign \$524  = sampler_fsm_state == 2'h3;
   always @(posedge clk)
-    slo_prev <= \$76 ;
+    slo_prev <= \$525 ;
   always @(posedge clk)
-    vote <= \$2 ;
+    vote <= \$226 ;
   always @(posedge clk)
-    single <= \$3 ;
+    single <= \$452 ;
   always @(posedge clk)
-    first_load <= \$5 [15:0];
+    first_load <= \$454 [15:0];
   always @(posedge clk)
-    vote_load <= \$6 [14:0];
+    vote_load <= \$455 [14:0];
   always @(posedge clk)
-    vote_one <= \$7 ;
+    vote_one <= \$456 ;
   always @(posedge clk)
-    mid_delay <= \$77 ;
+    mid_delay <= \$526 ;
   always @(posedge clk)
-    mid_slot <= \$78 ;
+    mid_slot <= \$527 ;
   always @(posedge clk)
-    odd <= \$79 ;
+    odd <= \$528 ;
   always @(posedge clk)
-    fixed_at <= \$11 [12:0];
+    fixed_at <= \$460 [12:0];
   always @(posedge clk)
-    elapsed <= \$80 ;
+    elapsed <= \$529 ;
   always @(posedge clk)
-    early <= \$81 ;
+    early <= \$530 ;
   always @(posedge clk)
-    locked <= \$82 ;
+    locked <= \$531 ;
   always @(posedge clk)
-    gap <= \$83 ;
+    gap <= \$532 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$84 ;
+    sampler_fsm_state <= \$533 ;
   always @(posedge clk)
-    delay <= \$85 ;
+    delay <= \$534 ;
   always @(posedge clk)
-    vote1 <= \$86 ;
+    vote1 <= \$535 ;
   always @(posedge clk)
-    vote2 <= \$87 ;
+    vote2 <= \$536 ;
   always @(posedge clk)
-    first_slot <= \$88 ;
+    first_slot <= \$537 ;
   always @(posedge clk)
-    phase <= \$89 ;
+    phase <= \$538 ;
   always @(posedge clk)
-    slot_left <= \$90 ;
+    slot_left <= \$539 ;
   always @(posedge clk)
-    slot_zero <= \$91 ;
-  assign \$1  = half_period >= 2'h3;
-  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
-  assign \$3  = half_period < 2'h3;
-  assign \$4  = half_period - vote;
-  assign \$5  = $signed(\$4 ) - $signed(2'h1);
-  assign \$6  = vote - 1'h1;
-  assign \$7  = vote == 1'h1;
-  assign \$8  = mid_delay + 1'h1;
+    slot_zero <= \$540 ;
+  assign \$1  = half_period[0] & half_period[1];
+  assign \$2  = ~ half_period[2];
+  assign \$3  = \$1  & \$2 ;
+  assign \$4  = ~ half_period[3];
+  assign \$5  = \$3  & \$4 ;
+  assign \$6  = ~ half_period[4];
+  assign \$7  = \$5  & \$6 ;
+  assign \$8  = ~ half_period[5];
+  assign \$9  = \$7  & \$8 ;
+  assign \$10  = ~ half_period[6];
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = ~ half_period[7];
+  assign \$13  = \$11  & \$12 ;
+  assign \$14  = ~ half_period[8];
+  assign \$15  = \$13  & \$14 ;
+  assign \$16  = ~ half_period[9];
+  assign \$17  = \$15  & \$16 ;
+  assign \$18  = ~ half_period[10];
+  assign \$19  = \$17  & \$18 ;
+  assign \$20  = ~ half_period[11];
+  assign \$21  = \$19  & \$20 ;
+  assign \$22  = ~ half_period[12];
+  assign \$23  = \$21  & \$22 ;
+  assign \$24  = ~ half_period[13];
+  assign \$25  = \$23  & \$24 ;
+  assign \$26  = ~ half_period[14];
+  assign \$27  = \$25  & \$26 ;
+  assign \$28  = ~ half_period[15];
+  assign \$29  = \$27  & \$28 ;
+  assign \$30  = ~ half_period[3];
+  assign \$31  = half_period[2] & \$30 ;
+  assign \$32  = ~ half_period[4];
+  assign \$33  = \$31  & \$32 ;
+  assign \$34  = ~ half_period[5];
+  assign \$35  = \$33  & \$34 ;
+  assign \$36  = ~ half_period[6];
+  assign \$37  = \$35  & \$36 ;
+  assign \$38  = ~ half_period[7];
+  assign \$39  = \$37  & \$38 ;
+  assign \$40  = ~ half_period[8];
+  assign \$41  = \$39  & \$40 ;
+  assign \$42  = ~ half_period[9];
+  assign \$43  = \$41  & \$42 ;
+  assign \$44  = ~ half_period[10];
+  assign \$45  = \$43  & \$44 ;
+  assign \$46  = ~ half_period[11];
+  assign \$47  = \$45  & \$46 ;
+  assign \$48  = ~ half_period[12];
+  assign \$49  = \$47  & \$48 ;
+  assign \$50  = ~ half_period[13];
+  assign \$51  = \$49  & \$50 ;
+  assign \$52  = ~ half_period[14];
+  assign \$53  = \$51  & \$52 ;
+  assign \$54  = ~ half_period[15];
+  assign \$55  = \$53  & \$54 ;
+  assign \$56  = \$29  | \$55 ;
+  assign \$57  = ~ half_period[4];
+  assign \$58  = half_period[3] & \$57 ;
+  assign \$59  = ~ half_period[5];
+  assign \$60  = \$58  & \$59 ;
+  assign \$61  = ~ half_period[6];
+  assign \$62  = \$60  & \$61 ;
+  assign \$63  = ~ half_period[7];
+  assign \$64  = \$62  & \$63 ;
+  assign \$65  = ~ half_period[8];
+  assign \$66  = \$64  & \$65 ;
+  assign \$67  = ~ half_period[9];
+  assign \$68  = \$66  & \$67 ;
+  assign \$69  = ~ half_period[10];
+  assign \$70  = \$68  & \$69 ;
+  assign \$71  = ~ half_period[11];
+  assign \$72  = \$70  & \$71 ;
+  assign \$73  = ~ half_period[12];
+  assign \$74  = \$72  & \$73 ;
+  assign \$75  = ~ half_period[13];
+  assign \$76  = \$74  & \$75 ;
+  assign \$77  = ~ half_period[14];
+  assign \$78  = \$76  & \$77 ;
+  assign \$79  = ~ half_period[15];
+  assign \$80  = \$78  & \$79 ;
+  assign \$81  = \$56  | \$80 ;
+  assign \$82  = ~ half_period[5];
+  assign \$83  = half_period[4] & \$82 ;
+  assign \$84  = ~ half_period[6];
+  assign \$85  = \$83  & \$84 ;
+  assign \$86  = ~ half_period[7];
+  assign \$87  = \$85  & \$86 ;
+  assign \$88  = ~ half_period[8];
+  assign \$89  = \$87  & \$88 ;
+  assign \$90  = ~ half_period[9];
+  assign \$91  = \$89  & \$90 ;
+  assign \$92  = ~ half_period[10];
+  assign \$93  = \$91  & \$92 ;
+  assign \$94  = ~ half_period[11];
+  assign \$95  = \$93  & \$94 ;
+  assign \$96  = ~ half_period[12];
+  assign \$97  = \$95  & \$96 ;
+  assign \$98  = ~ half_period[13];
+  assign \$99  = \$97  & \$98 ;
+  assign \$100  = ~ half_period[14];
+  assign \$101  = \$99  & \$100 ;
+  assign \$102  = ~ half_period[15];
+  assign \$103  = \$101  & \$102 ;
+  assign \$104  = \$81  | \$103 ;
+  assign \$105  = ~ half_period[6];
+  assign \$106  = half_period[5] & \$105 ;
+  assign \$107  = ~ half_period[7];
+  assign \$108  = \$106  & \$107 ;
+  assign \$109  = ~ half_period[8];
+  assign \$110  = \$108  & \$109 ;
+  assign \$111  = ~ half_period[9];
+  assign \$112  = \$110  & \$111 ;
+  assign \$113  = ~ half_period[10];
+  assign \$114  = \$112  & \$113 ;
+  assign \$115  = ~ half_period[11];
+  assign \$116  = \$114  & \$115 ;
+  assign \$117  = ~ half_period[12];
+  assign \$118  = \$116  & \$117 ;
+  assign \$119  = ~ half_period[13];
+  assign \$120  = \$118  & \$119 ;
+  assign \$121  = ~ half_period[14];
+  assign \$122  = \$120  & \$121 ;
+  assign \$123  = ~ half_period[15];
+  assign \$124  = \$122  & \$123 ;
+  assign \$125  = \$104  | \$124 ;
+  assign \$126  = ~ half_period[7];
+  assign \$127  = half_period[6] & \$126 ;
+  assign \$128  = ~ half_period[8];
+  assign \$129  = \$127  & \$128 ;
+  assign \$130  = ~ half_period[9];
+  assign \$131  = \$129  & \$130 ;
+  assign \$132  = ~ half_period[10];
+  assign \$133  = \$131  & \$132 ;
+  assign \$134  = ~ half_period[11];
+  assign \$135  = \$133  & \$134 ;
+  assign \$136  = ~ half_period[12];
+  assign \$137  = \$135  & \$136 ;
+  assign \$138  = ~ half_period[13];
+  assign \$139  = \$137  & \$138 ;
+  assign \$140  = ~ half_period[14];
+  assign \$141  = \$139  & \$140 ;
+  assign \$142  = ~ half_period[15];
+  assign \$143  = \$141  & \$142 ;
+  assign \$144  = \$125  | \$143 ;
+  assign \$145  = ~ half_period[8];
+  assign \$146  = half_period[7] & \$145 ;
+  assign \$147  = ~ half_period[9];
+  assign \$148  = \$146  & \$147 ;
+  assign \$149  = ~ half_period[10];
+  assign \$150  = \$148  & \$149 ;
+  assign \$151  = ~ half_period[11];
+  assign \$152  = \$150  & \$151 ;
+  assign \$153  = ~ half_period[12];
+  assign \$154  = \$152  & \$153 ;
+  assign \$155  = ~ half_period[13];
+  assign \$156  = \$154  & \$155 ;
+  assign \$157  = ~ half_period[14];
+  assign \$158  = \$156  & \$157 ;
+  assign \$159  = ~ half_period[15];
+  assign \$160  = \$158  & \$159 ;
+  assign \$161  = \$144  | \$160 ;
+  assign \$162  = ~ half_period[9];
+  assign \$163  = half_period[8] & \$162 ;
+  assign \$164  = ~ half_period[10];
+  assign \$165  = \$163  & \$164 ;
+  assign \$166  = ~ half_period[11];
+  assign \$167  = \$165  & \$166 ;
+  assign \$168  = ~ half_period[12];
+  assign \$169  = \$167  & \$168 ;
+  assign \$170  = ~ half_period[13];
+  assign \$171  = \$169  & \$170 ;
+  assign \$172  = ~ half_period[14];
+  assign \$173  = \$171  & \$172 ;
+  assign \$174  = ~ half_period[15];
+  assign \$175  = \$173  & \$174 ;
+  assign \$176  = \$161  | \$175 ;
+  assign \$177  = ~ half_period[10];
+  assign \$178  = half_period[9] & \$177 ;
+  assign \$179  = ~ half_period[11];
+  assign \$180  = \$178  & \$179 ;
+  assign \$181  = ~ half_period[12];
+  assign \$182  = \$180  & \$181 ;
+  assign \$183  = ~ half_period[13];
+  assign \$184  = \$182  & \$183 ;
+  assign \$185  = ~ half_period[14];
+  assign \$186  = \$184  & \$185 ;
+  assign \$187  = ~ half_period[15];
+  assign \$188  = \$186  & \$187 ;
+  assign \$189  = \$176  | \$188 ;
+  assign \$190  = ~ half_period[11];
+  assign \$191  = half_period[10] & \$190 ;
+  assign \$192  = ~ half_period[12];
+  assign \$193  = \$191  & \$192 ;
+  assign \$194  = ~ half_period[13];
+  assign \$195  = \$193  & \$194 ;
+  assign \$196  = ~ half_period[14];
+  assign \$197  = \$195  & \$196 ;
+  assign \$198  = ~ half_period[15];
+  assign \$199  = \$197  & \$198 ;
+  assign \$200  = \$189  | \$199 ;
+  assign \$201  = ~ half_period[12];
+  assign \$202  = half_period[11] & \$201 ;
+  assign \$203  = ~ half_period[13];
+  assign \$204  = \$202  & \$203 ;
+  assign \$205  = ~ half_period[14];
+  assign \$206  = \$204  & \$205 ;
+  assign \$207  = ~ half_period[15];
+  assign \$208  = \$206  & \$207 ;
+  assign \$209  = \$200  | \$208 ;
+  assign \$210  = ~ half_period[13];
+  assign \$211  = half_period[12] & \$210 ;
+  assign \$212  = ~ half_period[14];
+  assign \$213  = \$211  & \$212 ;
+  assign \$214  = ~ half_period[15];
+  assign \$215  = \$213  & \$214 ;
+  assign \$216  = \$209  | \$215 ;
+  assign \$217  = ~ half_period[14];
+  assign \$218  = half_period[13] & \$217 ;
+  assign \$219  = ~ half_period[15];
+  assign \$220  = \$218  & \$219 ;
+  assign \$221  = \$216  | \$220 ;
+  assign \$222  = ~ half_period[15];
+  assign \$223  = half_period[14] & \$222 ;
+  assign \$224  = \$221  | \$223 ;
+  assign \$225  = \$224  | half_period[15];
+  assign \$226  = \$225  ? half_period[15:1] : 15'h0000;
+  assign \$227  = half_period[0] & half_period[1];
+  assign \$228  = ~ half_period[2];
+  assign \$229  = \$227  & \$228 ;
+  assign \$230  = ~ half_period[3];
+  assign \$231  = \$229  & \$230 ;
+  assign \$232  = ~ half_period[4];
+  assign \$233  = \$231  & \$232 ;
+  assign \$234  = ~ half_period[5];
+  assign \$235  = \$233  & \$234 ;
+  assign \$236  = ~ half_period[6];
+  assign \$237  = \$235  & \$236 ;
+  assign \$238  = ~ half_period[7];
+  assign \$239  = \$237  & \$238 ;
+  assign \$240  = ~ half_period[8];
+  assign \$241  = \$239  & \$240 ;
+  assign \$242  = ~ half_period[9];
+  assign \$243  = \$241  & \$242 ;
+  assign \$244  = ~ half_period[10];
+  assign \$245  = \$243  & \$244 ;
+  assign \$246  = ~ half_period[11];
+  assign \$247  = \$245  & \$246 ;
+  assign \$248  = ~ half_period[12];
+  assign \$249  = \$247  & \$248 ;
+  assign \$250  = ~ half_period[13];
+  assign \$251  = \$249  & \$250 ;
+  assign \$252  = ~ half_period[14];
+  assign \$253  = \$251  & \$252 ;
+  assign \$254  = ~ half_period[15];
+  assign \$255  = \$253  & \$254 ;
+  assign \$256  = ~ half_period[3];
+  assign \$257  = half_period[2] & \$256 ;
+  assign \$258  = ~ half_period[4];
+  assign \$259  = \$257  & \$258 ;
+  assign \$260  = ~ half_period[5];
+  assign \$261  = \$259  & \$260 ;
+  assign \$262  = ~ half_period[6];
+  assign \$263  = \$261  & \$262 ;
+  assign \$264  = ~ half_period[7];
+  assign \$265  = \$263  & \$264 ;
+  assign \$266  = ~ half_period[8];
+  assign \$267  = \$265  & \$266 ;
+  assign \$268  = ~ half_period[9];
+  assign \$269  = \$267  & \$268 ;
+  assign \$270  = ~ half_period[10];
+  assign \$271  = \$269  & \$270 ;
+  assign \$272  = ~ half_period[11];
+  assign \$273  = \$271  & \$272 ;
+  assign \$274  = ~ half_period[12];
+  assign \$275  = \$273  & \$274 ;
+  assign \$276  = ~ half_period[13];
+  assign \$277  = \$275  & \$276 ;
+  assign \$278  = ~ half_period[14];
+  assign \$279  = \$277  & \$278 ;
+  assign \$280  = ~ half_period[15];
+  assign \$281  = \$279  & \$280 ;
+  assign \$282  = \$255  | \$281 ;
+  assign \$283  = ~ half_period[4];
+  assign \$284  = half_period[3] & \$283 ;
+  assign \$285  = ~ half_period[5];
+  assign \$286  = \$284  & \$285 ;
+  assign \$287  = ~ half_period[6];
+  assign \$288  = \$286  & \$287 ;
+  assign \$289  = ~ half_period[7];
+  assign \$290  = \$288  & \$289 ;
+  assign \$291  = ~ half_period[8];
+  assign \$292  = \$290  & \$291 ;
+  assign \$293  = ~ half_period[9];
+  assign \$294  = \$292  & \$293 ;
+  assign \$295  = ~ half_period[10];
+  assign \$296  = \$294  & \$295 ;
+  assign \$297  = ~ half_period[11];
+  assign \$298  = \$296  & \$297 ;
+  assign \$299  = ~ half_period[12];
+  assign \$300  = \$298  & \$299 ;
+  assign \$301  = ~ half_period[13];
+  assign \$302  = \$300  & \$301 ;
+  assign \$303  = ~ half_period[14];
+  assign \$304  = \$302  & \$303 ;
+  assign \$305  = ~ half_period[15];
+  assign \$306  = \$304  & \$305 ;
+  assign \$307  = \$282  | \$306 ;
+  assign \$308  = ~ half_period[5];
+  assign \$309  = half_period[4] & \$308 ;
+  assign \$310  = ~ half_period[6];
+  assign \$311  = \$309  & \$310 ;
+  assign \$312  = ~ half_period[7];
+  assign \$313  = \$311  & \$312 ;
+  assign \$314  = ~ half_period[8];
+  assign \$315  = \$313  & \$314 ;
+  assign \$316  = ~ half_period[9];
+  assign \$317  = \$315  & \$316 ;
+  assign \$318  = ~ half_period[10];
+  assign \$319  = \$317  & \$318 ;
+  assign \$320  = ~ half_period[11];
+  assign \$321  = \$319  & \$320 ;
+  assign \$322  = ~ half_period[12];
+  assign \$323  = \$321  & \$322 ;
+  assign \$324  = ~ half_period[13];
+  assign \$325  = \$323  & \$324 ;
+  assign \$326  = ~ half_period[14];
+  assign \$327  = \$325  & \$326 ;
+  assign \$328  = ~ half_period[15];
+  assign \$329  = \$327  & \$328 ;
+  assign \$330  = \$307  | \$329 ;
+  assign \$331  = ~ half_period[6];
+  assign \$332  = half_period[5] & \$331 ;
+  assign \$333  = ~ half_period[7];
+  assign \$334  = \$332  & \$333 ;
+  assign \$335  = ~ half_period[8];
+  assign \$336  = \$334  & \$335 ;
+  assign \$337  = ~ half_period[9];
+  assign \$338  = \$336  & \$337 ;
+  assign \$339  = ~ half_period[10];
+  assign \$340  = \$338  & \$339 ;
+  assign \$341  = ~ half_period[11];
+  assign \$342  = \$340  & \$341 ;
+  assign \$343  = ~ half_period[12];
+  assign \$344  = \$342  & \$343 ;
+  assign \$345  = ~ half_period[13];
+  assign \$346  = \$344  & \$345 ;
+  assign \$347  = ~ half_period[14];
+  assign \$348  = \$346  & \$347 ;
+  assign \$349  = ~ half_period[15];
+  assign \$350  = \$348  & \$349 ;
+  assign \$351  = \$330  | \$350 ;
+  assign \$352  = ~ half_period[7];
+  assign \$353  = half_period[6] & \$352 ;
+  assign \$354  = ~ half_period[8];
+  assign \$355  = \$353  & \$354 ;
+  assign \$356  = ~ half_period[9];
+  assign \$357  = \$355  & \$356 ;
+  assign \$358  = ~ half_period[10];
+  assign \$359  = \$357  & \$358 ;
+  assign \$360  = ~ half_period[11];
+  assign \$361  = \$359  & \$360 ;
+  assign \$362  = ~ half_period[12];
+  assign \$363  = \$361  & \$362 ;
+  assign \$364  = ~ half_period[13];
+  assign \$365  = \$363  & \$364 ;
+  assign \$366  = ~ half_period[14];
+  assign \$367  = \$365  & \$366 ;
+  assign \$368  = ~ half_period[15];
+  assign \$369  = \$367  & \$368 ;
+  assign \$370  = \$351  | \$369 ;
+  assign \$371  = ~ half_period[8];
+  assign \$372  = half_period[7] & \$371 ;
+  assign \$373  = ~ half_period[9];
+  assign \$374  = \$372  & \$373 ;
+  assign \$375  = ~ half_period[10];
+  assign \$376  = \$374  & \$375 ;
+  assign \$377  = ~ half_period[11];
+  assign \$378  = \$376  & \$377 ;
+  assign \$379  = ~ half_period[12];
+  assign \$380  = \$378  & \$379 ;
+  assign \$381  = ~ half_period[13];
+  assign \$382  = \$380  & \$381 ;
+  assign \$383  = ~ half_period[14];
+  assign \$384  = \$382  & \$383 ;
+  assign \$385  = ~ half_period[15];
+  assign \$386  = \$384  & \$385 ;
+  assign \$387  = \$370  | \$386 ;
+  assign \$388  = ~ half_period[9];
+  assign \$389  = half_period[8] & \$388 ;
+  assign \$390  = ~ half_period[10];
+  assign \$391  = \$389  & \$390 ;
+  assign \$392  = ~ half_period[11];
+  assign \$393  = \$391  & \$392 ;
+  assign \$394  = ~ half_period[12];
+  assign \$395  = \$393  & \$394 ;
+  assign \$396  = ~ half_period[13];
+  assign \$397  = \$395  & \$396 ;
+  assign \$398  = ~ half_period[14];
+  assign \$399  = \$397  & \$398 ;
+  assign \$400  = ~ half_period[15];
+  assign \$401  = \$399  & \$400 ;
+  assign \$402  = \$387  | \$401 ;
+  assign \$403  = ~ half_period[10];
+  assign \$404  = half_period[9] & \$403 ;
+  assign \$405  = ~ half_period[11];
+  assign \$406  = \$404  & \$405 ;
+  assign \$407  = ~ half_period[12];
+  assign \$408  = \$406  & \$407 ;
+  assign \$409  = ~ half_period[13];
+  assign \$410  = \$408  & \$409 ;
+  assign \$411  = ~ half_period[14];
+  assign \$412  = \$410  & \$411 ;
+  assign \$413  = ~ half_period[15];
+  assign \$414  = \$412  & \$413 ;
+  assign \$415  = \$402  | \$414 ;
+  assign \$416  = ~ half_period[11];
+  assign \$417  = half_period[10] & \$416 ;
+  assign \$418  = ~ half_period[12];
+  assign \$419  = \$417  & \$418 ;
+  assign \$420  = ~ half_period[13];
+  assign \$421  = \$419  & \$420 ;
+  assign \$422  = ~ half_period[14];
+  assign \$423  = \$421  & \$422 ;
+  assign \$424  = ~ half_period[15];
+  assign \$425  = \$423  & \$424 ;
+  assign \$426  = \$415  | \$425 ;
+  assign \$427  = ~ half_period[12];
+  assign \$428  = half_period[11] & \$427 ;
+  assign \$429  = ~ half_period[13];
+  assign \$430  = \$428  & \$429 ;
+  assign \$431  = ~ half_period[14];
+  assign \$432  = \$430  & \$431 ;
+  assign \$433  = ~ half_period[15];
+  assign \$434  = \$432  & \$433 ;
+  assign \$435  = \$426  | \$434 ;
+  assign \$436  = ~ half_period[13];
+  assign \$437  = half_period[12] & \$436 ;
+  assign \$438  = ~ half_period[14];
+  assign \$439  = \$437  & \$438 ;
+  assign \$440  = ~ half_period[15];
+  assign \$441  = \$439  & \$440 ;
+  assign \$442  = \$435  | \$441 ;
+  assign \$443  = ~ half_period[14];
+  assign \$444  = half_period[13] & \$443 ;
+  assign \$445  = ~ half_period[15];
+  assign \$446  = \$444  & \$445 ;
+  assign \$447  = \$442  | \$446 ;
+  assign \$448  = ~ half_period[15];
+  assign \$449  = half_period[14] & \$448 ;
+  assign \$450  = \$447  | \$449 ;
+  assign \$451  = \$450  | half_period[15];
+  assign \$452  = ~ \$451 ;
+  assign \$453  = half_period - vote;
+  assign \$454  = $signed(\$453 ) - $signed(2'h1);
+  assign \$455  = vote - 1'h1;
+  assign \$456  = vote == 1'h1;
+  assign \$457  = mid_delay + 1'h1;
+  assign \$458  = mid_slot - 1'h1;
+  assign \$459  = ~ odd;
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$8915$259 [0]),
+    .clear_high(\port$13541$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -39050,19 +44574,19 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$76  = level;
+    \$525  = level;
     if (receiver_clear) begin
-      \$76  = 1'h1;
+      \$525  = 1'h1;
     end
     if (rst) begin
-      \$76  = 1'h1;
+      \$525  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$77  = mid_delay;
+    \$526  = mid_delay;
     if (odd) begin
-      \$77  = \$8 [12:0];
+      \$526  = \$457 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
@@ -39070,28 +44594,28 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h2:
           /* empty */;
       2'h1:
-          if (\$20 ) begin
+          if (\$469 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$77  = \$30 [12:0];
+              \$526  = \$479 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$77  = 13'h0000;
+      \$526  = 13'h0000;
     end
     if (rst) begin
-      \$77  = 13'h0000;
+      \$526  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$78  = mid_slot;
+    \$527  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$78  = \$9 [16:0];
+      \$527  = \$458 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
@@ -39099,130 +44623,130 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h2:
           /* empty */;
       2'h1:
-          if (\$20 ) begin
+          if (\$469 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$78  = \$27 ;
+              \$527  = \$476 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$78  = 17'h00000;
+      \$527  = 17'h00000;
     end
     if (rst) begin
-      \$78  = 17'h00000;
+      \$527  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$79  = \$10 ;
+    \$528  = \$459 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
           /* empty */;
       2'h1:
-          if (\$20 ) begin
+          if (\$469 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$79  = 1'h1;
+              \$528  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$79  = 1'h0;
+      \$528  = 1'h0;
     end
     if (rst) begin
-      \$79  = 1'h0;
+      \$528  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$80  = elapsed;
+    \$529  = elapsed;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$80  = 13'h0001;
+            \$529  = 13'h0001;
           end
       2'h2:
-          \$80  = \$13 [12:0];
+          \$529  = \$462 [12:0];
       2'h1:
-          if (\$15 ) begin
-            \$80  = \$16 [12:0];
+          if (\$464 ) begin
+            \$529  = \$465 [12:0];
           end
       2'h3:
-          if (\$31 ) begin
-            \$80  = \$32 [12:0];
+          if (\$480 ) begin
+            \$529  = \$481 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$80  = 13'h0000;
+      \$529  = 13'h0000;
     end
     if (rst) begin
-      \$80  = 13'h0000;
+      \$529  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$81  = early;
+    \$530  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$81  = \$12 ;
-            if (\port$8915$259 [0]) begin
-              \$81  = 1'h0;
+            \$530  = \$461 ;
+            if (\port$13541$259 [0]) begin
+              \$530  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$81  = 1'h0;
+      \$530  = 1'h0;
     end
     if (rst) begin
-      \$81  = 1'h0;
+      \$530  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$82  = locked;
+    \$531  = locked;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$82  = 1'h0;
+            \$531  = 1'h0;
           end
       2'h2:
-          if (\$14 ) begin
-            \$82  = 1'h1;
+          if (\$463 ) begin
+            \$531  = 1'h1;
           end
       2'h1:
           /* empty */;
       2'h3:
-          if (\$39 ) begin
+          if (\$488 ) begin
             (* full_case = 32'd1 *)
-            if (\$45 ) begin
+            if (\$494 ) begin
             end else begin
-              \$82  = 1'h1;
+              \$531  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$82  = 1'h0;
+      \$531  = 1'h0;
     end
     if (rst) begin
-      \$82  = 1'h0;
+      \$531  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$83  = gap;
+    \$532  = gap;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$83  = 1'h0;
+            \$532  = 1'h0;
           end
       2'h2:
           /* empty */;
@@ -39230,212 +44754,212 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$83  = 1'h0;
+              \$532  = 1'h0;
             end
           end
-          if (\$20 ) begin
-            \$83  = 1'h0;
+          if (\$469 ) begin
+            \$532  = 1'h0;
           end
         end
       2'h3:
-          if (\$37 ) begin
-            \$83  = \$38 ;
+          if (\$486 ) begin
+            \$532  = \$487 ;
           end
     endcase
     if (receiver_clear) begin
-      \$83  = 1'h0;
+      \$532  = 1'h0;
     end
     if (rst) begin
-      \$83  = 1'h0;
+      \$532  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$84  = sampler_fsm_state;
+    \$533  = sampler_fsm_state;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$84  = 2'h1;
-            if (\port$8915$259 [0]) begin
-              \$84  = 2'h2;
+            \$533  = 2'h1;
+            if (\port$13541$259 [0]) begin
+              \$533  = 2'h2;
             end
           end
       2'h2:
-          if (\$14 ) begin
-            \$84  = 2'h3;
+          if (\$463 ) begin
+            \$533  = 2'h3;
           end
       2'h1:
-          if (\$20 ) begin
-            \$84  = 2'h3;
+          if (\$469 ) begin
+            \$533  = 2'h3;
           end
       2'h3:
         begin
-          if (\$37 ) begin
-            \$84  = 2'h1;
+          if (\$486 ) begin
+            \$533  = 2'h1;
           end
-          if (\$39 ) begin
-            if (\$45 ) begin
-              \$84  = 2'h1;
+          if (\$488 ) begin
+            if (\$494 ) begin
+              \$533  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$84  = 2'h0;
+      \$533  = 2'h0;
     end
     if (rst) begin
-      \$84  = 2'h0;
+      \$533  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$85  = delay;
+    \$534  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            \$85  = { 1'h0, \port$8915$259 [12:1] };
+          if (\$463 ) begin
+            \$534  = { 1'h0, \port$13541$259 [12:1] };
           end
       2'h1:
-          if (\$20 ) begin
+          if (\$469 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$85  = \$22 ;
+              \$534  = \$471 ;
             end else begin
-              \$85  = \$26 [12:0];
+              \$534  = \$475 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$85  = 13'h0000;
+      \$534  = 13'h0000;
     end
     if (rst) begin
-      \$85  = 13'h0000;
+      \$534  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$86  = vote1;
+    \$535  = vote1;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            \$86  = 1'h0;
+          if (\$463 ) begin
+            \$535  = 1'h0;
           end
       2'h1:
-          if (\$20 ) begin
-            \$86  = 1'h0;
+          if (\$469 ) begin
+            \$535  = 1'h0;
           end
       2'h3:
-          if (\$37 ) begin
+          if (\$486 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$86  = level;
+                    \$535  = level;
                   end
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$86  = 1'h0;
+      \$535  = 1'h0;
     end
     if (rst) begin
-      \$86  = 1'h0;
+      \$535  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$87  = vote2;
+    \$536  = vote2;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            \$87  = 1'h0;
+          if (\$463 ) begin
+            \$536  = 1'h0;
           end
       2'h1:
-          if (\$20 ) begin
-            \$87  = 1'h0;
+          if (\$469 ) begin
+            \$536  = 1'h0;
           end
       2'h3:
-          if (\$37 ) begin
+          if (\$486 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  \$87  = level;
+                  \$536  = level;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$87  = 1'h0;
+      \$536  = 1'h0;
     end
     if (rst) begin
-      \$87  = 1'h0;
+      \$536  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$88  = first_slot;
+    \$537  = first_slot;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            \$88  = 1'h0;
+          if (\$463 ) begin
+            \$537  = 1'h0;
           end
       2'h1:
-          if (\$20 ) begin
-            \$88  = 1'h1;
+          if (\$469 ) begin
+            \$537  = 1'h1;
           end
       2'h3:
-          if (\$39 ) begin
+          if (\$488 ) begin
             (* full_case = 32'd1 *)
-            if (\$45 ) begin
+            if (\$494 ) begin
             end else begin
-              \$88  = 1'h0;
+              \$537  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$88  = 1'h0;
+      \$537  = 1'h0;
     end
     if (rst) begin
-      \$88  = 1'h0;
+      \$537  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$89  = phase;
+    \$538  = phase;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            \$89  = 2'h0;
+          if (\$463 ) begin
+            \$538  = 2'h0;
           end
       2'h1:
-          if (\$20 ) begin
+          if (\$469 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$89  = 2'h1;
+              \$538  = 2'h1;
             end else begin
-              \$89  = 2'h0;
+              \$538  = 2'h0;
             end
           end
       2'h3:
-          if (\$37 ) begin
+          if (\$486 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -39443,135 +44967,135 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$89  = 2'h1;
+                    \$538  = 2'h1;
                   end
               2'h1:
-                  \$89  = 2'h2;
+                  \$538  = 2'h2;
               default:
-                  \$89  = 2'h0;
+                  \$538  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$89  = 2'h0;
+      \$538  = 2'h0;
     end
     if (rst) begin
-      \$89  = 2'h0;
+      \$538  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$90  = slot_left;
+    \$539  = slot_left;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            \$90  = { 1'h0, first_load };
+          if (\$463 ) begin
+            \$539  = { 1'h0, first_load };
           end
       2'h1:
         begin
           if (gap) begin
-            \$90  = \$17 [16:0];
+            \$539  = \$466 [16:0];
           end
-          if (\$20 ) begin
+          if (\$469 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$90  = mid_slot;
+              \$539  = mid_slot;
             end else begin
-              \$90  = { 1'h0, first_load };
+              \$539  = { 1'h0, first_load };
             end
           end
         end
       2'h3:
         begin
-          \$90  = \$33 [16:0];
-          if (\$37 ) begin
-            \$90  = { 2'h0, vote_load };
+          \$539  = \$482 [16:0];
+          if (\$486 ) begin
+            \$539  = { 2'h0, vote_load };
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$90  = { first_load, 1'h1 };
+                    \$539  = { first_load, 1'h1 };
                   end else begin
-                    \$90  = { 2'h0, vote_load };
+                    \$539  = { 2'h0, vote_load };
                   end
               2'h1:
-                  \$90  = { 2'h0, vote_load };
+                  \$539  = { 2'h0, vote_load };
               default:
-                  \$90  = { first_load, 1'h1 };
+                  \$539  = { first_load, 1'h1 };
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$90  = 17'h00000;
+      \$539  = 17'h00000;
     end
     if (rst) begin
-      \$90  = 17'h00000;
+      \$539  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    \$91  = slot_zero;
+    \$540  = slot_zero;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
-          if (\$14 ) begin
-            \$91  = 1'h0;
+          if (\$463 ) begin
+            \$540  = 1'h0;
           end
       2'h1:
         begin
           if (gap) begin
-            \$91  = \$18 ;
+            \$540  = \$467 ;
           end
-          if (\$20 ) begin
+          if (\$469 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$91  = \$23 ;
+              \$540  = \$472 ;
             end else begin
-              \$91  = 1'h0;
+              \$540  = 1'h0;
             end
           end
         end
       2'h3:
         begin
-          \$91  = \$34 ;
-          if (\$37 ) begin
-            \$91  = vote_one;
+          \$540  = \$483 ;
+          if (\$486 ) begin
+            \$540  = vote_one;
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$91  = 1'h0;
+                    \$540  = 1'h0;
                   end else begin
-                    \$91  = vote_one;
+                    \$540  = vote_one;
                   end
               2'h1:
-                  \$91  = vote_one;
+                  \$540  = vote_one;
               default:
-                  \$91  = 1'h0;
+                  \$540  = 1'h0;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$91  = 1'h1;
+      \$540  = 1'h1;
     end
     if (rst) begin
-      \$91  = 1'h1;
+      \$540  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
-    sample = \$47 ;
+    sample = \$496 ;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
@@ -39581,9 +45105,9 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h1:
           /* empty */;
       2'h3:
-          if (\$65 ) begin
+          if (\$514 ) begin
             (* full_case = 32'd1 *)
-            if (\$71 ) begin
+            if (\$520 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -39597,11 +45121,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           /* empty */;
       2'h2:
-          if (\$58 ) begin
+          if (\$507 ) begin
             clear = 1'h1;
           end
       2'h1:
-          if (\$60 ) begin
+          if (\$509 ) begin
             clear = 1'h1;
           end
     endcase
@@ -39619,11 +45143,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h3:
         begin
-          if (\$63 ) begin
+          if (\$512 ) begin
             dropped = 1'h1;
           end
-          if (\$65 ) begin
-            if (\$71 ) begin
+          if (\$514 ) begin
+            if (\$520 ) begin
               dropped = 1'h1;
             end
           end
@@ -39642,7 +45166,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h1:
           /* empty */;
       2'h3:
-          if (\$63 ) begin
+          if (\$512 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -39670,22 +45194,22 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h1:
           /* empty */;
       2'h3:
-          if (\$63 ) begin
+          if (\$512 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  centre = \$64 ;
+                  centre = \$513 ;
             endcase
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$8915$259 [12:1] };
-  assign fixed = \port$8915$259 [0];
+  assign fixed_delay = { 1'h0, \port$13541$259 [12:1] };
+  assign fixed = \port$13541$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$8915$259 [0];
+  assign clear_high = \port$13541$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -39949,36 +45473,1093 @@ endmodule
 module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
-  wire [25:0] \$10 ;
+  wire \$10 ;
+  wire \$100 ;
+  wire \$1000 ;
+  wire \$1001 ;
+  wire \$1002 ;
+  wire \$1003 ;
+  wire \$1004 ;
+  wire \$1005 ;
+  wire \$1006 ;
+  wire \$1007 ;
+  wire \$1008 ;
+  wire \$1009 ;
+  wire \$101 ;
+  wire \$1010 ;
+  wire \$1011 ;
+  wire \$1012 ;
+  wire \$1013 ;
+  wire \$1014 ;
+  wire \$1015 ;
+  wire \$1016 ;
+  wire \$1017 ;
+  wire \$1018 ;
+  wire \$1019 ;
+  wire \$102 ;
+  wire \$1020 ;
+  wire \$1021 ;
+  wire \$1022 ;
+  wire \$1023 ;
+  wire \$1024 ;
+  wire \$1025 ;
+  wire \$1026 ;
+  wire \$1027 ;
+  wire \$1028 ;
+  wire \$1029 ;
+  wire \$103 ;
+  wire \$1030 ;
+  wire \$1031 ;
+  wire \$1032 ;
+  wire \$1033 ;
+  wire \$1034 ;
+  wire \$1035 ;
+  wire \$1036 ;
+  wire \$1037 ;
+  wire \$1038 ;
+  wire \$1039 ;
+  wire \$104 ;
+  wire \$1040 ;
+  wire \$1041 ;
+  wire \$1042 ;
+  wire \$1043 ;
+  wire \$1044 ;
+  wire \$1045 ;
+  wire \$1046 ;
+  wire \$1047 ;
+  wire \$1048 ;
+  wire \$1049 ;
+  wire \$105 ;
+  wire \$1050 ;
+  wire \$1051 ;
+  wire \$1052 ;
+  wire \$1053 ;
+  wire \$1054 ;
+  wire \$1055 ;
+  wire \$1056 ;
+  wire \$1057 ;
+  wire \$1058 ;
+  wire \$1059 ;
+  wire \$106 ;
+  wire \$1060 ;
+  wire \$1061 ;
+  wire \$1062 ;
+  wire \$1063 ;
+  wire \$1064 ;
+  wire \$1065 ;
+  wire \$1066 ;
+  wire [25:0] \$1067 ;
+  wire \$1068 ;
+  wire \$1069 ;
+  wire \$107 ;
+  wire \$1070 ;
+  wire \$1071 ;
+  wire \$1072 ;
+  wire \$1073 ;
+  wire \$1074 ;
+  wire \$1075 ;
+  wire \$1076 ;
+  wire \$1077 ;
+  wire \$1078 ;
+  wire \$1079 ;
+  wire \$108 ;
+  wire \$1080 ;
+  wire \$1081 ;
+  wire \$1082 ;
+  wire \$1083 ;
+  wire \$1084 ;
+  reg \$1085 ;
+  reg [24:0] \$1086 ;
+  reg \$1087 ;
+  reg \$1088 ;
+  wire \$109 ;
   wire \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   wire \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire \$15 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
   wire \$16 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire \$17 ;
+  wire \$170 ;
+  wire \$171 ;
+  wire \$172 ;
+  wire \$173 ;
+  wire \$174 ;
+  wire \$175 ;
+  wire \$176 ;
+  wire \$177 ;
+  wire \$178 ;
+  wire \$179 ;
   wire \$18 ;
+  wire \$180 ;
+  wire \$181 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
+  wire \$189 ;
   wire \$19 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire \$198 ;
+  wire \$199 ;
   wire \$2 ;
   wire \$20 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire \$21 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
+  wire \$213 ;
+  wire \$214 ;
+  wire \$215 ;
+  wire \$216 ;
+  wire \$217 ;
+  wire \$218 ;
+  wire \$219 ;
   wire \$22 ;
+  wire \$220 ;
+  wire \$221 ;
+  wire \$222 ;
+  wire \$223 ;
+  wire \$224 ;
+  wire \$225 ;
+  wire \$226 ;
+  wire \$227 ;
+  wire \$228 ;
+  wire \$229 ;
   wire \$23 ;
+  wire \$230 ;
+  wire \$231 ;
+  wire \$232 ;
+  wire \$233 ;
+  wire \$234 ;
+  wire \$235 ;
+  wire \$236 ;
+  wire \$237 ;
+  wire \$238 ;
+  wire \$239 ;
   wire \$24 ;
+  wire \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  wire \$243 ;
+  wire \$244 ;
+  wire \$245 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
   wire \$25 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
   wire \$26 ;
+  wire \$260 ;
+  wire \$261 ;
+  wire \$262 ;
+  wire \$263 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire \$269 ;
   wire \$27 ;
-  reg \$28 ;
-  reg [24:0] \$29 ;
+  wire \$270 ;
+  wire \$271 ;
+  wire \$272 ;
+  wire \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
+  wire \$28 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
+  wire \$29 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   wire \$3 ;
-  reg \$30 ;
-  reg \$31 ;
+  wire \$30 ;
+  wire \$300 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
+  wire \$31 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
+  wire \$32 ;
+  wire \$320 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
+  wire \$33 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  wire \$337 ;
+  wire \$338 ;
+  wire \$339 ;
+  wire \$34 ;
+  wire \$340 ;
+  wire \$341 ;
+  wire \$342 ;
+  wire \$343 ;
+  wire \$344 ;
+  wire \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire \$349 ;
+  wire \$35 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire \$352 ;
+  wire \$353 ;
+  wire \$354 ;
+  wire \$355 ;
+  wire \$356 ;
+  wire \$357 ;
+  wire \$358 ;
+  wire \$359 ;
+  wire \$36 ;
+  wire \$360 ;
+  wire \$361 ;
+  wire \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
+  wire \$37 ;
+  wire \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire \$378 ;
+  wire \$379 ;
+  wire \$38 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
+  wire \$39 ;
+  wire \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire \$394 ;
+  wire \$395 ;
+  wire \$396 ;
+  wire \$397 ;
+  wire \$398 ;
+  wire \$399 ;
   wire \$4 ;
+  wire \$40 ;
+  wire \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  wire \$403 ;
+  wire \$404 ;
+  wire \$405 ;
+  wire \$406 ;
+  wire \$407 ;
+  wire \$408 ;
+  wire \$409 ;
+  wire \$41 ;
+  wire \$410 ;
+  wire \$411 ;
+  wire \$412 ;
+  wire \$413 ;
+  wire \$414 ;
+  wire \$415 ;
+  wire \$416 ;
+  wire \$417 ;
+  wire \$418 ;
+  wire \$419 ;
+  wire \$42 ;
+  wire \$420 ;
+  wire \$421 ;
+  wire \$422 ;
+  wire \$423 ;
+  wire \$424 ;
+  wire \$425 ;
+  wire \$426 ;
+  wire \$427 ;
+  wire \$428 ;
+  wire \$429 ;
+  wire \$43 ;
+  wire \$430 ;
+  wire \$431 ;
+  wire \$432 ;
+  wire \$433 ;
+  wire \$434 ;
+  wire \$435 ;
+  wire \$436 ;
+  wire \$437 ;
+  wire \$438 ;
+  wire \$439 ;
+  wire \$44 ;
+  wire \$440 ;
+  wire \$441 ;
+  wire \$442 ;
+  wire \$443 ;
+  wire \$444 ;
+  wire \$445 ;
+  wire \$446 ;
+  wire \$447 ;
+  wire \$448 ;
+  wire \$449 ;
+  wire \$45 ;
+  wire \$450 ;
+  wire \$451 ;
+  wire \$452 ;
+  wire \$453 ;
+  wire \$454 ;
+  wire \$455 ;
+  wire \$456 ;
+  wire \$457 ;
+  wire \$458 ;
+  wire \$459 ;
+  wire \$46 ;
+  wire \$460 ;
+  wire \$461 ;
+  wire \$462 ;
+  wire \$463 ;
+  wire \$464 ;
+  wire \$465 ;
+  wire \$466 ;
+  wire \$467 ;
+  wire \$468 ;
+  wire \$469 ;
+  wire \$47 ;
+  wire \$470 ;
+  wire \$471 ;
+  wire \$472 ;
+  wire \$473 ;
+  wire \$474 ;
+  wire \$475 ;
+  wire \$476 ;
+  wire \$477 ;
+  wire \$478 ;
+  wire \$479 ;
+  wire \$48 ;
+  wire \$480 ;
+  wire \$481 ;
+  wire \$482 ;
+  wire \$483 ;
+  wire \$484 ;
+  wire \$485 ;
+  wire \$486 ;
+  wire \$487 ;
+  wire \$488 ;
+  wire \$489 ;
+  wire \$49 ;
+  wire \$490 ;
+  wire \$491 ;
+  wire \$492 ;
+  wire \$493 ;
+  wire \$494 ;
+  wire \$495 ;
+  wire \$496 ;
+  wire \$497 ;
+  wire \$498 ;
+  wire \$499 ;
   wire \$5 ;
+  wire \$50 ;
+  wire \$500 ;
+  wire \$501 ;
+  wire \$502 ;
+  wire \$503 ;
+  wire \$504 ;
+  wire \$505 ;
+  wire \$506 ;
+  wire \$507 ;
+  wire \$508 ;
+  wire \$509 ;
+  wire \$51 ;
+  wire \$510 ;
+  wire \$511 ;
+  wire \$512 ;
+  wire \$513 ;
+  wire \$514 ;
+  wire \$515 ;
+  wire \$516 ;
+  wire \$517 ;
+  wire \$518 ;
+  wire \$519 ;
+  wire \$52 ;
+  wire \$520 ;
+  wire \$521 ;
+  wire \$522 ;
+  wire \$523 ;
+  wire \$524 ;
+  wire \$525 ;
+  wire \$526 ;
+  wire \$527 ;
+  wire \$528 ;
+  wire \$529 ;
+  wire \$53 ;
+  wire \$530 ;
+  wire \$531 ;
+  wire \$532 ;
+  wire \$533 ;
+  wire \$534 ;
+  wire \$535 ;
+  wire \$536 ;
+  wire \$537 ;
+  wire \$538 ;
+  wire \$539 ;
+  wire \$54 ;
+  wire \$540 ;
+  wire \$541 ;
+  wire \$542 ;
+  wire \$543 ;
+  wire \$544 ;
+  wire \$545 ;
+  wire \$546 ;
+  wire \$547 ;
+  wire \$548 ;
+  wire \$549 ;
+  wire \$55 ;
+  wire \$550 ;
+  wire \$551 ;
+  wire \$552 ;
+  wire \$553 ;
+  wire \$554 ;
+  wire \$555 ;
+  wire \$556 ;
+  wire \$557 ;
+  wire \$558 ;
+  wire \$559 ;
+  wire \$56 ;
+  wire \$560 ;
+  wire \$561 ;
+  wire \$562 ;
+  wire \$563 ;
+  wire \$564 ;
+  wire \$565 ;
+  wire \$566 ;
+  wire \$567 ;
+  wire \$568 ;
+  wire \$569 ;
+  wire \$57 ;
+  wire \$570 ;
+  wire \$571 ;
+  wire \$572 ;
+  wire \$573 ;
+  wire \$574 ;
+  wire \$575 ;
+  wire \$576 ;
+  wire \$577 ;
+  wire \$578 ;
+  wire \$579 ;
+  wire \$58 ;
+  wire \$580 ;
+  wire \$581 ;
+  wire \$582 ;
+  wire \$583 ;
+  wire \$584 ;
+  wire \$585 ;
+  wire \$586 ;
+  wire \$587 ;
+  wire \$588 ;
+  wire \$589 ;
+  wire \$59 ;
+  wire \$590 ;
+  wire \$591 ;
+  wire \$592 ;
+  wire \$593 ;
+  wire \$594 ;
+  wire \$595 ;
+  wire \$596 ;
+  wire \$597 ;
+  wire \$598 ;
+  wire \$599 ;
   wire \$6 ;
+  wire \$60 ;
+  wire \$600 ;
+  wire \$601 ;
+  wire \$602 ;
+  wire \$603 ;
+  wire \$604 ;
+  wire \$605 ;
+  wire \$606 ;
+  wire \$607 ;
+  wire \$608 ;
+  wire \$609 ;
+  wire \$61 ;
+  wire \$610 ;
+  wire \$611 ;
+  wire \$612 ;
+  wire \$613 ;
+  wire \$614 ;
+  wire \$615 ;
+  wire \$616 ;
+  wire \$617 ;
+  wire \$618 ;
+  wire \$619 ;
+  wire \$62 ;
+  wire \$620 ;
+  wire \$621 ;
+  wire \$622 ;
+  wire \$623 ;
+  wire \$624 ;
+  wire \$625 ;
+  wire \$626 ;
+  wire \$627 ;
+  wire \$628 ;
+  wire \$629 ;
+  wire \$63 ;
+  wire \$630 ;
+  wire \$631 ;
+  wire \$632 ;
+  wire \$633 ;
+  wire \$634 ;
+  wire \$635 ;
+  wire \$636 ;
+  wire \$637 ;
+  wire \$638 ;
+  wire \$639 ;
+  wire \$64 ;
+  wire \$640 ;
+  wire \$641 ;
+  wire \$642 ;
+  wire \$643 ;
+  wire \$644 ;
+  wire \$645 ;
+  wire \$646 ;
+  wire \$647 ;
+  wire \$648 ;
+  wire \$649 ;
+  wire \$65 ;
+  wire \$650 ;
+  wire \$651 ;
+  wire \$652 ;
+  wire \$653 ;
+  wire \$654 ;
+  wire \$655 ;
+  wire \$656 ;
+  wire \$657 ;
+  wire \$658 ;
+  wire \$659 ;
+  wire \$66 ;
+  wire \$660 ;
+  wire \$661 ;
+  wire \$662 ;
+  wire \$663 ;
+  wire \$664 ;
+  wire \$665 ;
+  wire \$666 ;
+  wire \$667 ;
+  wire \$668 ;
+  wire \$669 ;
+  wire \$67 ;
+  wire \$670 ;
+  wire \$671 ;
+  wire \$672 ;
+  wire \$673 ;
+  wire \$674 ;
+  wire \$675 ;
+  wire \$676 ;
+  wire \$677 ;
+  wire \$678 ;
+  wire \$679 ;
+  wire \$68 ;
+  wire \$680 ;
+  wire \$681 ;
+  wire \$682 ;
+  wire \$683 ;
+  wire \$684 ;
+  wire \$685 ;
+  wire \$686 ;
+  wire \$687 ;
+  wire \$688 ;
+  wire \$689 ;
+  wire \$69 ;
+  wire \$690 ;
+  wire \$691 ;
+  wire \$692 ;
+  wire \$693 ;
+  wire \$694 ;
+  wire \$695 ;
+  wire \$696 ;
+  wire \$697 ;
+  wire \$698 ;
+  wire \$699 ;
   wire \$7 ;
+  wire \$70 ;
+  wire \$700 ;
+  wire \$701 ;
+  wire \$702 ;
+  wire \$703 ;
+  wire \$704 ;
+  wire \$705 ;
+  wire \$706 ;
+  wire \$707 ;
+  wire \$708 ;
+  wire \$709 ;
+  wire \$71 ;
+  wire \$710 ;
+  wire \$711 ;
+  wire \$712 ;
+  wire \$713 ;
+  wire \$714 ;
+  wire \$715 ;
+  wire \$716 ;
+  wire \$717 ;
+  wire \$718 ;
+  wire \$719 ;
+  wire \$72 ;
+  wire \$720 ;
+  wire \$721 ;
+  wire \$722 ;
+  wire \$723 ;
+  wire \$724 ;
+  wire \$725 ;
+  wire \$726 ;
+  wire \$727 ;
+  wire \$728 ;
+  wire \$729 ;
+  wire \$73 ;
+  wire \$730 ;
+  wire \$731 ;
+  wire \$732 ;
+  wire \$733 ;
+  wire \$734 ;
+  wire \$735 ;
+  wire \$736 ;
+  wire \$737 ;
+  wire \$738 ;
+  wire \$739 ;
+  wire \$74 ;
+  wire \$740 ;
+  wire \$741 ;
+  wire \$742 ;
+  wire \$743 ;
+  wire \$744 ;
+  wire \$745 ;
+  wire \$746 ;
+  wire \$747 ;
+  wire \$748 ;
+  wire \$749 ;
+  wire \$75 ;
+  wire \$750 ;
+  wire \$751 ;
+  wire \$752 ;
+  wire \$753 ;
+  wire \$754 ;
+  wire \$755 ;
+  wire \$756 ;
+  wire \$757 ;
+  wire \$758 ;
+  wire \$759 ;
+  wire \$76 ;
+  wire \$760 ;
+  wire \$761 ;
+  wire \$762 ;
+  wire \$763 ;
+  wire \$764 ;
+  wire \$765 ;
+  wire \$766 ;
+  wire \$767 ;
+  wire \$768 ;
+  wire \$769 ;
+  wire \$77 ;
+  wire \$770 ;
+  wire \$771 ;
+  wire \$772 ;
+  wire \$773 ;
+  wire \$774 ;
+  wire \$775 ;
+  wire \$776 ;
+  wire \$777 ;
+  wire \$778 ;
+  wire \$779 ;
+  wire \$78 ;
+  wire \$780 ;
+  wire \$781 ;
+  wire \$782 ;
+  wire \$783 ;
+  wire \$784 ;
+  wire \$785 ;
+  wire \$786 ;
+  wire \$787 ;
+  wire \$788 ;
+  wire \$789 ;
+  wire \$79 ;
+  wire \$790 ;
+  wire \$791 ;
+  wire \$792 ;
+  wire \$793 ;
+  wire \$794 ;
+  wire \$795 ;
+  wire \$796 ;
+  wire \$797 ;
+  wire \$798 ;
+  wire \$799 ;
   wire \$8 ;
+  wire \$80 ;
+  wire \$800 ;
+  wire \$801 ;
+  wire \$802 ;
+  wire \$803 ;
+  wire \$804 ;
+  wire \$805 ;
+  wire \$806 ;
+  wire \$807 ;
+  wire \$808 ;
+  wire \$809 ;
+  wire \$81 ;
+  wire \$810 ;
+  wire \$811 ;
+  wire \$812 ;
+  wire \$813 ;
+  wire \$814 ;
+  wire \$815 ;
+  wire \$816 ;
+  wire \$817 ;
+  wire \$818 ;
+  wire \$819 ;
+  wire \$82 ;
+  wire \$820 ;
+  wire \$821 ;
+  wire \$822 ;
+  wire \$823 ;
+  wire \$824 ;
+  wire \$825 ;
+  wire \$826 ;
+  wire \$827 ;
+  wire \$828 ;
+  wire \$829 ;
+  wire \$83 ;
+  wire \$830 ;
+  wire \$831 ;
+  wire \$832 ;
+  wire \$833 ;
+  wire \$834 ;
+  wire \$835 ;
+  wire \$836 ;
+  wire \$837 ;
+  wire \$838 ;
+  wire \$839 ;
+  wire \$84 ;
+  wire \$840 ;
+  wire \$841 ;
+  wire \$842 ;
+  wire \$843 ;
+  wire \$844 ;
+  wire \$845 ;
+  wire \$846 ;
+  wire \$847 ;
+  wire \$848 ;
+  wire \$849 ;
+  wire \$85 ;
+  wire \$850 ;
+  wire \$851 ;
+  wire \$852 ;
+  wire \$853 ;
+  wire \$854 ;
+  wire \$855 ;
+  wire \$856 ;
+  wire \$857 ;
+  wire \$858 ;
+  wire \$859 ;
+  wire \$86 ;
+  wire \$860 ;
+  wire \$861 ;
+  wire \$862 ;
+  wire \$863 ;
+  wire \$864 ;
+  wire \$865 ;
+  wire \$866 ;
+  wire \$867 ;
+  wire \$868 ;
+  wire \$869 ;
+  wire \$87 ;
+  wire \$870 ;
+  wire \$871 ;
+  wire \$872 ;
+  wire \$873 ;
+  wire \$874 ;
+  wire \$875 ;
+  wire \$876 ;
+  wire \$877 ;
+  wire \$878 ;
+  wire \$879 ;
+  wire \$88 ;
+  wire \$880 ;
+  wire \$881 ;
+  wire \$882 ;
+  wire \$883 ;
+  wire \$884 ;
+  wire \$885 ;
+  wire \$886 ;
+  wire \$887 ;
+  wire \$888 ;
+  wire \$889 ;
+  wire \$89 ;
+  wire \$890 ;
+  wire \$891 ;
+  wire \$892 ;
+  wire \$893 ;
+  wire \$894 ;
+  wire \$895 ;
+  wire \$896 ;
+  wire \$897 ;
+  wire \$898 ;
+  wire \$899 ;
   wire \$9 ;
+  wire \$90 ;
+  wire \$900 ;
+  wire \$901 ;
+  wire \$902 ;
+  wire \$903 ;
+  wire \$904 ;
+  wire \$905 ;
+  wire \$906 ;
+  wire \$907 ;
+  wire \$908 ;
+  wire \$909 ;
+  wire \$91 ;
+  wire \$910 ;
+  wire \$911 ;
+  wire \$912 ;
+  wire \$913 ;
+  wire \$914 ;
+  wire \$915 ;
+  wire \$916 ;
+  wire \$917 ;
+  wire \$918 ;
+  wire \$919 ;
+  wire \$92 ;
+  wire \$920 ;
+  wire \$921 ;
+  wire \$922 ;
+  wire \$923 ;
+  wire \$924 ;
+  wire \$925 ;
+  wire \$926 ;
+  wire \$927 ;
+  wire \$928 ;
+  wire \$929 ;
+  wire \$93 ;
+  wire \$930 ;
+  wire \$931 ;
+  wire \$932 ;
+  wire \$933 ;
+  wire \$934 ;
+  wire \$935 ;
+  wire \$936 ;
+  wire \$937 ;
+  wire \$938 ;
+  wire \$939 ;
+  wire \$94 ;
+  wire \$940 ;
+  wire \$941 ;
+  wire \$942 ;
+  wire \$943 ;
+  wire \$944 ;
+  wire \$945 ;
+  wire \$946 ;
+  wire \$947 ;
+  wire \$948 ;
+  wire \$949 ;
+  wire \$95 ;
+  wire \$950 ;
+  wire \$951 ;
+  wire \$952 ;
+  wire \$953 ;
+  wire \$954 ;
+  wire \$955 ;
+  wire \$956 ;
+  wire \$957 ;
+  wire \$958 ;
+  wire \$959 ;
+  wire \$96 ;
+  wire \$960 ;
+  wire \$961 ;
+  wire \$962 ;
+  wire \$963 ;
+  wire \$964 ;
+  wire \$965 ;
+  wire \$966 ;
+  wire \$967 ;
+  wire \$968 ;
+  wire \$969 ;
+  wire \$97 ;
+  wire \$970 ;
+  wire \$971 ;
+  wire \$972 ;
+  wire \$973 ;
+  wire \$974 ;
+  wire \$975 ;
+  wire \$976 ;
+  wire \$977 ;
+  wire \$978 ;
+  wire \$979 ;
+  wire \$98 ;
+  wire \$980 ;
+  wire \$981 ;
+  wire \$982 ;
+  wire \$983 ;
+  wire \$984 ;
+  wire \$985 ;
+  wire \$986 ;
+  wire \$987 ;
+  wire \$988 ;
+  wire \$989 ;
+  wire \$99 ;
+  wire \$990 ;
+  wire \$991 ;
+  wire \$992 ;
+  wire \$993 ;
+  wire \$994 ;
+  wire \$995 ;
+  wire \$996 ;
+  wire \$997 ;
+  wire \$998 ;
+  wire \$999 ;
   input abort;
   wire abort;
   input clk;
@@ -40010,89 +46591,1146 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
   assign \$5  = wrap & \$4 ;
   assign \$6  = \$2  | \$5 ;
   assign \$7  = periodic & period_zero;
-  assign \$8  = period <= 1'h1;
-  assign \$9  = period <= 2'h2;
-  assign \$10  = count_p2 + 1'h1;
-  assign \$11  = count_p2 >= period;
-  assign \$12  = start | trigger;
-  assign \$13  = periodic & period_zero;
-  assign \$14  = ~ \$13 ;
-  assign \$15  = periodic & \$14 ;
-  assign \$16  = \$15  & period_start;
-  assign \$17  = \$12  | \$16 ;
-  assign \$18  = periodic & period_zero;
-  assign request = \$17  | \$18 ;
-  assign \$19  = start | trigger;
-  assign \$20  = periodic & period_zero;
-  assign \$21  = ~ \$20 ;
-  assign \$22  = periodic & \$21 ;
-  assign \$23  = \$22  & period_start;
-  assign \$24  = \$19  | \$23 ;
-  assign \$25  = ~ abort;
-  assign \$26  = idle & \$25 ;
-  assign \$27  = ~ \$26 ;
-  assign overrun = \$24  & \$27 ;
+  assign \$8  = ~ period[2];
+  assign \$9  = period[1] & \$8 ;
+  assign \$10  = ~ period[3];
+  assign \$11  = \$9  & \$10 ;
+  assign \$12  = ~ period[4];
+  assign \$13  = \$11  & \$12 ;
+  assign \$14  = ~ period[5];
+  assign \$15  = \$13  & \$14 ;
+  assign \$16  = ~ period[6];
+  assign \$17  = \$15  & \$16 ;
+  assign \$18  = ~ period[7];
+  assign \$19  = \$17  & \$18 ;
+  assign \$20  = ~ period[8];
+  assign \$21  = \$19  & \$20 ;
+  assign \$22  = ~ period[9];
+  assign \$23  = \$21  & \$22 ;
+  assign \$24  = ~ period[10];
+  assign \$25  = \$23  & \$24 ;
+  assign \$26  = ~ period[11];
+  assign \$27  = \$25  & \$26 ;
+  assign \$28  = ~ period[12];
+  assign \$29  = \$27  & \$28 ;
+  assign \$30  = ~ period[13];
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = ~ period[14];
+  assign \$33  = \$31  & \$32 ;
+  assign \$34  = ~ period[15];
+  assign \$35  = \$33  & \$34 ;
+  assign \$36  = ~ period[16];
+  assign \$37  = \$35  & \$36 ;
+  assign \$38  = ~ period[17];
+  assign \$39  = \$37  & \$38 ;
+  assign \$40  = ~ period[18];
+  assign \$41  = \$39  & \$40 ;
+  assign \$42  = ~ period[19];
+  assign \$43  = \$41  & \$42 ;
+  assign \$44  = ~ period[20];
+  assign \$45  = \$43  & \$44 ;
+  assign \$46  = ~ period[21];
+  assign \$47  = \$45  & \$46 ;
+  assign \$48  = ~ period[22];
+  assign \$49  = \$47  & \$48 ;
+  assign \$50  = ~ period[23];
+  assign \$51  = \$49  & \$50 ;
+  assign \$52  = ~ period[3];
+  assign \$53  = period[2] & \$52 ;
+  assign \$54  = ~ period[4];
+  assign \$55  = \$53  & \$54 ;
+  assign \$56  = ~ period[5];
+  assign \$57  = \$55  & \$56 ;
+  assign \$58  = ~ period[6];
+  assign \$59  = \$57  & \$58 ;
+  assign \$60  = ~ period[7];
+  assign \$61  = \$59  & \$60 ;
+  assign \$62  = ~ period[8];
+  assign \$63  = \$61  & \$62 ;
+  assign \$64  = ~ period[9];
+  assign \$65  = \$63  & \$64 ;
+  assign \$66  = ~ period[10];
+  assign \$67  = \$65  & \$66 ;
+  assign \$68  = ~ period[11];
+  assign \$69  = \$67  & \$68 ;
+  assign \$70  = ~ period[12];
+  assign \$71  = \$69  & \$70 ;
+  assign \$72  = ~ period[13];
+  assign \$73  = \$71  & \$72 ;
+  assign \$74  = ~ period[14];
+  assign \$75  = \$73  & \$74 ;
+  assign \$76  = ~ period[15];
+  assign \$77  = \$75  & \$76 ;
+  assign \$78  = ~ period[16];
+  assign \$79  = \$77  & \$78 ;
+  assign \$80  = ~ period[17];
+  assign \$81  = \$79  & \$80 ;
+  assign \$82  = ~ period[18];
+  assign \$83  = \$81  & \$82 ;
+  assign \$84  = ~ period[19];
+  assign \$85  = \$83  & \$84 ;
+  assign \$86  = ~ period[20];
+  assign \$87  = \$85  & \$86 ;
+  assign \$88  = ~ period[21];
+  assign \$89  = \$87  & \$88 ;
+  assign \$90  = ~ period[22];
+  assign \$91  = \$89  & \$90 ;
+  assign \$92  = ~ period[23];
+  assign \$93  = \$91  & \$92 ;
+  assign \$94  = \$51  | \$93 ;
+  assign \$95  = ~ period[4];
+  assign \$96  = period[3] & \$95 ;
+  assign \$97  = ~ period[5];
+  assign \$98  = \$96  & \$97 ;
+  assign \$99  = ~ period[6];
+  assign \$100  = \$98  & \$99 ;
+  assign \$101  = ~ period[7];
+  assign \$102  = \$100  & \$101 ;
+  assign \$103  = ~ period[8];
+  assign \$104  = \$102  & \$103 ;
+  assign \$105  = ~ period[9];
+  assign \$106  = \$104  & \$105 ;
+  assign \$107  = ~ period[10];
+  assign \$108  = \$106  & \$107 ;
+  assign \$109  = ~ period[11];
+  assign \$110  = \$108  & \$109 ;
+  assign \$111  = ~ period[12];
+  assign \$112  = \$110  & \$111 ;
+  assign \$113  = ~ period[13];
+  assign \$114  = \$112  & \$113 ;
+  assign \$115  = ~ period[14];
+  assign \$116  = \$114  & \$115 ;
+  assign \$117  = ~ period[15];
+  assign \$118  = \$116  & \$117 ;
+  assign \$119  = ~ period[16];
+  assign \$120  = \$118  & \$119 ;
+  assign \$121  = ~ period[17];
+  assign \$122  = \$120  & \$121 ;
+  assign \$123  = ~ period[18];
+  assign \$124  = \$122  & \$123 ;
+  assign \$125  = ~ period[19];
+  assign \$126  = \$124  & \$125 ;
+  assign \$127  = ~ period[20];
+  assign \$128  = \$126  & \$127 ;
+  assign \$129  = ~ period[21];
+  assign \$130  = \$128  & \$129 ;
+  assign \$131  = ~ period[22];
+  assign \$132  = \$130  & \$131 ;
+  assign \$133  = ~ period[23];
+  assign \$134  = \$132  & \$133 ;
+  assign \$135  = \$94  | \$134 ;
+  assign \$136  = ~ period[5];
+  assign \$137  = period[4] & \$136 ;
+  assign \$138  = ~ period[6];
+  assign \$139  = \$137  & \$138 ;
+  assign \$140  = ~ period[7];
+  assign \$141  = \$139  & \$140 ;
+  assign \$142  = ~ period[8];
+  assign \$143  = \$141  & \$142 ;
+  assign \$144  = ~ period[9];
+  assign \$145  = \$143  & \$144 ;
+  assign \$146  = ~ period[10];
+  assign \$147  = \$145  & \$146 ;
+  assign \$148  = ~ period[11];
+  assign \$149  = \$147  & \$148 ;
+  assign \$150  = ~ period[12];
+  assign \$151  = \$149  & \$150 ;
+  assign \$152  = ~ period[13];
+  assign \$153  = \$151  & \$152 ;
+  assign \$154  = ~ period[14];
+  assign \$155  = \$153  & \$154 ;
+  assign \$156  = ~ period[15];
+  assign \$157  = \$155  & \$156 ;
+  assign \$158  = ~ period[16];
+  assign \$159  = \$157  & \$158 ;
+  assign \$160  = ~ period[17];
+  assign \$161  = \$159  & \$160 ;
+  assign \$162  = ~ period[18];
+  assign \$163  = \$161  & \$162 ;
+  assign \$164  = ~ period[19];
+  assign \$165  = \$163  & \$164 ;
+  assign \$166  = ~ period[20];
+  assign \$167  = \$165  & \$166 ;
+  assign \$168  = ~ period[21];
+  assign \$169  = \$167  & \$168 ;
+  assign \$170  = ~ period[22];
+  assign \$171  = \$169  & \$170 ;
+  assign \$172  = ~ period[23];
+  assign \$173  = \$171  & \$172 ;
+  assign \$174  = \$135  | \$173 ;
+  assign \$175  = ~ period[6];
+  assign \$176  = period[5] & \$175 ;
+  assign \$177  = ~ period[7];
+  assign \$178  = \$176  & \$177 ;
+  assign \$179  = ~ period[8];
+  assign \$180  = \$178  & \$179 ;
+  assign \$181  = ~ period[9];
+  assign \$182  = \$180  & \$181 ;
+  assign \$183  = ~ period[10];
+  assign \$184  = \$182  & \$183 ;
+  assign \$185  = ~ period[11];
+  assign \$186  = \$184  & \$185 ;
+  assign \$187  = ~ period[12];
+  assign \$188  = \$186  & \$187 ;
+  assign \$189  = ~ period[13];
+  assign \$190  = \$188  & \$189 ;
+  assign \$191  = ~ period[14];
+  assign \$192  = \$190  & \$191 ;
+  assign \$193  = ~ period[15];
+  assign \$194  = \$192  & \$193 ;
+  assign \$195  = ~ period[16];
+  assign \$196  = \$194  & \$195 ;
+  assign \$197  = ~ period[17];
+  assign \$198  = \$196  & \$197 ;
+  assign \$199  = ~ period[18];
+  assign \$200  = \$198  & \$199 ;
+  assign \$201  = ~ period[19];
+  assign \$202  = \$200  & \$201 ;
+  assign \$203  = ~ period[20];
+  assign \$204  = \$202  & \$203 ;
+  assign \$205  = ~ period[21];
+  assign \$206  = \$204  & \$205 ;
+  assign \$207  = ~ period[22];
+  assign \$208  = \$206  & \$207 ;
+  assign \$209  = ~ period[23];
+  assign \$210  = \$208  & \$209 ;
+  assign \$211  = \$174  | \$210 ;
+  assign \$212  = ~ period[7];
+  assign \$213  = period[6] & \$212 ;
+  assign \$214  = ~ period[8];
+  assign \$215  = \$213  & \$214 ;
+  assign \$216  = ~ period[9];
+  assign \$217  = \$215  & \$216 ;
+  assign \$218  = ~ period[10];
+  assign \$219  = \$217  & \$218 ;
+  assign \$220  = ~ period[11];
+  assign \$221  = \$219  & \$220 ;
+  assign \$222  = ~ period[12];
+  assign \$223  = \$221  & \$222 ;
+  assign \$224  = ~ period[13];
+  assign \$225  = \$223  & \$224 ;
+  assign \$226  = ~ period[14];
+  assign \$227  = \$225  & \$226 ;
+  assign \$228  = ~ period[15];
+  assign \$229  = \$227  & \$228 ;
+  assign \$230  = ~ period[16];
+  assign \$231  = \$229  & \$230 ;
+  assign \$232  = ~ period[17];
+  assign \$233  = \$231  & \$232 ;
+  assign \$234  = ~ period[18];
+  assign \$235  = \$233  & \$234 ;
+  assign \$236  = ~ period[19];
+  assign \$237  = \$235  & \$236 ;
+  assign \$238  = ~ period[20];
+  assign \$239  = \$237  & \$238 ;
+  assign \$240  = ~ period[21];
+  assign \$241  = \$239  & \$240 ;
+  assign \$242  = ~ period[22];
+  assign \$243  = \$241  & \$242 ;
+  assign \$244  = ~ period[23];
+  assign \$245  = \$243  & \$244 ;
+  assign \$246  = \$211  | \$245 ;
+  assign \$247  = ~ period[8];
+  assign \$248  = period[7] & \$247 ;
+  assign \$249  = ~ period[9];
+  assign \$250  = \$248  & \$249 ;
+  assign \$251  = ~ period[10];
+  assign \$252  = \$250  & \$251 ;
+  assign \$253  = ~ period[11];
+  assign \$254  = \$252  & \$253 ;
+  assign \$255  = ~ period[12];
+  assign \$256  = \$254  & \$255 ;
+  assign \$257  = ~ period[13];
+  assign \$258  = \$256  & \$257 ;
+  assign \$259  = ~ period[14];
+  assign \$260  = \$258  & \$259 ;
+  assign \$261  = ~ period[15];
+  assign \$262  = \$260  & \$261 ;
+  assign \$263  = ~ period[16];
+  assign \$264  = \$262  & \$263 ;
+  assign \$265  = ~ period[17];
+  assign \$266  = \$264  & \$265 ;
+  assign \$267  = ~ period[18];
+  assign \$268  = \$266  & \$267 ;
+  assign \$269  = ~ period[19];
+  assign \$270  = \$268  & \$269 ;
+  assign \$271  = ~ period[20];
+  assign \$272  = \$270  & \$271 ;
+  assign \$273  = ~ period[21];
+  assign \$274  = \$272  & \$273 ;
+  assign \$275  = ~ period[22];
+  assign \$276  = \$274  & \$275 ;
+  assign \$277  = ~ period[23];
+  assign \$278  = \$276  & \$277 ;
+  assign \$279  = \$246  | \$278 ;
+  assign \$280  = ~ period[9];
+  assign \$281  = period[8] & \$280 ;
+  assign \$282  = ~ period[10];
+  assign \$283  = \$281  & \$282 ;
+  assign \$284  = ~ period[11];
+  assign \$285  = \$283  & \$284 ;
+  assign \$286  = ~ period[12];
+  assign \$287  = \$285  & \$286 ;
+  assign \$288  = ~ period[13];
+  assign \$289  = \$287  & \$288 ;
+  assign \$290  = ~ period[14];
+  assign \$291  = \$289  & \$290 ;
+  assign \$292  = ~ period[15];
+  assign \$293  = \$291  & \$292 ;
+  assign \$294  = ~ period[16];
+  assign \$295  = \$293  & \$294 ;
+  assign \$296  = ~ period[17];
+  assign \$297  = \$295  & \$296 ;
+  assign \$298  = ~ period[18];
+  assign \$299  = \$297  & \$298 ;
+  assign \$300  = ~ period[19];
+  assign \$301  = \$299  & \$300 ;
+  assign \$302  = ~ period[20];
+  assign \$303  = \$301  & \$302 ;
+  assign \$304  = ~ period[21];
+  assign \$305  = \$303  & \$304 ;
+  assign \$306  = ~ period[22];
+  assign \$307  = \$305  & \$306 ;
+  assign \$308  = ~ period[23];
+  assign \$309  = \$307  & \$308 ;
+  assign \$310  = \$279  | \$309 ;
+  assign \$311  = ~ period[10];
+  assign \$312  = period[9] & \$311 ;
+  assign \$313  = ~ period[11];
+  assign \$314  = \$312  & \$313 ;
+  assign \$315  = ~ period[12];
+  assign \$316  = \$314  & \$315 ;
+  assign \$317  = ~ period[13];
+  assign \$318  = \$316  & \$317 ;
+  assign \$319  = ~ period[14];
+  assign \$320  = \$318  & \$319 ;
+  assign \$321  = ~ period[15];
+  assign \$322  = \$320  & \$321 ;
+  assign \$323  = ~ period[16];
+  assign \$324  = \$322  & \$323 ;
+  assign \$325  = ~ period[17];
+  assign \$326  = \$324  & \$325 ;
+  assign \$327  = ~ period[18];
+  assign \$328  = \$326  & \$327 ;
+  assign \$329  = ~ period[19];
+  assign \$330  = \$328  & \$329 ;
+  assign \$331  = ~ period[20];
+  assign \$332  = \$330  & \$331 ;
+  assign \$333  = ~ period[21];
+  assign \$334  = \$332  & \$333 ;
+  assign \$335  = ~ period[22];
+  assign \$336  = \$334  & \$335 ;
+  assign \$337  = ~ period[23];
+  assign \$338  = \$336  & \$337 ;
+  assign \$339  = \$310  | \$338 ;
+  assign \$340  = ~ period[11];
+  assign \$341  = period[10] & \$340 ;
+  assign \$342  = ~ period[12];
+  assign \$343  = \$341  & \$342 ;
+  assign \$344  = ~ period[13];
+  assign \$345  = \$343  & \$344 ;
+  assign \$346  = ~ period[14];
+  assign \$347  = \$345  & \$346 ;
+  assign \$348  = ~ period[15];
+  assign \$349  = \$347  & \$348 ;
+  assign \$350  = ~ period[16];
+  assign \$351  = \$349  & \$350 ;
+  assign \$352  = ~ period[17];
+  assign \$353  = \$351  & \$352 ;
+  assign \$354  = ~ period[18];
+  assign \$355  = \$353  & \$354 ;
+  assign \$356  = ~ period[19];
+  assign \$357  = \$355  & \$356 ;
+  assign \$358  = ~ period[20];
+  assign \$359  = \$357  & \$358 ;
+  assign \$360  = ~ period[21];
+  assign \$361  = \$359  & \$360 ;
+  assign \$362  = ~ period[22];
+  assign \$363  = \$361  & \$362 ;
+  assign \$364  = ~ period[23];
+  assign \$365  = \$363  & \$364 ;
+  assign \$366  = \$339  | \$365 ;
+  assign \$367  = ~ period[12];
+  assign \$368  = period[11] & \$367 ;
+  assign \$369  = ~ period[13];
+  assign \$370  = \$368  & \$369 ;
+  assign \$371  = ~ period[14];
+  assign \$372  = \$370  & \$371 ;
+  assign \$373  = ~ period[15];
+  assign \$374  = \$372  & \$373 ;
+  assign \$375  = ~ period[16];
+  assign \$376  = \$374  & \$375 ;
+  assign \$377  = ~ period[17];
+  assign \$378  = \$376  & \$377 ;
+  assign \$379  = ~ period[18];
+  assign \$380  = \$378  & \$379 ;
+  assign \$381  = ~ period[19];
+  assign \$382  = \$380  & \$381 ;
+  assign \$383  = ~ period[20];
+  assign \$384  = \$382  & \$383 ;
+  assign \$385  = ~ period[21];
+  assign \$386  = \$384  & \$385 ;
+  assign \$387  = ~ period[22];
+  assign \$388  = \$386  & \$387 ;
+  assign \$389  = ~ period[23];
+  assign \$390  = \$388  & \$389 ;
+  assign \$391  = \$366  | \$390 ;
+  assign \$392  = ~ period[13];
+  assign \$393  = period[12] & \$392 ;
+  assign \$394  = ~ period[14];
+  assign \$395  = \$393  & \$394 ;
+  assign \$396  = ~ period[15];
+  assign \$397  = \$395  & \$396 ;
+  assign \$398  = ~ period[16];
+  assign \$399  = \$397  & \$398 ;
+  assign \$400  = ~ period[17];
+  assign \$401  = \$399  & \$400 ;
+  assign \$402  = ~ period[18];
+  assign \$403  = \$401  & \$402 ;
+  assign \$404  = ~ period[19];
+  assign \$405  = \$403  & \$404 ;
+  assign \$406  = ~ period[20];
+  assign \$407  = \$405  & \$406 ;
+  assign \$408  = ~ period[21];
+  assign \$409  = \$407  & \$408 ;
+  assign \$410  = ~ period[22];
+  assign \$411  = \$409  & \$410 ;
+  assign \$412  = ~ period[23];
+  assign \$413  = \$411  & \$412 ;
+  assign \$414  = \$391  | \$413 ;
+  assign \$415  = ~ period[14];
+  assign \$416  = period[13] & \$415 ;
+  assign \$417  = ~ period[15];
+  assign \$418  = \$416  & \$417 ;
+  assign \$419  = ~ period[16];
+  assign \$420  = \$418  & \$419 ;
+  assign \$421  = ~ period[17];
+  assign \$422  = \$420  & \$421 ;
+  assign \$423  = ~ period[18];
+  assign \$424  = \$422  & \$423 ;
+  assign \$425  = ~ period[19];
+  assign \$426  = \$424  & \$425 ;
+  assign \$427  = ~ period[20];
+  assign \$428  = \$426  & \$427 ;
+  assign \$429  = ~ period[21];
+  assign \$430  = \$428  & \$429 ;
+  assign \$431  = ~ period[22];
+  assign \$432  = \$430  & \$431 ;
+  assign \$433  = ~ period[23];
+  assign \$434  = \$432  & \$433 ;
+  assign \$435  = \$414  | \$434 ;
+  assign \$436  = ~ period[15];
+  assign \$437  = period[14] & \$436 ;
+  assign \$438  = ~ period[16];
+  assign \$439  = \$437  & \$438 ;
+  assign \$440  = ~ period[17];
+  assign \$441  = \$439  & \$440 ;
+  assign \$442  = ~ period[18];
+  assign \$443  = \$441  & \$442 ;
+  assign \$444  = ~ period[19];
+  assign \$445  = \$443  & \$444 ;
+  assign \$446  = ~ period[20];
+  assign \$447  = \$445  & \$446 ;
+  assign \$448  = ~ period[21];
+  assign \$449  = \$447  & \$448 ;
+  assign \$450  = ~ period[22];
+  assign \$451  = \$449  & \$450 ;
+  assign \$452  = ~ period[23];
+  assign \$453  = \$451  & \$452 ;
+  assign \$454  = \$435  | \$453 ;
+  assign \$455  = ~ period[16];
+  assign \$456  = period[15] & \$455 ;
+  assign \$457  = ~ period[17];
+  assign \$458  = \$456  & \$457 ;
+  assign \$459  = ~ period[18];
+  assign \$460  = \$458  & \$459 ;
+  assign \$461  = ~ period[19];
+  assign \$462  = \$460  & \$461 ;
+  assign \$463  = ~ period[20];
+  assign \$464  = \$462  & \$463 ;
+  assign \$465  = ~ period[21];
+  assign \$466  = \$464  & \$465 ;
+  assign \$467  = ~ period[22];
+  assign \$468  = \$466  & \$467 ;
+  assign \$469  = ~ period[23];
+  assign \$470  = \$468  & \$469 ;
+  assign \$471  = \$454  | \$470 ;
+  assign \$472  = ~ period[17];
+  assign \$473  = period[16] & \$472 ;
+  assign \$474  = ~ period[18];
+  assign \$475  = \$473  & \$474 ;
+  assign \$476  = ~ period[19];
+  assign \$477  = \$475  & \$476 ;
+  assign \$478  = ~ period[20];
+  assign \$479  = \$477  & \$478 ;
+  assign \$480  = ~ period[21];
+  assign \$481  = \$479  & \$480 ;
+  assign \$482  = ~ period[22];
+  assign \$483  = \$481  & \$482 ;
+  assign \$484  = ~ period[23];
+  assign \$485  = \$483  & \$484 ;
+  assign \$486  = \$471  | \$485 ;
+  assign \$487  = ~ period[18];
+  assign \$488  = period[17] & \$487 ;
+  assign \$489  = ~ period[19];
+  assign \$490  = \$488  & \$489 ;
+  assign \$491  = ~ period[20];
+  assign \$492  = \$490  & \$491 ;
+  assign \$493  = ~ period[21];
+  assign \$494  = \$492  & \$493 ;
+  assign \$495  = ~ period[22];
+  assign \$496  = \$494  & \$495 ;
+  assign \$497  = ~ period[23];
+  assign \$498  = \$496  & \$497 ;
+  assign \$499  = \$486  | \$498 ;
+  assign \$500  = ~ period[19];
+  assign \$501  = period[18] & \$500 ;
+  assign \$502  = ~ period[20];
+  assign \$503  = \$501  & \$502 ;
+  assign \$504  = ~ period[21];
+  assign \$505  = \$503  & \$504 ;
+  assign \$506  = ~ period[22];
+  assign \$507  = \$505  & \$506 ;
+  assign \$508  = ~ period[23];
+  assign \$509  = \$507  & \$508 ;
+  assign \$510  = \$499  | \$509 ;
+  assign \$511  = ~ period[20];
+  assign \$512  = period[19] & \$511 ;
+  assign \$513  = ~ period[21];
+  assign \$514  = \$512  & \$513 ;
+  assign \$515  = ~ period[22];
+  assign \$516  = \$514  & \$515 ;
+  assign \$517  = ~ period[23];
+  assign \$518  = \$516  & \$517 ;
+  assign \$519  = \$510  | \$518 ;
+  assign \$520  = ~ period[21];
+  assign \$521  = period[20] & \$520 ;
+  assign \$522  = ~ period[22];
+  assign \$523  = \$521  & \$522 ;
+  assign \$524  = ~ period[23];
+  assign \$525  = \$523  & \$524 ;
+  assign \$526  = \$519  | \$525 ;
+  assign \$527  = ~ period[22];
+  assign \$528  = period[21] & \$527 ;
+  assign \$529  = ~ period[23];
+  assign \$530  = \$528  & \$529 ;
+  assign \$531  = \$526  | \$530 ;
+  assign \$532  = ~ period[23];
+  assign \$533  = period[22] & \$532 ;
+  assign \$534  = \$531  | \$533 ;
+  assign \$535  = \$534  | period[23];
+  assign \$536  = ~ \$535 ;
+  assign \$537  = period[0] & period[1];
+  assign \$538  = ~ period[2];
+  assign \$539  = \$537  & \$538 ;
+  assign \$540  = ~ period[3];
+  assign \$541  = \$539  & \$540 ;
+  assign \$542  = ~ period[4];
+  assign \$543  = \$541  & \$542 ;
+  assign \$544  = ~ period[5];
+  assign \$545  = \$543  & \$544 ;
+  assign \$546  = ~ period[6];
+  assign \$547  = \$545  & \$546 ;
+  assign \$548  = ~ period[7];
+  assign \$549  = \$547  & \$548 ;
+  assign \$550  = ~ period[8];
+  assign \$551  = \$549  & \$550 ;
+  assign \$552  = ~ period[9];
+  assign \$553  = \$551  & \$552 ;
+  assign \$554  = ~ period[10];
+  assign \$555  = \$553  & \$554 ;
+  assign \$556  = ~ period[11];
+  assign \$557  = \$555  & \$556 ;
+  assign \$558  = ~ period[12];
+  assign \$559  = \$557  & \$558 ;
+  assign \$560  = ~ period[13];
+  assign \$561  = \$559  & \$560 ;
+  assign \$562  = ~ period[14];
+  assign \$563  = \$561  & \$562 ;
+  assign \$564  = ~ period[15];
+  assign \$565  = \$563  & \$564 ;
+  assign \$566  = ~ period[16];
+  assign \$567  = \$565  & \$566 ;
+  assign \$568  = ~ period[17];
+  assign \$569  = \$567  & \$568 ;
+  assign \$570  = ~ period[18];
+  assign \$571  = \$569  & \$570 ;
+  assign \$572  = ~ period[19];
+  assign \$573  = \$571  & \$572 ;
+  assign \$574  = ~ period[20];
+  assign \$575  = \$573  & \$574 ;
+  assign \$576  = ~ period[21];
+  assign \$577  = \$575  & \$576 ;
+  assign \$578  = ~ period[22];
+  assign \$579  = \$577  & \$578 ;
+  assign \$580  = ~ period[23];
+  assign \$581  = \$579  & \$580 ;
+  assign \$582  = ~ period[3];
+  assign \$583  = period[2] & \$582 ;
+  assign \$584  = ~ period[4];
+  assign \$585  = \$583  & \$584 ;
+  assign \$586  = ~ period[5];
+  assign \$587  = \$585  & \$586 ;
+  assign \$588  = ~ period[6];
+  assign \$589  = \$587  & \$588 ;
+  assign \$590  = ~ period[7];
+  assign \$591  = \$589  & \$590 ;
+  assign \$592  = ~ period[8];
+  assign \$593  = \$591  & \$592 ;
+  assign \$594  = ~ period[9];
+  assign \$595  = \$593  & \$594 ;
+  assign \$596  = ~ period[10];
+  assign \$597  = \$595  & \$596 ;
+  assign \$598  = ~ period[11];
+  assign \$599  = \$597  & \$598 ;
+  assign \$600  = ~ period[12];
+  assign \$601  = \$599  & \$600 ;
+  assign \$602  = ~ period[13];
+  assign \$603  = \$601  & \$602 ;
+  assign \$604  = ~ period[14];
+  assign \$605  = \$603  & \$604 ;
+  assign \$606  = ~ period[15];
+  assign \$607  = \$605  & \$606 ;
+  assign \$608  = ~ period[16];
+  assign \$609  = \$607  & \$608 ;
+  assign \$610  = ~ period[17];
+  assign \$611  = \$609  & \$610 ;
+  assign \$612  = ~ period[18];
+  assign \$613  = \$611  & \$612 ;
+  assign \$614  = ~ period[19];
+  assign \$615  = \$613  & \$614 ;
+  assign \$616  = ~ period[20];
+  assign \$617  = \$615  & \$616 ;
+  assign \$618  = ~ period[21];
+  assign \$619  = \$617  & \$618 ;
+  assign \$620  = ~ period[22];
+  assign \$621  = \$619  & \$620 ;
+  assign \$622  = ~ period[23];
+  assign \$623  = \$621  & \$622 ;
+  assign \$624  = \$581  | \$623 ;
+  assign \$625  = ~ period[4];
+  assign \$626  = period[3] & \$625 ;
+  assign \$627  = ~ period[5];
+  assign \$628  = \$626  & \$627 ;
+  assign \$629  = ~ period[6];
+  assign \$630  = \$628  & \$629 ;
+  assign \$631  = ~ period[7];
+  assign \$632  = \$630  & \$631 ;
+  assign \$633  = ~ period[8];
+  assign \$634  = \$632  & \$633 ;
+  assign \$635  = ~ period[9];
+  assign \$636  = \$634  & \$635 ;
+  assign \$637  = ~ period[10];
+  assign \$638  = \$636  & \$637 ;
+  assign \$639  = ~ period[11];
+  assign \$640  = \$638  & \$639 ;
+  assign \$641  = ~ period[12];
+  assign \$642  = \$640  & \$641 ;
+  assign \$643  = ~ period[13];
+  assign \$644  = \$642  & \$643 ;
+  assign \$645  = ~ period[14];
+  assign \$646  = \$644  & \$645 ;
+  assign \$647  = ~ period[15];
+  assign \$648  = \$646  & \$647 ;
+  assign \$649  = ~ period[16];
+  assign \$650  = \$648  & \$649 ;
+  assign \$651  = ~ period[17];
+  assign \$652  = \$650  & \$651 ;
+  assign \$653  = ~ period[18];
+  assign \$654  = \$652  & \$653 ;
+  assign \$655  = ~ period[19];
+  assign \$656  = \$654  & \$655 ;
+  assign \$657  = ~ period[20];
+  assign \$658  = \$656  & \$657 ;
+  assign \$659  = ~ period[21];
+  assign \$660  = \$658  & \$659 ;
+  assign \$661  = ~ period[22];
+  assign \$662  = \$660  & \$661 ;
+  assign \$663  = ~ period[23];
+  assign \$664  = \$662  & \$663 ;
+  assign \$665  = \$624  | \$664 ;
+  assign \$666  = ~ period[5];
+  assign \$667  = period[4] & \$666 ;
+  assign \$668  = ~ period[6];
+  assign \$669  = \$667  & \$668 ;
+  assign \$670  = ~ period[7];
+  assign \$671  = \$669  & \$670 ;
+  assign \$672  = ~ period[8];
+  assign \$673  = \$671  & \$672 ;
+  assign \$674  = ~ period[9];
+  assign \$675  = \$673  & \$674 ;
+  assign \$676  = ~ period[10];
+  assign \$677  = \$675  & \$676 ;
+  assign \$678  = ~ period[11];
+  assign \$679  = \$677  & \$678 ;
+  assign \$680  = ~ period[12];
+  assign \$681  = \$679  & \$680 ;
+  assign \$682  = ~ period[13];
+  assign \$683  = \$681  & \$682 ;
+  assign \$684  = ~ period[14];
+  assign \$685  = \$683  & \$684 ;
+  assign \$686  = ~ period[15];
+  assign \$687  = \$685  & \$686 ;
+  assign \$688  = ~ period[16];
+  assign \$689  = \$687  & \$688 ;
+  assign \$690  = ~ period[17];
+  assign \$691  = \$689  & \$690 ;
+  assign \$692  = ~ period[18];
+  assign \$693  = \$691  & \$692 ;
+  assign \$694  = ~ period[19];
+  assign \$695  = \$693  & \$694 ;
+  assign \$696  = ~ period[20];
+  assign \$697  = \$695  & \$696 ;
+  assign \$698  = ~ period[21];
+  assign \$699  = \$697  & \$698 ;
+  assign \$700  = ~ period[22];
+  assign \$701  = \$699  & \$700 ;
+  assign \$702  = ~ period[23];
+  assign \$703  = \$701  & \$702 ;
+  assign \$704  = \$665  | \$703 ;
+  assign \$705  = ~ period[6];
+  assign \$706  = period[5] & \$705 ;
+  assign \$707  = ~ period[7];
+  assign \$708  = \$706  & \$707 ;
+  assign \$709  = ~ period[8];
+  assign \$710  = \$708  & \$709 ;
+  assign \$711  = ~ period[9];
+  assign \$712  = \$710  & \$711 ;
+  assign \$713  = ~ period[10];
+  assign \$714  = \$712  & \$713 ;
+  assign \$715  = ~ period[11];
+  assign \$716  = \$714  & \$715 ;
+  assign \$717  = ~ period[12];
+  assign \$718  = \$716  & \$717 ;
+  assign \$719  = ~ period[13];
+  assign \$720  = \$718  & \$719 ;
+  assign \$721  = ~ period[14];
+  assign \$722  = \$720  & \$721 ;
+  assign \$723  = ~ period[15];
+  assign \$724  = \$722  & \$723 ;
+  assign \$725  = ~ period[16];
+  assign \$726  = \$724  & \$725 ;
+  assign \$727  = ~ period[17];
+  assign \$728  = \$726  & \$727 ;
+  assign \$729  = ~ period[18];
+  assign \$730  = \$728  & \$729 ;
+  assign \$731  = ~ period[19];
+  assign \$732  = \$730  & \$731 ;
+  assign \$733  = ~ period[20];
+  assign \$734  = \$732  & \$733 ;
+  assign \$735  = ~ period[21];
+  assign \$736  = \$734  & \$735 ;
+  assign \$737  = ~ period[22];
+  assign \$738  = \$736  & \$737 ;
+  assign \$739  = ~ period[23];
+  assign \$740  = \$738  & \$739 ;
+  assign \$741  = \$704  | \$740 ;
+  assign \$742  = ~ period[7];
+  assign \$743  = period[6] & \$742 ;
+  assign \$744  = ~ period[8];
+  assign \$745  = \$743  & \$744 ;
+  assign \$746  = ~ period[9];
+  assign \$747  = \$745  & \$746 ;
+  assign \$748  = ~ period[10];
+  assign \$749  = \$747  & \$748 ;
+  assign \$750  = ~ period[11];
+  assign \$751  = \$749  & \$750 ;
+  assign \$752  = ~ period[12];
+  assign \$753  = \$751  & \$752 ;
+  assign \$754  = ~ period[13];
+  assign \$755  = \$753  & \$754 ;
+  assign \$756  = ~ period[14];
+  assign \$757  = \$755  & \$756 ;
+  assign \$758  = ~ period[15];
+  assign \$759  = \$757  & \$758 ;
+  assign \$760  = ~ period[16];
+  assign \$761  = \$759  & \$760 ;
+  assign \$762  = ~ period[17];
+  assign \$763  = \$761  & \$762 ;
+  assign \$764  = ~ period[18];
+  assign \$765  = \$763  & \$764 ;
+  assign \$766  = ~ period[19];
+  assign \$767  = \$765  & \$766 ;
+  assign \$768  = ~ period[20];
+  assign \$769  = \$767  & \$768 ;
+  assign \$770  = ~ period[21];
+  assign \$771  = \$769  & \$770 ;
+  assign \$772  = ~ period[22];
+  assign \$773  = \$771  & \$772 ;
+  assign \$774  = ~ period[23];
+  assign \$775  = \$773  & \$774 ;
+  assign \$776  = \$741  | \$775 ;
+  assign \$777  = ~ period[8];
+  assign \$778  = period[7] & \$777 ;
+  assign \$779  = ~ period[9];
+  assign \$780  = \$778  & \$779 ;
+  assign \$781  = ~ period[10];
+  assign \$782  = \$780  & \$781 ;
+  assign \$783  = ~ period[11];
+  assign \$784  = \$782  & \$783 ;
+  assign \$785  = ~ period[12];
+  assign \$786  = \$784  & \$785 ;
+  assign \$787  = ~ period[13];
+  assign \$788  = \$786  & \$787 ;
+  assign \$789  = ~ period[14];
+  assign \$790  = \$788  & \$789 ;
+  assign \$791  = ~ period[15];
+  assign \$792  = \$790  & \$791 ;
+  assign \$793  = ~ period[16];
+  assign \$794  = \$792  & \$793 ;
+  assign \$795  = ~ period[17];
+  assign \$796  = \$794  & \$795 ;
+  assign \$797  = ~ period[18];
+  assign \$798  = \$796  & \$797 ;
+  assign \$799  = ~ period[19];
+  assign \$800  = \$798  & \$799 ;
+  assign \$801  = ~ period[20];
+  assign \$802  = \$800  & \$801 ;
+  assign \$803  = ~ period[21];
+  assign \$804  = \$802  & \$803 ;
+  assign \$805  = ~ period[22];
+  assign \$806  = \$804  & \$805 ;
+  assign \$807  = ~ period[23];
+  assign \$808  = \$806  & \$807 ;
+  assign \$809  = \$776  | \$808 ;
+  assign \$810  = ~ period[9];
+  assign \$811  = period[8] & \$810 ;
+  assign \$812  = ~ period[10];
+  assign \$813  = \$811  & \$812 ;
+  assign \$814  = ~ period[11];
+  assign \$815  = \$813  & \$814 ;
+  assign \$816  = ~ period[12];
+  assign \$817  = \$815  & \$816 ;
+  assign \$818  = ~ period[13];
+  assign \$819  = \$817  & \$818 ;
+  assign \$820  = ~ period[14];
+  assign \$821  = \$819  & \$820 ;
+  assign \$822  = ~ period[15];
+  assign \$823  = \$821  & \$822 ;
+  assign \$824  = ~ period[16];
+  assign \$825  = \$823  & \$824 ;
+  assign \$826  = ~ period[17];
+  assign \$827  = \$825  & \$826 ;
+  assign \$828  = ~ period[18];
+  assign \$829  = \$827  & \$828 ;
+  assign \$830  = ~ period[19];
+  assign \$831  = \$829  & \$830 ;
+  assign \$832  = ~ period[20];
+  assign \$833  = \$831  & \$832 ;
+  assign \$834  = ~ period[21];
+  assign \$835  = \$833  & \$834 ;
+  assign \$836  = ~ period[22];
+  assign \$837  = \$835  & \$836 ;
+  assign \$838  = ~ period[23];
+  assign \$839  = \$837  & \$838 ;
+  assign \$840  = \$809  | \$839 ;
+  assign \$841  = ~ period[10];
+  assign \$842  = period[9] & \$841 ;
+  assign \$843  = ~ period[11];
+  assign \$844  = \$842  & \$843 ;
+  assign \$845  = ~ period[12];
+  assign \$846  = \$844  & \$845 ;
+  assign \$847  = ~ period[13];
+  assign \$848  = \$846  & \$847 ;
+  assign \$849  = ~ period[14];
+  assign \$850  = \$848  & \$849 ;
+  assign \$851  = ~ period[15];
+  assign \$852  = \$850  & \$851 ;
+  assign \$853  = ~ period[16];
+  assign \$854  = \$852  & \$853 ;
+  assign \$855  = ~ period[17];
+  assign \$856  = \$854  & \$855 ;
+  assign \$857  = ~ period[18];
+  assign \$858  = \$856  & \$857 ;
+  assign \$859  = ~ period[19];
+  assign \$860  = \$858  & \$859 ;
+  assign \$861  = ~ period[20];
+  assign \$862  = \$860  & \$861 ;
+  assign \$863  = ~ period[21];
+  assign \$864  = \$862  & \$863 ;
+  assign \$865  = ~ period[22];
+  assign \$866  = \$864  & \$865 ;
+  assign \$867  = ~ period[23];
+  assign \$868  = \$866  & \$867 ;
+  assign \$869  = \$840  | \$868 ;
+  assign \$870  = ~ period[11];
+  assign \$871  = period[10] & \$870 ;
+  assign \$872  = ~ period[12];
+  assign \$873  = \$871  & \$872 ;
+  assign \$874  = ~ period[13];
+  assign \$875  = \$873  & \$874 ;
+  assign \$876  = ~ period[14];
+  assign \$877  = \$875  & \$876 ;
+  assign \$878  = ~ period[15];
+  assign \$879  = \$877  & \$878 ;
+  assign \$880  = ~ period[16];
+  assign \$881  = \$879  & \$880 ;
+  assign \$882  = ~ period[17];
+  assign \$883  = \$881  & \$882 ;
+  assign \$884  = ~ period[18];
+  assign \$885  = \$883  & \$884 ;
+  assign \$886  = ~ period[19];
+  assign \$887  = \$885  & \$886 ;
+  assign \$888  = ~ period[20];
+  assign \$889  = \$887  & \$888 ;
+  assign \$890  = ~ period[21];
+  assign \$891  = \$889  & \$890 ;
+  assign \$892  = ~ period[22];
+  assign \$893  = \$891  & \$892 ;
+  assign \$894  = ~ period[23];
+  assign \$895  = \$893  & \$894 ;
+  assign \$896  = \$869  | \$895 ;
+  assign \$897  = ~ period[12];
+  assign \$898  = period[11] & \$897 ;
+  assign \$899  = ~ period[13];
+  assign \$900  = \$898  & \$899 ;
+  assign \$901  = ~ period[14];
+  assign \$902  = \$900  & \$901 ;
+  assign \$903  = ~ period[15];
+  assign \$904  = \$902  & \$903 ;
+  assign \$905  = ~ period[16];
+  assign \$906  = \$904  & \$905 ;
+  assign \$907  = ~ period[17];
+  assign \$908  = \$906  & \$907 ;
+  assign \$909  = ~ period[18];
+  assign \$910  = \$908  & \$909 ;
+  assign \$911  = ~ period[19];
+  assign \$912  = \$910  & \$911 ;
+  assign \$913  = ~ period[20];
+  assign \$914  = \$912  & \$913 ;
+  assign \$915  = ~ period[21];
+  assign \$916  = \$914  & \$915 ;
+  assign \$917  = ~ period[22];
+  assign \$918  = \$916  & \$917 ;
+  assign \$919  = ~ period[23];
+  assign \$920  = \$918  & \$919 ;
+  assign \$921  = \$896  | \$920 ;
+  assign \$922  = ~ period[13];
+  assign \$923  = period[12] & \$922 ;
+  assign \$924  = ~ period[14];
+  assign \$925  = \$923  & \$924 ;
+  assign \$926  = ~ period[15];
+  assign \$927  = \$925  & \$926 ;
+  assign \$928  = ~ period[16];
+  assign \$929  = \$927  & \$928 ;
+  assign \$930  = ~ period[17];
+  assign \$931  = \$929  & \$930 ;
+  assign \$932  = ~ period[18];
+  assign \$933  = \$931  & \$932 ;
+  assign \$934  = ~ period[19];
+  assign \$935  = \$933  & \$934 ;
+  assign \$936  = ~ period[20];
+  assign \$937  = \$935  & \$936 ;
+  assign \$938  = ~ period[21];
+  assign \$939  = \$937  & \$938 ;
+  assign \$940  = ~ period[22];
+  assign \$941  = \$939  & \$940 ;
+  assign \$942  = ~ period[23];
+  assign \$943  = \$941  & \$942 ;
+  assign \$944  = \$921  | \$943 ;
+  assign \$945  = ~ period[14];
+  assign \$946  = period[13] & \$945 ;
+  assign \$947  = ~ period[15];
+  assign \$948  = \$946  & \$947 ;
+  assign \$949  = ~ period[16];
+  assign \$950  = \$948  & \$949 ;
+  assign \$951  = ~ period[17];
+  assign \$952  = \$950  & \$951 ;
+  assign \$953  = ~ period[18];
+  assign \$954  = \$952  & \$953 ;
+  assign \$955  = ~ period[19];
+  assign \$956  = \$954  & \$955 ;
+  assign \$957  = ~ period[20];
+  assign \$958  = \$956  & \$957 ;
+  assign \$959  = ~ period[21];
+  assign \$960  = \$958  & \$959 ;
+  assign \$961  = ~ period[22];
+  assign \$962  = \$960  & \$961 ;
+  assign \$963  = ~ period[23];
+  assign \$964  = \$962  & \$963 ;
+  assign \$965  = \$944  | \$964 ;
+  assign \$966  = ~ period[15];
+  assign \$967  = period[14] & \$966 ;
+  assign \$968  = ~ period[16];
+  assign \$969  = \$967  & \$968 ;
+  assign \$970  = ~ period[17];
+  assign \$971  = \$969  & \$970 ;
+  assign \$972  = ~ period[18];
+  assign \$973  = \$971  & \$972 ;
+  assign \$974  = ~ period[19];
+  assign \$975  = \$973  & \$974 ;
+  assign \$976  = ~ period[20];
+  assign \$977  = \$975  & \$976 ;
+  assign \$978  = ~ period[21];
+  assign \$979  = \$977  & \$978 ;
+  assign \$980  = ~ period[22];
+  assign \$981  = \$979  & \$980 ;
+  assign \$982  = ~ period[23];
+  assign \$983  = \$981  & \$982 ;
+  assign \$984  = \$965  | \$983 ;
+  assign \$985  = ~ period[16];
+  assign \$986  = period[15] & \$985 ;
+  assign \$987  = ~ period[17];
+  assign \$988  = \$986  & \$987 ;
+  assign \$989  = ~ period[18];
+  assign \$990  = \$988  & \$989 ;
+  assign \$991  = ~ period[19];
+  assign \$992  = \$990  & \$991 ;
+  assign \$993  = ~ period[20];
+  assign \$994  = \$992  & \$993 ;
+  assign \$995  = ~ period[21];
+  assign \$996  = \$994  & \$995 ;
+  assign \$997  = ~ period[22];
+  assign \$998  = \$996  & \$997 ;
+  assign \$999  = ~ period[23];
+  assign \$1000  = \$998  & \$999 ;
+  assign \$1001  = \$984  | \$1000 ;
+  assign \$1002  = ~ period[17];
+  assign \$1003  = period[16] & \$1002 ;
+  assign \$1004  = ~ period[18];
+  assign \$1005  = \$1003  & \$1004 ;
+  assign \$1006  = ~ period[19];
+  assign \$1007  = \$1005  & \$1006 ;
+  assign \$1008  = ~ period[20];
+  assign \$1009  = \$1007  & \$1008 ;
+  assign \$1010  = ~ period[21];
+  assign \$1011  = \$1009  & \$1010 ;
+  assign \$1012  = ~ period[22];
+  assign \$1013  = \$1011  & \$1012 ;
+  assign \$1014  = ~ period[23];
+  assign \$1015  = \$1013  & \$1014 ;
+  assign \$1016  = \$1001  | \$1015 ;
+  assign \$1017  = ~ period[18];
+  assign \$1018  = period[17] & \$1017 ;
+  assign \$1019  = ~ period[19];
+  assign \$1020  = \$1018  & \$1019 ;
+  assign \$1021  = ~ period[20];
+  assign \$1022  = \$1020  & \$1021 ;
+  assign \$1023  = ~ period[21];
+  assign \$1024  = \$1022  & \$1023 ;
+  assign \$1025  = ~ period[22];
+  assign \$1026  = \$1024  & \$1025 ;
+  assign \$1027  = ~ period[23];
+  assign \$1028  = \$1026  & \$1027 ;
+  assign \$1029  = \$1016  | \$1028 ;
+  assign \$1030  = ~ period[19];
+  assign \$1031  = period[18] & \$1030 ;
+  assign \$1032  = ~ period[20];
+  assign \$1033  = \$1031  & \$1032 ;
+  assign \$1034  = ~ period[21];
+  assign \$1035  = \$1033  & \$1034 ;
+  assign \$1036  = ~ period[22];
+  assign \$1037  = \$1035  & \$1036 ;
+  assign \$1038  = ~ period[23];
+  assign \$1039  = \$1037  & \$1038 ;
+  assign \$1040  = \$1029  | \$1039 ;
+  assign \$1041  = ~ period[20];
+  assign \$1042  = period[19] & \$1041 ;
+  assign \$1043  = ~ period[21];
+  assign \$1044  = \$1042  & \$1043 ;
+  assign \$1045  = ~ period[22];
+  assign \$1046  = \$1044  & \$1045 ;
+  assign \$1047  = ~ period[23];
+  assign \$1048  = \$1046  & \$1047 ;
+  assign \$1049  = \$1040  | \$1048 ;
+  assign \$1050  = ~ period[21];
+  assign \$1051  = period[20] & \$1050 ;
+  assign \$1052  = ~ period[22];
+  assign \$1053  = \$1051  & \$1052 ;
+  assign \$1054  = ~ period[23];
+  assign \$1055  = \$1053  & \$1054 ;
+  assign \$1056  = \$1049  | \$1055 ;
+  assign \$1057  = ~ period[22];
+  assign \$1058  = period[21] & \$1057 ;
+  assign \$1059  = ~ period[23];
+  assign \$1060  = \$1058  & \$1059 ;
+  assign \$1061  = \$1056  | \$1060 ;
+  assign \$1062  = ~ period[23];
+  assign \$1063  = period[22] & \$1062 ;
+  assign \$1064  = \$1061  | \$1063 ;
+  assign \$1065  = \$1064  | period[23];
+  assign \$1066  = ~ \$1065 ;
+  assign \$1067  = count_p2 + 1'h1;
+  assign \$1068  = count_p2 >= period;
+  assign \$1069  = start | trigger;
+  assign \$1070  = periodic & period_zero;
+  assign \$1071  = ~ \$1070 ;
+  assign \$1072  = periodic & \$1071 ;
+  assign \$1073  = \$1072  & period_start;
+  assign \$1074  = \$1069  | \$1073 ;
+  assign \$1075  = periodic & period_zero;
+  assign request = \$1074  | \$1075 ;
+  assign \$1076  = start | trigger;
+  assign \$1077  = periodic & period_zero;
+  assign \$1078  = ~ \$1077 ;
+  assign \$1079  = periodic & \$1078 ;
+  assign \$1080  = \$1079  & period_start;
+  assign \$1081  = \$1076  | \$1080 ;
+  assign \$1082  = ~ abort;
+  assign \$1083  = idle & \$1082 ;
+  assign \$1084  = ~ \$1083 ;
+  assign overrun = \$1081  & \$1084 ;
   always @(posedge clk)
-    period_zero <= \$28 ;
+    period_zero <= \$1085 ;
   always @(posedge clk)
-    count_p2 <= \$29 ;
+    count_p2 <= \$1086 ;
   always @(posedge clk)
-    period_start <= \$30 ;
+    period_start <= \$1087 ;
   always @(posedge clk)
-    wrap <= \$31 ;
+    wrap <= \$1088 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$28  = \$1 ;
+    \$1085  = \$1 ;
     if (rst) begin
-      \$28  = 1'h0;
+      \$1085  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$29  = 25'h0000002;
+      \$1086  = 25'h0000002;
     end else if (\$7 ) begin
-      \$29  = 25'h0000003;
+      \$1086  = 25'h0000003;
     end else begin
-      \$29  = \$10 [24:0];
+      \$1086  = \$1067 [24:0];
     end
     if (rst) begin
-      \$29  = 25'h0000002;
+      \$1086  = 25'h0000002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$30  = 1'h1;
+      \$1087  = 1'h1;
     end else if (\$7 ) begin
-      \$30  = 1'h0;
+      \$1087  = 1'h0;
     end else begin
-      \$30  = 1'h0;
+      \$1087  = 1'h0;
     end
     if (rst) begin
-      \$30  = 1'h1;
+      \$1087  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$31  = \$8 ;
+      \$1088  = \$536 ;
     end else if (\$7 ) begin
-      \$31  = \$9 ;
+      \$1088  = \$1066 ;
     end else begin
-      \$31  = \$11 ;
+      \$1088  = \$1068 ;
     end
     if (rst) begin
-      \$31  = 1'h0;
+      \$1088  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$8903$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13529$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -40134,8 +47772,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$8903$0 ;
-  wire \port$8903$0 ;
+  input \port$13529$0 ;
+  wire \port$13529$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -40149,9 +47787,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$8903$0  };
-  assign \$2  = { lc[4:0], \port$8903$0  } == last;
-  assign \$3  = { lc[4:0], \port$8903$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13529$0  };
+  assign \$2  = { lc[4:0], \port$13529$0  } == last;
+  assign \$3  = { lc[4:0], \port$13529$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -40261,7 +47899,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$8903$0  };
+  assign lc_next = { lc[4:0], \port$13529$0  };
   assign zero = is_zero;
 endmodule
 
@@ -41154,64 +48792,871 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
   reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire \$1 ;
   wire \$10 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
   wire \$11 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   wire \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire \$15 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
   wire \$16 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire \$17 ;
+  wire \$170 ;
+  wire \$171 ;
+  wire \$172 ;
+  wire \$173 ;
+  wire \$174 ;
+  wire \$175 ;
+  wire \$176 ;
+  wire \$177 ;
+  wire \$178 ;
+  wire \$179 ;
   wire \$18 ;
+  wire \$180 ;
+  wire \$181 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
+  wire \$189 ;
   wire \$19 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire \$198 ;
+  wire \$199 ;
   wire \$2 ;
-  wire [13:0] \$20 ;
+  wire \$20 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire \$21 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
+  wire \$213 ;
+  wire \$214 ;
+  wire \$215 ;
+  wire \$216 ;
+  wire \$217 ;
+  wire \$218 ;
+  wire \$219 ;
   wire \$22 ;
+  wire \$220 ;
+  wire \$221 ;
+  wire \$222 ;
+  wire \$223 ;
+  wire [13:0] \$224 ;
+  wire \$225 ;
+  wire \$226 ;
+  wire \$227 ;
+  wire \$228 ;
+  wire \$229 ;
   wire \$23 ;
+  wire \$230 ;
+  wire \$231 ;
+  wire \$232 ;
+  wire \$233 ;
+  wire \$234 ;
+  wire \$235 ;
+  wire \$236 ;
+  wire \$237 ;
+  wire \$238 ;
+  wire \$239 ;
   wire \$24 ;
-  wire [11:0] \$25 ;
+  wire \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  wire \$243 ;
+  wire \$244 ;
+  wire \$245 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
+  wire \$25 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
   wire \$26 ;
+  wire \$260 ;
+  wire \$261 ;
+  wire \$262 ;
+  wire \$263 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire \$269 ;
   wire \$27 ;
-  wire [11:0] \$28 ;
+  wire \$270 ;
+  wire \$271 ;
+  wire \$272 ;
+  wire \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
+  wire \$28 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
   wire \$29 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   wire \$3 ;
   wire \$30 ;
+  wire \$300 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
   wire \$31 ;
-  wire [25:0] \$32 ;
-  wire [25:0] \$33 ;
-  wire [25:0] \$34 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
+  wire \$32 ;
+  wire \$320 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
+  wire \$33 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  wire \$337 ;
+  wire \$338 ;
+  wire \$339 ;
+  wire \$34 ;
+  wire \$340 ;
+  wire \$341 ;
+  wire \$342 ;
+  wire \$343 ;
+  wire \$344 ;
+  wire \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire [11:0] \$349 ;
   wire \$35 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire [11:0] \$352 ;
+  wire \$353 ;
+  wire [11:0] \$354 ;
+  wire \$355 ;
+  wire \$356 ;
+  wire \$357 ;
+  wire [11:0] \$358 ;
+  wire \$359 ;
   wire \$36 ;
+  wire \$360 ;
+  wire \$361 ;
+  wire [11:0] \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire [11:0] \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
   wire \$37 ;
+  wire [11:0] \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire [11:0] \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire [11:0] \$378 ;
+  wire \$379 ;
   wire \$38 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire [11:0] \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire [11:0] \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
   wire \$39 ;
+  wire [11:0] \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire [11:0] \$394 ;
+  wire \$395 ;
+  wire [11:0] \$396 ;
+  wire \$397 ;
+  wire \$398 ;
+  wire \$399 ;
   wire [25:0] \$4 ;
   wire \$40 ;
+  wire [11:0] \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  wire \$403 ;
+  wire [11:0] \$404 ;
+  wire \$405 ;
+  wire \$406 ;
+  wire \$407 ;
+  wire [11:0] \$408 ;
+  wire \$409 ;
   wire \$41 ;
+  wire \$410 ;
+  wire \$411 ;
+  wire [11:0] \$412 ;
+  wire \$413 ;
+  wire \$414 ;
+  wire \$415 ;
+  wire [11:0] \$416 ;
+  wire \$417 ;
+  wire \$418 ;
+  wire \$419 ;
   wire \$42 ;
+  wire [11:0] \$420 ;
+  wire \$421 ;
+  wire \$422 ;
+  wire \$423 ;
+  wire [11:0] \$424 ;
+  wire \$425 ;
+  wire \$426 ;
+  wire \$427 ;
+  wire [11:0] \$428 ;
+  wire \$429 ;
   wire \$43 ;
+  wire \$430 ;
+  wire \$431 ;
+  wire \$432 ;
+  wire [11:0] \$433 ;
+  wire \$434 ;
+  wire [11:0] \$435 ;
+  wire \$436 ;
+  wire \$437 ;
+  wire \$438 ;
+  wire [11:0] \$439 ;
   wire \$44 ;
+  wire \$440 ;
+  wire \$441 ;
+  wire \$442 ;
+  wire [11:0] \$443 ;
+  wire \$444 ;
+  wire \$445 ;
+  wire \$446 ;
+  wire [11:0] \$447 ;
+  wire \$448 ;
+  wire \$449 ;
   wire \$45 ;
+  wire \$450 ;
+  wire [11:0] \$451 ;
+  wire \$452 ;
+  wire \$453 ;
+  wire \$454 ;
+  wire [11:0] \$455 ;
+  wire \$456 ;
+  wire \$457 ;
+  wire \$458 ;
+  wire [11:0] \$459 ;
   wire \$46 ;
+  wire \$460 ;
+  wire \$461 ;
+  wire \$462 ;
+  wire [11:0] \$463 ;
+  wire \$464 ;
+  wire \$465 ;
+  wire \$466 ;
+  wire \$467 ;
+  wire [11:0] \$468 ;
+  wire \$469 ;
   wire \$47 ;
+  wire [11:0] \$470 ;
+  wire \$471 ;
+  wire \$472 ;
+  wire \$473 ;
+  wire [11:0] \$474 ;
+  wire \$475 ;
+  wire \$476 ;
+  wire \$477 ;
+  wire [11:0] \$478 ;
+  wire \$479 ;
   wire \$48 ;
-  reg [24:0] \$49 ;
+  wire \$480 ;
+  wire \$481 ;
+  wire [11:0] \$482 ;
+  wire \$483 ;
+  wire \$484 ;
+  wire \$485 ;
+  wire [11:0] \$486 ;
+  wire \$487 ;
+  wire \$488 ;
+  wire \$489 ;
+  wire \$49 ;
+  wire [11:0] \$490 ;
+  wire \$491 ;
+  wire \$492 ;
+  wire \$493 ;
+  wire [11:0] \$494 ;
+  wire \$495 ;
+  wire \$496 ;
+  wire \$497 ;
+  wire \$498 ;
+  wire [11:0] \$499 ;
   wire \$5 ;
-  reg \$50 ;
-  reg \$51 ;
-  reg [12:0] \$52 ;
-  reg \$53 ;
-  reg \$54 ;
-  reg [24:0] \$55 ;
-  reg \$56 ;
-  reg \$57 ;
-  reg \$58 ;
-  reg \$59 ;
+  wire \$50 ;
+  wire \$500 ;
+  wire [11:0] \$501 ;
+  wire \$502 ;
+  wire \$503 ;
+  wire \$504 ;
+  wire [11:0] \$505 ;
+  wire \$506 ;
+  wire \$507 ;
+  wire \$508 ;
+  wire [11:0] \$509 ;
+  wire \$51 ;
+  wire \$510 ;
+  wire \$511 ;
+  wire \$512 ;
+  wire [11:0] \$513 ;
+  wire \$514 ;
+  wire \$515 ;
+  wire \$516 ;
+  wire [11:0] \$517 ;
+  wire \$518 ;
+  wire \$519 ;
+  wire \$52 ;
+  wire \$520 ;
+  wire [11:0] \$521 ;
+  wire \$522 ;
+  wire \$523 ;
+  wire \$524 ;
+  wire \$525 ;
+  wire [11:0] \$526 ;
+  wire \$527 ;
+  wire [11:0] \$528 ;
+  wire \$529 ;
+  wire \$53 ;
+  wire \$530 ;
+  wire \$531 ;
+  wire [11:0] \$532 ;
+  wire \$533 ;
+  wire \$534 ;
+  wire \$535 ;
+  wire [11:0] \$536 ;
+  wire \$537 ;
+  wire \$538 ;
+  wire \$539 ;
+  wire \$54 ;
+  wire [11:0] \$540 ;
+  wire \$541 ;
+  wire \$542 ;
+  wire \$543 ;
+  wire [11:0] \$544 ;
+  wire \$545 ;
+  wire \$546 ;
+  wire \$547 ;
+  wire \$548 ;
+  wire [11:0] \$549 ;
+  wire \$55 ;
+  wire \$550 ;
+  wire [11:0] \$551 ;
+  wire \$552 ;
+  wire \$553 ;
+  wire \$554 ;
+  wire [11:0] \$555 ;
+  wire \$556 ;
+  wire \$557 ;
+  wire \$558 ;
+  wire [11:0] \$559 ;
+  wire \$56 ;
+  wire \$560 ;
+  wire \$561 ;
+  wire \$562 ;
+  wire [11:0] \$563 ;
+  wire \$564 ;
+  wire \$565 ;
+  wire \$566 ;
+  wire \$567 ;
+  wire [11:0] \$568 ;
+  wire \$569 ;
+  wire \$57 ;
+  wire [11:0] \$570 ;
+  wire \$571 ;
+  wire \$572 ;
+  wire \$573 ;
+  wire [11:0] \$574 ;
+  wire \$575 ;
+  wire \$576 ;
+  wire \$577 ;
+  wire [11:0] \$578 ;
+  wire \$579 ;
+  wire \$58 ;
+  wire \$580 ;
+  wire \$581 ;
+  wire \$582 ;
+  wire [11:0] \$583 ;
+  wire \$584 ;
+  wire [11:0] \$585 ;
+  wire \$586 ;
+  wire \$587 ;
+  wire \$588 ;
+  wire [11:0] \$589 ;
+  wire \$59 ;
+  wire \$590 ;
+  wire \$591 ;
+  wire \$592 ;
+  wire \$593 ;
+  wire [11:0] \$594 ;
+  wire \$595 ;
+  wire [11:0] \$596 ;
+  wire \$597 ;
+  wire \$598 ;
+  wire \$599 ;
   wire \$6 ;
-  reg \$60 ;
+  wire \$60 ;
+  wire \$600 ;
+  wire [11:0] \$601 ;
+  wire \$602 ;
+  wire \$603 ;
+  wire \$604 ;
+  wire \$605 ;
+  wire [25:0] \$606 ;
+  wire [25:0] \$607 ;
+  wire [25:0] \$608 ;
+  wire \$609 ;
+  wire \$61 ;
+  wire \$610 ;
+  wire \$611 ;
+  wire \$612 ;
+  wire \$613 ;
+  wire \$614 ;
+  wire \$615 ;
+  wire \$616 ;
+  wire \$617 ;
+  wire \$618 ;
+  wire \$619 ;
+  wire \$62 ;
+  wire \$620 ;
+  wire \$621 ;
+  wire \$622 ;
+  wire \$623 ;
+  wire \$624 ;
+  wire \$625 ;
+  wire \$626 ;
+  wire \$627 ;
+  wire \$628 ;
+  wire \$629 ;
+  wire \$63 ;
+  wire \$630 ;
+  wire \$631 ;
+  wire \$632 ;
+  wire \$633 ;
+  wire \$634 ;
+  wire \$635 ;
+  wire \$636 ;
+  wire \$637 ;
+  wire \$638 ;
+  wire \$639 ;
+  wire \$64 ;
+  wire \$640 ;
+  wire \$641 ;
+  wire \$642 ;
+  wire \$643 ;
+  wire \$644 ;
+  wire \$645 ;
+  wire \$646 ;
+  wire \$647 ;
+  wire \$648 ;
+  wire \$649 ;
+  wire \$65 ;
+  wire \$650 ;
+  wire \$651 ;
+  wire \$652 ;
+  wire \$653 ;
+  wire \$654 ;
+  wire \$655 ;
+  wire \$656 ;
+  wire \$657 ;
+  wire \$658 ;
+  wire \$659 ;
+  wire \$66 ;
+  wire \$660 ;
+  wire \$661 ;
+  wire \$662 ;
+  wire \$663 ;
+  wire \$664 ;
+  wire \$665 ;
+  wire \$666 ;
+  wire \$667 ;
+  wire \$668 ;
+  wire \$669 ;
+  wire \$67 ;
+  wire \$670 ;
+  wire \$671 ;
+  wire \$672 ;
+  wire \$673 ;
+  wire \$674 ;
+  wire \$675 ;
+  wire \$676 ;
+  wire \$677 ;
+  wire \$678 ;
+  wire \$679 ;
+  wire \$68 ;
+  wire \$680 ;
+  wire \$681 ;
+  wire \$682 ;
+  wire \$683 ;
+  wire \$684 ;
+  wire \$685 ;
+  wire \$686 ;
+  wire \$687 ;
+  wire \$688 ;
+  wire \$689 ;
+  wire \$69 ;
+  wire \$690 ;
+  wire \$691 ;
+  wire \$692 ;
+  wire \$693 ;
+  wire \$694 ;
+  wire \$695 ;
+  wire \$696 ;
+  wire \$697 ;
+  wire \$698 ;
+  wire \$699 ;
   wire \$7 ;
+  wire \$70 ;
+  wire \$700 ;
+  wire \$701 ;
+  wire \$702 ;
+  wire \$703 ;
+  wire \$704 ;
+  wire \$705 ;
+  wire \$706 ;
+  wire \$707 ;
+  wire \$708 ;
+  wire \$709 ;
+  wire \$71 ;
+  wire \$710 ;
+  wire \$711 ;
+  wire \$712 ;
+  wire \$713 ;
+  wire \$714 ;
+  wire \$715 ;
+  wire \$716 ;
+  wire \$717 ;
+  wire \$718 ;
+  wire \$719 ;
+  wire \$72 ;
+  wire \$720 ;
+  wire \$721 ;
+  wire \$722 ;
+  wire \$723 ;
+  wire \$724 ;
+  wire \$725 ;
+  wire \$726 ;
+  wire \$727 ;
+  wire \$728 ;
+  wire \$729 ;
+  wire \$73 ;
+  wire \$730 ;
+  wire \$731 ;
+  wire \$732 ;
+  wire \$733 ;
+  wire \$734 ;
+  wire \$735 ;
+  wire \$736 ;
+  wire \$737 ;
+  wire \$738 ;
+  wire \$739 ;
+  wire \$74 ;
+  wire \$740 ;
+  wire \$741 ;
+  wire \$742 ;
+  wire \$743 ;
+  wire \$744 ;
+  wire \$745 ;
+  wire \$746 ;
+  wire \$747 ;
+  wire \$748 ;
+  wire \$749 ;
+  wire \$75 ;
+  wire \$750 ;
+  wire \$751 ;
+  wire \$752 ;
+  wire \$753 ;
+  wire \$754 ;
+  wire \$755 ;
+  wire \$756 ;
+  wire \$757 ;
+  wire \$758 ;
+  wire \$759 ;
+  wire \$76 ;
+  wire \$760 ;
+  wire \$761 ;
+  wire \$762 ;
+  wire \$763 ;
+  wire \$764 ;
+  wire \$765 ;
+  wire \$766 ;
+  wire \$767 ;
+  wire \$768 ;
+  wire \$769 ;
+  wire \$77 ;
+  wire \$770 ;
+  wire \$771 ;
+  wire \$772 ;
+  wire \$773 ;
+  wire \$774 ;
+  wire \$775 ;
+  wire \$776 ;
+  wire \$777 ;
+  wire \$778 ;
+  wire \$779 ;
+  wire \$78 ;
+  wire \$780 ;
+  wire \$781 ;
+  wire \$782 ;
+  wire \$783 ;
+  wire \$784 ;
+  wire \$785 ;
+  wire \$786 ;
+  wire \$787 ;
+  wire \$788 ;
+  wire \$789 ;
+  wire \$79 ;
+  wire \$790 ;
+  wire \$791 ;
+  wire \$792 ;
+  wire \$793 ;
+  wire \$794 ;
+  wire \$795 ;
+  wire \$796 ;
+  wire \$797 ;
+  wire \$798 ;
+  wire \$799 ;
   wire \$8 ;
+  wire \$80 ;
+  wire \$800 ;
+  wire \$801 ;
+  wire \$802 ;
+  wire \$803 ;
+  wire \$804 ;
+  wire \$805 ;
+  wire \$806 ;
+  wire \$807 ;
+  wire \$808 ;
+  wire \$809 ;
+  wire \$81 ;
+  wire \$810 ;
+  wire \$811 ;
+  wire \$812 ;
+  wire \$813 ;
+  wire \$814 ;
+  wire \$815 ;
+  wire \$816 ;
+  wire \$817 ;
+  wire \$818 ;
+  wire \$819 ;
+  wire \$82 ;
+  wire \$820 ;
+  wire \$821 ;
+  wire \$822 ;
+  wire \$823 ;
+  wire \$824 ;
+  wire \$825 ;
+  wire \$826 ;
+  wire \$827 ;
+  wire \$828 ;
+  wire \$829 ;
+  wire \$83 ;
+  wire \$830 ;
+  wire \$831 ;
+  wire \$832 ;
+  wire \$833 ;
+  wire \$834 ;
+  wire \$835 ;
+  wire \$836 ;
+  wire \$837 ;
+  wire \$838 ;
+  wire \$839 ;
+  wire \$84 ;
+  wire \$840 ;
+  wire \$841 ;
+  wire \$842 ;
+  wire \$843 ;
+  wire \$844 ;
+  wire \$845 ;
+  wire \$846 ;
+  wire \$847 ;
+  wire \$848 ;
+  wire \$849 ;
+  wire \$85 ;
+  wire \$850 ;
+  wire \$851 ;
+  wire \$852 ;
+  wire \$853 ;
+  wire \$854 ;
+  wire \$855 ;
+  reg [24:0] \$856 ;
+  reg \$857 ;
+  reg \$858 ;
+  reg [12:0] \$859 ;
+  wire \$86 ;
+  reg \$860 ;
+  reg \$861 ;
+  reg [24:0] \$862 ;
+  reg \$863 ;
+  reg \$864 ;
+  reg \$865 ;
+  reg \$866 ;
+  reg \$867 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
   wire \$9 ;
+  wire \$90 ;
+  wire \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire \$95 ;
+  wire \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   output ack_expired;
   reg ack_expired = 1'h0;
   input [23:0] ack_limit;
@@ -41265,39 +49710,753 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
   output timeout_over;
   reg timeout_over = 1'h0;
   reg [24:0] timer = 25'h0000001;
-  assign \$40  = ~ restart;
-  assign \$41  = in_clock & \$40 ;
-  assign \$42  = timer >= ack_limit;
-  assign \$43  = \$41  & \$42 ;
-  assign \$44  = ~ restart;
-  assign \$45  = in_clock & \$44 ;
-  assign \$46  = timer >= no_start_limit;
-  assign \$47  = \$45  & \$46 ;
-  assign \$48  = delay > delay_limit;
+  assign \$133  = ~ slo_low_time_p1[23];
+  assign \$134  = \$132  & \$133 ;
+  assign \$135  = ~ slo_low_time_p1[24];
+  assign \$136  = \$134  & \$135 ;
+  assign \$137  = \$118  | \$136 ;
+  assign \$138  = ~ slo_low_time_p1[17];
+  assign \$139  = slo_low_time_p1[16] & \$138 ;
+  assign \$140  = ~ slo_low_time_p1[18];
+  assign \$141  = \$139  & \$140 ;
+  assign \$142  = ~ slo_low_time_p1[19];
+  assign \$143  = \$141  & \$142 ;
+  assign \$144  = ~ slo_low_time_p1[20];
+  assign \$145  = \$143  & \$144 ;
+  assign \$146  = ~ slo_low_time_p1[21];
+  assign \$147  = \$145  & \$146 ;
+  assign \$148  = ~ slo_low_time_p1[22];
+  assign \$149  = \$147  & \$148 ;
+  assign \$150  = ~ slo_low_time_p1[23];
+  assign \$151  = \$149  & \$150 ;
+  assign \$152  = ~ slo_low_time_p1[24];
+  assign \$153  = \$151  & \$152 ;
+  assign \$154  = \$137  | \$153 ;
+  assign \$155  = ~ slo_low_time_p1[18];
+  assign \$156  = slo_low_time_p1[17] & \$155 ;
+  assign \$157  = ~ slo_low_time_p1[19];
+  assign \$158  = \$156  & \$157 ;
+  assign \$159  = ~ slo_low_time_p1[20];
+  assign \$160  = \$158  & \$159 ;
+  assign \$161  = ~ slo_low_time_p1[21];
+  assign \$162  = \$160  & \$161 ;
+  assign \$163  = ~ slo_low_time_p1[22];
+  assign \$164  = \$162  & \$163 ;
+  assign \$165  = ~ slo_low_time_p1[23];
+  assign \$166  = \$164  & \$165 ;
+  assign \$167  = ~ slo_low_time_p1[24];
+  assign \$168  = \$166  & \$167 ;
+  assign \$169  = \$154  | \$168 ;
+  assign \$170  = ~ slo_low_time_p1[19];
+  assign \$171  = slo_low_time_p1[18] & \$170 ;
+  assign \$172  = ~ slo_low_time_p1[20];
+  assign \$173  = \$171  & \$172 ;
+  assign \$174  = ~ slo_low_time_p1[21];
+  assign \$175  = \$173  & \$174 ;
+  assign \$176  = ~ slo_low_time_p1[22];
+  assign \$177  = \$175  & \$176 ;
+  assign \$178  = ~ slo_low_time_p1[23];
+  assign \$179  = \$177  & \$178 ;
+  assign \$180  = ~ slo_low_time_p1[24];
+  assign \$181  = \$179  & \$180 ;
+  assign \$182  = \$169  | \$181 ;
+  assign \$183  = ~ slo_low_time_p1[20];
+  assign \$184  = slo_low_time_p1[19] & \$183 ;
+  assign \$185  = ~ slo_low_time_p1[21];
+  assign \$186  = \$184  & \$185 ;
+  assign \$187  = ~ slo_low_time_p1[22];
+  assign \$188  = \$186  & \$187 ;
+  assign \$189  = ~ slo_low_time_p1[23];
+  assign \$190  = \$188  & \$189 ;
+  assign \$191  = ~ slo_low_time_p1[24];
+  assign \$192  = \$190  & \$191 ;
+  assign \$193  = \$182  | \$192 ;
+  assign \$194  = ~ slo_low_time_p1[21];
+  assign \$195  = slo_low_time_p1[20] & \$194 ;
+  assign \$196  = ~ slo_low_time_p1[22];
+  assign \$197  = \$195  & \$196 ;
+  assign \$198  = ~ slo_low_time_p1[23];
+  assign \$199  = \$197  & \$198 ;
+  assign \$200  = ~ slo_low_time_p1[24];
+  assign \$201  = \$199  & \$200 ;
+  assign \$202  = \$193  | \$201 ;
+  assign \$203  = ~ slo_low_time_p1[22];
+  assign \$204  = slo_low_time_p1[21] & \$203 ;
+  assign \$205  = ~ slo_low_time_p1[23];
+  assign \$206  = \$204  & \$205 ;
+  assign \$207  = ~ slo_low_time_p1[24];
+  assign \$208  = \$206  & \$207 ;
+  assign \$209  = \$202  | \$208 ;
+  assign \$210  = ~ slo_low_time_p1[23];
+  assign \$211  = slo_low_time_p1[22] & \$210 ;
+  assign \$212  = ~ slo_low_time_p1[24];
+  assign \$213  = \$211  & \$212 ;
+  assign \$214  = \$209  | \$213 ;
+  assign \$215  = ~ slo_low_time_p1[24];
+  assign \$216  = slo_low_time_p1[23] & \$215 ;
+  assign \$217  = \$214  | \$216 ;
+  assign \$218  = \$217  | slo_low_time_p1[24];
+  assign \$219  = slo_low_time_p1 >= timeout_live;
+  assign \$220  = \$13  ? \$218  : \$219 ;
+  assign \$221  = \$12  & \$220 ;
+  assign \$222  = ~ slo;
+  assign \$223  = ~ high_p2[12];
+  assign \$224  = high_p2 + 1'h1;
+  assign \$225  = high_p2 >= quiet_limit;
+  assign \$226  = ~ quiet_limit[2];
+  assign \$227  = quiet_limit[1] & \$226 ;
+  assign \$228  = ~ quiet_limit[3];
+  assign \$229  = \$227  & \$228 ;
+  assign \$230  = ~ quiet_limit[4];
+  assign \$231  = \$229  & \$230 ;
+  assign \$232  = ~ quiet_limit[5];
+  assign \$233  = \$231  & \$232 ;
+  assign \$234  = ~ quiet_limit[6];
+  assign \$235  = \$233  & \$234 ;
+  assign \$236  = ~ quiet_limit[7];
+  assign \$237  = \$235  & \$236 ;
+  assign \$238  = ~ quiet_limit[8];
+  assign \$239  = \$237  & \$238 ;
+  assign \$240  = ~ quiet_limit[9];
+  assign \$241  = \$239  & \$240 ;
+  assign \$242  = ~ quiet_limit[10];
+  assign \$243  = \$241  & \$242 ;
+  assign \$244  = ~ quiet_limit[11];
+  assign \$245  = \$243  & \$244 ;
+  assign \$246  = ~ quiet_limit[3];
+  assign \$247  = quiet_limit[2] & \$246 ;
+  assign \$248  = ~ quiet_limit[4];
+  assign \$249  = \$247  & \$248 ;
+  assign \$250  = ~ quiet_limit[5];
+  assign \$251  = \$249  & \$250 ;
+  assign \$252  = ~ quiet_limit[6];
+  assign \$253  = \$251  & \$252 ;
+  assign \$254  = ~ quiet_limit[7];
+  assign \$255  = \$253  & \$254 ;
+  assign \$256  = ~ quiet_limit[8];
+  assign \$257  = \$255  & \$256 ;
+  assign \$258  = ~ quiet_limit[9];
+  assign \$259  = \$257  & \$258 ;
+  assign \$260  = ~ quiet_limit[10];
+  assign \$261  = \$259  & \$260 ;
+  assign \$262  = ~ quiet_limit[11];
+  assign \$263  = \$261  & \$262 ;
+  assign \$264  = \$245  | \$263 ;
+  assign \$265  = ~ quiet_limit[4];
+  assign \$266  = quiet_limit[3] & \$265 ;
+  assign \$267  = ~ quiet_limit[5];
+  assign \$268  = \$266  & \$267 ;
+  assign \$269  = ~ quiet_limit[6];
+  assign \$270  = \$268  & \$269 ;
+  assign \$271  = ~ quiet_limit[7];
+  assign \$272  = \$270  & \$271 ;
+  assign \$273  = ~ quiet_limit[8];
+  assign \$274  = \$272  & \$273 ;
+  assign \$275  = ~ quiet_limit[9];
+  assign \$276  = \$274  & \$275 ;
+  assign \$277  = ~ quiet_limit[10];
+  assign \$278  = \$276  & \$277 ;
+  assign \$279  = ~ quiet_limit[11];
+  assign \$280  = \$278  & \$279 ;
+  assign \$281  = \$264  | \$280 ;
+  assign \$282  = ~ quiet_limit[5];
+  assign \$283  = quiet_limit[4] & \$282 ;
+  assign \$284  = ~ quiet_limit[6];
+  assign \$285  = \$283  & \$284 ;
+  assign \$286  = ~ quiet_limit[7];
+  assign \$287  = \$285  & \$286 ;
+  assign \$288  = ~ quiet_limit[8];
+  assign \$289  = \$287  & \$288 ;
+  assign \$290  = ~ quiet_limit[9];
+  assign \$291  = \$289  & \$290 ;
+  assign \$292  = ~ quiet_limit[10];
+  assign \$293  = \$291  & \$292 ;
+  assign \$294  = ~ quiet_limit[11];
+  assign \$295  = \$293  & \$294 ;
+  assign \$296  = \$281  | \$295 ;
+  assign \$297  = ~ quiet_limit[6];
+  assign \$298  = quiet_limit[5] & \$297 ;
+  assign \$299  = ~ quiet_limit[7];
+  assign \$300  = \$298  & \$299 ;
+  assign \$301  = ~ quiet_limit[8];
+  assign \$302  = \$300  & \$301 ;
+  assign \$303  = ~ quiet_limit[9];
+  assign \$304  = \$302  & \$303 ;
+  assign \$305  = ~ quiet_limit[10];
+  assign \$306  = \$304  & \$305 ;
+  assign \$307  = ~ quiet_limit[11];
+  assign \$308  = \$306  & \$307 ;
+  assign \$309  = \$296  | \$308 ;
+  assign \$310  = ~ quiet_limit[7];
+  assign \$311  = quiet_limit[6] & \$310 ;
+  assign \$312  = ~ quiet_limit[8];
+  assign \$313  = \$311  & \$312 ;
+  assign \$314  = ~ quiet_limit[9];
+  assign \$315  = \$313  & \$314 ;
+  assign \$316  = ~ quiet_limit[10];
+  assign \$317  = \$315  & \$316 ;
+  assign \$318  = ~ quiet_limit[11];
+  assign \$319  = \$317  & \$318 ;
+  assign \$320  = \$309  | \$319 ;
+  assign \$321  = ~ quiet_limit[8];
+  assign \$322  = quiet_limit[7] & \$321 ;
+  assign \$323  = ~ quiet_limit[9];
+  assign \$324  = \$322  & \$323 ;
+  assign \$325  = ~ quiet_limit[10];
+  assign \$326  = \$324  & \$325 ;
+  assign \$327  = ~ quiet_limit[11];
+  assign \$328  = \$326  & \$327 ;
+  assign \$329  = \$320  | \$328 ;
+  assign \$330  = ~ quiet_limit[9];
+  assign \$331  = quiet_limit[8] & \$330 ;
+  assign \$332  = ~ quiet_limit[10];
+  assign \$333  = \$331  & \$332 ;
+  assign \$334  = ~ quiet_limit[11];
+  assign \$335  = \$333  & \$334 ;
+  assign \$336  = \$329  | \$335 ;
+  assign \$337  = ~ quiet_limit[10];
+  assign \$338  = quiet_limit[9] & \$337 ;
+  assign \$339  = ~ quiet_limit[11];
+  assign \$340  = \$338  & \$339 ;
+  assign \$341  = \$336  | \$340 ;
+  assign \$342  = ~ quiet_limit[11];
+  assign \$343  = quiet_limit[10] & \$342 ;
+  assign \$344  = \$341  | \$343 ;
+  assign \$345  = \$344  | quiet_limit[11];
+  assign \$346  = ~ \$345 ;
+  assign \$347  = slo ? \$225  : \$346 ;
+  assign \$348  = ! quiet_time_live;
+  assign \$349  = \$348  ? 12'h064 : quiet_time_live;
+  assign \$350  = high_p2 >= \$349 ;
+  assign \$351  = ! quiet_time_live;
+  assign \$352  = \$351  ? 12'h064 : quiet_time_live;
+  assign \$353  = ! quiet_time_live;
+  assign \$354  = \$353  ? 12'h064 : quiet_time_live;
+  assign \$355  = ~ \$354 [2];
+  assign \$356  = \$352 [1] & \$355 ;
+  assign \$357  = ! quiet_time_live;
+  assign \$358  = \$357  ? 12'h064 : quiet_time_live;
+  assign \$359  = ~ \$358 [3];
+  assign \$360  = \$356  & \$359 ;
+  assign \$361  = ! quiet_time_live;
+  assign \$362  = \$361  ? 12'h064 : quiet_time_live;
+  assign \$363  = ~ \$362 [4];
+  assign \$364  = \$360  & \$363 ;
+  assign \$365  = ! quiet_time_live;
+  assign \$366  = \$365  ? 12'h064 : quiet_time_live;
+  assign \$367  = ~ \$366 [5];
+  assign \$368  = \$364  & \$367 ;
+  assign \$369  = ! quiet_time_live;
+  assign \$370  = \$369  ? 12'h064 : quiet_time_live;
+  assign \$371  = ~ \$370 [6];
+  assign \$372  = \$368  & \$371 ;
+  assign \$373  = ! quiet_time_live;
+  assign \$374  = \$373  ? 12'h064 : quiet_time_live;
+  assign \$375  = ~ \$374 [7];
+  assign \$376  = \$372  & \$375 ;
+  assign \$377  = ! quiet_time_live;
+  assign \$378  = \$377  ? 12'h064 : quiet_time_live;
+  assign \$379  = ~ \$378 [8];
+  assign \$380  = \$376  & \$379 ;
+  assign \$381  = ! quiet_time_live;
+  assign \$382  = \$381  ? 12'h064 : quiet_time_live;
+  assign \$383  = ~ \$382 [9];
+  assign \$384  = \$380  & \$383 ;
+  assign \$385  = ! quiet_time_live;
+  assign \$386  = \$385  ? 12'h064 : quiet_time_live;
+  assign \$387  = ~ \$386 [10];
+  assign \$388  = \$384  & \$387 ;
+  assign \$389  = ! quiet_time_live;
+  assign \$390  = \$389  ? 12'h064 : quiet_time_live;
+  assign \$391  = ~ \$390 [11];
+  assign \$392  = \$388  & \$391 ;
+  assign \$393  = ! quiet_time_live;
+  assign \$394  = \$393  ? 12'h064 : quiet_time_live;
+  assign \$395  = ! quiet_time_live;
+  assign \$396  = \$395  ? 12'h064 : quiet_time_live;
+  assign \$397  = ~ \$396 [3];
+  assign \$398  = \$394 [2] & \$397 ;
+  assign \$399  = ! quiet_time_live;
+  assign \$400  = \$399  ? 12'h064 : quiet_time_live;
+  assign \$401  = ~ \$400 [4];
+  assign \$402  = \$398  & \$401 ;
+  assign \$403  = ! quiet_time_live;
+  assign \$404  = \$403  ? 12'h064 : quiet_time_live;
+  assign \$405  = ~ \$404 [5];
+  assign \$406  = \$402  & \$405 ;
+  assign \$407  = ! quiet_time_live;
+  assign \$408  = \$407  ? 12'h064 : quiet_time_live;
+  assign \$409  = ~ \$408 [6];
+  assign \$410  = \$406  & \$409 ;
+  assign \$411  = ! quiet_time_live;
+  assign \$412  = \$411  ? 12'h064 : quiet_time_live;
+  assign \$413  = ~ \$412 [7];
+  assign \$414  = \$410  & \$413 ;
+  assign \$415  = ! quiet_time_live;
+  assign \$416  = \$415  ? 12'h064 : quiet_time_live;
+  assign \$417  = ~ \$416 [8];
+  assign \$418  = \$414  & \$417 ;
+  assign \$419  = ! quiet_time_live;
+  assign \$420  = \$419  ? 12'h064 : quiet_time_live;
+  assign \$421  = ~ \$420 [9];
+  assign \$422  = \$418  & \$421 ;
+  assign \$423  = ! quiet_time_live;
+  assign \$424  = \$423  ? 12'h064 : quiet_time_live;
+  assign \$425  = ~ \$424 [10];
+  assign \$426  = \$422  & \$425 ;
+  assign \$427  = ! quiet_time_live;
+  assign \$428  = \$427  ? 12'h064 : quiet_time_live;
+  assign \$429  = ~ \$428 [11];
+  assign \$430  = \$426  & \$429 ;
+  assign \$431  = \$392  | \$430 ;
+  assign \$432  = ! quiet_time_live;
+  assign \$433  = \$432  ? 12'h064 : quiet_time_live;
+  assign \$434  = ! quiet_time_live;
+  assign \$435  = \$434  ? 12'h064 : quiet_time_live;
+  assign \$436  = ~ \$435 [4];
+  assign \$437  = \$433 [3] & \$436 ;
+  assign \$438  = ! quiet_time_live;
+  assign \$439  = \$438  ? 12'h064 : quiet_time_live;
+  assign \$440  = ~ \$439 [5];
+  assign \$441  = \$437  & \$440 ;
+  assign \$442  = ! quiet_time_live;
+  assign \$443  = \$442  ? 12'h064 : quiet_time_live;
+  assign \$444  = ~ \$443 [6];
+  assign \$445  = \$441  & \$444 ;
+  assign \$446  = ! quiet_time_live;
+  assign \$447  = \$446  ? 12'h064 : quiet_time_live;
+  assign \$448  = ~ \$447 [7];
+  assign \$449  = \$445  & \$448 ;
+  assign \$450  = ! quiet_time_live;
+  assign \$451  = \$450  ? 12'h064 : quiet_time_live;
+  assign \$452  = ~ \$451 [8];
+  assign \$453  = \$449  & \$452 ;
+  assign \$454  = ! quiet_time_live;
+  assign \$455  = \$454  ? 12'h064 : quiet_time_live;
+  assign \$456  = ~ \$455 [9];
+  assign \$457  = \$453  & \$456 ;
+  assign \$458  = ! quiet_time_live;
+  assign \$459  = \$458  ? 12'h064 : quiet_time_live;
+  assign \$460  = ~ \$459 [10];
+  assign \$461  = \$457  & \$460 ;
+  assign \$462  = ! quiet_time_live;
+  assign \$463  = \$462  ? 12'h064 : quiet_time_live;
+  assign \$464  = ~ \$463 [11];
+  assign \$465  = \$461  & \$464 ;
+  assign \$466  = \$431  | \$465 ;
+  assign \$467  = ! quiet_time_live;
+  assign \$468  = \$467  ? 12'h064 : quiet_time_live;
+  assign \$469  = ! quiet_time_live;
+  assign \$470  = \$469  ? 12'h064 : quiet_time_live;
+  assign \$471  = ~ \$470 [5];
+  assign \$472  = \$468 [4] & \$471 ;
+  assign \$473  = ! quiet_time_live;
+  assign \$474  = \$473  ? 12'h064 : quiet_time_live;
+  assign \$475  = ~ \$474 [6];
+  assign \$476  = \$472  & \$475 ;
+  assign \$477  = ! quiet_time_live;
+  assign \$478  = \$477  ? 12'h064 : quiet_time_live;
+  assign \$479  = ~ \$478 [7];
+  assign \$480  = \$476  & \$479 ;
+  assign \$481  = ! quiet_time_live;
+  assign \$482  = \$481  ? 12'h064 : quiet_time_live;
+  assign \$483  = ~ \$482 [8];
+  assign \$484  = \$480  & \$483 ;
+  assign \$485  = ! quiet_time_live;
+  assign \$486  = \$485  ? 12'h064 : quiet_time_live;
+  assign \$487  = ~ \$486 [9];
+  assign \$488  = \$484  & \$487 ;
+  assign \$489  = ! quiet_time_live;
+  assign \$490  = \$489  ? 12'h064 : quiet_time_live;
+  assign \$491  = ~ \$490 [10];
+  assign \$492  = \$488  & \$491 ;
+  assign \$493  = ! quiet_time_live;
+  assign \$494  = \$493  ? 12'h064 : quiet_time_live;
+  assign \$495  = ~ \$494 [11];
+  assign \$496  = \$492  & \$495 ;
+  assign \$497  = \$466  | \$496 ;
+  assign \$498  = ! quiet_time_live;
+  assign \$499  = \$498  ? 12'h064 : quiet_time_live;
+  assign \$500  = ! quiet_time_live;
+  assign \$501  = \$500  ? 12'h064 : quiet_time_live;
+  assign \$502  = ~ \$501 [6];
+  assign \$503  = \$499 [5] & \$502 ;
+  assign \$504  = ! quiet_time_live;
+  assign \$505  = \$504  ? 12'h064 : quiet_time_live;
+  assign \$506  = ~ \$505 [7];
+  assign \$507  = \$503  & \$506 ;
+  assign \$508  = ! quiet_time_live;
+  assign \$509  = \$508  ? 12'h064 : quiet_time_live;
+  assign \$510  = ~ \$509 [8];
+  assign \$511  = \$507  & \$510 ;
+  assign \$512  = ! quiet_time_live;
+  assign \$513  = \$512  ? 12'h064 : quiet_time_live;
+  assign \$514  = ~ \$513 [9];
+  assign \$515  = \$511  & \$514 ;
+  assign \$516  = ! quiet_time_live;
+  assign \$517  = \$516  ? 12'h064 : quiet_time_live;
+  assign \$518  = ~ \$517 [10];
+  assign \$519  = \$515  & \$518 ;
+  assign \$520  = ! quiet_time_live;
+  assign \$521  = \$520  ? 12'h064 : quiet_time_live;
+  assign \$522  = ~ \$521 [11];
+  assign \$523  = \$519  & \$522 ;
+  assign \$524  = \$497  | \$523 ;
+  assign \$525  = ! quiet_time_live;
+  assign \$526  = \$525  ? 12'h064 : quiet_time_live;
+  assign \$527  = ! quiet_time_live;
+  assign \$528  = \$527  ? 12'h064 : quiet_time_live;
+  assign \$529  = ~ \$528 [7];
+  assign \$530  = \$526 [6] & \$529 ;
+  assign \$531  = ! quiet_time_live;
+  assign \$532  = \$531  ? 12'h064 : quiet_time_live;
+  assign \$533  = ~ \$532 [8];
+  assign \$534  = \$530  & \$533 ;
+  assign \$535  = ! quiet_time_live;
+  assign \$536  = \$535  ? 12'h064 : quiet_time_live;
+  assign \$537  = ~ \$536 [9];
+  assign \$538  = \$534  & \$537 ;
+  assign \$539  = ! quiet_time_live;
+  assign \$540  = \$539  ? 12'h064 : quiet_time_live;
+  assign \$541  = ~ \$540 [10];
+  assign \$542  = \$538  & \$541 ;
+  assign \$543  = ! quiet_time_live;
+  assign \$544  = \$543  ? 12'h064 : quiet_time_live;
+  assign \$545  = ~ \$544 [11];
+  assign \$546  = \$542  & \$545 ;
+  assign \$547  = \$524  | \$546 ;
+  assign \$548  = ! quiet_time_live;
+  assign \$549  = \$548  ? 12'h064 : quiet_time_live;
+  assign \$550  = ! quiet_time_live;
+  assign \$551  = \$550  ? 12'h064 : quiet_time_live;
+  assign \$552  = ~ \$551 [8];
+  assign \$553  = \$549 [7] & \$552 ;
+  assign \$554  = ! quiet_time_live;
+  assign \$555  = \$554  ? 12'h064 : quiet_time_live;
+  assign \$556  = ~ \$555 [9];
+  assign \$557  = \$553  & \$556 ;
+  assign \$558  = ! quiet_time_live;
+  assign \$559  = \$558  ? 12'h064 : quiet_time_live;
+  assign \$560  = ~ \$559 [10];
+  assign \$561  = \$557  & \$560 ;
+  assign \$562  = ! quiet_time_live;
+  assign \$563  = \$562  ? 12'h064 : quiet_time_live;
+  assign \$564  = ~ \$563 [11];
+  assign \$565  = \$561  & \$564 ;
+  assign \$566  = \$547  | \$565 ;
+  assign \$567  = ! quiet_time_live;
+  assign \$568  = \$567  ? 12'h064 : quiet_time_live;
+  assign \$569  = ! quiet_time_live;
+  assign \$570  = \$569  ? 12'h064 : quiet_time_live;
+  assign \$571  = ~ \$570 [9];
+  assign \$572  = \$568 [8] & \$571 ;
+  assign \$573  = ! quiet_time_live;
+  assign \$574  = \$573  ? 12'h064 : quiet_time_live;
+  assign \$575  = ~ \$574 [10];
+  assign \$576  = \$572  & \$575 ;
+  assign \$577  = ! quiet_time_live;
+  assign \$578  = \$577  ? 12'h064 : quiet_time_live;
+  assign \$579  = ~ \$578 [11];
+  assign \$580  = \$576  & \$579 ;
+  assign \$581  = \$566  | \$580 ;
+  assign \$582  = ! quiet_time_live;
+  assign \$583  = \$582  ? 12'h064 : quiet_time_live;
+  assign \$584  = ! quiet_time_live;
+  assign \$585  = \$584  ? 12'h064 : quiet_time_live;
+  assign \$586  = ~ \$585 [10];
+  assign \$587  = \$583 [9] & \$586 ;
+  assign \$588  = ! quiet_time_live;
+  assign \$589  = \$588  ? 12'h064 : quiet_time_live;
+  assign \$590  = ~ \$589 [11];
+  assign \$591  = \$587  & \$590 ;
+  assign \$592  = \$581  | \$591 ;
+  assign \$593  = ! quiet_time_live;
+  assign \$594  = \$593  ? 12'h064 : quiet_time_live;
+  assign \$595  = ! quiet_time_live;
+  assign \$596  = \$595  ? 12'h064 : quiet_time_live;
+  assign \$597  = ~ \$596 [11];
+  assign \$598  = \$594 [10] & \$597 ;
+  assign \$599  = \$592  | \$598 ;
+  assign \$600  = ! quiet_time_live;
+  assign \$601  = \$600  ? 12'h064 : quiet_time_live;
+  assign \$602  = \$599  | \$601 [11];
+  assign \$603  = ~ \$602 ;
+  assign \$604  = slo ? \$350  : \$603 ;
+  assign \$605  = & timer;
+  assign \$606  = timer + 1'h1;
+  assign \$607  = \$605  ? { 1'h0, timer } : \$606 ;
+  assign \$608  = clear ? 26'h0000001 : \$607 ;
+  assign \$609  = ! break_time;
+  assign \$610  = ~ timer[6];
+  assign \$611  = timer[5] & \$610 ;
+  assign \$612  = \$611  & timer[7];
+  assign \$613  = \$612  & timer[8];
+  assign \$614  = \$613  & timer[9];
+  assign \$615  = \$614  & timer[10];
+  assign \$616  = \$615  & timer[11];
+  assign \$617  = ~ timer[12];
+  assign \$618  = \$616  & \$617 ;
+  assign \$619  = ~ timer[13];
+  assign \$620  = \$618  & \$619 ;
+  assign \$621  = ~ timer[14];
+  assign \$622  = \$620  & \$621 ;
+  assign \$623  = ~ timer[15];
+  assign \$624  = \$622  & \$623 ;
+  assign \$625  = ~ timer[16];
+  assign \$626  = \$624  & \$625 ;
+  assign \$627  = ~ timer[17];
+  assign \$628  = \$626  & \$627 ;
+  assign \$629  = ~ timer[18];
+  assign \$630  = \$628  & \$629 ;
+  assign \$631  = ~ timer[19];
+  assign \$632  = \$630  & \$631 ;
+  assign \$633  = ~ timer[20];
+  assign \$634  = \$632  & \$633 ;
+  assign \$635  = ~ timer[21];
+  assign \$636  = \$634  & \$635 ;
+  assign \$637  = ~ timer[22];
+  assign \$638  = \$636  & \$637 ;
+  assign \$639  = ~ timer[23];
+  assign \$640  = \$638  & \$639 ;
+  assign \$641  = ~ timer[24];
+  assign \$642  = \$640  & \$641 ;
+  assign \$643  = timer[6] & timer[7];
+  assign \$644  = \$643  & timer[8];
+  assign \$645  = \$644  & timer[9];
+  assign \$646  = \$645  & timer[10];
+  assign \$647  = \$646  & timer[11];
+  assign \$648  = ~ timer[12];
+  assign \$649  = \$647  & \$648 ;
+  assign \$650  = ~ timer[13];
+  assign \$651  = \$649  & \$650 ;
+  assign \$652  = ~ timer[14];
+  assign \$653  = \$651  & \$652 ;
+  assign \$654  = ~ timer[15];
+  assign \$655  = \$653  & \$654 ;
+  assign \$656  = ~ timer[16];
+  assign \$657  = \$655  & \$656 ;
+  assign \$658  = ~ timer[17];
+  assign \$659  = \$657  & \$658 ;
+  assign \$660  = ~ timer[18];
+  assign \$661  = \$659  & \$660 ;
+  assign \$662  = ~ timer[19];
+  assign \$663  = \$661  & \$662 ;
+  assign \$664  = ~ timer[20];
+  assign \$665  = \$663  & \$664 ;
+  assign \$666  = ~ timer[21];
+  assign \$667  = \$665  & \$666 ;
+  assign \$668  = ~ timer[22];
+  assign \$669  = \$667  & \$668 ;
+  assign \$670  = ~ timer[23];
+  assign \$671  = \$669  & \$670 ;
+  assign \$672  = ~ timer[24];
+  assign \$673  = \$671  & \$672 ;
+  assign \$674  = \$642  | \$673 ;
+  assign \$675  = ~ timer[13];
+  assign \$676  = timer[12] & \$675 ;
+  assign \$677  = ~ timer[14];
+  assign \$678  = \$676  & \$677 ;
+  assign \$679  = ~ timer[15];
+  assign \$680  = \$678  & \$679 ;
+  assign \$681  = ~ timer[16];
+  assign \$682  = \$680  & \$681 ;
+  assign \$683  = ~ timer[17];
+  assign \$684  = \$682  & \$683 ;
+  assign \$685  = ~ timer[18];
+  assign \$686  = \$684  & \$685 ;
+  assign \$687  = ~ timer[19];
+  assign \$688  = \$686  & \$687 ;
+  assign \$689  = ~ timer[20];
+  assign \$690  = \$688  & \$689 ;
+  assign \$691  = ~ timer[21];
+  assign \$692  = \$690  & \$691 ;
+  assign \$693  = ~ timer[22];
+  assign \$694  = \$692  & \$693 ;
+  assign \$695  = ~ timer[23];
+  assign \$696  = \$694  & \$695 ;
+  assign \$697  = ~ timer[24];
+  assign \$698  = \$696  & \$697 ;
+  assign \$699  = \$674  | \$698 ;
+  assign \$700  = ~ timer[14];
+  assign \$701  = timer[13] & \$700 ;
+  assign \$702  = ~ timer[15];
+  assign \$703  = \$701  & \$702 ;
+  assign \$704  = ~ timer[16];
+  assign \$705  = \$703  & \$704 ;
+  assign \$706  = ~ timer[17];
+  assign \$707  = \$705  & \$706 ;
+  assign \$708  = ~ timer[18];
+  assign \$709  = \$707  & \$708 ;
+  assign \$710  = ~ timer[19];
+  assign \$711  = \$709  & \$710 ;
+  assign \$712  = ~ timer[20];
+  assign \$713  = \$711  & \$712 ;
+  assign \$714  = ~ timer[21];
+  assign \$715  = \$713  & \$714 ;
+  assign \$716  = ~ timer[22];
+  assign \$717  = \$715  & \$716 ;
+  assign \$718  = ~ timer[23];
+  assign \$719  = \$717  & \$718 ;
+  assign \$720  = ~ timer[24];
+  assign \$721  = \$719  & \$720 ;
+  assign \$722  = \$699  | \$721 ;
+  assign \$723  = ~ timer[15];
+  assign \$724  = timer[14] & \$723 ;
+  assign \$725  = ~ timer[16];
+  assign \$726  = \$724  & \$725 ;
+  assign \$727  = ~ timer[17];
+  assign \$728  = \$726  & \$727 ;
+  assign \$729  = ~ timer[18];
+  assign \$730  = \$728  & \$729 ;
+  assign \$731  = ~ timer[19];
+  assign \$732  = \$730  & \$731 ;
+  assign \$733  = ~ timer[20];
+  assign \$734  = \$732  & \$733 ;
+  assign \$735  = ~ timer[21];
+  assign \$736  = \$734  & \$735 ;
+  assign \$737  = ~ timer[22];
+  assign \$738  = \$736  & \$737 ;
+  assign \$739  = ~ timer[23];
+  assign \$740  = \$738  & \$739 ;
+  assign \$741  = ~ timer[24];
+  assign \$742  = \$740  & \$741 ;
+  assign \$743  = \$722  | \$742 ;
+  assign \$744  = ~ timer[16];
+  assign \$745  = timer[15] & \$744 ;
+  assign \$746  = ~ timer[17];
+  assign \$747  = \$745  & \$746 ;
+  assign \$748  = ~ timer[18];
+  assign \$749  = \$747  & \$748 ;
+  assign \$750  = ~ timer[19];
+  assign \$751  = \$749  & \$750 ;
+  assign \$752  = ~ timer[20];
+  assign \$753  = \$751  & \$752 ;
+  assign \$754  = ~ timer[21];
+  assign \$755  = \$753  & \$754 ;
+  assign \$756  = ~ timer[22];
+  assign \$757  = \$755  & \$756 ;
+  assign \$758  = ~ timer[23];
+  assign \$759  = \$757  & \$758 ;
+  assign \$760  = ~ timer[24];
+  assign \$761  = \$759  & \$760 ;
+  assign \$762  = \$743  | \$761 ;
+  assign \$763  = ~ timer[17];
+  assign \$764  = timer[16] & \$763 ;
+  assign \$765  = ~ timer[18];
+  assign \$766  = \$764  & \$765 ;
+  assign \$767  = ~ timer[19];
+  assign \$768  = \$766  & \$767 ;
+  assign \$769  = ~ timer[20];
+  assign \$770  = \$768  & \$769 ;
+  assign \$771  = ~ timer[21];
+  assign \$772  = \$770  & \$771 ;
+  assign \$773  = ~ timer[22];
+  assign \$774  = \$772  & \$773 ;
+  assign \$775  = ~ timer[23];
+  assign \$776  = \$774  & \$775 ;
+  assign \$777  = ~ timer[24];
+  assign \$778  = \$776  & \$777 ;
+  assign \$779  = \$762  | \$778 ;
+  assign \$780  = ~ timer[18];
+  assign \$781  = timer[17] & \$780 ;
+  assign \$782  = ~ timer[19];
+  assign \$783  = \$781  & \$782 ;
+  assign \$784  = ~ timer[20];
+  assign \$785  = \$783  & \$784 ;
+  assign \$786  = ~ timer[21];
+  assign \$787  = \$785  & \$786 ;
+  assign \$788  = ~ timer[22];
+  assign \$789  = \$787  & \$788 ;
+  assign \$790  = ~ timer[23];
+  assign \$791  = \$789  & \$790 ;
+  assign \$792  = ~ timer[24];
+  assign \$793  = \$791  & \$792 ;
+  assign \$794  = \$779  | \$793 ;
+  assign \$795  = ~ timer[19];
+  assign \$796  = timer[18] & \$795 ;
+  assign \$797  = ~ timer[20];
+  assign \$798  = \$796  & \$797 ;
+  assign \$799  = ~ timer[21];
+  assign \$800  = \$798  & \$799 ;
+  assign \$801  = ~ timer[22];
+  assign \$802  = \$800  & \$801 ;
+  assign \$803  = ~ timer[23];
+  assign \$804  = \$802  & \$803 ;
+  assign \$805  = ~ timer[24];
+  assign \$806  = \$804  & \$805 ;
+  assign \$807  = \$794  | \$806 ;
+  assign \$808  = ~ timer[20];
+  assign \$809  = timer[19] & \$808 ;
+  assign \$810  = ~ timer[21];
+  assign \$811  = \$809  & \$810 ;
+  assign \$812  = ~ timer[22];
+  assign \$813  = \$811  & \$812 ;
+  assign \$814  = ~ timer[23];
+  assign \$815  = \$813  & \$814 ;
+  assign \$816  = ~ timer[24];
+  assign \$817  = \$815  & \$816 ;
+  assign \$818  = \$807  | \$817 ;
+  assign \$819  = ~ timer[21];
+  assign \$820  = timer[20] & \$819 ;
+  assign \$821  = ~ timer[22];
+  assign \$822  = \$820  & \$821 ;
+  assign \$823  = ~ timer[23];
+  assign \$824  = \$822  & \$823 ;
+  assign \$825  = ~ timer[24];
+  assign \$826  = \$824  & \$825 ;
+  assign \$827  = \$818  | \$826 ;
+  assign \$828  = ~ timer[22];
+  assign \$829  = timer[21] & \$828 ;
+  assign \$830  = ~ timer[23];
+  assign \$831  = \$829  & \$830 ;
+  assign \$832  = ~ timer[24];
+  assign \$833  = \$831  & \$832 ;
+  assign \$834  = \$827  | \$833 ;
+  assign \$835  = ~ timer[23];
+  assign \$836  = timer[22] & \$835 ;
+  assign \$837  = ~ timer[24];
+  assign \$838  = \$836  & \$837 ;
+  assign \$839  = \$834  | \$838 ;
+  assign \$840  = ~ timer[24];
+  assign \$841  = timer[23] & \$840 ;
+  assign \$842  = \$839  | \$841 ;
+  assign \$843  = \$842  | timer[24];
+  assign \$844  = timer >= break_time;
+  assign \$845  = \$609  ? \$843  : \$844 ;
+  assign \$846  = timer >= timeout_limit;
+  assign \$847  = ~ restart;
+  assign \$848  = in_clock & \$847 ;
+  assign \$849  = timer >= ack_limit;
+  assign \$850  = \$848  & \$849 ;
+  assign \$851  = ~ restart;
+  assign \$852  = in_clock & \$851 ;
+  assign \$853  = timer >= no_start_limit;
+  assign \$854  = \$852  & \$853 ;
+  assign \$855  = delay > delay_limit;
   always @(posedge clk)
-    slo_low_time_p1 <= \$49 ;
+    slo_low_time_p1 <= \$856 ;
   always @(posedge clk)
-    slo_stuck <= \$50 ;
+    slo_stuck <= \$857 ;
   always @(posedge clk)
-    slo_stuck_live <= \$51 ;
+    slo_stuck_live <= \$858 ;
   always @(posedge clk)
-    high_p2 <= \$52 ;
+    high_p2 <= \$859 ;
   always @(posedge clk)
-    quiet <= \$53 ;
+    quiet <= \$860 ;
   always @(posedge clk)
-    quiet_live <= \$54 ;
+    quiet_live <= \$861 ;
   always @(posedge clk)
-    timer <= \$55 ;
+    timer <= \$862 ;
   always @(posedge clk)
-    break_over <= \$56 ;
+    break_over <= \$863 ;
   always @(posedge clk)
-    timeout_over <= \$57 ;
+    timeout_over <= \$864 ;
   always @(posedge clk)
-    ack_expired <= \$58 ;
+    ack_expired <= \$865 ;
   always @(posedge clk)
-    no_start_expired <= \$59 ;
+    no_start_expired <= \$866 ;
   always @(posedge clk)
-    delay_over <= \$60 ;
+    delay_over <= \$867 ;
   assign \$1  = slo & quiet;
   assign \$2  = \$1  | ma_busy;
   assign \$3  = ~ slo_low_time_p1[24];
@@ -41311,140 +50470,233 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
   assign \$11  = \$10  | ma_busy;
   assign \$12  = ~ \$11 ;
   assign \$13  = ! timeout_live;
-  assign \$14  = slo_low_time_p1 >= 13'h1f40;
-  assign \$15  = slo_low_time_p1 >= timeout_live;
-  assign \$16  = \$13  ? \$14  : \$15 ;
-  assign \$17  = \$12  & \$16 ;
-  assign \$18  = ~ slo;
-  assign \$19  = ~ high_p2[12];
-  assign \$20  = high_p2 + 1'h1;
-  assign \$21  = high_p2 >= quiet_limit;
-  assign \$22  = quiet_limit <= 1'h1;
-  assign \$23  = slo ? \$21  : \$22 ;
-  assign \$24  = ! quiet_time_live;
-  assign \$25  = \$24  ? 12'h064 : quiet_time_live;
-  assign \$26  = high_p2 >= \$25 ;
-  assign \$27  = ! quiet_time_live;
-  assign \$28  = \$27  ? 12'h064 : quiet_time_live;
-  assign \$29  = \$28  <= 1'h1;
-  assign \$30  = slo ? \$26  : \$29 ;
-  assign \$31  = & timer;
-  assign \$32  = timer + 1'h1;
-  assign \$33  = \$31  ? { 1'h0, timer } : \$32 ;
-  assign \$34  = clear ? 26'h0000001 : \$33 ;
-  assign \$35  = ! break_time;
-  assign \$36  = timer >= 12'hfa0;
-  assign \$37  = timer >= break_time;
-  assign \$38  = \$35  ? \$36  : \$37 ;
-  assign \$39  = timer >= timeout_limit;
+  assign \$14  = ~ slo_low_time_p1[7];
+  assign \$15  = slo_low_time_p1[6] & \$14 ;
+  assign \$16  = \$15  & slo_low_time_p1[8];
+  assign \$17  = \$16  & slo_low_time_p1[9];
+  assign \$18  = \$17  & slo_low_time_p1[10];
+  assign \$19  = \$18  & slo_low_time_p1[11];
+  assign \$20  = \$19  & slo_low_time_p1[12];
+  assign \$21  = ~ slo_low_time_p1[13];
+  assign \$22  = \$20  & \$21 ;
+  assign \$23  = ~ slo_low_time_p1[14];
+  assign \$24  = \$22  & \$23 ;
+  assign \$25  = ~ slo_low_time_p1[15];
+  assign \$26  = \$24  & \$25 ;
+  assign \$27  = ~ slo_low_time_p1[16];
+  assign \$28  = \$26  & \$27 ;
+  assign \$29  = ~ slo_low_time_p1[17];
+  assign \$30  = \$28  & \$29 ;
+  assign \$31  = ~ slo_low_time_p1[18];
+  assign \$32  = \$30  & \$31 ;
+  assign \$33  = ~ slo_low_time_p1[19];
+  assign \$34  = \$32  & \$33 ;
+  assign \$35  = ~ slo_low_time_p1[20];
+  assign \$36  = \$34  & \$35 ;
+  assign \$37  = ~ slo_low_time_p1[21];
+  assign \$38  = \$36  & \$37 ;
+  assign \$39  = ~ slo_low_time_p1[22];
+  assign \$40  = \$38  & \$39 ;
+  assign \$41  = ~ slo_low_time_p1[23];
+  assign \$42  = \$40  & \$41 ;
+  assign \$43  = ~ slo_low_time_p1[24];
+  assign \$44  = \$42  & \$43 ;
+  assign \$45  = slo_low_time_p1[7] & slo_low_time_p1[8];
+  assign \$46  = \$45  & slo_low_time_p1[9];
+  assign \$47  = \$46  & slo_low_time_p1[10];
+  assign \$48  = \$47  & slo_low_time_p1[11];
+  assign \$49  = \$48  & slo_low_time_p1[12];
+  assign \$50  = ~ slo_low_time_p1[13];
+  assign \$51  = \$49  & \$50 ;
+  assign \$52  = ~ slo_low_time_p1[14];
+  assign \$53  = \$51  & \$52 ;
+  assign \$54  = ~ slo_low_time_p1[15];
+  assign \$55  = \$53  & \$54 ;
+  assign \$56  = ~ slo_low_time_p1[16];
+  assign \$57  = \$55  & \$56 ;
+  assign \$58  = ~ slo_low_time_p1[17];
+  assign \$59  = \$57  & \$58 ;
+  assign \$60  = ~ slo_low_time_p1[18];
+  assign \$61  = \$59  & \$60 ;
+  assign \$62  = ~ slo_low_time_p1[19];
+  assign \$63  = \$61  & \$62 ;
+  assign \$64  = ~ slo_low_time_p1[20];
+  assign \$65  = \$63  & \$64 ;
+  assign \$66  = ~ slo_low_time_p1[21];
+  assign \$67  = \$65  & \$66 ;
+  assign \$68  = ~ slo_low_time_p1[22];
+  assign \$69  = \$67  & \$68 ;
+  assign \$70  = ~ slo_low_time_p1[23];
+  assign \$71  = \$69  & \$70 ;
+  assign \$72  = ~ slo_low_time_p1[24];
+  assign \$73  = \$71  & \$72 ;
+  assign \$74  = \$44  | \$73 ;
+  assign \$75  = ~ slo_low_time_p1[14];
+  assign \$76  = slo_low_time_p1[13] & \$75 ;
+  assign \$77  = ~ slo_low_time_p1[15];
+  assign \$78  = \$76  & \$77 ;
+  assign \$79  = ~ slo_low_time_p1[16];
+  assign \$80  = \$78  & \$79 ;
+  assign \$81  = ~ slo_low_time_p1[17];
+  assign \$82  = \$80  & \$81 ;
+  assign \$83  = ~ slo_low_time_p1[18];
+  assign \$84  = \$82  & \$83 ;
+  assign \$85  = ~ slo_low_time_p1[19];
+  assign \$86  = \$84  & \$85 ;
+  assign \$87  = ~ slo_low_time_p1[20];
+  assign \$88  = \$86  & \$87 ;
+  assign \$89  = ~ slo_low_time_p1[21];
+  assign \$90  = \$88  & \$89 ;
+  assign \$91  = ~ slo_low_time_p1[22];
+  assign \$92  = \$90  & \$91 ;
+  assign \$93  = ~ slo_low_time_p1[23];
+  assign \$94  = \$92  & \$93 ;
+  assign \$95  = ~ slo_low_time_p1[24];
+  assign \$96  = \$94  & \$95 ;
+  assign \$97  = \$74  | \$96 ;
+  assign \$98  = ~ slo_low_time_p1[15];
+  assign \$99  = slo_low_time_p1[14] & \$98 ;
+  assign \$100  = ~ slo_low_time_p1[16];
+  assign \$101  = \$99  & \$100 ;
+  assign \$102  = ~ slo_low_time_p1[17];
+  assign \$103  = \$101  & \$102 ;
+  assign \$104  = ~ slo_low_time_p1[18];
+  assign \$105  = \$103  & \$104 ;
+  assign \$106  = ~ slo_low_time_p1[19];
+  assign \$107  = \$105  & \$106 ;
+  assign \$108  = ~ slo_low_time_p1[20];
+  assign \$109  = \$107  & \$108 ;
+  assign \$110  = ~ slo_low_time_p1[21];
+  assign \$111  = \$109  & \$110 ;
+  assign \$112  = ~ slo_low_time_p1[22];
+  assign \$113  = \$111  & \$112 ;
+  assign \$114  = ~ slo_low_time_p1[23];
+  assign \$115  = \$113  & \$114 ;
+  assign \$116  = ~ slo_low_time_p1[24];
+  assign \$117  = \$115  & \$116 ;
+  assign \$118  = \$97  | \$117 ;
+  assign \$119  = ~ slo_low_time_p1[16];
+  assign \$120  = slo_low_time_p1[15] & \$119 ;
+  assign \$121  = ~ slo_low_time_p1[17];
+  assign \$122  = \$120  & \$121 ;
+  assign \$123  = ~ slo_low_time_p1[18];
+  assign \$124  = \$122  & \$123 ;
+  assign \$125  = ~ slo_low_time_p1[19];
+  assign \$126  = \$124  & \$125 ;
+  assign \$127  = ~ slo_low_time_p1[20];
+  assign \$128  = \$126  & \$127 ;
+  assign \$129  = ~ slo_low_time_p1[21];
+  assign \$130  = \$128  & \$129 ;
+  assign \$131  = ~ slo_low_time_p1[22];
+  assign \$132  = \$130  & \$131 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
-    \$49  = slo_low_time_p1;
+    \$856  = slo_low_time_p1;
     if (\$2 ) begin
-      \$49  = 25'h0000001;
+      \$856  = 25'h0000001;
     end else if (\$3 ) begin
-      \$49  = \$4 [24:0];
+      \$856  = \$4 [24:0];
     end
     if (rst) begin
-      \$49  = 25'h0000001;
+      \$856  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
-    \$50  = \$9 ;
+    \$857  = \$9 ;
     if (rst) begin
-      \$50  = 1'h0;
+      \$857  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
-    \$51  = \$17 ;
+    \$858  = \$221 ;
     if (rst) begin
-      \$51  = 1'h0;
+      \$858  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
-    \$52  = high_p2;
-    if (\$18 ) begin
-      \$52  = 13'h0002;
-    end else if (\$19 ) begin
-      \$52  = \$20 [12:0];
+    \$859  = high_p2;
+    if (\$222 ) begin
+      \$859  = 13'h0002;
+    end else if (\$223 ) begin
+      \$859  = \$224 [12:0];
     end
     if (rst) begin
-      \$52  = 13'h0002;
+      \$859  = 13'h0002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
-    \$53  = \$23 ;
+    \$860  = \$347 ;
     if (rst) begin
-      \$53  = 1'h1;
+      \$860  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
-    \$54  = \$30 ;
+    \$861  = \$604 ;
     if (rst) begin
-      \$54  = 1'h1;
+      \$861  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
-    \$55  = \$34 [24:0];
+    \$862  = \$608 [24:0];
     if (rst) begin
-      \$55  = 25'h0000001;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear) begin
-      \$56  = 1'h0;
-    end else begin
-      \$56  = \$38 ;
-    end
-    if (rst) begin
-      \$56  = 1'h0;
+      \$862  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
-      \$57  = 1'h0;
+      \$863  = 1'h0;
     end else begin
-      \$57  = \$39 ;
+      \$863  = \$845 ;
     end
     if (rst) begin
-      \$57  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
-    \$58  = \$43 ;
-    if (rst) begin
-      \$58  = 1'h0;
+      \$863  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
-    \$59  = \$47 ;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$864  = 1'h0;
+    end else begin
+      \$864  = \$846 ;
+    end
     if (rst) begin
-      \$59  = 1'h0;
+      \$864  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
-    \$60  = \$48 ;
+    \$865  = \$850 ;
     if (rst) begin
-      \$60  = 1'h0;
+      \$865  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    \$866  = \$854 ;
+    if (rst) begin
+      \$866  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    \$867  = \$855 ;
+    if (rst) begin
+      \$867  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$6827$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11453$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -41622,8 +50874,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$6827$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$6827$0 ;
-  wire \port$6827$0 ;
+  output \port$11453$0 ;
+  wire \port$11453$0 ;
   output report;
   wire report;
   input report_frame;
@@ -41741,7 +50993,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$6827$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$6827$0  = \$2 ;
+  assign \port$11453$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -5,6 +5,7 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from ..params import QUIET_WIDTH
+from .const_compare import above, at_most
 
 
 class LimitTimers(wiring.Component):
@@ -100,7 +101,8 @@ class LimitTimers(wiring.Component):
         m.d.sync += [
             self.slo_stuck.eq(low_idle & (slo_low_time_p1 >= self.timeout_limit)),
             self.slo_stuck_live.eq(low_idle & Mux(self.timeout_live == 0,
-                                                  slo_low_time_p1 >= p.timeout_limit_default,
+                                                  above(slo_low_time_p1,
+                                                        p.timeout_limit_default - 1),
                                                   slo_low_time_p1 >= self.timeout_live)),
         ]
 
@@ -115,8 +117,8 @@ class LimitTimers(wiring.Component):
             m.d.sync += high_p2.eq(high_p2 + 1)
         quiet_live = Mux(self.quiet_time_live == 0, p.quiet_default, self.quiet_time_live)
         m.d.sync += [
-            self.quiet.eq(Mux(self.slo, high_p2 >= self.quiet_limit, self.quiet_limit <= 1)),
-            self.quiet_live.eq(Mux(self.slo, high_p2 >= quiet_live, quiet_live <= 1)),
+            self.quiet.eq(Mux(self.slo, high_p2 >= self.quiet_limit, at_most(self.quiet_limit, 1))),
+            self.quiet_live.eq(Mux(self.slo, high_p2 >= quiet_live, at_most(quiet_live, 1))),
         ]
 
         # The cycle timer and its flags. Both break compares in parallel, then the default mux.
@@ -134,7 +136,7 @@ class LimitTimers(wiring.Component):
                 m.d.sync += self.timeout_over.eq(0)
         with m.Else():
             m.d.sync += self.break_over.eq(Mux(self.break_time == 0,
-                                               timer >= p.break_default,
+                                               above(timer, p.break_default - 1),
                                                timer >= self.break_time))
             if p.ssi:
                 m.d.sync += self.timeout_over.eq(timer >= self.timeout_limit)

@@ -4,6 +4,8 @@ from amaranth.hdl import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from .const_compare import at_most
+
 
 class RequestScheduler(wiring.Component):
     """Turns ``start``, ``periodic`` and the request period into requests for the controller.
@@ -75,10 +77,10 @@ class RequestScheduler(wiring.Component):
         tick = self.periodic & ~as_fast_as_possible & period_start
         with m.If(~self.periodic | (wrap & ~as_fast_as_possible)):
             # The period restarts: a tick in the next clock.
-            m.d.sync += [count_p2.eq(2), period_start.eq(1), wrap.eq(self.period <= 1)]
+            m.d.sync += [count_p2.eq(2), period_start.eq(1), wrap.eq(at_most(self.period, 1))]
         with m.Elif(as_fast_as_possible):
             # A continuous request is a tick: the next clock is the one after a tick.
-            m.d.sync += [count_p2.eq(3), period_start.eq(0), wrap.eq(self.period <= 2)]
+            m.d.sync += [count_p2.eq(3), period_start.eq(0), wrap.eq(at_most(self.period, 2))]
         with m.Else():
             m.d.sync += [count_p2.eq(count_p2 + 1), period_start.eq(0),
                          wrap.eq(count_p2 >= self.period)]

@@ -7,6 +7,7 @@ from amaranth.lib import cdc, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..params import HALF_PERIOD_WIDTH
+from .const_compare import above, at_most
 from .slot_noise import SlotNoise
 
 
@@ -206,8 +207,8 @@ class SloSampler(wiring.Component):
         s.vote_one = Signal(reset_less=True, name="vote_one")            # v == 1: vote_load is 0
         s.period_load = Cat(C(1, 1), s.first_load)                       # 2u - 1: third to first
         m.d.sync += [
-            vote.eq(Mux(hp >= 3, hp[1:], 0)),
-            s.single.eq(hp < 3),
+            vote.eq(Mux(above(hp, 2), hp[1:], 0)),
+            s.single.eq(at_most(hp, 2)),
             s.first_load.eq(hp - vote - 1),
             s.vote_load.eq(vote - 1),
             s.vote_one.eq(vote == 1),
