@@ -195,8 +195,9 @@ DEFAULT_TIMEOUT_LIMIT_S = 80e-6
 MAX_DATA_BITS = (55, 40)
 #: The chain bus top the bus scenarios build (sim/shared/runner.py, ``axil_chain``): one channel
 #: whose core decodes four words of up to these data bits (the register map's chain words,
-#: docs/registers.md: words 2..7 at cfg_wN / chain.*; word 2 as long as a word can be).
-CHAIN_BUS_DATA_BITS = (40, 32, 64, 16)
+#: docs/registers.md: words 2..7 at cfg_wN / chain.*; words 0, 1 and 2 as long as a word can
+#: be, 64 bits: result.w0_hi, result.w1_hi and chain.w2_hi each hold 32 of them).
+CHAIN_BUS_DATA_BITS = (64, 64, 64, 16)
 
 
 def crc_config(crc):

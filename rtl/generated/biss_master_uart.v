@@ -65,8 +65,8 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire [3:0] ch0__ca_wbuf_en;
   wire ch0__ca_write;
   wire ch0__cap_counters;
-  wire [5:0] ch0__cap_data_bits_w0;
-  wire [5:0] ch0__cap_data_bits_w1;
+  wire [6:0] ch0__cap_data_bits_w0;
+  wire [6:0] ch0__cap_data_bits_w1;
   wire [6:0] ch0__cap_data_bits_w2;
   wire [6:0] ch0__cap_data_bits_w3;
   wire [6:0] ch0__cap_data_bits_w4;
@@ -102,7 +102,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire [15:0] ch0__cfg_w0_crc_poly;
   wire [15:0] ch0__cfg_w0_crc_start;
   wire [4:0] ch0__cfg_w0_crc_width;
-  wire [5:0] ch0__cfg_w0_data_bits;
+  wire [6:0] ch0__cfg_w0_data_bits;
   wire ch0__cfg_w0_gray;
   wire ch0__cfg_w0_lc;
   wire ch0__cfg_w0_nenw;
@@ -112,7 +112,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire [15:0] ch0__cfg_w1_crc_poly;
   wire [15:0] ch0__cfg_w1_crc_start;
   wire [4:0] ch0__cfg_w1_crc_width;
-  wire [5:0] ch0__cfg_w1_data_bits;
+  wire [6:0] ch0__cfg_w1_data_bits;
   wire ch0__cfg_w1_enable;
   wire ch0__cfg_w1_gray;
   wire ch0__cfg_w1_lc;
@@ -225,11 +225,11 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire ch0__word0_crc_ok;
   wire ch0__word0_ne;
   wire ch0__word0_nw;
-  wire [54:0] ch0__word0_position;
+  wire [63:0] ch0__word0_position;
   wire ch0__word1_crc_ok;
   wire ch0__word1_ne;
   wire ch0__word1_nw;
-  wire [39:0] ch0__word1_position;
+  wire [63:0] ch0__word1_position;
   wire ch0__word2_crc_ok;
   wire ch0__word2_ne;
   wire ch0__word2_nw;
@@ -271,8 +271,8 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire [3:0] ch1__ca_wbuf_en;
   wire ch1__ca_write;
   wire ch1__cap_counters;
-  wire [5:0] ch1__cap_data_bits_w0;
-  wire [5:0] ch1__cap_data_bits_w1;
+  wire [6:0] ch1__cap_data_bits_w0;
+  wire [6:0] ch1__cap_data_bits_w1;
   wire [6:0] ch1__cap_data_bits_w2;
   wire [6:0] ch1__cap_data_bits_w3;
   wire [6:0] ch1__cap_data_bits_w4;
@@ -308,7 +308,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire [15:0] ch1__cfg_w0_crc_poly;
   wire [15:0] ch1__cfg_w0_crc_start;
   wire [4:0] ch1__cfg_w0_crc_width;
-  wire [5:0] ch1__cfg_w0_data_bits;
+  wire [6:0] ch1__cfg_w0_data_bits;
   wire ch1__cfg_w0_gray;
   wire ch1__cfg_w0_lc;
   wire ch1__cfg_w0_nenw;
@@ -318,7 +318,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire [15:0] ch1__cfg_w1_crc_poly;
   wire [15:0] ch1__cfg_w1_crc_start;
   wire [4:0] ch1__cfg_w1_crc_width;
-  wire [5:0] ch1__cfg_w1_data_bits;
+  wire [6:0] ch1__cfg_w1_data_bits;
   wire ch1__cfg_w1_enable;
   wire ch1__cfg_w1_gray;
   wire ch1__cfg_w1_lc;
@@ -431,11 +431,11 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire ch1__word0_crc_ok;
   wire ch1__word0_ne;
   wire ch1__word0_nw;
-  wire [54:0] ch1__word0_position;
+  wire [63:0] ch1__word0_position;
   wire ch1__word1_crc_ok;
   wire ch1__word1_ne;
   wire ch1__word1_nw;
-  wire [39:0] ch1__word1_position;
+  wire [63:0] ch1__word1_position;
   wire ch1__word2_crc_ok;
   wire ch1__word2_ne;
   wire ch1__word2_nw;
@@ -506,10 +506,10 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire \regs__ca_write$475 ;
   wire regs__cap_counters;
   wire \regs__cap_counters$478 ;
-  wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$480 ;
-  wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$482 ;
+  wire [6:0] regs__cap_data_bits_w0;
+  wire [6:0] \regs__cap_data_bits_w0$480 ;
+  wire [6:0] regs__cap_data_bits_w1;
+  wire [6:0] \regs__cap_data_bits_w1$482 ;
   wire [6:0] regs__cap_data_bits_w2;
   wire [6:0] \regs__cap_data_bits_w2$484 ;
   wire [6:0] regs__cap_data_bits_w3;
@@ -580,8 +580,8 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire [15:0] \regs__cfg_w0_crc_start$549 ;
   wire [4:0] regs__cfg_w0_crc_width;
   wire [4:0] \regs__cfg_w0_crc_width$551 ;
-  wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$553 ;
+  wire [6:0] regs__cfg_w0_data_bits;
+  wire [6:0] \regs__cfg_w0_data_bits$553 ;
   wire regs__cfg_w0_gray;
   wire \regs__cfg_w0_gray$555 ;
   wire regs__cfg_w0_lc;
@@ -600,8 +600,8 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire [15:0] \regs__cfg_w1_crc_start$569 ;
   wire [4:0] regs__cfg_w1_crc_width;
   wire [4:0] \regs__cfg_w1_crc_width$571 ;
-  wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$573 ;
+  wire [6:0] regs__cfg_w1_data_bits;
+  wire [6:0] \regs__cfg_w1_data_bits$573 ;
   wire regs__cfg_w1_enable;
   wire \regs__cfg_w1_enable$575 ;
   wire regs__cfg_w1_gray;
@@ -834,16 +834,16 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire \regs__word0_ne$796 ;
   wire regs__word0_nw;
   wire \regs__word0_nw$798 ;
-  wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$800 ;
+  wire [63:0] regs__word0_position;
+  wire [63:0] \regs__word0_position$800 ;
   wire regs__word1_crc_ok;
   wire \regs__word1_crc_ok$802 ;
   wire regs__word1_ne;
   wire \regs__word1_ne$804 ;
   wire regs__word1_nw;
   wire \regs__word1_nw$806 ;
-  wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$808 ;
+  wire [63:0] regs__word1_position;
+  wire [63:0] \regs__word1_position$808 ;
   wire regs__word2_crc_ok;
   wire \regs__word2_crc_ok$810 ;
   wire regs__word2_ne;
@@ -1053,12 +1053,12 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$13879$0 (\$10 ),
-    .\port$13890$0 (\$11 ),
-    .\port$13967$0 (\$12 ),
-    .\port$14426$0 (\$13 ),
-    .\port$14437$0 (\$14 ),
-    .\port$14514$0 (\$15 ),
+    .\port$13887$0 (\$10 ),
+    .\port$13898$0 (\$11 ),
+    .\port$13975$0 (\$12 ),
+    .\port$14434$0 (\$13 ),
+    .\port$14445$0 (\$14 ),
+    .\port$14522$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1110,7 +1110,6 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .cfg_w0_crc_poly(regs__cfg_w0_crc_poly),
     .cfg_w0_crc_start(regs__cfg_w0_crc_start),
     .cfg_w0_crc_width(regs__cfg_w0_crc_width),
-    .cfg_w0_data_bits(regs__cfg_w0_data_bits),
     .cfg_w0_gray(regs__cfg_w0_gray),
     .cfg_w0_lc(regs__cfg_w0_lc),
     .cfg_w0_nenw(regs__cfg_w0_nenw),
@@ -1120,7 +1119,6 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .cfg_w1_crc_poly(regs__cfg_w1_crc_poly),
     .cfg_w1_crc_start(regs__cfg_w1_crc_start),
     .cfg_w1_crc_width(regs__cfg_w1_crc_width),
-    .cfg_w1_data_bits(regs__cfg_w1_data_bits),
     .cfg_w1_enable(regs__cfg_w1_enable),
     .cfg_w1_gray(regs__cfg_w1_gray),
     .cfg_w1_lc(regs__cfg_w1_lc),
@@ -1131,14 +1129,16 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$13879$0 (\$10 ),
-    .\port$13890$0 (\$11 ),
-    .\port$13967$0 (\$12 ),
+    .\port$13887$0 (\$10 ),
+    .\port$13898$0 (\$11 ),
+    .\port$13975$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
     .regs__ca_done(ch0__ca_done),
     .regs__ca_rbuf_data(ch0__ca_rbuf_data),
+    .regs__cfg_w0_data_bits(regs__cfg_w0_data_bits),
+    .regs__cfg_w1_data_bits(regs__cfg_w1_data_bits),
     .regs__config_error(ch0__config_error),
     .regs__count_data(ch0__count_data),
     .regs__done_count(ch0__done_count),
@@ -1187,7 +1187,6 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$547 ),
     .cfg_w0_crc_start(\regs__cfg_w0_crc_start$549 ),
     .cfg_w0_crc_width(\regs__cfg_w0_crc_width$551 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$553 ),
     .cfg_w0_gray(\regs__cfg_w0_gray$555 ),
     .cfg_w0_lc(\regs__cfg_w0_lc$557 ),
     .cfg_w0_nenw(\regs__cfg_w0_nenw$559 ),
@@ -1197,7 +1196,6 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$567 ),
     .cfg_w1_crc_start(\regs__cfg_w1_crc_start$569 ),
     .cfg_w1_crc_width(\regs__cfg_w1_crc_width$571 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$573 ),
     .cfg_w1_enable(\regs__cfg_w1_enable$575 ),
     .cfg_w1_gray(\regs__cfg_w1_gray$577 ),
     .cfg_w1_lc(\regs__cfg_w1_lc$579 ),
@@ -1208,14 +1206,16 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(\regs__count_en$753 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$777 ),
-    .\port$14426$0 (\$13 ),
-    .\port$14437$0 (\$14 ),
-    .\port$14514$0 (\$15 ),
+    .\port$14434$0 (\$13 ),
+    .\port$14445$0 (\$14 ),
+    .\port$14522$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$441 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
     .regs__ca_rbuf_data(ch1__ca_rbuf_data),
+    .regs__cfg_w0_data_bits(\regs__cfg_w0_data_bits$553 ),
+    .regs__cfg_w1_data_bits(\regs__cfg_w1_data_bits$573 ),
     .regs__config_error(ch1__config_error),
     .regs__count_data(ch1__count_data),
     .regs__done_count(ch1__done_count),
@@ -1285,10 +1285,10 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign ch0__ca_write = regs__ca_write;
   assign ch0__cap_counters = 1'h1;
   assign regs__cap_counters = 1'h1;
-  assign ch0__cap_data_bits_w0 = 6'h37;
-  assign regs__cap_data_bits_w0 = 6'h37;
-  assign ch0__cap_data_bits_w1 = 6'h28;
-  assign regs__cap_data_bits_w1 = 6'h28;
+  assign ch0__cap_data_bits_w0 = 7'h37;
+  assign regs__cap_data_bits_w0 = 7'h37;
+  assign ch0__cap_data_bits_w1 = 7'h28;
+  assign regs__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_data_bits_w2 = 7'h00;
   assign regs__cap_data_bits_w2 = 7'h00;
   assign ch0__cap_data_bits_w3 = 7'h00;
@@ -1554,16 +1554,16 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign regs__word0_ne = \$10 [131];
   assign ch0__word0_nw = \$10 [132];
   assign regs__word0_nw = \$10 [132];
-  assign ch0__word0_position = \$10 [130:76];
-  assign regs__word0_position = \$10 [130:76];
+  assign ch0__word0_position = { 9'h000, \$10 [130:76] };
+  assign regs__word0_position = { 9'h000, \$10 [130:76] };
   assign ch0__word1_crc_ok = \$10 [176];
   assign regs__word1_crc_ok = \$10 [176];
   assign ch0__word1_ne = \$10 [174];
   assign regs__word1_ne = \$10 [174];
   assign ch0__word1_nw = \$10 [175];
   assign regs__word1_nw = \$10 [175];
-  assign ch0__word1_position = \$10 [173:134];
-  assign regs__word1_position = \$10 [173:134];
+  assign ch0__word1_position = { 24'h000000, \$10 [173:134] };
+  assign regs__word1_position = { 24'h000000, \$10 [173:134] };
   assign ch0__word2_crc_ok = 1'h0;
   assign regs__word2_crc_ok = 1'h0;
   assign ch0__word2_ne = 1'h0;
@@ -1629,10 +1629,10 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign ch1__ca_write = \regs__ca_write$475 ;
   assign ch1__cap_counters = 1'h1;
   assign \regs__cap_counters$478  = 1'h1;
-  assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$480  = 6'h37;
-  assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$482  = 6'h28;
+  assign ch1__cap_data_bits_w0 = 7'h37;
+  assign \regs__cap_data_bits_w0$480  = 7'h37;
+  assign ch1__cap_data_bits_w1 = 7'h28;
+  assign \regs__cap_data_bits_w1$482  = 7'h28;
   assign ch1__cap_data_bits_w2 = 7'h00;
   assign \regs__cap_data_bits_w2$484  = 7'h00;
   assign ch1__cap_data_bits_w3 = 7'h00;
@@ -1898,16 +1898,16 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign \regs__word0_ne$796  = \$13 [131];
   assign ch1__word0_nw = \$13 [132];
   assign \regs__word0_nw$798  = \$13 [132];
-  assign ch1__word0_position = \$13 [130:76];
-  assign \regs__word0_position$800  = \$13 [130:76];
+  assign ch1__word0_position = { 9'h000, \$13 [130:76] };
+  assign \regs__word0_position$800  = { 9'h000, \$13 [130:76] };
   assign ch1__word1_crc_ok = \$13 [176];
   assign \regs__word1_crc_ok$802  = \$13 [176];
   assign ch1__word1_ne = \$13 [174];
   assign \regs__word1_ne$804  = \$13 [174];
   assign ch1__word1_nw = \$13 [175];
   assign \regs__word1_nw$806  = \$13 [175];
-  assign ch1__word1_position = \$13 [173:134];
-  assign \regs__word1_position$808  = \$13 [173:134];
+  assign ch1__word1_position = { 24'h000000, \$13 [173:134] };
+  assign \regs__word1_position$808  = { 24'h000000, \$13 [173:134] };
   assign ch1__word2_crc_ok = 1'h0;
   assign \regs__word2_crc_ok$810  = 1'h0;
   assign ch1__word2_ne = 1'h0;
@@ -1959,7 +1959,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
 , ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start
 , ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray
 , ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double
-, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13879$0 , \port$13890$0 , ch0__ca_done, \port$13967$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$14426$0 , \port$14437$0 , ch1__ca_done, \port$14514$0 
+, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13887$0 , \port$13898$0 , ch0__ca_done, \port$13975$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$14434$0 , \port$14445$0 , ch1__ca_done, \port$14522$0 
 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
@@ -2627,7 +2627,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   reg \$696 ;
   reg [23:0] \$697 ;
   reg \$698 ;
-  reg [5:0] \$699 ;
+  reg [6:0] \$699 ;
   wire \$7 ;
   wire \$70 ;
   reg \$700 ;
@@ -2635,7 +2635,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   reg [1:0] \$702 ;
   reg \$703 ;
   reg \$704 ;
-  reg [5:0] \$705 ;
+  reg [6:0] \$705 ;
   reg \$706 ;
   reg \$707 ;
   reg [1:0] \$708 ;
@@ -2768,9 +2768,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   reg [15:0] \$822 ;
   reg [12:0] \$823 ;
   reg [31:0] \$824 ;
-  reg [22:0] \$825 ;
+  reg [31:0] \$825 ;
   reg [31:0] \$826 ;
-  reg [7:0] \$827 ;
+  reg [31:0] \$827 ;
   reg [31:0] \$828 ;
   reg [3:0] \$829 ;
   wire \$83 ;
@@ -2809,13 +2809,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   wire \$86 ;
   reg [23:0] \$860 ;
   reg \$861 ;
-  reg [5:0] \$862 ;
+  reg [6:0] \$862 ;
   reg \$863 ;
   reg \$864 ;
   reg [1:0] \$865 ;
   reg \$866 ;
   reg \$867 ;
-  reg [5:0] \$868 ;
+  reg [6:0] \$868 ;
   reg \$869 ;
   wire \$87 ;
   reg \$870 ;
@@ -2947,9 +2947,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   reg [15:0] \$984 ;
   reg [12:0] \$985 ;
   reg [31:0] \$986 ;
-  reg [22:0] \$987 ;
+  reg [31:0] \$987 ;
   reg [31:0] \$988 ;
-  reg [7:0] \$989 ;
+  reg [31:0] \$989 ;
   wire [31:0] \$99 ;
   reg [31:0] \$990 ;
   reg [3:0] \$991 ;
@@ -3010,8 +3010,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   (* init = 1'h0 *)
   wire ch0__ca_write;
   wire ch0__cap_counters;
-  wire [5:0] ch0__cap_data_bits_w0;
-  wire [5:0] ch0__cap_data_bits_w1;
+  wire [6:0] ch0__cap_data_bits_w0;
+  wire [6:0] ch0__cap_data_bits_w1;
   wire [6:0] ch0__cap_data_bits_w2;
   wire [6:0] ch0__cap_data_bits_w3;
   wire [6:0] ch0__cap_data_bits_w4;
@@ -3070,8 +3070,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   wire [15:0] ch0__cfg_w0_crc_start;
   (* init = 5'h00 *)
   wire [4:0] ch0__cfg_w0_crc_width;
-  (* init = 6'h00 *)
-  wire [5:0] ch0__cfg_w0_data_bits;
+  (* init = 7'h00 *)
+  wire [6:0] ch0__cfg_w0_data_bits;
   (* init = 1'h0 *)
   wire ch0__cfg_w0_gray;
   (* init = 1'h0 *)
@@ -3090,8 +3090,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   wire [15:0] ch0__cfg_w1_crc_start;
   (* init = 5'h00 *)
   wire [4:0] ch0__cfg_w1_crc_width;
-  (* init = 6'h00 *)
-  wire [5:0] ch0__cfg_w1_data_bits;
+  (* init = 7'h00 *)
+  wire [6:0] ch0__cfg_w1_data_bits;
   (* init = 1'h0 *)
   wire ch0__cfg_w1_enable;
   (* init = 1'h0 *)
@@ -3221,11 +3221,11 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   wire ch0__word0_crc_ok;
   wire ch0__word0_ne;
   wire ch0__word0_nw;
-  wire [54:0] ch0__word0_position;
+  wire [63:0] ch0__word0_position;
   wire ch0__word1_crc_ok;
   wire ch0__word1_ne;
   wire ch0__word1_nw;
-  wire [39:0] ch0__word1_position;
+  wire [63:0] ch0__word1_position;
   wire ch0__word2_crc_ok;
   wire ch0__word2_ne;
   wire ch0__word2_nw;
@@ -3381,8 +3381,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   reg ch0_cfg_words_config_write = 1'h0;
   output [1:0] ch0_cfg_words_w0_crc;
   reg [1:0] ch0_cfg_words_w0_crc = 2'h0;
-  output [5:0] ch0_cfg_words_w0_data_bits;
-  reg [5:0] ch0_cfg_words_w0_data_bits = 6'h00;
+  output [6:0] ch0_cfg_words_w0_data_bits;
+  reg [6:0] ch0_cfg_words_w0_data_bits = 7'h00;
   output ch0_cfg_words_w0_gray;
   reg ch0_cfg_words_w0_gray = 1'h0;
   output ch0_cfg_words_w0_lc;
@@ -3393,8 +3393,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   reg ch0_cfg_words_w0_signed = 1'h0;
   output [1:0] ch0_cfg_words_w1_crc;
   reg [1:0] ch0_cfg_words_w1_crc = 2'h0;
-  output [5:0] ch0_cfg_words_w1_data_bits;
-  reg [5:0] ch0_cfg_words_w1_data_bits = 6'h00;
+  output [6:0] ch0_cfg_words_w1_data_bits;
+  reg [6:0] ch0_cfg_words_w1_data_bits = 7'h00;
   output ch0_cfg_words_w1_enable;
   reg ch0_cfg_words_w1_enable = 1'h0;
   output ch0_cfg_words_w1_gray;
@@ -3504,11 +3504,11 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   wire ch0_result_status_write;
   reg [31:0] ch0_result_timestamp_time_snapshot = 32'd0;
   wire ch0_result_timestamp_write;
-  reg [22:0] ch0_result_w0_hi_data_snapshot = 23'h000000;
+  reg [31:0] ch0_result_w0_hi_data_snapshot = 32'd0;
   wire ch0_result_w0_hi_write;
   reg [31:0] ch0_result_w0_lo_data_snapshot = 32'd0;
   wire ch0_result_w0_lo_write;
-  reg [7:0] ch0_result_w1_hi_data_snapshot = 8'h00;
+  reg [31:0] ch0_result_w1_hi_data_snapshot = 32'd0;
   wire ch0_result_w1_hi_write;
   reg [31:0] ch0_result_w1_lo_data_snapshot = 32'd0;
   wire ch0_result_w1_lo_write;
@@ -3550,8 +3550,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   (* init = 1'h0 *)
   wire ch1__ca_write;
   wire ch1__cap_counters;
-  wire [5:0] ch1__cap_data_bits_w0;
-  wire [5:0] ch1__cap_data_bits_w1;
+  wire [6:0] ch1__cap_data_bits_w0;
+  wire [6:0] ch1__cap_data_bits_w1;
   wire [6:0] ch1__cap_data_bits_w2;
   wire [6:0] ch1__cap_data_bits_w3;
   wire [6:0] ch1__cap_data_bits_w4;
@@ -3610,8 +3610,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   wire [15:0] ch1__cfg_w0_crc_start;
   (* init = 5'h00 *)
   wire [4:0] ch1__cfg_w0_crc_width;
-  (* init = 6'h00 *)
-  wire [5:0] ch1__cfg_w0_data_bits;
+  (* init = 7'h00 *)
+  wire [6:0] ch1__cfg_w0_data_bits;
   (* init = 1'h0 *)
   wire ch1__cfg_w0_gray;
   (* init = 1'h0 *)
@@ -3630,8 +3630,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   wire [15:0] ch1__cfg_w1_crc_start;
   (* init = 5'h00 *)
   wire [4:0] ch1__cfg_w1_crc_width;
-  (* init = 6'h00 *)
-  wire [5:0] ch1__cfg_w1_data_bits;
+  (* init = 7'h00 *)
+  wire [6:0] ch1__cfg_w1_data_bits;
   (* init = 1'h0 *)
   wire ch1__cfg_w1_enable;
   (* init = 1'h0 *)
@@ -3761,11 +3761,11 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   wire ch1__word0_crc_ok;
   wire ch1__word0_ne;
   wire ch1__word0_nw;
-  wire [54:0] ch1__word0_position;
+  wire [63:0] ch1__word0_position;
   wire ch1__word1_crc_ok;
   wire ch1__word1_ne;
   wire ch1__word1_nw;
-  wire [39:0] ch1__word1_position;
+  wire [63:0] ch1__word1_position;
   wire ch1__word2_crc_ok;
   wire ch1__word2_ne;
   wire ch1__word2_nw;
@@ -3921,8 +3921,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   reg ch1_cfg_words_config_write = 1'h0;
   output [1:0] ch1_cfg_words_w0_crc;
   reg [1:0] ch1_cfg_words_w0_crc = 2'h0;
-  output [5:0] ch1_cfg_words_w0_data_bits;
-  reg [5:0] ch1_cfg_words_w0_data_bits = 6'h00;
+  output [6:0] ch1_cfg_words_w0_data_bits;
+  reg [6:0] ch1_cfg_words_w0_data_bits = 7'h00;
   output ch1_cfg_words_w0_gray;
   reg ch1_cfg_words_w0_gray = 1'h0;
   output ch1_cfg_words_w0_lc;
@@ -3933,8 +3933,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   reg ch1_cfg_words_w0_signed = 1'h0;
   output [1:0] ch1_cfg_words_w1_crc;
   reg [1:0] ch1_cfg_words_w1_crc = 2'h0;
-  output [5:0] ch1_cfg_words_w1_data_bits;
-  reg [5:0] ch1_cfg_words_w1_data_bits = 6'h00;
+  output [6:0] ch1_cfg_words_w1_data_bits;
+  reg [6:0] ch1_cfg_words_w1_data_bits = 7'h00;
   output ch1_cfg_words_w1_enable;
   reg ch1_cfg_words_w1_enable = 1'h0;
   output ch1_cfg_words_w1_gray;
@@ -4044,11 +4044,11 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   wire ch1_result_status_write;
   reg [31:0] ch1_result_timestamp_time_snapshot = 32'd0;
   wire ch1_result_timestamp_write;
-  reg [22:0] ch1_result_w0_hi_data_snapshot = 23'h000000;
+  reg [31:0] ch1_result_w0_hi_data_snapshot = 32'd0;
   wire ch1_result_w0_hi_write;
   reg [31:0] ch1_result_w0_lo_data_snapshot = 32'd0;
   wire ch1_result_w0_lo_write;
-  reg [7:0] ch1_result_w1_hi_data_snapshot = 8'h00;
+  reg [31:0] ch1_result_w1_hi_data_snapshot = 32'd0;
   wire ch1_result_w1_hi_write;
   reg [31:0] ch1_result_w1_lo_data_snapshot = 32'd0;
   wire ch1_result_w1_lo_write;
@@ -4085,18 +4085,18 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$13879$0 ;
-  wire [186:0] \port$13879$0 ;
-  input [79:0] \port$13890$0 ;
-  wire [79:0] \port$13890$0 ;
-  input [9:0] \port$13967$0 ;
-  wire [9:0] \port$13967$0 ;
-  input [186:0] \port$14426$0 ;
-  wire [186:0] \port$14426$0 ;
-  input [79:0] \port$14437$0 ;
-  wire [79:0] \port$14437$0 ;
-  input [9:0] \port$14514$0 ;
-  wire [9:0] \port$14514$0 ;
+  input [186:0] \port$13887$0 ;
+  wire [186:0] \port$13887$0 ;
+  input [79:0] \port$13898$0 ;
+  wire [79:0] \port$13898$0 ;
+  input [9:0] \port$13975$0 ;
+  wire [9:0] \port$13975$0 ;
+  input [186:0] \port$14434$0 ;
+  wire [186:0] \port$14434$0 ;
+  input [79:0] \port$14445$0 ;
+  wire [79:0] \port$14445$0 ;
+  input [9:0] \port$14522$0 ;
+  wire [9:0] \port$14522$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
@@ -4184,7 +4184,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$6  = bus__r_addr == 2'h3;
   assign \$7  = bus__r_addr == 3'h4;
   assign \$8  = g_read_select_0 ? 32'd1114198867 : 32'd0;
-  assign \$10  = g_read_select_1 ? 32'd65537 : 32'd0;
+  assign \$10  = g_read_select_1 ? 32'd131072 : 32'd0;
   assign \$11  = \$9  | \$10 ;
   assign \$12  = g_read_select_2 ? 32'd2 : 32'd0;
   assign \$13  = \$11  | \$12 ;
@@ -4225,13 +4225,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$50  = ch0_cfg_timeout_config_write & config_write_strb[2];
   assign \$51  = ch0_cfg_words_config_write & config_write_strb[0];
   assign \$52  = ch0_cfg_words_config_write & config_write_strb[0];
-  assign \$53  = ch0_cfg_words_config_write & config_write_strb[0];
+  assign \$53  = ch0_cfg_words_config_write & config_write_strb[1];
   assign \$54  = ch0_cfg_words_config_write & config_write_strb[1];
   assign \$55  = ch0_cfg_words_config_write & config_write_strb[1];
   assign \$56  = ch0_cfg_words_config_write & config_write_strb[1];
   assign \$57  = ch0_cfg_words_config_write & config_write_strb[2];
   assign \$58  = ch0_cfg_words_config_write & config_write_strb[2];
-  assign \$59  = ch0_cfg_words_config_write & config_write_strb[2];
+  assign \$59  = ch0_cfg_words_config_write & config_write_strb[3];
   assign \$60  = ch0_cfg_words_config_write & config_write_strb[3];
   assign \$61  = ch0_cfg_words_config_write & config_write_strb[3];
   assign \$62  = ch0_cfg_words_config_write & config_write_strb[3];
@@ -4334,29 +4334,29 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$160  = \$158  | \$159 ;
   assign \$161  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$13879$0 [182:177], 4'h0, \port$13879$0 [186:183], 1'h0, \port$13879$0 [176:174], 1'h0, \port$13879$0 [133:131], 3'h0, \port$13879$0 [49], \port$13879$0 [3:0] } : 32'd0;
+  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$13887$0 [182:177], 4'h0, \port$13887$0 [186:183], 1'h0, \port$13887$0 [176:174], 1'h0, \port$13887$0 [133:131], 3'h0, \port$13887$0 [49], \port$13887$0 [3:0] } : 32'd0;
   assign \$168  = \$166  | \$167 ;
   assign \$169  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$170  = \$168  | \$169 ;
   assign \$171  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
   assign \$172  = \$170  | \$171 ;
-  assign \$173  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$173  = ch0_read_select_93 ? ch0_result_w0_hi_data_snapshot : 32'd0;
   assign \$174  = \$172  | \$173 ;
   assign \$175  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$177  = ch0_read_select_95 ? ch0_result_w1_hi_data_snapshot : 32'd0;
   assign \$178  = \$176  | \$177 ;
   assign \$179  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
   assign \$180  = \$178  | \$179 ;
   assign \$181  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$13967$0 [9:3], 1'h0, \port$13967$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$13975$0 [9:3], 1'h0, \port$13975$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$228  = \$226  | \$227 ;
-  assign \$229  = ch0_read_select_c3 ? \port$13890$0 [31:0] : 32'd0;
+  assign \$229  = ch0_read_select_c3 ? \port$13898$0 [31:0] : 32'd0;
   assign \$230  = \$228  | \$229 ;
-  assign \$231  = ch0_read_select_c4 ? \port$13890$0 [63:32] : 32'd0;
+  assign \$231  = ch0_read_select_c4 ? \port$13898$0 [63:32] : 32'd0;
   assign \$232  = \$230  | \$231 ;
-  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$13890$0 [79:64] } : 32'd0;
+  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$13898$0 [79:64] } : 32'd0;
   assign \$234  = \$232  | \$233 ;
   assign \$237  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$238  = \$236  | \$237 ;
@@ -4401,13 +4401,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$279  = ch1_cfg_timeout_config_write & config_write_strb[2];
   assign \$280  = ch1_cfg_words_config_write & config_write_strb[0];
   assign \$281  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$282  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$282  = ch1_cfg_words_config_write & config_write_strb[1];
   assign \$283  = ch1_cfg_words_config_write & config_write_strb[1];
   assign \$284  = ch1_cfg_words_config_write & config_write_strb[1];
   assign \$285  = ch1_cfg_words_config_write & config_write_strb[1];
   assign \$286  = ch1_cfg_words_config_write & config_write_strb[2];
   assign \$287  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$288  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$288  = ch1_cfg_words_config_write & config_write_strb[3];
   assign \$289  = ch1_cfg_words_config_write & config_write_strb[3];
   assign \$290  = ch1_cfg_words_config_write & config_write_strb[3];
   assign \$291  = ch1_cfg_words_config_write & config_write_strb[3];
@@ -4505,29 +4505,29 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$384  = \$382  | \$383 ;
   assign \$385  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$386  = \$384  | \$385 ;
-  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$14426$0 [182:177], 4'h0, \port$14426$0 [186:183], 1'h0, \port$14426$0 [176:174], 1'h0, \port$14426$0 [133:131], 3'h0, \port$14426$0 [49], \port$14426$0 [3:0] } : 32'd0;
+  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$14434$0 [182:177], 4'h0, \port$14434$0 [186:183], 1'h0, \port$14434$0 [176:174], 1'h0, \port$14434$0 [133:131], 3'h0, \port$14434$0 [49], \port$14434$0 [3:0] } : 32'd0;
   assign \$392  = \$390  | \$391 ;
   assign \$393  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$394  = \$392  | \$393 ;
   assign \$395  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
   assign \$396  = \$394  | \$395 ;
-  assign \$397  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$397  = ch1_read_select_113 ? ch1_result_w0_hi_data_snapshot : 32'd0;
   assign \$398  = \$396  | \$397 ;
   assign \$399  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
   assign \$400  = \$398  | \$399 ;
-  assign \$401  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$401  = ch1_read_select_115 ? ch1_result_w1_hi_data_snapshot : 32'd0;
   assign \$402  = \$400  | \$401 ;
   assign \$403  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$404  = \$402  | \$403 ;
   assign \$405  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$406  = \$404  | \$405 ;
-  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$14514$0 [9:3], 1'h0, \port$14514$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$14522$0 [9:3], 1'h0, \port$14522$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$452  = \$450  | \$451 ;
-  assign \$453  = ch1_read_select_143 ? \port$14437$0 [31:0] : 32'd0;
+  assign \$453  = ch1_read_select_143 ? \port$14445$0 [31:0] : 32'd0;
   assign \$454  = \$452  | \$453 ;
-  assign \$455  = ch1_read_select_144 ? \port$14437$0 [63:32] : 32'd0;
+  assign \$455  = ch1_read_select_144 ? \port$14445$0 [63:32] : 32'd0;
   assign \$456  = \$454  | \$455 ;
-  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$14437$0 [79:64] } : 32'd0;
+  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$14445$0 [79:64] } : 32'd0;
   assign \$458  = \$456  | \$457 ;
   assign \$461  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$462  = \$460  | \$461 ;
@@ -5905,17 +5905,17 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$699  = ch0_cfg_words_w0_data_bits;
     if (\$51 ) begin
-      \$699  = config_write_data[5:0];
+      \$699  = config_write_data[6:0];
     end
     if (rst) begin
-      \$699  = 6'h00;
+      \$699  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$700  = ch0_cfg_words_w0_nenw;
     if (\$52 ) begin
-      \$700  = config_write_data[6];
+      \$700  = config_write_data[7];
     end
     if (rst) begin
       \$700  = 1'h0;
@@ -5925,7 +5925,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$701  = ch0_cfg_words_w0_lc;
     if (\$53 ) begin
-      \$701  = config_write_data[7];
+      \$701  = config_write_data[8];
     end
     if (rst) begin
       \$701  = 1'h0;
@@ -5935,7 +5935,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$702  = ch0_cfg_words_w0_crc;
     if (\$54 ) begin
-      \$702  = config_write_data[9:8];
+      \$702  = config_write_data[10:9];
     end
     if (rst) begin
       \$702  = 2'h0;
@@ -5945,7 +5945,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$703  = ch0_cfg_words_w0_gray;
     if (\$55 ) begin
-      \$703  = config_write_data[10];
+      \$703  = config_write_data[11];
     end
     if (rst) begin
       \$703  = 1'h0;
@@ -5955,7 +5955,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$704  = ch0_cfg_words_w0_signed;
     if (\$56 ) begin
-      \$704  = config_write_data[11];
+      \$704  = config_write_data[12];
     end
     if (rst) begin
       \$704  = 1'h0;
@@ -5965,17 +5965,17 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$705  = ch0_cfg_words_w1_data_bits;
     if (\$57 ) begin
-      \$705  = config_write_data[21:16];
+      \$705  = config_write_data[22:16];
     end
     if (rst) begin
-      \$705  = 6'h00;
+      \$705  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$706  = ch0_cfg_words_w1_nenw;
     if (\$58 ) begin
-      \$706  = config_write_data[22];
+      \$706  = config_write_data[23];
     end
     if (rst) begin
       \$706  = 1'h0;
@@ -5985,7 +5985,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$707  = ch0_cfg_words_w1_lc;
     if (\$59 ) begin
-      \$707  = config_write_data[23];
+      \$707  = config_write_data[24];
     end
     if (rst) begin
       \$707  = 1'h0;
@@ -5995,7 +5995,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$708  = ch0_cfg_words_w1_crc;
     if (\$60 ) begin
-      \$708  = config_write_data[25:24];
+      \$708  = config_write_data[26:25];
     end
     if (rst) begin
       \$708  = 2'h0;
@@ -6005,7 +6005,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$709  = ch0_cfg_words_w1_gray;
     if (\$61 ) begin
-      \$709  = config_write_data[26];
+      \$709  = config_write_data[27];
     end
     if (rst) begin
       \$709  = 1'h0;
@@ -6015,7 +6015,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$710  = ch0_cfg_words_w1_signed;
     if (\$62 ) begin
-      \$710  = config_write_data[27];
+      \$710  = config_write_data[28];
     end
     if (rst) begin
       \$710  = 1'h0;
@@ -6936,7 +6936,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$809  = ch0_result_status_status_snapshot;
     if (\$146 ) begin
-      \$809  = \port$13879$0 [3:0];
+      \$809  = \port$13887$0 [3:0];
     end
     if (rst) begin
       \$809  = 4'h0;
@@ -6946,7 +6946,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$810  = ch0_result_status_cds_snapshot;
     if (\$146 ) begin
-      \$810  = \port$13879$0 [49];
+      \$810  = \port$13887$0 [49];
     end
     if (rst) begin
       \$810  = 1'h0;
@@ -6956,7 +6956,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$811  = ch0_result_status_w0_ne_snapshot;
     if (\$146 ) begin
-      \$811  = \port$13879$0 [131];
+      \$811  = \port$13887$0 [131];
     end
     if (rst) begin
       \$811  = 1'h0;
@@ -6966,7 +6966,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$812  = ch0_result_status_w0_nw_snapshot;
     if (\$146 ) begin
-      \$812  = \port$13879$0 [132];
+      \$812  = \port$13887$0 [132];
     end
     if (rst) begin
       \$812  = 1'h0;
@@ -6976,7 +6976,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$813  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$146 ) begin
-      \$813  = \port$13879$0 [133];
+      \$813  = \port$13887$0 [133];
     end
     if (rst) begin
       \$813  = 1'h0;
@@ -6986,7 +6986,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$814  = ch0_result_status_w1_ne_snapshot;
     if (\$146 ) begin
-      \$814  = \port$13879$0 [174];
+      \$814  = \port$13887$0 [174];
     end
     if (rst) begin
       \$814  = 1'h0;
@@ -6996,7 +6996,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$815  = ch0_result_status_w1_nw_snapshot;
     if (\$146 ) begin
-      \$815  = \port$13879$0 [175];
+      \$815  = \port$13887$0 [175];
     end
     if (rst) begin
       \$815  = 1'h0;
@@ -7006,7 +7006,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$816  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$146 ) begin
-      \$816  = \port$13879$0 [176];
+      \$816  = \port$13887$0 [176];
     end
     if (rst) begin
       \$816  = 1'h0;
@@ -7016,7 +7016,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$817  = ch0_result_status_lc_repeat_snapshot;
     if (\$146 ) begin
-      \$817  = \port$13879$0 [183];
+      \$817  = \port$13887$0 [183];
     end
     if (rst) begin
       \$817  = 1'h0;
@@ -7026,7 +7026,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$818  = ch0_result_status_lc_skip_snapshot;
     if (\$146 ) begin
-      \$818  = \port$13879$0 [184];
+      \$818  = \port$13887$0 [184];
     end
     if (rst) begin
       \$818  = 1'h0;
@@ -7036,7 +7036,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$819  = ch0_result_status_lc_zero_snapshot;
     if (\$146 ) begin
-      \$819  = \port$13879$0 [185];
+      \$819  = \port$13887$0 [185];
     end
     if (rst) begin
       \$819  = 1'h0;
@@ -7046,7 +7046,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$820  = ch0_result_status_spw_mismatch_snapshot;
     if (\$146 ) begin
-      \$820  = \port$13879$0 [186];
+      \$820  = \port$13887$0 [186];
     end
     if (rst) begin
       \$820  = 1'h0;
@@ -7056,7 +7056,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$821  = ch0_result_status_lc_snapshot;
     if (\$146 ) begin
-      \$821  = \port$13879$0 [182:177];
+      \$821  = \port$13887$0 [182:177];
     end
     if (rst) begin
       \$821  = 6'h00;
@@ -7076,7 +7076,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$823  = ch0_result_seq_line_delay_snapshot;
     if (\$146 ) begin
-      \$823  = \port$13879$0 [48:36];
+      \$823  = \port$13887$0 [48:36];
     end
     if (rst) begin
       \$823  = 13'h0000;
@@ -7086,7 +7086,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$824  = ch0_result_w0_lo_data_snapshot;
     if (\$146 ) begin
-      \$824  = \port$13879$0 [107:76];
+      \$824  = \port$13887$0 [107:76];
     end
     if (rst) begin
       \$824  = 32'd0;
@@ -7096,17 +7096,17 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$825  = ch0_result_w0_hi_data_snapshot;
     if (\$146 ) begin
-      \$825  = \port$13879$0 [130:108];
+      \$825  = { 9'h000, \port$13887$0 [130:108] };
     end
     if (rst) begin
-      \$825  = 23'h000000;
+      \$825  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$826  = ch0_result_w1_lo_data_snapshot;
     if (\$146 ) begin
-      \$826  = \port$13879$0 [165:134];
+      \$826  = \port$13887$0 [165:134];
     end
     if (rst) begin
       \$826  = 32'd0;
@@ -7116,17 +7116,17 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$827  = ch0_result_w1_hi_data_snapshot;
     if (\$146 ) begin
-      \$827  = \port$13879$0 [173:166];
+      \$827  = { 24'h000000, \port$13887$0 [173:166] };
     end
     if (rst) begin
-      \$827  = 8'h00;
+      \$827  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$828  = ch0_result_timestamp_time_snapshot;
     if (\$146 ) begin
-      \$828  = \port$13879$0 [35:4];
+      \$828  = \port$13887$0 [35:4];
     end
     if (rst) begin
       \$828  = 32'd0;
@@ -7136,7 +7136,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$829  = ch0_result_line_noise_events_snapshot;
     if (\$146 ) begin
-      \$829  = \port$13879$0 [53:50];
+      \$829  = \port$13887$0 [53:50];
     end
     if (rst) begin
       \$829  = 4'h0;
@@ -7146,7 +7146,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$830  = ch0_result_line_delay_settled_snapshot;
     if (\$146 ) begin
-      \$830  = \port$13879$0 [54];
+      \$830  = \port$13887$0 [54];
     end
     if (rst) begin
       \$830  = 1'h0;
@@ -7156,7 +7156,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$831  = ch0_result_line_delay_spread_snapshot;
     if (\$146 ) begin
-      \$831  = \port$13879$0 [75:68];
+      \$831  = \port$13887$0 [75:68];
     end
     if (rst) begin
       \$831  = 8'h00;
@@ -7166,7 +7166,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$832  = ch0_result_line_settled_delay_snapshot;
     if (\$146 ) begin
-      \$832  = \port$13879$0 [67:55];
+      \$832  = \port$13887$0 [67:55];
     end
     if (rst) begin
       \$832  = 13'h0000;
@@ -7472,17 +7472,17 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$862  = ch1_cfg_words_w0_data_bits;
     if (\$280 ) begin
-      \$862  = config_write_data[5:0];
+      \$862  = config_write_data[6:0];
     end
     if (rst) begin
-      \$862  = 6'h00;
+      \$862  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$863  = ch1_cfg_words_w0_nenw;
     if (\$281 ) begin
-      \$863  = config_write_data[6];
+      \$863  = config_write_data[7];
     end
     if (rst) begin
       \$863  = 1'h0;
@@ -7492,7 +7492,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$864  = ch1_cfg_words_w0_lc;
     if (\$282 ) begin
-      \$864  = config_write_data[7];
+      \$864  = config_write_data[8];
     end
     if (rst) begin
       \$864  = 1'h0;
@@ -7502,7 +7502,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$865  = ch1_cfg_words_w0_crc;
     if (\$283 ) begin
-      \$865  = config_write_data[9:8];
+      \$865  = config_write_data[10:9];
     end
     if (rst) begin
       \$865  = 2'h0;
@@ -7512,7 +7512,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$866  = ch1_cfg_words_w0_gray;
     if (\$284 ) begin
-      \$866  = config_write_data[10];
+      \$866  = config_write_data[11];
     end
     if (rst) begin
       \$866  = 1'h0;
@@ -7522,7 +7522,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$867  = ch1_cfg_words_w0_signed;
     if (\$285 ) begin
-      \$867  = config_write_data[11];
+      \$867  = config_write_data[12];
     end
     if (rst) begin
       \$867  = 1'h0;
@@ -7532,17 +7532,17 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$868  = ch1_cfg_words_w1_data_bits;
     if (\$286 ) begin
-      \$868  = config_write_data[21:16];
+      \$868  = config_write_data[22:16];
     end
     if (rst) begin
-      \$868  = 6'h00;
+      \$868  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$869  = ch1_cfg_words_w1_nenw;
     if (\$287 ) begin
-      \$869  = config_write_data[22];
+      \$869  = config_write_data[23];
     end
     if (rst) begin
       \$869  = 1'h0;
@@ -7552,7 +7552,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$870  = ch1_cfg_words_w1_lc;
     if (\$288 ) begin
-      \$870  = config_write_data[23];
+      \$870  = config_write_data[24];
     end
     if (rst) begin
       \$870  = 1'h0;
@@ -7562,7 +7562,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$871  = ch1_cfg_words_w1_crc;
     if (\$289 ) begin
-      \$871  = config_write_data[25:24];
+      \$871  = config_write_data[26:25];
     end
     if (rst) begin
       \$871  = 2'h0;
@@ -7572,7 +7572,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$872  = ch1_cfg_words_w1_gray;
     if (\$290 ) begin
-      \$872  = config_write_data[26];
+      \$872  = config_write_data[27];
     end
     if (rst) begin
       \$872  = 1'h0;
@@ -7582,7 +7582,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$873  = ch1_cfg_words_w1_signed;
     if (\$291 ) begin
-      \$873  = config_write_data[27];
+      \$873  = config_write_data[28];
     end
     if (rst) begin
       \$873  = 1'h0;
@@ -8493,7 +8493,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$971  = ch1_result_status_status_snapshot;
     if (\$370 ) begin
-      \$971  = \port$14426$0 [3:0];
+      \$971  = \port$14434$0 [3:0];
     end
     if (rst) begin
       \$971  = 4'h0;
@@ -8503,7 +8503,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$972  = ch1_result_status_cds_snapshot;
     if (\$370 ) begin
-      \$972  = \port$14426$0 [49];
+      \$972  = \port$14434$0 [49];
     end
     if (rst) begin
       \$972  = 1'h0;
@@ -8513,7 +8513,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$973  = ch1_result_status_w0_ne_snapshot;
     if (\$370 ) begin
-      \$973  = \port$14426$0 [131];
+      \$973  = \port$14434$0 [131];
     end
     if (rst) begin
       \$973  = 1'h0;
@@ -8523,7 +8523,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$974  = ch1_result_status_w0_nw_snapshot;
     if (\$370 ) begin
-      \$974  = \port$14426$0 [132];
+      \$974  = \port$14434$0 [132];
     end
     if (rst) begin
       \$974  = 1'h0;
@@ -8533,7 +8533,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$975  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$370 ) begin
-      \$975  = \port$14426$0 [133];
+      \$975  = \port$14434$0 [133];
     end
     if (rst) begin
       \$975  = 1'h0;
@@ -8543,7 +8543,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$976  = ch1_result_status_w1_ne_snapshot;
     if (\$370 ) begin
-      \$976  = \port$14426$0 [174];
+      \$976  = \port$14434$0 [174];
     end
     if (rst) begin
       \$976  = 1'h0;
@@ -8553,7 +8553,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$977  = ch1_result_status_w1_nw_snapshot;
     if (\$370 ) begin
-      \$977  = \port$14426$0 [175];
+      \$977  = \port$14434$0 [175];
     end
     if (rst) begin
       \$977  = 1'h0;
@@ -8563,7 +8563,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$978  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$370 ) begin
-      \$978  = \port$14426$0 [176];
+      \$978  = \port$14434$0 [176];
     end
     if (rst) begin
       \$978  = 1'h0;
@@ -8573,7 +8573,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$979  = ch1_result_status_lc_repeat_snapshot;
     if (\$370 ) begin
-      \$979  = \port$14426$0 [183];
+      \$979  = \port$14434$0 [183];
     end
     if (rst) begin
       \$979  = 1'h0;
@@ -8583,7 +8583,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$980  = ch1_result_status_lc_skip_snapshot;
     if (\$370 ) begin
-      \$980  = \port$14426$0 [184];
+      \$980  = \port$14434$0 [184];
     end
     if (rst) begin
       \$980  = 1'h0;
@@ -8593,7 +8593,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$981  = ch1_result_status_lc_zero_snapshot;
     if (\$370 ) begin
-      \$981  = \port$14426$0 [185];
+      \$981  = \port$14434$0 [185];
     end
     if (rst) begin
       \$981  = 1'h0;
@@ -8603,7 +8603,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$982  = ch1_result_status_spw_mismatch_snapshot;
     if (\$370 ) begin
-      \$982  = \port$14426$0 [186];
+      \$982  = \port$14434$0 [186];
     end
     if (rst) begin
       \$982  = 1'h0;
@@ -8613,7 +8613,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$983  = ch1_result_status_lc_snapshot;
     if (\$370 ) begin
-      \$983  = \port$14426$0 [182:177];
+      \$983  = \port$14434$0 [182:177];
     end
     if (rst) begin
       \$983  = 6'h00;
@@ -8633,7 +8633,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$985  = ch1_result_seq_line_delay_snapshot;
     if (\$370 ) begin
-      \$985  = \port$14426$0 [48:36];
+      \$985  = \port$14434$0 [48:36];
     end
     if (rst) begin
       \$985  = 13'h0000;
@@ -8643,7 +8643,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$986  = ch1_result_w0_lo_data_snapshot;
     if (\$370 ) begin
-      \$986  = \port$14426$0 [107:76];
+      \$986  = \port$14434$0 [107:76];
     end
     if (rst) begin
       \$986  = 32'd0;
@@ -8653,17 +8653,17 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$987  = ch1_result_w0_hi_data_snapshot;
     if (\$370 ) begin
-      \$987  = \port$14426$0 [130:108];
+      \$987  = { 9'h000, \port$14434$0 [130:108] };
     end
     if (rst) begin
-      \$987  = 23'h000000;
+      \$987  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$988  = ch1_result_w1_lo_data_snapshot;
     if (\$370 ) begin
-      \$988  = \port$14426$0 [165:134];
+      \$988  = \port$14434$0 [165:134];
     end
     if (rst) begin
       \$988  = 32'd0;
@@ -8673,17 +8673,17 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$989  = ch1_result_w1_hi_data_snapshot;
     if (\$370 ) begin
-      \$989  = \port$14426$0 [173:166];
+      \$989  = { 24'h000000, \port$14434$0 [173:166] };
     end
     if (rst) begin
-      \$989  = 8'h00;
+      \$989  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$990  = ch1_result_timestamp_time_snapshot;
     if (\$370 ) begin
-      \$990  = \port$14426$0 [35:4];
+      \$990  = \port$14434$0 [35:4];
     end
     if (rst) begin
       \$990  = 32'd0;
@@ -8693,7 +8693,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$991  = ch1_result_line_noise_events_snapshot;
     if (\$370 ) begin
-      \$991  = \port$14426$0 [53:50];
+      \$991  = \port$14434$0 [53:50];
     end
     if (rst) begin
       \$991  = 4'h0;
@@ -8703,7 +8703,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$992  = ch1_result_line_delay_settled_snapshot;
     if (\$370 ) begin
-      \$992  = \port$14426$0 [54];
+      \$992  = \port$14434$0 [54];
     end
     if (rst) begin
       \$992  = 1'h0;
@@ -8713,7 +8713,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$993  = ch1_result_line_delay_spread_snapshot;
     if (\$370 ) begin
-      \$993  = \port$14426$0 [75:68];
+      \$993  = \port$14434$0 [75:68];
     end
     if (rst) begin
       \$993  = 8'h00;
@@ -8723,7 +8723,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$994  = ch1_result_line_settled_delay_snapshot;
     if (\$370 ) begin
-      \$994  = \port$14426$0 [67:55];
+      \$994  = \port$14434$0 [67:55];
     end
     if (rst) begin
       \$994  = 13'h0000;
@@ -8796,7 +8796,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
       7'h0c:
           config_memory0_write_mask = 32'd16777215;
       7'h0d:
-          config_memory0_write_mask = 32'd2415857663;
+          config_memory0_write_mask = 32'd2684297215;
       7'h0e:
           config_memory0_write_mask = 32'd268435203;
       7'h0f:
@@ -8926,29 +8926,29 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$13879$0 [3:0];
-  assign ch0__cds = \port$13879$0 [49];
-  assign ch0__word0_ne = \port$13879$0 [131];
-  assign ch0__word0_nw = \port$13879$0 [132];
-  assign ch0__word0_crc_ok = \port$13879$0 [133];
-  assign ch0__word1_ne = \port$13879$0 [174];
-  assign ch0__word1_nw = \port$13879$0 [175];
-  assign ch0__word1_crc_ok = \port$13879$0 [176];
-  assign ch0__lc_repeat = \port$13879$0 [183];
-  assign ch0__lc_skip = \port$13879$0 [184];
-  assign ch0__lc_zero = \port$13879$0 [185];
-  assign ch0__spw_mismatch = \port$13879$0 [186];
-  assign ch0__lc = \port$13879$0 [182:177];
-  assign ch0__line_delay = \port$13879$0 [48:36];
-  assign ch0__word0_position = \port$13879$0 [130:76];
-  assign ch0__word1_position = \port$13879$0 [173:134];
-  assign ch0__timestamp = \port$13879$0 [35:4];
-  assign ch0__noise_events = \port$13879$0 [53:50];
-  assign ch0__delay_settled = \port$13879$0 [54];
-  assign ch0__delay_spread = \port$13879$0 [75:68];
-  assign ch0__settled_delay = \port$13879$0 [67:55];
-  assign ch0__cap_data_bits_w0 = 6'h37;
-  assign ch0__cap_data_bits_w1 = 6'h28;
+  assign ch0__status = \port$13887$0 [3:0];
+  assign ch0__cds = \port$13887$0 [49];
+  assign ch0__word0_ne = \port$13887$0 [131];
+  assign ch0__word0_nw = \port$13887$0 [132];
+  assign ch0__word0_crc_ok = \port$13887$0 [133];
+  assign ch0__word1_ne = \port$13887$0 [174];
+  assign ch0__word1_nw = \port$13887$0 [175];
+  assign ch0__word1_crc_ok = \port$13887$0 [176];
+  assign ch0__lc_repeat = \port$13887$0 [183];
+  assign ch0__lc_skip = \port$13887$0 [184];
+  assign ch0__lc_zero = \port$13887$0 [185];
+  assign ch0__spw_mismatch = \port$13887$0 [186];
+  assign ch0__lc = \port$13887$0 [182:177];
+  assign ch0__line_delay = \port$13887$0 [48:36];
+  assign ch0__word0_position = { 9'h000, \port$13887$0 [130:76] };
+  assign ch0__word1_position = { 24'h000000, \port$13887$0 [173:134] };
+  assign ch0__timestamp = \port$13887$0 [35:4];
+  assign ch0__noise_events = \port$13887$0 [53:50];
+  assign ch0__delay_settled = \port$13887$0 [54];
+  assign ch0__delay_spread = \port$13887$0 [75:68];
+  assign ch0__settled_delay = \port$13887$0 [67:55];
+  assign ch0__cap_data_bits_w0 = 7'h37;
+  assign ch0__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
@@ -8967,13 +8967,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$13967$0 [2:0];
-  assign ch0__ca_bytes_done = \port$13967$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$13890$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$13890$0 [31:16];
-  assign ch0__count_ca_refused = \port$13890$0 [47:32];
-  assign ch0__count_ca_aborted = \port$13890$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$13890$0 [79:64];
+  assign ch0__ca_status = \port$13975$0 [2:0];
+  assign ch0__ca_bytes_done = \port$13975$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$13898$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$13898$0 [31:16];
+  assign ch0__count_ca_refused = \port$13898$0 [47:32];
+  assign ch0__count_ca_aborted = \port$13898$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$13898$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -8993,29 +8993,29 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$14426$0 [3:0];
-  assign ch1__cds = \port$14426$0 [49];
-  assign ch1__word0_ne = \port$14426$0 [131];
-  assign ch1__word0_nw = \port$14426$0 [132];
-  assign ch1__word0_crc_ok = \port$14426$0 [133];
-  assign ch1__word1_ne = \port$14426$0 [174];
-  assign ch1__word1_nw = \port$14426$0 [175];
-  assign ch1__word1_crc_ok = \port$14426$0 [176];
-  assign ch1__lc_repeat = \port$14426$0 [183];
-  assign ch1__lc_skip = \port$14426$0 [184];
-  assign ch1__lc_zero = \port$14426$0 [185];
-  assign ch1__spw_mismatch = \port$14426$0 [186];
-  assign ch1__lc = \port$14426$0 [182:177];
-  assign ch1__line_delay = \port$14426$0 [48:36];
-  assign ch1__word0_position = \port$14426$0 [130:76];
-  assign ch1__word1_position = \port$14426$0 [173:134];
-  assign ch1__timestamp = \port$14426$0 [35:4];
-  assign ch1__noise_events = \port$14426$0 [53:50];
-  assign ch1__delay_settled = \port$14426$0 [54];
-  assign ch1__delay_spread = \port$14426$0 [75:68];
-  assign ch1__settled_delay = \port$14426$0 [67:55];
-  assign ch1__cap_data_bits_w0 = 6'h37;
-  assign ch1__cap_data_bits_w1 = 6'h28;
+  assign ch1__status = \port$14434$0 [3:0];
+  assign ch1__cds = \port$14434$0 [49];
+  assign ch1__word0_ne = \port$14434$0 [131];
+  assign ch1__word0_nw = \port$14434$0 [132];
+  assign ch1__word0_crc_ok = \port$14434$0 [133];
+  assign ch1__word1_ne = \port$14434$0 [174];
+  assign ch1__word1_nw = \port$14434$0 [175];
+  assign ch1__word1_crc_ok = \port$14434$0 [176];
+  assign ch1__lc_repeat = \port$14434$0 [183];
+  assign ch1__lc_skip = \port$14434$0 [184];
+  assign ch1__lc_zero = \port$14434$0 [185];
+  assign ch1__spw_mismatch = \port$14434$0 [186];
+  assign ch1__lc = \port$14434$0 [182:177];
+  assign ch1__line_delay = \port$14434$0 [48:36];
+  assign ch1__word0_position = { 9'h000, \port$14434$0 [130:76] };
+  assign ch1__word1_position = { 24'h000000, \port$14434$0 [173:134] };
+  assign ch1__timestamp = \port$14434$0 [35:4];
+  assign ch1__noise_events = \port$14434$0 [53:50];
+  assign ch1__delay_settled = \port$14434$0 [54];
+  assign ch1__delay_spread = \port$14434$0 [75:68];
+  assign ch1__settled_delay = \port$14434$0 [67:55];
+  assign ch1__cap_data_bits_w0 = 7'h37;
+  assign ch1__cap_data_bits_w1 = 7'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
@@ -9034,13 +9034,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$14514$0 [2:0];
-  assign ch1__ca_bytes_done = \port$14514$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$14437$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$14437$0 [31:16];
-  assign ch1__count_ca_refused = \port$14437$0 [47:32];
-  assign ch1__count_ca_aborted = \port$14437$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$14437$0 [79:64];
+  assign ch1__ca_status = \port$14522$0 [2:0];
+  assign ch1__ca_bytes_done = \port$14522$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$14445$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$14445$0 [31:16];
+  assign ch1__count_ca_refused = \port$14445$0 [47:32];
+  assign ch1__count_ca_aborted = \port$14445$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$14445$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -11581,32 +11581,36 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
-, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
+, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13879$0 , \port$13890$0 , regs__ca_done, \port$13967$0 , slo);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13887$0 , \port$13898$0 , regs__ca_done, \port$13975$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
-  wire [16:0] \$10 ;
-  wire [16:0] \$11 ;
-  reg \$12 ;
-  reg [3:0] \$13 ;
-  reg \$14 ;
-  reg \$15 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire [4:0] \$12 ;
+  wire [4:0] \$13 ;
+  wire [16:0] \$14 ;
+  wire [16:0] \$15 ;
   reg \$16 ;
-  reg \$17 ;
-  reg [15:0] \$18 ;
-  reg [15:0] \$19 ;
+  reg [3:0] \$17 ;
+  reg \$18 ;
+  reg \$19 ;
   wire \$2 ;
-  wire [186:0] \$20 ;
-  wire [79:0] \$21 ;
-  wire [9:0] \$22 ;
+  reg \$20 ;
+  reg \$21 ;
+  reg [15:0] \$22 ;
+  reg [15:0] \$23 ;
+  wire [186:0] \$24 ;
+  wire [79:0] \$25 ;
+  wire [9:0] \$26 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
-  wire \$7 ;
-  wire [4:0] \$8 ;
-  wire [4:0] \$9 ;
+  wire [6:0] \$7 ;
+  wire \$8 ;
+  wire [6:0] \$9 ;
   reg \$signal  = 1'h0;
   reg abort_cycle = 1'h0;
   wire busy;
@@ -11697,7 +11701,6 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   wire [15:0] cfg_w0_crc_start;
   input [4:0] cfg_w0_crc_width;
   wire [4:0] cfg_w0_crc_width;
-  input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
   input cfg_w0_gray;
   wire cfg_w0_gray;
@@ -11722,7 +11725,6 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   wire [15:0] cfg_w1_crc_start;
   input [4:0] cfg_w1_crc_width;
   wire [4:0] cfg_w1_crc_width;
-  input [5:0] cfg_w1_data_bits;
   wire [5:0] cfg_w1_data_bits;
   input cfg_w1_enable;
   wire cfg_w1_enable;
@@ -11767,12 +11769,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$13879$0 ;
-  wire [186:0] \port$13879$0 ;
-  output [79:0] \port$13890$0 ;
-  wire [79:0] \port$13890$0 ;
-  output [9:0] \port$13967$0 ;
-  wire [9:0] \port$13967$0 ;
+  output [186:0] \port$13887$0 ;
+  wire [186:0] \port$13887$0 ;
+  output [79:0] \port$13898$0 ;
+  wire [79:0] \port$13898$0 ;
+  output [9:0] \port$13975$0 ;
+  wire [9:0] \port$13975$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -11797,8 +11799,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   wire [3:0] regs__ca_wbuf_en;
   wire regs__ca_write;
   wire regs__cap_counters;
-  wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] regs__cap_data_bits_w1;
+  wire [6:0] regs__cap_data_bits_w0;
+  wire [6:0] regs__cap_data_bits_w1;
   wire [6:0] regs__cap_data_bits_w2;
   wire [6:0] regs__cap_data_bits_w3;
   wire [6:0] regs__cap_data_bits_w4;
@@ -11839,7 +11841,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   wire [15:0] regs__cfg_w0_crc_poly;
   wire [15:0] regs__cfg_w0_crc_start;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [5:0] regs__cfg_w0_data_bits;
+  input [6:0] regs__cfg_w0_data_bits;
+  wire [6:0] regs__cfg_w0_data_bits;
   wire regs__cfg_w0_gray;
   wire regs__cfg_w0_lc;
   wire regs__cfg_w0_nenw;
@@ -11854,7 +11857,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   wire [15:0] regs__cfg_w1_crc_poly;
   wire [15:0] regs__cfg_w1_crc_start;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [5:0] regs__cfg_w1_data_bits;
+  input [6:0] regs__cfg_w1_data_bits;
+  wire [6:0] regs__cfg_w1_data_bits;
   wire regs__cfg_w1_enable;
   wire regs__cfg_w1_gray;
   wire regs__cfg_w1_lc;
@@ -11899,11 +11903,11 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   wire regs__word0_crc_ok;
   wire regs__word0_ne;
   wire regs__word0_nw;
-  wire [54:0] regs__word0_position;
+  wire [63:0] regs__word0_position;
   wire regs__word1_crc_ok;
   wire regs__word1_ne;
   wire regs__word1_nw;
-  wire [39:0] regs__word1_position;
+  wire [63:0] regs__word1_position;
   wire report;
   input rst;
   wire rst;
@@ -11956,29 +11960,31 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
+  assign \$7  = \$6  ? 7'h00 : regs__cfg_w0_data_bits;
+  assign \$9  = \$8  ? 7'h00 : regs__cfg_w1_data_bits;
   assign trigger = \trigger$204  & regs__trigger_enable;
-  assign \$6  = ~ report;
-  assign \$7  = \$signal  & \$6 ;
-  assign \$8  = waited + 1'h1;
-  assign \$9  = \$7  ? \$8  : 5'h00;
-  assign \$10  = regs__done_count + 1'h1;
-  assign \$11  = regs__result_updates + 1'h1;
+  assign \$10  = ~ report;
+  assign \$11  = \$signal  & \$10 ;
+  assign \$12  = waited + 1'h1;
+  assign \$13  = \$11  ? \$12  : 5'h00;
+  assign \$14  = regs__done_count + 1'h1;
+  assign \$15  = regs__result_updates + 1'h1;
   always @(posedge clk)
-    \$signal  <= \$12 ;
+    \$signal  <= \$16 ;
   always @(posedge clk)
-    waited <= \$13 ;
+    waited <= \$17 ;
   always @(posedge clk)
-    pending_ok <= \$14 ;
+    pending_ok <= \$18 ;
   always @(posedge clk)
-    regs__frame_done <= \$15 ;
+    regs__frame_done <= \$19 ;
   always @(posedge clk)
-    ended_ok <= \$16 ;
+    ended_ok <= \$20 ;
   always @(posedge clk)
-    abort_cycle <= \$17 ;
+    abort_cycle <= \$21 ;
   always @(posedge clk)
-    regs__done_count <= \$18 ;
+    regs__done_count <= \$22 ;
   always @(posedge clk)
-    regs__result_updates <= \$19 ;
+    regs__result_updates <= \$23 ;
   \biss_master_uart.ch0.core  core (
     .abort(abort_cycle),
     .\abort$267 (ca_abort),
@@ -12015,7 +12021,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
     .cfg_w0_crc_poly(cfg_w0_crc_poly),
     .cfg_w0_crc_start(cfg_w0_crc_start),
     .cfg_w0_crc_width(cfg_w0_crc_width),
-    .cfg_w0_data_bits(cfg_w0_data_bits),
+    .cfg_w0_data_bits(\$7 [5:0]),
     .cfg_w0_gray(cfg_w0_gray),
     .cfg_w0_lc(cfg_w0_lc),
     .cfg_w0_nenw(cfg_w0_nenw),
@@ -12025,7 +12031,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
     .cfg_w1_crc_poly(cfg_w1_crc_poly),
     .cfg_w1_crc_start(cfg_w1_crc_start),
     .cfg_w1_crc_width(cfg_w1_crc_width),
-    .cfg_w1_data_bits(cfg_w1_data_bits),
+    .cfg_w1_data_bits(\$9 [5:0]),
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_gray(cfg_w1_gray),
     .cfg_w1_lc(cfg_w1_lc),
@@ -12036,7 +12042,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
-    .counts(\$21 ),
+    .counts(\$25 ),
     .\done$319 (done),
     .frames(regs__ca_busy),
     .ma(ma),
@@ -12045,8 +12051,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
-    .result(\$22 ),
-    .\result$324 (\$20 ),
+    .result(\$26 ),
+    .\result$324 (\$24 ),
     .rst(rst),
     .slo(slo),
     .start(start),
@@ -12056,73 +12062,73 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$12  = \$signal ;
+    \$16  = \$signal ;
     if (report) begin
-      \$12  = 1'h0;
+      \$16  = 1'h0;
     end
     if (done) begin
-      \$12  = 1'h1;
+      \$16  = 1'h1;
     end
-    if (rst) begin
-      \$12  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$13  = \$9 [3:0];
-    if (rst) begin
-      \$13  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$14  = pending_ok;
-    if (done) begin
-      \$14  = valid;
-    end
-    if (rst) begin
-      \$14  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$15  = report;
-    if (rst) begin
-      \$15  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$16  = pending_ok;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$17  = regs__abort_cycle;
+    \$17  = \$13 [3:0];
     if (rst) begin
-      \$17  = 1'h0;
+      \$17  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$18  = regs__done_count;
-    if (regs__frame_done) begin
-      \$18  = \$10 [15:0];
-    end
-    if (rst) begin
-      \$18  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$19  = regs__result_updates;
+    \$18  = pending_ok;
     if (done) begin
-      \$19  = \$11 [15:0];
+      \$18  = valid;
     end
     if (rst) begin
-      \$19  = 16'h0000;
+      \$18  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    \$19  = report;
+    if (rst) begin
+      \$19  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    \$20  = pending_ok;
+    if (rst) begin
+      \$20  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    \$21  = regs__abort_cycle;
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    \$22  = regs__done_count;
+    if (regs__frame_done) begin
+      \$22  = \$14 [15:0];
+    end
+    if (rst) begin
+      \$22  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    \$23  = regs__result_updates;
+    if (done) begin
+      \$23  = \$15 [15:0];
+    end
+    if (rst) begin
+      \$23  = 16'h0000;
     end
   end
   assign count_addr = ca_rbuf_addr[2:0];
@@ -12134,8 +12140,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign regs__periodic = periodic;
   assign busy = regs__busy;
   assign config_error = regs__config_error;
-  assign regs__cap_data_bits_w0 = 6'h37;
-  assign regs__cap_data_bits_w1 = 6'h28;
+  assign regs__cap_data_bits_w0 = 7'h37;
+  assign regs__cap_data_bits_w1 = 7'h28;
   assign regs__cap_timer_width = 6'h18;
   assign regs__cap_counters = 1'h1;
   assign regs__cap_timestamp = 1'h1;
@@ -12156,13 +12162,13 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign regs__cfg_break_time = cfg_break_time;
   assign regs__cfg_ack_limit = cfg_ack_limit;
   assign regs__cfg_timeout_limit = cfg_timeout_limit;
-  assign regs__cfg_w0_data_bits = cfg_w0_data_bits;
+  assign cfg_w0_data_bits = \$7 [5:0];
   assign regs__cfg_w0_nenw = cfg_w0_nenw;
   assign regs__cfg_w0_lc = cfg_w0_lc;
   assign regs__cfg_w0_crc = cfg_w0_crc;
   assign regs__cfg_w0_gray = cfg_w0_gray;
   assign regs__cfg_w0_signed = cfg_w0_signed;
-  assign regs__cfg_w1_data_bits = cfg_w1_data_bits;
+  assign cfg_w1_data_bits = \$9 [5:0];
   assign regs__cfg_w1_nenw = cfg_w1_nenw;
   assign regs__cfg_w1_lc = cfg_w1_lc;
   assign regs__cfg_w1_crc = cfg_w1_crc;
@@ -12176,48 +12182,48 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
   assign regs__cfg_confirm_frames = cfg_confirm_frames;
   assign regs__cfg_quiet_time = cfg_quiet_time;
-  assign regs__status = \$20 [3:0];
-  assign status = \$20 [3:0];
-  assign regs__cds = \$20 [49];
-  assign cds = \$20 [49];
-  assign regs__word0_ne = \$20 [131];
-  assign word0_ne = \$20 [131];
-  assign regs__word0_nw = \$20 [132];
-  assign word0_nw = \$20 [132];
-  assign regs__word0_crc_ok = \$20 [133];
-  assign word0_crc_ok = \$20 [133];
-  assign regs__word1_ne = \$20 [174];
-  assign word1_ne = \$20 [174];
-  assign regs__word1_nw = \$20 [175];
-  assign word1_nw = \$20 [175];
-  assign regs__word1_crc_ok = \$20 [176];
-  assign word1_crc_ok = \$20 [176];
-  assign regs__lc_repeat = \$20 [183];
-  assign lc_repeat = \$20 [183];
-  assign regs__lc_skip = \$20 [184];
-  assign lc_skip = \$20 [184];
-  assign regs__lc_zero = \$20 [185];
-  assign lc_zero = \$20 [185];
-  assign regs__spw_mismatch = \$20 [186];
-  assign spw_mismatch = \$20 [186];
-  assign regs__lc = \$20 [182:177];
-  assign lc = \$20 [182:177];
-  assign regs__line_delay = \$20 [48:36];
-  assign line_delay = \$20 [48:36];
-  assign regs__word0_position = \$20 [130:76];
-  assign word0_position = \$20 [130:76];
-  assign regs__word1_position = \$20 [173:134];
-  assign word1_position = \$20 [173:134];
-  assign regs__timestamp = \$20 [35:4];
-  assign timestamp = \$20 [35:4];
-  assign regs__noise_events = \$20 [53:50];
-  assign noise_events = \$20 [53:50];
-  assign regs__delay_settled = \$20 [54];
-  assign delay_settled = \$20 [54];
-  assign regs__delay_spread = \$20 [75:68];
-  assign delay_spread = \$20 [75:68];
-  assign regs__settled_delay = \$20 [67:55];
-  assign settled_delay = \$20 [67:55];
+  assign regs__status = \$24 [3:0];
+  assign status = \$24 [3:0];
+  assign regs__cds = \$24 [49];
+  assign cds = \$24 [49];
+  assign regs__word0_ne = \$24 [131];
+  assign word0_ne = \$24 [131];
+  assign regs__word0_nw = \$24 [132];
+  assign word0_nw = \$24 [132];
+  assign regs__word0_crc_ok = \$24 [133];
+  assign word0_crc_ok = \$24 [133];
+  assign regs__word1_ne = \$24 [174];
+  assign word1_ne = \$24 [174];
+  assign regs__word1_nw = \$24 [175];
+  assign word1_nw = \$24 [175];
+  assign regs__word1_crc_ok = \$24 [176];
+  assign word1_crc_ok = \$24 [176];
+  assign regs__lc_repeat = \$24 [183];
+  assign lc_repeat = \$24 [183];
+  assign regs__lc_skip = \$24 [184];
+  assign lc_skip = \$24 [184];
+  assign regs__lc_zero = \$24 [185];
+  assign lc_zero = \$24 [185];
+  assign regs__spw_mismatch = \$24 [186];
+  assign spw_mismatch = \$24 [186];
+  assign regs__lc = \$24 [182:177];
+  assign lc = \$24 [182:177];
+  assign regs__line_delay = \$24 [48:36];
+  assign line_delay = \$24 [48:36];
+  assign regs__word0_position = { 9'h000, \$24 [130:76] };
+  assign word0_position = \$24 [130:76];
+  assign regs__word1_position = { 24'h000000, \$24 [173:134] };
+  assign word1_position = \$24 [173:134];
+  assign regs__timestamp = \$24 [35:4];
+  assign timestamp = \$24 [35:4];
+  assign regs__noise_events = \$24 [53:50];
+  assign noise_events = \$24 [53:50];
+  assign regs__delay_settled = \$24 [54];
+  assign delay_settled = \$24 [54];
+  assign regs__delay_spread = \$24 [75:68];
+  assign delay_spread = \$24 [75:68];
+  assign regs__settled_delay = \$24 [67:55];
+  assign settled_delay = \$24 [67:55];
   assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
   assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
   assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
@@ -12238,20 +12244,20 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign regs__ca_start = ca_start;
   assign regs__ca_abort = ca_abort;
   assign ca_busy = regs__ca_busy;
-  assign regs__ca_status = \$22 [2:0];
-  assign ca_status = \$22 [2:0];
-  assign regs__ca_bytes_done = \$22 [9:3];
-  assign ca_bytes_done = \$22 [9:3];
-  assign regs__count_ca_crc4_error = \$21 [15:0];
-  assign count_ca_crc4_error = \$21 [15:0];
-  assign regs__count_ca_no_answer = \$21 [31:16];
-  assign count_ca_no_answer = \$21 [31:16];
-  assign regs__count_ca_refused = \$21 [47:32];
-  assign count_ca_refused = \$21 [47:32];
-  assign regs__count_ca_aborted = \$21 [63:48];
-  assign count_ca_aborted = \$21 [63:48];
-  assign regs__count_ca_data_fault = \$21 [79:64];
-  assign count_ca_data_fault = \$21 [79:64];
+  assign regs__ca_status = \$26 [2:0];
+  assign ca_status = \$26 [2:0];
+  assign regs__ca_bytes_done = \$26 [9:3];
+  assign ca_bytes_done = \$26 [9:3];
+  assign regs__count_ca_crc4_error = \$25 [15:0];
+  assign count_ca_crc4_error = \$25 [15:0];
+  assign regs__count_ca_no_answer = \$25 [31:16];
+  assign count_ca_no_answer = \$25 [31:16];
+  assign regs__count_ca_refused = \$25 [47:32];
+  assign count_ca_refused = \$25 [47:32];
+  assign regs__count_ca_aborted = \$25 [63:48];
+  assign count_ca_aborted = \$25 [63:48];
+  assign regs__count_ca_data_fault = \$25 [79:64];
+  assign count_ca_data_fault = \$25 [79:64];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
@@ -12261,14 +12267,16 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$13879$0  = \$20 ;
-  assign \port$13890$0  = \$21 ;
-  assign \port$13967$0  = \$22 ;
+  assign \port$13887$0  = \$24 ;
+  assign \port$13898$0  = \$25 ;
+  assign \port$13975$0  = \$26 ;
+  assign \$6  = regs__cfg_w0_data_bits[6];
+  assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$316 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$292 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit
-, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
+module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$316 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$292 , \periodic$45 
+, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
 , cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$265 
 , \abort$267 , abort, ma, \done$319 , \valid$321 , \result$324 , counts, ca_done, result, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
@@ -13328,7 +13336,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13521$272 (cycle[274:272]),
+    .\port$13529$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -13388,7 +13396,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13521$199 (cycle[199]),
+    .\port$13529$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -13439,7 +13447,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13521$259 (cycle[271:259]),
+    .\port$13529$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -13463,7 +13471,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13509$0 (\bit ),
+    .\port$13517$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -13531,7 +13539,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$6349$0 (\$28 ),
+    .\port$6353$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -17683,7 +17691,7 @@ module \biss_master_uart.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$13521$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$13529$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
@@ -18399,8 +18407,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13521$272 ;
-  wire [2:0] \port$13521$272 ;
+  input [2:0] \port$13529$272 ;
+  wire [2:0] \port$13529$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -18710,7 +18718,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13521$272 [0];
+  assign error_bit = ssi & \port$13529$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -18741,19 +18749,19 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13521$272 [0];
+  assign \$24  = ssi & \port$13529$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13521$272 [0];
+  assign \$28  = ssi & \port$13529$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13521$272 [0];
+  assign \$35  = ssi & \port$13529$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13521$272 [0];
+  assign \$39  = ssi & \port$13529$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -18774,7 +18782,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$13521$272 [2];
+  assign \$61  = ssi & \port$13529$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -19060,15 +19068,15 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13521$272 [0];
+  assign \$347  = ssi & \port$13529$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13521$272 [0];
-  assign \$355  = ~ \port$13521$272 [1];
+  assign \$354  = ssi & \port$13529$272 [0];
+  assign \$355  = ~ \port$13529$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -19805,7 +19813,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$13521$272 [0];
+  assign ssi_error = \port$13529$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -19815,8 +19823,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13521$272 [2];
-  assign ssi_error_low = \port$13521$272 [1];
+  assign ssi_double = \port$13529$272 [2];
+  assign ssi_error_low = \port$13529$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22115,7 +22123,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$13521$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$13529$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -22206,8 +22214,8 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$13521$199 , ssi, ss
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13521$199 ;
-  wire \port$13521$199 ;
+  input \port$13529$199 ;
+  wire \port$13529$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -22330,7 +22338,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$13521$199 , ssi, ss
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$13521$199  : 1'h0;
+  assign \$14  = \$13  ? \port$13529$199  : 1'h0;
   assign \$16  = \$10  | \$15 ;
   assign \$17  = ! sum_word;
   assign \$18  = sum_word ? 12'h000 : words[11:0];
@@ -22495,7 +22503,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$13521$199 , ssi, ss
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13521$199 , 1'h1 };
+  assign enables = { \port$13529$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -24637,7 +24645,7 @@ module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13521$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13529$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -25220,8 +25228,8 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13521$259 ;
-  wire [12:0] \port$13521$259 ;
+  input [12:0] \port$13529$259 ;
+  wire [12:0] \port$13529$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -25244,7 +25252,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13521$259 [12:1] + 1'h1;
+  assign \$460  = \port$13529$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -25820,7 +25828,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13521$259 [0]),
+    .clear_high(\port$13529$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -25963,7 +25971,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13521$259 [0]) begin
+            if (\port$13529$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -26048,7 +26056,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13521$259 [0]) begin
+            if (\port$13529$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -26087,7 +26095,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13521$259 [12:1] };
+            \$534  = { 1'h0, \port$13529$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -26472,11 +26480,11 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13521$259 [12:1] };
-  assign fixed = \port$13521$259 [0];
+  assign fixed_delay = { 1'h0, \port$13529$259 [12:1] };
+  assign fixed = \port$13529$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13521$259 [0];
+  assign clear_high = \port$13529$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -28997,7 +29005,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13509$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13517$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -29039,8 +29047,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13509$0 ;
-  wire \port$13509$0 ;
+  input \port$13517$0 ;
+  wire \port$13517$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -29054,9 +29062,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13509$0  };
-  assign \$2  = { lc[4:0], \port$13509$0  } == last;
-  assign \$3  = { lc[4:0], \port$13509$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13517$0  };
+  assign \$2  = { lc[4:0], \port$13517$0  } == last;
+  assign \$3  = { lc[4:0], \port$13517$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -29166,7 +29174,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13509$0  };
+  assign lc_next = { lc[4:0], \port$13517$0  };
   assign zero = is_zero;
 endmodule
 
@@ -31963,7 +31971,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$6349$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$6353$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
@@ -32141,8 +32149,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$6349$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$6349$0 ;
-  wire \port$6349$0 ;
+  output \port$6353$0 ;
+  wire \port$6353$0 ;
   output report;
   wire report;
   input report_frame;
@@ -32260,7 +32268,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$6349$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$6349$0  = \$2 ;
+  assign \port$6353$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -32315,32 +32323,36 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
-, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
+, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14426$0 , \port$14437$0 , regs__ca_done, \port$14514$0 , slo);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14434$0 , \port$14445$0 , regs__ca_done, \port$14522$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire \$1 ;
-  wire [16:0] \$10 ;
-  wire [16:0] \$11 ;
-  reg \$12 ;
-  reg [3:0] \$13 ;
-  reg \$14 ;
-  reg \$15 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire [4:0] \$12 ;
+  wire [4:0] \$13 ;
+  wire [16:0] \$14 ;
+  wire [16:0] \$15 ;
   reg \$16 ;
-  reg \$17 ;
-  reg [15:0] \$18 ;
-  reg [15:0] \$19 ;
+  reg [3:0] \$17 ;
+  reg \$18 ;
+  reg \$19 ;
   wire \$2 ;
-  wire [186:0] \$20 ;
-  wire [79:0] \$21 ;
-  wire [9:0] \$22 ;
+  reg \$20 ;
+  reg \$21 ;
+  reg [15:0] \$22 ;
+  reg [15:0] \$23 ;
+  wire [186:0] \$24 ;
+  wire [79:0] \$25 ;
+  wire [9:0] \$26 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
-  wire \$7 ;
-  wire [4:0] \$8 ;
-  wire [4:0] \$9 ;
+  wire [6:0] \$7 ;
+  wire \$8 ;
+  wire [6:0] \$9 ;
   reg \$signal  = 1'h0;
   reg abort_cycle = 1'h0;
   wire busy;
@@ -32431,7 +32443,6 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   wire [15:0] cfg_w0_crc_start;
   input [4:0] cfg_w0_crc_width;
   wire [4:0] cfg_w0_crc_width;
-  input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
   input cfg_w0_gray;
   wire cfg_w0_gray;
@@ -32456,7 +32467,6 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   wire [15:0] cfg_w1_crc_start;
   input [4:0] cfg_w1_crc_width;
   wire [4:0] cfg_w1_crc_width;
-  input [5:0] cfg_w1_data_bits;
   wire [5:0] cfg_w1_data_bits;
   input cfg_w1_enable;
   wire cfg_w1_enable;
@@ -32501,12 +32511,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$14426$0 ;
-  wire [186:0] \port$14426$0 ;
-  output [79:0] \port$14437$0 ;
-  wire [79:0] \port$14437$0 ;
-  output [9:0] \port$14514$0 ;
-  wire [9:0] \port$14514$0 ;
+  output [186:0] \port$14434$0 ;
+  wire [186:0] \port$14434$0 ;
+  output [79:0] \port$14445$0 ;
+  wire [79:0] \port$14445$0 ;
+  output [9:0] \port$14522$0 ;
+  wire [9:0] \port$14522$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -32531,8 +32541,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   wire [3:0] regs__ca_wbuf_en;
   wire regs__ca_write;
   wire regs__cap_counters;
-  wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] regs__cap_data_bits_w1;
+  wire [6:0] regs__cap_data_bits_w0;
+  wire [6:0] regs__cap_data_bits_w1;
   wire [6:0] regs__cap_data_bits_w2;
   wire [6:0] regs__cap_data_bits_w3;
   wire [6:0] regs__cap_data_bits_w4;
@@ -32573,7 +32583,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   wire [15:0] regs__cfg_w0_crc_poly;
   wire [15:0] regs__cfg_w0_crc_start;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [5:0] regs__cfg_w0_data_bits;
+  input [6:0] regs__cfg_w0_data_bits;
+  wire [6:0] regs__cfg_w0_data_bits;
   wire regs__cfg_w0_gray;
   wire regs__cfg_w0_lc;
   wire regs__cfg_w0_nenw;
@@ -32588,7 +32599,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   wire [15:0] regs__cfg_w1_crc_poly;
   wire [15:0] regs__cfg_w1_crc_start;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [5:0] regs__cfg_w1_data_bits;
+  input [6:0] regs__cfg_w1_data_bits;
+  wire [6:0] regs__cfg_w1_data_bits;
   wire regs__cfg_w1_enable;
   wire regs__cfg_w1_gray;
   wire regs__cfg_w1_lc;
@@ -32633,11 +32645,11 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   wire regs__word0_crc_ok;
   wire regs__word0_ne;
   wire regs__word0_nw;
-  wire [54:0] regs__word0_position;
+  wire [63:0] regs__word0_position;
   wire regs__word1_crc_ok;
   wire regs__word1_ne;
   wire regs__word1_nw;
-  wire [39:0] regs__word1_position;
+  wire [63:0] regs__word1_position;
   wire report;
   input rst;
   wire rst;
@@ -32690,29 +32702,31 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
+  assign \$7  = \$6  ? 7'h00 : regs__cfg_w0_data_bits;
+  assign \$9  = \$8  ? 7'h00 : regs__cfg_w1_data_bits;
   assign trigger = \trigger$204  & regs__trigger_enable;
-  assign \$6  = ~ report;
-  assign \$7  = \$signal  & \$6 ;
-  assign \$8  = waited + 1'h1;
-  assign \$9  = \$7  ? \$8  : 5'h00;
-  assign \$10  = regs__done_count + 1'h1;
-  assign \$11  = regs__result_updates + 1'h1;
+  assign \$10  = ~ report;
+  assign \$11  = \$signal  & \$10 ;
+  assign \$12  = waited + 1'h1;
+  assign \$13  = \$11  ? \$12  : 5'h00;
+  assign \$14  = regs__done_count + 1'h1;
+  assign \$15  = regs__result_updates + 1'h1;
   always @(posedge clk)
-    \$signal  <= \$12 ;
+    \$signal  <= \$16 ;
   always @(posedge clk)
-    waited <= \$13 ;
+    waited <= \$17 ;
   always @(posedge clk)
-    pending_ok <= \$14 ;
+    pending_ok <= \$18 ;
   always @(posedge clk)
-    regs__frame_done <= \$15 ;
+    regs__frame_done <= \$19 ;
   always @(posedge clk)
-    ended_ok <= \$16 ;
+    ended_ok <= \$20 ;
   always @(posedge clk)
-    abort_cycle <= \$17 ;
+    abort_cycle <= \$21 ;
   always @(posedge clk)
-    regs__done_count <= \$18 ;
+    regs__done_count <= \$22 ;
   always @(posedge clk)
-    regs__result_updates <= \$19 ;
+    regs__result_updates <= \$23 ;
   \biss_master_uart.ch1.core  core (
     .abort(abort_cycle),
     .\abort$267 (ca_abort),
@@ -32749,7 +32763,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
     .cfg_w0_crc_poly(cfg_w0_crc_poly),
     .cfg_w0_crc_start(cfg_w0_crc_start),
     .cfg_w0_crc_width(cfg_w0_crc_width),
-    .cfg_w0_data_bits(cfg_w0_data_bits),
+    .cfg_w0_data_bits(\$7 [5:0]),
     .cfg_w0_gray(cfg_w0_gray),
     .cfg_w0_lc(cfg_w0_lc),
     .cfg_w0_nenw(cfg_w0_nenw),
@@ -32759,7 +32773,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
     .cfg_w1_crc_poly(cfg_w1_crc_poly),
     .cfg_w1_crc_start(cfg_w1_crc_start),
     .cfg_w1_crc_width(cfg_w1_crc_width),
-    .cfg_w1_data_bits(cfg_w1_data_bits),
+    .cfg_w1_data_bits(\$9 [5:0]),
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_gray(cfg_w1_gray),
     .cfg_w1_lc(cfg_w1_lc),
@@ -32770,7 +32784,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
-    .counts(\$21 ),
+    .counts(\$25 ),
     .\done$319 (done),
     .frames(regs__ca_busy),
     .ma(ma),
@@ -32779,8 +32793,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
-    .result(\$22 ),
-    .\result$324 (\$20 ),
+    .result(\$26 ),
+    .\result$324 (\$24 ),
     .rst(rst),
     .slo(slo),
     .start(start),
@@ -32790,73 +32804,73 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$12  = \$signal ;
+    \$16  = \$signal ;
     if (report) begin
-      \$12  = 1'h0;
+      \$16  = 1'h0;
     end
     if (done) begin
-      \$12  = 1'h1;
+      \$16  = 1'h1;
     end
-    if (rst) begin
-      \$12  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$13  = \$9 [3:0];
-    if (rst) begin
-      \$13  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$14  = pending_ok;
-    if (done) begin
-      \$14  = valid;
-    end
-    if (rst) begin
-      \$14  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$15  = report;
-    if (rst) begin
-      \$15  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$16  = pending_ok;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$17  = regs__abort_cycle;
+    \$17  = \$13 [3:0];
     if (rst) begin
-      \$17  = 1'h0;
+      \$17  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$18  = regs__done_count;
-    if (regs__frame_done) begin
-      \$18  = \$10 [15:0];
-    end
-    if (rst) begin
-      \$18  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$19  = regs__result_updates;
+    \$18  = pending_ok;
     if (done) begin
-      \$19  = \$11 [15:0];
+      \$18  = valid;
     end
     if (rst) begin
-      \$19  = 16'h0000;
+      \$18  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    \$19  = report;
+    if (rst) begin
+      \$19  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    \$20  = pending_ok;
+    if (rst) begin
+      \$20  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    \$21  = regs__abort_cycle;
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    \$22  = regs__done_count;
+    if (regs__frame_done) begin
+      \$22  = \$14 [15:0];
+    end
+    if (rst) begin
+      \$22  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    \$23  = regs__result_updates;
+    if (done) begin
+      \$23  = \$15 [15:0];
+    end
+    if (rst) begin
+      \$23  = 16'h0000;
     end
   end
   assign count_addr = ca_rbuf_addr[2:0];
@@ -32868,8 +32882,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign regs__periodic = periodic;
   assign busy = regs__busy;
   assign config_error = regs__config_error;
-  assign regs__cap_data_bits_w0 = 6'h37;
-  assign regs__cap_data_bits_w1 = 6'h28;
+  assign regs__cap_data_bits_w0 = 7'h37;
+  assign regs__cap_data_bits_w1 = 7'h28;
   assign regs__cap_timer_width = 6'h18;
   assign regs__cap_counters = 1'h1;
   assign regs__cap_timestamp = 1'h1;
@@ -32890,13 +32904,13 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign regs__cfg_break_time = cfg_break_time;
   assign regs__cfg_ack_limit = cfg_ack_limit;
   assign regs__cfg_timeout_limit = cfg_timeout_limit;
-  assign regs__cfg_w0_data_bits = cfg_w0_data_bits;
+  assign cfg_w0_data_bits = \$7 [5:0];
   assign regs__cfg_w0_nenw = cfg_w0_nenw;
   assign regs__cfg_w0_lc = cfg_w0_lc;
   assign regs__cfg_w0_crc = cfg_w0_crc;
   assign regs__cfg_w0_gray = cfg_w0_gray;
   assign regs__cfg_w0_signed = cfg_w0_signed;
-  assign regs__cfg_w1_data_bits = cfg_w1_data_bits;
+  assign cfg_w1_data_bits = \$9 [5:0];
   assign regs__cfg_w1_nenw = cfg_w1_nenw;
   assign regs__cfg_w1_lc = cfg_w1_lc;
   assign regs__cfg_w1_crc = cfg_w1_crc;
@@ -32910,48 +32924,48 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
   assign regs__cfg_confirm_frames = cfg_confirm_frames;
   assign regs__cfg_quiet_time = cfg_quiet_time;
-  assign regs__status = \$20 [3:0];
-  assign status = \$20 [3:0];
-  assign regs__cds = \$20 [49];
-  assign cds = \$20 [49];
-  assign regs__word0_ne = \$20 [131];
-  assign word0_ne = \$20 [131];
-  assign regs__word0_nw = \$20 [132];
-  assign word0_nw = \$20 [132];
-  assign regs__word0_crc_ok = \$20 [133];
-  assign word0_crc_ok = \$20 [133];
-  assign regs__word1_ne = \$20 [174];
-  assign word1_ne = \$20 [174];
-  assign regs__word1_nw = \$20 [175];
-  assign word1_nw = \$20 [175];
-  assign regs__word1_crc_ok = \$20 [176];
-  assign word1_crc_ok = \$20 [176];
-  assign regs__lc_repeat = \$20 [183];
-  assign lc_repeat = \$20 [183];
-  assign regs__lc_skip = \$20 [184];
-  assign lc_skip = \$20 [184];
-  assign regs__lc_zero = \$20 [185];
-  assign lc_zero = \$20 [185];
-  assign regs__spw_mismatch = \$20 [186];
-  assign spw_mismatch = \$20 [186];
-  assign regs__lc = \$20 [182:177];
-  assign lc = \$20 [182:177];
-  assign regs__line_delay = \$20 [48:36];
-  assign line_delay = \$20 [48:36];
-  assign regs__word0_position = \$20 [130:76];
-  assign word0_position = \$20 [130:76];
-  assign regs__word1_position = \$20 [173:134];
-  assign word1_position = \$20 [173:134];
-  assign regs__timestamp = \$20 [35:4];
-  assign timestamp = \$20 [35:4];
-  assign regs__noise_events = \$20 [53:50];
-  assign noise_events = \$20 [53:50];
-  assign regs__delay_settled = \$20 [54];
-  assign delay_settled = \$20 [54];
-  assign regs__delay_spread = \$20 [75:68];
-  assign delay_spread = \$20 [75:68];
-  assign regs__settled_delay = \$20 [67:55];
-  assign settled_delay = \$20 [67:55];
+  assign regs__status = \$24 [3:0];
+  assign status = \$24 [3:0];
+  assign regs__cds = \$24 [49];
+  assign cds = \$24 [49];
+  assign regs__word0_ne = \$24 [131];
+  assign word0_ne = \$24 [131];
+  assign regs__word0_nw = \$24 [132];
+  assign word0_nw = \$24 [132];
+  assign regs__word0_crc_ok = \$24 [133];
+  assign word0_crc_ok = \$24 [133];
+  assign regs__word1_ne = \$24 [174];
+  assign word1_ne = \$24 [174];
+  assign regs__word1_nw = \$24 [175];
+  assign word1_nw = \$24 [175];
+  assign regs__word1_crc_ok = \$24 [176];
+  assign word1_crc_ok = \$24 [176];
+  assign regs__lc_repeat = \$24 [183];
+  assign lc_repeat = \$24 [183];
+  assign regs__lc_skip = \$24 [184];
+  assign lc_skip = \$24 [184];
+  assign regs__lc_zero = \$24 [185];
+  assign lc_zero = \$24 [185];
+  assign regs__spw_mismatch = \$24 [186];
+  assign spw_mismatch = \$24 [186];
+  assign regs__lc = \$24 [182:177];
+  assign lc = \$24 [182:177];
+  assign regs__line_delay = \$24 [48:36];
+  assign line_delay = \$24 [48:36];
+  assign regs__word0_position = { 9'h000, \$24 [130:76] };
+  assign word0_position = \$24 [130:76];
+  assign regs__word1_position = { 24'h000000, \$24 [173:134] };
+  assign word1_position = \$24 [173:134];
+  assign regs__timestamp = \$24 [35:4];
+  assign timestamp = \$24 [35:4];
+  assign regs__noise_events = \$24 [53:50];
+  assign noise_events = \$24 [53:50];
+  assign regs__delay_settled = \$24 [54];
+  assign delay_settled = \$24 [54];
+  assign regs__delay_spread = \$24 [75:68];
+  assign delay_spread = \$24 [75:68];
+  assign regs__settled_delay = \$24 [67:55];
+  assign settled_delay = \$24 [67:55];
   assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
   assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
   assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
@@ -32972,20 +32986,20 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign regs__ca_start = ca_start;
   assign regs__ca_abort = ca_abort;
   assign ca_busy = regs__ca_busy;
-  assign regs__ca_status = \$22 [2:0];
-  assign ca_status = \$22 [2:0];
-  assign regs__ca_bytes_done = \$22 [9:3];
-  assign ca_bytes_done = \$22 [9:3];
-  assign regs__count_ca_crc4_error = \$21 [15:0];
-  assign count_ca_crc4_error = \$21 [15:0];
-  assign regs__count_ca_no_answer = \$21 [31:16];
-  assign count_ca_no_answer = \$21 [31:16];
-  assign regs__count_ca_refused = \$21 [47:32];
-  assign count_ca_refused = \$21 [47:32];
-  assign regs__count_ca_aborted = \$21 [63:48];
-  assign count_ca_aborted = \$21 [63:48];
-  assign regs__count_ca_data_fault = \$21 [79:64];
-  assign count_ca_data_fault = \$21 [79:64];
+  assign regs__ca_status = \$26 [2:0];
+  assign ca_status = \$26 [2:0];
+  assign regs__ca_bytes_done = \$26 [9:3];
+  assign ca_bytes_done = \$26 [9:3];
+  assign regs__count_ca_crc4_error = \$25 [15:0];
+  assign count_ca_crc4_error = \$25 [15:0];
+  assign regs__count_ca_no_answer = \$25 [31:16];
+  assign count_ca_no_answer = \$25 [31:16];
+  assign regs__count_ca_refused = \$25 [47:32];
+  assign count_ca_refused = \$25 [47:32];
+  assign regs__count_ca_aborted = \$25 [63:48];
+  assign count_ca_aborted = \$25 [63:48];
+  assign regs__count_ca_data_fault = \$25 [79:64];
+  assign count_ca_data_fault = \$25 [79:64];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
@@ -32995,14 +33009,16 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$14426$0  = \$20 ;
-  assign \port$14437$0  = \$21 ;
-  assign \port$14514$0  = \$22 ;
+  assign \port$14434$0  = \$24 ;
+  assign \port$14445$0  = \$25 ;
+  assign \port$14522$0  = \$26 ;
+  assign \$6  = regs__cfg_w0_data_bits[6];
+  assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$316 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$292 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit
-, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
+module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$316 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$292 , \periodic$45 
+, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
 , cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$265 
 , \abort$267 , abort, ma, \done$319 , \valid$321 , \result$324 , counts, ca_done, result, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
@@ -34062,7 +34078,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$14068$272 (cycle[274:272]),
+    .\port$14076$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -34122,7 +34138,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$14068$199 (cycle[199]),
+    .\port$14076$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -34173,7 +34189,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$14068$259 (cycle[271:259]),
+    .\port$14076$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -34197,7 +34213,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$14056$0 (\bit ),
+    .\port$14064$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -34265,7 +34281,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$11896$0 (\$28 ),
+    .\port$11904$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -38417,7 +38433,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$14068$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$14076$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
@@ -39133,8 +39149,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$14068$272 ;
-  wire [2:0] \port$14068$272 ;
+  input [2:0] \port$14076$272 ;
+  wire [2:0] \port$14076$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -39444,7 +39460,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$14068$272 [0];
+  assign error_bit = ssi & \port$14076$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -39475,19 +39491,19 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$14068$272 [0];
+  assign \$24  = ssi & \port$14076$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$14068$272 [0];
+  assign \$28  = ssi & \port$14076$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$14068$272 [0];
+  assign \$35  = ssi & \port$14076$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$14068$272 [0];
+  assign \$39  = ssi & \port$14076$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -39508,7 +39524,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$14068$272 [2];
+  assign \$61  = ssi & \port$14076$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -39794,15 +39810,15 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$14068$272 [0];
+  assign \$347  = ssi & \port$14076$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$14068$272 [0];
-  assign \$355  = ~ \port$14068$272 [1];
+  assign \$354  = ssi & \port$14076$272 [0];
+  assign \$355  = ~ \port$14076$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -40539,7 +40555,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$14068$272 [0];
+  assign ssi_error = \port$14076$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -40549,8 +40565,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$14068$272 [2];
-  assign ssi_error_low = \port$14068$272 [1];
+  assign ssi_double = \port$14076$272 [2];
+  assign ssi_error_low = \port$14076$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -42849,7 +42865,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$14068$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$14076$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -42940,8 +42956,8 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$14068$199 , ssi, ss
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$14068$199 ;
-  wire \port$14068$199 ;
+  input \port$14076$199 ;
+  wire \port$14076$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -43064,7 +43080,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$14068$199 , ssi, ss
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$14068$199  : 1'h0;
+  assign \$14  = \$13  ? \port$14076$199  : 1'h0;
   assign \$16  = \$10  | \$15 ;
   assign \$17  = ! sum_word;
   assign \$18  = sum_word ? 12'h000 : words[11:0];
@@ -43229,7 +43245,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$14068$199 , ssi, ss
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$14068$199 , 1'h1 };
+  assign enables = { \port$14076$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -45371,7 +45387,7 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$14068$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$14076$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -45954,8 +45970,8 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$14068$259 ;
-  wire [12:0] \port$14068$259 ;
+  input [12:0] \port$14076$259 ;
+  wire [12:0] \port$14076$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -45978,7 +45994,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$14068$259 [12:1] + 1'h1;
+  assign \$460  = \port$14076$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -46554,7 +46570,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$14068$259 [0]),
+    .clear_high(\port$14076$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -46697,7 +46713,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$14068$259 [0]) begin
+            if (\port$14076$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -46782,7 +46798,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$14068$259 [0]) begin
+            if (\port$14076$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -46821,7 +46837,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$14068$259 [12:1] };
+            \$534  = { 1'h0, \port$14076$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -47206,11 +47222,11 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$14068$259 [12:1] };
-  assign fixed = \port$14068$259 [0];
+  assign fixed_delay = { 1'h0, \port$14076$259 [12:1] };
+  assign fixed = \port$14076$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$14068$259 [0];
+  assign clear_high = \port$14076$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -49731,7 +49747,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$14056$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$14064$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -49773,8 +49789,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$14056$0 ;
-  wire \port$14056$0 ;
+  input \port$14064$0 ;
+  wire \port$14064$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -49788,9 +49804,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$14056$0  };
-  assign \$2  = { lc[4:0], \port$14056$0  } == last;
-  assign \$3  = { lc[4:0], \port$14056$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$14064$0  };
+  assign \$2  = { lc[4:0], \port$14064$0  } == last;
+  assign \$3  = { lc[4:0], \port$14064$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -49900,7 +49916,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$14056$0  };
+  assign lc_next = { lc[4:0], \port$14064$0  };
   assign zero = is_zero;
 endmodule
 
@@ -52697,7 +52713,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$11896$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$11904$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire \$1 ;
@@ -52875,8 +52891,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$11896$0 , 
   wire noisy;
   output passed;
   wire passed;
-  output \port$11896$0 ;
-  wire \port$11896$0 ;
+  output \port$11904$0 ;
+  wire \port$11904$0 ;
   output report;
   wire report;
   input report_frame;
@@ -52994,7 +53010,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$11896$0 , 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$11896$0  = \$2 ;
+  assign \port$11904$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

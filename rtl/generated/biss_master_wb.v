@@ -63,8 +63,8 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire [3:0] ch0__ca_wbuf_en;
   wire ch0__ca_write;
   wire ch0__cap_counters;
-  wire [5:0] ch0__cap_data_bits_w0;
-  wire [5:0] ch0__cap_data_bits_w1;
+  wire [6:0] ch0__cap_data_bits_w0;
+  wire [6:0] ch0__cap_data_bits_w1;
   wire [6:0] ch0__cap_data_bits_w2;
   wire [6:0] ch0__cap_data_bits_w3;
   wire [6:0] ch0__cap_data_bits_w4;
@@ -100,7 +100,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire [15:0] ch0__cfg_w0_crc_poly;
   wire [15:0] ch0__cfg_w0_crc_start;
   wire [4:0] ch0__cfg_w0_crc_width;
-  wire [5:0] ch0__cfg_w0_data_bits;
+  wire [6:0] ch0__cfg_w0_data_bits;
   wire ch0__cfg_w0_gray;
   wire ch0__cfg_w0_lc;
   wire ch0__cfg_w0_nenw;
@@ -110,7 +110,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire [15:0] ch0__cfg_w1_crc_poly;
   wire [15:0] ch0__cfg_w1_crc_start;
   wire [4:0] ch0__cfg_w1_crc_width;
-  wire [5:0] ch0__cfg_w1_data_bits;
+  wire [6:0] ch0__cfg_w1_data_bits;
   wire ch0__cfg_w1_enable;
   wire ch0__cfg_w1_gray;
   wire ch0__cfg_w1_lc;
@@ -223,11 +223,11 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch0__word0_crc_ok;
   wire ch0__word0_ne;
   wire ch0__word0_nw;
-  wire [54:0] ch0__word0_position;
+  wire [63:0] ch0__word0_position;
   wire ch0__word1_crc_ok;
   wire ch0__word1_ne;
   wire ch0__word1_nw;
-  wire [39:0] ch0__word1_position;
+  wire [63:0] ch0__word1_position;
   wire ch0__word2_crc_ok;
   wire ch0__word2_ne;
   wire ch0__word2_nw;
@@ -269,8 +269,8 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire [3:0] ch1__ca_wbuf_en;
   wire ch1__ca_write;
   wire ch1__cap_counters;
-  wire [5:0] ch1__cap_data_bits_w0;
-  wire [5:0] ch1__cap_data_bits_w1;
+  wire [6:0] ch1__cap_data_bits_w0;
+  wire [6:0] ch1__cap_data_bits_w1;
   wire [6:0] ch1__cap_data_bits_w2;
   wire [6:0] ch1__cap_data_bits_w3;
   wire [6:0] ch1__cap_data_bits_w4;
@@ -306,7 +306,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire [15:0] ch1__cfg_w0_crc_poly;
   wire [15:0] ch1__cfg_w0_crc_start;
   wire [4:0] ch1__cfg_w0_crc_width;
-  wire [5:0] ch1__cfg_w0_data_bits;
+  wire [6:0] ch1__cfg_w0_data_bits;
   wire ch1__cfg_w0_gray;
   wire ch1__cfg_w0_lc;
   wire ch1__cfg_w0_nenw;
@@ -316,7 +316,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire [15:0] ch1__cfg_w1_crc_poly;
   wire [15:0] ch1__cfg_w1_crc_start;
   wire [4:0] ch1__cfg_w1_crc_width;
-  wire [5:0] ch1__cfg_w1_data_bits;
+  wire [6:0] ch1__cfg_w1_data_bits;
   wire ch1__cfg_w1_enable;
   wire ch1__cfg_w1_gray;
   wire ch1__cfg_w1_lc;
@@ -429,11 +429,11 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch1__word0_crc_ok;
   wire ch1__word0_ne;
   wire ch1__word0_nw;
-  wire [54:0] ch1__word0_position;
+  wire [63:0] ch1__word0_position;
   wire ch1__word1_crc_ok;
   wire ch1__word1_ne;
   wire ch1__word1_nw;
-  wire [39:0] ch1__word1_position;
+  wire [63:0] ch1__word1_position;
   wire ch1__word2_crc_ok;
   wire ch1__word2_ne;
   wire ch1__word2_nw;
@@ -504,10 +504,10 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire \regs__ca_write$489 ;
   wire regs__cap_counters;
   wire \regs__cap_counters$492 ;
-  wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$494 ;
-  wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$496 ;
+  wire [6:0] regs__cap_data_bits_w0;
+  wire [6:0] \regs__cap_data_bits_w0$494 ;
+  wire [6:0] regs__cap_data_bits_w1;
+  wire [6:0] \regs__cap_data_bits_w1$496 ;
   wire [6:0] regs__cap_data_bits_w2;
   wire [6:0] \regs__cap_data_bits_w2$498 ;
   wire [6:0] regs__cap_data_bits_w3;
@@ -578,8 +578,8 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire [15:0] \regs__cfg_w0_crc_start$563 ;
   wire [4:0] regs__cfg_w0_crc_width;
   wire [4:0] \regs__cfg_w0_crc_width$565 ;
-  wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$567 ;
+  wire [6:0] regs__cfg_w0_data_bits;
+  wire [6:0] \regs__cfg_w0_data_bits$567 ;
   wire regs__cfg_w0_gray;
   wire \regs__cfg_w0_gray$569 ;
   wire regs__cfg_w0_lc;
@@ -598,8 +598,8 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire [15:0] \regs__cfg_w1_crc_start$583 ;
   wire [4:0] regs__cfg_w1_crc_width;
   wire [4:0] \regs__cfg_w1_crc_width$585 ;
-  wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$587 ;
+  wire [6:0] regs__cfg_w1_data_bits;
+  wire [6:0] \regs__cfg_w1_data_bits$587 ;
   wire regs__cfg_w1_enable;
   wire \regs__cfg_w1_enable$589 ;
   wire regs__cfg_w1_gray;
@@ -832,16 +832,16 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire \regs__word0_ne$810 ;
   wire regs__word0_nw;
   wire \regs__word0_nw$812 ;
-  wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$814 ;
+  wire [63:0] regs__word0_position;
+  wire [63:0] \regs__word0_position$814 ;
   wire regs__word1_crc_ok;
   wire \regs__word1_crc_ok$816 ;
   wire regs__word1_ne;
   wire \regs__word1_ne$818 ;
   wire regs__word1_nw;
   wire \regs__word1_nw$820 ;
-  wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$822 ;
+  wire [63:0] regs__word1_position;
+  wire [63:0] \regs__word1_position$822 ;
   wire regs__word2_crc_ok;
   wire \regs__word2_crc_ok$824 ;
   wire regs__word2_ne;
@@ -1072,12 +1072,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$13352$0 (\$10 ),
-    .\port$13363$0 (\$11 ),
-    .\port$13440$0 (\$12 ),
-    .\port$13899$0 (\$13 ),
-    .\port$13910$0 (\$14 ),
-    .\port$13987$0 (\$15 ),
+    .\port$13360$0 (\$10 ),
+    .\port$13371$0 (\$11 ),
+    .\port$13448$0 (\$12 ),
+    .\port$13907$0 (\$13 ),
+    .\port$13918$0 (\$14 ),
+    .\port$13995$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1132,7 +1132,6 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .cfg_w0_crc_poly(regs__cfg_w0_crc_poly),
     .cfg_w0_crc_start(regs__cfg_w0_crc_start),
     .cfg_w0_crc_width(regs__cfg_w0_crc_width),
-    .cfg_w0_data_bits(regs__cfg_w0_data_bits),
     .cfg_w0_gray(regs__cfg_w0_gray),
     .cfg_w0_lc(regs__cfg_w0_lc),
     .cfg_w0_nenw(regs__cfg_w0_nenw),
@@ -1142,7 +1141,6 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .cfg_w1_crc_poly(regs__cfg_w1_crc_poly),
     .cfg_w1_crc_start(regs__cfg_w1_crc_start),
     .cfg_w1_crc_width(regs__cfg_w1_crc_width),
-    .cfg_w1_data_bits(regs__cfg_w1_data_bits),
     .cfg_w1_enable(regs__cfg_w1_enable),
     .cfg_w1_gray(regs__cfg_w1_gray),
     .cfg_w1_lc(regs__cfg_w1_lc),
@@ -1153,14 +1151,16 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$13352$0 (\$10 ),
-    .\port$13363$0 (\$11 ),
-    .\port$13440$0 (\$12 ),
+    .\port$13360$0 (\$10 ),
+    .\port$13371$0 (\$11 ),
+    .\port$13448$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
     .regs__ca_done(ch0__ca_done),
     .regs__ca_rbuf_data(ch0__ca_rbuf_data),
+    .regs__cfg_w0_data_bits(regs__cfg_w0_data_bits),
+    .regs__cfg_w1_data_bits(regs__cfg_w1_data_bits),
     .regs__config_error(ch0__config_error),
     .regs__count_data(ch0__count_data),
     .regs__done_count(ch0__done_count),
@@ -1209,7 +1209,6 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$561 ),
     .cfg_w0_crc_start(\regs__cfg_w0_crc_start$563 ),
     .cfg_w0_crc_width(\regs__cfg_w0_crc_width$565 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$567 ),
     .cfg_w0_gray(\regs__cfg_w0_gray$569 ),
     .cfg_w0_lc(\regs__cfg_w0_lc$571 ),
     .cfg_w0_nenw(\regs__cfg_w0_nenw$573 ),
@@ -1219,7 +1218,6 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$581 ),
     .cfg_w1_crc_start(\regs__cfg_w1_crc_start$583 ),
     .cfg_w1_crc_width(\regs__cfg_w1_crc_width$585 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$587 ),
     .cfg_w1_enable(\regs__cfg_w1_enable$589 ),
     .cfg_w1_gray(\regs__cfg_w1_gray$591 ),
     .cfg_w1_lc(\regs__cfg_w1_lc$593 ),
@@ -1230,14 +1228,16 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(\regs__count_en$767 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$791 ),
-    .\port$13899$0 (\$13 ),
-    .\port$13910$0 (\$14 ),
-    .\port$13987$0 (\$15 ),
+    .\port$13907$0 (\$13 ),
+    .\port$13918$0 (\$14 ),
+    .\port$13995$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$455 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
     .regs__ca_rbuf_data(ch1__ca_rbuf_data),
+    .regs__cfg_w0_data_bits(\regs__cfg_w0_data_bits$567 ),
+    .regs__cfg_w1_data_bits(\regs__cfg_w1_data_bits$587 ),
     .regs__config_error(ch1__config_error),
     .regs__count_data(ch1__count_data),
     .regs__done_count(ch1__done_count),
@@ -1318,10 +1318,10 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign ch0__ca_write = regs__ca_write;
   assign ch0__cap_counters = 1'h1;
   assign regs__cap_counters = 1'h1;
-  assign ch0__cap_data_bits_w0 = 6'h37;
-  assign regs__cap_data_bits_w0 = 6'h37;
-  assign ch0__cap_data_bits_w1 = 6'h28;
-  assign regs__cap_data_bits_w1 = 6'h28;
+  assign ch0__cap_data_bits_w0 = 7'h37;
+  assign regs__cap_data_bits_w0 = 7'h37;
+  assign ch0__cap_data_bits_w1 = 7'h28;
+  assign regs__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_data_bits_w2 = 7'h00;
   assign regs__cap_data_bits_w2 = 7'h00;
   assign ch0__cap_data_bits_w3 = 7'h00;
@@ -1587,16 +1587,16 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign regs__word0_ne = \$10 [131];
   assign ch0__word0_nw = \$10 [132];
   assign regs__word0_nw = \$10 [132];
-  assign ch0__word0_position = \$10 [130:76];
-  assign regs__word0_position = \$10 [130:76];
+  assign ch0__word0_position = { 9'h000, \$10 [130:76] };
+  assign regs__word0_position = { 9'h000, \$10 [130:76] };
   assign ch0__word1_crc_ok = \$10 [176];
   assign regs__word1_crc_ok = \$10 [176];
   assign ch0__word1_ne = \$10 [174];
   assign regs__word1_ne = \$10 [174];
   assign ch0__word1_nw = \$10 [175];
   assign regs__word1_nw = \$10 [175];
-  assign ch0__word1_position = \$10 [173:134];
-  assign regs__word1_position = \$10 [173:134];
+  assign ch0__word1_position = { 24'h000000, \$10 [173:134] };
+  assign regs__word1_position = { 24'h000000, \$10 [173:134] };
   assign ch0__word2_crc_ok = 1'h0;
   assign regs__word2_crc_ok = 1'h0;
   assign ch0__word2_ne = 1'h0;
@@ -1662,10 +1662,10 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign ch1__ca_write = \regs__ca_write$489 ;
   assign ch1__cap_counters = 1'h1;
   assign \regs__cap_counters$492  = 1'h1;
-  assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$494  = 6'h37;
-  assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$496  = 6'h28;
+  assign ch1__cap_data_bits_w0 = 7'h37;
+  assign \regs__cap_data_bits_w0$494  = 7'h37;
+  assign ch1__cap_data_bits_w1 = 7'h28;
+  assign \regs__cap_data_bits_w1$496  = 7'h28;
   assign ch1__cap_data_bits_w2 = 7'h00;
   assign \regs__cap_data_bits_w2$498  = 7'h00;
   assign ch1__cap_data_bits_w3 = 7'h00;
@@ -1931,16 +1931,16 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign \regs__word0_ne$810  = \$13 [131];
   assign ch1__word0_nw = \$13 [132];
   assign \regs__word0_nw$812  = \$13 [132];
-  assign ch1__word0_position = \$13 [130:76];
-  assign \regs__word0_position$814  = \$13 [130:76];
+  assign ch1__word0_position = { 9'h000, \$13 [130:76] };
+  assign \regs__word0_position$814  = { 9'h000, \$13 [130:76] };
   assign ch1__word1_crc_ok = \$13 [176];
   assign \regs__word1_crc_ok$816  = \$13 [176];
   assign ch1__word1_ne = \$13 [174];
   assign \regs__word1_ne$818  = \$13 [174];
   assign ch1__word1_nw = \$13 [175];
   assign \regs__word1_nw$820  = \$13 [175];
-  assign ch1__word1_position = \$13 [173:134];
-  assign \regs__word1_position$822  = \$13 [173:134];
+  assign ch1__word1_position = { 24'h000000, \$13 [173:134] };
+  assign \regs__word1_position$822  = { 24'h000000, \$13 [173:134] };
   assign ch1__word2_crc_ok = 1'h0;
   assign \regs__word2_crc_ok$824  = 1'h0;
   assign ch1__word2_ne = 1'h0;
@@ -1992,7 +1992,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start
 , ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray
 , ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double
-, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13352$0 , \port$13363$0 , ch0__ca_done, \port$13440$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$13899$0 , \port$13910$0 , ch1__ca_done, \port$13987$0 
+, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13360$0 , \port$13371$0 , ch0__ca_done, \port$13448$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$13907$0 , \port$13918$0 , ch1__ca_done, \port$13995$0 
 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
@@ -2660,7 +2660,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$696 ;
   reg [23:0] \$697 ;
   reg \$698 ;
-  reg [5:0] \$699 ;
+  reg [6:0] \$699 ;
   wire \$7 ;
   wire \$70 ;
   reg \$700 ;
@@ -2668,7 +2668,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg [1:0] \$702 ;
   reg \$703 ;
   reg \$704 ;
-  reg [5:0] \$705 ;
+  reg [6:0] \$705 ;
   reg \$706 ;
   reg \$707 ;
   reg [1:0] \$708 ;
@@ -2801,9 +2801,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg [15:0] \$822 ;
   reg [12:0] \$823 ;
   reg [31:0] \$824 ;
-  reg [22:0] \$825 ;
+  reg [31:0] \$825 ;
   reg [31:0] \$826 ;
-  reg [7:0] \$827 ;
+  reg [31:0] \$827 ;
   reg [31:0] \$828 ;
   reg [3:0] \$829 ;
   wire \$83 ;
@@ -2842,13 +2842,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$86 ;
   reg [23:0] \$860 ;
   reg \$861 ;
-  reg [5:0] \$862 ;
+  reg [6:0] \$862 ;
   reg \$863 ;
   reg \$864 ;
   reg [1:0] \$865 ;
   reg \$866 ;
   reg \$867 ;
-  reg [5:0] \$868 ;
+  reg [6:0] \$868 ;
   reg \$869 ;
   wire \$87 ;
   reg \$870 ;
@@ -2980,9 +2980,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg [15:0] \$984 ;
   reg [12:0] \$985 ;
   reg [31:0] \$986 ;
-  reg [22:0] \$987 ;
+  reg [31:0] \$987 ;
   reg [31:0] \$988 ;
-  reg [7:0] \$989 ;
+  reg [31:0] \$989 ;
   wire [31:0] \$99 ;
   reg [31:0] \$990 ;
   reg [3:0] \$991 ;
@@ -3043,8 +3043,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire ch0__ca_write;
   wire ch0__cap_counters;
-  wire [5:0] ch0__cap_data_bits_w0;
-  wire [5:0] ch0__cap_data_bits_w1;
+  wire [6:0] ch0__cap_data_bits_w0;
+  wire [6:0] ch0__cap_data_bits_w1;
   wire [6:0] ch0__cap_data_bits_w2;
   wire [6:0] ch0__cap_data_bits_w3;
   wire [6:0] ch0__cap_data_bits_w4;
@@ -3103,8 +3103,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [15:0] ch0__cfg_w0_crc_start;
   (* init = 5'h00 *)
   wire [4:0] ch0__cfg_w0_crc_width;
-  (* init = 6'h00 *)
-  wire [5:0] ch0__cfg_w0_data_bits;
+  (* init = 7'h00 *)
+  wire [6:0] ch0__cfg_w0_data_bits;
   (* init = 1'h0 *)
   wire ch0__cfg_w0_gray;
   (* init = 1'h0 *)
@@ -3123,8 +3123,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [15:0] ch0__cfg_w1_crc_start;
   (* init = 5'h00 *)
   wire [4:0] ch0__cfg_w1_crc_width;
-  (* init = 6'h00 *)
-  wire [5:0] ch0__cfg_w1_data_bits;
+  (* init = 7'h00 *)
+  wire [6:0] ch0__cfg_w1_data_bits;
   (* init = 1'h0 *)
   wire ch0__cfg_w1_enable;
   (* init = 1'h0 *)
@@ -3254,11 +3254,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0__word0_crc_ok;
   wire ch0__word0_ne;
   wire ch0__word0_nw;
-  wire [54:0] ch0__word0_position;
+  wire [63:0] ch0__word0_position;
   wire ch0__word1_crc_ok;
   wire ch0__word1_ne;
   wire ch0__word1_nw;
-  wire [39:0] ch0__word1_position;
+  wire [63:0] ch0__word1_position;
   wire ch0__word2_crc_ok;
   wire ch0__word2_ne;
   wire ch0__word2_nw;
@@ -3414,8 +3414,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch0_cfg_words_config_write = 1'h0;
   output [1:0] ch0_cfg_words_w0_crc;
   reg [1:0] ch0_cfg_words_w0_crc = 2'h0;
-  output [5:0] ch0_cfg_words_w0_data_bits;
-  reg [5:0] ch0_cfg_words_w0_data_bits = 6'h00;
+  output [6:0] ch0_cfg_words_w0_data_bits;
+  reg [6:0] ch0_cfg_words_w0_data_bits = 7'h00;
   output ch0_cfg_words_w0_gray;
   reg ch0_cfg_words_w0_gray = 1'h0;
   output ch0_cfg_words_w0_lc;
@@ -3426,8 +3426,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch0_cfg_words_w0_signed = 1'h0;
   output [1:0] ch0_cfg_words_w1_crc;
   reg [1:0] ch0_cfg_words_w1_crc = 2'h0;
-  output [5:0] ch0_cfg_words_w1_data_bits;
-  reg [5:0] ch0_cfg_words_w1_data_bits = 6'h00;
+  output [6:0] ch0_cfg_words_w1_data_bits;
+  reg [6:0] ch0_cfg_words_w1_data_bits = 7'h00;
   output ch0_cfg_words_w1_enable;
   reg ch0_cfg_words_w1_enable = 1'h0;
   output ch0_cfg_words_w1_gray;
@@ -3537,11 +3537,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0_result_status_write;
   reg [31:0] ch0_result_timestamp_time_snapshot = 32'd0;
   wire ch0_result_timestamp_write;
-  reg [22:0] ch0_result_w0_hi_data_snapshot = 23'h000000;
+  reg [31:0] ch0_result_w0_hi_data_snapshot = 32'd0;
   wire ch0_result_w0_hi_write;
   reg [31:0] ch0_result_w0_lo_data_snapshot = 32'd0;
   wire ch0_result_w0_lo_write;
-  reg [7:0] ch0_result_w1_hi_data_snapshot = 8'h00;
+  reg [31:0] ch0_result_w1_hi_data_snapshot = 32'd0;
   wire ch0_result_w1_hi_write;
   reg [31:0] ch0_result_w1_lo_data_snapshot = 32'd0;
   wire ch0_result_w1_lo_write;
@@ -3583,8 +3583,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire ch1__ca_write;
   wire ch1__cap_counters;
-  wire [5:0] ch1__cap_data_bits_w0;
-  wire [5:0] ch1__cap_data_bits_w1;
+  wire [6:0] ch1__cap_data_bits_w0;
+  wire [6:0] ch1__cap_data_bits_w1;
   wire [6:0] ch1__cap_data_bits_w2;
   wire [6:0] ch1__cap_data_bits_w3;
   wire [6:0] ch1__cap_data_bits_w4;
@@ -3643,8 +3643,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [15:0] ch1__cfg_w0_crc_start;
   (* init = 5'h00 *)
   wire [4:0] ch1__cfg_w0_crc_width;
-  (* init = 6'h00 *)
-  wire [5:0] ch1__cfg_w0_data_bits;
+  (* init = 7'h00 *)
+  wire [6:0] ch1__cfg_w0_data_bits;
   (* init = 1'h0 *)
   wire ch1__cfg_w0_gray;
   (* init = 1'h0 *)
@@ -3663,8 +3663,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [15:0] ch1__cfg_w1_crc_start;
   (* init = 5'h00 *)
   wire [4:0] ch1__cfg_w1_crc_width;
-  (* init = 6'h00 *)
-  wire [5:0] ch1__cfg_w1_data_bits;
+  (* init = 7'h00 *)
+  wire [6:0] ch1__cfg_w1_data_bits;
   (* init = 1'h0 *)
   wire ch1__cfg_w1_enable;
   (* init = 1'h0 *)
@@ -3794,11 +3794,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1__word0_crc_ok;
   wire ch1__word0_ne;
   wire ch1__word0_nw;
-  wire [54:0] ch1__word0_position;
+  wire [63:0] ch1__word0_position;
   wire ch1__word1_crc_ok;
   wire ch1__word1_ne;
   wire ch1__word1_nw;
-  wire [39:0] ch1__word1_position;
+  wire [63:0] ch1__word1_position;
   wire ch1__word2_crc_ok;
   wire ch1__word2_ne;
   wire ch1__word2_nw;
@@ -3954,8 +3954,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch1_cfg_words_config_write = 1'h0;
   output [1:0] ch1_cfg_words_w0_crc;
   reg [1:0] ch1_cfg_words_w0_crc = 2'h0;
-  output [5:0] ch1_cfg_words_w0_data_bits;
-  reg [5:0] ch1_cfg_words_w0_data_bits = 6'h00;
+  output [6:0] ch1_cfg_words_w0_data_bits;
+  reg [6:0] ch1_cfg_words_w0_data_bits = 7'h00;
   output ch1_cfg_words_w0_gray;
   reg ch1_cfg_words_w0_gray = 1'h0;
   output ch1_cfg_words_w0_lc;
@@ -3966,8 +3966,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch1_cfg_words_w0_signed = 1'h0;
   output [1:0] ch1_cfg_words_w1_crc;
   reg [1:0] ch1_cfg_words_w1_crc = 2'h0;
-  output [5:0] ch1_cfg_words_w1_data_bits;
-  reg [5:0] ch1_cfg_words_w1_data_bits = 6'h00;
+  output [6:0] ch1_cfg_words_w1_data_bits;
+  reg [6:0] ch1_cfg_words_w1_data_bits = 7'h00;
   output ch1_cfg_words_w1_enable;
   reg ch1_cfg_words_w1_enable = 1'h0;
   output ch1_cfg_words_w1_gray;
@@ -4077,11 +4077,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1_result_status_write;
   reg [31:0] ch1_result_timestamp_time_snapshot = 32'd0;
   wire ch1_result_timestamp_write;
-  reg [22:0] ch1_result_w0_hi_data_snapshot = 23'h000000;
+  reg [31:0] ch1_result_w0_hi_data_snapshot = 32'd0;
   wire ch1_result_w0_hi_write;
   reg [31:0] ch1_result_w0_lo_data_snapshot = 32'd0;
   wire ch1_result_w0_lo_write;
-  reg [7:0] ch1_result_w1_hi_data_snapshot = 8'h00;
+  reg [31:0] ch1_result_w1_hi_data_snapshot = 32'd0;
   wire ch1_result_w1_hi_write;
   reg [31:0] ch1_result_w1_lo_data_snapshot = 32'd0;
   wire ch1_result_w1_lo_write;
@@ -4118,18 +4118,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$13352$0 ;
-  wire [186:0] \port$13352$0 ;
-  input [79:0] \port$13363$0 ;
-  wire [79:0] \port$13363$0 ;
-  input [9:0] \port$13440$0 ;
-  wire [9:0] \port$13440$0 ;
-  input [186:0] \port$13899$0 ;
-  wire [186:0] \port$13899$0 ;
-  input [79:0] \port$13910$0 ;
-  wire [79:0] \port$13910$0 ;
-  input [9:0] \port$13987$0 ;
-  wire [9:0] \port$13987$0 ;
+  input [186:0] \port$13360$0 ;
+  wire [186:0] \port$13360$0 ;
+  input [79:0] \port$13371$0 ;
+  wire [79:0] \port$13371$0 ;
+  input [9:0] \port$13448$0 ;
+  wire [9:0] \port$13448$0 ;
+  input [186:0] \port$13907$0 ;
+  wire [186:0] \port$13907$0 ;
+  input [79:0] \port$13918$0 ;
+  wire [79:0] \port$13918$0 ;
+  input [9:0] \port$13995$0 ;
+  wire [9:0] \port$13995$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
@@ -4217,7 +4217,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$6  = bus__w_addr == 2'h3;
   assign \$7  = bus__w_addr == 3'h4;
   assign \$8  = g_read_select_0 ? 32'd1114198867 : 32'd0;
-  assign \$10  = g_read_select_1 ? 32'd65537 : 32'd0;
+  assign \$10  = g_read_select_1 ? 32'd131072 : 32'd0;
   assign \$11  = \$9  | \$10 ;
   assign \$12  = g_read_select_2 ? 32'd2 : 32'd0;
   assign \$13  = \$11  | \$12 ;
@@ -4258,13 +4258,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$50  = ch0_cfg_timeout_config_write & config_write_strb[2];
   assign \$51  = ch0_cfg_words_config_write & config_write_strb[0];
   assign \$52  = ch0_cfg_words_config_write & config_write_strb[0];
-  assign \$53  = ch0_cfg_words_config_write & config_write_strb[0];
+  assign \$53  = ch0_cfg_words_config_write & config_write_strb[1];
   assign \$54  = ch0_cfg_words_config_write & config_write_strb[1];
   assign \$55  = ch0_cfg_words_config_write & config_write_strb[1];
   assign \$56  = ch0_cfg_words_config_write & config_write_strb[1];
   assign \$57  = ch0_cfg_words_config_write & config_write_strb[2];
   assign \$58  = ch0_cfg_words_config_write & config_write_strb[2];
-  assign \$59  = ch0_cfg_words_config_write & config_write_strb[2];
+  assign \$59  = ch0_cfg_words_config_write & config_write_strb[3];
   assign \$60  = ch0_cfg_words_config_write & config_write_strb[3];
   assign \$61  = ch0_cfg_words_config_write & config_write_strb[3];
   assign \$62  = ch0_cfg_words_config_write & config_write_strb[3];
@@ -4367,29 +4367,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$160  = \$158  | \$159 ;
   assign \$161  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$13352$0 [182:177], 4'h0, \port$13352$0 [186:183], 1'h0, \port$13352$0 [176:174], 1'h0, \port$13352$0 [133:131], 3'h0, \port$13352$0 [49], \port$13352$0 [3:0] } : 32'd0;
+  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$13360$0 [182:177], 4'h0, \port$13360$0 [186:183], 1'h0, \port$13360$0 [176:174], 1'h0, \port$13360$0 [133:131], 3'h0, \port$13360$0 [49], \port$13360$0 [3:0] } : 32'd0;
   assign \$168  = \$166  | \$167 ;
   assign \$169  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$170  = \$168  | \$169 ;
   assign \$171  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
   assign \$172  = \$170  | \$171 ;
-  assign \$173  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$173  = ch0_read_select_93 ? ch0_result_w0_hi_data_snapshot : 32'd0;
   assign \$174  = \$172  | \$173 ;
   assign \$175  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$177  = ch0_read_select_95 ? ch0_result_w1_hi_data_snapshot : 32'd0;
   assign \$178  = \$176  | \$177 ;
   assign \$179  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
   assign \$180  = \$178  | \$179 ;
   assign \$181  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$13440$0 [9:3], 1'h0, \port$13440$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$13448$0 [9:3], 1'h0, \port$13448$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$228  = \$226  | \$227 ;
-  assign \$229  = ch0_read_select_c3 ? \port$13363$0 [31:0] : 32'd0;
+  assign \$229  = ch0_read_select_c3 ? \port$13371$0 [31:0] : 32'd0;
   assign \$230  = \$228  | \$229 ;
-  assign \$231  = ch0_read_select_c4 ? \port$13363$0 [63:32] : 32'd0;
+  assign \$231  = ch0_read_select_c4 ? \port$13371$0 [63:32] : 32'd0;
   assign \$232  = \$230  | \$231 ;
-  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$13363$0 [79:64] } : 32'd0;
+  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$13371$0 [79:64] } : 32'd0;
   assign \$234  = \$232  | \$233 ;
   assign \$237  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$238  = \$236  | \$237 ;
@@ -4434,13 +4434,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$279  = ch1_cfg_timeout_config_write & config_write_strb[2];
   assign \$280  = ch1_cfg_words_config_write & config_write_strb[0];
   assign \$281  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$282  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$282  = ch1_cfg_words_config_write & config_write_strb[1];
   assign \$283  = ch1_cfg_words_config_write & config_write_strb[1];
   assign \$284  = ch1_cfg_words_config_write & config_write_strb[1];
   assign \$285  = ch1_cfg_words_config_write & config_write_strb[1];
   assign \$286  = ch1_cfg_words_config_write & config_write_strb[2];
   assign \$287  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$288  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$288  = ch1_cfg_words_config_write & config_write_strb[3];
   assign \$289  = ch1_cfg_words_config_write & config_write_strb[3];
   assign \$290  = ch1_cfg_words_config_write & config_write_strb[3];
   assign \$291  = ch1_cfg_words_config_write & config_write_strb[3];
@@ -4538,29 +4538,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$384  = \$382  | \$383 ;
   assign \$385  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$386  = \$384  | \$385 ;
-  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$13899$0 [182:177], 4'h0, \port$13899$0 [186:183], 1'h0, \port$13899$0 [176:174], 1'h0, \port$13899$0 [133:131], 3'h0, \port$13899$0 [49], \port$13899$0 [3:0] } : 32'd0;
+  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$13907$0 [182:177], 4'h0, \port$13907$0 [186:183], 1'h0, \port$13907$0 [176:174], 1'h0, \port$13907$0 [133:131], 3'h0, \port$13907$0 [49], \port$13907$0 [3:0] } : 32'd0;
   assign \$392  = \$390  | \$391 ;
   assign \$393  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$394  = \$392  | \$393 ;
   assign \$395  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
   assign \$396  = \$394  | \$395 ;
-  assign \$397  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$397  = ch1_read_select_113 ? ch1_result_w0_hi_data_snapshot : 32'd0;
   assign \$398  = \$396  | \$397 ;
   assign \$399  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
   assign \$400  = \$398  | \$399 ;
-  assign \$401  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$401  = ch1_read_select_115 ? ch1_result_w1_hi_data_snapshot : 32'd0;
   assign \$402  = \$400  | \$401 ;
   assign \$403  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$404  = \$402  | \$403 ;
   assign \$405  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$406  = \$404  | \$405 ;
-  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$13987$0 [9:3], 1'h0, \port$13987$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$13995$0 [9:3], 1'h0, \port$13995$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$452  = \$450  | \$451 ;
-  assign \$453  = ch1_read_select_143 ? \port$13910$0 [31:0] : 32'd0;
+  assign \$453  = ch1_read_select_143 ? \port$13918$0 [31:0] : 32'd0;
   assign \$454  = \$452  | \$453 ;
-  assign \$455  = ch1_read_select_144 ? \port$13910$0 [63:32] : 32'd0;
+  assign \$455  = ch1_read_select_144 ? \port$13918$0 [63:32] : 32'd0;
   assign \$456  = \$454  | \$455 ;
-  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$13910$0 [79:64] } : 32'd0;
+  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$13918$0 [79:64] } : 32'd0;
   assign \$458  = \$456  | \$457 ;
   assign \$461  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$462  = \$460  | \$461 ;
@@ -5938,17 +5938,17 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$699  = ch0_cfg_words_w0_data_bits;
     if (\$51 ) begin
-      \$699  = config_write_data[5:0];
+      \$699  = config_write_data[6:0];
     end
     if (rst) begin
-      \$699  = 6'h00;
+      \$699  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$700  = ch0_cfg_words_w0_nenw;
     if (\$52 ) begin
-      \$700  = config_write_data[6];
+      \$700  = config_write_data[7];
     end
     if (rst) begin
       \$700  = 1'h0;
@@ -5958,7 +5958,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$701  = ch0_cfg_words_w0_lc;
     if (\$53 ) begin
-      \$701  = config_write_data[7];
+      \$701  = config_write_data[8];
     end
     if (rst) begin
       \$701  = 1'h0;
@@ -5968,7 +5968,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$702  = ch0_cfg_words_w0_crc;
     if (\$54 ) begin
-      \$702  = config_write_data[9:8];
+      \$702  = config_write_data[10:9];
     end
     if (rst) begin
       \$702  = 2'h0;
@@ -5978,7 +5978,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$703  = ch0_cfg_words_w0_gray;
     if (\$55 ) begin
-      \$703  = config_write_data[10];
+      \$703  = config_write_data[11];
     end
     if (rst) begin
       \$703  = 1'h0;
@@ -5988,7 +5988,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$704  = ch0_cfg_words_w0_signed;
     if (\$56 ) begin
-      \$704  = config_write_data[11];
+      \$704  = config_write_data[12];
     end
     if (rst) begin
       \$704  = 1'h0;
@@ -5998,17 +5998,17 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$705  = ch0_cfg_words_w1_data_bits;
     if (\$57 ) begin
-      \$705  = config_write_data[21:16];
+      \$705  = config_write_data[22:16];
     end
     if (rst) begin
-      \$705  = 6'h00;
+      \$705  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$706  = ch0_cfg_words_w1_nenw;
     if (\$58 ) begin
-      \$706  = config_write_data[22];
+      \$706  = config_write_data[23];
     end
     if (rst) begin
       \$706  = 1'h0;
@@ -6018,7 +6018,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$707  = ch0_cfg_words_w1_lc;
     if (\$59 ) begin
-      \$707  = config_write_data[23];
+      \$707  = config_write_data[24];
     end
     if (rst) begin
       \$707  = 1'h0;
@@ -6028,7 +6028,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$708  = ch0_cfg_words_w1_crc;
     if (\$60 ) begin
-      \$708  = config_write_data[25:24];
+      \$708  = config_write_data[26:25];
     end
     if (rst) begin
       \$708  = 2'h0;
@@ -6038,7 +6038,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$709  = ch0_cfg_words_w1_gray;
     if (\$61 ) begin
-      \$709  = config_write_data[26];
+      \$709  = config_write_data[27];
     end
     if (rst) begin
       \$709  = 1'h0;
@@ -6048,7 +6048,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$710  = ch0_cfg_words_w1_signed;
     if (\$62 ) begin
-      \$710  = config_write_data[27];
+      \$710  = config_write_data[28];
     end
     if (rst) begin
       \$710  = 1'h0;
@@ -6969,7 +6969,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$809  = ch0_result_status_status_snapshot;
     if (\$146 ) begin
-      \$809  = \port$13352$0 [3:0];
+      \$809  = \port$13360$0 [3:0];
     end
     if (rst) begin
       \$809  = 4'h0;
@@ -6979,7 +6979,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$810  = ch0_result_status_cds_snapshot;
     if (\$146 ) begin
-      \$810  = \port$13352$0 [49];
+      \$810  = \port$13360$0 [49];
     end
     if (rst) begin
       \$810  = 1'h0;
@@ -6989,7 +6989,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$811  = ch0_result_status_w0_ne_snapshot;
     if (\$146 ) begin
-      \$811  = \port$13352$0 [131];
+      \$811  = \port$13360$0 [131];
     end
     if (rst) begin
       \$811  = 1'h0;
@@ -6999,7 +6999,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$812  = ch0_result_status_w0_nw_snapshot;
     if (\$146 ) begin
-      \$812  = \port$13352$0 [132];
+      \$812  = \port$13360$0 [132];
     end
     if (rst) begin
       \$812  = 1'h0;
@@ -7009,7 +7009,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$813  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$146 ) begin
-      \$813  = \port$13352$0 [133];
+      \$813  = \port$13360$0 [133];
     end
     if (rst) begin
       \$813  = 1'h0;
@@ -7019,7 +7019,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$814  = ch0_result_status_w1_ne_snapshot;
     if (\$146 ) begin
-      \$814  = \port$13352$0 [174];
+      \$814  = \port$13360$0 [174];
     end
     if (rst) begin
       \$814  = 1'h0;
@@ -7029,7 +7029,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$815  = ch0_result_status_w1_nw_snapshot;
     if (\$146 ) begin
-      \$815  = \port$13352$0 [175];
+      \$815  = \port$13360$0 [175];
     end
     if (rst) begin
       \$815  = 1'h0;
@@ -7039,7 +7039,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$816  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$146 ) begin
-      \$816  = \port$13352$0 [176];
+      \$816  = \port$13360$0 [176];
     end
     if (rst) begin
       \$816  = 1'h0;
@@ -7049,7 +7049,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$817  = ch0_result_status_lc_repeat_snapshot;
     if (\$146 ) begin
-      \$817  = \port$13352$0 [183];
+      \$817  = \port$13360$0 [183];
     end
     if (rst) begin
       \$817  = 1'h0;
@@ -7059,7 +7059,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$818  = ch0_result_status_lc_skip_snapshot;
     if (\$146 ) begin
-      \$818  = \port$13352$0 [184];
+      \$818  = \port$13360$0 [184];
     end
     if (rst) begin
       \$818  = 1'h0;
@@ -7069,7 +7069,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$819  = ch0_result_status_lc_zero_snapshot;
     if (\$146 ) begin
-      \$819  = \port$13352$0 [185];
+      \$819  = \port$13360$0 [185];
     end
     if (rst) begin
       \$819  = 1'h0;
@@ -7079,7 +7079,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$820  = ch0_result_status_spw_mismatch_snapshot;
     if (\$146 ) begin
-      \$820  = \port$13352$0 [186];
+      \$820  = \port$13360$0 [186];
     end
     if (rst) begin
       \$820  = 1'h0;
@@ -7089,7 +7089,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$821  = ch0_result_status_lc_snapshot;
     if (\$146 ) begin
-      \$821  = \port$13352$0 [182:177];
+      \$821  = \port$13360$0 [182:177];
     end
     if (rst) begin
       \$821  = 6'h00;
@@ -7109,7 +7109,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$823  = ch0_result_seq_line_delay_snapshot;
     if (\$146 ) begin
-      \$823  = \port$13352$0 [48:36];
+      \$823  = \port$13360$0 [48:36];
     end
     if (rst) begin
       \$823  = 13'h0000;
@@ -7119,7 +7119,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$824  = ch0_result_w0_lo_data_snapshot;
     if (\$146 ) begin
-      \$824  = \port$13352$0 [107:76];
+      \$824  = \port$13360$0 [107:76];
     end
     if (rst) begin
       \$824  = 32'd0;
@@ -7129,17 +7129,17 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$825  = ch0_result_w0_hi_data_snapshot;
     if (\$146 ) begin
-      \$825  = \port$13352$0 [130:108];
+      \$825  = { 9'h000, \port$13360$0 [130:108] };
     end
     if (rst) begin
-      \$825  = 23'h000000;
+      \$825  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$826  = ch0_result_w1_lo_data_snapshot;
     if (\$146 ) begin
-      \$826  = \port$13352$0 [165:134];
+      \$826  = \port$13360$0 [165:134];
     end
     if (rst) begin
       \$826  = 32'd0;
@@ -7149,17 +7149,17 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$827  = ch0_result_w1_hi_data_snapshot;
     if (\$146 ) begin
-      \$827  = \port$13352$0 [173:166];
+      \$827  = { 24'h000000, \port$13360$0 [173:166] };
     end
     if (rst) begin
-      \$827  = 8'h00;
+      \$827  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$828  = ch0_result_timestamp_time_snapshot;
     if (\$146 ) begin
-      \$828  = \port$13352$0 [35:4];
+      \$828  = \port$13360$0 [35:4];
     end
     if (rst) begin
       \$828  = 32'd0;
@@ -7169,7 +7169,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$829  = ch0_result_line_noise_events_snapshot;
     if (\$146 ) begin
-      \$829  = \port$13352$0 [53:50];
+      \$829  = \port$13360$0 [53:50];
     end
     if (rst) begin
       \$829  = 4'h0;
@@ -7179,7 +7179,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$830  = ch0_result_line_delay_settled_snapshot;
     if (\$146 ) begin
-      \$830  = \port$13352$0 [54];
+      \$830  = \port$13360$0 [54];
     end
     if (rst) begin
       \$830  = 1'h0;
@@ -7189,7 +7189,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$831  = ch0_result_line_delay_spread_snapshot;
     if (\$146 ) begin
-      \$831  = \port$13352$0 [75:68];
+      \$831  = \port$13360$0 [75:68];
     end
     if (rst) begin
       \$831  = 8'h00;
@@ -7199,7 +7199,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$832  = ch0_result_line_settled_delay_snapshot;
     if (\$146 ) begin
-      \$832  = \port$13352$0 [67:55];
+      \$832  = \port$13360$0 [67:55];
     end
     if (rst) begin
       \$832  = 13'h0000;
@@ -7505,17 +7505,17 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$862  = ch1_cfg_words_w0_data_bits;
     if (\$280 ) begin
-      \$862  = config_write_data[5:0];
+      \$862  = config_write_data[6:0];
     end
     if (rst) begin
-      \$862  = 6'h00;
+      \$862  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$863  = ch1_cfg_words_w0_nenw;
     if (\$281 ) begin
-      \$863  = config_write_data[6];
+      \$863  = config_write_data[7];
     end
     if (rst) begin
       \$863  = 1'h0;
@@ -7525,7 +7525,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$864  = ch1_cfg_words_w0_lc;
     if (\$282 ) begin
-      \$864  = config_write_data[7];
+      \$864  = config_write_data[8];
     end
     if (rst) begin
       \$864  = 1'h0;
@@ -7535,7 +7535,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$865  = ch1_cfg_words_w0_crc;
     if (\$283 ) begin
-      \$865  = config_write_data[9:8];
+      \$865  = config_write_data[10:9];
     end
     if (rst) begin
       \$865  = 2'h0;
@@ -7545,7 +7545,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$866  = ch1_cfg_words_w0_gray;
     if (\$284 ) begin
-      \$866  = config_write_data[10];
+      \$866  = config_write_data[11];
     end
     if (rst) begin
       \$866  = 1'h0;
@@ -7555,7 +7555,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$867  = ch1_cfg_words_w0_signed;
     if (\$285 ) begin
-      \$867  = config_write_data[11];
+      \$867  = config_write_data[12];
     end
     if (rst) begin
       \$867  = 1'h0;
@@ -7565,17 +7565,17 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$868  = ch1_cfg_words_w1_data_bits;
     if (\$286 ) begin
-      \$868  = config_write_data[21:16];
+      \$868  = config_write_data[22:16];
     end
     if (rst) begin
-      \$868  = 6'h00;
+      \$868  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$869  = ch1_cfg_words_w1_nenw;
     if (\$287 ) begin
-      \$869  = config_write_data[22];
+      \$869  = config_write_data[23];
     end
     if (rst) begin
       \$869  = 1'h0;
@@ -7585,7 +7585,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$870  = ch1_cfg_words_w1_lc;
     if (\$288 ) begin
-      \$870  = config_write_data[23];
+      \$870  = config_write_data[24];
     end
     if (rst) begin
       \$870  = 1'h0;
@@ -7595,7 +7595,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$871  = ch1_cfg_words_w1_crc;
     if (\$289 ) begin
-      \$871  = config_write_data[25:24];
+      \$871  = config_write_data[26:25];
     end
     if (rst) begin
       \$871  = 2'h0;
@@ -7605,7 +7605,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$872  = ch1_cfg_words_w1_gray;
     if (\$290 ) begin
-      \$872  = config_write_data[26];
+      \$872  = config_write_data[27];
     end
     if (rst) begin
       \$872  = 1'h0;
@@ -7615,7 +7615,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$873  = ch1_cfg_words_w1_signed;
     if (\$291 ) begin
-      \$873  = config_write_data[27];
+      \$873  = config_write_data[28];
     end
     if (rst) begin
       \$873  = 1'h0;
@@ -8526,7 +8526,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$971  = ch1_result_status_status_snapshot;
     if (\$370 ) begin
-      \$971  = \port$13899$0 [3:0];
+      \$971  = \port$13907$0 [3:0];
     end
     if (rst) begin
       \$971  = 4'h0;
@@ -8536,7 +8536,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$972  = ch1_result_status_cds_snapshot;
     if (\$370 ) begin
-      \$972  = \port$13899$0 [49];
+      \$972  = \port$13907$0 [49];
     end
     if (rst) begin
       \$972  = 1'h0;
@@ -8546,7 +8546,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$973  = ch1_result_status_w0_ne_snapshot;
     if (\$370 ) begin
-      \$973  = \port$13899$0 [131];
+      \$973  = \port$13907$0 [131];
     end
     if (rst) begin
       \$973  = 1'h0;
@@ -8556,7 +8556,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$974  = ch1_result_status_w0_nw_snapshot;
     if (\$370 ) begin
-      \$974  = \port$13899$0 [132];
+      \$974  = \port$13907$0 [132];
     end
     if (rst) begin
       \$974  = 1'h0;
@@ -8566,7 +8566,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$975  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$370 ) begin
-      \$975  = \port$13899$0 [133];
+      \$975  = \port$13907$0 [133];
     end
     if (rst) begin
       \$975  = 1'h0;
@@ -8576,7 +8576,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$976  = ch1_result_status_w1_ne_snapshot;
     if (\$370 ) begin
-      \$976  = \port$13899$0 [174];
+      \$976  = \port$13907$0 [174];
     end
     if (rst) begin
       \$976  = 1'h0;
@@ -8586,7 +8586,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$977  = ch1_result_status_w1_nw_snapshot;
     if (\$370 ) begin
-      \$977  = \port$13899$0 [175];
+      \$977  = \port$13907$0 [175];
     end
     if (rst) begin
       \$977  = 1'h0;
@@ -8596,7 +8596,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$978  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$370 ) begin
-      \$978  = \port$13899$0 [176];
+      \$978  = \port$13907$0 [176];
     end
     if (rst) begin
       \$978  = 1'h0;
@@ -8606,7 +8606,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$979  = ch1_result_status_lc_repeat_snapshot;
     if (\$370 ) begin
-      \$979  = \port$13899$0 [183];
+      \$979  = \port$13907$0 [183];
     end
     if (rst) begin
       \$979  = 1'h0;
@@ -8616,7 +8616,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$980  = ch1_result_status_lc_skip_snapshot;
     if (\$370 ) begin
-      \$980  = \port$13899$0 [184];
+      \$980  = \port$13907$0 [184];
     end
     if (rst) begin
       \$980  = 1'h0;
@@ -8626,7 +8626,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$981  = ch1_result_status_lc_zero_snapshot;
     if (\$370 ) begin
-      \$981  = \port$13899$0 [185];
+      \$981  = \port$13907$0 [185];
     end
     if (rst) begin
       \$981  = 1'h0;
@@ -8636,7 +8636,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$982  = ch1_result_status_spw_mismatch_snapshot;
     if (\$370 ) begin
-      \$982  = \port$13899$0 [186];
+      \$982  = \port$13907$0 [186];
     end
     if (rst) begin
       \$982  = 1'h0;
@@ -8646,7 +8646,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$983  = ch1_result_status_lc_snapshot;
     if (\$370 ) begin
-      \$983  = \port$13899$0 [182:177];
+      \$983  = \port$13907$0 [182:177];
     end
     if (rst) begin
       \$983  = 6'h00;
@@ -8666,7 +8666,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$985  = ch1_result_seq_line_delay_snapshot;
     if (\$370 ) begin
-      \$985  = \port$13899$0 [48:36];
+      \$985  = \port$13907$0 [48:36];
     end
     if (rst) begin
       \$985  = 13'h0000;
@@ -8676,7 +8676,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$986  = ch1_result_w0_lo_data_snapshot;
     if (\$370 ) begin
-      \$986  = \port$13899$0 [107:76];
+      \$986  = \port$13907$0 [107:76];
     end
     if (rst) begin
       \$986  = 32'd0;
@@ -8686,17 +8686,17 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$987  = ch1_result_w0_hi_data_snapshot;
     if (\$370 ) begin
-      \$987  = \port$13899$0 [130:108];
+      \$987  = { 9'h000, \port$13907$0 [130:108] };
     end
     if (rst) begin
-      \$987  = 23'h000000;
+      \$987  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$988  = ch1_result_w1_lo_data_snapshot;
     if (\$370 ) begin
-      \$988  = \port$13899$0 [165:134];
+      \$988  = \port$13907$0 [165:134];
     end
     if (rst) begin
       \$988  = 32'd0;
@@ -8706,17 +8706,17 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$989  = ch1_result_w1_hi_data_snapshot;
     if (\$370 ) begin
-      \$989  = \port$13899$0 [173:166];
+      \$989  = { 24'h000000, \port$13907$0 [173:166] };
     end
     if (rst) begin
-      \$989  = 8'h00;
+      \$989  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$990  = ch1_result_timestamp_time_snapshot;
     if (\$370 ) begin
-      \$990  = \port$13899$0 [35:4];
+      \$990  = \port$13907$0 [35:4];
     end
     if (rst) begin
       \$990  = 32'd0;
@@ -8726,7 +8726,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$991  = ch1_result_line_noise_events_snapshot;
     if (\$370 ) begin
-      \$991  = \port$13899$0 [53:50];
+      \$991  = \port$13907$0 [53:50];
     end
     if (rst) begin
       \$991  = 4'h0;
@@ -8736,7 +8736,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$992  = ch1_result_line_delay_settled_snapshot;
     if (\$370 ) begin
-      \$992  = \port$13899$0 [54];
+      \$992  = \port$13907$0 [54];
     end
     if (rst) begin
       \$992  = 1'h0;
@@ -8746,7 +8746,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$993  = ch1_result_line_delay_spread_snapshot;
     if (\$370 ) begin
-      \$993  = \port$13899$0 [75:68];
+      \$993  = \port$13907$0 [75:68];
     end
     if (rst) begin
       \$993  = 8'h00;
@@ -8756,7 +8756,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$994  = ch1_result_line_settled_delay_snapshot;
     if (\$370 ) begin
-      \$994  = \port$13899$0 [67:55];
+      \$994  = \port$13907$0 [67:55];
     end
     if (rst) begin
       \$994  = 13'h0000;
@@ -8829,7 +8829,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
       7'h0c:
           config_memory0_write_mask = 32'd16777215;
       7'h0d:
-          config_memory0_write_mask = 32'd2415857663;
+          config_memory0_write_mask = 32'd2684297215;
       7'h0e:
           config_memory0_write_mask = 32'd268435203;
       7'h0f:
@@ -8959,29 +8959,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$13352$0 [3:0];
-  assign ch0__cds = \port$13352$0 [49];
-  assign ch0__word0_ne = \port$13352$0 [131];
-  assign ch0__word0_nw = \port$13352$0 [132];
-  assign ch0__word0_crc_ok = \port$13352$0 [133];
-  assign ch0__word1_ne = \port$13352$0 [174];
-  assign ch0__word1_nw = \port$13352$0 [175];
-  assign ch0__word1_crc_ok = \port$13352$0 [176];
-  assign ch0__lc_repeat = \port$13352$0 [183];
-  assign ch0__lc_skip = \port$13352$0 [184];
-  assign ch0__lc_zero = \port$13352$0 [185];
-  assign ch0__spw_mismatch = \port$13352$0 [186];
-  assign ch0__lc = \port$13352$0 [182:177];
-  assign ch0__line_delay = \port$13352$0 [48:36];
-  assign ch0__word0_position = \port$13352$0 [130:76];
-  assign ch0__word1_position = \port$13352$0 [173:134];
-  assign ch0__timestamp = \port$13352$0 [35:4];
-  assign ch0__noise_events = \port$13352$0 [53:50];
-  assign ch0__delay_settled = \port$13352$0 [54];
-  assign ch0__delay_spread = \port$13352$0 [75:68];
-  assign ch0__settled_delay = \port$13352$0 [67:55];
-  assign ch0__cap_data_bits_w0 = 6'h37;
-  assign ch0__cap_data_bits_w1 = 6'h28;
+  assign ch0__status = \port$13360$0 [3:0];
+  assign ch0__cds = \port$13360$0 [49];
+  assign ch0__word0_ne = \port$13360$0 [131];
+  assign ch0__word0_nw = \port$13360$0 [132];
+  assign ch0__word0_crc_ok = \port$13360$0 [133];
+  assign ch0__word1_ne = \port$13360$0 [174];
+  assign ch0__word1_nw = \port$13360$0 [175];
+  assign ch0__word1_crc_ok = \port$13360$0 [176];
+  assign ch0__lc_repeat = \port$13360$0 [183];
+  assign ch0__lc_skip = \port$13360$0 [184];
+  assign ch0__lc_zero = \port$13360$0 [185];
+  assign ch0__spw_mismatch = \port$13360$0 [186];
+  assign ch0__lc = \port$13360$0 [182:177];
+  assign ch0__line_delay = \port$13360$0 [48:36];
+  assign ch0__word0_position = { 9'h000, \port$13360$0 [130:76] };
+  assign ch0__word1_position = { 24'h000000, \port$13360$0 [173:134] };
+  assign ch0__timestamp = \port$13360$0 [35:4];
+  assign ch0__noise_events = \port$13360$0 [53:50];
+  assign ch0__delay_settled = \port$13360$0 [54];
+  assign ch0__delay_spread = \port$13360$0 [75:68];
+  assign ch0__settled_delay = \port$13360$0 [67:55];
+  assign ch0__cap_data_bits_w0 = 7'h37;
+  assign ch0__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
@@ -9000,13 +9000,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$13440$0 [2:0];
-  assign ch0__ca_bytes_done = \port$13440$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$13363$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$13363$0 [31:16];
-  assign ch0__count_ca_refused = \port$13363$0 [47:32];
-  assign ch0__count_ca_aborted = \port$13363$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$13363$0 [79:64];
+  assign ch0__ca_status = \port$13448$0 [2:0];
+  assign ch0__ca_bytes_done = \port$13448$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$13371$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$13371$0 [31:16];
+  assign ch0__count_ca_refused = \port$13371$0 [47:32];
+  assign ch0__count_ca_aborted = \port$13371$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$13371$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9026,29 +9026,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$13899$0 [3:0];
-  assign ch1__cds = \port$13899$0 [49];
-  assign ch1__word0_ne = \port$13899$0 [131];
-  assign ch1__word0_nw = \port$13899$0 [132];
-  assign ch1__word0_crc_ok = \port$13899$0 [133];
-  assign ch1__word1_ne = \port$13899$0 [174];
-  assign ch1__word1_nw = \port$13899$0 [175];
-  assign ch1__word1_crc_ok = \port$13899$0 [176];
-  assign ch1__lc_repeat = \port$13899$0 [183];
-  assign ch1__lc_skip = \port$13899$0 [184];
-  assign ch1__lc_zero = \port$13899$0 [185];
-  assign ch1__spw_mismatch = \port$13899$0 [186];
-  assign ch1__lc = \port$13899$0 [182:177];
-  assign ch1__line_delay = \port$13899$0 [48:36];
-  assign ch1__word0_position = \port$13899$0 [130:76];
-  assign ch1__word1_position = \port$13899$0 [173:134];
-  assign ch1__timestamp = \port$13899$0 [35:4];
-  assign ch1__noise_events = \port$13899$0 [53:50];
-  assign ch1__delay_settled = \port$13899$0 [54];
-  assign ch1__delay_spread = \port$13899$0 [75:68];
-  assign ch1__settled_delay = \port$13899$0 [67:55];
-  assign ch1__cap_data_bits_w0 = 6'h37;
-  assign ch1__cap_data_bits_w1 = 6'h28;
+  assign ch1__status = \port$13907$0 [3:0];
+  assign ch1__cds = \port$13907$0 [49];
+  assign ch1__word0_ne = \port$13907$0 [131];
+  assign ch1__word0_nw = \port$13907$0 [132];
+  assign ch1__word0_crc_ok = \port$13907$0 [133];
+  assign ch1__word1_ne = \port$13907$0 [174];
+  assign ch1__word1_nw = \port$13907$0 [175];
+  assign ch1__word1_crc_ok = \port$13907$0 [176];
+  assign ch1__lc_repeat = \port$13907$0 [183];
+  assign ch1__lc_skip = \port$13907$0 [184];
+  assign ch1__lc_zero = \port$13907$0 [185];
+  assign ch1__spw_mismatch = \port$13907$0 [186];
+  assign ch1__lc = \port$13907$0 [182:177];
+  assign ch1__line_delay = \port$13907$0 [48:36];
+  assign ch1__word0_position = { 9'h000, \port$13907$0 [130:76] };
+  assign ch1__word1_position = { 24'h000000, \port$13907$0 [173:134] };
+  assign ch1__timestamp = \port$13907$0 [35:4];
+  assign ch1__noise_events = \port$13907$0 [53:50];
+  assign ch1__delay_settled = \port$13907$0 [54];
+  assign ch1__delay_spread = \port$13907$0 [75:68];
+  assign ch1__settled_delay = \port$13907$0 [67:55];
+  assign ch1__cap_data_bits_w0 = 7'h37;
+  assign ch1__cap_data_bits_w1 = 7'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
@@ -9067,13 +9067,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$13987$0 [2:0];
-  assign ch1__ca_bytes_done = \port$13987$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$13910$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$13910$0 [31:16];
-  assign ch1__count_ca_refused = \port$13910$0 [47:32];
-  assign ch1__count_ca_aborted = \port$13910$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$13910$0 [79:64];
+  assign ch1__ca_status = \port$13995$0 [2:0];
+  assign ch1__ca_bytes_done = \port$13995$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$13918$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$13918$0 [31:16];
+  assign ch1__count_ca_refused = \port$13918$0 [47:32];
+  assign ch1__count_ca_aborted = \port$13918$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$13918$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9580,32 +9580,36 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
-, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
+, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13352$0 , \port$13363$0 , regs__ca_done, \port$13440$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13360$0 , \port$13371$0 , regs__ca_done, \port$13448$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
-  wire [16:0] \$10 ;
-  wire [16:0] \$11 ;
-  reg \$12 ;
-  reg [3:0] \$13 ;
-  reg \$14 ;
-  reg \$15 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire [4:0] \$12 ;
+  wire [4:0] \$13 ;
+  wire [16:0] \$14 ;
+  wire [16:0] \$15 ;
   reg \$16 ;
-  reg \$17 ;
-  reg [15:0] \$18 ;
-  reg [15:0] \$19 ;
+  reg [3:0] \$17 ;
+  reg \$18 ;
+  reg \$19 ;
   wire \$2 ;
-  wire [186:0] \$20 ;
-  wire [79:0] \$21 ;
-  wire [9:0] \$22 ;
+  reg \$20 ;
+  reg \$21 ;
+  reg [15:0] \$22 ;
+  reg [15:0] \$23 ;
+  wire [186:0] \$24 ;
+  wire [79:0] \$25 ;
+  wire [9:0] \$26 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
-  wire \$7 ;
-  wire [4:0] \$8 ;
-  wire [4:0] \$9 ;
+  wire [6:0] \$7 ;
+  wire \$8 ;
+  wire [6:0] \$9 ;
   reg \$signal  = 1'h0;
   reg abort_cycle = 1'h0;
   wire busy;
@@ -9696,7 +9700,6 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [15:0] cfg_w0_crc_start;
   input [4:0] cfg_w0_crc_width;
   wire [4:0] cfg_w0_crc_width;
-  input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
   input cfg_w0_gray;
   wire cfg_w0_gray;
@@ -9721,7 +9724,6 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [15:0] cfg_w1_crc_start;
   input [4:0] cfg_w1_crc_width;
   wire [4:0] cfg_w1_crc_width;
-  input [5:0] cfg_w1_data_bits;
   wire [5:0] cfg_w1_data_bits;
   input cfg_w1_enable;
   wire cfg_w1_enable;
@@ -9766,12 +9768,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$13352$0 ;
-  wire [186:0] \port$13352$0 ;
-  output [79:0] \port$13363$0 ;
-  wire [79:0] \port$13363$0 ;
-  output [9:0] \port$13440$0 ;
-  wire [9:0] \port$13440$0 ;
+  output [186:0] \port$13360$0 ;
+  wire [186:0] \port$13360$0 ;
+  output [79:0] \port$13371$0 ;
+  wire [79:0] \port$13371$0 ;
+  output [9:0] \port$13448$0 ;
+  wire [9:0] \port$13448$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -9796,8 +9798,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [3:0] regs__ca_wbuf_en;
   wire regs__ca_write;
   wire regs__cap_counters;
-  wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] regs__cap_data_bits_w1;
+  wire [6:0] regs__cap_data_bits_w0;
+  wire [6:0] regs__cap_data_bits_w1;
   wire [6:0] regs__cap_data_bits_w2;
   wire [6:0] regs__cap_data_bits_w3;
   wire [6:0] regs__cap_data_bits_w4;
@@ -9838,7 +9840,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [15:0] regs__cfg_w0_crc_poly;
   wire [15:0] regs__cfg_w0_crc_start;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [5:0] regs__cfg_w0_data_bits;
+  input [6:0] regs__cfg_w0_data_bits;
+  wire [6:0] regs__cfg_w0_data_bits;
   wire regs__cfg_w0_gray;
   wire regs__cfg_w0_lc;
   wire regs__cfg_w0_nenw;
@@ -9853,7 +9856,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [15:0] regs__cfg_w1_crc_poly;
   wire [15:0] regs__cfg_w1_crc_start;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [5:0] regs__cfg_w1_data_bits;
+  input [6:0] regs__cfg_w1_data_bits;
+  wire [6:0] regs__cfg_w1_data_bits;
   wire regs__cfg_w1_enable;
   wire regs__cfg_w1_gray;
   wire regs__cfg_w1_lc;
@@ -9898,11 +9902,11 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire regs__word0_crc_ok;
   wire regs__word0_ne;
   wire regs__word0_nw;
-  wire [54:0] regs__word0_position;
+  wire [63:0] regs__word0_position;
   wire regs__word1_crc_ok;
   wire regs__word1_ne;
   wire regs__word1_nw;
-  wire [39:0] regs__word1_position;
+  wire [63:0] regs__word1_position;
   wire report;
   input rst;
   wire rst;
@@ -9955,29 +9959,31 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
+  assign \$7  = \$6  ? 7'h00 : regs__cfg_w0_data_bits;
+  assign \$9  = \$8  ? 7'h00 : regs__cfg_w1_data_bits;
   assign trigger = \trigger$204  & regs__trigger_enable;
-  assign \$6  = ~ report;
-  assign \$7  = \$signal  & \$6 ;
-  assign \$8  = waited + 1'h1;
-  assign \$9  = \$7  ? \$8  : 5'h00;
-  assign \$10  = regs__done_count + 1'h1;
-  assign \$11  = regs__result_updates + 1'h1;
+  assign \$10  = ~ report;
+  assign \$11  = \$signal  & \$10 ;
+  assign \$12  = waited + 1'h1;
+  assign \$13  = \$11  ? \$12  : 5'h00;
+  assign \$14  = regs__done_count + 1'h1;
+  assign \$15  = regs__result_updates + 1'h1;
   always @(posedge clk)
-    \$signal  <= \$12 ;
+    \$signal  <= \$16 ;
   always @(posedge clk)
-    waited <= \$13 ;
+    waited <= \$17 ;
   always @(posedge clk)
-    pending_ok <= \$14 ;
+    pending_ok <= \$18 ;
   always @(posedge clk)
-    regs__frame_done <= \$15 ;
+    regs__frame_done <= \$19 ;
   always @(posedge clk)
-    ended_ok <= \$16 ;
+    ended_ok <= \$20 ;
   always @(posedge clk)
-    abort_cycle <= \$17 ;
+    abort_cycle <= \$21 ;
   always @(posedge clk)
-    regs__done_count <= \$18 ;
+    regs__done_count <= \$22 ;
   always @(posedge clk)
-    regs__result_updates <= \$19 ;
+    regs__result_updates <= \$23 ;
   \biss_master_wb.ch0.core  core (
     .abort(abort_cycle),
     .\abort$267 (ca_abort),
@@ -10014,7 +10020,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .cfg_w0_crc_poly(cfg_w0_crc_poly),
     .cfg_w0_crc_start(cfg_w0_crc_start),
     .cfg_w0_crc_width(cfg_w0_crc_width),
-    .cfg_w0_data_bits(cfg_w0_data_bits),
+    .cfg_w0_data_bits(\$7 [5:0]),
     .cfg_w0_gray(cfg_w0_gray),
     .cfg_w0_lc(cfg_w0_lc),
     .cfg_w0_nenw(cfg_w0_nenw),
@@ -10024,7 +10030,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .cfg_w1_crc_poly(cfg_w1_crc_poly),
     .cfg_w1_crc_start(cfg_w1_crc_start),
     .cfg_w1_crc_width(cfg_w1_crc_width),
-    .cfg_w1_data_bits(cfg_w1_data_bits),
+    .cfg_w1_data_bits(\$9 [5:0]),
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_gray(cfg_w1_gray),
     .cfg_w1_lc(cfg_w1_lc),
@@ -10035,7 +10041,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
-    .counts(\$21 ),
+    .counts(\$25 ),
     .\done$319 (done),
     .frames(regs__ca_busy),
     .ma(ma),
@@ -10044,8 +10050,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
-    .result(\$22 ),
-    .\result$324 (\$20 ),
+    .result(\$26 ),
+    .\result$324 (\$24 ),
     .rst(rst),
     .slo(slo),
     .start(start),
@@ -10055,73 +10061,73 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$12  = \$signal ;
+    \$16  = \$signal ;
     if (report) begin
-      \$12  = 1'h0;
+      \$16  = 1'h0;
     end
     if (done) begin
-      \$12  = 1'h1;
+      \$16  = 1'h1;
     end
-    if (rst) begin
-      \$12  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$13  = \$9 [3:0];
-    if (rst) begin
-      \$13  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$14  = pending_ok;
-    if (done) begin
-      \$14  = valid;
-    end
-    if (rst) begin
-      \$14  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$15  = report;
-    if (rst) begin
-      \$15  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$16  = pending_ok;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$17  = regs__abort_cycle;
+    \$17  = \$13 [3:0];
     if (rst) begin
-      \$17  = 1'h0;
+      \$17  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$18  = regs__done_count;
-    if (regs__frame_done) begin
-      \$18  = \$10 [15:0];
-    end
-    if (rst) begin
-      \$18  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$19  = regs__result_updates;
+    \$18  = pending_ok;
     if (done) begin
-      \$19  = \$11 [15:0];
+      \$18  = valid;
     end
     if (rst) begin
-      \$19  = 16'h0000;
+      \$18  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$19  = report;
+    if (rst) begin
+      \$19  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$20  = pending_ok;
+    if (rst) begin
+      \$20  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$21  = regs__abort_cycle;
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$22  = regs__done_count;
+    if (regs__frame_done) begin
+      \$22  = \$14 [15:0];
+    end
+    if (rst) begin
+      \$22  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$23  = regs__result_updates;
+    if (done) begin
+      \$23  = \$15 [15:0];
+    end
+    if (rst) begin
+      \$23  = 16'h0000;
     end
   end
   assign count_addr = ca_rbuf_addr[2:0];
@@ -10133,8 +10139,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign regs__periodic = periodic;
   assign busy = regs__busy;
   assign config_error = regs__config_error;
-  assign regs__cap_data_bits_w0 = 6'h37;
-  assign regs__cap_data_bits_w1 = 6'h28;
+  assign regs__cap_data_bits_w0 = 7'h37;
+  assign regs__cap_data_bits_w1 = 7'h28;
   assign regs__cap_timer_width = 6'h18;
   assign regs__cap_counters = 1'h1;
   assign regs__cap_timestamp = 1'h1;
@@ -10155,13 +10161,13 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign regs__cfg_break_time = cfg_break_time;
   assign regs__cfg_ack_limit = cfg_ack_limit;
   assign regs__cfg_timeout_limit = cfg_timeout_limit;
-  assign regs__cfg_w0_data_bits = cfg_w0_data_bits;
+  assign cfg_w0_data_bits = \$7 [5:0];
   assign regs__cfg_w0_nenw = cfg_w0_nenw;
   assign regs__cfg_w0_lc = cfg_w0_lc;
   assign regs__cfg_w0_crc = cfg_w0_crc;
   assign regs__cfg_w0_gray = cfg_w0_gray;
   assign regs__cfg_w0_signed = cfg_w0_signed;
-  assign regs__cfg_w1_data_bits = cfg_w1_data_bits;
+  assign cfg_w1_data_bits = \$9 [5:0];
   assign regs__cfg_w1_nenw = cfg_w1_nenw;
   assign regs__cfg_w1_lc = cfg_w1_lc;
   assign regs__cfg_w1_crc = cfg_w1_crc;
@@ -10175,48 +10181,48 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
   assign regs__cfg_confirm_frames = cfg_confirm_frames;
   assign regs__cfg_quiet_time = cfg_quiet_time;
-  assign regs__status = \$20 [3:0];
-  assign status = \$20 [3:0];
-  assign regs__cds = \$20 [49];
-  assign cds = \$20 [49];
-  assign regs__word0_ne = \$20 [131];
-  assign word0_ne = \$20 [131];
-  assign regs__word0_nw = \$20 [132];
-  assign word0_nw = \$20 [132];
-  assign regs__word0_crc_ok = \$20 [133];
-  assign word0_crc_ok = \$20 [133];
-  assign regs__word1_ne = \$20 [174];
-  assign word1_ne = \$20 [174];
-  assign regs__word1_nw = \$20 [175];
-  assign word1_nw = \$20 [175];
-  assign regs__word1_crc_ok = \$20 [176];
-  assign word1_crc_ok = \$20 [176];
-  assign regs__lc_repeat = \$20 [183];
-  assign lc_repeat = \$20 [183];
-  assign regs__lc_skip = \$20 [184];
-  assign lc_skip = \$20 [184];
-  assign regs__lc_zero = \$20 [185];
-  assign lc_zero = \$20 [185];
-  assign regs__spw_mismatch = \$20 [186];
-  assign spw_mismatch = \$20 [186];
-  assign regs__lc = \$20 [182:177];
-  assign lc = \$20 [182:177];
-  assign regs__line_delay = \$20 [48:36];
-  assign line_delay = \$20 [48:36];
-  assign regs__word0_position = \$20 [130:76];
-  assign word0_position = \$20 [130:76];
-  assign regs__word1_position = \$20 [173:134];
-  assign word1_position = \$20 [173:134];
-  assign regs__timestamp = \$20 [35:4];
-  assign timestamp = \$20 [35:4];
-  assign regs__noise_events = \$20 [53:50];
-  assign noise_events = \$20 [53:50];
-  assign regs__delay_settled = \$20 [54];
-  assign delay_settled = \$20 [54];
-  assign regs__delay_spread = \$20 [75:68];
-  assign delay_spread = \$20 [75:68];
-  assign regs__settled_delay = \$20 [67:55];
-  assign settled_delay = \$20 [67:55];
+  assign regs__status = \$24 [3:0];
+  assign status = \$24 [3:0];
+  assign regs__cds = \$24 [49];
+  assign cds = \$24 [49];
+  assign regs__word0_ne = \$24 [131];
+  assign word0_ne = \$24 [131];
+  assign regs__word0_nw = \$24 [132];
+  assign word0_nw = \$24 [132];
+  assign regs__word0_crc_ok = \$24 [133];
+  assign word0_crc_ok = \$24 [133];
+  assign regs__word1_ne = \$24 [174];
+  assign word1_ne = \$24 [174];
+  assign regs__word1_nw = \$24 [175];
+  assign word1_nw = \$24 [175];
+  assign regs__word1_crc_ok = \$24 [176];
+  assign word1_crc_ok = \$24 [176];
+  assign regs__lc_repeat = \$24 [183];
+  assign lc_repeat = \$24 [183];
+  assign regs__lc_skip = \$24 [184];
+  assign lc_skip = \$24 [184];
+  assign regs__lc_zero = \$24 [185];
+  assign lc_zero = \$24 [185];
+  assign regs__spw_mismatch = \$24 [186];
+  assign spw_mismatch = \$24 [186];
+  assign regs__lc = \$24 [182:177];
+  assign lc = \$24 [182:177];
+  assign regs__line_delay = \$24 [48:36];
+  assign line_delay = \$24 [48:36];
+  assign regs__word0_position = { 9'h000, \$24 [130:76] };
+  assign word0_position = \$24 [130:76];
+  assign regs__word1_position = { 24'h000000, \$24 [173:134] };
+  assign word1_position = \$24 [173:134];
+  assign regs__timestamp = \$24 [35:4];
+  assign timestamp = \$24 [35:4];
+  assign regs__noise_events = \$24 [53:50];
+  assign noise_events = \$24 [53:50];
+  assign regs__delay_settled = \$24 [54];
+  assign delay_settled = \$24 [54];
+  assign regs__delay_spread = \$24 [75:68];
+  assign delay_spread = \$24 [75:68];
+  assign regs__settled_delay = \$24 [67:55];
+  assign settled_delay = \$24 [67:55];
   assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
   assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
   assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
@@ -10237,20 +10243,20 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign regs__ca_start = ca_start;
   assign regs__ca_abort = ca_abort;
   assign ca_busy = regs__ca_busy;
-  assign regs__ca_status = \$22 [2:0];
-  assign ca_status = \$22 [2:0];
-  assign regs__ca_bytes_done = \$22 [9:3];
-  assign ca_bytes_done = \$22 [9:3];
-  assign regs__count_ca_crc4_error = \$21 [15:0];
-  assign count_ca_crc4_error = \$21 [15:0];
-  assign regs__count_ca_no_answer = \$21 [31:16];
-  assign count_ca_no_answer = \$21 [31:16];
-  assign regs__count_ca_refused = \$21 [47:32];
-  assign count_ca_refused = \$21 [47:32];
-  assign regs__count_ca_aborted = \$21 [63:48];
-  assign count_ca_aborted = \$21 [63:48];
-  assign regs__count_ca_data_fault = \$21 [79:64];
-  assign count_ca_data_fault = \$21 [79:64];
+  assign regs__ca_status = \$26 [2:0];
+  assign ca_status = \$26 [2:0];
+  assign regs__ca_bytes_done = \$26 [9:3];
+  assign ca_bytes_done = \$26 [9:3];
+  assign regs__count_ca_crc4_error = \$25 [15:0];
+  assign count_ca_crc4_error = \$25 [15:0];
+  assign regs__count_ca_no_answer = \$25 [31:16];
+  assign count_ca_no_answer = \$25 [31:16];
+  assign regs__count_ca_refused = \$25 [47:32];
+  assign count_ca_refused = \$25 [47:32];
+  assign regs__count_ca_aborted = \$25 [63:48];
+  assign count_ca_aborted = \$25 [63:48];
+  assign regs__count_ca_data_fault = \$25 [79:64];
+  assign count_ca_data_fault = \$25 [79:64];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
@@ -10260,14 +10266,16 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$13352$0  = \$20 ;
-  assign \port$13363$0  = \$21 ;
-  assign \port$13440$0  = \$22 ;
+  assign \port$13360$0  = \$24 ;
+  assign \port$13371$0  = \$25 ;
+  assign \port$13448$0  = \$26 ;
+  assign \$6  = regs__cfg_w0_data_bits[6];
+  assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$316 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$292 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit
-, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
+module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$316 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$292 , \periodic$45 
+, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
 , cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$265 
 , \abort$267 , abort, ma, \done$319 , \valid$321 , \result$324 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
@@ -11327,7 +11335,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$12994$272 (cycle[274:272]),
+    .\port$13002$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -11387,7 +11395,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$12994$199 (cycle[199]),
+    .\port$13002$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -11438,7 +11446,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$12994$259 (cycle[271:259]),
+    .\port$13002$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -11462,7 +11470,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$12982$0 (\bit ),
+    .\port$12990$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -11530,7 +11538,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5906$0 (\$28 ),
+    .\port$5910$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -15682,7 +15690,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$12994$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$13002$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -16398,8 +16406,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$12994$272 ;
-  wire [2:0] \port$12994$272 ;
+  input [2:0] \port$13002$272 ;
+  wire [2:0] \port$13002$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -16709,7 +16717,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$12994$272 [0];
+  assign error_bit = ssi & \port$13002$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -16740,19 +16748,19 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$12994$272 [0];
+  assign \$24  = ssi & \port$13002$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$12994$272 [0];
+  assign \$28  = ssi & \port$13002$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$12994$272 [0];
+  assign \$35  = ssi & \port$13002$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$12994$272 [0];
+  assign \$39  = ssi & \port$13002$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -16773,7 +16781,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$12994$272 [2];
+  assign \$61  = ssi & \port$13002$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -17059,15 +17067,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$12994$272 [0];
+  assign \$347  = ssi & \port$13002$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$12994$272 [0];
-  assign \$355  = ~ \port$12994$272 [1];
+  assign \$354  = ssi & \port$13002$272 [0];
+  assign \$355  = ~ \port$13002$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -17804,7 +17812,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$12994$272 [0];
+  assign ssi_error = \port$13002$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -17814,8 +17822,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$12994$272 [2];
-  assign ssi_error_low = \port$12994$272 [1];
+  assign ssi_double = \port$13002$272 [2];
+  assign ssi_error_low = \port$13002$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -20114,7 +20122,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$12994$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$13002$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20205,8 +20213,8 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$12994$199 , ssi, ssi_
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$12994$199 ;
-  wire \port$12994$199 ;
+  input \port$13002$199 ;
+  wire \port$13002$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20329,7 +20337,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$12994$199 , ssi, ssi_
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$12994$199  : 1'h0;
+  assign \$14  = \$13  ? \port$13002$199  : 1'h0;
   assign \$16  = \$10  | \$15 ;
   assign \$17  = ! sum_word;
   assign \$18  = sum_word ? 12'h000 : words[11:0];
@@ -20494,7 +20502,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$12994$199 , ssi, ssi_
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$12994$199 , 1'h1 };
+  assign enables = { \port$13002$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22636,7 +22644,7 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$12994$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13002$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -23219,8 +23227,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$12994$259 ;
-  wire [12:0] \port$12994$259 ;
+  input [12:0] \port$13002$259 ;
+  wire [12:0] \port$13002$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -23243,7 +23251,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$12994$259 [12:1] + 1'h1;
+  assign \$460  = \port$13002$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -23819,7 +23827,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$12994$259 [0]),
+    .clear_high(\port$13002$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -23962,7 +23970,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$12994$259 [0]) begin
+            if (\port$13002$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -24047,7 +24055,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$12994$259 [0]) begin
+            if (\port$13002$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -24086,7 +24094,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$12994$259 [12:1] };
+            \$534  = { 1'h0, \port$13002$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -24471,11 +24479,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$12994$259 [12:1] };
-  assign fixed = \port$12994$259 [0];
+  assign fixed_delay = { 1'h0, \port$13002$259 [12:1] };
+  assign fixed = \port$13002$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$12994$259 [0];
+  assign clear_high = \port$13002$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -26996,7 +27004,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$12982$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$12990$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -27038,8 +27046,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$12982$0 ;
-  wire \port$12982$0 ;
+  input \port$12990$0 ;
+  wire \port$12990$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -27053,9 +27061,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$12982$0  };
-  assign \$2  = { lc[4:0], \port$12982$0  } == last;
-  assign \$3  = { lc[4:0], \port$12982$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$12990$0  };
+  assign \$2  = { lc[4:0], \port$12990$0  } == last;
+  assign \$3  = { lc[4:0], \port$12990$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -27165,7 +27173,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$12982$0  };
+  assign lc_next = { lc[4:0], \port$12990$0  };
   assign zero = is_zero;
 endmodule
 
@@ -29962,7 +29970,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$5906$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$5910$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -30140,8 +30148,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$5906$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$5906$0 ;
-  wire \port$5906$0 ;
+  output \port$5910$0 ;
+  wire \port$5910$0 ;
   output report;
   wire report;
   input report_frame;
@@ -30259,7 +30267,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$5906$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5906$0  = \$2 ;
+  assign \port$5910$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -30314,32 +30322,36 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
-, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
+, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13899$0 , \port$13910$0 , regs__ca_done, \port$13987$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13907$0 , \port$13918$0 , regs__ca_done, \port$13995$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
-  wire [16:0] \$10 ;
-  wire [16:0] \$11 ;
-  reg \$12 ;
-  reg [3:0] \$13 ;
-  reg \$14 ;
-  reg \$15 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire [4:0] \$12 ;
+  wire [4:0] \$13 ;
+  wire [16:0] \$14 ;
+  wire [16:0] \$15 ;
   reg \$16 ;
-  reg \$17 ;
-  reg [15:0] \$18 ;
-  reg [15:0] \$19 ;
+  reg [3:0] \$17 ;
+  reg \$18 ;
+  reg \$19 ;
   wire \$2 ;
-  wire [186:0] \$20 ;
-  wire [79:0] \$21 ;
-  wire [9:0] \$22 ;
+  reg \$20 ;
+  reg \$21 ;
+  reg [15:0] \$22 ;
+  reg [15:0] \$23 ;
+  wire [186:0] \$24 ;
+  wire [79:0] \$25 ;
+  wire [9:0] \$26 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
-  wire \$7 ;
-  wire [4:0] \$8 ;
-  wire [4:0] \$9 ;
+  wire [6:0] \$7 ;
+  wire \$8 ;
+  wire [6:0] \$9 ;
   reg \$signal  = 1'h0;
   reg abort_cycle = 1'h0;
   wire busy;
@@ -30430,7 +30442,6 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [15:0] cfg_w0_crc_start;
   input [4:0] cfg_w0_crc_width;
   wire [4:0] cfg_w0_crc_width;
-  input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
   input cfg_w0_gray;
   wire cfg_w0_gray;
@@ -30455,7 +30466,6 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [15:0] cfg_w1_crc_start;
   input [4:0] cfg_w1_crc_width;
   wire [4:0] cfg_w1_crc_width;
-  input [5:0] cfg_w1_data_bits;
   wire [5:0] cfg_w1_data_bits;
   input cfg_w1_enable;
   wire cfg_w1_enable;
@@ -30500,12 +30510,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$13899$0 ;
-  wire [186:0] \port$13899$0 ;
-  output [79:0] \port$13910$0 ;
-  wire [79:0] \port$13910$0 ;
-  output [9:0] \port$13987$0 ;
-  wire [9:0] \port$13987$0 ;
+  output [186:0] \port$13907$0 ;
+  wire [186:0] \port$13907$0 ;
+  output [79:0] \port$13918$0 ;
+  wire [79:0] \port$13918$0 ;
+  output [9:0] \port$13995$0 ;
+  wire [9:0] \port$13995$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -30530,8 +30540,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [3:0] regs__ca_wbuf_en;
   wire regs__ca_write;
   wire regs__cap_counters;
-  wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] regs__cap_data_bits_w1;
+  wire [6:0] regs__cap_data_bits_w0;
+  wire [6:0] regs__cap_data_bits_w1;
   wire [6:0] regs__cap_data_bits_w2;
   wire [6:0] regs__cap_data_bits_w3;
   wire [6:0] regs__cap_data_bits_w4;
@@ -30572,7 +30582,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [15:0] regs__cfg_w0_crc_poly;
   wire [15:0] regs__cfg_w0_crc_start;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [5:0] regs__cfg_w0_data_bits;
+  input [6:0] regs__cfg_w0_data_bits;
+  wire [6:0] regs__cfg_w0_data_bits;
   wire regs__cfg_w0_gray;
   wire regs__cfg_w0_lc;
   wire regs__cfg_w0_nenw;
@@ -30587,7 +30598,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [15:0] regs__cfg_w1_crc_poly;
   wire [15:0] regs__cfg_w1_crc_start;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [5:0] regs__cfg_w1_data_bits;
+  input [6:0] regs__cfg_w1_data_bits;
+  wire [6:0] regs__cfg_w1_data_bits;
   wire regs__cfg_w1_enable;
   wire regs__cfg_w1_gray;
   wire regs__cfg_w1_lc;
@@ -30632,11 +30644,11 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire regs__word0_crc_ok;
   wire regs__word0_ne;
   wire regs__word0_nw;
-  wire [54:0] regs__word0_position;
+  wire [63:0] regs__word0_position;
   wire regs__word1_crc_ok;
   wire regs__word1_ne;
   wire regs__word1_nw;
-  wire [39:0] regs__word1_position;
+  wire [63:0] regs__word1_position;
   wire report;
   input rst;
   wire rst;
@@ -30689,29 +30701,31 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
+  assign \$7  = \$6  ? 7'h00 : regs__cfg_w0_data_bits;
+  assign \$9  = \$8  ? 7'h00 : regs__cfg_w1_data_bits;
   assign trigger = \trigger$204  & regs__trigger_enable;
-  assign \$6  = ~ report;
-  assign \$7  = \$signal  & \$6 ;
-  assign \$8  = waited + 1'h1;
-  assign \$9  = \$7  ? \$8  : 5'h00;
-  assign \$10  = regs__done_count + 1'h1;
-  assign \$11  = regs__result_updates + 1'h1;
+  assign \$10  = ~ report;
+  assign \$11  = \$signal  & \$10 ;
+  assign \$12  = waited + 1'h1;
+  assign \$13  = \$11  ? \$12  : 5'h00;
+  assign \$14  = regs__done_count + 1'h1;
+  assign \$15  = regs__result_updates + 1'h1;
   always @(posedge clk)
-    \$signal  <= \$12 ;
+    \$signal  <= \$16 ;
   always @(posedge clk)
-    waited <= \$13 ;
+    waited <= \$17 ;
   always @(posedge clk)
-    pending_ok <= \$14 ;
+    pending_ok <= \$18 ;
   always @(posedge clk)
-    regs__frame_done <= \$15 ;
+    regs__frame_done <= \$19 ;
   always @(posedge clk)
-    ended_ok <= \$16 ;
+    ended_ok <= \$20 ;
   always @(posedge clk)
-    abort_cycle <= \$17 ;
+    abort_cycle <= \$21 ;
   always @(posedge clk)
-    regs__done_count <= \$18 ;
+    regs__done_count <= \$22 ;
   always @(posedge clk)
-    regs__result_updates <= \$19 ;
+    regs__result_updates <= \$23 ;
   \biss_master_wb.ch1.core  core (
     .abort(abort_cycle),
     .\abort$267 (ca_abort),
@@ -30748,7 +30762,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .cfg_w0_crc_poly(cfg_w0_crc_poly),
     .cfg_w0_crc_start(cfg_w0_crc_start),
     .cfg_w0_crc_width(cfg_w0_crc_width),
-    .cfg_w0_data_bits(cfg_w0_data_bits),
+    .cfg_w0_data_bits(\$7 [5:0]),
     .cfg_w0_gray(cfg_w0_gray),
     .cfg_w0_lc(cfg_w0_lc),
     .cfg_w0_nenw(cfg_w0_nenw),
@@ -30758,7 +30772,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .cfg_w1_crc_poly(cfg_w1_crc_poly),
     .cfg_w1_crc_start(cfg_w1_crc_start),
     .cfg_w1_crc_width(cfg_w1_crc_width),
-    .cfg_w1_data_bits(cfg_w1_data_bits),
+    .cfg_w1_data_bits(\$9 [5:0]),
     .cfg_w1_enable(cfg_w1_enable),
     .cfg_w1_gray(cfg_w1_gray),
     .cfg_w1_lc(cfg_w1_lc),
@@ -30769,7 +30783,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
-    .counts(\$21 ),
+    .counts(\$25 ),
     .\done$319 (done),
     .frames(regs__ca_busy),
     .ma(ma),
@@ -30778,8 +30792,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
-    .result(\$22 ),
-    .\result$324 (\$20 ),
+    .result(\$26 ),
+    .\result$324 (\$24 ),
     .rst(rst),
     .slo(slo),
     .start(start),
@@ -30789,73 +30803,73 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$12  = \$signal ;
+    \$16  = \$signal ;
     if (report) begin
-      \$12  = 1'h0;
+      \$16  = 1'h0;
     end
     if (done) begin
-      \$12  = 1'h1;
+      \$16  = 1'h1;
     end
-    if (rst) begin
-      \$12  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$13  = \$9 [3:0];
-    if (rst) begin
-      \$13  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$14  = pending_ok;
-    if (done) begin
-      \$14  = valid;
-    end
-    if (rst) begin
-      \$14  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$15  = report;
-    if (rst) begin
-      \$15  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$16  = pending_ok;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$17  = regs__abort_cycle;
+    \$17  = \$13 [3:0];
     if (rst) begin
-      \$17  = 1'h0;
+      \$17  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$18  = regs__done_count;
-    if (regs__frame_done) begin
-      \$18  = \$10 [15:0];
-    end
-    if (rst) begin
-      \$18  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$19  = regs__result_updates;
+    \$18  = pending_ok;
     if (done) begin
-      \$19  = \$11 [15:0];
+      \$18  = valid;
     end
     if (rst) begin
-      \$19  = 16'h0000;
+      \$18  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$19  = report;
+    if (rst) begin
+      \$19  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$20  = pending_ok;
+    if (rst) begin
+      \$20  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$21  = regs__abort_cycle;
+    if (rst) begin
+      \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$22  = regs__done_count;
+    if (regs__frame_done) begin
+      \$22  = \$14 [15:0];
+    end
+    if (rst) begin
+      \$22  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$23  = regs__result_updates;
+    if (done) begin
+      \$23  = \$15 [15:0];
+    end
+    if (rst) begin
+      \$23  = 16'h0000;
     end
   end
   assign count_addr = ca_rbuf_addr[2:0];
@@ -30867,8 +30881,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign regs__periodic = periodic;
   assign busy = regs__busy;
   assign config_error = regs__config_error;
-  assign regs__cap_data_bits_w0 = 6'h37;
-  assign regs__cap_data_bits_w1 = 6'h28;
+  assign regs__cap_data_bits_w0 = 7'h37;
+  assign regs__cap_data_bits_w1 = 7'h28;
   assign regs__cap_timer_width = 6'h18;
   assign regs__cap_counters = 1'h1;
   assign regs__cap_timestamp = 1'h1;
@@ -30889,13 +30903,13 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign regs__cfg_break_time = cfg_break_time;
   assign regs__cfg_ack_limit = cfg_ack_limit;
   assign regs__cfg_timeout_limit = cfg_timeout_limit;
-  assign regs__cfg_w0_data_bits = cfg_w0_data_bits;
+  assign cfg_w0_data_bits = \$7 [5:0];
   assign regs__cfg_w0_nenw = cfg_w0_nenw;
   assign regs__cfg_w0_lc = cfg_w0_lc;
   assign regs__cfg_w0_crc = cfg_w0_crc;
   assign regs__cfg_w0_gray = cfg_w0_gray;
   assign regs__cfg_w0_signed = cfg_w0_signed;
-  assign regs__cfg_w1_data_bits = cfg_w1_data_bits;
+  assign cfg_w1_data_bits = \$9 [5:0];
   assign regs__cfg_w1_nenw = cfg_w1_nenw;
   assign regs__cfg_w1_lc = cfg_w1_lc;
   assign regs__cfg_w1_crc = cfg_w1_crc;
@@ -30909,48 +30923,48 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
   assign regs__cfg_confirm_frames = cfg_confirm_frames;
   assign regs__cfg_quiet_time = cfg_quiet_time;
-  assign regs__status = \$20 [3:0];
-  assign status = \$20 [3:0];
-  assign regs__cds = \$20 [49];
-  assign cds = \$20 [49];
-  assign regs__word0_ne = \$20 [131];
-  assign word0_ne = \$20 [131];
-  assign regs__word0_nw = \$20 [132];
-  assign word0_nw = \$20 [132];
-  assign regs__word0_crc_ok = \$20 [133];
-  assign word0_crc_ok = \$20 [133];
-  assign regs__word1_ne = \$20 [174];
-  assign word1_ne = \$20 [174];
-  assign regs__word1_nw = \$20 [175];
-  assign word1_nw = \$20 [175];
-  assign regs__word1_crc_ok = \$20 [176];
-  assign word1_crc_ok = \$20 [176];
-  assign regs__lc_repeat = \$20 [183];
-  assign lc_repeat = \$20 [183];
-  assign regs__lc_skip = \$20 [184];
-  assign lc_skip = \$20 [184];
-  assign regs__lc_zero = \$20 [185];
-  assign lc_zero = \$20 [185];
-  assign regs__spw_mismatch = \$20 [186];
-  assign spw_mismatch = \$20 [186];
-  assign regs__lc = \$20 [182:177];
-  assign lc = \$20 [182:177];
-  assign regs__line_delay = \$20 [48:36];
-  assign line_delay = \$20 [48:36];
-  assign regs__word0_position = \$20 [130:76];
-  assign word0_position = \$20 [130:76];
-  assign regs__word1_position = \$20 [173:134];
-  assign word1_position = \$20 [173:134];
-  assign regs__timestamp = \$20 [35:4];
-  assign timestamp = \$20 [35:4];
-  assign regs__noise_events = \$20 [53:50];
-  assign noise_events = \$20 [53:50];
-  assign regs__delay_settled = \$20 [54];
-  assign delay_settled = \$20 [54];
-  assign regs__delay_spread = \$20 [75:68];
-  assign delay_spread = \$20 [75:68];
-  assign regs__settled_delay = \$20 [67:55];
-  assign settled_delay = \$20 [67:55];
+  assign regs__status = \$24 [3:0];
+  assign status = \$24 [3:0];
+  assign regs__cds = \$24 [49];
+  assign cds = \$24 [49];
+  assign regs__word0_ne = \$24 [131];
+  assign word0_ne = \$24 [131];
+  assign regs__word0_nw = \$24 [132];
+  assign word0_nw = \$24 [132];
+  assign regs__word0_crc_ok = \$24 [133];
+  assign word0_crc_ok = \$24 [133];
+  assign regs__word1_ne = \$24 [174];
+  assign word1_ne = \$24 [174];
+  assign regs__word1_nw = \$24 [175];
+  assign word1_nw = \$24 [175];
+  assign regs__word1_crc_ok = \$24 [176];
+  assign word1_crc_ok = \$24 [176];
+  assign regs__lc_repeat = \$24 [183];
+  assign lc_repeat = \$24 [183];
+  assign regs__lc_skip = \$24 [184];
+  assign lc_skip = \$24 [184];
+  assign regs__lc_zero = \$24 [185];
+  assign lc_zero = \$24 [185];
+  assign regs__spw_mismatch = \$24 [186];
+  assign spw_mismatch = \$24 [186];
+  assign regs__lc = \$24 [182:177];
+  assign lc = \$24 [182:177];
+  assign regs__line_delay = \$24 [48:36];
+  assign line_delay = \$24 [48:36];
+  assign regs__word0_position = { 9'h000, \$24 [130:76] };
+  assign word0_position = \$24 [130:76];
+  assign regs__word1_position = { 24'h000000, \$24 [173:134] };
+  assign word1_position = \$24 [173:134];
+  assign regs__timestamp = \$24 [35:4];
+  assign timestamp = \$24 [35:4];
+  assign regs__noise_events = \$24 [53:50];
+  assign noise_events = \$24 [53:50];
+  assign regs__delay_settled = \$24 [54];
+  assign delay_settled = \$24 [54];
+  assign regs__delay_spread = \$24 [75:68];
+  assign delay_spread = \$24 [75:68];
+  assign regs__settled_delay = \$24 [67:55];
+  assign settled_delay = \$24 [67:55];
   assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
   assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
   assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
@@ -30971,20 +30985,20 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign regs__ca_start = ca_start;
   assign regs__ca_abort = ca_abort;
   assign ca_busy = regs__ca_busy;
-  assign regs__ca_status = \$22 [2:0];
-  assign ca_status = \$22 [2:0];
-  assign regs__ca_bytes_done = \$22 [9:3];
-  assign ca_bytes_done = \$22 [9:3];
-  assign regs__count_ca_crc4_error = \$21 [15:0];
-  assign count_ca_crc4_error = \$21 [15:0];
-  assign regs__count_ca_no_answer = \$21 [31:16];
-  assign count_ca_no_answer = \$21 [31:16];
-  assign regs__count_ca_refused = \$21 [47:32];
-  assign count_ca_refused = \$21 [47:32];
-  assign regs__count_ca_aborted = \$21 [63:48];
-  assign count_ca_aborted = \$21 [63:48];
-  assign regs__count_ca_data_fault = \$21 [79:64];
-  assign count_ca_data_fault = \$21 [79:64];
+  assign regs__ca_status = \$26 [2:0];
+  assign ca_status = \$26 [2:0];
+  assign regs__ca_bytes_done = \$26 [9:3];
+  assign ca_bytes_done = \$26 [9:3];
+  assign regs__count_ca_crc4_error = \$25 [15:0];
+  assign count_ca_crc4_error = \$25 [15:0];
+  assign regs__count_ca_no_answer = \$25 [31:16];
+  assign count_ca_no_answer = \$25 [31:16];
+  assign regs__count_ca_refused = \$25 [47:32];
+  assign count_ca_refused = \$25 [47:32];
+  assign regs__count_ca_aborted = \$25 [63:48];
+  assign count_ca_aborted = \$25 [63:48];
+  assign regs__count_ca_data_fault = \$25 [79:64];
+  assign count_ca_data_fault = \$25 [79:64];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
@@ -30994,14 +31008,16 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$13899$0  = \$20 ;
-  assign \port$13910$0  = \$21 ;
-  assign \port$13987$0  = \$22 ;
+  assign \port$13907$0  = \$24 ;
+  assign \port$13918$0  = \$25 ;
+  assign \port$13995$0  = \$26 ;
+  assign \$6  = regs__cfg_w0_data_bits[6];
+  assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$316 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$292 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit
-, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
+module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$316 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$292 , \periodic$45 
+, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
 , cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$265 
 , \abort$267 , abort, ma, \done$319 , \valid$321 , \result$324 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
@@ -32061,7 +32077,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13541$272 (cycle[274:272]),
+    .\port$13549$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -32121,7 +32137,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13541$199 (cycle[199]),
+    .\port$13549$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -32172,7 +32188,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13541$259 (cycle[271:259]),
+    .\port$13549$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -32196,7 +32212,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13529$0 (\bit ),
+    .\port$13537$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -32264,7 +32280,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$11453$0 (\$28 ),
+    .\port$11461$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -36416,7 +36432,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$13541$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$13549$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -37132,8 +37148,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13541$272 ;
-  wire [2:0] \port$13541$272 ;
+  input [2:0] \port$13549$272 ;
+  wire [2:0] \port$13549$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -37443,7 +37459,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13541$272 [0];
+  assign error_bit = ssi & \port$13549$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -37474,19 +37490,19 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13541$272 [0];
+  assign \$24  = ssi & \port$13549$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13541$272 [0];
+  assign \$28  = ssi & \port$13549$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13541$272 [0];
+  assign \$35  = ssi & \port$13549$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13541$272 [0];
+  assign \$39  = ssi & \port$13549$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -37507,7 +37523,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$13541$272 [2];
+  assign \$61  = ssi & \port$13549$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -37793,15 +37809,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13541$272 [0];
+  assign \$347  = ssi & \port$13549$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13541$272 [0];
-  assign \$355  = ~ \port$13541$272 [1];
+  assign \$354  = ssi & \port$13549$272 [0];
+  assign \$355  = ~ \port$13549$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -38538,7 +38554,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$13541$272 [0];
+  assign ssi_error = \port$13549$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -38548,8 +38564,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13541$272 [2];
-  assign ssi_error_low = \port$13541$272 [1];
+  assign ssi_double = \port$13549$272 [2];
+  assign ssi_error_low = \port$13549$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -40848,7 +40864,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13541$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13549$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -40939,8 +40955,8 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13541$199 , ssi, ssi_
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13541$199 ;
-  wire \port$13541$199 ;
+  input \port$13549$199 ;
+  wire \port$13549$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -41063,7 +41079,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13541$199 , ssi, ssi_
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$13541$199  : 1'h0;
+  assign \$14  = \$13  ? \port$13549$199  : 1'h0;
   assign \$16  = \$10  | \$15 ;
   assign \$17  = ! sum_word;
   assign \$18  = sum_word ? 12'h000 : words[11:0];
@@ -41228,7 +41244,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13541$199 , ssi, ssi_
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13541$199 , 1'h1 };
+  assign enables = { \port$13549$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -43370,7 +43386,7 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13541$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13549$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -43953,8 +43969,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13541$259 ;
-  wire [12:0] \port$13541$259 ;
+  input [12:0] \port$13549$259 ;
+  wire [12:0] \port$13549$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -43977,7 +43993,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13541$259 [12:1] + 1'h1;
+  assign \$460  = \port$13549$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -44553,7 +44569,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13541$259 [0]),
+    .clear_high(\port$13549$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -44696,7 +44712,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13541$259 [0]) begin
+            if (\port$13549$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -44781,7 +44797,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13541$259 [0]) begin
+            if (\port$13549$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -44820,7 +44836,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13541$259 [12:1] };
+            \$534  = { 1'h0, \port$13549$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -45205,11 +45221,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13541$259 [12:1] };
-  assign fixed = \port$13541$259 [0];
+  assign fixed_delay = { 1'h0, \port$13549$259 [12:1] };
+  assign fixed = \port$13549$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13541$259 [0];
+  assign clear_high = \port$13549$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -47730,7 +47746,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13529$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13537$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -47772,8 +47788,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13529$0 ;
-  wire \port$13529$0 ;
+  input \port$13537$0 ;
+  wire \port$13537$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -47787,9 +47803,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13529$0  };
-  assign \$2  = { lc[4:0], \port$13529$0  } == last;
-  assign \$3  = { lc[4:0], \port$13529$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13537$0  };
+  assign \$2  = { lc[4:0], \port$13537$0  } == last;
+  assign \$3  = { lc[4:0], \port$13537$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -47899,7 +47915,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13529$0  };
+  assign lc_next = { lc[4:0], \port$13537$0  };
   assign zero = is_zero;
 endmodule
 
@@ -50696,7 +50712,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11453$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11461$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -50874,8 +50890,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11453$0 , lc
   wire noisy;
   output passed;
   wire passed;
-  output \port$11453$0 ;
-  wire \port$11453$0 ;
+  output \port$11461$0 ;
+  wire \port$11461$0 ;
   output report;
   wire report;
   input report_frame;
@@ -50993,7 +51009,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11453$0 , lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$11453$0  = \$2 ;
+  assign \port$11461$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -1273,7 +1273,7 @@ async def uart_host_tool_unplugged_encoder(dut):
 
 
 # -- A chain behind the bus (issue 26): the axil_chain top -----------------------------------
-# One channel whose core decodes four words of up to 40, 32, 64 and 16 bits
+# One channel whose core decodes four words of up to 64, 64, 64 and 16 bits
 # (master_contract.CHAIN_BUS_DATA_BITS; sim/shared/runner.py builds it): words 0 and 1 in
 # cfg_words / result, words 2 and 3 in cfg_w2, cfg_w3 and chain.* (docs/registers.md).
 
@@ -1284,7 +1284,7 @@ CHAIN_4 = frames.FrameFormat("chain_4", (*CHAIN_3.words,
                                          frames.WordFormat(16, crc=frames.CRC16, signed=True)),
                              chain=True)
 #: The chain top's words and the longest field of each, as docs/registers.md's caps name them.
-CHAIN_CAPS = {"caps": {"words": 4, "data_bits_w0": 40, "data_bits_w1": 32},
+CHAIN_CAPS = {"caps": {"words": 4, "data_bits_w0": 64, "data_bits_w1": 64},
               "caps_chain": {"data_bits_a": 64, "data_bits_b": 16, "data_bits_c": 0,
                              "data_bits_d": 0},
               "caps_chain2": {"data_bits_a": 0, "data_bits_b": 0}}
@@ -1316,7 +1316,7 @@ def fault_once(enc, make):
 @only_on_buses("axil_chain")
 async def chain_words_through_the_registers(dut):
     """A chain of four slaves set up and read through the register map alone: the caps name
-    four words (40, 32, 64, 16 bits); cfg_words, cfg_w2 and cfg_w3 (custom CRCs in cfg_crc1,
+    four words (64, 64, 64, 16 bits); cfg_words, cfg_w2 and cfg_w3 (custom CRCs in cfg_crc1,
     cfg_w2_crc, cfg_w2_crc_start) set the frame; frames at 5 MHz over 20 m read back every
     word's data, nE, nW and crc_ok as each slave sent it (word 3 signed, sign-extended to 16
     bits). Then a CRC bit of word 2, of word 3, of words 0 and 3 flipped: status
@@ -1383,32 +1383,39 @@ async def chain_fewer_words_and_a_gap(dut):
 
 @cocotb.test()
 @only_on_buses("axil_chain")
-async def chain_word_of_64_bits(dut):
-    """A 64-bit slave behind the bus: cfg_w2.data_bits 64 (its field's top bit), the position
-    read from chain.w2_lo and chain.w2_hi (all 32 bits of it), Gray-decoded over the whole
-    word, then as two's complement (no sign extension left to do at 64 bits); every frame as
-    sent, positions with bit 63 set among them. Then 65 written (a length the core cannot
-    read): state.config_error, the request ends BAD_CONFIG and MA stays quiet; 64 again
-    reads frames."""
+async def chain_words_of_64_bits(dut):
+    """Words 0, 1 and 2 of 64 bits behind the bus (map version 2): cfg_words.w0_data_bits,
+    w1_data_bits and cfg_w2.data_bits 64 (each field's top bit), the positions read from
+    result.w0_lo / w0_hi, w1_lo / w1_hi and chain.w2_lo / w2_hi (all 32 bits of each _hi),
+    each word Gray-decoded over the whole word in one format and two's complement (no sign
+    extension left to do at 64 bits) in the other; every frame as sent, positions with bit 63
+    set in every word. Then 65 written to each word's length in turn (a length the core
+    cannot read): state.config_error, the request ends BAD_CONFIG and MA stays quiet; 64
+    again reads frames."""
     tb = BusTestbench(dut, seed=2605)
     await tb.start([Encoder(CHAIN_64[0], Cable(length_m=10))])
-    top_set = 0
+    top_set = [0, 0, 0]
     for fmt in CHAIN_64:
         tb.channels[0].set_format(fmt)
         await tb.configure(0, fmt, 5e6)
-        assert (await tb.read_fields("cfg_w2", 0))["data_bits"] == 64
+        words = await tb.read_fields("cfg_words", 0)
+        assert (words["w0_data_bits"], words["w1_data_bits"],
+                (await tb.read_fields("cfg_w2", 0))["data_bits"]) == (64, 64, 64)
         await tb.encoders_ready()
         for _ in range(6):
             res = await tb.request(0)
             tb.check_result(0, res)
-            top_set += res["word2"] >> 63
-    assert top_set, "no position with bit 63 set: the test did not reach the top bit"
-    cfg_w2 = await tb.read_fields("cfg_w2", 0)
-    await tb.write_fields("cfg_w2", 0, **{**cfg_w2, "data_bits": 65})
-    await refused_without_a_pulse(tb, dut)
-    await tb.write_fields("cfg_w2", 0, **cfg_w2)
-    await tb.encoders_ready()
-    tb.check_result(0, await tb.request(0))
+            for w in range(3):
+                top_set[w] += res[f"word{w}"] >> 63
+    assert all(top_set), f"a word never had bit 63 set ({top_set}): the top bit not reached"
+    for path, field in (("cfg_words", "w0_data_bits"), ("cfg_words", "w1_data_bits"),
+                        ("cfg_w2", "data_bits")):
+        good = await tb.read_fields(path, 0)
+        await tb.write_fields(path, 0, **{**good, field: 65})
+        await refused_without_a_pulse(tb, dut)
+        await tb.write_fields(path, 0, **good)
+        await tb.encoders_ready()
+        tb.check_result(0, await tb.request(0))
 
 
 @cocotb.test()

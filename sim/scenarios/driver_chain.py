@@ -1,6 +1,6 @@
 """cocotb scenarios of the C driver (sw/) reading a chain of slaves (words 2..7 of the register
 map) on the ``axil_chain`` bus top: an AXI4-Lite top (module biss_master_axil) of one channel
-whose core decodes four words of up to master_contract.CHAIN_BUS_DATA_BITS = 40, 32, 64, 16
+whose core decodes four words of up to master_contract.CHAIN_BUS_DATA_BITS = 64, 64, 64, 16
 bits (sim/shared/runner.py builds it).
 
 As in sim/scenarios/driver.py the driver, ``libbissmaster.so`` (path in ``BISS_DRIVER_LIB``),
@@ -261,13 +261,16 @@ async def driver_chain_of_three_on_a_four_word_build(dut):
 
 
 @cocotb.test()
-async def driver_chain_word_of_64_bits(dut):
-    """A 64-bit chain word through the driver: biss_configure writes data_bits 64 (its
-    field's top bit), biss_read_result joins chain.w2_lo and all 32 bits of chain.w2_hi;
-    every word as sent, Gray-decoded, then as two's complement (biss_signed_data of a
-    64-bit word is the word itself); positions with bit 63 set among them."""
+async def driver_chain_words_of_64_bits(dut):
+    """Words 0, 1 and 2 of 64 bits through the driver (map version 2): biss_channel_init
+    reads 64-bit caps for words 0 and 1, biss_configure writes data_bits 64 (each field's top
+    bit), biss_read_result joins result.w0_lo / w0_hi, w1_lo / w1_hi and chain.w2_lo / w2_hi
+    (all 32 bits of each _hi); every word as sent, Gray-decoded in one format and two's
+    complement in the other (biss_signed_data of a 64-bit word is the word itself);
+    positions with bit 63 set in every word."""
     tb, drv, ch = await setup(dut, seed=2615, fmt=CHAIN_64[0])
-    top_set = 0
+    assert tuple(ch.max_data_bits) == (64, 64) and ch.chain_data_bits[0] == 64
+    top_set = [0, 0, 0]
     for fmt in CHAIN_64:
         tb.channels[0].set_format(fmt)
         tb.channels[0].source.chain_positions_at = lambda t, fmt=fmt: [
@@ -275,15 +278,19 @@ async def driver_chain_word_of_64_bits(dut):
         cfg = await chain_config(drv, fmt)
         await drv.check("biss_configure", byref(ch), byref(cfg))
         await check_chain_registers(tb, fmt)
+        words = await tb.read_fields("cfg_words", 0)
+        assert (words["w0_data_bits"], words["w1_data_bits"]) == (64, 64)
         await tb.encoders_ready()
         for _ in range(5):
             res = await sample(drv, ch)
             check_frame(tb, fmt, res)
-            top_set += res["word2"] >> 63
-            if fmt.words[2].signed:
-                got = drv.lib.biss_signed_data(byref(ch), 2, res["word2"])
-                assert got == res["word2"] - (res["word2"] >> 63 << 64), (got, res["word2"])
-    assert top_set, "no position with bit 63 set: the test did not reach the top bit"
+            for w in range(3):
+                data = res[f"word{w}"]
+                top_set[w] += data >> 63
+                if fmt.words[w].signed:
+                    got = drv.lib.biss_signed_data(byref(ch), w, data)
+                    assert got == data - (data >> 63 << 64), (w, got, data)
+    assert all(top_set), f"a word never had bit 63 set ({top_set}): the top bit not reached"
 
 
 @cocotb.test()

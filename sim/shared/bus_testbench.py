@@ -39,16 +39,18 @@ BUILD_DATA_BITS = (CHAIN_BUS_DATA_BITS if os.environ.get("BISS_BUS_BUILD") == "c
 CHAIN_FIRST = 2
 #: Reads of a chain result before giving up on a consistent set (chain.updates).
 CHAIN_READ_TRIES = 8
-#: The chain top's word 2 as long as a word can be (64 data bits), after a 26-bit and a 12-bit
-#: slave: Gray with CRC-16 and nE/nW, then two's complement with iC-MB4's CRC-8 (0x12F) and no
-#: nE/nW (the bus and the C driver scenarios read both).
-CHAIN_64 = tuple(frames.FrameFormat(name, (frames.WordFormat(26), frames.WordFormat(12), word),
-                                    chain=True)
-                 for name, word in (
-                     ("chain_64_gray", frames.WordFormat(64, crc=frames.CRC16, gray=True)),
-                     ("chain_64_signed", frames.WordFormat(
-                         64, nenw=False, signed=True,
-                         crc=frames.CustomCrc(8, 0x2F, 0x00, True)))))
+#: Words of 64 data bits, as long as a word can be: Gray with CRC-16 and nE/nW, and two's
+#: complement with iC-MB4's CRC-8 (0x12F) and no nE/nW.
+WORD_64_GRAY = frames.WordFormat(64, crc=frames.CRC16, gray=True)
+WORD_64_SIGNED = frames.WordFormat(64, nenw=False, signed=True,
+                                   crc=frames.CustomCrc(8, 0x2F, 0x00, True))
+#: The chain top's words 0, 1 and 2 all of 64 bits (result.w0_*, result.w1_*, chain.w2_*),
+#: each word Gray in one format and two's complement in the other (the bus and the C driver
+#: scenarios read both).
+CHAIN_64 = (frames.FrameFormat("chain_64_a", (WORD_64_GRAY, WORD_64_SIGNED, WORD_64_GRAY),
+                               chain=True),
+            frames.FrameFormat("chain_64_b", (WORD_64_SIGNED, WORD_64_GRAY, WORD_64_SIGNED),
+                               chain=True))
 
 
 class AxiLiteBus:

@@ -324,8 +324,8 @@ typedef struct {
 } biss_word_result_t;
 
 typedef struct {
-    uint64_t word0;                 /* word 0 data (up to 55 bits) */
-    uint64_t word1;                 /* word 1 data (up to 40 bits) */
+    uint64_t word0;                 /* word 0 data (up to 64 bits: caps.data_bits_w0) */
+    uint64_t word1;                 /* word 1 data (up to 64 bits: caps.data_bits_w1) */
     uint32_t timestamp;             /* clock count at the frame's first MA rising edge */
     uint16_t seq;                   /* ended request cycles since reset, wrapping */
     uint16_t line_delay;            /* measured round trip, clocks */

@@ -151,7 +151,7 @@ class RegisterModel:
         path, ch, index = hit
         self.log.append(("r", path, ch))
         if ch is None:
-            return {"id": ID, "version": (1 << 16) | 1, "channels": self.n}.get(path, 0)
+            return {"id": ID, "version": 2 << 16, "channels": self.n}.get(path, 0)
         if path == "state":
             return self.pack("state", busy=0, config_error=int(self.config_error(ch)))
         if path == "caps":

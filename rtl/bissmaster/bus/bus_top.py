@@ -115,11 +115,12 @@ class BusChannel(wiring.Component):
     (``word1_position`` in a one-word build, ``word2_position`` .. ``word7_position`` in a
     build of fewer words, the ``ca_*`` ports of the register-access engine in a build
     without it) reads 0 and its configuration is not stored. A core port wider than the map's
-    field is refused (the map holds word 0 up to 55 data bits, word 1 up to 40, words 2..7 up
-    to 64). A word's length field wider than the core's ``cfg_w<W>_data_bits`` port (7 bits
-    for a core whose words are all shorter than 64 bits, which has a 6-bit port) reaches the
-    core as 0 when its top bit is set: a length the build cannot read is then an enabled word
-    of length 0, ``BAD_CONFIG``, never a length cut to its low bits.
+    field is refused (the map holds every word up to 64 data bits, so of the words only a
+    port the map does not name, a ninth word, could be). A word's length field wider than the
+    core's ``cfg_w<W>_data_bits`` port (7 bits for a core whose words are all shorter than 64
+    bits, which has a 6-bit port) reaches the core as 0 when its top bit is set: a length the
+    build cannot read is then an enabled word of length 0, ``BAD_CONFIG``, never a length cut
+    to its low bits.
 
     Parameters
     ----------

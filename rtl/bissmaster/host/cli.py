@@ -742,7 +742,7 @@ def cmd_config(board, args, out, err):
     if args.list_presets:
         for name in presets.PRESETS:
             print(f"{name:<16} {presets.describe(name)}", file=out)
-        print(f"{'biss-c-N':<16} word 0 N bits nE nW CRC6 (N 1..55)", file=out)
+        print(f"{'biss-c-N':<16} word 0 N bits nE nW CRC6 (N 1..64)", file=out)
         return EXIT_CODES["ok"]
     ch = _one_channel(args)
     settings, ctrl = {}, {}

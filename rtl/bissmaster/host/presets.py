@@ -43,9 +43,9 @@ def words_of(name):
     if name in PRESETS:
         return PRESETS[name]
     m = _GENERIC.match(name)
-    if m and 1 <= int(m.group(1)) <= 55:
+    if m and 1 <= int(m.group(1)) <= 64:
         return {"data_bits": int(m.group(1)), **_C}, None
-    raise KeyError(f"no preset {name!r}; presets: {', '.join(PRESETS)}, biss-c-N (N 1..55)")
+    raise KeyError(f"no preset {name!r}; presets: {', '.join(PRESETS)}, biss-c-N (N 1..64)")
 
 
 def half_period(clock_hz, ma_hz):

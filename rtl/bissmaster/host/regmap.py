@@ -14,7 +14,7 @@ offset in the channel's block, channel ``n`` starting at :func:`channel_base` ``
 #: The value of ``id``: "BiSS" in ASCII.
 ID_VALUE = 0x42695353
 #: The register map's major version this host software is written for (``version.major``).
-MAP_MAJOR = 1
+MAP_MAJOR = 2
 #: Channel n's block starts at CHANNEL_BASE + n * CHANNEL_STRIDE; at most MAX_CHANNELS.
 CHANNEL_BASE = 0x200
 CHANNEL_STRIDE = 0x200
@@ -88,7 +88,7 @@ FIELDS = {
     "ctrl": {"start": (0, 1), "abort": (1, 1), "clear_counters": (2, 1), "periodic": (8, 1),
              "trigger_enable": (9, 1)},
     "state": {"busy": (0, 1), "config_error": (1, 1)},
-    "caps": {"data_bits_w0": (0, 6), "data_bits_w1": (8, 6), "timer_width": (16, 6),
+    "caps": {"data_bits_w0": (0, 7), "data_bits_w1": (8, 7), "timer_width": (16, 6),
              "counters": (24, 1), "timestamp": (25, 1), "register_access": (26, 1),
              "ssi": (27, 1), "words": (28, 4)},
     "irq_status": {"done": (0, 1), "error": (1, 1), "access_done": (2, 1)},
@@ -98,10 +98,10 @@ FIELDS = {
     "cfg_break": {"break_time": (0, 24)},
     "cfg_ack": {"ack_limit": (0, 24)},
     "cfg_timeout": {"timeout_limit": (0, 24)},
-    "cfg_words": {"w0_data_bits": (0, 6), "w0_nenw": (6, 1), "w0_lc": (7, 1), "w0_crc": (8, 2),
-                  "w0_gray": (10, 1), "w0_signed": (11, 1), "w1_data_bits": (16, 6),
-                  "w1_nenw": (22, 1), "w1_lc": (23, 1), "w1_crc": (24, 2), "w1_gray": (26, 1),
-                  "w1_signed": (27, 1), "w1_enable": (31, 1)},
+    "cfg_words": {"w0_data_bits": (0, 7), "w0_nenw": (7, 1), "w0_lc": (8, 1), "w0_crc": (9, 2),
+                  "w0_gray": (11, 1), "w0_signed": (12, 1), "w1_data_bits": (16, 7),
+                  "w1_nenw": (23, 1), "w1_lc": (24, 1), "w1_crc": (25, 2), "w1_gray": (27, 1),
+                  "w1_signed": (28, 1), "w1_enable": (31, 1)},
     "cfg_checks": {"end_check": (0, 1), "spw_check": (1, 1), "spw_tolerance": (8, 8),
                    "noise_limit": (16, 4), "delay_tolerance": (20, 4),
                    "confirm_frames": (24, 4)},
@@ -118,9 +118,9 @@ FIELDS = {
                       "lc_zero": (18, 1), "spw_mismatch": (19, 1), "lc": (24, 6)},
     "result.seq": {"seq": (0, 16), "line_delay": (16, 13)},
     "result.w0_lo": {"data": (0, 32)},
-    "result.w0_hi": {"data": (0, 23)},
+    "result.w0_hi": {"data": (0, 32)},
     "result.w1_lo": {"data": (0, 32)},
-    "result.w1_hi": {"data": (0, 8)},
+    "result.w1_hi": {"data": (0, 32)},
     "result.timestamp": {"time": (0, 32)},
     "result.line": {"noise_events": (0, 4), "delay_settled": (4, 1), "delay_spread": (8, 8),
                     "settled_delay": (16, 13)},

@@ -649,7 +649,7 @@ def test_channel_init_reads_the_chain_caps(lib, words, chain, want_words, want_b
     caps = m.reg("caps", 0).fields
     version = m.reg("version").fields
     regs = {m.address("id"): 0x42695353,            # "BiSS", docs/registers.md
-            m.address("version"): version["major"].put(0, 1),
+            m.address("version"): version["major"].put(0, 2),
             m.address("channels"): 1,
             m.address("caps", 0): caps["words"].put(caps["data_bits_w1"].put(
                 caps["data_bits_w0"].put(0, 40), 32), words)}

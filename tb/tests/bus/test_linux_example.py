@@ -242,7 +242,7 @@ def test_uio_map_size_comes_from_sysfs(prog, tmp_path):
     r = run(prog, "--uio", dev, "--channel", 7, "--preset", "resolute_c_26", "--count", 1,
             env={"BISS_UIO_SYSFS": str(sysfs)})
     assert r.returncode == EXIT_OK, r.stderr
-    assert f"{dev} (map 0, 0x2000 bytes): BiSS master, register map 1.1, 8 channels" in r.stdout
+    assert f"{dev} (map 0, 0x2000 bytes): BiSS master, register map 2.0, 8 channels" in r.stdout
     assert frame_lines(r.stdout) == [
         "frame 1 ch 7 status OK position 19088743 (0x1234567) nE 1 nW 1 crc ok "
         "line_delay 40 (400 ns) seq 3 timestamp 0"]
@@ -260,7 +260,7 @@ def test_uio_map_size_comes_from_sysfs(prog, tmp_path):
 @pytest.mark.parametrize("change,words", [
     ({"size": 0x2000, "zero": True}, ["id reads 0x00000000", "not 0x42695353"]),
     ({"id": int.from_bytes(b"BiSs", "big")}, ["id reads 0x42695373"]),
-    ({"major": 2}, ["register map version 2.1", "major version 1"]),
+    ({"major": 1}, ["register map version 1.0", "major version 2"]),
     ({"channels": 0}, ["reports 0 channels"]),
     ({"channels": 9}, ["reports 9 channels"]),
 ])

@@ -119,11 +119,11 @@ def test_settings_the_core_lacks_are_not_stored():
             base = ch * MAP.channel_stride
             await write(ctx, bank, base + words, 0xFFFFFFFF)
             await write(ctx, bank, base + ssi, 0xFFFFFFFF)
-        w1_bits = 0x3F << 16 | 1 << 31              # w1_data_bits [21:16], w1_enable [31]
+        w1_bits = 0x7F << 16 | 1 << 31              # w1_data_bits [22:16], w1_enable [31]
         assert await read(ctx, bank, words) == 0xFFFFFFFF & ~w1_bits & _mask("cfg_words")
         assert await read(ctx, bank, ssi) == 0b1110                # error, error_low, double
         assert ctx.get(bank.ch0.cfg_w1_enable) == 0 and ctx.get(bank.ch0.cfg_ssi_delay) == 0
-        assert ctx.get(bank.ch0.cfg_w0_data_bits) == 0x3F
+        assert ctx.get(bank.ch0.cfg_w0_data_bits) == 0x7F
         ch1 = MAP.channel_stride
         assert await read(ctx, bank, ch1 + words) == _mask("cfg_words")
         assert await read(ctx, bank, ch1 + ssi) == _mask("cfg_ssi")
@@ -256,7 +256,7 @@ def test_axil_reads_back_to_back_and_write_with_address_after_data():
             await ctx.tick()
             if ctx.get(bus.rvalid):
                 got.append((clock + 1, ctx.get(bus.rdata)))
-        assert got == [(2, 0x1234), (3, 0x42695353), (4, 0x00010001)]    # version 1.1
+        assert got == [(2, 0x1234), (3, 0x42695353), (4, 0x00020000)]    # version 2.0
 
     run_adapter(AxiLiteAdapter, bench)
 
@@ -299,7 +299,7 @@ def test_axil_read_backpressure_reads_each_register_once():
                 ctx.set(bank.ch0.word0_position, 0x7F_FFFF_FFFF)
         assert issued == len(reads) and status_seen
         assert [g & 0xF if n == 1 else g for n, g in enumerate(got)] == [
-            0x42695353, 3, 0x0000_00AA, 0x55, 0x00010001, 0x0000_00AA]
+            0x42695353, 3, 0x0000_00AA, 0x55, 0x00020000, 0x0000_00AA]
 
     run_adapter(AxiLiteAdapter, bench)
 

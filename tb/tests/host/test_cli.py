@@ -491,7 +491,7 @@ def test_config_show_preset_and_set():
 
 def test_config_refusals():
     bridge = biss_c_board()
-    for argv, text in ((["config", "--set", "w0_data_bits=64"], "6 bit"),
+    for argv, text in ((["config", "--set", "w0_data_bits=128"], "7 bit"),
                        (["config", "--set", "nonsense=1"], "no configuration field"),
                        (["config", "--set", "w0_data_bits"], "name=value"),
                        (["config", "--preset", "nope"], "no preset"),
@@ -825,8 +825,8 @@ def test_a_board_that_does_not_answer():
 def test_something_else_on_the_port():
     code, _, err = run(["counters"], MemoryBridge({0: 0x12345678}))
     assert code == EXIT["no board"] and "not a BiSS master" in err
-    code, _, err = run(["counters"], MemoryBridge({0: 0x42695353, 4: 2 << 16, 8: 2}))
-    assert code == EXIT["no board"] and "version 2.0" in err
+    code, _, err = run(["counters"], MemoryBridge({0: 0x42695353, 4: 1 << 16 | 1, 8: 2}))
+    assert code == EXIT["no board"] and "version 1.1" in err
 
 
 def test_a_garbled_link():

@@ -85,8 +85,8 @@ def test_get_put_and_config_field():
         f["w1_enable"].put(0, 1), 1), 1), 26)
     assert regmap.get("cfg_words", word, "w0_data_bits") == 26
     assert regmap.get("cfg_words", word)["w1_enable"] == 1
-    with pytest.raises(ValueError, match="6 bit"):
-        regmap.put("cfg_words", w0_data_bits=64)
+    with pytest.raises(ValueError, match="7 bit"):
+        regmap.put("cfg_words", w0_data_bits=128)
     with pytest.raises(KeyError):
         regmap.put("cfg_words", nonsense=1)
     assert regmap.config_field("cfg_spw_check") == ("cfg_checks", "spw_check")
@@ -126,7 +126,9 @@ def test_preset_config_sets_every_field():
     assert (cfg["spw_check"], cfg["spw_tolerance"], cfg["w1_enable"]) == (1, 1, 1)
     c = presets.config("biss-c-19", 100e6, 1e6)
     assert (c["w0_data_bits"], c["w0_crc"], c["w1_enable"], c["spw_check"]) == (19, 1, 0, 0)
-    for bad in ("biss-c-56", "resolute_c_99", "biss-c"):
+    c = presets.config("biss-c-64", 100e6, 1e6)
+    assert (c["w0_data_bits"], c["w0_crc"]) == (64, 1)
+    for bad in ("biss-c-65", "biss-c-0", "resolute_c_99", "biss-c"):
         with pytest.raises(KeyError):
             presets.words_of(bad)
     for clock, ma in ((100e6, 11e6), (100e6, 50e3), (4e6, 3e6), (20e9, 100e3)):
