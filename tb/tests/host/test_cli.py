@@ -138,6 +138,21 @@ def test_read_and_log_show_a_signed_word_as_a_negative_number(tmp_path):
     assert [r["position"] for r in csv.DictReader(path.open())] == ["-2"]
 
 
+def test_read_shows_64_bit_words_whole():
+    """Map version 2: words 0 and 1 of up to 64 bits (caps.data_bits_w0 / w1 64, the whole of
+    result.w0_hi / w1_hi): an unsigned word with bit 63 set reads as its full value, a
+    signed one as the negative number."""
+    model = RegisterModel(caps={"data_bits_w0": 64, "data_bits_w1": 64})
+    model.configure(0, ma_half_period=50, w0_data_bits=64, w0_nenw=1, w0_crc=2, w1_enable=1,
+                    w1_data_bits=64, w1_nenw=1, w1_crc=2, w1_signed=1)
+    model.encoders[0] = FakeEncoder(positions=lambda n: 2**64 - 5 - n,
+                                    word1=lambda n: 2**64 - 3)
+    code, out, err = run(["read", "-c", "0", "--count", "2"], FakeBridge(model))
+    assert code == EXIT["ok"], err
+    rows = [r.split() for r in out.splitlines()[1:]]
+    assert [(int(r[4]), int(r[8])) for r in rows] == [(2**64 - 5, -3), (2**64 - 6, -3)], rows
+
+
 @pytest.mark.parametrize("status, code", [("NO_ACK", "no encoder"),
                                           ("SLO_STUCK_LOW", "no encoder"),
                                           ("CRC_ERROR_WORD0", "encoder errors")])
