@@ -1124,7 +1124,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$5305$272 (cycle[274:272]),
+    .\port$5303$272 (cycle[274:272]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(sample),
@@ -1184,7 +1184,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$5305$199 (cycle[199]),
+    .\port$5303$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -1235,7 +1235,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$5305$259 (cycle[271:259]),
+    .\port$5303$259 (cycle[271:259]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(\sample$349 ),
@@ -1258,7 +1258,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$213 ),
     .load(load),
-    .\port$5293$0 (\bit ),
+    .\port$5291$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1325,7 +1325,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$4725$0 (\$28 ),
+    .\port$4723$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -5657,7 +5657,7 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$5305$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$5303$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
@@ -6373,8 +6373,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$5305$272 ;
-  wire [2:0] \port$5305$272 ;
+  input [2:0] \port$5303$272 ;
+  wire [2:0] \port$5303$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -6684,7 +6684,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$5305$272 [0];
+  assign error_bit = ssi & \port$5303$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -6715,19 +6715,19 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$5305$272 [0];
+  assign \$24  = ssi & \port$5303$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$5305$272 [0];
+  assign \$28  = ssi & \port$5303$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$5305$272 [0];
+  assign \$35  = ssi & \port$5303$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$5305$272 [0];
+  assign \$39  = ssi & \port$5303$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -6748,7 +6748,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$5305$272 [2];
+  assign \$61  = ssi & \port$5303$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -7034,15 +7034,15 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$5305$272 [0];
+  assign \$347  = ssi & \port$5303$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$5305$272 [0];
-  assign \$355  = ~ \port$5305$272 [1];
+  assign \$354  = ssi & \port$5303$272 [0];
+  assign \$355  = ~ \port$5303$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -7779,7 +7779,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$5305$272 [0];
+  assign ssi_error = \port$5303$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -7789,8 +7789,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$5305$272 [2];
-  assign ssi_error_low = \port$5305$272 [1];
+  assign ssi_double = \port$5303$272 [2];
+  assign ssi_error_low = \port$5303$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -10089,7 +10089,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_stop (rst, words, \port$5305$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master.ma_stop (rst, words, \port$5303$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10098,49 +10098,49 @@ module \biss_master.ma_stop (rst, words, \port$5305$199 , ssi, ssi_error, ssi_do
   wire \$13 ;
   wire \$14 ;
   wire \$15 ;
-  wire \$16 ;
+  wire [11:0] \$16 ;
   wire \$17 ;
   wire [11:0] \$18 ;
-  wire \$19 ;
+  wire [11:0] \$19 ;
   reg [7:0] \$2 ;
-  wire [11:0] \$20 ;
+  wire \$20 ;
   wire [11:0] \$21 ;
   wire \$22 ;
   wire [11:0] \$23 ;
-  wire \$24 ;
-  wire [11:0] \$25 ;
+  wire [11:0] \$24 ;
+  wire \$25 ;
   wire [11:0] \$26 ;
   wire \$27 ;
   wire [11:0] \$28 ;
-  wire \$29 ;
+  wire [11:0] \$29 ;
   wire [8:0] \$3 ;
-  wire [11:0] \$30 ;
-  wire [11:0] \$31 ;
-  reg [8:0] \$32 ;
+  reg [8:0] \$30 ;
+  wire \$31 ;
+  wire [4:0] \$32 ;
   wire \$33 ;
   wire [4:0] \$34 ;
-  wire \$35 ;
-  wire [4:0] \$36 ;
-  wire [4:0] \$37 ;
-  wire [9:0] \$38 ;
-  wire [9:0] \$39 ;
+  wire [4:0] \$35 ;
+  wire [9:0] \$36 ;
+  wire [9:0] \$37 ;
+  wire [8:0] \$38 ;
+  wire \$39 ;
   wire [8:0] \$4 ;
-  wire [8:0] \$40 ;
+  wire \$40 ;
   wire \$41 ;
   wire \$42 ;
   wire \$43 ;
   wire \$44 ;
-  wire \$45 ;
+  wire [1:0] \$45 ;
   wire \$46 ;
-  wire [1:0] \$47 ;
+  wire \$47 ;
   wire \$48 ;
-  wire \$49 ;
+  wire [8:0] \$49 ;
   wire [8:0] \$5 ;
-  wire \$50 ;
+  wire [9:0] \$50 ;
   wire [8:0] \$51 ;
-  wire [9:0] \$52 ;
-  wire [8:0] \$53 ;
-  wire [16:0] \$54 ;
+  wire [16:0] \$52 ;
+  wire \$53 ;
+  wire \$54 ;
   wire \$55 ;
   wire \$56 ;
   wire \$57 ;
@@ -10148,23 +10148,21 @@ module \biss_master.ma_stop (rst, words, \port$5305$199 , ssi, ssi_error, ssi_do
   wire \$59 ;
   wire [8:0] \$6 ;
   wire \$60 ;
-  wire \$61 ;
-  wire \$62 ;
-  reg [7:0] \$63 ;
-  reg [7:0] \$64 ;
-  reg [8:0] \$65 ;
+  reg [7:0] \$61 ;
+  reg [7:0] \$62 ;
+  reg [8:0] \$63 ;
+  reg \$64 ;
+  reg \$65 ;
   reg \$66 ;
   reg \$67 ;
   reg \$68 ;
   reg \$69 ;
   wire [9:0] \$7 ;
   reg \$70 ;
-  reg \$71 ;
-  reg \$72 ;
-  reg [8:0] \$73 ;
-  reg [16:0] \$74 ;
-  reg \$75 ;
-  reg \$76 ;
+  reg [8:0] \$71 ;
+  reg [16:0] \$72 ;
+  reg \$73 ;
+  reg \$74 ;
   wire [8:0] \$8 ;
   wire [9:0] \$9 ;
   input clear;
@@ -10180,8 +10178,8 @@ module \biss_master.ma_stop (rst, words, \port$5305$199 , ssi, ssi_error, ssi_do
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$5305$199 ;
-  wire \port$5305$199 ;
+  input \port$5303$199 ;
+  wire \port$5303$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -10233,67 +10231,64 @@ module \biss_master.ma_stop (rst, words, \port$5305$199 , ssi, ssi_error, ssi_do
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$25  = \$24  ? words[23:12] : 12'h000;
-  assign \$26  = \$23  | \$25 ;
-  assign \$27  = ! sum_word;
-  assign \$28  = sum_word ? 12'h000 : words[11:0];
-  assign \$30  = \$29  ? words[23:12] : 12'h000;
-  assign \$31  = \$28  | \$30 ;
-  assign \$33  = ! sum_word;
-  assign \$34  = sum_word ? 5'h00 : crc_widths[4:0];
-  assign \$36  = \$35  ? crc_widths[9:5] : 5'h00;
-  assign \$37  = \$34  | \$36 ;
-  assign \$38  = \$32  + \$37 ;
-  assign \$39  = \$21 [5:0] + \$38 [8:0];
-  assign \$40  = \$16  ? \$39 [8:0] : 9'h000;
-  assign \$41  = ! sum_word;
+  assign \$26  = sum_word ? 12'h000 : words[11:0];
+  assign \$28  = \$27  ? words[23:12] : 12'h000;
+  assign \$29  = \$26  | \$28 ;
+  assign \$31  = ! sum_word;
+  assign \$32  = sum_word ? 5'h00 : crc_widths[4:0];
+  assign \$34  = \$33  ? crc_widths[9:5] : 5'h00;
+  assign \$35  = \$32  | \$34 ;
+  assign \$36  = \$30  + \$35 ;
+  assign \$37  = \$19 [5:0] + \$36 [8:0];
+  assign \$38  = \$14  ? \$37 [8:0] : 9'h000;
+  assign \$39  = ! sum_word;
+  assign \$41  = ~ clear;
+  assign \$42  = sum_feeding & \$41 ;
   assign \$43  = ~ clear;
-  assign \$44  = sum_feeding & \$43 ;
-  assign \$45  = ~ clear;
-  assign \$46  = sum_done & \$45 ;
-  assign \$47  = sum_word + 1'h1;
-  assign \$49  = ~ clear;
-  assign \$50  = sum_adding & \$49 ;
-  assign \$51  = sum_first ? 9'h004 : frame_len;
-  assign \$52  = \$51  + sum_length;
-  assign \$53  = ssi ? { 1'h0, word0_len } : frame_len;
-  assign \$54  = start_slot + \$53 ;
-  assign \$55  = | rises;
-  assign \$56  = ssi ? \$55  : \started$23 ;
-  assign \$57  = summed | ssi;
-  assign \$58  = started & \$57 ;
-  assign \$59  = rises >= target_rises;
+  assign \$44  = sum_done & \$43 ;
+  assign \$45  = sum_word + 1'h1;
+  assign \$47  = ~ clear;
+  assign \$48  = sum_adding & \$47 ;
+  assign \$49  = sum_first ? 9'h004 : frame_len;
+  assign \$50  = \$49  + sum_length;
+  assign \$51  = ssi ? { 1'h0, word0_len } : frame_len;
+  assign \$52  = start_slot + \$51 ;
+  assign \$53  = | rises;
+  assign \$54  = ssi ? \$53  : \started$23 ;
+  assign \$55  = summed | ssi;
+  assign \$56  = started & \$55 ;
+  assign \$57  = rises >= target_rises;
+  assign \$58  = \$56  & \$57 ;
+  assign \$59  = ~ clear;
   assign \$60  = \$58  & \$59 ;
-  assign \$61  = ~ clear;
-  assign \$62  = \$60  & \$61 ;
   always @(posedge clk)
-    n <= \$63 ;
+    n <= \$61 ;
   always @(posedge clk)
-    word0_len <= \$64 ;
+    word0_len <= \$62 ;
   always @(posedge clk)
-    sum_length <= \$65 ;
+    sum_length <= \$63 ;
   always @(posedge clk)
-    sum_first <= \$66 ;
+    sum_first <= \$64 ;
   always @(posedge clk)
-    sum_last <= \$67 ;
+    sum_last <= \$65 ;
   always @(posedge clk)
-    sum_adding <= \$68 ;
+    sum_adding <= \$66 ;
   always @(posedge clk)
-    summed <= \$69 ;
+    summed <= \$67 ;
   always @(posedge clk)
-    sum_word <= \$70 ;
+    sum_word <= \$68 ;
   always @(posedge clk)
-    sum_feeding <= \$71 ;
+    sum_feeding <= \$69 ;
   always @(posedge clk)
-    sum_done <= \$72 ;
+    sum_done <= \$70 ;
   always @(posedge clk)
-    frame_len <= \$73 ;
+    frame_len <= \$71 ;
   always @(posedge clk)
-    target_rises <= \$74 ;
+    target_rises <= \$72 ;
   always @(posedge clk)
-    started <= \$75 ;
+    started <= \$73 ;
   always @(posedge clk)
-    enough <= \$76 ;
+    enough <= \$74 ;
   assign \$1  = ssi & ssi_error;
   assign \$3  = \$2  + crc_widths[4:0];
   assign \$4  = words[5:0] + \$3 [7:0];
@@ -10303,148 +10298,151 @@ module \biss_master.ma_stop (rst, words, \port$5305$199 , ssi, ssi_error, ssi_do
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
-  assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$5305$199  : 1'h0;
-  assign \$16  = \$10  | \$15 ;
-  assign \$17  = ! sum_word;
-  assign \$18  = sum_word ? 12'h000 : words[11:0];
-  assign \$20  = \$19  ? words[23:12] : 12'h000;
-  assign \$21  = \$18  | \$20 ;
-  assign \$22  = ! sum_word;
-  assign \$23  = sum_word ? 12'h000 : words[11:0];
+  assign \$11  = sum_word ? 1'h0 : 1'h1;
+  assign \$13  = \$12  ? \port$5303$199  : 1'h0;
+  assign \$14  = \$11  | \$13 ;
+  assign \$15  = ! sum_word;
+  assign \$16  = sum_word ? 12'h000 : words[11:0];
+  assign \$18  = \$17  ? words[23:12] : 12'h000;
+  assign \$19  = \$16  | \$18 ;
+  assign \$20  = ! sum_word;
+  assign \$21  = sum_word ? 12'h000 : words[11:0];
+  assign \$23  = \$22  ? words[23:12] : 12'h000;
+  assign \$24  = \$21  | \$23 ;
+  assign \$25  = ! sum_word;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$31 [7], \$26 [6] })
+    casez ({ \$29 [7], \$24 [6] })
       2'h0:
-          \$32  = 9'h000;
+          \$30  = 9'h000;
       2'h1:
-          \$32  = 9'h002;
+          \$30  = 9'h002;
       2'h2:
-          \$32  = 9'h006;
+          \$30  = 9'h006;
       2'h3:
-          \$32  = 9'h008;
+          \$30  = 9'h008;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$63  = \$4 [7:0];
+    \$61  = \$4 [7:0];
     if (rst) begin
-      \$63  = 8'h00;
+      \$61  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$64  = \$9 [7:0];
+    \$62  = \$9 [7:0];
     if (rst) begin
-      \$64  = 8'h00;
+      \$62  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$63  = \$38 ;
+    if (rst) begin
+      \$63  = 9'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$64  = \$39 ;
+    if (rst) begin
+      \$64  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$65  = \$40 ;
     if (rst) begin
-      \$65  = 9'h000;
+      \$65  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$66  = \$41 ;
+    \$66  = \$42 ;
     if (rst) begin
       \$66  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$67  = \$42 ;
+    \$67  = \$44 ;
     if (rst) begin
       \$67  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$68  = \$44 ;
+    \$68  = sum_word;
+    if (clear) begin
+      \$68  = 1'h0;
+    end else if (sum_feeding) begin
+      \$68  = \$45 [0];
+    end
     if (rst) begin
       \$68  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$69  = \$46 ;
+    \$69  = sum_feeding;
+    if (clear) begin
+      \$69  = 1'h1;
+    end else if (sum_feeding) begin
+      if (\$46 ) begin
+        \$69  = 1'h0;
+      end
+    end
     if (rst) begin
       \$69  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$70  = sum_word;
+    \$70  = sum_done;
     if (clear) begin
       \$70  = 1'h0;
-    end else if (sum_feeding) begin
-      \$70  = \$47 [0];
     end
-    if (rst) begin
-      \$70  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$71  = sum_feeding;
-    if (clear) begin
-      \$71  = 1'h1;
-    end else if (sum_feeding) begin
-      if (\$48 ) begin
-        \$71  = 1'h0;
-      end
-    end
-    if (rst) begin
-      \$71  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$72  = sum_done;
-    if (clear) begin
-      \$72  = 1'h0;
-    end
-    if (\$50 ) begin
+    if (\$48 ) begin
       if (sum_last) begin
-        \$72  = 1'h1;
+        \$70  = 1'h1;
       end
     end
     if (rst) begin
-      \$72  = 1'h0;
+      \$70  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$73  = frame_len;
-    if (\$50 ) begin
-      \$73  = \$52 [8:0];
+    \$71  = frame_len;
+    if (\$48 ) begin
+      \$71  = \$50 [8:0];
     end
     if (rst) begin
-      \$73  = 9'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$74  = \$54 ;
-    if (rst) begin
-      \$74  = 17'h00000;
+      \$71  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$75  = \$56 ;
+    \$72  = \$52 ;
     if (rst) begin
-      \$75  = 1'h0;
+      \$72  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$76  = \$62 ;
+    \$73  = \$54 ;
     if (rst) begin
-      \$76  = 1'h0;
+      \$73  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$74  = \$60 ;
+    if (rst) begin
+      \$74  = 1'h0;
     end
   end
   always @* begin
@@ -10469,7 +10467,7 @@ module \biss_master.ma_stop (rst, words, \port$5305$199 , ssi, ssi_error, ssi_do
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$5305$199 , 1'h1 };
+  assign enables = { \port$5303$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -10486,15 +10484,13 @@ module \biss_master.ma_stop (rst, words, \port$5305$199 , ssi, ssi_error, ssi_do
   assign \words[1].signed  = words[23];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign \$12  = 1'h0;
-  assign \$13  = sum_word;
-  assign \$15  = \$14 ;
-  assign \$19  = sum_word;
-  assign \$24  = sum_word;
-  assign \$29  = sum_word;
-  assign \$35  = sum_word;
-  assign \$42  = sum_word;
-  assign \$48  = sum_word;
+  assign \$12  = sum_word;
+  assign \$17  = sum_word;
+  assign \$22  = sum_word;
+  assign \$27  = sum_word;
+  assign \$33  = sum_word;
+  assign \$40  = sum_word;
+  assign \$46  = sum_word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -12611,7 +12607,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$5305$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$5303$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -13194,8 +13190,8 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$5305$259 ;
-  wire [12:0] \port$5305$259 ;
+  input [12:0] \port$5303$259 ;
+  wire [12:0] \port$5303$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -13218,7 +13214,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$5305$259 [12:1] + 1'h1;
+  assign \$460  = \port$5303$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -13794,7 +13790,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$5305$259 [0]),
+    .clear_high(\port$5303$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -13937,7 +13933,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$5305$259 [0]) begin
+            if (\port$5303$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -14022,7 +14018,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$5305$259 [0]) begin
+            if (\port$5303$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -14061,7 +14057,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$5305$259 [12:1] };
+            \$534  = { 1'h0, \port$5303$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -14446,11 +14442,11 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$5305$259 [12:1] };
-  assign fixed = \port$5305$259 [0];
+  assign fixed_delay = { 1'h0, \port$5303$259 [12:1] };
+  assign fixed = \port$5303$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$5305$259 [0];
+  assign clear_high = \port$5303$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -16971,7 +16967,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5293$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5291$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -17013,8 +17009,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5293$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5293$0 ;
-  wire \port$5293$0 ;
+  input \port$5291$0 ;
+  wire \port$5291$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -17028,9 +17024,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5293$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5293$0  };
-  assign \$2  = { lc[4:0], \port$5293$0  } == last;
-  assign \$3  = { lc[4:0], \port$5293$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5291$0  };
+  assign \$2  = { lc[4:0], \port$5291$0  } == last;
+  assign \$3  = { lc[4:0], \port$5291$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -17140,7 +17136,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5293$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5293$0  };
+  assign lc_next = { lc[4:0], \port$5291$0  };
   assign zero = is_zero;
 endmodule
 
@@ -19948,7 +19944,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$4725$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master.verdict (lc_skip_seen, noisy, \port$4723$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
@@ -20126,8 +20122,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$4725$0 , lc_check, lc_re
   wire noisy;
   output passed;
   wire passed;
-  output \port$4725$0 ;
-  wire \port$4725$0 ;
+  output \port$4723$0 ;
+  wire \port$4723$0 ;
   output report;
   wire report;
   input report_frame;
@@ -20245,7 +20241,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$4725$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4725$0  = \$2 ;
+  assign \port$4723$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -1072,12 +1072,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$13360$0 (\$10 ),
-    .\port$13371$0 (\$11 ),
-    .\port$13448$0 (\$12 ),
-    .\port$13907$0 (\$13 ),
-    .\port$13918$0 (\$14 ),
-    .\port$13995$0 (\$15 ),
+    .\port$13356$0 (\$10 ),
+    .\port$13367$0 (\$11 ),
+    .\port$13444$0 (\$12 ),
+    .\port$13903$0 (\$13 ),
+    .\port$13914$0 (\$14 ),
+    .\port$13991$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1151,9 +1151,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$13360$0 (\$10 ),
-    .\port$13371$0 (\$11 ),
-    .\port$13448$0 (\$12 ),
+    .\port$13356$0 (\$10 ),
+    .\port$13367$0 (\$11 ),
+    .\port$13444$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1228,9 +1228,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(\regs__count_en$767 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$791 ),
-    .\port$13907$0 (\$13 ),
-    .\port$13918$0 (\$14 ),
-    .\port$13995$0 (\$15 ),
+    .\port$13903$0 (\$13 ),
+    .\port$13914$0 (\$14 ),
+    .\port$13991$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$455 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1992,7 +1992,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start
 , ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray
 , ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double
-, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13360$0 , \port$13371$0 , ch0__ca_done, \port$13448$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$13907$0 , \port$13918$0 , ch1__ca_done, \port$13995$0 
+, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13356$0 , \port$13367$0 , ch0__ca_done, \port$13444$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$13903$0 , \port$13914$0 , ch1__ca_done, \port$13991$0 
 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
@@ -4118,18 +4118,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$13360$0 ;
-  wire [186:0] \port$13360$0 ;
-  input [79:0] \port$13371$0 ;
-  wire [79:0] \port$13371$0 ;
-  input [9:0] \port$13448$0 ;
-  wire [9:0] \port$13448$0 ;
-  input [186:0] \port$13907$0 ;
-  wire [186:0] \port$13907$0 ;
-  input [79:0] \port$13918$0 ;
-  wire [79:0] \port$13918$0 ;
-  input [9:0] \port$13995$0 ;
-  wire [9:0] \port$13995$0 ;
+  input [186:0] \port$13356$0 ;
+  wire [186:0] \port$13356$0 ;
+  input [79:0] \port$13367$0 ;
+  wire [79:0] \port$13367$0 ;
+  input [9:0] \port$13444$0 ;
+  wire [9:0] \port$13444$0 ;
+  input [186:0] \port$13903$0 ;
+  wire [186:0] \port$13903$0 ;
+  input [79:0] \port$13914$0 ;
+  wire [79:0] \port$13914$0 ;
+  input [9:0] \port$13991$0 ;
+  wire [9:0] \port$13991$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
@@ -4367,7 +4367,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$160  = \$158  | \$159 ;
   assign \$161  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$13360$0 [182:177], 4'h0, \port$13360$0 [186:183], 1'h0, \port$13360$0 [176:174], 1'h0, \port$13360$0 [133:131], 3'h0, \port$13360$0 [49], \port$13360$0 [3:0] } : 32'd0;
+  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$13356$0 [182:177], 4'h0, \port$13356$0 [186:183], 1'h0, \port$13356$0 [176:174], 1'h0, \port$13356$0 [133:131], 3'h0, \port$13356$0 [49], \port$13356$0 [3:0] } : 32'd0;
   assign \$168  = \$166  | \$167 ;
   assign \$169  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$170  = \$168  | \$169 ;
@@ -4383,13 +4383,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$180  = \$178  | \$179 ;
   assign \$181  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$13448$0 [9:3], 1'h0, \port$13448$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$13444$0 [9:3], 1'h0, \port$13444$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$228  = \$226  | \$227 ;
-  assign \$229  = ch0_read_select_c3 ? \port$13371$0 [31:0] : 32'd0;
+  assign \$229  = ch0_read_select_c3 ? \port$13367$0 [31:0] : 32'd0;
   assign \$230  = \$228  | \$229 ;
-  assign \$231  = ch0_read_select_c4 ? \port$13371$0 [63:32] : 32'd0;
+  assign \$231  = ch0_read_select_c4 ? \port$13367$0 [63:32] : 32'd0;
   assign \$232  = \$230  | \$231 ;
-  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$13371$0 [79:64] } : 32'd0;
+  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$13367$0 [79:64] } : 32'd0;
   assign \$234  = \$232  | \$233 ;
   assign \$237  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$238  = \$236  | \$237 ;
@@ -4538,7 +4538,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$384  = \$382  | \$383 ;
   assign \$385  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$386  = \$384  | \$385 ;
-  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$13907$0 [182:177], 4'h0, \port$13907$0 [186:183], 1'h0, \port$13907$0 [176:174], 1'h0, \port$13907$0 [133:131], 3'h0, \port$13907$0 [49], \port$13907$0 [3:0] } : 32'd0;
+  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$13903$0 [182:177], 4'h0, \port$13903$0 [186:183], 1'h0, \port$13903$0 [176:174], 1'h0, \port$13903$0 [133:131], 3'h0, \port$13903$0 [49], \port$13903$0 [3:0] } : 32'd0;
   assign \$392  = \$390  | \$391 ;
   assign \$393  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$394  = \$392  | \$393 ;
@@ -4554,13 +4554,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$404  = \$402  | \$403 ;
   assign \$405  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$406  = \$404  | \$405 ;
-  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$13995$0 [9:3], 1'h0, \port$13995$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$13991$0 [9:3], 1'h0, \port$13991$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$452  = \$450  | \$451 ;
-  assign \$453  = ch1_read_select_143 ? \port$13918$0 [31:0] : 32'd0;
+  assign \$453  = ch1_read_select_143 ? \port$13914$0 [31:0] : 32'd0;
   assign \$454  = \$452  | \$453 ;
-  assign \$455  = ch1_read_select_144 ? \port$13918$0 [63:32] : 32'd0;
+  assign \$455  = ch1_read_select_144 ? \port$13914$0 [63:32] : 32'd0;
   assign \$456  = \$454  | \$455 ;
-  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$13918$0 [79:64] } : 32'd0;
+  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$13914$0 [79:64] } : 32'd0;
   assign \$458  = \$456  | \$457 ;
   assign \$461  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$462  = \$460  | \$461 ;
@@ -6969,7 +6969,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$809  = ch0_result_status_status_snapshot;
     if (\$146 ) begin
-      \$809  = \port$13360$0 [3:0];
+      \$809  = \port$13356$0 [3:0];
     end
     if (rst) begin
       \$809  = 4'h0;
@@ -6979,7 +6979,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$810  = ch0_result_status_cds_snapshot;
     if (\$146 ) begin
-      \$810  = \port$13360$0 [49];
+      \$810  = \port$13356$0 [49];
     end
     if (rst) begin
       \$810  = 1'h0;
@@ -6989,7 +6989,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$811  = ch0_result_status_w0_ne_snapshot;
     if (\$146 ) begin
-      \$811  = \port$13360$0 [131];
+      \$811  = \port$13356$0 [131];
     end
     if (rst) begin
       \$811  = 1'h0;
@@ -6999,7 +6999,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$812  = ch0_result_status_w0_nw_snapshot;
     if (\$146 ) begin
-      \$812  = \port$13360$0 [132];
+      \$812  = \port$13356$0 [132];
     end
     if (rst) begin
       \$812  = 1'h0;
@@ -7009,7 +7009,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$813  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$146 ) begin
-      \$813  = \port$13360$0 [133];
+      \$813  = \port$13356$0 [133];
     end
     if (rst) begin
       \$813  = 1'h0;
@@ -7019,7 +7019,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$814  = ch0_result_status_w1_ne_snapshot;
     if (\$146 ) begin
-      \$814  = \port$13360$0 [174];
+      \$814  = \port$13356$0 [174];
     end
     if (rst) begin
       \$814  = 1'h0;
@@ -7029,7 +7029,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$815  = ch0_result_status_w1_nw_snapshot;
     if (\$146 ) begin
-      \$815  = \port$13360$0 [175];
+      \$815  = \port$13356$0 [175];
     end
     if (rst) begin
       \$815  = 1'h0;
@@ -7039,7 +7039,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$816  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$146 ) begin
-      \$816  = \port$13360$0 [176];
+      \$816  = \port$13356$0 [176];
     end
     if (rst) begin
       \$816  = 1'h0;
@@ -7049,7 +7049,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$817  = ch0_result_status_lc_repeat_snapshot;
     if (\$146 ) begin
-      \$817  = \port$13360$0 [183];
+      \$817  = \port$13356$0 [183];
     end
     if (rst) begin
       \$817  = 1'h0;
@@ -7059,7 +7059,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$818  = ch0_result_status_lc_skip_snapshot;
     if (\$146 ) begin
-      \$818  = \port$13360$0 [184];
+      \$818  = \port$13356$0 [184];
     end
     if (rst) begin
       \$818  = 1'h0;
@@ -7069,7 +7069,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$819  = ch0_result_status_lc_zero_snapshot;
     if (\$146 ) begin
-      \$819  = \port$13360$0 [185];
+      \$819  = \port$13356$0 [185];
     end
     if (rst) begin
       \$819  = 1'h0;
@@ -7079,7 +7079,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$820  = ch0_result_status_spw_mismatch_snapshot;
     if (\$146 ) begin
-      \$820  = \port$13360$0 [186];
+      \$820  = \port$13356$0 [186];
     end
     if (rst) begin
       \$820  = 1'h0;
@@ -7089,7 +7089,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$821  = ch0_result_status_lc_snapshot;
     if (\$146 ) begin
-      \$821  = \port$13360$0 [182:177];
+      \$821  = \port$13356$0 [182:177];
     end
     if (rst) begin
       \$821  = 6'h00;
@@ -7109,7 +7109,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$823  = ch0_result_seq_line_delay_snapshot;
     if (\$146 ) begin
-      \$823  = \port$13360$0 [48:36];
+      \$823  = \port$13356$0 [48:36];
     end
     if (rst) begin
       \$823  = 13'h0000;
@@ -7119,7 +7119,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$824  = ch0_result_w0_lo_data_snapshot;
     if (\$146 ) begin
-      \$824  = \port$13360$0 [107:76];
+      \$824  = \port$13356$0 [107:76];
     end
     if (rst) begin
       \$824  = 32'd0;
@@ -7129,7 +7129,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$825  = ch0_result_w0_hi_data_snapshot;
     if (\$146 ) begin
-      \$825  = { 9'h000, \port$13360$0 [130:108] };
+      \$825  = { 9'h000, \port$13356$0 [130:108] };
     end
     if (rst) begin
       \$825  = 32'd0;
@@ -7139,7 +7139,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$826  = ch0_result_w1_lo_data_snapshot;
     if (\$146 ) begin
-      \$826  = \port$13360$0 [165:134];
+      \$826  = \port$13356$0 [165:134];
     end
     if (rst) begin
       \$826  = 32'd0;
@@ -7149,7 +7149,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$827  = ch0_result_w1_hi_data_snapshot;
     if (\$146 ) begin
-      \$827  = { 24'h000000, \port$13360$0 [173:166] };
+      \$827  = { 24'h000000, \port$13356$0 [173:166] };
     end
     if (rst) begin
       \$827  = 32'd0;
@@ -7159,7 +7159,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$828  = ch0_result_timestamp_time_snapshot;
     if (\$146 ) begin
-      \$828  = \port$13360$0 [35:4];
+      \$828  = \port$13356$0 [35:4];
     end
     if (rst) begin
       \$828  = 32'd0;
@@ -7169,7 +7169,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$829  = ch0_result_line_noise_events_snapshot;
     if (\$146 ) begin
-      \$829  = \port$13360$0 [53:50];
+      \$829  = \port$13356$0 [53:50];
     end
     if (rst) begin
       \$829  = 4'h0;
@@ -7179,7 +7179,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$830  = ch0_result_line_delay_settled_snapshot;
     if (\$146 ) begin
-      \$830  = \port$13360$0 [54];
+      \$830  = \port$13356$0 [54];
     end
     if (rst) begin
       \$830  = 1'h0;
@@ -7189,7 +7189,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$831  = ch0_result_line_delay_spread_snapshot;
     if (\$146 ) begin
-      \$831  = \port$13360$0 [75:68];
+      \$831  = \port$13356$0 [75:68];
     end
     if (rst) begin
       \$831  = 8'h00;
@@ -7199,7 +7199,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$832  = ch0_result_line_settled_delay_snapshot;
     if (\$146 ) begin
-      \$832  = \port$13360$0 [67:55];
+      \$832  = \port$13356$0 [67:55];
     end
     if (rst) begin
       \$832  = 13'h0000;
@@ -8526,7 +8526,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$971  = ch1_result_status_status_snapshot;
     if (\$370 ) begin
-      \$971  = \port$13907$0 [3:0];
+      \$971  = \port$13903$0 [3:0];
     end
     if (rst) begin
       \$971  = 4'h0;
@@ -8536,7 +8536,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$972  = ch1_result_status_cds_snapshot;
     if (\$370 ) begin
-      \$972  = \port$13907$0 [49];
+      \$972  = \port$13903$0 [49];
     end
     if (rst) begin
       \$972  = 1'h0;
@@ -8546,7 +8546,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$973  = ch1_result_status_w0_ne_snapshot;
     if (\$370 ) begin
-      \$973  = \port$13907$0 [131];
+      \$973  = \port$13903$0 [131];
     end
     if (rst) begin
       \$973  = 1'h0;
@@ -8556,7 +8556,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$974  = ch1_result_status_w0_nw_snapshot;
     if (\$370 ) begin
-      \$974  = \port$13907$0 [132];
+      \$974  = \port$13903$0 [132];
     end
     if (rst) begin
       \$974  = 1'h0;
@@ -8566,7 +8566,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$975  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$370 ) begin
-      \$975  = \port$13907$0 [133];
+      \$975  = \port$13903$0 [133];
     end
     if (rst) begin
       \$975  = 1'h0;
@@ -8576,7 +8576,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$976  = ch1_result_status_w1_ne_snapshot;
     if (\$370 ) begin
-      \$976  = \port$13907$0 [174];
+      \$976  = \port$13903$0 [174];
     end
     if (rst) begin
       \$976  = 1'h0;
@@ -8586,7 +8586,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$977  = ch1_result_status_w1_nw_snapshot;
     if (\$370 ) begin
-      \$977  = \port$13907$0 [175];
+      \$977  = \port$13903$0 [175];
     end
     if (rst) begin
       \$977  = 1'h0;
@@ -8596,7 +8596,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$978  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$370 ) begin
-      \$978  = \port$13907$0 [176];
+      \$978  = \port$13903$0 [176];
     end
     if (rst) begin
       \$978  = 1'h0;
@@ -8606,7 +8606,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$979  = ch1_result_status_lc_repeat_snapshot;
     if (\$370 ) begin
-      \$979  = \port$13907$0 [183];
+      \$979  = \port$13903$0 [183];
     end
     if (rst) begin
       \$979  = 1'h0;
@@ -8616,7 +8616,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$980  = ch1_result_status_lc_skip_snapshot;
     if (\$370 ) begin
-      \$980  = \port$13907$0 [184];
+      \$980  = \port$13903$0 [184];
     end
     if (rst) begin
       \$980  = 1'h0;
@@ -8626,7 +8626,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$981  = ch1_result_status_lc_zero_snapshot;
     if (\$370 ) begin
-      \$981  = \port$13907$0 [185];
+      \$981  = \port$13903$0 [185];
     end
     if (rst) begin
       \$981  = 1'h0;
@@ -8636,7 +8636,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$982  = ch1_result_status_spw_mismatch_snapshot;
     if (\$370 ) begin
-      \$982  = \port$13907$0 [186];
+      \$982  = \port$13903$0 [186];
     end
     if (rst) begin
       \$982  = 1'h0;
@@ -8646,7 +8646,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$983  = ch1_result_status_lc_snapshot;
     if (\$370 ) begin
-      \$983  = \port$13907$0 [182:177];
+      \$983  = \port$13903$0 [182:177];
     end
     if (rst) begin
       \$983  = 6'h00;
@@ -8666,7 +8666,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$985  = ch1_result_seq_line_delay_snapshot;
     if (\$370 ) begin
-      \$985  = \port$13907$0 [48:36];
+      \$985  = \port$13903$0 [48:36];
     end
     if (rst) begin
       \$985  = 13'h0000;
@@ -8676,7 +8676,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$986  = ch1_result_w0_lo_data_snapshot;
     if (\$370 ) begin
-      \$986  = \port$13907$0 [107:76];
+      \$986  = \port$13903$0 [107:76];
     end
     if (rst) begin
       \$986  = 32'd0;
@@ -8686,7 +8686,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$987  = ch1_result_w0_hi_data_snapshot;
     if (\$370 ) begin
-      \$987  = { 9'h000, \port$13907$0 [130:108] };
+      \$987  = { 9'h000, \port$13903$0 [130:108] };
     end
     if (rst) begin
       \$987  = 32'd0;
@@ -8696,7 +8696,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$988  = ch1_result_w1_lo_data_snapshot;
     if (\$370 ) begin
-      \$988  = \port$13907$0 [165:134];
+      \$988  = \port$13903$0 [165:134];
     end
     if (rst) begin
       \$988  = 32'd0;
@@ -8706,7 +8706,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$989  = ch1_result_w1_hi_data_snapshot;
     if (\$370 ) begin
-      \$989  = { 24'h000000, \port$13907$0 [173:166] };
+      \$989  = { 24'h000000, \port$13903$0 [173:166] };
     end
     if (rst) begin
       \$989  = 32'd0;
@@ -8716,7 +8716,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$990  = ch1_result_timestamp_time_snapshot;
     if (\$370 ) begin
-      \$990  = \port$13907$0 [35:4];
+      \$990  = \port$13903$0 [35:4];
     end
     if (rst) begin
       \$990  = 32'd0;
@@ -8726,7 +8726,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$991  = ch1_result_line_noise_events_snapshot;
     if (\$370 ) begin
-      \$991  = \port$13907$0 [53:50];
+      \$991  = \port$13903$0 [53:50];
     end
     if (rst) begin
       \$991  = 4'h0;
@@ -8736,7 +8736,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$992  = ch1_result_line_delay_settled_snapshot;
     if (\$370 ) begin
-      \$992  = \port$13907$0 [54];
+      \$992  = \port$13903$0 [54];
     end
     if (rst) begin
       \$992  = 1'h0;
@@ -8746,7 +8746,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$993  = ch1_result_line_delay_spread_snapshot;
     if (\$370 ) begin
-      \$993  = \port$13907$0 [75:68];
+      \$993  = \port$13903$0 [75:68];
     end
     if (rst) begin
       \$993  = 8'h00;
@@ -8756,7 +8756,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$994  = ch1_result_line_settled_delay_snapshot;
     if (\$370 ) begin
-      \$994  = \port$13907$0 [67:55];
+      \$994  = \port$13903$0 [67:55];
     end
     if (rst) begin
       \$994  = 13'h0000;
@@ -8959,27 +8959,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$13360$0 [3:0];
-  assign ch0__cds = \port$13360$0 [49];
-  assign ch0__word0_ne = \port$13360$0 [131];
-  assign ch0__word0_nw = \port$13360$0 [132];
-  assign ch0__word0_crc_ok = \port$13360$0 [133];
-  assign ch0__word1_ne = \port$13360$0 [174];
-  assign ch0__word1_nw = \port$13360$0 [175];
-  assign ch0__word1_crc_ok = \port$13360$0 [176];
-  assign ch0__lc_repeat = \port$13360$0 [183];
-  assign ch0__lc_skip = \port$13360$0 [184];
-  assign ch0__lc_zero = \port$13360$0 [185];
-  assign ch0__spw_mismatch = \port$13360$0 [186];
-  assign ch0__lc = \port$13360$0 [182:177];
-  assign ch0__line_delay = \port$13360$0 [48:36];
-  assign ch0__word0_position = { 9'h000, \port$13360$0 [130:76] };
-  assign ch0__word1_position = { 24'h000000, \port$13360$0 [173:134] };
-  assign ch0__timestamp = \port$13360$0 [35:4];
-  assign ch0__noise_events = \port$13360$0 [53:50];
-  assign ch0__delay_settled = \port$13360$0 [54];
-  assign ch0__delay_spread = \port$13360$0 [75:68];
-  assign ch0__settled_delay = \port$13360$0 [67:55];
+  assign ch0__status = \port$13356$0 [3:0];
+  assign ch0__cds = \port$13356$0 [49];
+  assign ch0__word0_ne = \port$13356$0 [131];
+  assign ch0__word0_nw = \port$13356$0 [132];
+  assign ch0__word0_crc_ok = \port$13356$0 [133];
+  assign ch0__word1_ne = \port$13356$0 [174];
+  assign ch0__word1_nw = \port$13356$0 [175];
+  assign ch0__word1_crc_ok = \port$13356$0 [176];
+  assign ch0__lc_repeat = \port$13356$0 [183];
+  assign ch0__lc_skip = \port$13356$0 [184];
+  assign ch0__lc_zero = \port$13356$0 [185];
+  assign ch0__spw_mismatch = \port$13356$0 [186];
+  assign ch0__lc = \port$13356$0 [182:177];
+  assign ch0__line_delay = \port$13356$0 [48:36];
+  assign ch0__word0_position = { 9'h000, \port$13356$0 [130:76] };
+  assign ch0__word1_position = { 24'h000000, \port$13356$0 [173:134] };
+  assign ch0__timestamp = \port$13356$0 [35:4];
+  assign ch0__noise_events = \port$13356$0 [53:50];
+  assign ch0__delay_settled = \port$13356$0 [54];
+  assign ch0__delay_spread = \port$13356$0 [75:68];
+  assign ch0__settled_delay = \port$13356$0 [67:55];
   assign ch0__cap_data_bits_w0 = 7'h37;
   assign ch0__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9000,13 +9000,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$13448$0 [2:0];
-  assign ch0__ca_bytes_done = \port$13448$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$13371$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$13371$0 [31:16];
-  assign ch0__count_ca_refused = \port$13371$0 [47:32];
-  assign ch0__count_ca_aborted = \port$13371$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$13371$0 [79:64];
+  assign ch0__ca_status = \port$13444$0 [2:0];
+  assign ch0__ca_bytes_done = \port$13444$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$13367$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$13367$0 [31:16];
+  assign ch0__count_ca_refused = \port$13367$0 [47:32];
+  assign ch0__count_ca_aborted = \port$13367$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$13367$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9026,27 +9026,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$13907$0 [3:0];
-  assign ch1__cds = \port$13907$0 [49];
-  assign ch1__word0_ne = \port$13907$0 [131];
-  assign ch1__word0_nw = \port$13907$0 [132];
-  assign ch1__word0_crc_ok = \port$13907$0 [133];
-  assign ch1__word1_ne = \port$13907$0 [174];
-  assign ch1__word1_nw = \port$13907$0 [175];
-  assign ch1__word1_crc_ok = \port$13907$0 [176];
-  assign ch1__lc_repeat = \port$13907$0 [183];
-  assign ch1__lc_skip = \port$13907$0 [184];
-  assign ch1__lc_zero = \port$13907$0 [185];
-  assign ch1__spw_mismatch = \port$13907$0 [186];
-  assign ch1__lc = \port$13907$0 [182:177];
-  assign ch1__line_delay = \port$13907$0 [48:36];
-  assign ch1__word0_position = { 9'h000, \port$13907$0 [130:76] };
-  assign ch1__word1_position = { 24'h000000, \port$13907$0 [173:134] };
-  assign ch1__timestamp = \port$13907$0 [35:4];
-  assign ch1__noise_events = \port$13907$0 [53:50];
-  assign ch1__delay_settled = \port$13907$0 [54];
-  assign ch1__delay_spread = \port$13907$0 [75:68];
-  assign ch1__settled_delay = \port$13907$0 [67:55];
+  assign ch1__status = \port$13903$0 [3:0];
+  assign ch1__cds = \port$13903$0 [49];
+  assign ch1__word0_ne = \port$13903$0 [131];
+  assign ch1__word0_nw = \port$13903$0 [132];
+  assign ch1__word0_crc_ok = \port$13903$0 [133];
+  assign ch1__word1_ne = \port$13903$0 [174];
+  assign ch1__word1_nw = \port$13903$0 [175];
+  assign ch1__word1_crc_ok = \port$13903$0 [176];
+  assign ch1__lc_repeat = \port$13903$0 [183];
+  assign ch1__lc_skip = \port$13903$0 [184];
+  assign ch1__lc_zero = \port$13903$0 [185];
+  assign ch1__spw_mismatch = \port$13903$0 [186];
+  assign ch1__lc = \port$13903$0 [182:177];
+  assign ch1__line_delay = \port$13903$0 [48:36];
+  assign ch1__word0_position = { 9'h000, \port$13903$0 [130:76] };
+  assign ch1__word1_position = { 24'h000000, \port$13903$0 [173:134] };
+  assign ch1__timestamp = \port$13903$0 [35:4];
+  assign ch1__noise_events = \port$13903$0 [53:50];
+  assign ch1__delay_settled = \port$13903$0 [54];
+  assign ch1__delay_spread = \port$13903$0 [75:68];
+  assign ch1__settled_delay = \port$13903$0 [67:55];
   assign ch1__cap_data_bits_w0 = 7'h37;
   assign ch1__cap_data_bits_w1 = 7'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9067,13 +9067,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$13995$0 [2:0];
-  assign ch1__ca_bytes_done = \port$13995$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$13918$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$13918$0 [31:16];
-  assign ch1__count_ca_refused = \port$13918$0 [47:32];
-  assign ch1__count_ca_aborted = \port$13918$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$13918$0 [79:64];
+  assign ch1__ca_status = \port$13991$0 [2:0];
+  assign ch1__ca_bytes_done = \port$13991$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$13914$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$13914$0 [31:16];
+  assign ch1__count_ca_refused = \port$13914$0 [47:32];
+  assign ch1__count_ca_aborted = \port$13914$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$13914$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9582,7 +9582,7 @@ endmodule
 module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13360$0 , \port$13371$0 , regs__ca_done, \port$13448$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13356$0 , \port$13367$0 , regs__ca_done, \port$13444$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -9768,12 +9768,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$13360$0 ;
-  wire [186:0] \port$13360$0 ;
-  output [79:0] \port$13371$0 ;
-  wire [79:0] \port$13371$0 ;
-  output [9:0] \port$13448$0 ;
-  wire [9:0] \port$13448$0 ;
+  output [186:0] \port$13356$0 ;
+  wire [186:0] \port$13356$0 ;
+  output [79:0] \port$13367$0 ;
+  wire [79:0] \port$13367$0 ;
+  output [9:0] \port$13444$0 ;
+  wire [9:0] \port$13444$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10266,9 +10266,9 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$13360$0  = \$24 ;
-  assign \port$13371$0  = \$25 ;
-  assign \port$13448$0  = \$26 ;
+  assign \port$13356$0  = \$24 ;
+  assign \port$13367$0  = \$25 ;
+  assign \port$13444$0  = \$26 ;
   assign \$6  = regs__cfg_w0_data_bits[6];
   assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
@@ -11335,7 +11335,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13002$272 (cycle[274:272]),
+    .\port$12998$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -11395,7 +11395,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13002$199 (cycle[199]),
+    .\port$12998$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -11446,7 +11446,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13002$259 (cycle[271:259]),
+    .\port$12998$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -11470,7 +11470,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$12990$0 (\bit ),
+    .\port$12986$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -11538,7 +11538,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5910$0 (\$28 ),
+    .\port$5908$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -15690,7 +15690,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$13002$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$12998$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -16406,8 +16406,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13002$272 ;
-  wire [2:0] \port$13002$272 ;
+  input [2:0] \port$12998$272 ;
+  wire [2:0] \port$12998$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -16717,7 +16717,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13002$272 [0];
+  assign error_bit = ssi & \port$12998$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -16748,19 +16748,19 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13002$272 [0];
+  assign \$24  = ssi & \port$12998$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13002$272 [0];
+  assign \$28  = ssi & \port$12998$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13002$272 [0];
+  assign \$35  = ssi & \port$12998$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13002$272 [0];
+  assign \$39  = ssi & \port$12998$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -16781,7 +16781,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$13002$272 [2];
+  assign \$61  = ssi & \port$12998$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -17067,15 +17067,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13002$272 [0];
+  assign \$347  = ssi & \port$12998$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13002$272 [0];
-  assign \$355  = ~ \port$13002$272 [1];
+  assign \$354  = ssi & \port$12998$272 [0];
+  assign \$355  = ~ \port$12998$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -17812,7 +17812,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$13002$272 [0];
+  assign ssi_error = \port$12998$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -17822,8 +17822,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13002$272 [2];
-  assign ssi_error_low = \port$13002$272 [1];
+  assign ssi_double = \port$12998$272 [2];
+  assign ssi_error_low = \port$12998$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -20122,7 +20122,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$13002$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$12998$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20131,49 +20131,49 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$13002$199 , ssi, ssi_
   wire \$13 ;
   wire \$14 ;
   wire \$15 ;
-  wire \$16 ;
+  wire [11:0] \$16 ;
   wire \$17 ;
   wire [11:0] \$18 ;
-  wire \$19 ;
+  wire [11:0] \$19 ;
   reg [7:0] \$2 ;
-  wire [11:0] \$20 ;
+  wire \$20 ;
   wire [11:0] \$21 ;
   wire \$22 ;
   wire [11:0] \$23 ;
-  wire \$24 ;
-  wire [11:0] \$25 ;
+  wire [11:0] \$24 ;
+  wire \$25 ;
   wire [11:0] \$26 ;
   wire \$27 ;
   wire [11:0] \$28 ;
-  wire \$29 ;
+  wire [11:0] \$29 ;
   wire [8:0] \$3 ;
-  wire [11:0] \$30 ;
-  wire [11:0] \$31 ;
-  reg [8:0] \$32 ;
+  reg [8:0] \$30 ;
+  wire \$31 ;
+  wire [4:0] \$32 ;
   wire \$33 ;
   wire [4:0] \$34 ;
-  wire \$35 ;
-  wire [4:0] \$36 ;
-  wire [4:0] \$37 ;
-  wire [9:0] \$38 ;
-  wire [9:0] \$39 ;
+  wire [4:0] \$35 ;
+  wire [9:0] \$36 ;
+  wire [9:0] \$37 ;
+  wire [8:0] \$38 ;
+  wire \$39 ;
   wire [8:0] \$4 ;
-  wire [8:0] \$40 ;
+  wire \$40 ;
   wire \$41 ;
   wire \$42 ;
   wire \$43 ;
   wire \$44 ;
-  wire \$45 ;
+  wire [1:0] \$45 ;
   wire \$46 ;
-  wire [1:0] \$47 ;
+  wire \$47 ;
   wire \$48 ;
-  wire \$49 ;
+  wire [8:0] \$49 ;
   wire [8:0] \$5 ;
-  wire \$50 ;
+  wire [9:0] \$50 ;
   wire [8:0] \$51 ;
-  wire [9:0] \$52 ;
-  wire [8:0] \$53 ;
-  wire [16:0] \$54 ;
+  wire [16:0] \$52 ;
+  wire \$53 ;
+  wire \$54 ;
   wire \$55 ;
   wire \$56 ;
   wire \$57 ;
@@ -20181,23 +20181,21 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$13002$199 , ssi, ssi_
   wire \$59 ;
   wire [8:0] \$6 ;
   wire \$60 ;
-  wire \$61 ;
-  wire \$62 ;
-  reg [7:0] \$63 ;
-  reg [7:0] \$64 ;
-  reg [8:0] \$65 ;
+  reg [7:0] \$61 ;
+  reg [7:0] \$62 ;
+  reg [8:0] \$63 ;
+  reg \$64 ;
+  reg \$65 ;
   reg \$66 ;
   reg \$67 ;
   reg \$68 ;
   reg \$69 ;
   wire [9:0] \$7 ;
   reg \$70 ;
-  reg \$71 ;
-  reg \$72 ;
-  reg [8:0] \$73 ;
-  reg [16:0] \$74 ;
-  reg \$75 ;
-  reg \$76 ;
+  reg [8:0] \$71 ;
+  reg [16:0] \$72 ;
+  reg \$73 ;
+  reg \$74 ;
   wire [8:0] \$8 ;
   wire [9:0] \$9 ;
   input clear;
@@ -20213,8 +20211,8 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$13002$199 , ssi, ssi_
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13002$199 ;
-  wire \port$13002$199 ;
+  input \port$12998$199 ;
+  wire \port$12998$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20266,67 +20264,64 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$13002$199 , ssi, ssi_
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$25  = \$24  ? words[23:12] : 12'h000;
-  assign \$26  = \$23  | \$25 ;
-  assign \$27  = ! sum_word;
-  assign \$28  = sum_word ? 12'h000 : words[11:0];
-  assign \$30  = \$29  ? words[23:12] : 12'h000;
-  assign \$31  = \$28  | \$30 ;
-  assign \$33  = ! sum_word;
-  assign \$34  = sum_word ? 5'h00 : crc_widths[4:0];
-  assign \$36  = \$35  ? crc_widths[9:5] : 5'h00;
-  assign \$37  = \$34  | \$36 ;
-  assign \$38  = \$32  + \$37 ;
-  assign \$39  = \$21 [5:0] + \$38 [8:0];
-  assign \$40  = \$16  ? \$39 [8:0] : 9'h000;
-  assign \$41  = ! sum_word;
+  assign \$26  = sum_word ? 12'h000 : words[11:0];
+  assign \$28  = \$27  ? words[23:12] : 12'h000;
+  assign \$29  = \$26  | \$28 ;
+  assign \$31  = ! sum_word;
+  assign \$32  = sum_word ? 5'h00 : crc_widths[4:0];
+  assign \$34  = \$33  ? crc_widths[9:5] : 5'h00;
+  assign \$35  = \$32  | \$34 ;
+  assign \$36  = \$30  + \$35 ;
+  assign \$37  = \$19 [5:0] + \$36 [8:0];
+  assign \$38  = \$14  ? \$37 [8:0] : 9'h000;
+  assign \$39  = ! sum_word;
+  assign \$41  = ~ clear;
+  assign \$42  = sum_feeding & \$41 ;
   assign \$43  = ~ clear;
-  assign \$44  = sum_feeding & \$43 ;
-  assign \$45  = ~ clear;
-  assign \$46  = sum_done & \$45 ;
-  assign \$47  = sum_word + 1'h1;
-  assign \$49  = ~ clear;
-  assign \$50  = sum_adding & \$49 ;
-  assign \$51  = sum_first ? 9'h004 : frame_len;
-  assign \$52  = \$51  + sum_length;
-  assign \$53  = ssi ? { 1'h0, word0_len } : frame_len;
-  assign \$54  = start_slot + \$53 ;
-  assign \$55  = | rises;
-  assign \$56  = ssi ? \$55  : \started$23 ;
-  assign \$57  = summed | ssi;
-  assign \$58  = started & \$57 ;
-  assign \$59  = rises >= target_rises;
+  assign \$44  = sum_done & \$43 ;
+  assign \$45  = sum_word + 1'h1;
+  assign \$47  = ~ clear;
+  assign \$48  = sum_adding & \$47 ;
+  assign \$49  = sum_first ? 9'h004 : frame_len;
+  assign \$50  = \$49  + sum_length;
+  assign \$51  = ssi ? { 1'h0, word0_len } : frame_len;
+  assign \$52  = start_slot + \$51 ;
+  assign \$53  = | rises;
+  assign \$54  = ssi ? \$53  : \started$23 ;
+  assign \$55  = summed | ssi;
+  assign \$56  = started & \$55 ;
+  assign \$57  = rises >= target_rises;
+  assign \$58  = \$56  & \$57 ;
+  assign \$59  = ~ clear;
   assign \$60  = \$58  & \$59 ;
-  assign \$61  = ~ clear;
-  assign \$62  = \$60  & \$61 ;
   always @(posedge clk)
-    n <= \$63 ;
+    n <= \$61 ;
   always @(posedge clk)
-    word0_len <= \$64 ;
+    word0_len <= \$62 ;
   always @(posedge clk)
-    sum_length <= \$65 ;
+    sum_length <= \$63 ;
   always @(posedge clk)
-    sum_first <= \$66 ;
+    sum_first <= \$64 ;
   always @(posedge clk)
-    sum_last <= \$67 ;
+    sum_last <= \$65 ;
   always @(posedge clk)
-    sum_adding <= \$68 ;
+    sum_adding <= \$66 ;
   always @(posedge clk)
-    summed <= \$69 ;
+    summed <= \$67 ;
   always @(posedge clk)
-    sum_word <= \$70 ;
+    sum_word <= \$68 ;
   always @(posedge clk)
-    sum_feeding <= \$71 ;
+    sum_feeding <= \$69 ;
   always @(posedge clk)
-    sum_done <= \$72 ;
+    sum_done <= \$70 ;
   always @(posedge clk)
-    frame_len <= \$73 ;
+    frame_len <= \$71 ;
   always @(posedge clk)
-    target_rises <= \$74 ;
+    target_rises <= \$72 ;
   always @(posedge clk)
-    started <= \$75 ;
+    started <= \$73 ;
   always @(posedge clk)
-    enough <= \$76 ;
+    enough <= \$74 ;
   assign \$1  = ssi & ssi_error;
   assign \$3  = \$2  + crc_widths[4:0];
   assign \$4  = words[5:0] + \$3 [7:0];
@@ -20336,148 +20331,151 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$13002$199 , ssi, ssi_
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
-  assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$13002$199  : 1'h0;
-  assign \$16  = \$10  | \$15 ;
-  assign \$17  = ! sum_word;
-  assign \$18  = sum_word ? 12'h000 : words[11:0];
-  assign \$20  = \$19  ? words[23:12] : 12'h000;
-  assign \$21  = \$18  | \$20 ;
-  assign \$22  = ! sum_word;
-  assign \$23  = sum_word ? 12'h000 : words[11:0];
+  assign \$11  = sum_word ? 1'h0 : 1'h1;
+  assign \$13  = \$12  ? \port$12998$199  : 1'h0;
+  assign \$14  = \$11  | \$13 ;
+  assign \$15  = ! sum_word;
+  assign \$16  = sum_word ? 12'h000 : words[11:0];
+  assign \$18  = \$17  ? words[23:12] : 12'h000;
+  assign \$19  = \$16  | \$18 ;
+  assign \$20  = ! sum_word;
+  assign \$21  = sum_word ? 12'h000 : words[11:0];
+  assign \$23  = \$22  ? words[23:12] : 12'h000;
+  assign \$24  = \$21  | \$23 ;
+  assign \$25  = ! sum_word;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$31 [7], \$26 [6] })
+    casez ({ \$29 [7], \$24 [6] })
       2'h0:
-          \$32  = 9'h000;
+          \$30  = 9'h000;
       2'h1:
-          \$32  = 9'h002;
+          \$30  = 9'h002;
       2'h2:
-          \$32  = 9'h006;
+          \$30  = 9'h006;
       2'h3:
-          \$32  = 9'h008;
+          \$30  = 9'h008;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$63  = \$4 [7:0];
+    \$61  = \$4 [7:0];
     if (rst) begin
-      \$63  = 8'h00;
+      \$61  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$64  = \$9 [7:0];
+    \$62  = \$9 [7:0];
     if (rst) begin
-      \$64  = 8'h00;
+      \$62  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$63  = \$38 ;
+    if (rst) begin
+      \$63  = 9'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$64  = \$39 ;
+    if (rst) begin
+      \$64  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$65  = \$40 ;
     if (rst) begin
-      \$65  = 9'h000;
+      \$65  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$66  = \$41 ;
+    \$66  = \$42 ;
     if (rst) begin
       \$66  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$67  = \$42 ;
+    \$67  = \$44 ;
     if (rst) begin
       \$67  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$68  = \$44 ;
+    \$68  = sum_word;
+    if (clear) begin
+      \$68  = 1'h0;
+    end else if (sum_feeding) begin
+      \$68  = \$45 [0];
+    end
     if (rst) begin
       \$68  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$69  = \$46 ;
+    \$69  = sum_feeding;
+    if (clear) begin
+      \$69  = 1'h1;
+    end else if (sum_feeding) begin
+      if (\$46 ) begin
+        \$69  = 1'h0;
+      end
+    end
     if (rst) begin
       \$69  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$70  = sum_word;
+    \$70  = sum_done;
     if (clear) begin
       \$70  = 1'h0;
-    end else if (sum_feeding) begin
-      \$70  = \$47 [0];
     end
-    if (rst) begin
-      \$70  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$71  = sum_feeding;
-    if (clear) begin
-      \$71  = 1'h1;
-    end else if (sum_feeding) begin
-      if (\$48 ) begin
-        \$71  = 1'h0;
-      end
-    end
-    if (rst) begin
-      \$71  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$72  = sum_done;
-    if (clear) begin
-      \$72  = 1'h0;
-    end
-    if (\$50 ) begin
+    if (\$48 ) begin
       if (sum_last) begin
-        \$72  = 1'h1;
+        \$70  = 1'h1;
       end
     end
     if (rst) begin
-      \$72  = 1'h0;
+      \$70  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$73  = frame_len;
-    if (\$50 ) begin
-      \$73  = \$52 [8:0];
+    \$71  = frame_len;
+    if (\$48 ) begin
+      \$71  = \$50 [8:0];
     end
     if (rst) begin
-      \$73  = 9'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$74  = \$54 ;
-    if (rst) begin
-      \$74  = 17'h00000;
+      \$71  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$75  = \$56 ;
+    \$72  = \$52 ;
     if (rst) begin
-      \$75  = 1'h0;
+      \$72  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$76  = \$62 ;
+    \$73  = \$54 ;
     if (rst) begin
-      \$76  = 1'h0;
+      \$73  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$74  = \$60 ;
+    if (rst) begin
+      \$74  = 1'h0;
     end
   end
   always @* begin
@@ -20502,7 +20500,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$13002$199 , ssi, ssi_
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13002$199 , 1'h1 };
+  assign enables = { \port$12998$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -20519,15 +20517,13 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$13002$199 , ssi, ssi_
   assign \words[1].signed  = words[23];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign \$12  = 1'h0;
-  assign \$13  = sum_word;
-  assign \$15  = \$14 ;
-  assign \$19  = sum_word;
-  assign \$24  = sum_word;
-  assign \$29  = sum_word;
-  assign \$35  = sum_word;
-  assign \$42  = sum_word;
-  assign \$48  = sum_word;
+  assign \$12  = sum_word;
+  assign \$17  = sum_word;
+  assign \$22  = sum_word;
+  assign \$27  = sum_word;
+  assign \$33  = sum_word;
+  assign \$40  = sum_word;
+  assign \$46  = sum_word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -22644,7 +22640,7 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13002$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$12998$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -23227,8 +23223,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13002$259 ;
-  wire [12:0] \port$13002$259 ;
+  input [12:0] \port$12998$259 ;
+  wire [12:0] \port$12998$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -23251,7 +23247,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13002$259 [12:1] + 1'h1;
+  assign \$460  = \port$12998$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -23827,7 +23823,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13002$259 [0]),
+    .clear_high(\port$12998$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -23970,7 +23966,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13002$259 [0]) begin
+            if (\port$12998$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -24055,7 +24051,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13002$259 [0]) begin
+            if (\port$12998$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -24094,7 +24090,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13002$259 [12:1] };
+            \$534  = { 1'h0, \port$12998$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -24479,11 +24475,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13002$259 [12:1] };
-  assign fixed = \port$13002$259 [0];
+  assign fixed_delay = { 1'h0, \port$12998$259 [12:1] };
+  assign fixed = \port$12998$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13002$259 [0];
+  assign clear_high = \port$12998$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -27004,7 +27000,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$12990$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$12986$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -27046,8 +27042,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$12990$0 ;
-  wire \port$12990$0 ;
+  input \port$12986$0 ;
+  wire \port$12986$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -27061,9 +27057,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$12990$0  };
-  assign \$2  = { lc[4:0], \port$12990$0  } == last;
-  assign \$3  = { lc[4:0], \port$12990$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$12986$0  };
+  assign \$2  = { lc[4:0], \port$12986$0  } == last;
+  assign \$3  = { lc[4:0], \port$12986$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -27173,7 +27169,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$12990$0  };
+  assign lc_next = { lc[4:0], \port$12986$0  };
   assign zero = is_zero;
 endmodule
 
@@ -29970,7 +29966,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$5910$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$5908$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -30148,8 +30144,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$5910$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$5910$0 ;
-  wire \port$5910$0 ;
+  output \port$5908$0 ;
+  wire \port$5908$0 ;
   output report;
   wire report;
   input report_frame;
@@ -30267,7 +30263,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$5910$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5910$0  = \$2 ;
+  assign \port$5908$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -30324,7 +30320,7 @@ endmodule
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13907$0 , \port$13918$0 , regs__ca_done, \port$13995$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13903$0 , \port$13914$0 , regs__ca_done, \port$13991$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -30510,12 +30506,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$13907$0 ;
-  wire [186:0] \port$13907$0 ;
-  output [79:0] \port$13918$0 ;
-  wire [79:0] \port$13918$0 ;
-  output [9:0] \port$13995$0 ;
-  wire [9:0] \port$13995$0 ;
+  output [186:0] \port$13903$0 ;
+  wire [186:0] \port$13903$0 ;
+  output [79:0] \port$13914$0 ;
+  wire [79:0] \port$13914$0 ;
+  output [9:0] \port$13991$0 ;
+  wire [9:0] \port$13991$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -31008,9 +31004,9 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$13907$0  = \$24 ;
-  assign \port$13918$0  = \$25 ;
-  assign \port$13995$0  = \$26 ;
+  assign \port$13903$0  = \$24 ;
+  assign \port$13914$0  = \$25 ;
+  assign \port$13991$0  = \$26 ;
   assign \$6  = regs__cfg_w0_data_bits[6];
   assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
@@ -32077,7 +32073,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13549$272 (cycle[274:272]),
+    .\port$13545$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -32137,7 +32133,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13549$199 (cycle[199]),
+    .\port$13545$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -32188,7 +32184,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13549$259 (cycle[271:259]),
+    .\port$13545$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$347 ),
@@ -32212,7 +32208,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13537$0 (\bit ),
+    .\port$13533$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -32280,7 +32276,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$11461$0 (\$28 ),
+    .\port$11457$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -36432,7 +36428,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$13549$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$13545$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -37148,8 +37144,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13549$272 ;
-  wire [2:0] \port$13549$272 ;
+  input [2:0] \port$13545$272 ;
+  wire [2:0] \port$13545$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -37459,7 +37455,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13549$272 [0];
+  assign error_bit = ssi & \port$13545$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -37490,19 +37486,19 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13549$272 [0];
+  assign \$24  = ssi & \port$13545$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13549$272 [0];
+  assign \$28  = ssi & \port$13545$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13549$272 [0];
+  assign \$35  = ssi & \port$13545$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13549$272 [0];
+  assign \$39  = ssi & \port$13545$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -37523,7 +37519,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$13549$272 [2];
+  assign \$61  = ssi & \port$13545$272 [2];
   assign \$62  = index + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -37809,15 +37805,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13549$272 [0];
+  assign \$347  = ssi & \port$13545$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! index;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13549$272 [0];
-  assign \$355  = ~ \port$13549$272 [1];
+  assign \$354  = ssi & \port$13545$272 [0];
+  assign \$355  = ~ \port$13545$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -38554,7 +38550,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
   assign word = index;
-  assign ssi_error = \port$13549$272 [0];
+  assign ssi_error = \port$13545$272 [0];
   assign \bit$13  = \bit ;
   assign \index$14  = current[34:28];
   assign \mismatch$17  = mismatch;
@@ -38564,8 +38560,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$44  = index;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13549$272 [2];
-  assign ssi_error_low = \port$13549$272 [1];
+  assign ssi_double = \port$13545$272 [2];
+  assign ssi_error_low = \port$13545$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -40864,7 +40860,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13549$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13545$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -40873,49 +40869,49 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13549$199 , ssi, ssi_
   wire \$13 ;
   wire \$14 ;
   wire \$15 ;
-  wire \$16 ;
+  wire [11:0] \$16 ;
   wire \$17 ;
   wire [11:0] \$18 ;
-  wire \$19 ;
+  wire [11:0] \$19 ;
   reg [7:0] \$2 ;
-  wire [11:0] \$20 ;
+  wire \$20 ;
   wire [11:0] \$21 ;
   wire \$22 ;
   wire [11:0] \$23 ;
-  wire \$24 ;
-  wire [11:0] \$25 ;
+  wire [11:0] \$24 ;
+  wire \$25 ;
   wire [11:0] \$26 ;
   wire \$27 ;
   wire [11:0] \$28 ;
-  wire \$29 ;
+  wire [11:0] \$29 ;
   wire [8:0] \$3 ;
-  wire [11:0] \$30 ;
-  wire [11:0] \$31 ;
-  reg [8:0] \$32 ;
+  reg [8:0] \$30 ;
+  wire \$31 ;
+  wire [4:0] \$32 ;
   wire \$33 ;
   wire [4:0] \$34 ;
-  wire \$35 ;
-  wire [4:0] \$36 ;
-  wire [4:0] \$37 ;
-  wire [9:0] \$38 ;
-  wire [9:0] \$39 ;
+  wire [4:0] \$35 ;
+  wire [9:0] \$36 ;
+  wire [9:0] \$37 ;
+  wire [8:0] \$38 ;
+  wire \$39 ;
   wire [8:0] \$4 ;
-  wire [8:0] \$40 ;
+  wire \$40 ;
   wire \$41 ;
   wire \$42 ;
   wire \$43 ;
   wire \$44 ;
-  wire \$45 ;
+  wire [1:0] \$45 ;
   wire \$46 ;
-  wire [1:0] \$47 ;
+  wire \$47 ;
   wire \$48 ;
-  wire \$49 ;
+  wire [8:0] \$49 ;
   wire [8:0] \$5 ;
-  wire \$50 ;
+  wire [9:0] \$50 ;
   wire [8:0] \$51 ;
-  wire [9:0] \$52 ;
-  wire [8:0] \$53 ;
-  wire [16:0] \$54 ;
+  wire [16:0] \$52 ;
+  wire \$53 ;
+  wire \$54 ;
   wire \$55 ;
   wire \$56 ;
   wire \$57 ;
@@ -40923,23 +40919,21 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13549$199 , ssi, ssi_
   wire \$59 ;
   wire [8:0] \$6 ;
   wire \$60 ;
-  wire \$61 ;
-  wire \$62 ;
-  reg [7:0] \$63 ;
-  reg [7:0] \$64 ;
-  reg [8:0] \$65 ;
+  reg [7:0] \$61 ;
+  reg [7:0] \$62 ;
+  reg [8:0] \$63 ;
+  reg \$64 ;
+  reg \$65 ;
   reg \$66 ;
   reg \$67 ;
   reg \$68 ;
   reg \$69 ;
   wire [9:0] \$7 ;
   reg \$70 ;
-  reg \$71 ;
-  reg \$72 ;
-  reg [8:0] \$73 ;
-  reg [16:0] \$74 ;
-  reg \$75 ;
-  reg \$76 ;
+  reg [8:0] \$71 ;
+  reg [16:0] \$72 ;
+  reg \$73 ;
+  reg \$74 ;
   wire [8:0] \$8 ;
   wire [9:0] \$9 ;
   input clear;
@@ -40955,8 +40949,8 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13549$199 , ssi, ssi_
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13549$199 ;
-  wire \port$13549$199 ;
+  input \port$13545$199 ;
+  wire \port$13545$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -41008,67 +41002,64 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13549$199 , ssi, ssi_
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$25  = \$24  ? words[23:12] : 12'h000;
-  assign \$26  = \$23  | \$25 ;
-  assign \$27  = ! sum_word;
-  assign \$28  = sum_word ? 12'h000 : words[11:0];
-  assign \$30  = \$29  ? words[23:12] : 12'h000;
-  assign \$31  = \$28  | \$30 ;
-  assign \$33  = ! sum_word;
-  assign \$34  = sum_word ? 5'h00 : crc_widths[4:0];
-  assign \$36  = \$35  ? crc_widths[9:5] : 5'h00;
-  assign \$37  = \$34  | \$36 ;
-  assign \$38  = \$32  + \$37 ;
-  assign \$39  = \$21 [5:0] + \$38 [8:0];
-  assign \$40  = \$16  ? \$39 [8:0] : 9'h000;
-  assign \$41  = ! sum_word;
+  assign \$26  = sum_word ? 12'h000 : words[11:0];
+  assign \$28  = \$27  ? words[23:12] : 12'h000;
+  assign \$29  = \$26  | \$28 ;
+  assign \$31  = ! sum_word;
+  assign \$32  = sum_word ? 5'h00 : crc_widths[4:0];
+  assign \$34  = \$33  ? crc_widths[9:5] : 5'h00;
+  assign \$35  = \$32  | \$34 ;
+  assign \$36  = \$30  + \$35 ;
+  assign \$37  = \$19 [5:0] + \$36 [8:0];
+  assign \$38  = \$14  ? \$37 [8:0] : 9'h000;
+  assign \$39  = ! sum_word;
+  assign \$41  = ~ clear;
+  assign \$42  = sum_feeding & \$41 ;
   assign \$43  = ~ clear;
-  assign \$44  = sum_feeding & \$43 ;
-  assign \$45  = ~ clear;
-  assign \$46  = sum_done & \$45 ;
-  assign \$47  = sum_word + 1'h1;
-  assign \$49  = ~ clear;
-  assign \$50  = sum_adding & \$49 ;
-  assign \$51  = sum_first ? 9'h004 : frame_len;
-  assign \$52  = \$51  + sum_length;
-  assign \$53  = ssi ? { 1'h0, word0_len } : frame_len;
-  assign \$54  = start_slot + \$53 ;
-  assign \$55  = | rises;
-  assign \$56  = ssi ? \$55  : \started$23 ;
-  assign \$57  = summed | ssi;
-  assign \$58  = started & \$57 ;
-  assign \$59  = rises >= target_rises;
+  assign \$44  = sum_done & \$43 ;
+  assign \$45  = sum_word + 1'h1;
+  assign \$47  = ~ clear;
+  assign \$48  = sum_adding & \$47 ;
+  assign \$49  = sum_first ? 9'h004 : frame_len;
+  assign \$50  = \$49  + sum_length;
+  assign \$51  = ssi ? { 1'h0, word0_len } : frame_len;
+  assign \$52  = start_slot + \$51 ;
+  assign \$53  = | rises;
+  assign \$54  = ssi ? \$53  : \started$23 ;
+  assign \$55  = summed | ssi;
+  assign \$56  = started & \$55 ;
+  assign \$57  = rises >= target_rises;
+  assign \$58  = \$56  & \$57 ;
+  assign \$59  = ~ clear;
   assign \$60  = \$58  & \$59 ;
-  assign \$61  = ~ clear;
-  assign \$62  = \$60  & \$61 ;
   always @(posedge clk)
-    n <= \$63 ;
+    n <= \$61 ;
   always @(posedge clk)
-    word0_len <= \$64 ;
+    word0_len <= \$62 ;
   always @(posedge clk)
-    sum_length <= \$65 ;
+    sum_length <= \$63 ;
   always @(posedge clk)
-    sum_first <= \$66 ;
+    sum_first <= \$64 ;
   always @(posedge clk)
-    sum_last <= \$67 ;
+    sum_last <= \$65 ;
   always @(posedge clk)
-    sum_adding <= \$68 ;
+    sum_adding <= \$66 ;
   always @(posedge clk)
-    summed <= \$69 ;
+    summed <= \$67 ;
   always @(posedge clk)
-    sum_word <= \$70 ;
+    sum_word <= \$68 ;
   always @(posedge clk)
-    sum_feeding <= \$71 ;
+    sum_feeding <= \$69 ;
   always @(posedge clk)
-    sum_done <= \$72 ;
+    sum_done <= \$70 ;
   always @(posedge clk)
-    frame_len <= \$73 ;
+    frame_len <= \$71 ;
   always @(posedge clk)
-    target_rises <= \$74 ;
+    target_rises <= \$72 ;
   always @(posedge clk)
-    started <= \$75 ;
+    started <= \$73 ;
   always @(posedge clk)
-    enough <= \$76 ;
+    enough <= \$74 ;
   assign \$1  = ssi & ssi_error;
   assign \$3  = \$2  + crc_widths[4:0];
   assign \$4  = words[5:0] + \$3 [7:0];
@@ -41078,148 +41069,151 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13549$199 , ssi, ssi_
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
-  assign \$11  = ! sum_word;
-  assign \$14  = \$13  ? \port$13549$199  : 1'h0;
-  assign \$16  = \$10  | \$15 ;
-  assign \$17  = ! sum_word;
-  assign \$18  = sum_word ? 12'h000 : words[11:0];
-  assign \$20  = \$19  ? words[23:12] : 12'h000;
-  assign \$21  = \$18  | \$20 ;
-  assign \$22  = ! sum_word;
-  assign \$23  = sum_word ? 12'h000 : words[11:0];
+  assign \$11  = sum_word ? 1'h0 : 1'h1;
+  assign \$13  = \$12  ? \port$13545$199  : 1'h0;
+  assign \$14  = \$11  | \$13 ;
+  assign \$15  = ! sum_word;
+  assign \$16  = sum_word ? 12'h000 : words[11:0];
+  assign \$18  = \$17  ? words[23:12] : 12'h000;
+  assign \$19  = \$16  | \$18 ;
+  assign \$20  = ! sum_word;
+  assign \$21  = sum_word ? 12'h000 : words[11:0];
+  assign \$23  = \$22  ? words[23:12] : 12'h000;
+  assign \$24  = \$21  | \$23 ;
+  assign \$25  = ! sum_word;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$31 [7], \$26 [6] })
+    casez ({ \$29 [7], \$24 [6] })
       2'h0:
-          \$32  = 9'h000;
+          \$30  = 9'h000;
       2'h1:
-          \$32  = 9'h002;
+          \$30  = 9'h002;
       2'h2:
-          \$32  = 9'h006;
+          \$30  = 9'h006;
       2'h3:
-          \$32  = 9'h008;
+          \$30  = 9'h008;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$63  = \$4 [7:0];
+    \$61  = \$4 [7:0];
     if (rst) begin
-      \$63  = 8'h00;
+      \$61  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$64  = \$9 [7:0];
+    \$62  = \$9 [7:0];
     if (rst) begin
-      \$64  = 8'h00;
+      \$62  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    \$63  = \$38 ;
+    if (rst) begin
+      \$63  = 9'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    \$64  = \$39 ;
+    if (rst) begin
+      \$64  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$65  = \$40 ;
     if (rst) begin
-      \$65  = 9'h000;
+      \$65  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$66  = \$41 ;
+    \$66  = \$42 ;
     if (rst) begin
       \$66  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$67  = \$42 ;
+    \$67  = \$44 ;
     if (rst) begin
       \$67  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$68  = \$44 ;
+    \$68  = sum_word;
+    if (clear) begin
+      \$68  = 1'h0;
+    end else if (sum_feeding) begin
+      \$68  = \$45 [0];
+    end
     if (rst) begin
       \$68  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$69  = \$46 ;
+    \$69  = sum_feeding;
+    if (clear) begin
+      \$69  = 1'h1;
+    end else if (sum_feeding) begin
+      if (\$46 ) begin
+        \$69  = 1'h0;
+      end
+    end
     if (rst) begin
       \$69  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$70  = sum_word;
+    \$70  = sum_done;
     if (clear) begin
       \$70  = 1'h0;
-    end else if (sum_feeding) begin
-      \$70  = \$47 [0];
     end
-    if (rst) begin
-      \$70  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$71  = sum_feeding;
-    if (clear) begin
-      \$71  = 1'h1;
-    end else if (sum_feeding) begin
-      if (\$48 ) begin
-        \$71  = 1'h0;
-      end
-    end
-    if (rst) begin
-      \$71  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$72  = sum_done;
-    if (clear) begin
-      \$72  = 1'h0;
-    end
-    if (\$50 ) begin
+    if (\$48 ) begin
       if (sum_last) begin
-        \$72  = 1'h1;
+        \$70  = 1'h1;
       end
     end
     if (rst) begin
-      \$72  = 1'h0;
+      \$70  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$73  = frame_len;
-    if (\$50 ) begin
-      \$73  = \$52 [8:0];
+    \$71  = frame_len;
+    if (\$48 ) begin
+      \$71  = \$50 [8:0];
     end
     if (rst) begin
-      \$73  = 9'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$74  = \$54 ;
-    if (rst) begin
-      \$74  = 17'h00000;
+      \$71  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$75  = \$56 ;
+    \$72  = \$52 ;
     if (rst) begin
-      \$75  = 1'h0;
+      \$72  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
-    \$76  = \$62 ;
+    \$73  = \$54 ;
     if (rst) begin
-      \$76  = 1'h0;
+      \$73  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    \$74  = \$60 ;
+    if (rst) begin
+      \$74  = 1'h0;
     end
   end
   always @* begin
@@ -41244,7 +41238,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13549$199 , ssi, ssi_
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13549$199 , 1'h1 };
+  assign enables = { \port$13545$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -41261,15 +41255,13 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13549$199 , ssi, ssi_
   assign \words[1].signed  = words[23];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign \$12  = 1'h0;
-  assign \$13  = sum_word;
-  assign \$15  = \$14 ;
-  assign \$19  = sum_word;
-  assign \$24  = sum_word;
-  assign \$29  = sum_word;
-  assign \$35  = sum_word;
-  assign \$42  = sum_word;
-  assign \$48  = sum_word;
+  assign \$12  = sum_word;
+  assign \$17  = sum_word;
+  assign \$22  = sum_word;
+  assign \$27  = sum_word;
+  assign \$33  = sum_word;
+  assign \$40  = sum_word;
+  assign \$46  = sum_word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -43386,7 +43378,7 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13549$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13545$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -43969,8 +43961,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13549$259 ;
-  wire [12:0] \port$13549$259 ;
+  input [12:0] \port$13545$259 ;
+  wire [12:0] \port$13545$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -43993,7 +43985,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13549$259 [12:1] + 1'h1;
+  assign \$460  = \port$13545$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -44569,7 +44561,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13549$259 [0]),
+    .clear_high(\port$13545$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -44712,7 +44704,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13549$259 [0]) begin
+            if (\port$13545$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -44797,7 +44789,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13549$259 [0]) begin
+            if (\port$13545$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -44836,7 +44828,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13549$259 [12:1] };
+            \$534  = { 1'h0, \port$13545$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -45221,11 +45213,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13549$259 [12:1] };
-  assign fixed = \port$13549$259 [0];
+  assign fixed_delay = { 1'h0, \port$13545$259 [12:1] };
+  assign fixed = \port$13545$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13549$259 [0];
+  assign clear_high = \port$13545$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -47746,7 +47738,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13537$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13533$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -47788,8 +47780,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13537$0 ;
-  wire \port$13537$0 ;
+  input \port$13533$0 ;
+  wire \port$13533$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -47803,9 +47795,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13537$0  };
-  assign \$2  = { lc[4:0], \port$13537$0  } == last;
-  assign \$3  = { lc[4:0], \port$13537$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13533$0  };
+  assign \$2  = { lc[4:0], \port$13533$0  } == last;
+  assign \$3  = { lc[4:0], \port$13533$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -47915,7 +47907,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13537$0  };
+  assign lc_next = { lc[4:0], \port$13533$0  };
   assign zero = is_zero;
 endmodule
 
@@ -50712,7 +50704,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11461$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11457$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -50890,8 +50882,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11461$0 , lc
   wire noisy;
   output passed;
   wire passed;
-  output \port$11461$0 ;
-  wire \port$11461$0 ;
+  output \port$11457$0 ;
+  wire \port$11457$0 ;
   output report;
   wire report;
   input report_frame;
@@ -51009,7 +51001,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11461$0 , lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$11461$0  = \$2 ;
+  assign \port$11457$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -155,8 +155,8 @@ class MaStop(wiring.Component):
         # select_word, not an Array).
         pick = select_word(k, [self.words[w] for w in range(n_words)])
         pick_crc = select_word(k, [self.crc_widths[w] for w in range(n_words)])
-        pick_on = (k == 0) | select_word(k, [C(0, 1)] + [self.enables[w]
-                                                         for w in range(1, n_words)])
+        # Word 0 is always in the frame (its enable is the constant 1, as config_enables).
+        pick_on = select_word(k, [C(1, 1)] + [self.enables[w] for w in range(1, n_words)])
         m.d.sync += [
             picked.eq(Mux(pick_on, word_length(pick, pick_crc, width=width + 1), 0)),
             picked_first.eq(k == 0),
