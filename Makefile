@@ -116,7 +116,7 @@ bench: setup  ## simulated performance: cycle overhead, verdict latency, line-de
 	$(PY) -m sim.tools.perf
 
 .PHONY: synth
-synth: setup  ## Yosys + nextpnr: LUT4/FF/carry/RAM and Fmax of the core presets, the AXI4-Lite bus top (1, 4 channels) and four cores without a bus (the control) on ECP5-25k and iCE40 UP5K, Yosys-only cell counts for Xilinx 7-series and Cyclone V (docs/performance.md); VARIANTS=n: n netlists each; ARCH=ecp5,ice40,xilinx,intel (any subset)
+synth: setup  ## Yosys + nextpnr: LUT4/FF/carry/RAM and Fmax of the core presets, the AXI4-Lite bus top (1, 4 and 8 channels; a chain of 4 and of 8 words) and four cores without a bus (the control) on ECP5-25k and iCE40 UP5K, Yosys-only cell counts for Xilinx 7-series and Cyclone V (docs/performance.md); VARIANTS=n: n netlists each; ARCH=ecp5,ice40,xilinx,intel (any subset)
 	$(PY) scripts/synth.py --variants $(VARIANTS) --arch $(ARCH)
 
 .PHONY: board

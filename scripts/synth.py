@@ -74,8 +74,9 @@ PRESET_CONFIGS = ("biss-c", "biss-c-lean", "safety", "bp3", "chain")
 
 #: The chain core of four words the chain configurations build (the sim's axil_chain top's).
 CHAIN_4_OPTIONS = ["--max-data-bits", "40,32,24,16", "--word-crcs", "6+16,6+16,6+16,6+16"]
-#: A chain of eight words as long as the map holds (words 0 and 1 at their map limits, words
-#: 2..7 of 63 bits): one channel of issue 27's `axil-8` target.
+#: A chain of eight long words (words 0 and 1 of 55 and 40 bits, the map's limits before its
+#: version 2, kept so that the figures compare; words 2..7 of 63 bits): one channel of issue
+#: 27's `axil-8` target.
 CHAIN_8_OPTIONS = ["--max-data-bits", "55,40,63,63,63,63,63,63", "--word-crcs",
                    ",".join(["6+16"] * 8)]
 
@@ -99,6 +100,9 @@ BUS_CONFIGS = {
     # issue 27's target itself: eight such channels. nextpnr packs it and reports the
     # device's share it needs (it does not fit the 25F: "does not fit", with the counts).
     "axil-8": ("axil", 8, "chain", ("ecp5",), CHAIN_8_OPTIONS),
+    # eight axes of one BiSS C word each (the common motion controller): how much of the 25F
+    # eight channels take when their frames are short
+    "axil-8-biss-c": ("axil", 8, "biss-c", ("ecp5",)),
 }
 #: The control for the bus tops' Fmax: N copies of a preset core side by side in one harness,
 #: no bus (name -> (copies, core preset, archs)). Four cores fill the device about as much as
