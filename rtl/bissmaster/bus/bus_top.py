@@ -86,18 +86,9 @@ COUNT_BITS = COUNTER_HALF_BITS
 GLOBAL_SIGNALS = ("channels", "trigger", "irq_pending")
 
 
-#: The words' length settings, by word: a map field may be wider than the core's port
+#: The words' length settings: a map field (7 bits, 1..64) may be wider than the core's port
 #: (BusChannel).
-_LENGTHS = {f"cfg_w{w}_data_bits": w for w in range(MAX_WORDS)}
-
-
-def _needed_bits(name, port, params):
-    """Bits of the map's field that the core's port ``name`` needs: a word's length needs
-    those of the build's longest length for that word (the port may be a bit wider, all words
-    sharing one layout); any other port all of its bits."""
-    if name in _LENGTHS:
-        return params.max_data_bits[_LENGTHS[name]].bit_length()
-    return Shape.cast(port.shape).width
+_LENGTHS = frozenset(f"cfg_w{w}_data_bits" for w in range(MAX_WORDS))
 
 
 class BusChannel(wiring.Component):
@@ -115,12 +106,12 @@ class BusChannel(wiring.Component):
     (``word1_position`` in a one-word build, ``word2_position`` .. ``word7_position`` in a
     build of fewer words, the ``ca_*`` ports of the register-access engine in a build
     without it) reads 0 and its configuration is not stored. A core port wider than the map's
-    field is refused (the map holds every word up to 64 data bits, so of the words only a
-    port the map does not name, a ninth word, could be). A word's length field wider than the
-    core's ``cfg_w<W>_data_bits`` port (7 bits for a core whose words are all shorter than 64
-    bits, which has a 6-bit port) reaches the core as 0 when its top bit is set: a length the
-    build cannot read is then an enabled word of length 0, ``BAD_CONFIG``, never a length cut
-    to its low bits.
+    field is refused (e.g. a timer wider than the map's 24-bit time fields; the map holds
+    every word up to 64 data bits, so no word length or position is). A word's length field
+    wider than the core's ``cfg_w<W>_data_bits`` port (7 bits for a core whose words are all
+    shorter than 64 bits, which has a 6-bit port) reaches the core as 0 when its top bit is
+    set: a length the build cannot read is then an enabled word of length 0, ``BAD_CONFIG``,
+    never a length cut to its low bits.
 
     Parameters
     ----------
@@ -175,15 +166,9 @@ class BusChannel(wiring.Component):
                 raise ValueError(f"the register map names {name!r}, which is neither a port "
                                  f"of biss_master nor a signal of the bus channel")
             held = Shape.cast(member.shape).width
-            if name not in core or _needed_bits(name, core[name], params) <= held:
-                continue
-            if name in _LENGTHS:
-                w = _LENGTHS[name]
-                raise ValueError(f"the register map holds word {w} lengths of up to "
-                                 f"{2**held - 1} data bits ({name}); this build's word {w} has "
-                                 f"up to {params.max_data_bits[w]}")
-            raise ValueError(f"the register map holds {held} bits of {name}; "
-                             f"this build's port has {Shape.cast(core[name].shape).width}")
+            if name in core and Shape.cast(core[name].shape).width > held:
+                raise ValueError(f"the register map holds {held} bits of {name}; "
+                                 f"this build's port has {Shape.cast(core[name].shape).width}")
         super().__init__({
             "regs": In(regs),
             "trigger": In(1),

@@ -66,8 +66,8 @@ def test_nine_words_is_a_usage_error(capsys):
 def test_64_bit_words_0_and_1_have_a_bus_top(tmp_path):
     """The register map holds every word up to 64 data bits (7-bit lengths in cfg_words,
     32-bit result.w0_hi / w1_hi, map version 2): the chain preset (a 64-bit word 0) and a
-    two-word build of 64-bit words have bus tops (read end to end: sim/scenarios/chain.py,
-    bus_reads_64_bit_words_0_and_1)."""
+    two-word build of 64-bit words have bus tops (read end to end: sim/scenarios/bus.py,
+    chain_words_of_64_bits, and sim/scenarios/driver_chain.py, driver_chain_words_of_64_bits)."""
     for argv in (["--preset", "chain"], ["--max-data-bits", "64,64"]):
         out = tmp_path / "c.v"
         main(["--top", "axil", "--channels", "1", *argv, "-o", str(out)])
