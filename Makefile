@@ -56,19 +56,20 @@ regmap: setup  ## regenerate the register map's C header, docs/registers.md and 
 	$(PY) -m bissmaster.bus.regmap --header sw/include/biss_master_regs.h --markdown docs/registers.md \
 	  --ipxact rtl/generated/biss_master_regs.xml
 
-lint: setup  ## verilator --lint-only -Wall on the default Verilog, a BiSS-C-only, a lean and a chain build (flip-flops and memory), the three bus tops (waivers: rtl/lint.vlt)
+lint: setup  ## verilator --lint-only -Wall on the default Verilog, a BiSS-C-only, a lean and a chain build (flip-flops and memory), two lean channels with an 8-bit half period behind AXI4-Lite, the three bus tops (waivers: rtl/lint.vlt)
 	@mkdir -p sim_build
 	@$(PY) -m bissmaster.generate --preset biss-c -o sim_build/biss_master_c36.v
 	@$(PY) -m bissmaster.generate --preset biss-c-lean -o sim_build/biss_master_lean.v
 	@$(PY) -m bissmaster.generate --preset chain -o sim_build/biss_master_chain.v
 	@$(PY) -m bissmaster.generate --preset chain --chain-memory 1 -o sim_build/biss_master_chain_mem.v
+	@$(PY) -m bissmaster.generate --top axil --channels 2 --preset biss-c-lean --half-period-width 8 -o sim_build/biss_master_axil_hp8.v
 	@for top in $(VERILOG):biss_master sim_build/biss_master_c36.v:biss_master \
 	    sim_build/biss_master_lean.v:biss_master sim_build/biss_master_chain.v:biss_master \
-	    sim_build/biss_master_chain_mem.v:biss_master \
+	    sim_build/biss_master_chain_mem.v:biss_master sim_build/biss_master_axil_hp8.v:biss_master_axil \
 	    $(foreach bus,$(BUS_TOPS),rtl/generated/biss_master_$(bus).v:biss_master_$(bus)); do \
 	  echo "lint: verilator --lint-only -Wall rtl/lint.vlt $${top%%:*} --top-module $${top##*:}"; \
 	  verilator --lint-only -Wall --quiet-stats rtl/lint.vlt $${top%%:*} --top-module $${top##*:} || exit 1; done
-	@echo "lint: clean (default build, BiSS C 36-bit build, lean BiSS C build, chain of three in flip-flops and in memory, AXI4-Lite, Wishbone and UART-bridge bus tops)"
+	@echo "lint: clean (default build, BiSS C 36-bit build, lean BiSS C build, chain of three in flip-flops and in memory, two lean channels of an 8-bit half period behind AXI4-Lite, AXI4-Lite, Wishbone and UART-bridge bus tops)"
 
 unit: setup  ## fast tests: encoder model, RTL blocks (Amaranth simulator), generated Verilog up to date
 	$(PY) -m pytest $(UNIT_TESTS) -q -n $(JOBS) --dist worksteal

@@ -91,6 +91,12 @@ BUS_CONFIGS = {
     "axil-4": ("axil", 4, "biss-c", ("ecp5", "xilinx", "intel")),
     # issue 27's iCE40 target: two channels behind AXI4-Lite in the UP5K (the lean core)
     "axil-2-lean": ("axil", 2, "biss-c-lean", ("ice40", "ecp5")),
+    # the same as a UP5K design builds it: the iCEBreaker's 24 MHz system clock, a half-period
+    # setting of 8 bits (MA down to 47 kHz, below BiSS's 80 kHz) and round trips up to 1023
+    # clocks (42.6 us, above the protocol's 40 us)
+    "axil-2-up5k": ("axil", 2, "biss-c-lean", ("ice40",),
+                    ["--sys-clk-hz", "24000000", "--half-period-width", "8",
+                     "--max-line-delay", "1023"]),
     # the UART bridge instead of AXI4-Lite (a board's host link; docs/uart_bridge.md)
     "uart-1": ("uart", 1, "biss-c", ("ecp5", "ice40", "xilinx", "intel")),
     # a chain of four words behind the bus (issue 26; the core alone: `chain-4`)
@@ -103,6 +109,8 @@ BUS_CONFIGS = {
     # eight axes of one BiSS C word each (the common motion controller): how much of the 25F
     # eight channels take when their frames are short
     "axil-8-biss-c": ("axil", 8, "biss-c", ("ecp5",)),
+    # the same with a 10-bit half period (MA down to 48.9 kHz at 100 MHz, below BiSS's 80 kHz)
+    "axil-8-biss-c-hp10": ("axil", 8, "biss-c", ("ecp5",), ["--half-period-width", "10"]),
 }
 #: The control for the bus tops' Fmax: N copies of a preset core side by side in one harness,
 #: no bus (name -> (copies, core preset, archs)). Four cores fill the device about as much as
@@ -140,7 +148,14 @@ ARCHS = {
         "ram": ("DP16KD", "PDPW16KD", "TRELLIS_DPR16X4"),
     },
     "ice40": {
-        "synth": "synth_ice40",
+        # ``-dffe_min_ce_use 8``: a clock enable shared by fewer than 8 flip-flops becomes logic
+        # in front of them (in a logic cell whose LUT is mostly free: the flip-flop's own). An
+        # iCE40 logic block's 8 cells share one clock enable and one set/reset, so every small
+        # enable group (the register bank writes its settings by byte lane: a 13-bit field has
+        # an enable of 5 flip-flops) takes a block of its own, and nextpnr found no legal
+        # placement for two channels (`axil-2-lean`) at 93 % of the logic cells without it;
+        # with it they place and route (docs/performance.md, "Area and Fmax of the bus tops").
+        "synth": "synth_ice40 -dffe_min_ce_use 8",
         # The Verilog generated for the family (``--family ice40``, as the board designs are
         # built): iCE40 has no distributed RAM, so the counter memory is marked for block RAM
         # (else Yosys builds it from flip-flops) and a bus top reads its configuration back

@@ -258,6 +258,12 @@ def _parser():
     core.add_argument("--timer-width", type=int, default=defaults.timer_width, metavar="BITS",
                       help="width of the time settings in system clocks, 16..32 "
                            "(default: %(default)s)")
+    core.add_argument("--half-period-width", type=int, default=defaults.half_period_width,
+                      metavar="BITS",
+                      help="width of the MA half-period setting in system clocks, 4..16: the "
+                           "slowest MA is the system clock / (2 * (2**BITS - 1)); 10 bits reach "
+                           "the protocol's 80 kHz at 100 MHz, 8 bits at 24 MHz "
+                           "(default: %(default)s)")
     core.add_argument("--counter-width", type=int, default=defaults.counter_width,
                       metavar="BITS",
                       help="width of the error counters, 0: no counters (default: %(default)s)")
@@ -329,6 +335,7 @@ def _params(ap, args):
     try:
         return MasterParams(sys_clk_hz=args.sys_clk_hz, max_data_bits=bits, word_crcs=crcs,
                             max_line_delay=args.max_line_delay, timer_width=args.timer_width,
+                            half_period_width=args.half_period_width,
                             counter_width=args.counter_width,
                             counter_ram=bool(args.counter_ram),
                             chain_memory=bool(args.chain_memory),

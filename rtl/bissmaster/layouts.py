@@ -10,7 +10,7 @@ from amaranth.hdl import C
 from amaranth.lib import data
 
 from . import protocol
-from .params import (CHAIN_FIRST_WORD, CRC_SETTINGS, DELAY_SPREAD_WIDTH, FAULTS, HALF_PERIOD_WIDTH, LINE_CHECK_WIDTH,
+from .params import (CHAIN_FIRST_WORD, CRC_SETTINGS, DELAY_SPREAD_WIDTH, FAULTS, LINE_CHECK_WIDTH,
                      QUIET_WIDTH, AccessStatus, Status, word_config,
                      counter_settle, counter_words)
 
@@ -24,7 +24,7 @@ def config_layout(params):
     # ``cfg_wN_signed`` only in builds with signed words (the field is the word's last).
     word = word_config(params, signed=params.signed_words)
     members = {
-        "ma_half_period": HALF_PERIOD_WIDTH,
+        "ma_half_period": params.half_period_width,
         "request_period": tw,
         "break_time": tw,
         "ack_limit": tw,

@@ -25,7 +25,7 @@ from .core.ma_clock import MaClock
 from .core.ma_stop import MaStop
 from . import protocol
 from .params import (CHAIN_FIRST_WORD, CHAIN_MEMORY_WORD_BITS, DELAY_SPREAD_WIDTH,
-                     HALF_PERIOD_WIDTH, LINE_CHECK_WIDTH, AccessStatus, MasterParams, Status,
+                     LINE_CHECK_WIDTH, AccessStatus, MasterParams, Status,
                      word_config)
 from .control.register_access import RegisterAccess
 from .core.request_scheduler import RequestScheduler
@@ -163,10 +163,10 @@ class BissMaster(wiring.Component):
         cdm = p.register_access
         m.submodules.controller = controller = CycleController(cdm=cdm)
         m.submodules.timers = timers = LimitTimers(p)
-        m.submodules.ma_clock = ma_clock = MaClock(cdm=cdm)
+        m.submodules.ma_clock = ma_clock = MaClock(cdm=cdm, half_period_width=p.half_period_width)
         m.submodules.ma_stop = ma_stop = MaStop(p.words, ssi=p.ssi, word_layout=word_config(p))
         # The receiver is held in reset between cycles: every cycle starts from scratch.
-        sampler = SloSampler(p.delay_width, fixed=p.ssi)
+        sampler = SloSampler(p.delay_width, fixed=p.ssi, half_period_width=p.half_period_width)
         decoder = FrameDecoder(p)
         m.submodules.sampler = ResetInserter(controller.receiver_clear)(sampler)
         m.submodules.decoder = ResetInserter(controller.receiver_clear)(decoder)
@@ -176,7 +176,7 @@ class BissMaster(wiring.Component):
         m.submodules.line_noise = line_noise = LineNoise()
         m.submodules.delay_check = delay_check = DelayCheck(
             p.delay_width, settle_frames=protocol.DELAY_SETTLE_FRAMES,
-            tolerance_width=HALF_PERIOD_WIDTH + 1, spread_width=DELAY_SPREAD_WIDTH)
+            tolerance_width=p.delay_tolerance_width, spread_width=DELAY_SPREAD_WIDTH)
         m.submodules.verdict = verdict = FrameVerdict(p)
         m.submodules.confirmation = confirmation = Confirmation()
         m.submodules.results = results = ResultRegisters(p)

@@ -85,8 +85,12 @@ class AccessStatus(enum.IntEnum, shape=3):
     DATA_FAULT = 5      # a frame carrying a control bit did not pass (status not OK or UNCONFIRMED)
     BAD_REQUEST = 6     # byte count 0 or > 64, or address + count beyond 0x7F; nothing sent
 
-#: Width of the MA half-period setting, and of the timers that count within one MA phase.
+#: Width of the MA half-period setting, and of the timers that count within one MA phase: the
+#: largest a build may have (``MasterParams.half_period_width``, its default), and the width of
+#: the register map's field.
 HALF_PERIOD_WIDTH = protocol.MA_HALF_PERIOD_MAX.bit_length()
+#: The narrowest ``half_period_width``: 4 bits, half periods up to 15 clocks.
+HALF_PERIOD_WIDTH_MIN = 4
 #: Width of ``cfg_quiet_time`` (clocks SLO must be high before MA starts; 0: the default).
 QUIET_WIDTH = 12
 #: Width of ``cfg_noise_limit``, ``noise_events`` and ``cfg_delay_tolerance``: 4 bits; the value
@@ -196,6 +200,14 @@ class MasterParams:
         Longest round trip the delay counter can measure, in system clocks.
     timer_width : int
         Width of the time settings (period, break, Ack and timeout limits) in system clocks.
+    half_period_width : int
+        Width of ``cfg_ma_half_period`` and of the counters that run within one MA period (the
+        MA clock's phase counter, the sampler's slot timer and its reload values), 4 ..
+        :data:`HALF_PERIOD_WIDTH` (16, the default): the slowest MA clock is ``sys_clk_hz /
+        (2 * (2**half_period_width - 1))``. BiSS allows MA down to 80 kHz (docs/protocol.md):
+        at 100 MHz that is a half period of 625 clocks, 10 bits; at 24 MHz, 150 clocks, 8
+        bits. A narrower build is smaller (issue 27: the iCE40 UP5K); a longer half period
+        than it holds cannot be set on the core's port, and behind the bus it is BAD_CONFIG.
     counter_width : int
         Width of each saturating error counter; 0 builds no counters (no ``count_*`` ports and
         no ``clear_counters``), for the smallest core.
@@ -244,6 +256,7 @@ class MasterParams:
     word_crcs: tuple = ((Crc.CRC6, Crc.CRC16), (Crc.CRC6, Crc.CRC16))
     max_line_delay: int = 4095
     timer_width: int = 24
+    half_period_width: int = HALF_PERIOD_WIDTH
     counter_width: int = 16
     counter_ram: bool = False
     chain_memory: bool = False
@@ -277,6 +290,10 @@ class MasterParams:
                              f"not {self.max_line_delay!r}")
         if not isinstance(self.timer_width, int) or not 16 <= self.timer_width <= 32:
             raise ValueError(f"timer_width must be an integer from 16 to 32, not {self.timer_width!r}")
+        if (not isinstance(self.half_period_width, int)
+                or not HALF_PERIOD_WIDTH_MIN <= self.half_period_width <= HALF_PERIOD_WIDTH):
+            raise ValueError(f"half_period_width must be an integer from {HALF_PERIOD_WIDTH_MIN} "
+                             f"to {HALF_PERIOD_WIDTH}, not {self.half_period_width!r}")
         for default in (self.break_default, self.ack_limit_default, self.timeout_limit_default):
             if default >= 2**self.timer_width:
                 raise ValueError(f"timer_width {self.timer_width} cannot hold the default time "
@@ -336,7 +353,18 @@ class MasterParams:
         """Width of the cycle timer and the NO_START limit: the longest limit it compares with
         is the Ack limit plus one MA period (two half periods) plus one clock, and one bit more for
         it."""
-        return max(self.timer_width, HALF_PERIOD_WIDTH + 1) + 1
+        return max(self.timer_width, self.half_period_width + 1) + 1
+
+    @property
+    def delay_tolerance_width(self):
+        """Width of the round-trip check's tolerance: the half period plus
+        ``cfg_delay_tolerance``, one bit more than the wider of the two."""
+        return max(self.half_period_width, LINE_CHECK_WIDTH) + 1
+
+    @property
+    def slowest_ma_hz(self):
+        """The slowest MA clock the build can run: the longest half period it holds."""
+        return self.sys_clk_hz / (2 * (2**self.half_period_width - 1))
 
     @property
     def delay_limit_width(self):
@@ -381,6 +409,9 @@ class MasterParams:
             + (" and CUSTOM (cfg_wN_crc_*)" if self.custom_crc else ""),
             f"max_line_delay  = {self.max_line_delay} clocks",
             f"timer_width     = {self.timer_width}",
+            *([f"half_period_width = {self.half_period_width} (MA down to "
+               f"{self.slowest_ma_hz / 1e3:.1f} kHz)"]
+              if self.half_period_width != HALF_PERIOD_WIDTH else []),
             f"counter_width   = {self.counter_width}" + ("" if self.counters else " (no counters)")
             + (" in memory (count_addr, count_data)" if self.counter_ram else ""),
             f"timestamp_width = {self.timestamp_width}" + ("" if self.timestamped else " (no timestamp)")

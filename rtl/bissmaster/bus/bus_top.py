@@ -86,9 +86,12 @@ COUNT_BITS = COUNTER_HALF_BITS
 GLOBAL_SIGNALS = ("channels", "trigger", "irq_pending")
 
 
-#: The words' length settings: a map field (7 bits, 1..64) may be wider than the core's port
-#: (BusChannel).
-_LENGTHS = frozenset(f"cfg_w{w}_data_bits" for w in range(MAX_WORDS))
+#: The settings whose map field may be wider than the core's port, and whose 0 the core
+#: refuses (BusChannel): the words' lengths (7 bits, 1..64; 0 is an enabled word of length 0)
+#: and the MA half period (16 bits; a narrower ``half_period_width`` build; 0 is below the
+#: least half period, 2).
+_CUT_TO_ZERO = frozenset([*(f"cfg_w{w}_data_bits" for w in range(MAX_WORDS)),
+                          "cfg_ma_half_period"])
 
 
 class BusChannel(wiring.Component):
@@ -111,7 +114,8 @@ class BusChannel(wiring.Component):
     wider than the core's ``cfg_w<W>_data_bits`` port (7 bits for a core whose words are all
     shorter than 64 bits, which has a 6-bit port) reaches the core as 0 when its top bit is
     set: a length the build cannot read is then an enabled word of length 0, ``BAD_CONFIG``,
-    never a length cut to its low bits.
+    never a length cut to its low bits. So does a half period longer than a build of a narrower
+    ``half_period_width`` holds (0 is below the least half period, 2: ``BAD_CONFIG``).
 
     Parameters
     ----------
@@ -232,8 +236,8 @@ class BusChannel(wiring.Component):
                 port = getattr(core, name)
                 if member.flow != In:
                     m.d.comb += signal.eq(port)
-                elif name in _LENGTHS and len(signal) > len(port):
-                    # A length the port cannot hold: 0, so an enabled word is BAD_CONFIG.
+                elif name in _CUT_TO_ZERO and len(signal) > len(port):
+                    # A value the port cannot hold: 0, which the core refuses (BAD_CONFIG).
                     m.d.comb += port.eq(Mux(signal[len(port):].any(), 0, signal))
                 else:
                     m.d.comb += port.eq(signal)

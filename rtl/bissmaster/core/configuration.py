@@ -6,7 +6,7 @@ from amaranth.lib.wiring import In, Out
 
 from .. import protocol
 from ..layouts import config_custom_crcs, config_enables, config_layout, config_words
-from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, HALF_PERIOD_WIDTH, QUIET_WIDTH, Crc
+from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, QUIET_WIDTH, Crc
 from .const_compare import above, at_most
 from .crc_engine import crc_settings
 
@@ -45,7 +45,7 @@ class Configuration(wiring.Component):
         ``cfg_delay_limit`` of the cycle, 0 replaced by ``max_line_delay``.
     quiet_time : Out(12)
         ``cfg_quiet_time`` of the cycle, 0 replaced by ``quiet_default``.
-    delay_tolerance : Out(17)
+    delay_tolerance : Out(params.delay_tolerance_width)
         The round-trip check's tolerance for the cycle: its half period plus
         ``cfg_delay_tolerance`` (0 replaced by the default, 2 clocks): a jittered Ack edge moves
         by up to a quarter MA period each way (docs/ports.md, "Noise: the line checks").
@@ -80,7 +80,7 @@ class Configuration(wiring.Component):
             "timeout_limit": Out(tw),
             "delay_limit": Out(p.delay_limit_width),
             "quiet_time": Out(QUIET_WIDTH),
-            "delay_tolerance": Out(HALF_PERIOD_WIDTH + 1),
+            "delay_tolerance": Out(p.delay_tolerance_width),
             "no_start_limit": Out(p.cycle_timer_width),
             "word_count": Out(range(1, p.words + 1)),
             "crc_widths": Out(data.ArrayLayout(range(CRC_MAX_WIDTH + 1), p.words)),

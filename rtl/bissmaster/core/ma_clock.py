@@ -31,12 +31,14 @@ class MaClock(wiring.Component):
     ----------
     cdm : bool
         Build the CDM hold (the ``hold`` input, the ``held`` and ``clocking`` outputs).
+    half_period_width : int
+        Width of ``half_period`` and of the phase counter (``MasterParams.half_period_width``).
 
     Attributes
     ----------
     run : In(1)
         Keep clocking. Sampled at the end of every high phase: low there means stop, MA stays high.
-    half_period : In(16)
+    half_period : In(half_period_width)
         System clocks per MA phase, at least 2.
     ma : Out(1)
         The MA line, registered.
@@ -58,11 +60,12 @@ class MaClock(wiring.Component):
         ``cdm`` builds: a clock period is in progress (busy, but not in HOLD or RELEASE).
     """
 
-    def __init__(self, cdm=False):
+    def __init__(self, cdm=False, half_period_width=HALF_PERIOD_WIDTH):
         self._cdm = bool(cdm)
+        self._hp_width = half_period_width
         members = {
             "run": In(1),
-            "half_period": In(HALF_PERIOD_WIDTH),
+            "half_period": In(half_period_width),
             "ma": Out(1, init=1),
             "rise": Out(1),
             "rises": Out(SLOT_WIDTH),
@@ -78,7 +81,7 @@ class MaClock(wiring.Component):
         m = Module()
         cdm = self._cdm
 
-        phase_left = Signal(HALF_PERIOD_WIDTH)     # clocks left in the current phase, minus one
+        phase_left = Signal(self._hp_width)     # clocks left in the current phase, minus one
         # ``phase_left == 0``, kept as a register: written wherever ``phase_left`` is.
         last_clock = Signal(init=1)
         reload_last = self.half_period == 1      # phase_left <- half_period - 1 == 0

@@ -96,13 +96,16 @@ class SloSampler(wiring.Component):
     the first ``sample``, ``locked`` rises with the edge, and the slot before it counts as
     decided high (the idle line) for the noise judgement. Nothing is dropped or waited for.
 
+    ``half_period_width`` (``MasterParams.half_period_width``, 16 by default) is the width of
+    ``half_period``, of the slot timer and of its reload values.
+
     Attributes
     ----------
     slo : In(1)
         The SLO pin (with ``synchronizer=False``: the output of a two-flop synchronizer).
     level : Out(1)
         SLO after the synchronizer.
-    half_period : In(16)
+    half_period : In(half_period_width)
         MA half period in system clocks (constant during the cycle).
     arm : In(1)
         Strobe on the master's second MA rising edge: start measuring.
@@ -125,14 +128,16 @@ class SloSampler(wiring.Component):
         ``fixed=True`` builds: the round trip to use, in the same measure as ``delay``.
     """
 
-    def __init__(self, delay_width, *, synchronizer=True, fixed=False):
+    def __init__(self, delay_width, *, synchronizer=True, fixed=False,
+                 half_period_width=HALF_PERIOD_WIDTH):
         self._delay_width = delay_width
+        self._hp_width = half_period_width
         self._synchronizer = bool(synchronizer)
         self._fixed = bool(fixed)
         super().__init__({
             "slo": In(1, init=1),
             "level": Out(1, init=1),
-            "half_period": In(HALF_PERIOD_WIDTH),
+            "half_period": In(half_period_width),
             "arm": In(1),
             "delay": Out(delay_width),
             "early": Out(1),
@@ -162,7 +167,7 @@ class SloSampler(wiring.Component):
 
         s.elapsed = Signal(self._delay_width, name="elapsed")   # clocks since arm
         # clocks to the slot's next event, minus one
-        s.slot_left = Signal(HALF_PERIOD_WIDTH + 1, name="slot_left")
+        s.slot_left = Signal(self._hp_width + 1, name="slot_left")
         # ``slot_left == 0`` kept as a register, written wherever ``slot_left`` is, from the
         # value written: the event strobe needs no wide compare.
         s.slot_zero = Signal(init=1, name="slot_zero")
@@ -197,12 +202,12 @@ class SloSampler(wiring.Component):
         # ``v`` is a register (it keeps the compare and select of the half period out of the
         # subtracter in front of ``first_load``: the core's critical path without it); ``2u - 1``
         # is wiring (``u - 1`` with a 1 below it).
-        vw = HALF_PERIOD_WIDTH - 1
+        vw = self._hp_width - 1
         s.vote = vote = Signal(vw, reset_less=True, name="vote")
         # one sample per slot (hp = 2)
         s.single = Signal(reset_less=True, name="single")
         # u - 1: edge to first vote
-        s.first_load = Signal(HALF_PERIOD_WIDTH, reset_less=True, name="first_load")
+        s.first_load = Signal(self._hp_width, reset_less=True, name="first_load")
         s.vote_load = Signal(vw, reset_less=True, name="vote_load")      # v - 1: vote to vote
         s.vote_one = Signal(reset_less=True, name="vote_one")            # v == 1: vote_load is 0
         s.period_load = Cat(C(1, 1), s.first_load)                       # 2u - 1: third to first
@@ -222,7 +227,7 @@ class SloSampler(wiring.Component):
         # clocks since that fall, ``mid_slot`` = hp - 1 - ceil(span / 2) (the timer to the
         # slot's centre had the edge been halfway) and ``mid_delay`` = its delay + floor(span /
         # 2); ``odd`` = span % 2.
-        s.mid_slot = Signal(HALF_PERIOD_WIDTH + 1, name="mid_slot")
+        s.mid_slot = Signal(self._hp_width + 1, name="mid_slot")
         s.mid_delay = Signal(self._delay_width, name="mid_delay")
         s.odd = Signal(name="odd")
         with m.If(s.odd):

@@ -2,7 +2,9 @@
 length field is 7 bits in the map (words 2..7: 1..64 data bits, docs/registers.md), and a core
 whose words are all shorter than 64 bits has a 6-bit length port. A length that port cannot
 hold must reach the core as 0 (an enabled word of length 0: BAD_CONFIG, docs/bus.md, Chains),
-never cut to its low six bits (88 = 0b1011000 would read as 24, a valid length).
+never cut to its low six bits (88 = 0b1011000 would read as 24, a valid length). The same for
+the MA half period (16 bits in the map) of a build whose port is 8 bits (``half_period_width``,
+docs/ports.md): 266 must not read as 10.
 
 The core's own verdict on its configuration (``config_error``, state.config_error in the map)
 is what is observed: the test side knows the legal lengths from the build it asks for.
@@ -25,24 +27,21 @@ PARAMS = MasterParams(max_data_bits=(40, 32, WORD2_MAX, 16),
                       word_crcs=((Crc.CRC6, Crc.CRC16),) * 4, register_access=False, ssi=False)
 
 
-def config_errors(lengths):
-    """``config_error`` after each of ``lengths`` is written to cfg_w2.data_bits (word 2
-    enabled, CRC-6, words 0 and 1 valid, word 3 disabled)."""
+def errors_after_writes(params, settings, field, values):
+    """``config_error`` of a BusChannel of ``params`` after each of ``values`` is written to
+    the map's ``field``, the other fields as ``settings`` gives them."""
     top = Module()
     top.domains.sync = ClockDomain()
     the_map = regmap.load()
-    top.submodules.dut = dut = BusChannel(PARAMS, block_signature(the_map, the_map.channel))
+    top.submodules.dut = dut = BusChannel(params, block_signature(the_map, the_map.channel))
     regs = dut.regs
     seen = []
 
     async def bench(ctx):
-        for name, value in (("cfg_ma_half_period", 10), ("cfg_w0_data_bits", 26),
-                            ("cfg_w0_nenw", 1), ("cfg_w0_crc", 1), ("cfg_w1_enable", 1),
-                            ("cfg_w1_data_bits", 12), ("cfg_w1_nenw", 1), ("cfg_w1_crc", 1),
-                            ("cfg_w2_enable", 1), ("cfg_w2_nenw", 1), ("cfg_w2_crc", 1)):
+        for name, value in settings:
             ctx.set(getattr(regs, name), value)
-        for length in lengths:
-            ctx.set(regs.cfg_w2_data_bits, length)
+        for value in values:
+            ctx.set(getattr(regs, field), value)
             await ctx.tick().repeat(4)
             seen.append(ctx.get(regs.config_error))
 
@@ -53,12 +52,51 @@ def config_errors(lengths):
     return seen
 
 
+def config_errors(lengths):
+    """``config_error`` after each of ``lengths`` is written to cfg_w2.data_bits (word 2
+    enabled, CRC-6, words 0 and 1 valid, word 3 disabled)."""
+    return errors_after_writes(
+        PARAMS, (("cfg_ma_half_period", 10), ("cfg_w0_data_bits", 26), ("cfg_w0_nenw", 1),
+                 ("cfg_w0_crc", 1), ("cfg_w1_enable", 1), ("cfg_w1_data_bits", 12),
+                 ("cfg_w1_nenw", 1), ("cfg_w1_crc", 1), ("cfg_w2_enable", 1),
+                 ("cfg_w2_nenw", 1), ("cfg_w2_crc", 1)),
+        "cfg_w2_data_bits", lengths)
+
+
 def test_the_port_is_narrower_than_the_field():
     """The premise: the map's field holds 64, this build's port does not."""
     the_map = regmap.load()
     field = block_signature(the_map, the_map.channel).members["cfg_w2_data_bits"]
     port = BissMaster.ports(PARAMS)["cfg_w2_data_bits"]
     assert Shape.cast(field.shape).width == 7 and Shape.cast(port.shape).width == 6
+
+
+#: A build whose MA half-period setting is 8 bits (``half_period_width``): half periods 2..255.
+NARROW = MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),), half_period_width=8,
+                      register_access=False, ssi=False)
+
+
+def half_period_errors(half_periods):
+    """``config_error`` of the NARROW build after each of ``half_periods`` is written to the
+    map's 16-bit cfg_ma_half_period (word 0 a valid BiSS C word)."""
+    return errors_after_writes(
+        NARROW, (("cfg_w0_data_bits", 26), ("cfg_w0_nenw", 1), ("cfg_w0_crc", 1)),
+        "cfg_ma_half_period", half_periods)
+
+
+def test_the_half_period_port_is_narrower_than_the_field():
+    the_map = regmap.load()
+    field = block_signature(the_map, the_map.channel).members["cfg_ma_half_period"]
+    port = BissMaster.ports(NARROW)["cfg_ma_half_period"]
+    assert Shape.cast(field.shape).width == 16 and Shape.cast(port.shape).width == 8
+
+
+@pytest.mark.parametrize("half_periods, errors", [
+    ((2, 255, 1, 0, 10), (0, 0, 1, 1, 0)),              # in range; below the least, 2
+    ((256 + 10, 10, 512 + 255, 65535, 255), (1, 0, 1, 1, 0)),   # too long: never cut to 10, 255
+])
+def test_a_half_period_the_core_cannot_hold_is_bad_config(half_periods, errors):
+    assert tuple(half_period_errors(half_periods)) == errors
 
 
 @pytest.mark.parametrize("lengths, errors", [

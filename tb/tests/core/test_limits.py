@@ -602,3 +602,23 @@ def test_reset_drops_requests():
     assert run.trace[r0 + 2]["count_overrun"] == 1
     assert busy_falls(run)[-1] == r0 + RESET_BREAK + 1
     assert [f for f in run.falls if f > 60][0] == r0 + RESET_BREAK + 1 + 3
+
+
+# -- A build with a narrower half-period setting (half_period_width) -----------------------------
+
+@pytest.mark.parametrize("hp", (2, 255), ids=("hp2_the_shortest", "hp255_the_longest"))
+def test_an_8_bit_half_period_build_reads_frames_up_to_its_longest_half_period(hp):
+    """MasterParams.half_period_width 8 (docs/ports.md, ``cfg_ma_half_period``): the setting
+    holds half periods up to 2**8 - 1 = 255 clocks. A frame at the shortest and at the longest
+    is read as in the default build: reported OK at the documented clock, with exactly the
+    frame's MA rises, and MA's low phases exactly ``hp`` clocks long."""
+    params = replace(PARAMS, half_period_width=8)
+    ld = 7
+    ack = ld + hp + vote_spacing(hp) + 1 + 10      # above ack_round_trip_max's bound
+    cfg = base_config(hp, cfg_break_time=BREAK, cfg_ack_limit=ack)
+    n = 5 + ld + 2 * hp * (target_rises(1) + 2) + 20
+    run = simulate(cfg, Encoder(hp, FRAME, round_trip=ld - 1), n, start_at(5), params=params)
+    s = run.rises[1]
+    assert_frame(run, s, ld, 1, hp=hp)
+    lows = [r - f for f, r in zip(run.falls, run.rises)]
+    assert lows == [hp] * target_rises(1)

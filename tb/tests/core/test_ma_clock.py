@@ -83,10 +83,10 @@ def _ma_run_wave(hp, rng):
     return run, 3 * len(offsets) + 1
 
 
-def _ma_sim(hp, run):
+def _ma_sim(hp, run, **options):
     """MaClock at half period ``hp`` with ``run`` one value per cycle: per cycle
-    (ma, rise, rises, busy)."""
-    dut = MaClock()
+    (ma, rise, rises, busy). ``options``: MaClock's (``half_period_width``)."""
+    dut = MaClock(**options)
     trace = []
 
     async def tb(ctx):
@@ -159,6 +159,18 @@ def test_ma_clock_phases_rise_and_stop_at_any_offset(hp):
     # rises counts from 1 at the first rise of every burst.
     for s, p in bursts:
         assert rises[s + hp + 1] == 1 and rises[s + 2 * hp * p] == p
+
+
+@pytest.mark.parametrize("hp", (2, 255))
+def test_ma_clock_of_an_8_bit_half_period_build(hp):
+    """``half_period_width`` 8 (MasterParams): the setting holds up to 255 clocks, and MA's
+    phases are exact at the shortest and the longest, cycle by cycle against the reference."""
+    run = [0, 0, 0] + [1] * (2 * hp * 3) + [0] * (2 * hp + 3) + [1] * (hp + 1) + [0] * (2 * hp)
+    trace = _ma_sim(hp, run, half_period_width=8)
+    exp_ma, exp_rise, exp_rises, exp_busy, bursts = _ma_reference(hp, run)
+    assert [b[1] for b in bursts] == [3, 1]
+    for i, expected in enumerate((exp_ma, exp_rise, exp_rises, exp_busy)):
+        assert [x[i] for x in trace] == expected, ("ma", "rise", "rises", "busy")[i]
 
 
 def test_ma_clock_abort_mid_low_completes_period_then_idles():

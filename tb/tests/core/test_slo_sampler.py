@@ -69,12 +69,15 @@ class DelayedEncoder:
                 for k in range(len(self.slots))]
 
 
-def _sampler_sim(width, hp, scenarios, *, extra=0):
+def _sampler_sim(width, hp, scenarios, *, extra=0, half_period_width=None):
     """Run scenarios [(encoder, cycles)] back to back, reset in between (as the master does).
+    ``half_period_width``: a build with a narrower half-period setting (default: the default
+    build's).
 
     Returns one trace per scenario: per relative cycle c = 0 (arm) .. cycles-1, a dict of outputs.
     """
-    sampler = SloSampler(width, synchronizer=False)
+    narrow = {} if half_period_width is None else {"half_period_width": half_period_width}
+    sampler = SloSampler(width, synchronizer=False, **narrow)
     rst = Signal()
     top = ResetInserter(rst)(sampler)
     traces = []
@@ -141,6 +144,25 @@ def test_slo_sampler_delay_and_mid_bit_samples_for_delays_1_to_60(hp):
         assert all(x["delay"] == d - 1 for x in trace[d + 1:]), where
         assert trace[-1]["delay"] == d - SYNC_LATENCY, where
         assert not any(x["early"] for x in trace), where
+
+
+@pytest.mark.parametrize("hp", (2, 3, 128, 255))
+def test_slo_sampler_of_an_8_bit_half_period_build_up_to_its_longest_half_period(hp):
+    """A build with ``half_period_width`` 8 (MasterParams; the slowest MA 100 MHz / 510): its
+    setting holds half periods up to 255, and at each of them, the shortest and the longest,
+    the delay and every slot's decision are as at any half period of the default build."""
+    assert 2**8 - 1 == 255
+    rng = random.Random(2100 + hp)
+    scenarios = []
+    for d in (1, 2, 37, 700):
+        enc = DelayedEncoder(hp, d, _random_slots(rng, 4))
+        scenarios.append((enc, d + 2 * hp * len(enc.slots)))
+    traces = _sampler_sim(SAMPLER_DELAY_WIDTH, hp, scenarios, half_period_width=8)
+    for (enc, cycles), trace in zip(scenarios, traces):
+        where = f"hp={hp} d={enc.d}"
+        assert _samples(trace) == list(zip(enc.sample_cycles(), enc.slots)), where
+        assert trace[-1]["delay"] == enc.d - SYNC_LATENCY, where
+        assert not any(x["noise"] or x["early"] for x in trace), where
 
 
 def test_slo_sampler_early_when_slo_low_at_arm():

@@ -24,6 +24,7 @@ def test_help_names_presets_tops_and_every_core_option(capsys):
     assert text.startswith("usage: bissmaster-generate")
     for word in ("--top", "--list-presets", "--version", "-o FILE", "--name", "--sys-clk-hz",
                  "--max-data-bits", "--word-crcs", "--max-line-delay", "--timer-width",
+                 "--half-period-width",
                  "--counter-width", "--counter-ram", "--timestamp-width", "examples:", *PRESETS,
                  *TOPS):
         assert word in text, word

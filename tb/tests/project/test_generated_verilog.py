@@ -35,6 +35,8 @@ def test_header_names_generator_and_parameters():
     ({"sys_clk_hz": 1_000_000_000, "timer_width": 16}, "cannot hold"),
     ({"counter_width": -1}, "counter_width"),
     ({"timestamp_width": 8}, "timestamp_width"),
+    ({"half_period_width": 3}, "half_period_width"),
+    ({"half_period_width": 17}, "half_period_width"),
 ])
 def test_bad_parameters_are_refused(kwargs, message):
     with pytest.raises(ValueError, match=message):
@@ -45,6 +47,18 @@ def test_biss_c_only_configuration_generates():
     text = generate(MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),)))
     assert "word1_position" not in text and "cfg_w1_enable" not in text
     assert "input [5:0] cfg_w0_data_bits" in text
+
+
+def test_a_narrower_half_period_setting_narrows_the_port_and_says_so(tmp_path):
+    """``--half-period-width 8`` at 24 MHz: an 8-bit ``cfg_ma_half_period`` (the default build's
+    is 16 bits), and the header gives the slowest MA clock: 24 MHz / (2 x 255) = 47.1 kHz."""
+    out = tmp_path / "narrow.v"
+    main(["--preset", "biss-c-lean", "--sys-clk-hz", "24000000", "--half-period-width", "8",
+          "-o", str(out)])
+    text = out.read_text()
+    assert "input [7:0] cfg_ma_half_period" in text
+    assert "half_period_width = 8 (MA down to 47.1 kHz)" in text
+    assert "input [15:0] cfg_ma_half_period" in COMMITTED.read_text()
 
 
 def test_lean_build_has_no_counters_and_no_timestamp(tmp_path):
