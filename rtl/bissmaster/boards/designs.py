@@ -213,8 +213,10 @@ BOARDS = {b.name: b for b in [
         reset=("button", 0), resources=("break_off_pmod",),
         io_attrs={"IO_STANDARD": "SB_LVCMOS"}, slo_attrs={"PULLUP": 1},
         # The UP5K is full: 16-bit time settings (655 us at 100 MHz, 2.7 ms at 24 MHz: every
-        # limit the protocol needs) and no timestamp make room for the line checks (issue 28).
-        overrides={"timer_width": 16, "timestamp_width": 0}),
+        # limit the protocol needs) and no timestamp make room for the line checks (issue 28);
+        # an 8-bit half period (MA down to 47 kHz at 24 MHz, below BiSS's 80 kHz and the host
+        # tool's least MA rate) leaves room on top.
+        overrides={"timer_width": 16, "timestamp_width": 0, "half_period_width": 8}),
     Board(
         "arty-a7-35", "Digilent Arty A7-35T (Artix-7), FT2232H USB-serial: vendor plan only",
         "arty_a7:ArtyA7_35Platform", "xilinx", "clk100", 100_000_000, 100_000_000,
