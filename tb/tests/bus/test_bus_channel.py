@@ -63,12 +63,17 @@ def config_errors(lengths):
         "cfg_w2_data_bits", lengths)
 
 
+def field_and_port_widths(params, name):
+    """Widths of the map's field ``name`` and of the ``params`` build's port of that name."""
+    the_map = regmap.load()
+    field = block_signature(the_map, the_map.channel).members[name]
+    port = BissMaster.ports(params)[name]
+    return Shape.cast(field.shape).width, Shape.cast(port.shape).width
+
+
 def test_the_port_is_narrower_than_the_field():
     """The premise: the map's field holds 64, this build's port does not."""
-    the_map = regmap.load()
-    field = block_signature(the_map, the_map.channel).members["cfg_w2_data_bits"]
-    port = BissMaster.ports(PARAMS)["cfg_w2_data_bits"]
-    assert Shape.cast(field.shape).width == 7 and Shape.cast(port.shape).width == 6
+    assert field_and_port_widths(PARAMS, "cfg_w2_data_bits") == (7, 6)
 
 
 #: A build whose MA half-period setting is 8 bits (``half_period_width``): half periods 2..255.
@@ -85,10 +90,7 @@ def half_period_errors(half_periods):
 
 
 def test_the_half_period_port_is_narrower_than_the_field():
-    the_map = regmap.load()
-    field = block_signature(the_map, the_map.channel).members["cfg_ma_half_period"]
-    port = BissMaster.ports(NARROW)["cfg_ma_half_period"]
-    assert Shape.cast(field.shape).width == 16 and Shape.cast(port.shape).width == 8
+    assert field_and_port_widths(NARROW, "cfg_ma_half_period") == (16, 8)
 
 
 @pytest.mark.parametrize("half_periods, errors", [
