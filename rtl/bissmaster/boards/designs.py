@@ -184,26 +184,25 @@ def _pmod_channel(conn, first):
     return Channel(conn, {pin: str(first + i) for i, pin in enumerate(CHANNEL_PINS)})
 
 
+def _ulx3s(size):
+    """The ULX3S with an LFE5U of ``size`` ("85F", "25F"): the same board otherwise, two
+    channels on the GPIO header's pairs (the + and the - pins of pairs 0..3)."""
+    return Board(
+        f"ulx3s-{size.lower()}", f"Radiona ULX3S, LFE5U-{size} (ECP5), FT231X USB-serial",
+        f"ulx3s:ULX3S_{size}_Platform", "ecp5", "clk25", 25_000_000, 80_000_000,
+        channels=tuple(Channel(("gpio", 0), {pin: f"{i}{side}" for i, pin
+                                             in enumerate(CHANNEL_PINS)})
+                       for side in "+-"),
+        leds={"heartbeat": ("led", 0), "ch0_valid_led": ("led", 1), "ch0_fault_led": ("led", 2),
+              "ch1_valid_led": ("led", 3), "ch1_fault_led": ("led", 4)},
+        reset=("button_fire", 1),
+        io_attrs={"IO_TYPE": "LVCMOS33"}, slo_attrs={"PULLMODE": "UP"})
+
+
 #: The boards, by ``make board BOARD=<name>``.
 BOARDS = {b.name: b for b in [
-    Board(
-        "ulx3s-85f", "Radiona ULX3S, LFE5U-85F (ECP5), FT231X USB-serial",
-        "ulx3s:ULX3S_85F_Platform", "ecp5", "clk25", 25_000_000, 80_000_000,
-        channels=(Channel(("gpio", 0), {"ma": "0+", "slo": "1+", "de": "2+", "re": "3+"}),
-                  Channel(("gpio", 0), {"ma": "0-", "slo": "1-", "de": "2-", "re": "3-"})),
-        leds={"heartbeat": ("led", 0), "ch0_valid_led": ("led", 1), "ch0_fault_led": ("led", 2),
-              "ch1_valid_led": ("led", 3), "ch1_fault_led": ("led", 4)},
-        reset=("button_fire", 1),
-        io_attrs={"IO_TYPE": "LVCMOS33"}, slo_attrs={"PULLMODE": "UP"}),
-    Board(
-        "ulx3s-25f", "Radiona ULX3S, LFE5U-25F (ECP5), FT231X USB-serial",
-        "ulx3s:ULX3S_25F_Platform", "ecp5", "clk25", 25_000_000, 80_000_000,
-        channels=(Channel(("gpio", 0), {"ma": "0+", "slo": "1+", "de": "2+", "re": "3+"}),
-                  Channel(("gpio", 0), {"ma": "0-", "slo": "1-", "de": "2-", "re": "3-"})),
-        leds={"heartbeat": ("led", 0), "ch0_valid_led": ("led", 1), "ch0_fault_led": ("led", 2),
-              "ch1_valid_led": ("led", 3), "ch1_fault_led": ("led", 4)},
-        reset=("button_fire", 1),
-        io_attrs={"IO_TYPE": "LVCMOS33"}, slo_attrs={"PULLMODE": "UP"}),
+    _ulx3s("85F"),
+    _ulx3s("25F"),
     Board(
         "icebreaker", "1BitSquared iCEBreaker, iCE40UP5K-SG48, FT2232H USB-serial",
         "icebreaker:ICEBreakerPlatform", "ice40", "clk12", 12_000_000, 24_000_000,
