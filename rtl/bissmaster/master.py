@@ -41,7 +41,9 @@ class BissMaster(wiring.Component):
 
     See ``docs/ports.md`` for the port table and ``docs/timing.md`` for one request cycle.
     Runtime settings (``cfg_*``) are checked when a request arrives and latched for the
-    cycle: changing them mid-cycle never mixes two configurations in one frame.
+    cycle: changing them mid-cycle never mixes two configurations in one frame. (A
+    ``config_hold`` build latches none: its ``cfg_*`` change only while ``cfg_hold`` keeps it
+    idle, :class:`~bissmaster.params.MasterParams`.)
 
     The ports are flat (Verilog users wire them one by one); inside, the configuration, the
     result and the counters are the structures of :mod:`~bissmaster.layouts`, and the port
@@ -114,6 +116,7 @@ class BissMaster(wiring.Component):
             **({"time_now": In(p.timestamp_width)} if p.time_input else {}),
             # Runtime configuration
             **{name: In(shape) for name, _, shape in config_ports(p)},
+            **({"cfg_hold": In(1)} if p.config_hold else {}),
             # State
             "busy": Out(1),
             "config_error": Out(1),
@@ -159,7 +162,7 @@ class BissMaster(wiring.Component):
         p = self.params
         two = p.words >= 2
         m.submodules.config = config = Configuration(p)
-        m.submodules.scheduler = scheduler = RequestScheduler(p.timer_width)
+        m.submodules.scheduler = scheduler = RequestScheduler(p.timer_width, hold=p.config_hold)
         cdm = p.register_access
         m.submodules.controller = controller = CycleController(cdm=cdm)
         m.submodules.timers = timers = LimitTimers(p)
@@ -224,6 +227,8 @@ class BissMaster(wiring.Component):
         ]
         if self.has_trigger:
             m.d.comb += b.scheduler.trigger.eq(self.trigger)
+        if self.params.config_hold:
+            m.d.comb += b.scheduler.hold.eq(self.cfg_hold)
 
     def _connect_control(self, m, b):
         """The controller, its limits and the MA clock."""

@@ -224,6 +224,16 @@ class MasterParams:
         read port (``chain_addr``, ``chain_en``, ``chain_data``; docs/ports.md, Chains).
         Nothing changes in a build of one or two words. The bus tops build their chain cores
         this way.
+    config_hold : bool
+        The ``cfg_*`` inputs change only while the core lets them (issue 27; the bus tops
+        build their cores this way): the core then reads them directly through the cycle
+        instead of a copy latched per cycle (a flip-flop per configuration bit). The input
+        ``cfg_hold`` keeps the controller in IDLE; the ``cfg_*`` inputs may change only after
+        a clock with ``cfg_hold`` high and ``busy`` low (they hold their new value from the
+        next clock). A ``start``, ``trigger`` or periodic tick that comes while ``cfg_hold``
+        keeps the controller waiting is taken when it is released, not dropped
+        (docs/ports.md, "Configuration"). The register bank holds a channel's configuration
+        write until then (docs/bus.md).
     timestamp_width : int
         Width of the free-running time base behind the ``timestamp`` output; 0 builds neither.
     time_input : bool
@@ -260,6 +270,7 @@ class MasterParams:
     counter_width: int = 16
     counter_ram: bool = False
     chain_memory: bool = False
+    config_hold: bool = False
     timestamp_width: int = 32
     time_input: bool = False
     custom_crc: bool = True
@@ -303,6 +314,8 @@ class MasterParams:
                              f"not {self.counter_width!r}")
         if not isinstance(self.counter_ram, bool):
             raise ValueError(f"counter_ram must be a bool, not {self.counter_ram!r}")
+        if not isinstance(self.config_hold, bool):
+            raise ValueError(f"config_hold must be a bool, not {self.config_hold!r}")
         if not isinstance(self.chain_memory, bool):
             raise ValueError(f"chain_memory must be a bool, not {self.chain_memory!r}")
         if self.counter_ram and not 1 <= self.counter_width <= COUNTER_HALF_BITS:

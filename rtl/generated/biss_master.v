@@ -1124,7 +1124,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$5303$272 (cycle[274:272]),
+    .\port$5304$272 (cycle[274:272]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(sample),
@@ -1184,7 +1184,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$5303$199 (cycle[199]),
+    .\port$5304$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -1235,7 +1235,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$5303$259 (cycle[271:259]),
+    .\port$5304$259 (cycle[271:259]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(\sample$349 ),
@@ -1258,7 +1258,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$213 ),
     .load(load),
-    .\port$5291$0 (\bit ),
+    .\port$5292$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1325,7 +1325,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$4723$0 (\$28 ),
+    .\port$4724$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -5657,7 +5657,7 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$5303$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$5304$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
@@ -6266,8 +6266,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   reg \begin ;
   input \bit ;
   wire \bit ;
-  wire \bit$13 ;
-  wire \bit$41 ;
+  wire \bit$11 ;
+  wire \bit$40 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -6308,17 +6308,17 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   wire [6:0] \current.word_end_m1 ;
   input [75:0] customs;
   wire [75:0] customs;
-  wire [75:0] \customs$35 ;
-  wire [37:0] \customs$35[0] ;
-  wire \customs$35[0].inverted ;
-  wire [15:0] \customs$35[0].poly ;
-  wire [15:0] \customs$35[0].start ;
-  wire [4:0] \customs$35[0].width ;
-  wire [37:0] \customs$35[1] ;
-  wire \customs$35[1].inverted ;
-  wire [15:0] \customs$35[1].poly ;
-  wire [15:0] \customs$35[1].start ;
-  wire [4:0] \customs$35[1].width ;
+  wire [75:0] \customs$34 ;
+  wire [37:0] \customs$34[0] ;
+  wire \customs$34[0].inverted ;
+  wire [15:0] \customs$34[0].poly ;
+  wire [15:0] \customs$34[0].start ;
+  wire [4:0] \customs$34[0].width ;
+  wire [37:0] \customs$34[1] ;
+  wire \customs$34[1].inverted ;
+  wire [15:0] \customs$34[1].poly ;
+  wire [15:0] \customs$34[1].start ;
+  wire [4:0] \customs$34[1].width ;
   wire [37:0] \customs[0] ;
   wire \customs[0].inverted ;
   wire [15:0] \customs[0].poly ;
@@ -6353,10 +6353,9 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
-  reg index = 1'h0;
-  wire [6:0] \index$14 ;
+  wire [6:0] index;
   (* init = 1'h0 *)
-  wire \index$44 ;
+  wire \index$43 ;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -6367,14 +6366,14 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   wire load_index;
   output mismatch;
   wire mismatch;
-  wire \mismatch$17 ;
+  wire \mismatch$15 ;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$5303$272 ;
-  wire [2:0] \port$5303$272 ;
+  input [2:0] \port$5304$272 ;
+  wire [2:0] \port$5304$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -6399,8 +6398,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   reg stop_bit = 1'h0;
   output stopped;
   reg stopped = 1'h0;
-  (* init = 1'h0 *)
-  wire word;
+  reg word = 1'h0;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [23:0] words;
@@ -6661,7 +6659,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   always @(posedge clk)
     in_top <= \$589 ;
   always @(posedge clk)
-    index <= \$590 ;
+    word <= \$590 ;
   always @(posedge clk)
     decoder_fsm_state <= \$591 ;
   always @(posedge clk)
@@ -6684,12 +6682,12 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$5303$272 [0];
+  assign error_bit = ssi & \port$5304$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
   assign \$3  = word_count - 1'h1;
-  assign \$4  = index == \$3 ;
+  assign \$4  = word == \$3 ;
   assign first = in_word & ssi;
   assign lc_load = in_word & in_lc;
   assign \$5  = idx == current[34:28];
@@ -6700,7 +6698,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign check = in_word & in_crc;
   assign \$8  = idx == current[34:28];
   assign last = in_word & \$8 ;
-  assign \$9  = index + 1'h1;
+  assign \$9  = word + 1'h1;
   assign \$10  = at_cds ? 2'h0 : \$9 ;
   assign \$11  = ! decoder_fsm_state;
   assign \$12  = decoder_fsm_state == 1'h1;
@@ -6715,19 +6713,19 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$5303$272 [0];
+  assign \$24  = ssi & \port$5304$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$5303$272 [0];
+  assign \$28  = ssi & \port$5304$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$5303$272 [0];
+  assign \$35  = ssi & \port$5304$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$5303$272 [0];
+  assign \$39  = ssi & \port$5304$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -6747,12 +6745,12 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$57  = in_top & \$56 ;
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
-  assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$5303$272 [2];
-  assign \$62  = index + 1'h1;
+  assign \$60  = word == \$59 ;
+  assign \$61  = ssi & \port$5304$272 [2];
+  assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
-  assign \$65  = ! index;
+  assign \$65  = ! word;
   assign \$66  = in_word & \$65 ;
   assign \$67  = \$66  & in_data;
   assign \$68  = words[10] & data0[0];
@@ -7034,19 +7032,19 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$5303$272 [0];
+  assign \$347  = ssi & \port$5304$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
-  assign \$350  = ! index;
+  assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$5303$272 [0];
-  assign \$355  = ~ \port$5303$272 [1];
+  assign \$354  = ssi & \port$5304$272 [0];
+  assign \$355  = ~ \port$5304$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
-  assign \$359  = ! index;
+  assign \$359  = ! word;
   assign \$360  = in_word & \$359 ;
   assign \$361  = idx == current[6:0];
   assign \$362  = \$360  & \$361 ;
@@ -7095,7 +7093,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
     .codes(codes),
     .\cover (\cover ),
     .customs(customs),
-    .index(index),
+    .index(word),
     .last(last),
     .load(load),
     .load_index(\$10 [0]),
@@ -7111,7 +7109,6 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
     .current(current),
     .error_bit(error_bit),
     .following(following),
-    .index(index),
     .receiver_clear(receiver_clear),
     .rst(rst),
     .words(words)
@@ -7434,7 +7431,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$590  = index;
+    \$590  = word;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
@@ -7778,19 +7775,18 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign word = index;
-  assign ssi_error = \port$5303$272 [0];
-  assign \bit$13  = \bit ;
-  assign \index$14  = current[34:28];
-  assign \mismatch$17  = mismatch;
+  assign ssi_error = \port$5304$272 [0];
+  assign \bit$11  = \bit ;
+  assign index = current[34:28];
+  assign \mismatch$15  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
-  assign \customs$35  = customs;
-  assign \bit$41  = \bit ;
+  assign \customs$34  = customs;
+  assign \bit$40  = \bit ;
   assign ok = crc_ok;
-  assign \index$44  = index;
+  assign \index$43  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$5303$272 [2];
-  assign ssi_error_low = \port$5303$272 [1];
+  assign ssi_double = \port$5304$272 [2];
+  assign ssi_error_low = \port$5304$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -7842,16 +7838,16 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \customs[1].poly  = customs[58:43];
   assign \customs[1].start  = customs[74:59];
   assign \customs[1].inverted  = customs[75];
-  assign \customs$35[0]  = customs[37:0];
-  assign \customs$35[0].width  = customs[4:0];
-  assign \customs$35[0].poly  = customs[20:5];
-  assign \customs$35[0].start  = customs[36:21];
-  assign \customs$35[0].inverted  = customs[37];
-  assign \customs$35[1]  = customs[75:38];
-  assign \customs$35[1].width  = customs[42:38];
-  assign \customs$35[1].poly  = customs[58:43];
-  assign \customs$35[1].start  = customs[74:59];
-  assign \customs$35[1].inverted  = customs[75];
+  assign \customs$34[0]  = customs[37:0];
+  assign \customs$34[0].width  = customs[4:0];
+  assign \customs$34[0].poly  = customs[20:5];
+  assign \customs$34[0].start  = customs[36:21];
+  assign \customs$34[0].inverted  = customs[37];
+  assign \customs$34[1]  = customs[75:38];
+  assign \customs$34[1].width  = customs[42:38];
+  assign \customs$34[1].poly  = customs[58:43];
+  assign \customs$34[1].start  = customs[74:59];
+  assign \customs$34[1].inverted  = customs[75];
   assign \following.data_end_p1  = following[6:0];
   assign \following.data_end_m1  = following[13:7];
   assign \following.nenw_end_m1  = following[20:14];
@@ -7861,9 +7857,9 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \following.lc_at0  = following[36];
   assign codes[3:2] = words[21:20];
   assign codes[1:0] = words[9:8];
-  assign \$363  = index;
-  assign \$570  = index;
-  assign \$574  = index;
+  assign \$363  = word;
+  assign \$570  = word;
+  assign \$574  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -8343,252 +8339,253 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, cu
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.field_ends (rst, error_bit, words, crc_widths, receiver_clear, \begin , advance, index, current, following, clk);
+module \biss_master.decoder.field_ends (rst, error_bit, words, crc_widths, receiver_clear, \begin , advance, current, following, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
-  wire [2:0] \$1 ;
-  wire [7:0] \$10 ;
-  wire [11:0] \$100 ;
-  wire \$101 ;
+  wire [6:0] \$1 ;
+  wire \$10 ;
+  wire \$100 ;
+  wire [11:0] \$101 ;
   wire [11:0] \$102 ;
-  wire [11:0] \$103 ;
-  wire \$104 ;
-  wire [11:0] \$105 ;
-  wire \$106 ;
+  wire \$103 ;
+  wire [11:0] \$104 ;
+  wire \$105 ;
+  wire [11:0] \$106 ;
   wire [11:0] \$107 ;
-  wire [11:0] \$108 ;
-  reg [1:0] \$109 ;
-  wire \$11 ;
-  wire [6:0] \$110 ;
+  reg [1:0] \$108 ;
+  wire [6:0] \$109 ;
+  reg [1:0] \$11 ;
+  wire \$110 ;
   wire \$111 ;
-  wire \$112 ;
-  wire [11:0] \$113 ;
-  wire \$114 ;
+  wire [11:0] \$112 ;
+  wire \$113 ;
+  wire [11:0] \$114 ;
   wire [11:0] \$115 ;
-  wire [11:0] \$116 ;
-  wire \$117 ;
-  wire [11:0] \$118 ;
-  wire \$119 ;
-  reg [1:0] \$12 ;
+  wire \$116 ;
+  wire [11:0] \$117 ;
+  wire \$118 ;
+  wire [11:0] \$119 ;
+  wire [6:0] \$12 ;
   wire [11:0] \$120 ;
-  wire [11:0] \$121 ;
-  wire \$122 ;
-  wire [11:0] \$123 ;
-  wire \$124 ;
+  wire \$121 ;
+  wire [11:0] \$122 ;
+  wire \$123 ;
+  wire [11:0] \$124 ;
   wire [11:0] \$125 ;
-  wire [11:0] \$126 ;
-  reg [3:0] \$127 ;
-  wire [6:0] \$128 ;
+  reg [3:0] \$126 ;
+  wire [6:0] \$127 ;
+  wire \$128 ;
   wire \$129 ;
-  wire [6:0] \$13 ;
+  wire \$13 ;
   wire \$130 ;
-  wire \$131 ;
-  wire [11:0] \$132 ;
-  wire \$133 ;
+  wire [11:0] \$131 ;
+  wire \$132 ;
+  wire [11:0] \$133 ;
   wire [11:0] \$134 ;
-  wire [11:0] \$135 ;
-  wire [6:0] \$136 ;
-  wire \$137 ;
-  wire [11:0] \$138 ;
-  wire \$139 ;
-  wire \$14 ;
+  wire [6:0] \$135 ;
+  wire \$136 ;
+  wire [11:0] \$137 ;
+  wire \$138 ;
+  wire [11:0] \$139 ;
+  reg [3:0] \$14 ;
   wire [11:0] \$140 ;
-  wire [11:0] \$141 ;
-  wire [7:0] \$142 ;
-  wire \$143 ;
-  wire [11:0] \$144 ;
-  wire \$145 ;
+  wire [7:0] \$141 ;
+  wire \$142 ;
+  wire [11:0] \$143 ;
+  wire \$144 ;
+  wire [11:0] \$145 ;
   wire [11:0] \$146 ;
-  wire [11:0] \$147 ;
-  wire \$148 ;
-  wire [11:0] \$149 ;
-  reg [3:0] \$15 ;
-  wire \$150 ;
+  wire \$147 ;
+  wire [11:0] \$148 ;
+  wire \$149 ;
+  wire [6:0] \$15 ;
+  wire [11:0] \$150 ;
   wire [11:0] \$151 ;
-  wire [11:0] \$152 ;
-  wire \$153 ;
-  wire [11:0] \$154 ;
-  wire \$155 ;
+  wire \$152 ;
+  wire [11:0] \$153 ;
+  wire \$154 ;
+  wire [11:0] \$155 ;
   wire [11:0] \$156 ;
-  wire [11:0] \$157 ;
-  reg [6:0] \$158 ;
-  wire [7:0] \$159 ;
-  wire [6:0] \$16 ;
-  wire \$160 ;
-  wire [11:0] \$161 ;
-  wire \$162 ;
+  reg [6:0] \$157 ;
+  wire [7:0] \$158 ;
+  wire \$159 ;
+  wire \$16 ;
+  wire [11:0] \$160 ;
+  wire \$161 ;
+  wire [11:0] \$162 ;
   wire [11:0] \$163 ;
-  wire [11:0] \$164 ;
-  wire \$165 ;
-  wire [11:0] \$166 ;
-  wire \$167 ;
+  wire \$164 ;
+  wire [11:0] \$165 ;
+  wire \$166 ;
+  wire [11:0] \$167 ;
   wire [11:0] \$168 ;
-  wire [11:0] \$169 ;
+  wire \$169 ;
   wire \$17 ;
-  wire \$170 ;
-  wire [11:0] \$171 ;
-  wire \$172 ;
+  wire [11:0] \$170 ;
+  wire \$171 ;
+  wire [11:0] \$172 ;
   wire [11:0] \$173 ;
-  wire [11:0] \$174 ;
-  reg [6:0] \$175 ;
-  wire [7:0] \$176 ;
-  wire \$177 ;
-  wire [11:0] \$178 ;
-  wire \$179 ;
+  reg [6:0] \$174 ;
+  wire [7:0] \$175 ;
+  wire \$176 ;
+  wire [11:0] \$177 ;
+  wire \$178 ;
+  wire [11:0] \$179 ;
   wire \$18 ;
   wire [11:0] \$180 ;
-  wire [11:0] \$181 ;
-  wire \$182 ;
-  wire [11:0] \$183 ;
-  wire \$184 ;
+  wire \$181 ;
+  wire [11:0] \$182 ;
+  wire \$183 ;
+  wire [11:0] \$184 ;
   wire [11:0] \$185 ;
-  wire [11:0] \$186 ;
-  wire \$187 ;
-  wire [11:0] \$188 ;
-  wire \$189 ;
-  wire \$19 ;
+  wire \$186 ;
+  wire [11:0] \$187 ;
+  wire \$188 ;
+  wire [11:0] \$189 ;
+  wire [11:0] \$19 ;
   wire [11:0] \$190 ;
-  wire [11:0] \$191 ;
-  reg [6:0] \$192 ;
-  wire \$193 ;
-  wire [4:0] \$194 ;
-  wire \$195 ;
+  reg [6:0] \$191 ;
+  wire \$192 ;
+  wire [4:0] \$193 ;
+  wire \$194 ;
+  wire [4:0] \$195 ;
   wire [4:0] \$196 ;
-  wire [4:0] \$197 ;
+  wire [7:0] \$197 ;
   wire [7:0] \$198 ;
-  wire [7:0] \$199 ;
-  wire [6:0] \$2 ;
-  wire [11:0] \$20 ;
-  wire \$200 ;
-  wire [11:0] \$201 ;
-  wire \$202 ;
+  wire \$199 ;
+  wire [7:0] \$2 ;
+  wire \$20 ;
+  wire [11:0] \$200 ;
+  wire \$201 ;
+  wire [11:0] \$202 ;
   wire [11:0] \$203 ;
-  wire [11:0] \$204 ;
+  wire \$204 ;
   wire \$205 ;
-  wire \$206 ;
-  wire [11:0] \$207 ;
-  wire \$208 ;
+  wire [11:0] \$206 ;
+  wire \$207 ;
+  wire [11:0] \$208 ;
   wire [11:0] \$209 ;
-  wire \$21 ;
-  wire [11:0] \$210 ;
-  wire \$211 ;
-  wire [11:0] \$212 ;
-  wire \$213 ;
+  wire [11:0] \$21 ;
+  wire \$210 ;
+  wire [11:0] \$211 ;
+  wire \$212 ;
+  wire [11:0] \$213 ;
   wire [11:0] \$214 ;
-  wire [11:0] \$215 ;
-  wire \$216 ;
-  wire [11:0] \$217 ;
-  wire \$218 ;
+  wire \$215 ;
+  wire [11:0] \$216 ;
+  wire \$217 ;
+  wire [11:0] \$218 ;
   wire [11:0] \$219 ;
   wire [11:0] \$22 ;
-  wire [11:0] \$220 ;
-  reg [1:0] \$221 ;
-  wire [6:0] \$222 ;
+  reg [1:0] \$220 ;
+  wire [6:0] \$221 ;
+  wire \$222 ;
   wire \$223 ;
-  wire \$224 ;
-  wire [11:0] \$225 ;
-  wire \$226 ;
+  wire [11:0] \$224 ;
+  wire \$225 ;
+  wire [11:0] \$226 ;
   wire [11:0] \$227 ;
-  wire [11:0] \$228 ;
-  wire \$229 ;
-  wire [11:0] \$23 ;
-  wire [11:0] \$230 ;
-  wire \$231 ;
+  wire \$228 ;
+  wire [11:0] \$229 ;
+  wire [6:0] \$23 ;
+  wire \$230 ;
+  wire [11:0] \$231 ;
   wire [11:0] \$232 ;
-  wire [11:0] \$233 ;
-  wire \$234 ;
-  wire [11:0] \$235 ;
-  wire \$236 ;
+  wire \$233 ;
+  wire [11:0] \$234 ;
+  wire \$235 ;
+  wire [11:0] \$236 ;
   wire [11:0] \$237 ;
-  wire [11:0] \$238 ;
-  reg [3:0] \$239 ;
-  wire [6:0] \$24 ;
-  wire [6:0] \$240 ;
+  reg [3:0] \$238 ;
+  wire [6:0] \$239 ;
+  wire \$24 ;
+  wire \$240 ;
   wire \$241 ;
-  wire \$242 ;
+  wire [2:0] \$242 ;
   reg [36:0] \$243 ;
   reg [36:0] \$244 ;
-  wire \$25 ;
-  wire [11:0] \$26 ;
-  wire \$27 ;
+  reg [1:0] \$245 ;
+  wire [11:0] \$25 ;
+  wire \$26 ;
+  wire [11:0] \$27 ;
   wire [11:0] \$28 ;
-  wire [11:0] \$29 ;
-  wire [7:0] \$3 ;
-  wire [7:0] \$30 ;
-  wire \$31 ;
-  wire [11:0] \$32 ;
-  wire \$33 ;
+  wire [7:0] \$29 ;
+  reg [6:0] \$3 ;
+  wire \$30 ;
+  wire [11:0] \$31 ;
+  wire \$32 ;
+  wire [11:0] \$33 ;
   wire [11:0] \$34 ;
-  wire [11:0] \$35 ;
-  wire \$36 ;
-  wire [11:0] \$37 ;
-  wire \$38 ;
+  wire \$35 ;
+  wire [11:0] \$36 ;
+  wire \$37 ;
+  wire [11:0] \$38 ;
   wire [11:0] \$39 ;
-  reg [6:0] \$4 ;
-  wire [11:0] \$40 ;
-  wire \$41 ;
-  wire [11:0] \$42 ;
-  wire \$43 ;
+  wire [7:0] \$4 ;
+  wire \$40 ;
+  wire [11:0] \$41 ;
+  wire \$42 ;
+  wire [11:0] \$43 ;
   wire [11:0] \$44 ;
-  wire [11:0] \$45 ;
-  reg [6:0] \$46 ;
-  wire [7:0] \$47 ;
-  wire \$48 ;
-  wire [11:0] \$49 ;
-  wire [7:0] \$5 ;
-  wire \$50 ;
+  reg [6:0] \$45 ;
+  wire [7:0] \$46 ;
+  wire \$47 ;
+  wire [11:0] \$48 ;
+  wire \$49 ;
+  reg [6:0] \$5 ;
+  wire [11:0] \$50 ;
   wire [11:0] \$51 ;
-  wire [11:0] \$52 ;
-  wire \$53 ;
-  wire [11:0] \$54 ;
-  wire \$55 ;
+  wire \$52 ;
+  wire [11:0] \$53 ;
+  wire \$54 ;
+  wire [11:0] \$55 ;
   wire [11:0] \$56 ;
-  wire [11:0] \$57 ;
-  wire \$58 ;
-  wire [11:0] \$59 ;
-  reg [6:0] \$6 ;
-  wire \$60 ;
+  wire \$57 ;
+  wire [11:0] \$58 ;
+  wire \$59 ;
+  wire [7:0] \$6 ;
+  wire [11:0] \$60 ;
   wire [11:0] \$61 ;
-  wire [11:0] \$62 ;
-  reg [6:0] \$63 ;
-  wire [7:0] \$64 ;
-  wire \$65 ;
-  wire [11:0] \$66 ;
-  wire \$67 ;
+  reg [6:0] \$62 ;
+  wire [7:0] \$63 ;
+  wire \$64 ;
+  wire [11:0] \$65 ;
+  wire \$66 ;
+  wire [11:0] \$67 ;
   wire [11:0] \$68 ;
-  wire [11:0] \$69 ;
-  wire [7:0] \$7 ;
-  wire \$70 ;
-  wire [11:0] \$71 ;
-  wire \$72 ;
+  wire \$69 ;
+  reg [6:0] \$7 ;
+  wire [11:0] \$70 ;
+  wire \$71 ;
+  wire [11:0] \$72 ;
   wire [11:0] \$73 ;
-  wire [11:0] \$74 ;
-  wire \$75 ;
-  wire [11:0] \$76 ;
-  wire \$77 ;
+  wire \$74 ;
+  wire [11:0] \$75 ;
+  wire \$76 ;
+  wire [11:0] \$77 ;
   wire [11:0] \$78 ;
-  wire [11:0] \$79 ;
-  reg [6:0] \$8 ;
-  reg [6:0] \$80 ;
-  wire \$81 ;
-  wire [4:0] \$82 ;
-  wire \$83 ;
+  reg [6:0] \$79 ;
+  wire [7:0] \$8 ;
+  wire \$80 ;
+  wire [4:0] \$81 ;
+  wire \$82 ;
+  wire [4:0] \$83 ;
   wire [4:0] \$84 ;
-  wire [4:0] \$85 ;
+  wire [7:0] \$85 ;
   wire [7:0] \$86 ;
-  wire [7:0] \$87 ;
-  wire \$88 ;
-  wire [11:0] \$89 ;
+  wire \$87 ;
+  wire [11:0] \$88 ;
+  wire \$89 ;
   wire [7:0] \$9 ;
-  wire \$90 ;
+  wire [11:0] \$90 ;
   wire [11:0] \$91 ;
-  wire [11:0] \$92 ;
+  wire \$92 ;
   wire \$93 ;
-  wire \$94 ;
-  wire [11:0] \$95 ;
-  wire \$96 ;
+  wire [11:0] \$94 ;
+  wire \$95 ;
+  wire [11:0] \$96 ;
   wire [11:0] \$97 ;
-  wire [11:0] \$98 ;
-  wire \$99 ;
+  wire \$98 ;
+  wire [11:0] \$99 ;
   input advance;
   wire advance;
   input \begin ;
@@ -8637,9 +8634,7 @@ module \biss_master.decoder.field_ends (rst, error_bit, words, crc_widths, recei
   wire [6:0] \following_ends.lc_end_m1 ;
   wire [6:0] \following_ends.nenw_end_m1 ;
   wire [6:0] \following_ends.word_end_m1 ;
-  wire following_word;
-  input index;
-  wire index;
+  reg [1:0] following_word = 2'h1;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -8670,242 +8665,259 @@ module \biss_master.decoder.field_ends (rst, error_bit, words, crc_widths, recei
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$1  = index + 2'h2;
-  assign following_word = \begin  ? 1'h1 : \$1 [0];
-  assign \$2  = words[5:0] + 1'h1;
-  assign \$3  = words[5:0] + 7'h7f;
-  assign \$5  = words[5:0] + \$4 ;
-  assign \$7  = words[5:0] + \$6 ;
-  assign \$9  = \$8  + crc_widths[4:0];
-  assign \$10  = words[5:0] + \$9 [6:0];
-  assign \$11  = | words[5:0];
-  assign \$13  = words[5:0] + \$12 ;
-  assign \$14  = ! \$13 ;
-  assign \$16  = words[5:0] + \$15 ;
-  assign \$17  = | \$16 ;
-  assign \$18  = \$14  & \$17 ;
-  assign \$19  = ! following_word;
-  assign \$20  = following_word ? 12'h000 : words[11:0];
-  assign \$22  = \$21  ? words[23:12] : 12'h000;
-  assign \$23  = \$20  | \$22 ;
-  assign \$24  = \$23 [5:0] + 1'h1;
-  assign \$25  = ! following_word;
-  assign \$26  = following_word ? 12'h000 : words[11:0];
-  assign \$28  = \$27  ? words[23:12] : 12'h000;
-  assign \$29  = \$26  | \$28 ;
-  assign \$30  = \$29 [5:0] + 7'h7f;
-  assign \$31  = ! following_word;
-  assign \$32  = following_word ? 12'h000 : words[11:0];
-  assign \$34  = \$33  ? words[23:12] : 12'h000;
-  assign \$35  = \$32  | \$34 ;
-  assign \$36  = ! following_word;
-  assign \$37  = following_word ? 12'h000 : words[11:0];
-  assign \$39  = \$38  ? words[23:12] : 12'h000;
-  assign \$40  = \$37  | \$39 ;
-  assign \$41  = ! following_word;
-  assign \$42  = following_word ? 12'h000 : words[11:0];
-  assign \$44  = \$43  ? words[23:12] : 12'h000;
-  assign \$45  = \$42  | \$44 ;
-  assign \$47  = \$35 [5:0] + \$46 ;
-  assign \$48  = ! following_word;
-  assign \$49  = following_word ? 12'h000 : words[11:0];
-  assign \$51  = \$50  ? words[23:12] : 12'h000;
-  assign \$52  = \$49  | \$51 ;
-  assign \$53  = ! following_word;
-  assign \$54  = following_word ? 12'h000 : words[11:0];
-  assign \$56  = \$55  ? words[23:12] : 12'h000;
-  assign \$57  = \$54  | \$56 ;
-  assign \$58  = ! following_word;
-  assign \$59  = following_word ? 12'h000 : words[11:0];
-  assign \$61  = \$60  ? words[23:12] : 12'h000;
-  assign \$62  = \$59  | \$61 ;
-  assign \$64  = \$52 [5:0] + \$63 ;
-  assign \$65  = ! following_word;
-  assign \$66  = following_word ? 12'h000 : words[11:0];
-  assign \$68  = \$67  ? words[23:12] : 12'h000;
-  assign \$69  = \$66  | \$68 ;
-  assign \$70  = ! following_word;
-  assign \$71  = following_word ? 12'h000 : words[11:0];
-  assign \$73  = \$72  ? words[23:12] : 12'h000;
-  assign \$74  = \$71  | \$73 ;
-  assign \$75  = ! following_word;
-  assign \$76  = following_word ? 12'h000 : words[11:0];
-  assign \$78  = \$77  ? words[23:12] : 12'h000;
-  assign \$79  = \$76  | \$78 ;
-  assign \$81  = ! following_word;
-  assign \$82  = following_word ? 5'h00 : crc_widths[4:0];
-  assign \$84  = \$83  ? crc_widths[9:5] : 5'h00;
-  assign \$85  = \$82  | \$84 ;
-  assign \$86  = \$80  + \$85 ;
-  assign \$87  = \$69 [5:0] + \$86 [6:0];
-  assign \$88  = ! following_word;
-  assign \$89  = following_word ? 12'h000 : words[11:0];
-  assign \$91  = \$90  ? words[23:12] : 12'h000;
-  assign \$92  = \$89  | \$91 ;
-  assign \$93  = | \$92 [5:0];
-  assign \$94  = ! following_word;
-  assign \$95  = following_word ? 12'h000 : words[11:0];
-  assign \$97  = \$96  ? words[23:12] : 12'h000;
-  assign \$98  = \$95  | \$97 ;
-  assign \$99  = ! following_word;
-  assign \$100  = following_word ? 12'h000 : words[11:0];
-  assign \$102  = \$101  ? words[23:12] : 12'h000;
-  assign \$103  = \$100  | \$102 ;
-  assign \$104  = ! following_word;
-  assign \$105  = following_word ? 12'h000 : words[11:0];
-  assign \$107  = \$106  ? words[23:12] : 12'h000;
-  assign \$108  = \$105  | \$107 ;
-  assign \$110  = \$98 [5:0] + \$109 ;
-  assign \$111  = ! \$110 ;
-  assign \$112  = ! following_word;
-  assign \$113  = following_word ? 12'h000 : words[11:0];
-  assign \$115  = \$114  ? words[23:12] : 12'h000;
-  assign \$116  = \$113  | \$115 ;
-  assign \$117  = ! following_word;
-  assign \$118  = following_word ? 12'h000 : words[11:0];
-  assign \$120  = \$119  ? words[23:12] : 12'h000;
-  assign \$121  = \$118  | \$120 ;
-  assign \$122  = ! following_word;
-  assign \$123  = following_word ? 12'h000 : words[11:0];
-  assign \$125  = \$124  ? words[23:12] : 12'h000;
-  assign \$126  = \$123  | \$125 ;
-  assign \$128  = \$116 [5:0] + \$127 ;
-  assign \$129  = | \$128 ;
-  assign \$130  = \$111  & \$129 ;
-  assign \$131  = ! following_word;
-  assign \$132  = following_word ? 12'h000 : words[11:0];
-  assign \$134  = \$133  ? words[23:12] : 12'h000;
-  assign \$135  = \$132  | \$134 ;
-  assign \$136  = \$135 [5:0] + 1'h1;
-  assign \$137  = ! following_word;
-  assign \$138  = following_word ? 12'h000 : words[11:0];
-  assign \$140  = \$139  ? words[23:12] : 12'h000;
-  assign \$141  = \$138  | \$140 ;
-  assign \$142  = \$141 [5:0] + 7'h7f;
-  assign \$143  = ! following_word;
-  assign \$144  = following_word ? 12'h000 : words[11:0];
-  assign \$146  = \$145  ? words[23:12] : 12'h000;
-  assign \$147  = \$144  | \$146 ;
-  assign \$148  = ! following_word;
-  assign \$149  = following_word ? 12'h000 : words[11:0];
-  assign \$151  = \$150  ? words[23:12] : 12'h000;
-  assign \$152  = \$149  | \$151 ;
-  assign \$153  = ! following_word;
-  assign \$154  = following_word ? 12'h000 : words[11:0];
-  assign \$156  = \$155  ? words[23:12] : 12'h000;
-  assign \$157  = \$154  | \$156 ;
-  assign \$159  = \$147 [5:0] + \$158 ;
-  assign \$160  = ! following_word;
-  assign \$161  = following_word ? 12'h000 : words[11:0];
-  assign \$163  = \$162  ? words[23:12] : 12'h000;
-  assign \$164  = \$161  | \$163 ;
-  assign \$165  = ! following_word;
-  assign \$166  = following_word ? 12'h000 : words[11:0];
-  assign \$168  = \$167  ? words[23:12] : 12'h000;
-  assign \$169  = \$166  | \$168 ;
-  assign \$170  = ! following_word;
-  assign \$171  = following_word ? 12'h000 : words[11:0];
-  assign \$173  = \$172  ? words[23:12] : 12'h000;
-  assign \$174  = \$171  | \$173 ;
-  assign \$176  = \$164 [5:0] + \$175 ;
-  assign \$177  = ! following_word;
-  assign \$178  = following_word ? 12'h000 : words[11:0];
-  assign \$180  = \$179  ? words[23:12] : 12'h000;
-  assign \$181  = \$178  | \$180 ;
-  assign \$182  = ! following_word;
-  assign \$183  = following_word ? 12'h000 : words[11:0];
-  assign \$185  = \$184  ? words[23:12] : 12'h000;
-  assign \$186  = \$183  | \$185 ;
-  assign \$187  = ! following_word;
-  assign \$188  = following_word ? 12'h000 : words[11:0];
-  assign \$190  = \$189  ? words[23:12] : 12'h000;
-  assign \$191  = \$188  | \$190 ;
-  assign \$193  = ! following_word;
-  assign \$194  = following_word ? 5'h00 : crc_widths[4:0];
-  assign \$196  = \$195  ? crc_widths[9:5] : 5'h00;
-  assign \$197  = \$194  | \$196 ;
-  assign \$198  = \$192  + \$197 ;
-  assign \$199  = \$181 [5:0] + \$198 [6:0];
-  assign \$200  = ! following_word;
-  assign \$201  = following_word ? 12'h000 : words[11:0];
-  assign \$203  = \$202  ? words[23:12] : 12'h000;
-  assign \$204  = \$201  | \$203 ;
-  assign \$205  = | \$204 [5:0];
-  assign \$206  = ! following_word;
-  assign \$207  = following_word ? 12'h000 : words[11:0];
-  assign \$209  = \$208  ? words[23:12] : 12'h000;
-  assign \$210  = \$207  | \$209 ;
-  assign \$211  = ! following_word;
-  assign \$212  = following_word ? 12'h000 : words[11:0];
-  assign \$214  = \$213  ? words[23:12] : 12'h000;
-  assign \$215  = \$212  | \$214 ;
-  assign \$216  = ! following_word;
-  assign \$217  = following_word ? 12'h000 : words[11:0];
-  assign \$219  = \$218  ? words[23:12] : 12'h000;
-  assign \$220  = \$217  | \$219 ;
-  assign \$222  = \$210 [5:0] + \$221 ;
-  assign \$223  = ! \$222 ;
-  assign \$224  = ! following_word;
-  assign \$225  = following_word ? 12'h000 : words[11:0];
-  assign \$227  = \$226  ? words[23:12] : 12'h000;
-  assign \$228  = \$225  | \$227 ;
-  assign \$229  = ! following_word;
-  assign \$230  = following_word ? 12'h000 : words[11:0];
-  assign \$232  = \$231  ? words[23:12] : 12'h000;
-  assign \$233  = \$230  | \$232 ;
-  assign \$234  = ! following_word;
-  assign \$235  = following_word ? 12'h000 : words[11:0];
-  assign \$237  = \$236  ? words[23:12] : 12'h000;
-  assign \$238  = \$235  | \$237 ;
-  assign \$240  = \$228 [5:0] + \$239 ;
-  assign \$241  = | \$240 ;
-  assign \$242  = \$223  & \$241 ;
+  assign \$1  = words[5:0] + 1'h1;
+  assign \$2  = words[5:0] + 7'h7f;
+  assign \$4  = words[5:0] + \$3 ;
+  assign \$6  = words[5:0] + \$5 ;
+  assign \$8  = \$7  + crc_widths[4:0];
+  assign \$9  = words[5:0] + \$8 [6:0];
+  assign \$10  = | words[5:0];
+  assign \$12  = words[5:0] + \$11 ;
+  assign \$13  = ! \$12 ;
+  assign \$15  = words[5:0] + \$14 ;
+  assign \$16  = | \$15 ;
+  assign \$17  = \$13  & \$16 ;
+  assign \$18  = ! following_word;
+  assign \$19  = \$18  ? words[11:0] : 12'h000;
+  assign \$20  = following_word == 1'h1;
+  assign \$21  = \$20  ? words[23:12] : 12'h000;
+  assign \$22  = \$19  | \$21 ;
+  assign \$23  = \$22 [5:0] + 1'h1;
+  assign \$24  = ! following_word;
+  assign \$25  = \$24  ? words[11:0] : 12'h000;
+  assign \$26  = following_word == 1'h1;
+  assign \$27  = \$26  ? words[23:12] : 12'h000;
+  assign \$28  = \$25  | \$27 ;
+  assign \$29  = \$28 [5:0] + 7'h7f;
+  assign \$30  = ! following_word;
+  assign \$31  = \$30  ? words[11:0] : 12'h000;
+  assign \$32  = following_word == 1'h1;
+  assign \$33  = \$32  ? words[23:12] : 12'h000;
+  assign \$34  = \$31  | \$33 ;
+  assign \$35  = ! following_word;
+  assign \$36  = \$35  ? words[11:0] : 12'h000;
+  assign \$37  = following_word == 1'h1;
+  assign \$38  = \$37  ? words[23:12] : 12'h000;
+  assign \$39  = \$36  | \$38 ;
+  assign \$40  = ! following_word;
+  assign \$41  = \$40  ? words[11:0] : 12'h000;
+  assign \$42  = following_word == 1'h1;
+  assign \$43  = \$42  ? words[23:12] : 12'h000;
+  assign \$44  = \$41  | \$43 ;
+  assign \$46  = \$34 [5:0] + \$45 ;
+  assign \$47  = ! following_word;
+  assign \$48  = \$47  ? words[11:0] : 12'h000;
+  assign \$49  = following_word == 1'h1;
+  assign \$50  = \$49  ? words[23:12] : 12'h000;
+  assign \$51  = \$48  | \$50 ;
+  assign \$52  = ! following_word;
+  assign \$53  = \$52  ? words[11:0] : 12'h000;
+  assign \$54  = following_word == 1'h1;
+  assign \$55  = \$54  ? words[23:12] : 12'h000;
+  assign \$56  = \$53  | \$55 ;
+  assign \$57  = ! following_word;
+  assign \$58  = \$57  ? words[11:0] : 12'h000;
+  assign \$59  = following_word == 1'h1;
+  assign \$60  = \$59  ? words[23:12] : 12'h000;
+  assign \$61  = \$58  | \$60 ;
+  assign \$63  = \$51 [5:0] + \$62 ;
+  assign \$64  = ! following_word;
+  assign \$65  = \$64  ? words[11:0] : 12'h000;
+  assign \$66  = following_word == 1'h1;
+  assign \$67  = \$66  ? words[23:12] : 12'h000;
+  assign \$68  = \$65  | \$67 ;
+  assign \$69  = ! following_word;
+  assign \$70  = \$69  ? words[11:0] : 12'h000;
+  assign \$71  = following_word == 1'h1;
+  assign \$72  = \$71  ? words[23:12] : 12'h000;
+  assign \$73  = \$70  | \$72 ;
+  assign \$74  = ! following_word;
+  assign \$75  = \$74  ? words[11:0] : 12'h000;
+  assign \$76  = following_word == 1'h1;
+  assign \$77  = \$76  ? words[23:12] : 12'h000;
+  assign \$78  = \$75  | \$77 ;
+  assign \$80  = ! following_word;
+  assign \$81  = \$80  ? crc_widths[4:0] : 5'h00;
+  assign \$82  = following_word == 1'h1;
+  assign \$83  = \$82  ? crc_widths[9:5] : 5'h00;
+  assign \$84  = \$81  | \$83 ;
+  assign \$85  = \$79  + \$84 ;
+  assign \$86  = \$68 [5:0] + \$85 [6:0];
+  assign \$87  = ! following_word;
+  assign \$88  = \$87  ? words[11:0] : 12'h000;
+  assign \$89  = following_word == 1'h1;
+  assign \$90  = \$89  ? words[23:12] : 12'h000;
+  assign \$91  = \$88  | \$90 ;
+  assign \$92  = | \$91 [5:0];
+  assign \$93  = ! following_word;
+  assign \$94  = \$93  ? words[11:0] : 12'h000;
+  assign \$95  = following_word == 1'h1;
+  assign \$96  = \$95  ? words[23:12] : 12'h000;
+  assign \$97  = \$94  | \$96 ;
+  assign \$98  = ! following_word;
+  assign \$99  = \$98  ? words[11:0] : 12'h000;
+  assign \$100  = following_word == 1'h1;
+  assign \$101  = \$100  ? words[23:12] : 12'h000;
+  assign \$102  = \$99  | \$101 ;
+  assign \$103  = ! following_word;
+  assign \$104  = \$103  ? words[11:0] : 12'h000;
+  assign \$105  = following_word == 1'h1;
+  assign \$106  = \$105  ? words[23:12] : 12'h000;
+  assign \$107  = \$104  | \$106 ;
+  assign \$109  = \$97 [5:0] + \$108 ;
+  assign \$110  = ! \$109 ;
+  assign \$111  = ! following_word;
+  assign \$112  = \$111  ? words[11:0] : 12'h000;
+  assign \$113  = following_word == 1'h1;
+  assign \$114  = \$113  ? words[23:12] : 12'h000;
+  assign \$115  = \$112  | \$114 ;
+  assign \$116  = ! following_word;
+  assign \$117  = \$116  ? words[11:0] : 12'h000;
+  assign \$118  = following_word == 1'h1;
+  assign \$119  = \$118  ? words[23:12] : 12'h000;
+  assign \$120  = \$117  | \$119 ;
+  assign \$121  = ! following_word;
+  assign \$122  = \$121  ? words[11:0] : 12'h000;
+  assign \$123  = following_word == 1'h1;
+  assign \$124  = \$123  ? words[23:12] : 12'h000;
+  assign \$125  = \$122  | \$124 ;
+  assign \$127  = \$115 [5:0] + \$126 ;
+  assign \$128  = | \$127 ;
+  assign \$129  = \$110  & \$128 ;
+  assign \$130  = ! following_word;
+  assign \$131  = \$130  ? words[11:0] : 12'h000;
+  assign \$132  = following_word == 1'h1;
+  assign \$133  = \$132  ? words[23:12] : 12'h000;
+  assign \$134  = \$131  | \$133 ;
+  assign \$135  = \$134 [5:0] + 1'h1;
+  assign \$136  = ! following_word;
+  assign \$137  = \$136  ? words[11:0] : 12'h000;
+  assign \$138  = following_word == 1'h1;
+  assign \$139  = \$138  ? words[23:12] : 12'h000;
+  assign \$140  = \$137  | \$139 ;
+  assign \$141  = \$140 [5:0] + 7'h7f;
+  assign \$142  = ! following_word;
+  assign \$143  = \$142  ? words[11:0] : 12'h000;
+  assign \$144  = following_word == 1'h1;
+  assign \$145  = \$144  ? words[23:12] : 12'h000;
+  assign \$146  = \$143  | \$145 ;
+  assign \$147  = ! following_word;
+  assign \$148  = \$147  ? words[11:0] : 12'h000;
+  assign \$149  = following_word == 1'h1;
+  assign \$150  = \$149  ? words[23:12] : 12'h000;
+  assign \$151  = \$148  | \$150 ;
+  assign \$152  = ! following_word;
+  assign \$153  = \$152  ? words[11:0] : 12'h000;
+  assign \$154  = following_word == 1'h1;
+  assign \$155  = \$154  ? words[23:12] : 12'h000;
+  assign \$156  = \$153  | \$155 ;
+  assign \$158  = \$146 [5:0] + \$157 ;
+  assign \$159  = ! following_word;
+  assign \$160  = \$159  ? words[11:0] : 12'h000;
+  assign \$161  = following_word == 1'h1;
+  assign \$162  = \$161  ? words[23:12] : 12'h000;
+  assign \$163  = \$160  | \$162 ;
+  assign \$164  = ! following_word;
+  assign \$165  = \$164  ? words[11:0] : 12'h000;
+  assign \$166  = following_word == 1'h1;
+  assign \$167  = \$166  ? words[23:12] : 12'h000;
+  assign \$168  = \$165  | \$167 ;
+  assign \$169  = ! following_word;
+  assign \$170  = \$169  ? words[11:0] : 12'h000;
+  assign \$171  = following_word == 1'h1;
+  assign \$172  = \$171  ? words[23:12] : 12'h000;
+  assign \$173  = \$170  | \$172 ;
+  assign \$175  = \$163 [5:0] + \$174 ;
+  assign \$176  = ! following_word;
+  assign \$177  = \$176  ? words[11:0] : 12'h000;
+  assign \$178  = following_word == 1'h1;
+  assign \$179  = \$178  ? words[23:12] : 12'h000;
+  assign \$180  = \$177  | \$179 ;
+  assign \$181  = ! following_word;
+  assign \$182  = \$181  ? words[11:0] : 12'h000;
+  assign \$183  = following_word == 1'h1;
+  assign \$184  = \$183  ? words[23:12] : 12'h000;
+  assign \$185  = \$182  | \$184 ;
+  assign \$186  = ! following_word;
+  assign \$187  = \$186  ? words[11:0] : 12'h000;
+  assign \$188  = following_word == 1'h1;
+  assign \$189  = \$188  ? words[23:12] : 12'h000;
+  assign \$190  = \$187  | \$189 ;
+  assign \$192  = ! following_word;
+  assign \$193  = \$192  ? crc_widths[4:0] : 5'h00;
+  assign \$194  = following_word == 1'h1;
+  assign \$195  = \$194  ? crc_widths[9:5] : 5'h00;
+  assign \$196  = \$193  | \$195 ;
+  assign \$197  = \$191  + \$196 ;
+  assign \$198  = \$180 [5:0] + \$197 [6:0];
+  assign \$199  = ! following_word;
+  assign \$200  = \$199  ? words[11:0] : 12'h000;
+  assign \$201  = following_word == 1'h1;
+  assign \$202  = \$201  ? words[23:12] : 12'h000;
+  assign \$203  = \$200  | \$202 ;
+  assign \$204  = | \$203 [5:0];
+  assign \$205  = ! following_word;
+  assign \$206  = \$205  ? words[11:0] : 12'h000;
+  assign \$207  = following_word == 1'h1;
+  assign \$208  = \$207  ? words[23:12] : 12'h000;
+  assign \$209  = \$206  | \$208 ;
+  assign \$210  = ! following_word;
+  assign \$211  = \$210  ? words[11:0] : 12'h000;
+  assign \$212  = following_word == 1'h1;
+  assign \$213  = \$212  ? words[23:12] : 12'h000;
+  assign \$214  = \$211  | \$213 ;
+  assign \$215  = ! following_word;
+  assign \$216  = \$215  ? words[11:0] : 12'h000;
+  assign \$217  = following_word == 1'h1;
+  assign \$218  = \$217  ? words[23:12] : 12'h000;
+  assign \$219  = \$216  | \$218 ;
+  assign \$221  = \$209 [5:0] + \$220 ;
+  assign \$222  = ! \$221 ;
+  assign \$223  = ! following_word;
+  assign \$224  = \$223  ? words[11:0] : 12'h000;
+  assign \$225  = following_word == 1'h1;
+  assign \$226  = \$225  ? words[23:12] : 12'h000;
+  assign \$227  = \$224  | \$226 ;
+  assign \$228  = ! following_word;
+  assign \$229  = \$228  ? words[11:0] : 12'h000;
+  assign \$230  = following_word == 1'h1;
+  assign \$231  = \$230  ? words[23:12] : 12'h000;
+  assign \$232  = \$229  | \$231 ;
+  assign \$233  = ! following_word;
+  assign \$234  = \$233  ? words[11:0] : 12'h000;
+  assign \$235  = following_word == 1'h1;
+  assign \$236  = \$235  ? words[23:12] : 12'h000;
+  assign \$237  = \$234  | \$236 ;
+  assign \$239  = \$227 [5:0] + \$238 ;
+  assign \$240  = | \$239 ;
+  assign \$241  = \$222  & \$240 ;
+  assign \$242  = following_word + 1'h1;
   always @(posedge clk)
     current <= \$243 ;
   always @(posedge clk)
     following <= \$244 ;
+  always @(posedge clk)
+    following_word <= \$245 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$4  = 7'h7f;
+          \$3  = 7'h7f;
       3'h1:
-          \$4  = 7'h01;
+          \$3  = 7'h01;
       3'h2:
-          \$4  = 7'h7f;
+          \$3  = 7'h7f;
       3'h3:
-          \$4  = 7'h01;
+          \$3  = 7'h01;
       3'h4:
-          \$4  = 7'h00;
+          \$3  = 7'h00;
       3'h5:
-          \$4  = 7'h02;
+          \$3  = 7'h02;
       3'h6:
-          \$4  = 7'h00;
+          \$3  = 7'h00;
       3'h7:
-          \$4  = 7'h02;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ error_bit, words[7:6] })
-      3'h0:
-          \$6  = 7'h7f;
-      3'h1:
-          \$6  = 7'h01;
-      3'h2:
-          \$6  = 7'h05;
-      3'h3:
-          \$6  = 7'h07;
-      3'h4:
-          \$6  = 7'h00;
-      3'h5:
-          \$6  = 7'h02;
-      3'h6:
-          \$6  = 7'h06;
-      3'h7:
-          \$6  = 7'h08;
+          \$3  = 7'h02;
     endcase
   end
   always @* begin
@@ -8913,21 +8925,21 @@ module \biss_master.decoder.field_ends (rst, error_bit, words, crc_widths, recei
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$8  = 7'h7f;
+          \$5  = 7'h7f;
       3'h1:
-          \$8  = 7'h01;
+          \$5  = 7'h01;
       3'h2:
-          \$8  = 7'h05;
+          \$5  = 7'h05;
       3'h3:
-          \$8  = 7'h07;
+          \$5  = 7'h07;
       3'h4:
-          \$8  = 7'h00;
+          \$5  = 7'h00;
       3'h5:
-          \$8  = 7'h02;
+          \$5  = 7'h02;
       3'h6:
-          \$8  = 7'h06;
+          \$5  = 7'h06;
       3'h7:
-          \$8  = 7'h08;
+          \$5  = 7'h08;
     endcase
   end
   always @* begin
@@ -8935,21 +8947,21 @@ module \biss_master.decoder.field_ends (rst, error_bit, words, crc_widths, recei
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$12  = 2'h0;
+          \$7  = 7'h7f;
       3'h1:
-          \$12  = 2'h2;
+          \$7  = 7'h01;
       3'h2:
-          \$12  = 2'h0;
+          \$7  = 7'h05;
       3'h3:
-          \$12  = 2'h2;
+          \$7  = 7'h07;
       3'h4:
-          \$12  = 2'h1;
+          \$7  = 7'h00;
       3'h5:
-          \$12  = 2'h3;
+          \$7  = 7'h02;
       3'h6:
-          \$12  = 2'h1;
+          \$7  = 7'h06;
       3'h7:
-          \$12  = 2'h3;
+          \$7  = 7'h08;
     endcase
   end
   always @* begin
@@ -8957,174 +8969,196 @@ module \biss_master.decoder.field_ends (rst, error_bit, words, crc_widths, recei
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$15  = 4'h0;
+          \$11  = 2'h0;
       3'h1:
-          \$15  = 4'h2;
+          \$11  = 2'h2;
       3'h2:
-          \$15  = 4'h6;
+          \$11  = 2'h0;
       3'h3:
-          \$15  = 4'h8;
+          \$11  = 2'h2;
       3'h4:
-          \$15  = 4'h1;
+          \$11  = 2'h1;
       3'h5:
-          \$15  = 4'h3;
+          \$11  = 2'h3;
       3'h6:
-          \$15  = 4'h7;
+          \$11  = 2'h1;
       3'h7:
-          \$15  = 4'h9;
+          \$11  = 2'h3;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$45 [7], \$40 [6] })
-      2'h0:
-          \$46  = 7'h7f;
-      2'h1:
-          \$46  = 7'h01;
-      2'h2:
-          \$46  = 7'h7f;
-      2'h3:
-          \$46  = 7'h01;
+    casez ({ error_bit, words[7:6] })
+      3'h0:
+          \$14  = 4'h0;
+      3'h1:
+          \$14  = 4'h2;
+      3'h2:
+          \$14  = 4'h6;
+      3'h3:
+          \$14  = 4'h8;
+      3'h4:
+          \$14  = 4'h1;
+      3'h5:
+          \$14  = 4'h3;
+      3'h6:
+          \$14  = 4'h7;
+      3'h7:
+          \$14  = 4'h9;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$62 [7], \$57 [6] })
+    casez ({ \$44 [7], \$39 [6] })
       2'h0:
-          \$63  = 7'h7f;
+          \$45  = 7'h7f;
       2'h1:
-          \$63  = 7'h01;
+          \$45  = 7'h01;
       2'h2:
-          \$63  = 7'h05;
+          \$45  = 7'h7f;
       2'h3:
-          \$63  = 7'h07;
+          \$45  = 7'h01;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$79 [7], \$74 [6] })
+    casez ({ \$61 [7], \$56 [6] })
       2'h0:
-          \$80  = 7'h7f;
+          \$62  = 7'h7f;
       2'h1:
-          \$80  = 7'h01;
+          \$62  = 7'h01;
       2'h2:
-          \$80  = 7'h05;
+          \$62  = 7'h05;
       2'h3:
-          \$80  = 7'h07;
+          \$62  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$108 [7], \$103 [6] })
+    casez ({ \$78 [7], \$73 [6] })
       2'h0:
-          \$109  = 2'h0;
+          \$79  = 7'h7f;
       2'h1:
-          \$109  = 2'h2;
+          \$79  = 7'h01;
       2'h2:
-          \$109  = 2'h0;
+          \$79  = 7'h05;
       2'h3:
-          \$109  = 2'h2;
+          \$79  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$126 [7], \$121 [6] })
+    casez ({ \$107 [7], \$102 [6] })
       2'h0:
-          \$127  = 4'h0;
+          \$108  = 2'h0;
       2'h1:
-          \$127  = 4'h2;
+          \$108  = 2'h2;
       2'h2:
-          \$127  = 4'h6;
+          \$108  = 2'h0;
       2'h3:
-          \$127  = 4'h8;
+          \$108  = 2'h2;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$157 [7], \$152 [6] })
+    casez ({ \$125 [7], \$120 [6] })
       2'h0:
-          \$158  = 7'h7f;
+          \$126  = 4'h0;
       2'h1:
-          \$158  = 7'h01;
+          \$126  = 4'h2;
       2'h2:
-          \$158  = 7'h7f;
+          \$126  = 4'h6;
       2'h3:
-          \$158  = 7'h01;
+          \$126  = 4'h8;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$174 [7], \$169 [6] })
+    casez ({ \$156 [7], \$151 [6] })
       2'h0:
-          \$175  = 7'h7f;
+          \$157  = 7'h7f;
       2'h1:
-          \$175  = 7'h01;
+          \$157  = 7'h01;
       2'h2:
-          \$175  = 7'h05;
+          \$157  = 7'h7f;
       2'h3:
-          \$175  = 7'h07;
+          \$157  = 7'h01;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$191 [7], \$186 [6] })
+    casez ({ \$173 [7], \$168 [6] })
       2'h0:
-          \$192  = 7'h7f;
+          \$174  = 7'h7f;
       2'h1:
-          \$192  = 7'h01;
+          \$174  = 7'h01;
       2'h2:
-          \$192  = 7'h05;
+          \$174  = 7'h05;
       2'h3:
-          \$192  = 7'h07;
+          \$174  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$220 [7], \$215 [6] })
+    casez ({ \$190 [7], \$185 [6] })
       2'h0:
-          \$221  = 2'h0;
+          \$191  = 7'h7f;
       2'h1:
-          \$221  = 2'h2;
+          \$191  = 7'h01;
       2'h2:
-          \$221  = 2'h0;
+          \$191  = 7'h05;
       2'h3:
-          \$221  = 2'h2;
+          \$191  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$238 [7], \$233 [6] })
+    casez ({ \$219 [7], \$214 [6] })
       2'h0:
-          \$239  = 4'h0;
+          \$220  = 2'h0;
       2'h1:
-          \$239  = 4'h2;
+          \$220  = 2'h2;
       2'h2:
-          \$239  = 4'h6;
+          \$220  = 2'h0;
       2'h3:
-          \$239  = 4'h8;
+          \$220  = 2'h2;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$237 [7], \$232 [6] })
+      2'h0:
+          \$238  = 4'h0;
+      2'h1:
+          \$238  = 4'h2;
+      2'h2:
+          \$238  = 4'h6;
+      2'h3:
+          \$238  = 4'h8;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$243  = current;
     if (\begin ) begin
-      \$243 [6:0] = \$2 ;
-      \$243 [13:7] = \$3 [6:0];
-      \$243 [20:14] = \$5 [6:0];
-      \$243 [27:21] = \$7 [6:0];
-      \$243 [34:28] = \$10 [6:0];
-      \$243 [35] = \$11 ;
-      \$243 [36] = \$18 ;
+      \$243 [6:0] = \$1 ;
+      \$243 [13:7] = \$2 [6:0];
+      \$243 [20:14] = \$4 [6:0];
+      \$243 [27:21] = \$6 [6:0];
+      \$243 [34:28] = \$9 [6:0];
+      \$243 [35] = \$10 ;
+      \$243 [36] = \$17 ;
     end else if (advance) begin
       \$243  = following;
     end
@@ -9133,21 +9167,36 @@ module \biss_master.decoder.field_ends (rst, error_bit, words, crc_widths, recei
     if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$244  = following;
     if (\begin ) begin
-      \$244 [6:0] = \$24 ;
-      \$244 [13:7] = \$30 [6:0];
-      \$244 [20:14] = \$47 [6:0];
-      \$244 [27:21] = \$64 [6:0];
-      \$244 [34:28] = \$87 [6:0];
-      \$244 [35] = \$93 ;
-      \$244 [36] = \$130 ;
+      \$244 [6:0] = \$23 ;
+      \$244 [13:7] = \$29 [6:0];
+      \$244 [20:14] = \$46 [6:0];
+      \$244 [27:21] = \$63 [6:0];
+      \$244 [34:28] = \$86 [6:0];
+      \$244 [35] = \$92 ;
+      \$244 [36] = \$129 ;
     end else if (advance) begin
-      \$244 [6:0] = \$136 ;
-      \$244 [13:7] = \$142 [6:0];
-      \$244 [20:14] = \$159 [6:0];
-      \$244 [27:21] = \$176 [6:0];
-      \$244 [34:28] = \$199 [6:0];
-      \$244 [35] = \$205 ;
-      \$244 [36] = \$242 ;
+      \$244 [6:0] = \$135 ;
+      \$244 [13:7] = \$141 [6:0];
+      \$244 [20:14] = \$158 [6:0];
+      \$244 [27:21] = \$175 [6:0];
+      \$244 [34:28] = \$198 [6:0];
+      \$244 [35] = \$204 ;
+      \$244 [36] = \$241 ;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    \$245  = following_word;
+    if (\begin ) begin
+      \$245  = 2'h2;
+    end else if (advance) begin
+      \$245  = \$242 [1:0];
+    end
+    if (receiver_clear) begin
+      \$245  = 2'h1;
+    end
+    if (rst) begin
+      \$245  = 2'h1;
     end
   end
   assign current_ends = current;
@@ -9196,44 +9245,6 @@ module \biss_master.decoder.field_ends (rst, error_bit, words, crc_widths, recei
   assign \words[1].signed  = words[23];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign \$21  = following_word;
-  assign \$27  = following_word;
-  assign \$33  = following_word;
-  assign \$38  = following_word;
-  assign \$43  = following_word;
-  assign \$50  = following_word;
-  assign \$55  = following_word;
-  assign \$60  = following_word;
-  assign \$67  = following_word;
-  assign \$72  = following_word;
-  assign \$77  = following_word;
-  assign \$83  = following_word;
-  assign \$90  = following_word;
-  assign \$96  = following_word;
-  assign \$101  = following_word;
-  assign \$106  = following_word;
-  assign \$114  = following_word;
-  assign \$119  = following_word;
-  assign \$124  = following_word;
-  assign \$133  = following_word;
-  assign \$139  = following_word;
-  assign \$145  = following_word;
-  assign \$150  = following_word;
-  assign \$155  = following_word;
-  assign \$162  = following_word;
-  assign \$167  = following_word;
-  assign \$172  = following_word;
-  assign \$179  = following_word;
-  assign \$184  = following_word;
-  assign \$189  = following_word;
-  assign \$195  = following_word;
-  assign \$202  = following_word;
-  assign \$208  = following_word;
-  assign \$213  = following_word;
-  assign \$218  = following_word;
-  assign \$226  = following_word;
-  assign \$231  = following_word;
-  assign \$236  = following_word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -10089,7 +10100,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_stop (rst, words, \port$5303$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master.ma_stop (rst, words, \port$5304$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10178,8 +10189,8 @@ module \biss_master.ma_stop (rst, words, \port$5303$199 , ssi, ssi_error, ssi_do
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$5303$199 ;
-  wire \port$5303$199 ;
+  input \port$5304$199 ;
+  wire \port$5304$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -10299,7 +10310,7 @@ module \biss_master.ma_stop (rst, words, \port$5303$199 , ssi, ssi_error, ssi_do
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$5303$199  : 1'h0;
+  assign \$13  = \$12  ? \port$5304$199  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -10467,7 +10478,7 @@ module \biss_master.ma_stop (rst, words, \port$5303$199 , ssi, ssi_error, ssi_do
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$5303$199 , 1'h1 };
+  assign enables = { \port$5304$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -12607,7 +12618,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$5303$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$5304$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -13190,8 +13201,8 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$5303$259 ;
-  wire [12:0] \port$5303$259 ;
+  input [12:0] \port$5304$259 ;
+  wire [12:0] \port$5304$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -13214,7 +13225,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$5303$259 [12:1] + 1'h1;
+  assign \$460  = \port$5304$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -13790,7 +13801,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$5303$259 [0]),
+    .clear_high(\port$5304$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -13933,7 +13944,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$5303$259 [0]) begin
+            if (\port$5304$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -14018,7 +14029,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$5303$259 [0]) begin
+            if (\port$5304$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -14057,7 +14068,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$5303$259 [12:1] };
+            \$534  = { 1'h0, \port$5304$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -14442,11 +14453,11 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$5303$259 [12:1] };
-  assign fixed = \port$5303$259 [0];
+  assign fixed_delay = { 1'h0, \port$5304$259 [12:1] };
+  assign fixed = \port$5304$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$5303$259 [0];
+  assign clear_high = \port$5304$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -16967,7 +16978,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5291$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5292$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -17009,8 +17020,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5291$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5291$0 ;
-  wire \port$5291$0 ;
+  input \port$5292$0 ;
+  wire \port$5292$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -17024,9 +17035,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5291$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5291$0  };
-  assign \$2  = { lc[4:0], \port$5291$0  } == last;
-  assign \$3  = { lc[4:0], \port$5291$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5292$0  };
+  assign \$2  = { lc[4:0], \port$5292$0  } == last;
+  assign \$3  = { lc[4:0], \port$5292$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -17136,7 +17147,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5291$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5291$0  };
+  assign lc_next = { lc[4:0], \port$5292$0  };
   assign zero = is_zero;
 endmodule
 
@@ -19944,7 +19955,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$4723$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master.verdict (lc_skip_seen, noisy, \port$4724$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
@@ -20122,8 +20133,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$4723$0 , lc_check, lc_re
   wire noisy;
   output passed;
   wire passed;
-  output \port$4723$0 ;
-  wire \port$4723$0 ;
+  output \port$4724$0 ;
+  wire \port$4724$0 ;
   output report;
   wire report;
   input report_frame;
@@ -20241,7 +20252,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$4723$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4723$0  = \$2 ;
+  assign \port$4724$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

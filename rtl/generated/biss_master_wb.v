@@ -41,9 +41,16 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire bus__r_en;
   wire bus__r_load;
   wire [10:0] bus__w_addr;
+  wire bus__w_busy;
   wire [31:0] bus__w_data;
   wire bus__w_en;
   wire [3:0] bus__w_strb;
+  wire [1:0] cfg_free;
+  wire \cfg_free$457 ;
+  wire \cfg_free$867 ;
+  wire cfg_hold;
+  wire [1:0] \cfg_hold$455 ;
+  wire \cfg_hold$866 ;
   wire ch0__abort_cycle;
   wire ch0__busy;
   wire ch0__ca_abort;
@@ -463,435 +470,436 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$864 ;
+  wire [1:0] \irq$872 ;
   wire ma;
-  wire \ma$860 ;
+  wire \ma$868 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$455 ;
+  wire \regs__abort_cycle$461 ;
   wire regs__busy;
-  wire \regs__busy$458 ;
+  wire \regs__busy$464 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$459 ;
+  wire \regs__ca_abort$465 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$461 ;
+  wire [6:0] \regs__ca_address$467 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$464 ;
+  wire \regs__ca_busy$470 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$466 ;
+  wire [6:0] \regs__ca_bytes_done$472 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$467 ;
+  wire [6:0] \regs__ca_count$473 ;
   wire regs__ca_done;
-  wire \regs__ca_done$470 ;
+  wire \regs__ca_done$476 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$471 ;
+  wire [3:0] \regs__ca_rbuf_addr$477 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$474 ;
+  wire [31:0] \regs__ca_rbuf_data$480 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$475 ;
+  wire \regs__ca_rbuf_en$481 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$477 ;
+  wire [2:0] \regs__ca_slave_id$483 ;
   wire regs__ca_start;
-  wire \regs__ca_start$479 ;
+  wire \regs__ca_start$485 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$482 ;
+  wire [2:0] \regs__ca_status$488 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$483 ;
+  wire [3:0] \regs__ca_wbuf_addr$489 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$485 ;
+  wire [31:0] \regs__ca_wbuf_data$491 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$487 ;
+  wire [3:0] \regs__ca_wbuf_en$493 ;
   wire regs__ca_write;
-  wire \regs__ca_write$489 ;
+  wire \regs__ca_write$495 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$492 ;
+  wire \regs__cap_counters$498 ;
   wire [6:0] regs__cap_data_bits_w0;
-  wire [6:0] \regs__cap_data_bits_w0$494 ;
+  wire [6:0] \regs__cap_data_bits_w0$500 ;
   wire [6:0] regs__cap_data_bits_w1;
-  wire [6:0] \regs__cap_data_bits_w1$496 ;
+  wire [6:0] \regs__cap_data_bits_w1$502 ;
   wire [6:0] regs__cap_data_bits_w2;
-  wire [6:0] \regs__cap_data_bits_w2$498 ;
+  wire [6:0] \regs__cap_data_bits_w2$504 ;
   wire [6:0] regs__cap_data_bits_w3;
-  wire [6:0] \regs__cap_data_bits_w3$500 ;
+  wire [6:0] \regs__cap_data_bits_w3$506 ;
   wire [6:0] regs__cap_data_bits_w4;
-  wire [6:0] \regs__cap_data_bits_w4$502 ;
+  wire [6:0] \regs__cap_data_bits_w4$508 ;
   wire [6:0] regs__cap_data_bits_w5;
-  wire [6:0] \regs__cap_data_bits_w5$504 ;
+  wire [6:0] \regs__cap_data_bits_w5$510 ;
   wire [6:0] regs__cap_data_bits_w6;
-  wire [6:0] \regs__cap_data_bits_w6$506 ;
+  wire [6:0] \regs__cap_data_bits_w6$512 ;
   wire [6:0] regs__cap_data_bits_w7;
-  wire [6:0] \regs__cap_data_bits_w7$508 ;
+  wire [6:0] \regs__cap_data_bits_w7$514 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$510 ;
+  wire \regs__cap_register_access$516 ;
   wire regs__cap_ssi;
-  wire \regs__cap_ssi$512 ;
+  wire \regs__cap_ssi$518 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$514 ;
+  wire [5:0] \regs__cap_timer_width$520 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$516 ;
+  wire \regs__cap_timestamp$522 ;
   wire [3:0] regs__cap_words;
-  wire [3:0] \regs__cap_words$518 ;
+  wire [3:0] \regs__cap_words$524 ;
   wire regs__cds;
-  wire \regs__cds$520 ;
+  wire \regs__cds$526 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$521 ;
+  wire [23:0] \regs__cfg_ack_limit$527 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$523 ;
+  wire [23:0] \regs__cfg_break_time$529 ;
   wire [3:0] regs__cfg_confirm_frames;
-  wire [3:0] \regs__cfg_confirm_frames$525 ;
+  wire [3:0] \regs__cfg_confirm_frames$531 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$527 ;
+  wire [11:0] \regs__cfg_delay_limit$533 ;
   wire [3:0] regs__cfg_delay_tolerance;
-  wire [3:0] \regs__cfg_delay_tolerance$529 ;
+  wire [3:0] \regs__cfg_delay_tolerance$535 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$531 ;
+  wire \regs__cfg_end_check$537 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$533 ;
+  wire [15:0] \regs__cfg_ma_half_period$539 ;
   wire [3:0] regs__cfg_noise_limit;
-  wire [3:0] \regs__cfg_noise_limit$535 ;
+  wire [3:0] \regs__cfg_noise_limit$541 ;
   wire [11:0] regs__cfg_quiet_time;
-  wire [11:0] \regs__cfg_quiet_time$537 ;
+  wire [11:0] \regs__cfg_quiet_time$543 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$539 ;
+  wire [23:0] \regs__cfg_request_period$545 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$541 ;
+  wire \regs__cfg_spw_check$547 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$543 ;
+  wire [7:0] \regs__cfg_spw_tolerance$549 ;
   wire regs__cfg_ssi;
-  wire \regs__cfg_ssi$545 ;
+  wire \regs__cfg_ssi$551 ;
   wire [11:0] regs__cfg_ssi_delay;
-  wire [11:0] \regs__cfg_ssi_delay$547 ;
+  wire [11:0] \regs__cfg_ssi_delay$553 ;
   wire regs__cfg_ssi_double;
-  wire \regs__cfg_ssi_double$549 ;
+  wire \regs__cfg_ssi_double$555 ;
   wire regs__cfg_ssi_error;
-  wire \regs__cfg_ssi_error$551 ;
+  wire \regs__cfg_ssi_error$557 ;
   wire regs__cfg_ssi_error_low;
-  wire \regs__cfg_ssi_error_low$553 ;
+  wire \regs__cfg_ssi_error_low$559 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$555 ;
+  wire [23:0] \regs__cfg_timeout_limit$561 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$557 ;
+  wire [1:0] \regs__cfg_w0_crc$563 ;
   wire regs__cfg_w0_crc_inverted;
-  wire \regs__cfg_w0_crc_inverted$559 ;
+  wire \regs__cfg_w0_crc_inverted$565 ;
   wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] \regs__cfg_w0_crc_poly$561 ;
+  wire [15:0] \regs__cfg_w0_crc_poly$567 ;
   wire [15:0] regs__cfg_w0_crc_start;
-  wire [15:0] \regs__cfg_w0_crc_start$563 ;
+  wire [15:0] \regs__cfg_w0_crc_start$569 ;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [4:0] \regs__cfg_w0_crc_width$565 ;
+  wire [4:0] \regs__cfg_w0_crc_width$571 ;
   wire [6:0] regs__cfg_w0_data_bits;
-  wire [6:0] \regs__cfg_w0_data_bits$567 ;
+  wire [6:0] \regs__cfg_w0_data_bits$573 ;
   wire regs__cfg_w0_gray;
-  wire \regs__cfg_w0_gray$569 ;
+  wire \regs__cfg_w0_gray$575 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$571 ;
+  wire \regs__cfg_w0_lc$577 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$573 ;
+  wire \regs__cfg_w0_nenw$579 ;
   wire regs__cfg_w0_signed;
-  wire \regs__cfg_w0_signed$575 ;
+  wire \regs__cfg_w0_signed$581 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$577 ;
+  wire [1:0] \regs__cfg_w1_crc$583 ;
   wire regs__cfg_w1_crc_inverted;
-  wire \regs__cfg_w1_crc_inverted$579 ;
+  wire \regs__cfg_w1_crc_inverted$585 ;
   wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] \regs__cfg_w1_crc_poly$581 ;
+  wire [15:0] \regs__cfg_w1_crc_poly$587 ;
   wire [15:0] regs__cfg_w1_crc_start;
-  wire [15:0] \regs__cfg_w1_crc_start$583 ;
+  wire [15:0] \regs__cfg_w1_crc_start$589 ;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [4:0] \regs__cfg_w1_crc_width$585 ;
+  wire [4:0] \regs__cfg_w1_crc_width$591 ;
   wire [6:0] regs__cfg_w1_data_bits;
-  wire [6:0] \regs__cfg_w1_data_bits$587 ;
+  wire [6:0] \regs__cfg_w1_data_bits$593 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$589 ;
+  wire \regs__cfg_w1_enable$595 ;
   wire regs__cfg_w1_gray;
-  wire \regs__cfg_w1_gray$591 ;
+  wire \regs__cfg_w1_gray$597 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$593 ;
+  wire \regs__cfg_w1_lc$599 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$595 ;
+  wire \regs__cfg_w1_nenw$601 ;
   wire regs__cfg_w1_signed;
-  wire \regs__cfg_w1_signed$597 ;
+  wire \regs__cfg_w1_signed$603 ;
   wire [1:0] regs__cfg_w2_crc;
-  wire [1:0] \regs__cfg_w2_crc$599 ;
+  wire [1:0] \regs__cfg_w2_crc$605 ;
   wire regs__cfg_w2_crc_inverted;
-  wire \regs__cfg_w2_crc_inverted$601 ;
+  wire \regs__cfg_w2_crc_inverted$607 ;
   wire [15:0] regs__cfg_w2_crc_poly;
-  wire [15:0] \regs__cfg_w2_crc_poly$603 ;
+  wire [15:0] \regs__cfg_w2_crc_poly$609 ;
   wire [15:0] regs__cfg_w2_crc_start;
-  wire [15:0] \regs__cfg_w2_crc_start$605 ;
+  wire [15:0] \regs__cfg_w2_crc_start$611 ;
   wire [4:0] regs__cfg_w2_crc_width;
-  wire [4:0] \regs__cfg_w2_crc_width$607 ;
+  wire [4:0] \regs__cfg_w2_crc_width$613 ;
   wire [6:0] regs__cfg_w2_data_bits;
-  wire [6:0] \regs__cfg_w2_data_bits$609 ;
+  wire [6:0] \regs__cfg_w2_data_bits$615 ;
   wire regs__cfg_w2_enable;
-  wire \regs__cfg_w2_enable$611 ;
+  wire \regs__cfg_w2_enable$617 ;
   wire regs__cfg_w2_gray;
-  wire \regs__cfg_w2_gray$613 ;
+  wire \regs__cfg_w2_gray$619 ;
   wire regs__cfg_w2_lc;
-  wire \regs__cfg_w2_lc$615 ;
+  wire \regs__cfg_w2_lc$621 ;
   wire regs__cfg_w2_nenw;
-  wire \regs__cfg_w2_nenw$617 ;
+  wire \regs__cfg_w2_nenw$623 ;
   wire regs__cfg_w2_signed;
-  wire \regs__cfg_w2_signed$619 ;
+  wire \regs__cfg_w2_signed$625 ;
   wire [1:0] regs__cfg_w3_crc;
-  wire [1:0] \regs__cfg_w3_crc$621 ;
+  wire [1:0] \regs__cfg_w3_crc$627 ;
   wire regs__cfg_w3_crc_inverted;
-  wire \regs__cfg_w3_crc_inverted$623 ;
+  wire \regs__cfg_w3_crc_inverted$629 ;
   wire [15:0] regs__cfg_w3_crc_poly;
-  wire [15:0] \regs__cfg_w3_crc_poly$625 ;
+  wire [15:0] \regs__cfg_w3_crc_poly$631 ;
   wire [15:0] regs__cfg_w3_crc_start;
-  wire [15:0] \regs__cfg_w3_crc_start$627 ;
+  wire [15:0] \regs__cfg_w3_crc_start$633 ;
   wire [4:0] regs__cfg_w3_crc_width;
-  wire [4:0] \regs__cfg_w3_crc_width$629 ;
+  wire [4:0] \regs__cfg_w3_crc_width$635 ;
   wire [6:0] regs__cfg_w3_data_bits;
-  wire [6:0] \regs__cfg_w3_data_bits$631 ;
+  wire [6:0] \regs__cfg_w3_data_bits$637 ;
   wire regs__cfg_w3_enable;
-  wire \regs__cfg_w3_enable$633 ;
+  wire \regs__cfg_w3_enable$639 ;
   wire regs__cfg_w3_gray;
-  wire \regs__cfg_w3_gray$635 ;
+  wire \regs__cfg_w3_gray$641 ;
   wire regs__cfg_w3_lc;
-  wire \regs__cfg_w3_lc$637 ;
+  wire \regs__cfg_w3_lc$643 ;
   wire regs__cfg_w3_nenw;
-  wire \regs__cfg_w3_nenw$639 ;
+  wire \regs__cfg_w3_nenw$645 ;
   wire regs__cfg_w3_signed;
-  wire \regs__cfg_w3_signed$641 ;
+  wire \regs__cfg_w3_signed$647 ;
   wire [1:0] regs__cfg_w4_crc;
-  wire [1:0] \regs__cfg_w4_crc$643 ;
+  wire [1:0] \regs__cfg_w4_crc$649 ;
   wire regs__cfg_w4_crc_inverted;
-  wire \regs__cfg_w4_crc_inverted$645 ;
+  wire \regs__cfg_w4_crc_inverted$651 ;
   wire [15:0] regs__cfg_w4_crc_poly;
-  wire [15:0] \regs__cfg_w4_crc_poly$647 ;
+  wire [15:0] \regs__cfg_w4_crc_poly$653 ;
   wire [15:0] regs__cfg_w4_crc_start;
-  wire [15:0] \regs__cfg_w4_crc_start$649 ;
+  wire [15:0] \regs__cfg_w4_crc_start$655 ;
   wire [4:0] regs__cfg_w4_crc_width;
-  wire [4:0] \regs__cfg_w4_crc_width$651 ;
+  wire [4:0] \regs__cfg_w4_crc_width$657 ;
   wire [6:0] regs__cfg_w4_data_bits;
-  wire [6:0] \regs__cfg_w4_data_bits$653 ;
+  wire [6:0] \regs__cfg_w4_data_bits$659 ;
   wire regs__cfg_w4_enable;
-  wire \regs__cfg_w4_enable$655 ;
+  wire \regs__cfg_w4_enable$661 ;
   wire regs__cfg_w4_gray;
-  wire \regs__cfg_w4_gray$657 ;
+  wire \regs__cfg_w4_gray$663 ;
   wire regs__cfg_w4_lc;
-  wire \regs__cfg_w4_lc$659 ;
+  wire \regs__cfg_w4_lc$665 ;
   wire regs__cfg_w4_nenw;
-  wire \regs__cfg_w4_nenw$661 ;
+  wire \regs__cfg_w4_nenw$667 ;
   wire regs__cfg_w4_signed;
-  wire \regs__cfg_w4_signed$663 ;
+  wire \regs__cfg_w4_signed$669 ;
   wire [1:0] regs__cfg_w5_crc;
-  wire [1:0] \regs__cfg_w5_crc$665 ;
+  wire [1:0] \regs__cfg_w5_crc$671 ;
   wire regs__cfg_w5_crc_inverted;
-  wire \regs__cfg_w5_crc_inverted$667 ;
+  wire \regs__cfg_w5_crc_inverted$673 ;
   wire [15:0] regs__cfg_w5_crc_poly;
-  wire [15:0] \regs__cfg_w5_crc_poly$669 ;
+  wire [15:0] \regs__cfg_w5_crc_poly$675 ;
   wire [15:0] regs__cfg_w5_crc_start;
-  wire [15:0] \regs__cfg_w5_crc_start$671 ;
+  wire [15:0] \regs__cfg_w5_crc_start$677 ;
   wire [4:0] regs__cfg_w5_crc_width;
-  wire [4:0] \regs__cfg_w5_crc_width$673 ;
+  wire [4:0] \regs__cfg_w5_crc_width$679 ;
   wire [6:0] regs__cfg_w5_data_bits;
-  wire [6:0] \regs__cfg_w5_data_bits$675 ;
+  wire [6:0] \regs__cfg_w5_data_bits$681 ;
   wire regs__cfg_w5_enable;
-  wire \regs__cfg_w5_enable$677 ;
+  wire \regs__cfg_w5_enable$683 ;
   wire regs__cfg_w5_gray;
-  wire \regs__cfg_w5_gray$679 ;
+  wire \regs__cfg_w5_gray$685 ;
   wire regs__cfg_w5_lc;
-  wire \regs__cfg_w5_lc$681 ;
+  wire \regs__cfg_w5_lc$687 ;
   wire regs__cfg_w5_nenw;
-  wire \regs__cfg_w5_nenw$683 ;
+  wire \regs__cfg_w5_nenw$689 ;
   wire regs__cfg_w5_signed;
-  wire \regs__cfg_w5_signed$685 ;
+  wire \regs__cfg_w5_signed$691 ;
   wire [1:0] regs__cfg_w6_crc;
-  wire [1:0] \regs__cfg_w6_crc$687 ;
+  wire [1:0] \regs__cfg_w6_crc$693 ;
   wire regs__cfg_w6_crc_inverted;
-  wire \regs__cfg_w6_crc_inverted$689 ;
+  wire \regs__cfg_w6_crc_inverted$695 ;
   wire [15:0] regs__cfg_w6_crc_poly;
-  wire [15:0] \regs__cfg_w6_crc_poly$691 ;
+  wire [15:0] \regs__cfg_w6_crc_poly$697 ;
   wire [15:0] regs__cfg_w6_crc_start;
-  wire [15:0] \regs__cfg_w6_crc_start$693 ;
+  wire [15:0] \regs__cfg_w6_crc_start$699 ;
   wire [4:0] regs__cfg_w6_crc_width;
-  wire [4:0] \regs__cfg_w6_crc_width$695 ;
+  wire [4:0] \regs__cfg_w6_crc_width$701 ;
   wire [6:0] regs__cfg_w6_data_bits;
-  wire [6:0] \regs__cfg_w6_data_bits$697 ;
+  wire [6:0] \regs__cfg_w6_data_bits$703 ;
   wire regs__cfg_w6_enable;
-  wire \regs__cfg_w6_enable$699 ;
+  wire \regs__cfg_w6_enable$705 ;
   wire regs__cfg_w6_gray;
-  wire \regs__cfg_w6_gray$701 ;
+  wire \regs__cfg_w6_gray$707 ;
   wire regs__cfg_w6_lc;
-  wire \regs__cfg_w6_lc$703 ;
+  wire \regs__cfg_w6_lc$709 ;
   wire regs__cfg_w6_nenw;
-  wire \regs__cfg_w6_nenw$705 ;
+  wire \regs__cfg_w6_nenw$711 ;
   wire regs__cfg_w6_signed;
-  wire \regs__cfg_w6_signed$707 ;
+  wire \regs__cfg_w6_signed$713 ;
   wire [1:0] regs__cfg_w7_crc;
-  wire [1:0] \regs__cfg_w7_crc$709 ;
+  wire [1:0] \regs__cfg_w7_crc$715 ;
   wire regs__cfg_w7_crc_inverted;
-  wire \regs__cfg_w7_crc_inverted$711 ;
+  wire \regs__cfg_w7_crc_inverted$717 ;
   wire [15:0] regs__cfg_w7_crc_poly;
-  wire [15:0] \regs__cfg_w7_crc_poly$713 ;
+  wire [15:0] \regs__cfg_w7_crc_poly$719 ;
   wire [15:0] regs__cfg_w7_crc_start;
-  wire [15:0] \regs__cfg_w7_crc_start$715 ;
+  wire [15:0] \regs__cfg_w7_crc_start$721 ;
   wire [4:0] regs__cfg_w7_crc_width;
-  wire [4:0] \regs__cfg_w7_crc_width$717 ;
+  wire [4:0] \regs__cfg_w7_crc_width$723 ;
   wire [6:0] regs__cfg_w7_data_bits;
-  wire [6:0] \regs__cfg_w7_data_bits$719 ;
+  wire [6:0] \regs__cfg_w7_data_bits$725 ;
   wire regs__cfg_w7_enable;
-  wire \regs__cfg_w7_enable$721 ;
+  wire \regs__cfg_w7_enable$727 ;
   wire regs__cfg_w7_gray;
-  wire \regs__cfg_w7_gray$723 ;
+  wire \regs__cfg_w7_gray$729 ;
   wire regs__cfg_w7_lc;
-  wire \regs__cfg_w7_lc$725 ;
+  wire \regs__cfg_w7_lc$731 ;
   wire regs__cfg_w7_nenw;
-  wire \regs__cfg_w7_nenw$727 ;
+  wire \regs__cfg_w7_nenw$733 ;
   wire regs__cfg_w7_signed;
-  wire \regs__cfg_w7_signed$729 ;
+  wire \regs__cfg_w7_signed$735 ;
   wire [3:0] regs__chain_addr;
-  wire [3:0] \regs__chain_addr$731 ;
+  wire [3:0] \regs__chain_addr$737 ;
   wire [31:0] regs__chain_data;
-  wire [31:0] \regs__chain_data$734 ;
+  wire [31:0] \regs__chain_data$740 ;
   wire regs__chain_en;
-  wire \regs__chain_en$735 ;
+  wire \regs__chain_en$741 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$737 ;
+  wire \regs__clear_counters$743 ;
   wire regs__config_error;
-  wire \regs__config_error$740 ;
+  wire \regs__config_error$746 ;
   wire [2:0] regs__count_addr;
-  wire [2:0] \regs__count_addr$741 ;
+  wire [2:0] \regs__count_addr$747 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$744 ;
+  wire [15:0] \regs__count_ca_aborted$750 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$746 ;
+  wire [15:0] \regs__count_ca_crc4_error$752 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$748 ;
+  wire [15:0] \regs__count_ca_data_fault$754 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$750 ;
+  wire [15:0] \regs__count_ca_no_answer$756 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$752 ;
+  wire [15:0] \regs__count_ca_refused$758 ;
   wire [15:0] regs__count_crc_word2;
-  wire [15:0] \regs__count_crc_word2$754 ;
+  wire [15:0] \regs__count_crc_word2$760 ;
   wire [15:0] regs__count_crc_word3;
-  wire [15:0] \regs__count_crc_word3$756 ;
+  wire [15:0] \regs__count_crc_word3$762 ;
   wire [15:0] regs__count_crc_word4;
-  wire [15:0] \regs__count_crc_word4$758 ;
+  wire [15:0] \regs__count_crc_word4$764 ;
   wire [15:0] regs__count_crc_word5;
-  wire [15:0] \regs__count_crc_word5$760 ;
+  wire [15:0] \regs__count_crc_word5$766 ;
   wire [15:0] regs__count_crc_word6;
-  wire [15:0] \regs__count_crc_word6$762 ;
+  wire [15:0] \regs__count_crc_word6$768 ;
   wire [15:0] regs__count_crc_word7;
-  wire [15:0] \regs__count_crc_word7$764 ;
+  wire [15:0] \regs__count_crc_word7$770 ;
   wire [31:0] regs__count_data;
-  wire [31:0] \regs__count_data$766 ;
+  wire [31:0] \regs__count_data$772 ;
   wire regs__count_en;
-  wire \regs__count_en$767 ;
+  wire \regs__count_en$773 ;
   wire regs__delay_settled;
-  wire \regs__delay_settled$770 ;
+  wire \regs__delay_settled$776 ;
   wire [7:0] regs__delay_spread;
-  wire [7:0] \regs__delay_spread$772 ;
+  wire [7:0] \regs__delay_spread$778 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$774 ;
+  wire [15:0] \regs__done_count$780 ;
   wire regs__frame_done;
-  wire \regs__frame_done$776 ;
+  wire \regs__frame_done$782 ;
   wire regs__frame_error;
-  wire \regs__frame_error$778 ;
+  wire \regs__frame_error$784 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$780 ;
+  wire [5:0] \regs__lc$786 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$782 ;
+  wire \regs__lc_repeat$788 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$784 ;
+  wire \regs__lc_skip$790 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$786 ;
+  wire \regs__lc_zero$792 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$788 ;
+  wire [12:0] \regs__line_delay$794 ;
   wire [3:0] regs__noise_events;
-  wire [3:0] \regs__noise_events$790 ;
+  wire [3:0] \regs__noise_events$796 ;
   wire regs__periodic;
-  wire \regs__periodic$791 ;
+  wire \regs__periodic$797 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__r_load;
   wire [15:0] regs__result_updates;
-  wire [15:0] \regs__result_updates$794 ;
+  wire [15:0] \regs__result_updates$800 ;
   wire [12:0] regs__settled_delay;
-  wire [12:0] \regs__settled_delay$796 ;
+  wire [12:0] \regs__settled_delay$802 ;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$798 ;
+  wire \regs__spw_mismatch$804 ;
   wire regs__start;
-  wire \regs__start$799 ;
+  wire \regs__start$805 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$802 ;
+  wire [3:0] \regs__status$808 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$804 ;
+  wire [31:0] \regs__timestamp$810 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$805 ;
+  wire \regs__trigger_enable$811 ;
   wire [10:0] regs__w_addr;
+  wire regs__w_busy;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$808 ;
+  wire \regs__word0_crc_ok$814 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$810 ;
+  wire \regs__word0_ne$816 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$812 ;
+  wire \regs__word0_nw$818 ;
   wire [63:0] regs__word0_position;
-  wire [63:0] \regs__word0_position$814 ;
+  wire [63:0] \regs__word0_position$820 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$816 ;
+  wire \regs__word1_crc_ok$822 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$818 ;
+  wire \regs__word1_ne$824 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$820 ;
+  wire \regs__word1_nw$826 ;
   wire [63:0] regs__word1_position;
-  wire [63:0] \regs__word1_position$822 ;
+  wire [63:0] \regs__word1_position$828 ;
   wire regs__word2_crc_ok;
-  wire \regs__word2_crc_ok$824 ;
+  wire \regs__word2_crc_ok$830 ;
   wire regs__word2_ne;
-  wire \regs__word2_ne$826 ;
+  wire \regs__word2_ne$832 ;
   wire regs__word2_nw;
-  wire \regs__word2_nw$828 ;
+  wire \regs__word2_nw$834 ;
   wire regs__word3_crc_ok;
-  wire \regs__word3_crc_ok$830 ;
+  wire \regs__word3_crc_ok$836 ;
   wire regs__word3_ne;
-  wire \regs__word3_ne$832 ;
+  wire \regs__word3_ne$838 ;
   wire regs__word3_nw;
-  wire \regs__word3_nw$834 ;
+  wire \regs__word3_nw$840 ;
   wire regs__word4_crc_ok;
-  wire \regs__word4_crc_ok$836 ;
+  wire \regs__word4_crc_ok$842 ;
   wire regs__word4_ne;
-  wire \regs__word4_ne$838 ;
+  wire \regs__word4_ne$844 ;
   wire regs__word4_nw;
-  wire \regs__word4_nw$840 ;
+  wire \regs__word4_nw$846 ;
   wire regs__word5_crc_ok;
-  wire \regs__word5_crc_ok$842 ;
+  wire \regs__word5_crc_ok$848 ;
   wire regs__word5_ne;
-  wire \regs__word5_ne$844 ;
+  wire \regs__word5_ne$850 ;
   wire regs__word5_nw;
-  wire \regs__word5_nw$846 ;
+  wire \regs__word5_nw$852 ;
   wire regs__word6_crc_ok;
-  wire \regs__word6_crc_ok$848 ;
+  wire \regs__word6_crc_ok$854 ;
   wire regs__word6_ne;
-  wire \regs__word6_ne$850 ;
+  wire \regs__word6_ne$856 ;
   wire regs__word6_nw;
-  wire \regs__word6_nw$852 ;
+  wire \regs__word6_nw$858 ;
   wire regs__word7_crc_ok;
-  wire \regs__word7_crc_ok$854 ;
+  wire \regs__word7_crc_ok$860 ;
   wire regs__word7_ne;
-  wire \regs__word7_ne$856 ;
+  wire \regs__word7_ne$862 ;
   wire regs__word7_nw;
-  wire \regs__word7_nw$858 ;
+  wire \regs__word7_nw$864 ;
   input rst;
   wire rst;
   wire slo;
-  wire \slo$861 ;
+  wire \slo$869 ;
   reg [31:0] time_now = 32'd0;
   (* init = 32'd0 *)
-  wire [31:0] \time_now$454 ;
+  wire [31:0] \time_now$460 ;
   (* init = 32'd0 *)
-  wire [31:0] \time_now$46 ;
+  wire [31:0] \time_now$48 ;
   input trigger;
   wire trigger;
-  wire \trigger$42 ;
-  wire \trigger$451 ;
-  wire \trigger$859 ;
+  wire \trigger$44 ;
+  wire \trigger$453 ;
+  wire \trigger$865 ;
   reg trigger_in = 1'h0;
   wire wb__ack;
   wire [10:0] wb__adr;
@@ -922,7 +930,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire wb_we;
   assign \$1  = ~ trigger_in;
   assign \$2  = trigger & \$1 ;
-  assign \trigger$42  = glob__trigger | \$2 ;
+  assign \trigger$44  = glob__trigger | \$2 ;
   assign \$3  = time_now + 1'h1;
   assign \$4  = | { \$9 , \$8  };
   always @(posedge clk)
@@ -936,9 +944,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .bus__r_en(bus__r_en),
     .bus__r_load(bus__r_load),
     .bus__w_addr(wb_adr),
+    .bus__w_busy(regs__w_busy),
     .bus__w_data(wb_dat_w),
     .bus__w_en(bus__w_en),
     .bus__w_strb(wb_sel),
+    .cfg_free(cfg_free),
+    .cfg_hold(\cfg_hold$455 ),
     .ch0__busy(ch0__busy),
     .ch0__ca_busy(ch0__ca_busy),
     .ch0__ca_done(ch0__ca_done),
@@ -959,7 +970,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch0_ca_request_address(regs__ca_address),
     .ch0_ca_request_count(regs__ca_count),
     .ch0_ca_request_slave_id(regs__ca_slave_id),
-    .\ch0_ca_request_write$149 (regs__ca_write),
+    .\ch0_ca_request_write$152 (regs__ca_write),
     .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
     .ch0_cfg_break_break_time(regs__cfg_break_time),
     .ch0_cfg_checks_confirm_frames(regs__cfg_confirm_frames),
@@ -1009,83 +1020,84 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$475 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$487 ),
-    .ch1__chain_en(\regs__chain_en$735 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$481 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$493 ),
+    .ch1__chain_en(\regs__chain_en$741 ),
     .ch1__config_error(ch1__config_error),
     .ch1__count_data(ch1__count_data),
-    .ch1__count_en(\regs__count_en$767 ),
+    .ch1__count_en(\regs__count_en$773 ),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_done(ch1__frame_done),
     .ch1__frame_error(ch1__frame_error),
     .ch1__result_updates(ch1__result_updates),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$459 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$479 ),
-    .ch1_ca_request_address(\regs__ca_address$461 ),
-    .ch1_ca_request_count(\regs__ca_count$467 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$477 ),
-    .\ch1_ca_request_write$430 (\regs__ca_write$489 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$521 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$523 ),
-    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$525 ),
-    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$529 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$531 ),
-    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$535 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$541 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$543 ),
-    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$563 ),
-    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$559 ),
-    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$561 ),
-    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$565 ),
-    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$583 ),
-    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$579 ),
-    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$581 ),
-    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$585 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$527 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$533 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$539 ),
-    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$537 ),
-    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$545 ),
-    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$547 ),
-    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$549 ),
-    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$551 ),
-    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$553 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$555 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$557 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$567 ),
-    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$569 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$571 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$573 ),
-    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$575 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$577 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$587 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$589 ),
-    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$591 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$593 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$595 ),
-    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$597 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$455 ),
-    .ch1_ctrl_clear_counters(\regs__clear_counters$737 ),
-    .ch1_ctrl_periodic(\regs__periodic$791 ),
-    .ch1_ctrl_start(\regs__start$799 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$805 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$465 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$485 ),
+    .ch1_ca_request_address(\regs__ca_address$467 ),
+    .ch1_ca_request_count(\regs__ca_count$473 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$483 ),
+    .\ch1_ca_request_write$435 (\regs__ca_write$495 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$527 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$529 ),
+    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$531 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$535 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$537 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$541 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$547 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$549 ),
+    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$569 ),
+    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$565 ),
+    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$567 ),
+    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$571 ),
+    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$589 ),
+    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$585 ),
+    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$587 ),
+    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$591 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$533 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$539 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$545 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$543 ),
+    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$551 ),
+    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$553 ),
+    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$555 ),
+    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$557 ),
+    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$559 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$561 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$563 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$573 ),
+    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$575 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$577 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$579 ),
+    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$581 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$583 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$593 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$595 ),
+    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$597 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$599 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$601 ),
+    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$603 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$461 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$743 ),
+    .ch1_ctrl_periodic(\regs__periodic$797 ),
+    .ch1_ctrl_start(\regs__start$805 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$811 ),
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$13356$0 (\$10 ),
-    .\port$13367$0 (\$11 ),
-    .\port$13444$0 (\$12 ),
-    .\port$13903$0 (\$13 ),
-    .\port$13914$0 (\$14 ),
-    .\port$13991$0 (\$15 ),
+    .\port$13541$0 (\$10 ),
+    .\port$13552$0 (\$11 ),
+    .\port$13629$0 (\$12 ),
+    .\port$14092$0 (\$13 ),
+    .\port$14103$0 (\$14 ),
+    .\port$14180$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
   \biss_master_wb.bus  bus (
     .clk(clk),
-    .pending(bus__r_load),
     .regs__r_addr(wb_adr),
     .regs__r_en(bus__r_en),
+    .regs__r_load(bus__r_load),
+    .regs__w_busy(regs__w_busy),
     .regs__w_data(wb_dat_w),
     .regs__w_en(bus__w_en),
     .regs__w_strb(wb_sel),
@@ -1115,6 +1127,8 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .cfg_delay_limit(regs__cfg_delay_limit),
     .cfg_delay_tolerance(regs__cfg_delay_tolerance),
     .cfg_end_check(regs__cfg_end_check),
+    .cfg_free(\cfg_free$457 ),
+    .cfg_hold(\cfg_hold$455 [0]),
     .cfg_ma_half_period(regs__cfg_ma_half_period),
     .cfg_noise_limit(regs__cfg_noise_limit),
     .cfg_quiet_time(regs__cfg_quiet_time),
@@ -1151,9 +1165,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$13356$0 (\$10 ),
-    .\port$13367$0 (\$11 ),
-    .\port$13444$0 (\$12 ),
+    .\port$13541$0 (\$10 ),
+    .\port$13552$0 (\$11 ),
+    .\port$13629$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1172,84 +1186,86 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .slo(ch0_slo),
     .start(regs__start),
     .time_now(time_now),
-    .\trigger$204 (\trigger$42 )
+    .\trigger$204 (\trigger$44 )
   );
   \biss_master_wb.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$459 ),
-    .ca_address(\regs__ca_address$461 ),
-    .ca_count(\regs__ca_count$467 ),
+    .ca_abort(\regs__ca_abort$465 ),
+    .ca_address(\regs__ca_address$467 ),
+    .ca_count(\regs__ca_count$473 ),
     .ca_rbuf_addr(wb_adr[3:0]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$475 ),
-    .ca_slave_id(\regs__ca_slave_id$477 ),
-    .ca_start(\regs__ca_start$479 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$481 ),
+    .ca_slave_id(\regs__ca_slave_id$483 ),
+    .ca_start(\regs__ca_start$485 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$487 ),
-    .ca_write(\regs__ca_write$489 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$521 ),
-    .cfg_break_time(\regs__cfg_break_time$523 ),
-    .cfg_confirm_frames(\regs__cfg_confirm_frames$525 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$527 ),
-    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$529 ),
-    .cfg_end_check(\regs__cfg_end_check$531 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$533 ),
-    .cfg_noise_limit(\regs__cfg_noise_limit$535 ),
-    .cfg_quiet_time(\regs__cfg_quiet_time$537 ),
-    .cfg_request_period(\regs__cfg_request_period$539 ),
-    .cfg_spw_check(\regs__cfg_spw_check$541 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$543 ),
-    .cfg_ssi(\regs__cfg_ssi$545 ),
-    .cfg_ssi_delay(\regs__cfg_ssi_delay$547 ),
-    .cfg_ssi_double(\regs__cfg_ssi_double$549 ),
-    .cfg_ssi_error(\regs__cfg_ssi_error$551 ),
-    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$553 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$555 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$557 ),
-    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$559 ),
-    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$561 ),
-    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$563 ),
-    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$565 ),
-    .cfg_w0_gray(\regs__cfg_w0_gray$569 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$571 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$573 ),
-    .cfg_w0_signed(\regs__cfg_w0_signed$575 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$577 ),
-    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$579 ),
-    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$581 ),
-    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$583 ),
-    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$585 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$589 ),
-    .cfg_w1_gray(\regs__cfg_w1_gray$591 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$593 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$595 ),
-    .cfg_w1_signed(\regs__cfg_w1_signed$597 ),
-    .clear_counters(\regs__clear_counters$737 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$493 ),
+    .ca_write(\regs__ca_write$495 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$527 ),
+    .cfg_break_time(\regs__cfg_break_time$529 ),
+    .cfg_confirm_frames(\regs__cfg_confirm_frames$531 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$533 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$535 ),
+    .cfg_end_check(\regs__cfg_end_check$537 ),
+    .cfg_free(\cfg_free$867 ),
+    .cfg_hold(\cfg_hold$455 [1]),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$539 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$541 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$543 ),
+    .cfg_request_period(\regs__cfg_request_period$545 ),
+    .cfg_spw_check(\regs__cfg_spw_check$547 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$549 ),
+    .cfg_ssi(\regs__cfg_ssi$551 ),
+    .cfg_ssi_delay(\regs__cfg_ssi_delay$553 ),
+    .cfg_ssi_double(\regs__cfg_ssi_double$555 ),
+    .cfg_ssi_error(\regs__cfg_ssi_error$557 ),
+    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$559 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$561 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$563 ),
+    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$565 ),
+    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$567 ),
+    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$569 ),
+    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$571 ),
+    .cfg_w0_gray(\regs__cfg_w0_gray$575 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$577 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$579 ),
+    .cfg_w0_signed(\regs__cfg_w0_signed$581 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$583 ),
+    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$585 ),
+    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$587 ),
+    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$589 ),
+    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$591 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$595 ),
+    .cfg_w1_gray(\regs__cfg_w1_gray$597 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$599 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$601 ),
+    .cfg_w1_signed(\regs__cfg_w1_signed$603 ),
+    .clear_counters(\regs__clear_counters$743 ),
     .clk(clk),
-    .count_en(\regs__count_en$767 ),
+    .count_en(\regs__count_en$773 ),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$791 ),
-    .\port$13903$0 (\$13 ),
-    .\port$13914$0 (\$14 ),
-    .\port$13991$0 (\$15 ),
-    .regs__abort_cycle(\regs__abort_cycle$455 ),
+    .periodic(\regs__periodic$797 ),
+    .\port$14092$0 (\$13 ),
+    .\port$14103$0 (\$14 ),
+    .\port$14180$0 (\$15 ),
+    .regs__abort_cycle(\regs__abort_cycle$461 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
     .regs__ca_rbuf_data(ch1__ca_rbuf_data),
-    .regs__cfg_w0_data_bits(\regs__cfg_w0_data_bits$567 ),
-    .regs__cfg_w1_data_bits(\regs__cfg_w1_data_bits$587 ),
+    .regs__cfg_w0_data_bits(\regs__cfg_w0_data_bits$573 ),
+    .regs__cfg_w1_data_bits(\regs__cfg_w1_data_bits$593 ),
     .regs__config_error(ch1__config_error),
     .regs__count_data(ch1__count_data),
     .regs__done_count(ch1__done_count),
     .regs__frame_done(ch1__frame_done),
     .regs__frame_error(ch1__frame_error),
     .regs__result_updates(ch1__result_updates),
-    .regs__trigger_enable(\regs__trigger_enable$805 ),
+    .regs__trigger_enable(\regs__trigger_enable$811 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$799 ),
+    .start(\regs__start$805 ),
     .time_now(time_now),
-    .\trigger$204 (\trigger$42 )
+    .\trigger$204 (\trigger$44 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
@@ -1280,6 +1296,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign regs__r_load = bus__r_load;
   assign bus__w_addr = wb_adr;
   assign regs__w_addr = wb_adr;
+  assign bus__w_busy = regs__w_busy;
   assign bus__w_data = wb_dat_w;
   assign regs__w_data = wb_dat_w;
   assign regs__w_en = bus__w_en;
@@ -1294,7 +1311,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign wb__dat_r = wb_dat_r;
   assign wb__ack = wb_ack;
   assign wb__stall = wb_stall;
-  assign \time_now$46  = time_now;
+  assign \time_now$48  = time_now;
   assign ch0__abort_cycle = regs__abort_cycle;
   assign regs__busy = ch0__busy;
   assign ch0__ca_abort = regs__ca_abort;
@@ -1633,380 +1650,475 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign regs__word7_ne = 1'h0;
   assign ch0__word7_nw = 1'h0;
   assign regs__word7_nw = 1'h0;
-  assign \trigger$451  = \trigger$42 ;
+  assign \trigger$453  = \trigger$44 ;
+  assign cfg_hold = \cfg_hold$455 [0];
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign \time_now$454  = time_now;
-  assign ch1__abort_cycle = \regs__abort_cycle$455 ;
-  assign \regs__busy$458  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$459 ;
-  assign ch1__ca_address = \regs__ca_address$461 ;
-  assign \regs__ca_busy$464  = ch1__ca_busy;
+  assign \time_now$460  = time_now;
+  assign ch1__abort_cycle = \regs__abort_cycle$461 ;
+  assign \regs__busy$464  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$465 ;
+  assign ch1__ca_address = \regs__ca_address$467 ;
+  assign \regs__ca_busy$470  = ch1__ca_busy;
   assign ch1__ca_bytes_done = \$15 [9:3];
-  assign \regs__ca_bytes_done$466  = \$15 [9:3];
-  assign ch1__ca_count = \regs__ca_count$467 ;
-  assign \regs__ca_done$470  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$471  = wb_adr[3:0];
+  assign \regs__ca_bytes_done$472  = \$15 [9:3];
+  assign ch1__ca_count = \regs__ca_count$473 ;
+  assign \regs__ca_done$476  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$477  = wb_adr[3:0];
   assign ch1__ca_rbuf_addr = wb_adr[3:0];
-  assign \regs__ca_rbuf_data$474  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$475 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$477 ;
-  assign ch1__ca_start = \regs__ca_start$479 ;
+  assign \regs__ca_rbuf_data$480  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$481 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$483 ;
+  assign ch1__ca_start = \regs__ca_start$485 ;
   assign ch1__ca_status = \$15 [2:0];
-  assign \regs__ca_status$482  = \$15 [2:0];
-  assign \regs__ca_wbuf_addr$483  = regs__ca_wbuf_addr;
+  assign \regs__ca_status$488  = \$15 [2:0];
+  assign \regs__ca_wbuf_addr$489  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$485  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$491  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$487 ;
-  assign ch1__ca_write = \regs__ca_write$489 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$493 ;
+  assign ch1__ca_write = \regs__ca_write$495 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$492  = 1'h1;
+  assign \regs__cap_counters$498  = 1'h1;
   assign ch1__cap_data_bits_w0 = 7'h37;
-  assign \regs__cap_data_bits_w0$494  = 7'h37;
+  assign \regs__cap_data_bits_w0$500  = 7'h37;
   assign ch1__cap_data_bits_w1 = 7'h28;
-  assign \regs__cap_data_bits_w1$496  = 7'h28;
+  assign \regs__cap_data_bits_w1$502  = 7'h28;
   assign ch1__cap_data_bits_w2 = 7'h00;
-  assign \regs__cap_data_bits_w2$498  = 7'h00;
+  assign \regs__cap_data_bits_w2$504  = 7'h00;
   assign ch1__cap_data_bits_w3 = 7'h00;
-  assign \regs__cap_data_bits_w3$500  = 7'h00;
+  assign \regs__cap_data_bits_w3$506  = 7'h00;
   assign ch1__cap_data_bits_w4 = 7'h00;
-  assign \regs__cap_data_bits_w4$502  = 7'h00;
+  assign \regs__cap_data_bits_w4$508  = 7'h00;
   assign ch1__cap_data_bits_w5 = 7'h00;
-  assign \regs__cap_data_bits_w5$504  = 7'h00;
+  assign \regs__cap_data_bits_w5$510  = 7'h00;
   assign ch1__cap_data_bits_w6 = 7'h00;
-  assign \regs__cap_data_bits_w6$506  = 7'h00;
+  assign \regs__cap_data_bits_w6$512  = 7'h00;
   assign ch1__cap_data_bits_w7 = 7'h00;
-  assign \regs__cap_data_bits_w7$508  = 7'h00;
+  assign \regs__cap_data_bits_w7$514  = 7'h00;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$510  = 1'h1;
+  assign \regs__cap_register_access$516  = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign \regs__cap_ssi$512  = 1'h1;
+  assign \regs__cap_ssi$518  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$514  = 6'h18;
+  assign \regs__cap_timer_width$520  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$516  = 1'h1;
+  assign \regs__cap_timestamp$522  = 1'h1;
   assign ch1__cap_words = 4'h2;
-  assign \regs__cap_words$518  = 4'h2;
+  assign \regs__cap_words$524  = 4'h2;
   assign ch1__cds = \$13 [49];
-  assign \regs__cds$520  = \$13 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$521 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$523 ;
-  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$525 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$527 ;
-  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$529 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$531 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$533 ;
-  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$535 ;
-  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$537 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$539 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$541 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$543 ;
-  assign ch1__cfg_ssi = \regs__cfg_ssi$545 ;
-  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$547 ;
-  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$549 ;
-  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$551 ;
-  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$553 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$555 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$557 ;
-  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$559 ;
-  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$561 ;
-  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$563 ;
-  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$565 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$567 ;
-  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$569 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$571 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$573 ;
-  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$575 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$577 ;
-  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$579 ;
-  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$581 ;
-  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$583 ;
-  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$585 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$587 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$589 ;
-  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$591 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$593 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$595 ;
-  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$597 ;
-  assign \regs__cfg_w2_crc$599  = 2'h0;
+  assign \regs__cds$526  = \$13 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$527 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$529 ;
+  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$531 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$533 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$535 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$537 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$539 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$541 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$543 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$545 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$547 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$549 ;
+  assign ch1__cfg_ssi = \regs__cfg_ssi$551 ;
+  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$553 ;
+  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$555 ;
+  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$557 ;
+  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$559 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$561 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$563 ;
+  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$565 ;
+  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$567 ;
+  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$569 ;
+  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$571 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$573 ;
+  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$575 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$577 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$579 ;
+  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$581 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$583 ;
+  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$585 ;
+  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$587 ;
+  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$589 ;
+  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$591 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$593 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$595 ;
+  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$597 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$599 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$601 ;
+  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$603 ;
+  assign \regs__cfg_w2_crc$605  = 2'h0;
   assign ch1__cfg_w2_crc = 2'h0;
-  assign \regs__cfg_w2_crc_inverted$601  = 1'h0;
+  assign \regs__cfg_w2_crc_inverted$607  = 1'h0;
   assign ch1__cfg_w2_crc_inverted = 1'h0;
-  assign \regs__cfg_w2_crc_poly$603  = 16'h0000;
+  assign \regs__cfg_w2_crc_poly$609  = 16'h0000;
   assign ch1__cfg_w2_crc_poly = 16'h0000;
-  assign \regs__cfg_w2_crc_start$605  = 16'h0000;
+  assign \regs__cfg_w2_crc_start$611  = 16'h0000;
   assign ch1__cfg_w2_crc_start = 16'h0000;
-  assign \regs__cfg_w2_crc_width$607  = 5'h00;
+  assign \regs__cfg_w2_crc_width$613  = 5'h00;
   assign ch1__cfg_w2_crc_width = 5'h00;
-  assign \regs__cfg_w2_data_bits$609  = 7'h00;
+  assign \regs__cfg_w2_data_bits$615  = 7'h00;
   assign ch1__cfg_w2_data_bits = 7'h00;
-  assign \regs__cfg_w2_enable$611  = 1'h0;
+  assign \regs__cfg_w2_enable$617  = 1'h0;
   assign ch1__cfg_w2_enable = 1'h0;
-  assign \regs__cfg_w2_gray$613  = 1'h0;
+  assign \regs__cfg_w2_gray$619  = 1'h0;
   assign ch1__cfg_w2_gray = 1'h0;
-  assign \regs__cfg_w2_lc$615  = 1'h0;
+  assign \regs__cfg_w2_lc$621  = 1'h0;
   assign ch1__cfg_w2_lc = 1'h0;
-  assign \regs__cfg_w2_nenw$617  = 1'h0;
+  assign \regs__cfg_w2_nenw$623  = 1'h0;
   assign ch1__cfg_w2_nenw = 1'h0;
-  assign \regs__cfg_w2_signed$619  = 1'h0;
+  assign \regs__cfg_w2_signed$625  = 1'h0;
   assign ch1__cfg_w2_signed = 1'h0;
-  assign \regs__cfg_w3_crc$621  = 2'h0;
+  assign \regs__cfg_w3_crc$627  = 2'h0;
   assign ch1__cfg_w3_crc = 2'h0;
-  assign \regs__cfg_w3_crc_inverted$623  = 1'h0;
+  assign \regs__cfg_w3_crc_inverted$629  = 1'h0;
   assign ch1__cfg_w3_crc_inverted = 1'h0;
-  assign \regs__cfg_w3_crc_poly$625  = 16'h0000;
+  assign \regs__cfg_w3_crc_poly$631  = 16'h0000;
   assign ch1__cfg_w3_crc_poly = 16'h0000;
-  assign \regs__cfg_w3_crc_start$627  = 16'h0000;
+  assign \regs__cfg_w3_crc_start$633  = 16'h0000;
   assign ch1__cfg_w3_crc_start = 16'h0000;
-  assign \regs__cfg_w3_crc_width$629  = 5'h00;
+  assign \regs__cfg_w3_crc_width$635  = 5'h00;
   assign ch1__cfg_w3_crc_width = 5'h00;
-  assign \regs__cfg_w3_data_bits$631  = 7'h00;
+  assign \regs__cfg_w3_data_bits$637  = 7'h00;
   assign ch1__cfg_w3_data_bits = 7'h00;
-  assign \regs__cfg_w3_enable$633  = 1'h0;
+  assign \regs__cfg_w3_enable$639  = 1'h0;
   assign ch1__cfg_w3_enable = 1'h0;
-  assign \regs__cfg_w3_gray$635  = 1'h0;
+  assign \regs__cfg_w3_gray$641  = 1'h0;
   assign ch1__cfg_w3_gray = 1'h0;
-  assign \regs__cfg_w3_lc$637  = 1'h0;
+  assign \regs__cfg_w3_lc$643  = 1'h0;
   assign ch1__cfg_w3_lc = 1'h0;
-  assign \regs__cfg_w3_nenw$639  = 1'h0;
+  assign \regs__cfg_w3_nenw$645  = 1'h0;
   assign ch1__cfg_w3_nenw = 1'h0;
-  assign \regs__cfg_w3_signed$641  = 1'h0;
+  assign \regs__cfg_w3_signed$647  = 1'h0;
   assign ch1__cfg_w3_signed = 1'h0;
-  assign \regs__cfg_w4_crc$643  = 2'h0;
+  assign \regs__cfg_w4_crc$649  = 2'h0;
   assign ch1__cfg_w4_crc = 2'h0;
-  assign \regs__cfg_w4_crc_inverted$645  = 1'h0;
+  assign \regs__cfg_w4_crc_inverted$651  = 1'h0;
   assign ch1__cfg_w4_crc_inverted = 1'h0;
-  assign \regs__cfg_w4_crc_poly$647  = 16'h0000;
+  assign \regs__cfg_w4_crc_poly$653  = 16'h0000;
   assign ch1__cfg_w4_crc_poly = 16'h0000;
-  assign \regs__cfg_w4_crc_start$649  = 16'h0000;
+  assign \regs__cfg_w4_crc_start$655  = 16'h0000;
   assign ch1__cfg_w4_crc_start = 16'h0000;
-  assign \regs__cfg_w4_crc_width$651  = 5'h00;
+  assign \regs__cfg_w4_crc_width$657  = 5'h00;
   assign ch1__cfg_w4_crc_width = 5'h00;
-  assign \regs__cfg_w4_data_bits$653  = 7'h00;
+  assign \regs__cfg_w4_data_bits$659  = 7'h00;
   assign ch1__cfg_w4_data_bits = 7'h00;
-  assign \regs__cfg_w4_enable$655  = 1'h0;
+  assign \regs__cfg_w4_enable$661  = 1'h0;
   assign ch1__cfg_w4_enable = 1'h0;
-  assign \regs__cfg_w4_gray$657  = 1'h0;
+  assign \regs__cfg_w4_gray$663  = 1'h0;
   assign ch1__cfg_w4_gray = 1'h0;
-  assign \regs__cfg_w4_lc$659  = 1'h0;
+  assign \regs__cfg_w4_lc$665  = 1'h0;
   assign ch1__cfg_w4_lc = 1'h0;
-  assign \regs__cfg_w4_nenw$661  = 1'h0;
+  assign \regs__cfg_w4_nenw$667  = 1'h0;
   assign ch1__cfg_w4_nenw = 1'h0;
-  assign \regs__cfg_w4_signed$663  = 1'h0;
+  assign \regs__cfg_w4_signed$669  = 1'h0;
   assign ch1__cfg_w4_signed = 1'h0;
-  assign \regs__cfg_w5_crc$665  = 2'h0;
+  assign \regs__cfg_w5_crc$671  = 2'h0;
   assign ch1__cfg_w5_crc = 2'h0;
-  assign \regs__cfg_w5_crc_inverted$667  = 1'h0;
+  assign \regs__cfg_w5_crc_inverted$673  = 1'h0;
   assign ch1__cfg_w5_crc_inverted = 1'h0;
-  assign \regs__cfg_w5_crc_poly$669  = 16'h0000;
+  assign \regs__cfg_w5_crc_poly$675  = 16'h0000;
   assign ch1__cfg_w5_crc_poly = 16'h0000;
-  assign \regs__cfg_w5_crc_start$671  = 16'h0000;
+  assign \regs__cfg_w5_crc_start$677  = 16'h0000;
   assign ch1__cfg_w5_crc_start = 16'h0000;
-  assign \regs__cfg_w5_crc_width$673  = 5'h00;
+  assign \regs__cfg_w5_crc_width$679  = 5'h00;
   assign ch1__cfg_w5_crc_width = 5'h00;
-  assign \regs__cfg_w5_data_bits$675  = 7'h00;
+  assign \regs__cfg_w5_data_bits$681  = 7'h00;
   assign ch1__cfg_w5_data_bits = 7'h00;
-  assign \regs__cfg_w5_enable$677  = 1'h0;
+  assign \regs__cfg_w5_enable$683  = 1'h0;
   assign ch1__cfg_w5_enable = 1'h0;
-  assign \regs__cfg_w5_gray$679  = 1'h0;
+  assign \regs__cfg_w5_gray$685  = 1'h0;
   assign ch1__cfg_w5_gray = 1'h0;
-  assign \regs__cfg_w5_lc$681  = 1'h0;
+  assign \regs__cfg_w5_lc$687  = 1'h0;
   assign ch1__cfg_w5_lc = 1'h0;
-  assign \regs__cfg_w5_nenw$683  = 1'h0;
+  assign \regs__cfg_w5_nenw$689  = 1'h0;
   assign ch1__cfg_w5_nenw = 1'h0;
-  assign \regs__cfg_w5_signed$685  = 1'h0;
+  assign \regs__cfg_w5_signed$691  = 1'h0;
   assign ch1__cfg_w5_signed = 1'h0;
-  assign \regs__cfg_w6_crc$687  = 2'h0;
+  assign \regs__cfg_w6_crc$693  = 2'h0;
   assign ch1__cfg_w6_crc = 2'h0;
-  assign \regs__cfg_w6_crc_inverted$689  = 1'h0;
+  assign \regs__cfg_w6_crc_inverted$695  = 1'h0;
   assign ch1__cfg_w6_crc_inverted = 1'h0;
-  assign \regs__cfg_w6_crc_poly$691  = 16'h0000;
+  assign \regs__cfg_w6_crc_poly$697  = 16'h0000;
   assign ch1__cfg_w6_crc_poly = 16'h0000;
-  assign \regs__cfg_w6_crc_start$693  = 16'h0000;
+  assign \regs__cfg_w6_crc_start$699  = 16'h0000;
   assign ch1__cfg_w6_crc_start = 16'h0000;
-  assign \regs__cfg_w6_crc_width$695  = 5'h00;
+  assign \regs__cfg_w6_crc_width$701  = 5'h00;
   assign ch1__cfg_w6_crc_width = 5'h00;
-  assign \regs__cfg_w6_data_bits$697  = 7'h00;
+  assign \regs__cfg_w6_data_bits$703  = 7'h00;
   assign ch1__cfg_w6_data_bits = 7'h00;
-  assign \regs__cfg_w6_enable$699  = 1'h0;
+  assign \regs__cfg_w6_enable$705  = 1'h0;
   assign ch1__cfg_w6_enable = 1'h0;
-  assign \regs__cfg_w6_gray$701  = 1'h0;
+  assign \regs__cfg_w6_gray$707  = 1'h0;
   assign ch1__cfg_w6_gray = 1'h0;
-  assign \regs__cfg_w6_lc$703  = 1'h0;
+  assign \regs__cfg_w6_lc$709  = 1'h0;
   assign ch1__cfg_w6_lc = 1'h0;
-  assign \regs__cfg_w6_nenw$705  = 1'h0;
+  assign \regs__cfg_w6_nenw$711  = 1'h0;
   assign ch1__cfg_w6_nenw = 1'h0;
-  assign \regs__cfg_w6_signed$707  = 1'h0;
+  assign \regs__cfg_w6_signed$713  = 1'h0;
   assign ch1__cfg_w6_signed = 1'h0;
-  assign \regs__cfg_w7_crc$709  = 2'h0;
+  assign \regs__cfg_w7_crc$715  = 2'h0;
   assign ch1__cfg_w7_crc = 2'h0;
-  assign \regs__cfg_w7_crc_inverted$711  = 1'h0;
+  assign \regs__cfg_w7_crc_inverted$717  = 1'h0;
   assign ch1__cfg_w7_crc_inverted = 1'h0;
-  assign \regs__cfg_w7_crc_poly$713  = 16'h0000;
+  assign \regs__cfg_w7_crc_poly$719  = 16'h0000;
   assign ch1__cfg_w7_crc_poly = 16'h0000;
-  assign \regs__cfg_w7_crc_start$715  = 16'h0000;
+  assign \regs__cfg_w7_crc_start$721  = 16'h0000;
   assign ch1__cfg_w7_crc_start = 16'h0000;
-  assign \regs__cfg_w7_crc_width$717  = 5'h00;
+  assign \regs__cfg_w7_crc_width$723  = 5'h00;
   assign ch1__cfg_w7_crc_width = 5'h00;
-  assign \regs__cfg_w7_data_bits$719  = 7'h00;
+  assign \regs__cfg_w7_data_bits$725  = 7'h00;
   assign ch1__cfg_w7_data_bits = 7'h00;
-  assign \regs__cfg_w7_enable$721  = 1'h0;
+  assign \regs__cfg_w7_enable$727  = 1'h0;
   assign ch1__cfg_w7_enable = 1'h0;
-  assign \regs__cfg_w7_gray$723  = 1'h0;
+  assign \regs__cfg_w7_gray$729  = 1'h0;
   assign ch1__cfg_w7_gray = 1'h0;
-  assign \regs__cfg_w7_lc$725  = 1'h0;
+  assign \regs__cfg_w7_lc$731  = 1'h0;
   assign ch1__cfg_w7_lc = 1'h0;
-  assign \regs__cfg_w7_nenw$727  = 1'h0;
+  assign \regs__cfg_w7_nenw$733  = 1'h0;
   assign ch1__cfg_w7_nenw = 1'h0;
-  assign \regs__cfg_w7_signed$729  = 1'h0;
+  assign \regs__cfg_w7_signed$735  = 1'h0;
   assign ch1__cfg_w7_signed = 1'h0;
-  assign \regs__chain_addr$731  = wb_adr[3:0];
+  assign \regs__chain_addr$737  = wb_adr[3:0];
   assign ch1__chain_addr = wb_adr[3:0];
   assign ch1__chain_data = 32'd0;
-  assign \regs__chain_data$734  = 32'd0;
-  assign ch1__chain_en = \regs__chain_en$735 ;
-  assign ch1__clear_counters = \regs__clear_counters$737 ;
-  assign \regs__config_error$740  = ch1__config_error;
-  assign \regs__count_addr$741  = wb_adr[2:0];
+  assign \regs__chain_data$740  = 32'd0;
+  assign ch1__chain_en = \regs__chain_en$741 ;
+  assign ch1__clear_counters = \regs__clear_counters$743 ;
+  assign \regs__config_error$746  = ch1__config_error;
+  assign \regs__count_addr$747  = wb_adr[2:0];
   assign ch1__count_addr = wb_adr[2:0];
   assign ch1__count_ca_aborted = \$14 [63:48];
-  assign \regs__count_ca_aborted$744  = \$14 [63:48];
+  assign \regs__count_ca_aborted$750  = \$14 [63:48];
   assign ch1__count_ca_crc4_error = \$14 [15:0];
-  assign \regs__count_ca_crc4_error$746  = \$14 [15:0];
+  assign \regs__count_ca_crc4_error$752  = \$14 [15:0];
   assign ch1__count_ca_data_fault = \$14 [79:64];
-  assign \regs__count_ca_data_fault$748  = \$14 [79:64];
+  assign \regs__count_ca_data_fault$754  = \$14 [79:64];
   assign ch1__count_ca_no_answer = \$14 [31:16];
-  assign \regs__count_ca_no_answer$750  = \$14 [31:16];
+  assign \regs__count_ca_no_answer$756  = \$14 [31:16];
   assign ch1__count_ca_refused = \$14 [47:32];
-  assign \regs__count_ca_refused$752  = \$14 [47:32];
+  assign \regs__count_ca_refused$758  = \$14 [47:32];
   assign ch1__count_crc_word2 = 16'h0000;
-  assign \regs__count_crc_word2$754  = 16'h0000;
+  assign \regs__count_crc_word2$760  = 16'h0000;
   assign ch1__count_crc_word3 = 16'h0000;
-  assign \regs__count_crc_word3$756  = 16'h0000;
+  assign \regs__count_crc_word3$762  = 16'h0000;
   assign ch1__count_crc_word4 = 16'h0000;
-  assign \regs__count_crc_word4$758  = 16'h0000;
+  assign \regs__count_crc_word4$764  = 16'h0000;
   assign ch1__count_crc_word5 = 16'h0000;
-  assign \regs__count_crc_word5$760  = 16'h0000;
+  assign \regs__count_crc_word5$766  = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
-  assign \regs__count_crc_word6$762  = 16'h0000;
+  assign \regs__count_crc_word6$768  = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign \regs__count_crc_word7$764  = 16'h0000;
-  assign \regs__count_data$766  = ch1__count_data;
-  assign ch1__count_en = \regs__count_en$767 ;
+  assign \regs__count_crc_word7$770  = 16'h0000;
+  assign \regs__count_data$772  = ch1__count_data;
+  assign ch1__count_en = \regs__count_en$773 ;
   assign ch1__delay_settled = \$13 [54];
-  assign \regs__delay_settled$770  = \$13 [54];
+  assign \regs__delay_settled$776  = \$13 [54];
   assign ch1__delay_spread = \$13 [75:68];
-  assign \regs__delay_spread$772  = \$13 [75:68];
-  assign \regs__done_count$774  = ch1__done_count;
-  assign \regs__frame_done$776  = ch1__frame_done;
-  assign \regs__frame_error$778  = ch1__frame_error;
+  assign \regs__delay_spread$778  = \$13 [75:68];
+  assign \regs__done_count$780  = ch1__done_count;
+  assign \regs__frame_done$782  = ch1__frame_done;
+  assign \regs__frame_error$784  = ch1__frame_error;
   assign ch1__lc = \$13 [182:177];
-  assign \regs__lc$780  = \$13 [182:177];
+  assign \regs__lc$786  = \$13 [182:177];
   assign ch1__lc_repeat = \$13 [183];
-  assign \regs__lc_repeat$782  = \$13 [183];
+  assign \regs__lc_repeat$788  = \$13 [183];
   assign ch1__lc_skip = \$13 [184];
-  assign \regs__lc_skip$784  = \$13 [184];
+  assign \regs__lc_skip$790  = \$13 [184];
   assign ch1__lc_zero = \$13 [185];
-  assign \regs__lc_zero$786  = \$13 [185];
+  assign \regs__lc_zero$792  = \$13 [185];
   assign ch1__line_delay = \$13 [48:36];
-  assign \regs__line_delay$788  = \$13 [48:36];
+  assign \regs__line_delay$794  = \$13 [48:36];
   assign ch1__noise_events = \$13 [53:50];
-  assign \regs__noise_events$790  = \$13 [53:50];
-  assign ch1__periodic = \regs__periodic$791 ;
-  assign \regs__result_updates$794  = ch1__result_updates;
+  assign \regs__noise_events$796  = \$13 [53:50];
+  assign ch1__periodic = \regs__periodic$797 ;
+  assign \regs__result_updates$800  = ch1__result_updates;
   assign ch1__settled_delay = \$13 [67:55];
-  assign \regs__settled_delay$796  = \$13 [67:55];
+  assign \regs__settled_delay$802  = \$13 [67:55];
   assign ch1__spw_mismatch = \$13 [186];
-  assign \regs__spw_mismatch$798  = \$13 [186];
-  assign ch1__start = \regs__start$799 ;
+  assign \regs__spw_mismatch$804  = \$13 [186];
+  assign ch1__start = \regs__start$805 ;
   assign ch1__status = \$13 [3:0];
-  assign \regs__status$802  = \$13 [3:0];
+  assign \regs__status$808  = \$13 [3:0];
   assign ch1__timestamp = \$13 [35:4];
-  assign \regs__timestamp$804  = \$13 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$805 ;
+  assign \regs__timestamp$810  = \$13 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$811 ;
   assign ch1__word0_crc_ok = \$13 [133];
-  assign \regs__word0_crc_ok$808  = \$13 [133];
+  assign \regs__word0_crc_ok$814  = \$13 [133];
   assign ch1__word0_ne = \$13 [131];
-  assign \regs__word0_ne$810  = \$13 [131];
+  assign \regs__word0_ne$816  = \$13 [131];
   assign ch1__word0_nw = \$13 [132];
-  assign \regs__word0_nw$812  = \$13 [132];
+  assign \regs__word0_nw$818  = \$13 [132];
   assign ch1__word0_position = { 9'h000, \$13 [130:76] };
-  assign \regs__word0_position$814  = { 9'h000, \$13 [130:76] };
+  assign \regs__word0_position$820  = { 9'h000, \$13 [130:76] };
   assign ch1__word1_crc_ok = \$13 [176];
-  assign \regs__word1_crc_ok$816  = \$13 [176];
+  assign \regs__word1_crc_ok$822  = \$13 [176];
   assign ch1__word1_ne = \$13 [174];
-  assign \regs__word1_ne$818  = \$13 [174];
+  assign \regs__word1_ne$824  = \$13 [174];
   assign ch1__word1_nw = \$13 [175];
-  assign \regs__word1_nw$820  = \$13 [175];
+  assign \regs__word1_nw$826  = \$13 [175];
   assign ch1__word1_position = { 24'h000000, \$13 [173:134] };
-  assign \regs__word1_position$822  = { 24'h000000, \$13 [173:134] };
+  assign \regs__word1_position$828  = { 24'h000000, \$13 [173:134] };
   assign ch1__word2_crc_ok = 1'h0;
-  assign \regs__word2_crc_ok$824  = 1'h0;
+  assign \regs__word2_crc_ok$830  = 1'h0;
   assign ch1__word2_ne = 1'h0;
-  assign \regs__word2_ne$826  = 1'h0;
+  assign \regs__word2_ne$832  = 1'h0;
   assign ch1__word2_nw = 1'h0;
-  assign \regs__word2_nw$828  = 1'h0;
+  assign \regs__word2_nw$834  = 1'h0;
   assign ch1__word3_crc_ok = 1'h0;
-  assign \regs__word3_crc_ok$830  = 1'h0;
+  assign \regs__word3_crc_ok$836  = 1'h0;
   assign ch1__word3_ne = 1'h0;
-  assign \regs__word3_ne$832  = 1'h0;
+  assign \regs__word3_ne$838  = 1'h0;
   assign ch1__word3_nw = 1'h0;
-  assign \regs__word3_nw$834  = 1'h0;
+  assign \regs__word3_nw$840  = 1'h0;
   assign ch1__word4_crc_ok = 1'h0;
-  assign \regs__word4_crc_ok$836  = 1'h0;
+  assign \regs__word4_crc_ok$842  = 1'h0;
   assign ch1__word4_ne = 1'h0;
-  assign \regs__word4_ne$838  = 1'h0;
+  assign \regs__word4_ne$844  = 1'h0;
   assign ch1__word4_nw = 1'h0;
-  assign \regs__word4_nw$840  = 1'h0;
+  assign \regs__word4_nw$846  = 1'h0;
   assign ch1__word5_crc_ok = 1'h0;
-  assign \regs__word5_crc_ok$842  = 1'h0;
+  assign \regs__word5_crc_ok$848  = 1'h0;
   assign ch1__word5_ne = 1'h0;
-  assign \regs__word5_ne$844  = 1'h0;
+  assign \regs__word5_ne$850  = 1'h0;
   assign ch1__word5_nw = 1'h0;
-  assign \regs__word5_nw$846  = 1'h0;
+  assign \regs__word5_nw$852  = 1'h0;
   assign ch1__word6_crc_ok = 1'h0;
-  assign \regs__word6_crc_ok$848  = 1'h0;
+  assign \regs__word6_crc_ok$854  = 1'h0;
   assign ch1__word6_ne = 1'h0;
-  assign \regs__word6_ne$850  = 1'h0;
+  assign \regs__word6_ne$856  = 1'h0;
   assign ch1__word6_nw = 1'h0;
-  assign \regs__word6_nw$852  = 1'h0;
+  assign \regs__word6_nw$858  = 1'h0;
   assign ch1__word7_crc_ok = 1'h0;
-  assign \regs__word7_crc_ok$854  = 1'h0;
+  assign \regs__word7_crc_ok$860  = 1'h0;
   assign ch1__word7_ne = 1'h0;
-  assign \regs__word7_ne$856  = 1'h0;
+  assign \regs__word7_ne$862  = 1'h0;
   assign ch1__word7_nw = 1'h0;
-  assign \regs__word7_nw$858  = 1'h0;
-  assign \trigger$859  = \trigger$42 ;
-  assign \ma$860  = ch1_ma;
-  assign \slo$861  = ch1_slo;
+  assign \regs__word7_nw$864  = 1'h0;
+  assign \trigger$865  = \trigger$44 ;
+  assign \cfg_hold$866  = \cfg_hold$455 [1];
+  assign \ma$868  = ch1_ma;
+  assign \slo$869  = ch1_slo;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$9 , \$8  };
-  assign \irq$864  = { \$9 , \$8  };
+  assign \irq$872  = { \$9 , \$8  };
+  assign cfg_free[1] = \cfg_free$867 ;
+  assign cfg_free[0] = \cfg_free$457 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus__w_en, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__count_en, ch1__chain_en, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__count_data
-, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__count_data, ch1__ca_busy, ch1__ca_rbuf_data, bus__r_load, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time
-, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames
-, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start
-, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray
-, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double
-, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$430 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13356$0 , \port$13367$0 , ch0__ca_done, \port$13444$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$13903$0 , \port$13914$0 , ch1__ca_done, \port$13991$0 
-, bus__w_addr);
+module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus__w_en, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__count_en, ch1__chain_en, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__w_busy, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error
+, ch0__count_data, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__count_data, ch1__ca_busy, ch1__ca_rbuf_data, cfg_free, bus__r_load, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit
+, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit
+, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$152 , ch0_ca_ctrl_start
+, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc
+, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error
+, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$435 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13541$0 , \port$13552$0 , ch0__ca_done, \port$13629$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$14092$0 
+, \port$14103$0 , ch1__ca_done, \port$14180$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
-  wire [31:0] \$100 ;
-  wire [31:0] \$101 ;
-  wire [31:0] \$102 ;
-  wire [14:0] \$103 ;
+  wire \$100 ;
+  reg \$1000 ;
+  reg \$1001 ;
+  reg \$1002 ;
+  reg \$1003 ;
+  reg \$1004 ;
+  reg \$1005 ;
+  reg \$1006 ;
+  reg \$1007 ;
+  reg \$1008 ;
+  reg \$1009 ;
+  wire \$101 ;
+  reg \$1010 ;
+  reg \$1011 ;
+  reg [2:0] \$1012 ;
+  reg [6:0] \$1013 ;
+  reg [6:0] \$1014 ;
+  reg \$1015 ;
+  reg \$1016 ;
+  reg \$1017 ;
+  reg [14:0] \$1018 ;
+  reg [3:0] \$1019 ;
+  wire \$102 ;
+  reg \$1020 ;
+  reg \$1021 ;
+  reg \$1022 ;
+  reg \$1023 ;
+  reg \$1024 ;
+  reg \$1025 ;
+  reg \$1026 ;
+  reg \$1027 ;
+  reg \$1028 ;
+  reg \$1029 ;
+  wire \$103 ;
+  reg \$1030 ;
+  reg \$1031 ;
+  reg \$1032 ;
+  reg \$1033 ;
+  reg \$1034 ;
+  reg \$1035 ;
+  reg \$1036 ;
+  reg \$1037 ;
+  reg \$1038 ;
+  reg \$1039 ;
   wire \$104 ;
+  reg \$1040 ;
+  reg \$1041 ;
+  reg \$1042 ;
+  reg \$1043 ;
+  reg \$1044 ;
+  reg \$1045 ;
+  reg \$1046 ;
+  reg \$1047 ;
+  reg \$1048 ;
+  reg \$1049 ;
   wire \$105 ;
+  reg \$1050 ;
+  reg \$1051 ;
+  reg \$1052 ;
+  reg \$1053 ;
+  reg \$1054 ;
+  reg \$1055 ;
+  reg \$1056 ;
+  reg \$1057 ;
+  reg \$1058 ;
+  reg \$1059 ;
   wire \$106 ;
+  reg \$1060 ;
+  reg \$1061 ;
+  reg [3:0] \$1062 ;
+  reg \$1063 ;
+  reg \$1064 ;
+  reg \$1065 ;
+  reg \$1066 ;
+  reg \$1067 ;
+  reg \$1068 ;
+  reg \$1069 ;
   wire \$107 ;
+  reg \$1070 ;
+  reg \$1071 ;
+  reg \$1072 ;
+  reg \$1073 ;
+  reg [5:0] \$1074 ;
+  reg [15:0] \$1075 ;
+  reg [12:0] \$1076 ;
+  reg [31:0] \$1077 ;
+  reg [31:0] \$1078 ;
+  reg [31:0] \$1079 ;
   wire \$108 ;
+  reg [31:0] \$1080 ;
+  reg [31:0] \$1081 ;
+  reg [3:0] \$1082 ;
+  reg \$1083 ;
+  reg [7:0] \$1084 ;
+  reg [12:0] \$1085 ;
+  reg \$1086 ;
+  reg \$1087 ;
+  reg \$1088 ;
+  reg \$1089 ;
   wire \$109 ;
+  reg [31:0] \$1090 ;
   wire [31:0] \$11 ;
   wire \$110 ;
   wire \$111 ;
@@ -2042,12 +2154,12 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$139 ;
   wire [31:0] \$14 ;
   wire \$140 ;
-  wire \$141 ;
-  wire \$142 ;
-  wire \$143 ;
-  wire \$144 ;
-  wire \$145 ;
-  wire \$146 ;
+  wire [31:0] \$141 ;
+  wire [31:0] \$142 ;
+  wire [31:0] \$143 ;
+  wire [31:0] \$144 ;
+  wire [31:0] \$145 ;
+  wire [14:0] \$146 ;
   wire \$147 ;
   wire \$148 ;
   wire \$149 ;
@@ -2057,53 +2169,53 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$152 ;
   wire \$153 ;
   wire \$154 ;
-  wire [31:0] \$155 ;
-  wire [31:0] \$156 ;
-  wire [31:0] \$157 ;
-  wire [31:0] \$158 ;
-  wire [31:0] \$159 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
   wire [31:0] \$16 ;
-  wire [31:0] \$160 ;
-  wire [31:0] \$161 ;
-  wire [31:0] \$162 ;
-  wire [31:0] \$163 ;
-  wire [31:0] \$164 ;
-  wire [31:0] \$165 ;
-  wire [31:0] \$166 ;
-  wire [31:0] \$167 ;
-  wire [31:0] \$168 ;
-  wire [31:0] \$169 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire [31:0] \$17 ;
-  wire [31:0] \$170 ;
-  wire [31:0] \$171 ;
-  wire [31:0] \$172 ;
-  wire [31:0] \$173 ;
-  wire [31:0] \$174 ;
-  wire [31:0] \$175 ;
-  wire [31:0] \$176 ;
-  wire [31:0] \$177 ;
-  wire [31:0] \$178 ;
-  wire [31:0] \$179 ;
+  wire \$170 ;
+  wire \$171 ;
+  wire \$172 ;
+  wire \$173 ;
+  wire \$174 ;
+  wire \$175 ;
+  wire \$176 ;
+  wire \$177 ;
+  wire \$178 ;
+  wire \$179 ;
   wire \$18 ;
-  wire [31:0] \$180 ;
-  wire [31:0] \$181 ;
-  wire [31:0] \$182 ;
-  wire [31:0] \$183 ;
-  wire [31:0] \$184 ;
-  wire [31:0] \$185 ;
-  wire [31:0] \$186 ;
-  wire [31:0] \$187 ;
-  wire [31:0] \$188 ;
-  wire [31:0] \$189 ;
+  wire \$180 ;
+  wire \$181 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
+  wire \$189 ;
   wire \$19 ;
-  wire [31:0] \$190 ;
-  wire [31:0] \$191 ;
-  wire [31:0] \$192 ;
-  wire [31:0] \$193 ;
-  wire [31:0] \$194 ;
-  wire [31:0] \$195 ;
-  wire [31:0] \$196 ;
-  wire [31:0] \$197 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
   wire [31:0] \$198 ;
   wire [31:0] \$199 ;
   wire \$2 ;
@@ -2159,53 +2271,53 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [31:0] \$244 ;
   wire [31:0] \$245 ;
   wire [31:0] \$246 ;
-  wire \$247 ;
-  wire \$248 ;
-  wire \$249 ;
+  wire [31:0] \$247 ;
+  wire [31:0] \$248 ;
+  wire [31:0] \$249 ;
   wire \$25 ;
-  wire \$250 ;
-  wire \$251 ;
-  wire \$252 ;
-  wire \$253 ;
-  wire \$254 ;
-  wire \$255 ;
-  wire \$256 ;
-  wire \$257 ;
-  wire \$258 ;
-  wire \$259 ;
+  wire [31:0] \$250 ;
+  wire [31:0] \$251 ;
+  wire [31:0] \$252 ;
+  wire [31:0] \$253 ;
+  wire [31:0] \$254 ;
+  wire [31:0] \$255 ;
+  wire [31:0] \$256 ;
+  wire [31:0] \$257 ;
+  wire [31:0] \$258 ;
+  wire [31:0] \$259 ;
   wire \$26 ;
-  wire \$260 ;
-  wire \$261 ;
-  wire \$262 ;
-  wire \$263 ;
-  wire \$264 ;
-  wire \$265 ;
-  wire \$266 ;
-  wire \$267 ;
-  wire \$268 ;
-  wire \$269 ;
+  wire [31:0] \$260 ;
+  wire [31:0] \$261 ;
+  wire [31:0] \$262 ;
+  wire [31:0] \$263 ;
+  wire [31:0] \$264 ;
+  wire [31:0] \$265 ;
+  wire [31:0] \$266 ;
+  wire [31:0] \$267 ;
+  wire [31:0] \$268 ;
+  wire [31:0] \$269 ;
   wire \$27 ;
-  wire \$270 ;
-  wire \$271 ;
-  wire \$272 ;
-  wire \$273 ;
-  wire \$274 ;
-  wire \$275 ;
-  wire \$276 ;
-  wire \$277 ;
-  wire \$278 ;
-  wire \$279 ;
+  wire [31:0] \$270 ;
+  wire [31:0] \$271 ;
+  wire [31:0] \$272 ;
+  wire [31:0] \$273 ;
+  wire [31:0] \$274 ;
+  wire [31:0] \$275 ;
+  wire [31:0] \$276 ;
+  wire [31:0] \$277 ;
+  wire [31:0] \$278 ;
+  wire [31:0] \$279 ;
   wire \$28 ;
-  wire \$280 ;
-  wire \$281 ;
-  wire \$282 ;
-  wire \$283 ;
-  wire \$284 ;
-  wire \$285 ;
-  wire \$286 ;
-  wire \$287 ;
-  wire \$288 ;
-  wire \$289 ;
+  wire [31:0] \$280 ;
+  wire [31:0] \$281 ;
+  wire [31:0] \$282 ;
+  wire [31:0] \$283 ;
+  wire [31:0] \$284 ;
+  wire [31:0] \$285 ;
+  wire [31:0] \$286 ;
+  wire [31:0] \$287 ;
+  wire [31:0] \$288 ;
+  wire [31:0] \$289 ;
   wire \$29 ;
   wire \$290 ;
   wire \$291 ;
@@ -2248,7 +2360,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$324 ;
   wire \$325 ;
   wire \$326 ;
-  wire [14:0] \$327 ;
+  wire \$327 ;
   wire \$328 ;
   wire \$329 ;
   wire \$33 ;
@@ -2305,102 +2417,102 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$376 ;
   wire \$377 ;
   wire \$378 ;
-  wire [31:0] \$379 ;
+  wire \$379 ;
   wire \$38 ;
-  wire [31:0] \$380 ;
-  wire [31:0] \$381 ;
-  wire [31:0] \$382 ;
-  wire [31:0] \$383 ;
-  wire [31:0] \$384 ;
-  wire [31:0] \$385 ;
-  wire [31:0] \$386 ;
-  wire [31:0] \$387 ;
-  wire [31:0] \$388 ;
-  wire [31:0] \$389 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
   wire \$39 ;
-  wire [31:0] \$390 ;
-  wire [31:0] \$391 ;
-  wire [31:0] \$392 ;
-  wire [31:0] \$393 ;
-  wire [31:0] \$394 ;
-  wire [31:0] \$395 ;
-  wire [31:0] \$396 ;
-  wire [31:0] \$397 ;
-  wire [31:0] \$398 ;
-  wire [31:0] \$399 ;
+  wire \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire \$394 ;
+  wire \$395 ;
+  wire \$396 ;
+  wire \$397 ;
+  wire \$398 ;
+  wire \$399 ;
   wire \$4 ;
   wire \$40 ;
-  wire [31:0] \$400 ;
-  wire [31:0] \$401 ;
-  wire [31:0] \$402 ;
-  wire [31:0] \$403 ;
-  wire [31:0] \$404 ;
-  wire [31:0] \$405 ;
-  wire [31:0] \$406 ;
-  wire [31:0] \$407 ;
-  wire [31:0] \$408 ;
-  wire [31:0] \$409 ;
+  wire \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  wire \$403 ;
+  wire \$404 ;
+  wire \$405 ;
+  wire \$406 ;
+  wire \$407 ;
+  wire \$408 ;
+  wire \$409 ;
   wire \$41 ;
-  wire [31:0] \$410 ;
-  wire [31:0] \$411 ;
-  wire [31:0] \$412 ;
-  wire [31:0] \$413 ;
-  wire [31:0] \$414 ;
-  wire [31:0] \$415 ;
-  wire [31:0] \$416 ;
-  wire [31:0] \$417 ;
-  wire [31:0] \$418 ;
-  wire [31:0] \$419 ;
+  wire \$410 ;
+  wire \$411 ;
+  wire \$412 ;
+  wire [14:0] \$413 ;
+  wire \$414 ;
+  wire \$415 ;
+  wire \$416 ;
+  wire \$417 ;
+  wire \$418 ;
+  wire \$419 ;
   wire \$42 ;
-  wire [31:0] \$420 ;
-  wire [31:0] \$421 ;
-  wire [31:0] \$422 ;
-  wire [31:0] \$423 ;
-  wire [31:0] \$424 ;
-  wire [31:0] \$425 ;
-  wire [31:0] \$426 ;
-  wire [31:0] \$427 ;
-  wire [31:0] \$428 ;
-  wire [31:0] \$429 ;
+  wire \$420 ;
+  wire \$421 ;
+  wire \$422 ;
+  wire \$423 ;
+  wire \$424 ;
+  wire \$425 ;
+  wire \$426 ;
+  wire \$427 ;
+  wire \$428 ;
+  wire \$429 ;
   wire \$43 ;
-  wire [31:0] \$430 ;
-  wire [31:0] \$431 ;
-  wire [31:0] \$432 ;
-  wire [31:0] \$433 ;
-  wire [31:0] \$434 ;
-  wire [31:0] \$435 ;
-  wire [31:0] \$436 ;
-  wire [31:0] \$437 ;
-  wire [31:0] \$438 ;
-  wire [31:0] \$439 ;
+  wire \$430 ;
+  wire \$431 ;
+  wire \$432 ;
+  wire \$433 ;
+  wire \$434 ;
+  wire \$435 ;
+  wire \$436 ;
+  wire \$437 ;
+  wire \$438 ;
+  wire \$439 ;
   wire \$44 ;
-  wire [31:0] \$440 ;
-  wire [31:0] \$441 ;
-  wire [31:0] \$442 ;
-  wire [31:0] \$443 ;
-  wire [31:0] \$444 ;
-  wire [31:0] \$445 ;
-  wire [31:0] \$446 ;
-  wire [31:0] \$447 ;
-  wire [31:0] \$448 ;
-  wire [31:0] \$449 ;
+  wire \$440 ;
+  wire \$441 ;
+  wire \$442 ;
+  wire \$443 ;
+  wire \$444 ;
+  wire \$445 ;
+  wire \$446 ;
+  wire \$447 ;
+  wire \$448 ;
+  wire \$449 ;
   wire \$45 ;
-  wire [31:0] \$450 ;
-  wire [31:0] \$451 ;
-  wire [31:0] \$452 ;
-  wire [31:0] \$453 ;
-  wire [31:0] \$454 ;
-  wire [31:0] \$455 ;
-  wire [31:0] \$456 ;
-  wire [31:0] \$457 ;
-  wire [31:0] \$458 ;
-  wire [31:0] \$459 ;
+  wire \$450 ;
+  wire \$451 ;
+  wire \$452 ;
+  wire \$453 ;
+  wire \$454 ;
+  wire \$455 ;
+  wire \$456 ;
+  wire \$457 ;
+  wire \$458 ;
+  wire \$459 ;
   wire \$46 ;
-  wire [31:0] \$460 ;
-  wire [31:0] \$461 ;
-  wire [31:0] \$462 ;
-  wire [31:0] \$463 ;
-  wire [31:0] \$464 ;
+  wire \$460 ;
+  wire \$461 ;
+  wire \$462 ;
+  wire \$463 ;
+  wire \$464 ;
   wire [31:0] \$465 ;
   wire [31:0] \$466 ;
   wire [31:0] \$467 ;
@@ -2408,107 +2520,107 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [31:0] \$469 ;
   wire \$47 ;
   wire [31:0] \$470 ;
-  wire \$471 ;
-  wire \$472 ;
-  wire \$473 ;
-  wire \$474 ;
-  wire \$475 ;
-  wire \$476 ;
-  wire \$477 ;
-  wire \$478 ;
-  wire \$479 ;
+  wire [31:0] \$471 ;
+  wire [31:0] \$472 ;
+  wire [31:0] \$473 ;
+  wire [31:0] \$474 ;
+  wire [31:0] \$475 ;
+  wire [31:0] \$476 ;
+  wire [31:0] \$477 ;
+  wire [31:0] \$478 ;
+  wire [31:0] \$479 ;
   wire \$48 ;
-  wire \$480 ;
-  wire \$481 ;
-  wire \$482 ;
-  wire \$483 ;
-  wire \$484 ;
-  wire \$485 ;
-  wire \$486 ;
-  wire \$487 ;
-  wire \$488 ;
-  wire \$489 ;
+  wire [31:0] \$480 ;
+  wire [31:0] \$481 ;
+  wire [31:0] \$482 ;
+  wire [31:0] \$483 ;
+  wire [31:0] \$484 ;
+  wire [31:0] \$485 ;
+  wire [31:0] \$486 ;
+  wire [31:0] \$487 ;
+  wire [31:0] \$488 ;
+  wire [31:0] \$489 ;
   wire \$49 ;
-  wire \$490 ;
-  wire \$491 ;
-  wire \$492 ;
-  wire \$493 ;
-  wire \$494 ;
-  wire \$495 ;
-  wire \$496 ;
-  wire \$497 ;
-  wire \$498 ;
-  wire \$499 ;
+  wire [31:0] \$490 ;
+  wire [31:0] \$491 ;
+  wire [31:0] \$492 ;
+  wire [31:0] \$493 ;
+  wire [31:0] \$494 ;
+  wire [31:0] \$495 ;
+  wire [31:0] \$496 ;
+  wire [31:0] \$497 ;
+  wire [31:0] \$498 ;
+  wire [31:0] \$499 ;
   wire \$5 ;
   wire \$50 ;
-  wire \$500 ;
-  wire \$501 ;
-  wire \$502 ;
-  wire \$503 ;
-  wire \$504 ;
-  wire \$505 ;
-  wire \$506 ;
-  wire \$507 ;
-  wire \$508 ;
-  wire \$509 ;
+  wire [31:0] \$500 ;
+  wire [31:0] \$501 ;
+  wire [31:0] \$502 ;
+  wire [31:0] \$503 ;
+  wire [31:0] \$504 ;
+  wire [31:0] \$505 ;
+  wire [31:0] \$506 ;
+  wire [31:0] \$507 ;
+  wire [31:0] \$508 ;
+  wire [31:0] \$509 ;
   wire \$51 ;
-  wire \$510 ;
-  wire \$511 ;
-  wire \$512 ;
-  wire \$513 ;
-  wire \$514 ;
-  wire \$515 ;
-  wire \$516 ;
-  wire \$517 ;
-  wire \$518 ;
-  wire \$519 ;
+  wire [31:0] \$510 ;
+  wire [31:0] \$511 ;
+  wire [31:0] \$512 ;
+  wire [31:0] \$513 ;
+  wire [31:0] \$514 ;
+  wire [31:0] \$515 ;
+  wire [31:0] \$516 ;
+  wire [31:0] \$517 ;
+  wire [31:0] \$518 ;
+  wire [31:0] \$519 ;
   wire \$52 ;
-  wire \$520 ;
-  wire \$521 ;
-  wire \$522 ;
-  wire \$523 ;
-  wire \$524 ;
-  wire \$525 ;
-  wire \$526 ;
-  wire \$527 ;
-  wire \$528 ;
-  wire \$529 ;
+  wire [31:0] \$520 ;
+  wire [31:0] \$521 ;
+  wire [31:0] \$522 ;
+  wire [31:0] \$523 ;
+  wire [31:0] \$524 ;
+  wire [31:0] \$525 ;
+  wire [31:0] \$526 ;
+  wire [31:0] \$527 ;
+  wire [31:0] \$528 ;
+  wire [31:0] \$529 ;
   wire \$53 ;
-  wire \$530 ;
-  wire \$531 ;
-  wire \$532 ;
-  wire \$533 ;
-  wire \$534 ;
-  wire \$535 ;
-  wire \$536 ;
-  wire \$537 ;
-  wire \$538 ;
-  wire \$539 ;
+  wire [31:0] \$530 ;
+  wire [31:0] \$531 ;
+  wire [31:0] \$532 ;
+  wire [31:0] \$533 ;
+  wire [31:0] \$534 ;
+  wire [31:0] \$535 ;
+  wire [31:0] \$536 ;
+  wire [31:0] \$537 ;
+  wire [31:0] \$538 ;
+  wire [31:0] \$539 ;
   wire \$54 ;
-  wire \$540 ;
-  wire \$541 ;
-  wire \$542 ;
-  wire \$543 ;
-  wire \$544 ;
-  wire [14:0] \$545 ;
-  wire [14:0] \$546 ;
-  wire \$547 ;
-  wire [14:0] \$548 ;
-  wire [14:0] \$549 ;
+  wire [31:0] \$540 ;
+  wire [31:0] \$541 ;
+  wire [31:0] \$542 ;
+  wire [31:0] \$543 ;
+  wire [31:0] \$544 ;
+  wire [31:0] \$545 ;
+  wire [31:0] \$546 ;
+  wire [31:0] \$547 ;
+  wire [31:0] \$548 ;
+  wire [31:0] \$549 ;
   wire \$55 ;
-  wire \$550 ;
-  wire [14:0] \$551 ;
-  wire [14:0] \$552 ;
-  wire \$553 ;
-  wire [14:0] \$554 ;
-  wire [14:0] \$555 ;
-  wire \$556 ;
-  wire [3:0] \$557 ;
+  wire [31:0] \$550 ;
+  wire [31:0] \$551 ;
+  wire [31:0] \$552 ;
+  wire [31:0] \$553 ;
+  wire [31:0] \$554 ;
+  wire [31:0] \$555 ;
+  wire [31:0] \$556 ;
+  wire \$557 ;
   wire \$558 ;
   wire \$559 ;
   wire \$56 ;
   wire \$560 ;
-  wire [31:0] \$561 ;
+  wire \$561 ;
   wire \$562 ;
   wire \$563 ;
   wire \$564 ;
@@ -2586,11 +2698,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$629 ;
   wire \$63 ;
   wire \$630 ;
-  wire \$631 ;
-  wire \$632 ;
+  wire [14:0] \$631 ;
+  wire [14:0] \$632 ;
   wire \$633 ;
-  wire \$634 ;
-  wire \$635 ;
+  wire [14:0] \$634 ;
+  wire [14:0] \$635 ;
   wire \$636 ;
   wire [14:0] \$637 ;
   wire [14:0] \$638 ;
@@ -2599,18 +2711,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [14:0] \$640 ;
   wire [14:0] \$641 ;
   wire \$642 ;
-  wire [14:0] \$643 ;
-  wire [14:0] \$644 ;
+  wire [3:0] \$643 ;
+  wire \$644 ;
   wire \$645 ;
-  wire [14:0] \$646 ;
-  wire [14:0] \$647 ;
+  wire \$646 ;
+  wire [31:0] \$647 ;
   wire \$648 ;
-  wire [3:0] \$649 ;
+  wire \$649 ;
   wire \$65 ;
   wire \$650 ;
   wire \$651 ;
   wire \$652 ;
-  wire [31:0] \$653 ;
+  wire \$653 ;
   wire \$654 ;
   wire \$655 ;
   wire \$656 ;
@@ -2618,124 +2730,124 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$658 ;
   wire \$659 ;
   wire \$66 ;
-  wire [31:0] \$660 ;
-  wire [31:0] \$661 ;
-  reg \$662 ;
-  reg [10:0] \$663 ;
-  reg [31:0] \$664 ;
-  reg [3:0] \$665 ;
-  reg [31:0] \$666 ;
-  reg [3:0] \$667 ;
-  reg \$668 ;
-  reg \$669 ;
+  wire \$660 ;
+  wire \$661 ;
+  wire \$662 ;
+  wire \$663 ;
+  wire \$664 ;
+  wire \$665 ;
+  wire \$666 ;
+  wire \$667 ;
+  wire \$668 ;
+  wire \$669 ;
   wire \$67 ;
-  reg \$670 ;
-  reg \$671 ;
-  reg \$672 ;
-  reg \$673 ;
-  reg [31:0] \$674 ;
-  reg \$675 ;
-  reg \$676 ;
-  reg \$677 ;
-  reg \$678 ;
-  reg \$679 ;
+  wire \$670 ;
+  wire \$671 ;
+  wire \$672 ;
+  wire \$673 ;
+  wire \$674 ;
+  wire \$675 ;
+  wire \$676 ;
+  wire \$677 ;
+  wire \$678 ;
+  wire \$679 ;
   wire \$68 ;
-  reg \$680 ;
-  reg \$681 ;
-  reg \$682 ;
-  reg \$683 ;
-  reg \$684 ;
-  reg \$685 ;
-  reg \$686 ;
-  reg \$687 ;
-  reg [15:0] \$688 ;
-  reg [11:0] \$689 ;
+  wire \$680 ;
+  wire \$681 ;
+  wire \$682 ;
+  wire \$683 ;
+  wire \$684 ;
+  wire \$685 ;
+  wire \$686 ;
+  wire \$687 ;
+  wire \$688 ;
+  wire \$689 ;
   wire \$69 ;
-  reg \$690 ;
-  reg [23:0] \$691 ;
-  reg \$692 ;
-  reg [23:0] \$693 ;
-  reg \$694 ;
-  reg [23:0] \$695 ;
-  reg \$696 ;
-  reg [23:0] \$697 ;
-  reg \$698 ;
-  reg [6:0] \$699 ;
+  wire \$690 ;
+  wire \$691 ;
+  wire \$692 ;
+  wire \$693 ;
+  wire \$694 ;
+  wire \$695 ;
+  wire \$696 ;
+  wire \$697 ;
+  wire \$698 ;
+  wire \$699 ;
   wire \$7 ;
   wire \$70 ;
-  reg \$700 ;
-  reg \$701 ;
-  reg [1:0] \$702 ;
-  reg \$703 ;
-  reg \$704 ;
-  reg [6:0] \$705 ;
-  reg \$706 ;
-  reg \$707 ;
-  reg [1:0] \$708 ;
-  reg \$709 ;
+  wire \$700 ;
+  wire \$701 ;
+  wire \$702 ;
+  wire \$703 ;
+  wire \$704 ;
+  wire \$705 ;
+  wire \$706 ;
+  wire \$707 ;
+  wire \$708 ;
+  wire \$709 ;
   wire \$71 ;
-  reg \$710 ;
-  reg \$711 ;
-  reg \$712 ;
-  reg \$713 ;
-  reg \$714 ;
-  reg [7:0] \$715 ;
-  reg [3:0] \$716 ;
-  reg [3:0] \$717 ;
-  reg [3:0] \$718 ;
-  reg \$719 ;
+  wire \$710 ;
+  wire \$711 ;
+  wire \$712 ;
+  wire \$713 ;
+  wire \$714 ;
+  wire \$715 ;
+  wire \$716 ;
+  wire \$717 ;
+  wire \$718 ;
+  wire \$719 ;
   wire \$72 ;
-  reg [11:0] \$720 ;
-  reg \$721 ;
-  reg [15:0] \$722 ;
-  reg [4:0] \$723 ;
-  reg \$724 ;
-  reg \$725 ;
-  reg [15:0] \$726 ;
-  reg \$727 ;
-  reg [15:0] \$728 ;
-  reg [4:0] \$729 ;
+  wire \$720 ;
+  wire \$721 ;
+  wire \$722 ;
+  wire [14:0] \$723 ;
+  wire [14:0] \$724 ;
+  wire \$725 ;
+  wire [14:0] \$726 ;
+  wire [14:0] \$727 ;
+  wire \$728 ;
+  wire [14:0] \$729 ;
   wire \$73 ;
-  reg \$730 ;
-  reg \$731 ;
-  reg [15:0] \$732 ;
-  reg \$733 ;
-  reg \$734 ;
-  reg \$735 ;
-  reg \$736 ;
-  reg \$737 ;
-  reg [11:0] \$738 ;
-  reg \$739 ;
+  wire [14:0] \$730 ;
+  wire \$731 ;
+  wire [14:0] \$732 ;
+  wire [14:0] \$733 ;
+  wire \$734 ;
+  wire [3:0] \$735 ;
+  wire \$736 ;
+  wire \$737 ;
+  wire \$738 ;
+  wire [31:0] \$739 ;
   wire \$74 ;
-  reg \$740 ;
-  reg \$741 ;
-  reg \$742 ;
-  reg \$743 ;
-  reg \$744 ;
-  reg \$745 ;
-  reg \$746 ;
-  reg \$747 ;
-  reg \$748 ;
+  wire \$740 ;
+  wire \$741 ;
+  wire \$742 ;
+  wire \$743 ;
+  wire \$744 ;
+  wire \$745 ;
+  wire \$746 ;
+  wire [31:0] \$747 ;
+  wire [31:0] \$748 ;
   reg \$749 ;
   wire \$75 ;
-  reg \$750 ;
-  reg \$751 ;
-  reg \$752 ;
-  reg \$753 ;
-  reg \$754 ;
+  reg [10:0] \$750 ;
+  reg [31:0] \$751 ;
+  reg [3:0] \$752 ;
+  reg [31:0] \$753 ;
+  reg [3:0] \$754 ;
   reg \$755 ;
   reg \$756 ;
   reg \$757 ;
-  reg [2:0] \$758 ;
-  reg [6:0] \$759 ;
+  reg \$758 ;
+  reg \$759 ;
   wire \$76 ;
-  reg [6:0] \$760 ;
-  reg \$761 ;
+  reg \$760 ;
+  reg [31:0] \$761 ;
   reg \$762 ;
   reg \$763 ;
-  reg [31:0] \$764 ;
-  reg [14:0] \$765 ;
-  reg [3:0] \$766 ;
+  reg \$764 ;
+  reg \$765 ;
+  reg \$766 ;
   reg \$767 ;
   reg \$768 ;
   reg \$769 ;
@@ -2747,29 +2859,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$774 ;
   reg \$775 ;
   reg \$776 ;
-  reg \$777 ;
-  reg \$778 ;
+  reg [15:0] \$777 ;
+  reg [11:0] \$778 ;
   reg \$779 ;
   wire \$78 ;
-  reg \$780 ;
+  reg [23:0] \$780 ;
   reg \$781 ;
-  reg \$782 ;
+  reg [23:0] \$782 ;
   reg \$783 ;
-  reg \$784 ;
+  reg [23:0] \$784 ;
   reg \$785 ;
-  reg \$786 ;
+  reg [23:0] \$786 ;
   reg \$787 ;
-  reg \$788 ;
+  reg [6:0] \$788 ;
   reg \$789 ;
   wire \$79 ;
   reg \$790 ;
-  reg \$791 ;
+  reg [1:0] \$791 ;
   reg \$792 ;
   reg \$793 ;
-  reg \$794 ;
+  reg [6:0] \$794 ;
   reg \$795 ;
   reg \$796 ;
-  reg \$797 ;
+  reg [1:0] \$797 ;
   reg \$798 ;
   reg \$799 ;
   wire [31:0] \$8 ;
@@ -2778,43 +2890,43 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$801 ;
   reg \$802 ;
   reg \$803 ;
-  reg \$804 ;
-  reg \$805 ;
-  reg \$806 ;
-  reg \$807 ;
+  reg [7:0] \$804 ;
+  reg [3:0] \$805 ;
+  reg [3:0] \$806 ;
+  reg [3:0] \$807 ;
   reg \$808 ;
-  reg [3:0] \$809 ;
+  reg [11:0] \$809 ;
   wire \$81 ;
   reg \$810 ;
-  reg \$811 ;
-  reg \$812 ;
+  reg [15:0] \$811 ;
+  reg [4:0] \$812 ;
   reg \$813 ;
   reg \$814 ;
-  reg \$815 ;
+  reg [15:0] \$815 ;
   reg \$816 ;
-  reg \$817 ;
-  reg \$818 ;
+  reg [15:0] \$817 ;
+  reg [4:0] \$818 ;
   reg \$819 ;
   wire \$82 ;
   reg \$820 ;
-  reg [5:0] \$821 ;
-  reg [15:0] \$822 ;
-  reg [12:0] \$823 ;
-  reg [31:0] \$824 ;
-  reg [31:0] \$825 ;
-  reg [31:0] \$826 ;
-  reg [31:0] \$827 ;
-  reg [31:0] \$828 ;
-  reg [3:0] \$829 ;
+  reg [15:0] \$821 ;
+  reg \$822 ;
+  reg \$823 ;
+  reg \$824 ;
+  reg \$825 ;
+  reg \$826 ;
+  reg [11:0] \$827 ;
+  reg \$828 ;
+  reg \$829 ;
   wire \$83 ;
   reg \$830 ;
-  reg [7:0] \$831 ;
-  reg [12:0] \$832 ;
+  reg \$831 ;
+  reg \$832 ;
   reg \$833 ;
   reg \$834 ;
   reg \$835 ;
   reg \$836 ;
-  reg [31:0] \$837 ;
+  reg \$837 ;
   reg \$838 ;
   reg \$839 ;
   wire \$84 ;
@@ -2825,68 +2937,68 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$844 ;
   reg \$845 ;
   reg \$846 ;
-  reg \$847 ;
-  reg \$848 ;
-  reg \$849 ;
+  reg [2:0] \$847 ;
+  reg [6:0] \$848 ;
+  reg [6:0] \$849 ;
   wire \$85 ;
   reg \$850 ;
-  reg [15:0] \$851 ;
-  reg [11:0] \$852 ;
-  reg \$853 ;
-  reg [23:0] \$854 ;
-  reg \$855 ;
-  reg [23:0] \$856 ;
+  reg \$851 ;
+  reg \$852 ;
+  reg [31:0] \$853 ;
+  reg [14:0] \$854 ;
+  reg [3:0] \$855 ;
+  reg \$856 ;
   reg \$857 ;
-  reg [23:0] \$858 ;
+  reg \$858 ;
   reg \$859 ;
   wire \$86 ;
-  reg [23:0] \$860 ;
+  reg \$860 ;
   reg \$861 ;
-  reg [6:0] \$862 ;
+  reg \$862 ;
   reg \$863 ;
   reg \$864 ;
-  reg [1:0] \$865 ;
+  reg \$865 ;
   reg \$866 ;
   reg \$867 ;
-  reg [6:0] \$868 ;
+  reg \$868 ;
   reg \$869 ;
   wire \$87 ;
   reg \$870 ;
-  reg [1:0] \$871 ;
+  reg \$871 ;
   reg \$872 ;
   reg \$873 ;
   reg \$874 ;
   reg \$875 ;
   reg \$876 ;
   reg \$877 ;
-  reg [7:0] \$878 ;
-  reg [3:0] \$879 ;
+  reg \$878 ;
+  reg \$879 ;
   wire \$88 ;
-  reg [3:0] \$880 ;
-  reg [3:0] \$881 ;
+  reg \$880 ;
+  reg \$881 ;
   reg \$882 ;
-  reg [11:0] \$883 ;
+  reg \$883 ;
   reg \$884 ;
-  reg [15:0] \$885 ;
-  reg [4:0] \$886 ;
+  reg \$885 ;
+  reg \$886 ;
   reg \$887 ;
   reg \$888 ;
-  reg [15:0] \$889 ;
+  reg \$889 ;
   wire \$89 ;
   reg \$890 ;
-  reg [15:0] \$891 ;
-  reg [4:0] \$892 ;
+  reg \$891 ;
+  reg \$892 ;
   reg \$893 ;
   reg \$894 ;
-  reg [15:0] \$895 ;
+  reg \$895 ;
   reg \$896 ;
   reg \$897 ;
-  reg \$898 ;
+  reg [3:0] \$898 ;
   reg \$899 ;
   wire [31:0] \$9 ;
   wire \$90 ;
   reg \$900 ;
-  reg [11:0] \$901 ;
+  reg \$901 ;
   reg \$902 ;
   reg \$903 ;
   reg \$904 ;
@@ -2896,26 +3008,26 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$908 ;
   reg \$909 ;
   wire \$91 ;
-  reg \$910 ;
-  reg \$911 ;
-  reg \$912 ;
-  reg \$913 ;
-  reg \$914 ;
-  reg \$915 ;
-  reg \$916 ;
-  reg \$917 ;
-  reg \$918 ;
+  reg [5:0] \$910 ;
+  reg [15:0] \$911 ;
+  reg [12:0] \$912 ;
+  reg [31:0] \$913 ;
+  reg [31:0] \$914 ;
+  reg [31:0] \$915 ;
+  reg [31:0] \$916 ;
+  reg [31:0] \$917 ;
+  reg [3:0] \$918 ;
   reg \$919 ;
   wire \$92 ;
-  reg \$920 ;
-  reg [2:0] \$921 ;
-  reg [6:0] \$922 ;
-  reg [6:0] \$923 ;
+  reg [7:0] \$920 ;
+  reg [12:0] \$921 ;
+  reg \$922 ;
+  reg \$923 ;
   reg \$924 ;
   reg \$925 ;
-  reg \$926 ;
-  reg [14:0] \$927 ;
-  reg [3:0] \$928 ;
+  reg [31:0] \$926 ;
+  reg \$927 ;
+  reg \$928 ;
   reg \$929 ;
   wire \$93 ;
   reg \$930 ;
@@ -2931,69 +3043,69 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$94 ;
   reg \$940 ;
   reg \$941 ;
-  reg \$942 ;
-  reg \$943 ;
+  reg [15:0] \$942 ;
+  reg [11:0] \$943 ;
   reg \$944 ;
-  reg \$945 ;
+  reg [23:0] \$945 ;
   reg \$946 ;
-  reg \$947 ;
+  reg [23:0] \$947 ;
   reg \$948 ;
-  reg \$949 ;
+  reg [23:0] \$949 ;
   wire \$95 ;
   reg \$950 ;
-  reg \$951 ;
+  reg [23:0] \$951 ;
   reg \$952 ;
-  reg \$953 ;
+  reg [6:0] \$953 ;
   reg \$954 ;
   reg \$955 ;
-  reg \$956 ;
+  reg [1:0] \$956 ;
   reg \$957 ;
   reg \$958 ;
-  reg \$959 ;
+  reg [6:0] \$959 ;
   wire \$96 ;
   reg \$960 ;
   reg \$961 ;
-  reg \$962 ;
+  reg [1:0] \$962 ;
   reg \$963 ;
   reg \$964 ;
   reg \$965 ;
   reg \$966 ;
   reg \$967 ;
   reg \$968 ;
-  reg \$969 ;
+  reg [7:0] \$969 ;
   wire \$97 ;
-  reg \$970 ;
+  reg [3:0] \$970 ;
   reg [3:0] \$971 ;
-  reg \$972 ;
+  reg [3:0] \$972 ;
   reg \$973 ;
-  reg \$974 ;
+  reg [11:0] \$974 ;
   reg \$975 ;
-  reg \$976 ;
-  reg \$977 ;
+  reg [15:0] \$976 ;
+  reg [4:0] \$977 ;
   reg \$978 ;
   reg \$979 ;
-  wire [31:0] \$98 ;
-  reg \$980 ;
+  wire \$98 ;
+  reg [15:0] \$980 ;
   reg \$981 ;
-  reg \$982 ;
-  reg [5:0] \$983 ;
-  reg [15:0] \$984 ;
-  reg [12:0] \$985 ;
-  reg [31:0] \$986 ;
-  reg [31:0] \$987 ;
-  reg [31:0] \$988 ;
-  reg [31:0] \$989 ;
-  wire [31:0] \$99 ;
-  reg [31:0] \$990 ;
-  reg [3:0] \$991 ;
-  reg \$992 ;
-  reg [7:0] \$993 ;
-  reg [12:0] \$994 ;
+  reg [15:0] \$982 ;
+  reg [4:0] \$983 ;
+  reg \$984 ;
+  reg \$985 ;
+  reg [15:0] \$986 ;
+  reg \$987 ;
+  reg \$988 ;
+  reg \$989 ;
+  wire \$99 ;
+  reg \$990 ;
+  reg \$991 ;
+  reg [11:0] \$992 ;
+  reg \$993 ;
+  reg \$994 ;
   reg \$995 ;
   reg \$996 ;
   reg \$997 ;
   reg \$998 ;
-  reg [31:0] \$999 ;
+  reg \$999 ;
   wire [10:0] bus__r_addr;
   output [31:0] bus__r_data;
   wire [31:0] bus__r_data;
@@ -3003,12 +3115,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire bus__r_load;
   input [10:0] bus__w_addr;
   wire [10:0] bus__w_addr;
+  output bus__w_busy;
+  wire bus__w_busy;
   input [31:0] bus__w_data;
   wire [31:0] bus__w_data;
   input bus__w_en;
   wire bus__w_en;
   input [3:0] bus__w_strb;
   wire [3:0] bus__w_strb;
+  input [1:0] cfg_free;
+  wire [1:0] cfg_free;
+  output [1:0] cfg_hold;
+  wire [1:0] cfg_hold;
   (* init = 1'h0 *)
   wire ch0__abort_cycle;
   input ch0__busy;
@@ -3293,21 +3411,24 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [2:0] ch0_ca_request_slave_id;
   reg [2:0] ch0_ca_request_slave_id = 3'h0;
   wire ch0_ca_request_write;
-  output \ch0_ca_request_write$149 ;
-  reg \ch0_ca_request_write$149  = 1'h0;
+  output \ch0_ca_request_write$152 ;
+  reg \ch0_ca_request_write$152  = 1'h0;
   wire ch0_ca_state_write;
   wire ch0_caps_chain2_write;
   wire ch0_caps_chain_write;
   wire ch0_caps_write;
   output [23:0] ch0_cfg_ack_ack_limit;
   reg [23:0] ch0_cfg_ack_ack_limit = 24'h000000;
-  reg ch0_cfg_ack_config_write = 1'h0;
+  reg ch0_cfg_ack_config_addressed = 1'h0;
+  wire ch0_cfg_ack_config_write;
   wire ch0_cfg_ack_write;
   output [23:0] ch0_cfg_break_break_time;
   reg [23:0] ch0_cfg_break_break_time = 24'h000000;
-  reg ch0_cfg_break_config_write = 1'h0;
+  reg ch0_cfg_break_config_addressed = 1'h0;
+  wire ch0_cfg_break_config_write;
   wire ch0_cfg_break_write;
-  reg ch0_cfg_checks_config_write = 1'h0;
+  reg ch0_cfg_checks_config_addressed = 1'h0;
+  wire ch0_cfg_checks_config_write;
   output [3:0] ch0_cfg_checks_confirm_frames;
   reg [3:0] ch0_cfg_checks_confirm_frames = 4'h0;
   output [3:0] ch0_cfg_checks_delay_tolerance;
@@ -3321,8 +3442,10 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [7:0] ch0_cfg_checks_spw_tolerance;
   reg [7:0] ch0_cfg_checks_spw_tolerance = 8'h00;
   wire ch0_cfg_checks_write;
-  reg ch0_cfg_crc0_config_write = 1'h0;
-  reg ch0_cfg_crc0_start_config_write = 1'h0;
+  reg ch0_cfg_crc0_config_addressed = 1'h0;
+  wire ch0_cfg_crc0_config_write;
+  reg ch0_cfg_crc0_start_config_addressed = 1'h0;
+  wire ch0_cfg_crc0_start_config_write;
   output [15:0] ch0_cfg_crc0_start_w0_crc_start;
   reg [15:0] ch0_cfg_crc0_start_w0_crc_start = 16'h0000;
   wire ch0_cfg_crc0_start_write;
@@ -3333,8 +3456,10 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [4:0] ch0_cfg_crc0_w0_crc_width;
   reg [4:0] ch0_cfg_crc0_w0_crc_width = 5'h00;
   wire ch0_cfg_crc0_write;
-  reg ch0_cfg_crc1_config_write = 1'h0;
-  reg ch0_cfg_crc1_start_config_write = 1'h0;
+  reg ch0_cfg_crc1_config_addressed = 1'h0;
+  wire ch0_cfg_crc1_config_write;
+  reg ch0_cfg_crc1_start_config_addressed = 1'h0;
+  wire ch0_cfg_crc1_start_config_write;
   output [15:0] ch0_cfg_crc1_start_w1_crc_start;
   reg [15:0] ch0_cfg_crc1_start_w1_crc_start = 16'h0000;
   wire ch0_cfg_crc1_start_write;
@@ -3345,21 +3470,25 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [4:0] ch0_cfg_crc1_w1_crc_width;
   reg [4:0] ch0_cfg_crc1_w1_crc_width = 5'h00;
   wire ch0_cfg_crc1_write;
-  reg ch0_cfg_ma_config_write = 1'h0;
+  reg ch0_cfg_ma_config_addressed = 1'h0;
+  wire ch0_cfg_ma_config_write;
   output [11:0] ch0_cfg_ma_delay_limit;
   reg [11:0] ch0_cfg_ma_delay_limit = 12'h000;
   output [15:0] ch0_cfg_ma_ma_half_period;
   reg [15:0] ch0_cfg_ma_ma_half_period = 16'h0000;
   wire ch0_cfg_ma_write;
-  reg ch0_cfg_period_config_write = 1'h0;
+  reg ch0_cfg_period_config_addressed = 1'h0;
+  wire ch0_cfg_period_config_write;
   output [23:0] ch0_cfg_period_request_period;
   reg [23:0] ch0_cfg_period_request_period = 24'h000000;
   wire ch0_cfg_period_write;
-  reg ch0_cfg_quiet_config_write = 1'h0;
+  reg ch0_cfg_quiet_config_addressed = 1'h0;
+  wire ch0_cfg_quiet_config_write;
   output [11:0] ch0_cfg_quiet_quiet_time;
   reg [11:0] ch0_cfg_quiet_quiet_time = 12'h000;
   wire ch0_cfg_quiet_write;
-  reg ch0_cfg_ssi_config_write = 1'h0;
+  reg ch0_cfg_ssi_config_addressed = 1'h0;
+  wire ch0_cfg_ssi_config_write;
   output ch0_cfg_ssi_ssi;
   reg ch0_cfg_ssi_ssi = 1'h0;
   output [11:0] ch0_cfg_ssi_ssi_delay;
@@ -3371,7 +3500,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output ch0_cfg_ssi_ssi_error_low;
   reg ch0_cfg_ssi_ssi_error_low = 1'h0;
   wire ch0_cfg_ssi_write;
-  reg ch0_cfg_timeout_config_write = 1'h0;
+  reg ch0_cfg_timeout_config_addressed = 1'h0;
+  wire ch0_cfg_timeout_config_write;
   output [23:0] ch0_cfg_timeout_timeout_limit;
   reg [23:0] ch0_cfg_timeout_timeout_limit = 24'h000000;
   wire ch0_cfg_timeout_write;
@@ -3411,7 +3541,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0_cfg_w7_crc_start_write;
   wire ch0_cfg_w7_crc_write;
   wire ch0_cfg_w7_write;
-  reg ch0_cfg_words_config_write = 1'h0;
+  reg ch0_cfg_words_config_addressed = 1'h0;
+  wire ch0_cfg_words_config_write;
   output [1:0] ch0_cfg_words_w0_crc;
   reg [1:0] ch0_cfg_words_w0_crc = 2'h0;
   output [6:0] ch0_cfg_words_w0_data_bits;
@@ -3441,9 +3572,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0_cfg_words_write;
   wire ch0_chain_flags_write;
   wire ch0_chain_updates_write;
+  reg ch0_config_go = 1'h0;
   wire ch0_config_read;
   wire [31:0] ch0_config_read_data;
   reg [3:0] ch0_config_read_index = 4'h0;
+  reg ch0_config_wait = 1'h0;
   reg [14:0] ch0_config_written = 15'h0000;
   wire ch0_count_chain2_write;
   wire ch0_count_chain3_write;
@@ -3833,21 +3966,24 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$430 ;
-  reg \ch1_ca_request_write$430  = 1'h0;
+  output \ch1_ca_request_write$435 ;
+  reg \ch1_ca_request_write$435  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_chain2_write;
   wire ch1_caps_chain_write;
   wire ch1_caps_write;
   output [23:0] ch1_cfg_ack_ack_limit;
   reg [23:0] ch1_cfg_ack_ack_limit = 24'h000000;
-  reg ch1_cfg_ack_config_write = 1'h0;
+  reg ch1_cfg_ack_config_addressed = 1'h0;
+  wire ch1_cfg_ack_config_write;
   wire ch1_cfg_ack_write;
   output [23:0] ch1_cfg_break_break_time;
   reg [23:0] ch1_cfg_break_break_time = 24'h000000;
-  reg ch1_cfg_break_config_write = 1'h0;
+  reg ch1_cfg_break_config_addressed = 1'h0;
+  wire ch1_cfg_break_config_write;
   wire ch1_cfg_break_write;
-  reg ch1_cfg_checks_config_write = 1'h0;
+  reg ch1_cfg_checks_config_addressed = 1'h0;
+  wire ch1_cfg_checks_config_write;
   output [3:0] ch1_cfg_checks_confirm_frames;
   reg [3:0] ch1_cfg_checks_confirm_frames = 4'h0;
   output [3:0] ch1_cfg_checks_delay_tolerance;
@@ -3861,8 +3997,10 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [7:0] ch1_cfg_checks_spw_tolerance;
   reg [7:0] ch1_cfg_checks_spw_tolerance = 8'h00;
   wire ch1_cfg_checks_write;
-  reg ch1_cfg_crc0_config_write = 1'h0;
-  reg ch1_cfg_crc0_start_config_write = 1'h0;
+  reg ch1_cfg_crc0_config_addressed = 1'h0;
+  wire ch1_cfg_crc0_config_write;
+  reg ch1_cfg_crc0_start_config_addressed = 1'h0;
+  wire ch1_cfg_crc0_start_config_write;
   output [15:0] ch1_cfg_crc0_start_w0_crc_start;
   reg [15:0] ch1_cfg_crc0_start_w0_crc_start = 16'h0000;
   wire ch1_cfg_crc0_start_write;
@@ -3873,8 +4011,10 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [4:0] ch1_cfg_crc0_w0_crc_width;
   reg [4:0] ch1_cfg_crc0_w0_crc_width = 5'h00;
   wire ch1_cfg_crc0_write;
-  reg ch1_cfg_crc1_config_write = 1'h0;
-  reg ch1_cfg_crc1_start_config_write = 1'h0;
+  reg ch1_cfg_crc1_config_addressed = 1'h0;
+  wire ch1_cfg_crc1_config_write;
+  reg ch1_cfg_crc1_start_config_addressed = 1'h0;
+  wire ch1_cfg_crc1_start_config_write;
   output [15:0] ch1_cfg_crc1_start_w1_crc_start;
   reg [15:0] ch1_cfg_crc1_start_w1_crc_start = 16'h0000;
   wire ch1_cfg_crc1_start_write;
@@ -3885,21 +4025,25 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [4:0] ch1_cfg_crc1_w1_crc_width;
   reg [4:0] ch1_cfg_crc1_w1_crc_width = 5'h00;
   wire ch1_cfg_crc1_write;
-  reg ch1_cfg_ma_config_write = 1'h0;
+  reg ch1_cfg_ma_config_addressed = 1'h0;
+  wire ch1_cfg_ma_config_write;
   output [11:0] ch1_cfg_ma_delay_limit;
   reg [11:0] ch1_cfg_ma_delay_limit = 12'h000;
   output [15:0] ch1_cfg_ma_ma_half_period;
   reg [15:0] ch1_cfg_ma_ma_half_period = 16'h0000;
   wire ch1_cfg_ma_write;
-  reg ch1_cfg_period_config_write = 1'h0;
+  reg ch1_cfg_period_config_addressed = 1'h0;
+  wire ch1_cfg_period_config_write;
   output [23:0] ch1_cfg_period_request_period;
   reg [23:0] ch1_cfg_period_request_period = 24'h000000;
   wire ch1_cfg_period_write;
-  reg ch1_cfg_quiet_config_write = 1'h0;
+  reg ch1_cfg_quiet_config_addressed = 1'h0;
+  wire ch1_cfg_quiet_config_write;
   output [11:0] ch1_cfg_quiet_quiet_time;
   reg [11:0] ch1_cfg_quiet_quiet_time = 12'h000;
   wire ch1_cfg_quiet_write;
-  reg ch1_cfg_ssi_config_write = 1'h0;
+  reg ch1_cfg_ssi_config_addressed = 1'h0;
+  wire ch1_cfg_ssi_config_write;
   output ch1_cfg_ssi_ssi;
   reg ch1_cfg_ssi_ssi = 1'h0;
   output [11:0] ch1_cfg_ssi_ssi_delay;
@@ -3911,7 +4055,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output ch1_cfg_ssi_ssi_error_low;
   reg ch1_cfg_ssi_ssi_error_low = 1'h0;
   wire ch1_cfg_ssi_write;
-  reg ch1_cfg_timeout_config_write = 1'h0;
+  reg ch1_cfg_timeout_config_addressed = 1'h0;
+  wire ch1_cfg_timeout_config_write;
   output [23:0] ch1_cfg_timeout_timeout_limit;
   reg [23:0] ch1_cfg_timeout_timeout_limit = 24'h000000;
   wire ch1_cfg_timeout_write;
@@ -3951,7 +4096,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1_cfg_w7_crc_start_write;
   wire ch1_cfg_w7_crc_write;
   wire ch1_cfg_w7_write;
-  reg ch1_cfg_words_config_write = 1'h0;
+  reg ch1_cfg_words_config_addressed = 1'h0;
+  wire ch1_cfg_words_config_write;
   output [1:0] ch1_cfg_words_w0_crc;
   reg [1:0] ch1_cfg_words_w0_crc = 2'h0;
   output [6:0] ch1_cfg_words_w0_data_bits;
@@ -3981,9 +4127,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1_cfg_words_write;
   wire ch1_chain_flags_write;
   wire ch1_chain_updates_write;
+  reg ch1_config_go = 1'h0;
   wire ch1_config_read;
   wire [31:0] ch1_config_read_data;
   reg [3:0] ch1_config_read_index = 4'h0;
+  reg ch1_config_wait = 1'h0;
   reg [14:0] ch1_config_written = 15'h0000;
   wire ch1_count_chain2_write;
   wire ch1_count_chain3_write;
@@ -4118,34 +4266,34 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$13356$0 ;
-  wire [186:0] \port$13356$0 ;
-  input [79:0] \port$13367$0 ;
-  wire [79:0] \port$13367$0 ;
-  input [9:0] \port$13444$0 ;
-  wire [9:0] \port$13444$0 ;
-  input [186:0] \port$13903$0 ;
-  wire [186:0] \port$13903$0 ;
-  input [79:0] \port$13914$0 ;
-  wire [79:0] \port$13914$0 ;
-  input [9:0] \port$13991$0 ;
-  wire [9:0] \port$13991$0 ;
+  input [186:0] \port$13541$0 ;
+  wire [186:0] \port$13541$0 ;
+  input [79:0] \port$13552$0 ;
+  wire [79:0] \port$13552$0 ;
+  input [9:0] \port$13629$0 ;
+  wire [9:0] \port$13629$0 ;
+  input [186:0] \port$14092$0 ;
+  wire [186:0] \port$14092$0 ;
+  input [79:0] \port$14103$0 ;
+  wire [79:0] \port$14103$0 ;
+  input [9:0] \port$14180$0 ;
+  wire [9:0] \port$14180$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
-  wire [3:0] \rd__addr$891 ;
+  wire [3:0] \rd__addr$923 ;
   wire [31:0] rd__data;
-  wire [31:0] \rd__data$892 ;
+  wire [31:0] \rd__data$924 ;
   input rst;
   wire rst;
   wire [3:0] wr__addr;
-  wire [3:0] \wr__addr$888 ;
+  wire [3:0] \wr__addr$920 ;
   (* init = 32'd0 *)
   wire [31:0] wr__data;
   (* init = 32'd0 *)
-  wire [31:0] \wr__data$889 ;
+  wire [31:0] \wr__data$921 ;
   wire [3:0] wr__en;
-  wire [3:0] \wr__en$890 ;
+  wire [3:0] \wr__en$922 ;
   reg [10:0] write_addr = 11'h000;
   output [31:0] write_data;
   reg [31:0] write_data = 32'd0;
@@ -4171,13 +4319,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @(posedge clk) begin
     if (wr__en[0])
-      ch0_config_memory[{ \$543 , \$542 , \$541 , \$540  }][7:0] <= config_memory0_write_data[7:0];
+      ch0_config_memory[{ \$629 , \$628 , \$627 , \$626  }][7:0] <= config_memory0_write_data[7:0];
     if (wr__en[1])
-      ch0_config_memory[{ \$543 , \$542 , \$541 , \$540  }][15:8] <= config_memory0_write_data[15:8];
+      ch0_config_memory[{ \$629 , \$628 , \$627 , \$626  }][15:8] <= config_memory0_write_data[15:8];
     if (wr__en[2])
-      ch0_config_memory[{ \$543 , \$542 , \$541 , \$540  }][23:16] <= config_memory0_write_data[23:16];
+      ch0_config_memory[{ \$629 , \$628 , \$627 , \$626  }][23:16] <= config_memory0_write_data[23:16];
     if (wr__en[3])
-      ch0_config_memory[{ \$543 , \$542 , \$541 , \$540  }][31:24] <= config_memory0_write_data[31:24];
+      ch0_config_memory[{ \$629 , \$628 , \$627 , \$626  }][31:24] <= config_memory0_write_data[31:24];
   end
   assign rd__data = ch0_config_memory[ch0_config_read_index];
   reg [31:0] ch1_config_memory [14:0];
@@ -4199,16 +4347,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     ch1_config_memory[14] = 32'd0;
   end
   always @(posedge clk) begin
-    if (\wr__en$890 [0])
-      ch1_config_memory[{ \$635 , \$634 , \$633 , \$632  }][7:0] <= config_memory0_write_data[7:0];
-    if (\wr__en$890 [1])
-      ch1_config_memory[{ \$635 , \$634 , \$633 , \$632  }][15:8] <= config_memory0_write_data[15:8];
-    if (\wr__en$890 [2])
-      ch1_config_memory[{ \$635 , \$634 , \$633 , \$632  }][23:16] <= config_memory0_write_data[23:16];
-    if (\wr__en$890 [3])
-      ch1_config_memory[{ \$635 , \$634 , \$633 , \$632  }][31:24] <= config_memory0_write_data[31:24];
+    if (\wr__en$922 [0])
+      ch1_config_memory[{ \$721 , \$720 , \$719 , \$718  }][7:0] <= config_memory0_write_data[7:0];
+    if (\wr__en$922 [1])
+      ch1_config_memory[{ \$721 , \$720 , \$719 , \$718  }][15:8] <= config_memory0_write_data[15:8];
+    if (\wr__en$922 [2])
+      ch1_config_memory[{ \$721 , \$720 , \$719 , \$718  }][23:16] <= config_memory0_write_data[23:16];
+    if (\wr__en$922 [3])
+      ch1_config_memory[{ \$721 , \$720 , \$719 , \$718  }][31:24] <= config_memory0_write_data[31:24];
   end
-  assign \rd__data$892  = ch1_config_memory[ch1_config_read_index];
+  assign \rd__data$924  = ch1_config_memory[ch1_config_read_index];
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__w_addr;
@@ -4223,2333 +4371,1638 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$13  = \$11  | \$12 ;
   assign \$16  = g_read_select_4 ? { 30'h00000000, ch1_irq, ch0_irq } : 32'd0;
   assign \$17  = \$15  | \$16 ;
-  assign \$18  = write_data[0] & write_strb[0];
-  assign \$19  = ch0_ctrl_write ? \$18  : 1'h0;
-  assign \$20  = write_data[1] & write_strb[0];
-  assign \$21  = ch0_ctrl_write ? \$20  : 1'h0;
-  assign \$22  = write_data[2] & write_strb[0];
-  assign \$23  = ch0_ctrl_write ? \$22  : 1'h0;
-  assign \$24  = ch0_ctrl_write & write_strb[1];
-  assign \$25  = ch0_ctrl_write & write_strb[1];
-  assign \$26  = write_data[0] & write_strb[0];
-  assign \$27  = ch0_irq_status_write ? \$26  : 1'h0;
-  assign \$28  = write_data[1] & write_strb[0];
-  assign \$29  = ch0_irq_status_write ? \$28  : 1'h0;
-  assign \$30  = write_data[2] & write_strb[0];
-  assign \$31  = ch0_irq_status_write ? \$30  : 1'h0;
-  assign \$32  = ch0_irq_enable_config_write & config_write_strb[0];
-  assign \$33  = ch0_irq_enable_config_write & config_write_strb[0];
-  assign \$34  = ch0_irq_enable_config_write & config_write_strb[0];
-  assign \$35  = ch0_cfg_ma_config_write & config_write_strb[0];
-  assign \$36  = ch0_cfg_ma_config_write & config_write_strb[1];
-  assign \$37  = ch0_cfg_ma_config_write & config_write_strb[2];
-  assign \$38  = ch0_cfg_ma_config_write & config_write_strb[3];
-  assign \$39  = ch0_cfg_period_config_write & config_write_strb[0];
-  assign \$40  = ch0_cfg_period_config_write & config_write_strb[1];
-  assign \$41  = ch0_cfg_period_config_write & config_write_strb[2];
-  assign \$42  = ch0_cfg_break_config_write & config_write_strb[0];
-  assign \$43  = ch0_cfg_break_config_write & config_write_strb[1];
-  assign \$44  = ch0_cfg_break_config_write & config_write_strb[2];
-  assign \$45  = ch0_cfg_ack_config_write & config_write_strb[0];
-  assign \$46  = ch0_cfg_ack_config_write & config_write_strb[1];
-  assign \$47  = ch0_cfg_ack_config_write & config_write_strb[2];
-  assign \$48  = ch0_cfg_timeout_config_write & config_write_strb[0];
-  assign \$49  = ch0_cfg_timeout_config_write & config_write_strb[1];
-  assign \$50  = ch0_cfg_timeout_config_write & config_write_strb[2];
-  assign \$51  = ch0_cfg_words_config_write & config_write_strb[0];
-  assign \$52  = ch0_cfg_words_config_write & config_write_strb[0];
-  assign \$53  = ch0_cfg_words_config_write & config_write_strb[1];
-  assign \$54  = ch0_cfg_words_config_write & config_write_strb[1];
-  assign \$55  = ch0_cfg_words_config_write & config_write_strb[1];
-  assign \$56  = ch0_cfg_words_config_write & config_write_strb[1];
-  assign \$57  = ch0_cfg_words_config_write & config_write_strb[2];
-  assign \$58  = ch0_cfg_words_config_write & config_write_strb[2];
-  assign \$59  = ch0_cfg_words_config_write & config_write_strb[3];
-  assign \$60  = ch0_cfg_words_config_write & config_write_strb[3];
-  assign \$61  = ch0_cfg_words_config_write & config_write_strb[3];
-  assign \$62  = ch0_cfg_words_config_write & config_write_strb[3];
-  assign \$63  = ch0_cfg_words_config_write & config_write_strb[3];
-  assign \$64  = ch0_cfg_checks_config_write & config_write_strb[0];
-  assign \$65  = ch0_cfg_checks_config_write & config_write_strb[0];
-  assign \$66  = ch0_cfg_checks_config_write & config_write_strb[1];
-  assign \$67  = ch0_cfg_checks_config_write & config_write_strb[2];
-  assign \$68  = ch0_cfg_checks_config_write & config_write_strb[2];
-  assign \$69  = ch0_cfg_checks_config_write & config_write_strb[3];
-  assign \$70  = ch0_cfg_quiet_config_write & config_write_strb[0];
-  assign \$71  = ch0_cfg_quiet_config_write & config_write_strb[1];
-  assign \$72  = ch0_cfg_crc0_config_write & config_write_strb[0];
-  assign \$73  = ch0_cfg_crc0_config_write & config_write_strb[1];
-  assign \$74  = ch0_cfg_crc0_config_write & config_write_strb[2];
-  assign \$75  = ch0_cfg_crc0_config_write & config_write_strb[3];
-  assign \$76  = ch0_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$77  = ch0_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$78  = ch0_cfg_crc1_config_write & config_write_strb[0];
-  assign \$79  = ch0_cfg_crc1_config_write & config_write_strb[1];
-  assign \$80  = ch0_cfg_crc1_config_write & config_write_strb[2];
-  assign \$81  = ch0_cfg_crc1_config_write & config_write_strb[3];
-  assign \$82  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$83  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$84  = ch0_cfg_ssi_config_write & config_write_strb[0];
-  assign \$85  = ch0_cfg_ssi_config_write & config_write_strb[0];
-  assign \$86  = ch0_cfg_ssi_config_write & config_write_strb[0];
-  assign \$87  = ch0_cfg_ssi_config_write & config_write_strb[0];
-  assign \$88  = ch0_cfg_ssi_config_write & config_write_strb[2];
-  assign \$89  = ch0_cfg_ssi_config_write & config_write_strb[3];
-  assign \$90  = ch0_ca_request_config_write & config_write_strb[0];
-  assign \$91  = ch0_ca_request_config_write & config_write_strb[1];
-  assign \$92  = ch0_ca_request_config_write & config_write_strb[2];
-  assign \$93  = ch0_ca_request_config_write & config_write_strb[3];
-  assign \$94  = write_data[0] & write_strb[0];
-  assign \$95  = ch0_ca_ctrl_write ? \$94  : 1'h0;
-  assign \$96  = write_data[1] & write_strb[0];
-  assign \$97  = ch0_ca_ctrl_write ? \$96  : 1'h0;
-  assign \$98  = write_data & config_memory0_write_mask;
-  assign \$99  = \$98  & { write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3:2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2:1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1:0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0] };
-  assign \$100  = ~ { write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3:2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2:1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1:0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0] };
-  assign \$101  = config_memory0_write_fill & \$100 ;
-  assign \$102  = \$99  | \$101 ;
-  assign \$103  = ch0_config_written | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
-  assign \$104  = bus__w_addr == 8'h80;
-  assign \$105  = bus__w_addr == 8'h81;
-  assign \$106  = bus__w_addr == 8'h82;
-  assign \$107  = bus__w_addr == 8'h84;
-  assign \$108  = bus__w_addr == 8'h86;
-  assign \$109  = bus__w_addr == 8'h87;
-  assign \$110  = bus__w_addr == 8'h90;
-  assign \$111  = bus__w_addr == 8'h91;
-  assign \$112  = bus__w_addr == 8'h92;
-  assign \$113  = bus__w_addr == 8'h93;
-  assign \$114  = bus__w_addr == 8'h94;
-  assign \$115  = bus__w_addr == 8'h95;
-  assign \$116  = bus__w_addr == 8'h96;
-  assign \$117  = bus__w_addr == 8'h97;
-  assign \$118  = bus__w_addr == 8'ha5;
-  assign \$119  = bus__w_addr == 8'ha6;
-  assign \$120  = bus__w_addr == 8'ha7;
-  assign \$121  = bus__w_addr == 8'ha8;
-  assign \$122  = bus__w_addr == 8'ha9;
-  assign \$123  = bus__w_addr == 8'haa;
-  assign \$124  = bus__w_addr == 8'hac;
-  assign \$125  = bus__w_addr == 8'had;
-  assign \$126  = bus__w_addr == 8'hae;
-  assign \$127  = bus__w_addr == 8'hb0;
-  assign \$128  = bus__w_addr == 8'hb1;
-  assign \$129  = bus__w_addr == 8'hb2;
-  assign \$130  = bus__w_addr == 8'hb4;
-  assign \$131  = bus__w_addr == 8'hb5;
-  assign \$132  = bus__w_addr == 8'hb6;
-  assign \$133  = bus__w_addr == 8'hb8;
-  assign \$134  = bus__w_addr == 8'hb9;
-  assign \$135  = bus__w_addr == 8'hba;
-  assign \$136  = bus__w_addr == 8'hbc;
-  assign \$137  = bus__w_addr == 8'hbd;
-  assign \$138  = bus__w_addr == 8'hbe;
-  assign \$139  = bus__w_addr == 8'hc1;
-  assign \$140  = bus__w_addr == 8'hc2;
-  assign \$141  = bus__w_addr == 8'hc3;
-  assign \$142  = bus__w_addr == 8'hc4;
-  assign \$143  = bus__w_addr == 8'hc5;
-  assign \$144  = bus__w_addr == 8'hfc;
-  assign \$145  = bus__w_addr == 8'hfd;
-  assign \$146  = ch0_read_select_90 & bus__r_load;
-  assign \$147  = bus__w_addr[10:3] == 5'h13;
-  assign \$148  = bus__r_en & \$147 ;
-  assign \$149  = bus__w_addr[10:4] == 4'hf;
-  assign \$150  = bus__r_en & \$149 ;
-  assign \$151  = bus__w_addr[3:0] < 4'hc;
-  assign \$152  = \$150  & \$151 ;
-  assign \$153  = bus__w_addr[10:4] == 4'he;
-  assign \$154  = bus__r_en & \$153 ;
-  assign \$155  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$157  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$158  = \$156  | \$157 ;
-  assign \$159  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
-  assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
-  assign \$162  = \$160  | \$161 ;
-  assign \$167  = ch0_read_select_90 ? { 2'h0, \port$13356$0 [182:177], 4'h0, \port$13356$0 [186:183], 1'h0, \port$13356$0 [176:174], 1'h0, \port$13356$0 [133:131], 3'h0, \port$13356$0 [49], \port$13356$0 [3:0] } : 32'd0;
-  assign \$168  = \$166  | \$167 ;
-  assign \$169  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
-  assign \$170  = \$168  | \$169 ;
-  assign \$171  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
-  assign \$172  = \$170  | \$171 ;
-  assign \$173  = ch0_read_select_93 ? ch0_result_w0_hi_data_snapshot : 32'd0;
-  assign \$174  = \$172  | \$173 ;
-  assign \$175  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
-  assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_95 ? ch0_result_w1_hi_data_snapshot : 32'd0;
-  assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
-  assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
-  assign \$182  = \$180  | \$181 ;
-  assign \$227  = ch0_read_select_c2 ? { 17'h00000, \port$13444$0 [9:3], 1'h0, \port$13444$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$228  = \$226  | \$227 ;
-  assign \$229  = ch0_read_select_c3 ? \port$13367$0 [31:0] : 32'd0;
-  assign \$230  = \$228  | \$229 ;
-  assign \$231  = ch0_read_select_c4 ? \port$13367$0 [63:32] : 32'd0;
-  assign \$232  = \$230  | \$231 ;
-  assign \$233  = ch0_read_select_c5 ? { 16'h0000, \port$13367$0 [79:64] } : 32'd0;
-  assign \$234  = \$232  | \$233 ;
-  assign \$237  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
-  assign \$238  = \$236  | \$237 ;
-  assign \$239  = ch0_window0_read ? ch0__count_data : 32'd0;
-  assign \$240  = \$238  | \$239 ;
-  assign \$243  = ch0_window2_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$244  = \$242  | \$243 ;
-  assign \$245  = ch0_window3_read ? ch0_config_read_data : 32'd0;
-  assign \$246  = \$244  | \$245 ;
-  assign \$247  = write_data[0] & write_strb[0];
-  assign \$248  = ch1_ctrl_write ? \$247  : 1'h0;
-  assign \$249  = write_data[1] & write_strb[0];
-  assign \$250  = ch1_ctrl_write ? \$249  : 1'h0;
-  assign \$251  = write_data[2] & write_strb[0];
-  assign \$252  = ch1_ctrl_write ? \$251  : 1'h0;
-  assign \$253  = ch1_ctrl_write & write_strb[1];
-  assign \$254  = ch1_ctrl_write & write_strb[1];
-  assign \$255  = write_data[0] & write_strb[0];
-  assign \$256  = ch1_irq_status_write ? \$255  : 1'h0;
-  assign \$257  = write_data[1] & write_strb[0];
-  assign \$258  = ch1_irq_status_write ? \$257  : 1'h0;
-  assign \$259  = write_data[2] & write_strb[0];
-  assign \$260  = ch1_irq_status_write ? \$259  : 1'h0;
-  assign \$261  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$262  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$263  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$264  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$265  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$266  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$267  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$268  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$269  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$270  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$271  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$272  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$273  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$274  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$275  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$276  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$277  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$278  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$279  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$280  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$281  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$282  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$283  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$284  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$285  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$286  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$287  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$288  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$289  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$290  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$291  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$292  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$293  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$294  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$295  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$296  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$297  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$298  = ch1_cfg_checks_config_write & config_write_strb[3];
-  assign \$299  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$300  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$301  = ch1_cfg_crc0_config_write & config_write_strb[0];
-  assign \$302  = ch1_cfg_crc0_config_write & config_write_strb[1];
-  assign \$303  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$304  = ch1_cfg_crc0_config_write & config_write_strb[3];
-  assign \$305  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$306  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$307  = ch1_cfg_crc1_config_write & config_write_strb[0];
-  assign \$308  = ch1_cfg_crc1_config_write & config_write_strb[1];
-  assign \$309  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$310  = ch1_cfg_crc1_config_write & config_write_strb[3];
-  assign \$311  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$312  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$313  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$314  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$315  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$316  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$317  = ch1_cfg_ssi_config_write & config_write_strb[2];
-  assign \$318  = ch1_cfg_ssi_config_write & config_write_strb[3];
-  assign \$319  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$320  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$321  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$322  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$323  = write_data[0] & write_strb[0];
-  assign \$324  = ch1_ca_ctrl_write ? \$323  : 1'h0;
-  assign \$325  = write_data[1] & write_strb[0];
-  assign \$326  = ch1_ca_ctrl_write ? \$325  : 1'h0;
-  assign \$327  = ch1_config_written | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
-  assign \$328  = bus__w_addr == 9'h100;
-  assign \$329  = bus__w_addr == 9'h101;
-  assign \$330  = bus__w_addr == 9'h102;
-  assign \$331  = bus__w_addr == 9'h104;
-  assign \$332  = bus__w_addr == 9'h106;
-  assign \$333  = bus__w_addr == 9'h107;
-  assign \$334  = bus__w_addr == 9'h110;
-  assign \$335  = bus__w_addr == 9'h111;
-  assign \$336  = bus__w_addr == 9'h112;
-  assign \$337  = bus__w_addr == 9'h113;
-  assign \$338  = bus__w_addr == 9'h114;
-  assign \$339  = bus__w_addr == 9'h115;
-  assign \$340  = bus__w_addr == 9'h116;
-  assign \$341  = bus__w_addr == 9'h117;
-  assign \$342  = bus__w_addr == 9'h125;
-  assign \$343  = bus__w_addr == 9'h126;
-  assign \$344  = bus__w_addr == 9'h127;
-  assign \$345  = bus__w_addr == 9'h128;
-  assign \$346  = bus__w_addr == 9'h129;
-  assign \$347  = bus__w_addr == 9'h12a;
-  assign \$348  = bus__w_addr == 9'h12c;
-  assign \$349  = bus__w_addr == 9'h12d;
-  assign \$350  = bus__w_addr == 9'h12e;
-  assign \$351  = bus__w_addr == 9'h130;
-  assign \$352  = bus__w_addr == 9'h131;
-  assign \$353  = bus__w_addr == 9'h132;
-  assign \$354  = bus__w_addr == 9'h134;
-  assign \$355  = bus__w_addr == 9'h135;
-  assign \$356  = bus__w_addr == 9'h136;
-  assign \$357  = bus__w_addr == 9'h138;
-  assign \$358  = bus__w_addr == 9'h139;
-  assign \$359  = bus__w_addr == 9'h13a;
-  assign \$360  = bus__w_addr == 9'h13c;
-  assign \$361  = bus__w_addr == 9'h13d;
-  assign \$362  = bus__w_addr == 9'h13e;
-  assign \$363  = bus__w_addr == 9'h141;
-  assign \$364  = bus__w_addr == 9'h142;
-  assign \$365  = bus__w_addr == 9'h143;
-  assign \$366  = bus__w_addr == 9'h144;
-  assign \$367  = bus__w_addr == 9'h145;
-  assign \$368  = bus__w_addr == 9'h17c;
-  assign \$369  = bus__w_addr == 9'h17d;
-  assign \$370  = ch1_read_select_110 & bus__r_load;
-  assign \$371  = bus__w_addr[10:3] == 6'h23;
-  assign \$372  = bus__r_en & \$371 ;
-  assign \$373  = bus__w_addr[10:4] == 5'h17;
-  assign \$374  = bus__r_en & \$373 ;
-  assign \$375  = bus__w_addr[3:0] < 4'hc;
-  assign \$376  = \$374  & \$375 ;
-  assign \$377  = bus__w_addr[10:4] == 5'h16;
-  assign \$378  = bus__r_en & \$377 ;
-  assign \$379  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$381  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$382  = \$380  | \$381 ;
-  assign \$383  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
-  assign \$384  = \$382  | \$383 ;
-  assign \$385  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
-  assign \$386  = \$384  | \$385 ;
-  assign \$391  = ch1_read_select_110 ? { 2'h0, \port$13903$0 [182:177], 4'h0, \port$13903$0 [186:183], 1'h0, \port$13903$0 [176:174], 1'h0, \port$13903$0 [133:131], 3'h0, \port$13903$0 [49], \port$13903$0 [3:0] } : 32'd0;
-  assign \$392  = \$390  | \$391 ;
-  assign \$393  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
-  assign \$394  = \$392  | \$393 ;
-  assign \$395  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
-  assign \$396  = \$394  | \$395 ;
-  assign \$397  = ch1_read_select_113 ? ch1_result_w0_hi_data_snapshot : 32'd0;
-  assign \$398  = \$396  | \$397 ;
-  assign \$399  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
-  assign \$400  = \$398  | \$399 ;
-  assign \$401  = ch1_read_select_115 ? ch1_result_w1_hi_data_snapshot : 32'd0;
-  assign \$402  = \$400  | \$401 ;
-  assign \$403  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
-  assign \$404  = \$402  | \$403 ;
-  assign \$405  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
-  assign \$406  = \$404  | \$405 ;
-  assign \$451  = ch1_read_select_142 ? { 17'h00000, \port$13991$0 [9:3], 1'h0, \port$13991$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
-  assign \$452  = \$450  | \$451 ;
-  assign \$453  = ch1_read_select_143 ? \port$13914$0 [31:0] : 32'd0;
-  assign \$454  = \$452  | \$453 ;
-  assign \$455  = ch1_read_select_144 ? \port$13914$0 [63:32] : 32'd0;
-  assign \$456  = \$454  | \$455 ;
-  assign \$457  = ch1_read_select_145 ? { 16'h0000, \port$13914$0 [79:64] } : 32'd0;
-  assign \$458  = \$456  | \$457 ;
-  assign \$461  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
-  assign \$462  = \$460  | \$461 ;
-  assign \$463  = ch1_window0_read ? ch1__count_data : 32'd0;
-  assign \$464  = \$462  | \$463 ;
-  assign \$467  = ch1_window2_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$18  = write_addr == 8'h88;
+  assign \$19  = write_en & \$18 ;
+  assign \$20  = write_addr == 8'h89;
+  assign \$21  = write_en & \$20 ;
+  assign \$22  = write_addr == 8'h8a;
+  assign \$23  = write_en & \$22 ;
+  assign \$24  = write_addr == 8'h8b;
+  assign \$25  = write_en & \$24 ;
+  assign \$26  = write_addr == 8'h8c;
+  assign \$27  = write_en & \$26 ;
+  assign \$28  = write_addr == 8'h8d;
+  assign \$29  = write_en & \$28 ;
+  assign \$30  = write_addr == 8'h8e;
+  assign \$31  = write_en & \$30 ;
+  assign \$32  = write_addr == 8'h8f;
+  assign \$33  = write_en & \$32 ;
+  assign \$34  = write_addr == 8'ha0;
+  assign \$35  = write_en & \$34 ;
+  assign \$36  = write_addr == 8'ha1;
+  assign \$37  = write_en & \$36 ;
+  assign \$38  = write_addr == 8'ha2;
+  assign \$39  = write_en & \$38 ;
+  assign \$40  = write_addr == 8'ha3;
+  assign \$41  = write_en & \$40 ;
+  assign \$42  = write_addr == 8'ha4;
+  assign \$43  = write_en & \$42 ;
+  assign \$44  = | { \$43 , \$41 , \$39 , \$37 , \$35 , \$33 , \$31 , \$29 , \$27 , \$25 , \$23 , \$21 , \$19  };
+  assign \$45  = ~ ch0_config_go;
+  assign \$46  = ch0_config_wait & \$45 ;
+  assign \$47  = \$46  & cfg_free[0];
+  assign \$48  = write_data[0] & write_strb[0];
+  assign \$49  = ch0_ctrl_write ? \$48  : 1'h0;
+  assign \$50  = write_data[1] & write_strb[0];
+  assign \$51  = ch0_ctrl_write ? \$50  : 1'h0;
+  assign \$52  = write_data[2] & write_strb[0];
+  assign \$53  = ch0_ctrl_write ? \$52  : 1'h0;
+  assign \$54  = ch0_ctrl_write & write_strb[1];
+  assign \$55  = ch0_ctrl_write & write_strb[1];
+  assign \$56  = write_data[0] & write_strb[0];
+  assign \$57  = ch0_irq_status_write ? \$56  : 1'h0;
+  assign \$58  = write_data[1] & write_strb[0];
+  assign \$59  = ch0_irq_status_write ? \$58  : 1'h0;
+  assign \$60  = write_data[2] & write_strb[0];
+  assign \$61  = ch0_irq_status_write ? \$60  : 1'h0;
+  assign \$62  = ch0_irq_enable_config_write & config_write_strb[0];
+  assign \$63  = ch0_irq_enable_config_write & config_write_strb[0];
+  assign \$64  = ch0_irq_enable_config_write & config_write_strb[0];
+  assign \$65  = write_addr == 8'h88;
+  assign \$66  = ch0_cfg_ma_config_write & config_write_strb[0];
+  assign \$67  = ch0_cfg_ma_config_write & config_write_strb[1];
+  assign \$68  = ch0_cfg_ma_config_write & config_write_strb[2];
+  assign \$69  = ch0_cfg_ma_config_write & config_write_strb[3];
+  assign \$70  = write_addr == 8'h89;
+  assign \$71  = ch0_cfg_period_config_write & config_write_strb[0];
+  assign \$72  = ch0_cfg_period_config_write & config_write_strb[1];
+  assign \$73  = ch0_cfg_period_config_write & config_write_strb[2];
+  assign \$74  = write_addr == 8'h8a;
+  assign \$75  = ch0_cfg_break_config_write & config_write_strb[0];
+  assign \$76  = ch0_cfg_break_config_write & config_write_strb[1];
+  assign \$77  = ch0_cfg_break_config_write & config_write_strb[2];
+  assign \$78  = write_addr == 8'h8b;
+  assign \$79  = ch0_cfg_ack_config_write & config_write_strb[0];
+  assign \$80  = ch0_cfg_ack_config_write & config_write_strb[1];
+  assign \$81  = ch0_cfg_ack_config_write & config_write_strb[2];
+  assign \$82  = write_addr == 8'h8c;
+  assign \$83  = ch0_cfg_timeout_config_write & config_write_strb[0];
+  assign \$84  = ch0_cfg_timeout_config_write & config_write_strb[1];
+  assign \$85  = ch0_cfg_timeout_config_write & config_write_strb[2];
+  assign \$86  = write_addr == 8'h8d;
+  assign \$87  = ch0_cfg_words_config_write & config_write_strb[0];
+  assign \$88  = ch0_cfg_words_config_write & config_write_strb[0];
+  assign \$89  = ch0_cfg_words_config_write & config_write_strb[1];
+  assign \$90  = ch0_cfg_words_config_write & config_write_strb[1];
+  assign \$91  = ch0_cfg_words_config_write & config_write_strb[1];
+  assign \$92  = ch0_cfg_words_config_write & config_write_strb[1];
+  assign \$93  = ch0_cfg_words_config_write & config_write_strb[2];
+  assign \$94  = ch0_cfg_words_config_write & config_write_strb[2];
+  assign \$95  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$96  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$97  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$98  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$99  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$100  = write_addr == 8'h8e;
+  assign \$101  = ch0_cfg_checks_config_write & config_write_strb[0];
+  assign \$102  = ch0_cfg_checks_config_write & config_write_strb[0];
+  assign \$103  = ch0_cfg_checks_config_write & config_write_strb[1];
+  assign \$104  = ch0_cfg_checks_config_write & config_write_strb[2];
+  assign \$105  = ch0_cfg_checks_config_write & config_write_strb[2];
+  assign \$106  = ch0_cfg_checks_config_write & config_write_strb[3];
+  assign \$107  = write_addr == 8'h8f;
+  assign \$108  = ch0_cfg_quiet_config_write & config_write_strb[0];
+  assign \$109  = ch0_cfg_quiet_config_write & config_write_strb[1];
+  assign \$110  = write_addr == 8'ha0;
+  assign \$111  = ch0_cfg_crc0_config_write & config_write_strb[0];
+  assign \$112  = ch0_cfg_crc0_config_write & config_write_strb[1];
+  assign \$113  = ch0_cfg_crc0_config_write & config_write_strb[2];
+  assign \$114  = ch0_cfg_crc0_config_write & config_write_strb[3];
+  assign \$115  = write_addr == 8'ha1;
+  assign \$116  = ch0_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$117  = ch0_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$118  = write_addr == 8'ha2;
+  assign \$119  = ch0_cfg_crc1_config_write & config_write_strb[0];
+  assign \$120  = ch0_cfg_crc1_config_write & config_write_strb[1];
+  assign \$121  = ch0_cfg_crc1_config_write & config_write_strb[2];
+  assign \$122  = ch0_cfg_crc1_config_write & config_write_strb[3];
+  assign \$123  = write_addr == 8'ha3;
+  assign \$124  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$125  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$126  = write_addr == 8'ha4;
+  assign \$127  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$128  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$129  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$130  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$131  = ch0_cfg_ssi_config_write & config_write_strb[2];
+  assign \$132  = ch0_cfg_ssi_config_write & config_write_strb[3];
+  assign \$133  = ch0_ca_request_config_write & config_write_strb[0];
+  assign \$134  = ch0_ca_request_config_write & config_write_strb[1];
+  assign \$135  = ch0_ca_request_config_write & config_write_strb[2];
+  assign \$136  = ch0_ca_request_config_write & config_write_strb[3];
+  assign \$137  = write_data[0] & write_strb[0];
+  assign \$138  = ch0_ca_ctrl_write ? \$137  : 1'h0;
+  assign \$139  = write_data[1] & write_strb[0];
+  assign \$140  = ch0_ca_ctrl_write ? \$139  : 1'h0;
+  assign \$141  = write_data & config_memory0_write_mask;
+  assign \$142  = \$141  & { write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3:2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2:1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1:0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0] };
+  assign \$143  = ~ { write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3:2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2:1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1:0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0] };
+  assign \$144  = config_memory0_write_fill & \$143 ;
+  assign \$145  = \$142  | \$144 ;
+  assign \$146  = ch0_config_written | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
+  assign \$147  = bus__w_addr == 8'h80;
+  assign \$148  = bus__w_addr == 8'h81;
+  assign \$149  = bus__w_addr == 8'h82;
+  assign \$150  = bus__w_addr == 8'h84;
+  assign \$151  = bus__w_addr == 8'h86;
+  assign \$152  = bus__w_addr == 8'h87;
+  assign \$153  = bus__w_addr == 8'h90;
+  assign \$154  = bus__w_addr == 8'h91;
+  assign \$155  = bus__w_addr == 8'h92;
+  assign \$156  = bus__w_addr == 8'h93;
+  assign \$157  = bus__w_addr == 8'h94;
+  assign \$158  = bus__w_addr == 8'h95;
+  assign \$159  = bus__w_addr == 8'h96;
+  assign \$160  = bus__w_addr == 8'h97;
+  assign \$161  = bus__w_addr == 8'ha5;
+  assign \$162  = bus__w_addr == 8'ha6;
+  assign \$163  = bus__w_addr == 8'ha7;
+  assign \$164  = bus__w_addr == 8'ha8;
+  assign \$165  = bus__w_addr == 8'ha9;
+  assign \$166  = bus__w_addr == 8'haa;
+  assign \$167  = bus__w_addr == 8'hac;
+  assign \$168  = bus__w_addr == 8'had;
+  assign \$169  = bus__w_addr == 8'hae;
+  assign \$170  = bus__w_addr == 8'hb0;
+  assign \$171  = bus__w_addr == 8'hb1;
+  assign \$172  = bus__w_addr == 8'hb2;
+  assign \$173  = bus__w_addr == 8'hb4;
+  assign \$174  = bus__w_addr == 8'hb5;
+  assign \$175  = bus__w_addr == 8'hb6;
+  assign \$176  = bus__w_addr == 8'hb8;
+  assign \$177  = bus__w_addr == 8'hb9;
+  assign \$178  = bus__w_addr == 8'hba;
+  assign \$179  = bus__w_addr == 8'hbc;
+  assign \$180  = bus__w_addr == 8'hbd;
+  assign \$181  = bus__w_addr == 8'hbe;
+  assign \$182  = bus__w_addr == 8'hc1;
+  assign \$183  = bus__w_addr == 8'hc2;
+  assign \$184  = bus__w_addr == 8'hc3;
+  assign \$185  = bus__w_addr == 8'hc4;
+  assign \$186  = bus__w_addr == 8'hc5;
+  assign \$187  = bus__w_addr == 8'hfc;
+  assign \$188  = bus__w_addr == 8'hfd;
+  assign \$189  = ch0_read_select_90 & bus__r_load;
+  assign \$190  = bus__w_addr[10:3] == 5'h13;
+  assign \$191  = bus__r_en & \$190 ;
+  assign \$192  = bus__w_addr[10:4] == 4'hf;
+  assign \$193  = bus__r_en & \$192 ;
+  assign \$194  = bus__w_addr[3:0] < 4'hc;
+  assign \$195  = \$193  & \$194 ;
+  assign \$196  = bus__w_addr[10:4] == 4'he;
+  assign \$197  = bus__r_en & \$196 ;
+  assign \$198  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$200  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$201  = \$199  | \$200 ;
+  assign \$202  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
+  assign \$203  = \$201  | \$202 ;
+  assign \$204  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$205  = \$203  | \$204 ;
+  assign \$210  = ch0_read_select_90 ? { 2'h0, \port$13541$0 [182:177], 4'h0, \port$13541$0 [186:183], 1'h0, \port$13541$0 [176:174], 1'h0, \port$13541$0 [133:131], 3'h0, \port$13541$0 [49], \port$13541$0 [3:0] } : 32'd0;
+  assign \$211  = \$209  | \$210 ;
+  assign \$212  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$213  = \$211  | \$212 ;
+  assign \$214  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$215  = \$213  | \$214 ;
+  assign \$216  = ch0_read_select_93 ? ch0_result_w0_hi_data_snapshot : 32'd0;
+  assign \$217  = \$215  | \$216 ;
+  assign \$218  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$219  = \$217  | \$218 ;
+  assign \$220  = ch0_read_select_95 ? ch0_result_w1_hi_data_snapshot : 32'd0;
+  assign \$221  = \$219  | \$220 ;
+  assign \$222  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$223  = \$221  | \$222 ;
+  assign \$224  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
+  assign \$225  = \$223  | \$224 ;
+  assign \$270  = ch0_read_select_c2 ? { 17'h00000, \port$13629$0 [9:3], 1'h0, \port$13629$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$271  = \$269  | \$270 ;
+  assign \$272  = ch0_read_select_c3 ? \port$13552$0 [31:0] : 32'd0;
+  assign \$273  = \$271  | \$272 ;
+  assign \$274  = ch0_read_select_c4 ? \port$13552$0 [63:32] : 32'd0;
+  assign \$275  = \$273  | \$274 ;
+  assign \$276  = ch0_read_select_c5 ? { 16'h0000, \port$13552$0 [79:64] } : 32'd0;
+  assign \$277  = \$275  | \$276 ;
+  assign \$280  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
+  assign \$281  = \$279  | \$280 ;
+  assign \$282  = ch0_window0_read ? ch0__count_data : 32'd0;
+  assign \$283  = \$281  | \$282 ;
+  assign \$286  = ch0_window2_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$287  = \$285  | \$286 ;
+  assign \$288  = ch0_window3_read ? ch0_config_read_data : 32'd0;
+  assign \$289  = \$287  | \$288 ;
+  assign \$290  = write_addr == 9'h108;
+  assign \$291  = write_en & \$290 ;
+  assign \$292  = write_addr == 9'h109;
+  assign \$293  = write_en & \$292 ;
+  assign \$294  = write_addr == 9'h10a;
+  assign \$295  = write_en & \$294 ;
+  assign \$296  = write_addr == 9'h10b;
+  assign \$297  = write_en & \$296 ;
+  assign \$298  = write_addr == 9'h10c;
+  assign \$299  = write_en & \$298 ;
+  assign \$300  = write_addr == 9'h10d;
+  assign \$301  = write_en & \$300 ;
+  assign \$302  = write_addr == 9'h10e;
+  assign \$303  = write_en & \$302 ;
+  assign \$304  = write_addr == 9'h10f;
+  assign \$305  = write_en & \$304 ;
+  assign \$306  = write_addr == 9'h120;
+  assign \$307  = write_en & \$306 ;
+  assign \$308  = write_addr == 9'h121;
+  assign \$309  = write_en & \$308 ;
+  assign \$310  = write_addr == 9'h122;
+  assign \$311  = write_en & \$310 ;
+  assign \$312  = write_addr == 9'h123;
+  assign \$313  = write_en & \$312 ;
+  assign \$314  = write_addr == 9'h124;
+  assign \$315  = write_en & \$314 ;
+  assign \$316  = | { \$315 , \$313 , \$311 , \$309 , \$307 , \$305 , \$303 , \$301 , \$299 , \$297 , \$295 , \$293 , \$291  };
+  assign \$317  = ~ ch1_config_go;
+  assign \$318  = ch1_config_wait & \$317 ;
+  assign \$319  = \$318  & cfg_free[1];
+  assign \$320  = write_data[0] & write_strb[0];
+  assign \$321  = ch1_ctrl_write ? \$320  : 1'h0;
+  assign \$322  = write_data[1] & write_strb[0];
+  assign \$323  = ch1_ctrl_write ? \$322  : 1'h0;
+  assign \$324  = write_data[2] & write_strb[0];
+  assign \$325  = ch1_ctrl_write ? \$324  : 1'h0;
+  assign \$326  = ch1_ctrl_write & write_strb[1];
+  assign \$327  = ch1_ctrl_write & write_strb[1];
+  assign \$328  = write_data[0] & write_strb[0];
+  assign \$329  = ch1_irq_status_write ? \$328  : 1'h0;
+  assign \$330  = write_data[1] & write_strb[0];
+  assign \$331  = ch1_irq_status_write ? \$330  : 1'h0;
+  assign \$332  = write_data[2] & write_strb[0];
+  assign \$333  = ch1_irq_status_write ? \$332  : 1'h0;
+  assign \$334  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$335  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$336  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$337  = write_addr == 9'h108;
+  assign \$338  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$339  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$340  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$341  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$342  = write_addr == 9'h109;
+  assign \$343  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$344  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$345  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$346  = write_addr == 9'h10a;
+  assign \$347  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$348  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$349  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$350  = write_addr == 9'h10b;
+  assign \$351  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$352  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$353  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$354  = write_addr == 9'h10c;
+  assign \$355  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$356  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$357  = ch1_cfg_timeout_config_write & config_write_strb[2];
+  assign \$358  = write_addr == 9'h10d;
+  assign \$359  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$360  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$361  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$362  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$363  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$364  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$365  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$366  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$367  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$368  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$369  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$370  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$371  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$372  = write_addr == 9'h10e;
+  assign \$373  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$374  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$375  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$376  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$377  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$378  = ch1_cfg_checks_config_write & config_write_strb[3];
+  assign \$379  = write_addr == 9'h10f;
+  assign \$380  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$381  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$382  = write_addr == 9'h120;
+  assign \$383  = ch1_cfg_crc0_config_write & config_write_strb[0];
+  assign \$384  = ch1_cfg_crc0_config_write & config_write_strb[1];
+  assign \$385  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$386  = ch1_cfg_crc0_config_write & config_write_strb[3];
+  assign \$387  = write_addr == 9'h121;
+  assign \$388  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$389  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$390  = write_addr == 9'h122;
+  assign \$391  = ch1_cfg_crc1_config_write & config_write_strb[0];
+  assign \$392  = ch1_cfg_crc1_config_write & config_write_strb[1];
+  assign \$393  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$394  = ch1_cfg_crc1_config_write & config_write_strb[3];
+  assign \$395  = write_addr == 9'h123;
+  assign \$396  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$397  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$398  = write_addr == 9'h124;
+  assign \$399  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$400  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$401  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$402  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$403  = ch1_cfg_ssi_config_write & config_write_strb[2];
+  assign \$404  = ch1_cfg_ssi_config_write & config_write_strb[3];
+  assign \$405  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$406  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$407  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$408  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$409  = write_data[0] & write_strb[0];
+  assign \$410  = ch1_ca_ctrl_write ? \$409  : 1'h0;
+  assign \$411  = write_data[1] & write_strb[0];
+  assign \$412  = ch1_ca_ctrl_write ? \$411  : 1'h0;
+  assign \$413  = ch1_config_written | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$414  = bus__w_addr == 9'h100;
+  assign \$415  = bus__w_addr == 9'h101;
+  assign \$416  = bus__w_addr == 9'h102;
+  assign \$417  = bus__w_addr == 9'h104;
+  assign \$418  = bus__w_addr == 9'h106;
+  assign \$419  = bus__w_addr == 9'h107;
+  assign \$420  = bus__w_addr == 9'h110;
+  assign \$421  = bus__w_addr == 9'h111;
+  assign \$422  = bus__w_addr == 9'h112;
+  assign \$423  = bus__w_addr == 9'h113;
+  assign \$424  = bus__w_addr == 9'h114;
+  assign \$425  = bus__w_addr == 9'h115;
+  assign \$426  = bus__w_addr == 9'h116;
+  assign \$427  = bus__w_addr == 9'h117;
+  assign \$428  = bus__w_addr == 9'h125;
+  assign \$429  = bus__w_addr == 9'h126;
+  assign \$430  = bus__w_addr == 9'h127;
+  assign \$431  = bus__w_addr == 9'h128;
+  assign \$432  = bus__w_addr == 9'h129;
+  assign \$433  = bus__w_addr == 9'h12a;
+  assign \$434  = bus__w_addr == 9'h12c;
+  assign \$435  = bus__w_addr == 9'h12d;
+  assign \$436  = bus__w_addr == 9'h12e;
+  assign \$437  = bus__w_addr == 9'h130;
+  assign \$438  = bus__w_addr == 9'h131;
+  assign \$439  = bus__w_addr == 9'h132;
+  assign \$440  = bus__w_addr == 9'h134;
+  assign \$441  = bus__w_addr == 9'h135;
+  assign \$442  = bus__w_addr == 9'h136;
+  assign \$443  = bus__w_addr == 9'h138;
+  assign \$444  = bus__w_addr == 9'h139;
+  assign \$445  = bus__w_addr == 9'h13a;
+  assign \$446  = bus__w_addr == 9'h13c;
+  assign \$447  = bus__w_addr == 9'h13d;
+  assign \$448  = bus__w_addr == 9'h13e;
+  assign \$449  = bus__w_addr == 9'h141;
+  assign \$450  = bus__w_addr == 9'h142;
+  assign \$451  = bus__w_addr == 9'h143;
+  assign \$452  = bus__w_addr == 9'h144;
+  assign \$453  = bus__w_addr == 9'h145;
+  assign \$454  = bus__w_addr == 9'h17c;
+  assign \$455  = bus__w_addr == 9'h17d;
+  assign \$456  = ch1_read_select_110 & bus__r_load;
+  assign \$457  = bus__w_addr[10:3] == 6'h23;
+  assign \$458  = bus__r_en & \$457 ;
+  assign \$459  = bus__w_addr[10:4] == 5'h17;
+  assign \$460  = bus__r_en & \$459 ;
+  assign \$461  = bus__w_addr[3:0] < 4'hc;
+  assign \$462  = \$460  & \$461 ;
+  assign \$463  = bus__w_addr[10:4] == 5'h16;
+  assign \$464  = bus__r_en & \$463 ;
+  assign \$465  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$467  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
   assign \$468  = \$466  | \$467 ;
-  assign \$469  = ch1_window3_read ? ch1_config_read_data : 32'd0;
+  assign \$469  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
   assign \$470  = \$468  | \$469 ;
-  assign \$471  = ! write_addr;
-  assign g_id_write = write_en & \$471 ;
-  assign \$472  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$472 ;
-  assign \$473  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$473 ;
-  assign \$474  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$474 ;
-  assign \$475  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$475 ;
-  assign \$476  = bus__w_addr[10:3] == 5'h13;
-  assign ch0__count_en = bus__r_en & \$476 ;
-  assign \$477  = bus__w_addr[10:4] == 4'hf;
-  assign \$478  = bus__r_en & \$477 ;
-  assign \$479  = bus__w_addr[3:0] < 4'hc;
-  assign ch0__chain_en = \$478  & \$479 ;
-  assign \$480  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$480 ;
-  assign \$481  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$481 ;
-  assign \$482  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$482 ;
-  assign \$483  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$483 ;
-  assign \$484  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$484 ;
-  assign \$485  = write_addr == 8'h86;
-  assign ch0_caps_chain_write = write_en & \$485 ;
-  assign \$486  = write_addr == 8'h87;
-  assign ch0_caps_chain2_write = write_en & \$486 ;
-  assign \$487  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$487 ;
-  assign \$488  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$488 ;
-  assign \$489  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$489 ;
-  assign \$490  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$490 ;
-  assign \$491  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$491 ;
-  assign \$492  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$492 ;
-  assign \$493  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$493 ;
-  assign \$494  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$494 ;
-  assign \$495  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$495 ;
-  assign \$496  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$496 ;
-  assign \$497  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$497 ;
-  assign \$498  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$498 ;
-  assign \$499  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$499 ;
-  assign \$500  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$500 ;
-  assign \$501  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$501 ;
-  assign \$502  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$502 ;
-  assign \$503  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$503 ;
-  assign \$504  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$504 ;
-  assign \$505  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$505 ;
-  assign \$506  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$506 ;
-  assign \$507  = write_addr == 8'ha4;
-  assign ch0_cfg_ssi_write = write_en & \$507 ;
-  assign \$508  = write_addr == 8'ha5;
-  assign ch0_count_chain_write = write_en & \$508 ;
-  assign \$509  = write_addr == 8'ha6;
-  assign ch0_count_chain2_write = write_en & \$509 ;
-  assign \$510  = write_addr == 8'ha7;
-  assign ch0_count_chain3_write = write_en & \$510 ;
-  assign \$511  = write_addr == 8'ha8;
-  assign ch0_cfg_w2_write = write_en & \$511 ;
-  assign \$512  = write_addr == 8'ha9;
-  assign ch0_cfg_w2_crc_write = write_en & \$512 ;
-  assign \$513  = write_addr == 8'haa;
-  assign ch0_cfg_w2_crc_start_write = write_en & \$513 ;
-  assign \$514  = write_addr == 8'hac;
-  assign ch0_cfg_w3_write = write_en & \$514 ;
-  assign \$515  = write_addr == 8'had;
-  assign ch0_cfg_w3_crc_write = write_en & \$515 ;
-  assign \$516  = write_addr == 8'hae;
-  assign ch0_cfg_w3_crc_start_write = write_en & \$516 ;
-  assign \$517  = write_addr == 8'hb0;
-  assign ch0_cfg_w4_write = write_en & \$517 ;
-  assign \$518  = write_addr == 8'hb1;
-  assign ch0_cfg_w4_crc_write = write_en & \$518 ;
-  assign \$519  = write_addr == 8'hb2;
-  assign ch0_cfg_w4_crc_start_write = write_en & \$519 ;
-  assign \$520  = write_addr == 8'hb4;
-  assign ch0_cfg_w5_write = write_en & \$520 ;
-  assign \$521  = write_addr == 8'hb5;
-  assign ch0_cfg_w5_crc_write = write_en & \$521 ;
-  assign \$522  = write_addr == 8'hb6;
-  assign ch0_cfg_w5_crc_start_write = write_en & \$522 ;
-  assign \$523  = write_addr == 8'hb8;
-  assign ch0_cfg_w6_write = write_en & \$523 ;
-  assign \$524  = write_addr == 8'hb9;
-  assign ch0_cfg_w6_crc_write = write_en & \$524 ;
-  assign \$525  = write_addr == 8'hba;
-  assign ch0_cfg_w6_crc_start_write = write_en & \$525 ;
-  assign \$526  = write_addr == 8'hbc;
-  assign ch0_cfg_w7_write = write_en & \$526 ;
-  assign \$527  = write_addr == 8'hbd;
-  assign ch0_cfg_w7_crc_write = write_en & \$527 ;
-  assign \$528  = write_addr == 8'hbe;
-  assign ch0_cfg_w7_crc_start_write = write_en & \$528 ;
-  assign \$529  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$529 ;
-  assign \$530  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$530 ;
-  assign \$531  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$531 ;
-  assign \$532  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$532 ;
-  assign \$533  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$533 ;
-  assign \$534  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$534 ;
-  assign \$535  = write_addr[10:4] == 4'hd;
-  assign \$536  = write_en & \$535 ;
-  assign ch0__ca_wbuf_en = \$536  ? write_strb : 4'h0;
-  assign \$537  = bus__w_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$537 ;
-  assign \$538  = write_addr == 8'hfc;
-  assign ch0_chain_flags_write = write_en & \$538 ;
-  assign \$539  = write_addr == 8'hfd;
-  assign ch0_chain_updates_write = write_en & \$539 ;
-  assign \$540  = | { ch0_cfg_ssi_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write, ch0_cfg_checks_config_write, ch0_cfg_timeout_config_write, ch0_cfg_break_config_write, ch0_cfg_ma_config_write };
-  assign \$541  = | { ch0_ca_request_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write };
-  assign \$542  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write };
-  assign \$543  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write };
-  assign \$544  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
-  assign \$545  = ~ ch0_config_written;
-  assign \$546  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$545 ;
-  assign \$547  = | \$546 ;
-  assign \$548  = ~ ch0_config_written;
-  assign \$549  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$548 ;
-  assign \$550  = | \$549 ;
-  assign \$551  = ~ ch0_config_written;
-  assign \$552  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$551 ;
-  assign \$553  = | \$552 ;
-  assign \$554  = ~ ch0_config_written;
-  assign \$555  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$554 ;
-  assign \$556  = | \$555 ;
-  assign \$557  = config_write_strb | { \$556 , \$553 , \$550 , \$547  };
-  assign wr__en = \$544  ? \$557  : 4'h0;
-  assign \$558  = bus__w_addr[10:7] == 1'h1;
-  assign \$559  = bus__r_en & \$558 ;
-  assign ch0_config_read = \$559  & config_memory0_read_hit;
-  assign \$560  = ch0_config_written >> ch0_config_read_index;
-  assign \$561  = \$560  ? rd__data : 32'd0;
-  assign \$562  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$564  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$566  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$567 , \$565 , \$563  };
-  assign \$568  = bus__w_addr[10:3] == 6'h23;
-  assign ch1__count_en = bus__r_en & \$568 ;
-  assign \$569  = bus__w_addr[10:4] == 5'h17;
-  assign \$570  = bus__r_en & \$569 ;
-  assign \$571  = bus__w_addr[3:0] < 4'hc;
-  assign ch1__chain_en = \$570  & \$571 ;
-  assign \$572  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$572 ;
-  assign \$573  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$573 ;
-  assign \$574  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$574 ;
-  assign \$575  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$575 ;
-  assign \$576  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$576 ;
-  assign \$577  = write_addr == 9'h106;
-  assign ch1_caps_chain_write = write_en & \$577 ;
-  assign \$578  = write_addr == 9'h107;
-  assign ch1_caps_chain2_write = write_en & \$578 ;
-  assign \$579  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$579 ;
-  assign \$580  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$580 ;
-  assign \$581  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$581 ;
-  assign \$582  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$582 ;
-  assign \$583  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$583 ;
-  assign \$584  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$584 ;
-  assign \$585  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$585 ;
-  assign \$586  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$586 ;
-  assign \$587  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$587 ;
-  assign \$588  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$588 ;
-  assign \$589  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$589 ;
-  assign \$590  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$590 ;
-  assign \$591  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$591 ;
-  assign \$592  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$592 ;
-  assign \$593  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$593 ;
-  assign \$594  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$594 ;
-  assign \$595  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$595 ;
-  assign \$596  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$596 ;
-  assign \$597  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$597 ;
-  assign \$598  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$598 ;
-  assign \$599  = write_addr == 9'h124;
-  assign ch1_cfg_ssi_write = write_en & \$599 ;
-  assign \$600  = write_addr == 9'h125;
-  assign ch1_count_chain_write = write_en & \$600 ;
-  assign \$601  = write_addr == 9'h126;
-  assign ch1_count_chain2_write = write_en & \$601 ;
-  assign \$602  = write_addr == 9'h127;
-  assign ch1_count_chain3_write = write_en & \$602 ;
-  assign \$603  = write_addr == 9'h128;
-  assign ch1_cfg_w2_write = write_en & \$603 ;
-  assign \$604  = write_addr == 9'h129;
-  assign ch1_cfg_w2_crc_write = write_en & \$604 ;
-  assign \$605  = write_addr == 9'h12a;
-  assign ch1_cfg_w2_crc_start_write = write_en & \$605 ;
-  assign \$606  = write_addr == 9'h12c;
-  assign ch1_cfg_w3_write = write_en & \$606 ;
-  assign \$607  = write_addr == 9'h12d;
-  assign ch1_cfg_w3_crc_write = write_en & \$607 ;
-  assign \$608  = write_addr == 9'h12e;
-  assign ch1_cfg_w3_crc_start_write = write_en & \$608 ;
-  assign \$609  = write_addr == 9'h130;
-  assign ch1_cfg_w4_write = write_en & \$609 ;
-  assign \$610  = write_addr == 9'h131;
-  assign ch1_cfg_w4_crc_write = write_en & \$610 ;
-  assign \$611  = write_addr == 9'h132;
-  assign ch1_cfg_w4_crc_start_write = write_en & \$611 ;
-  assign \$612  = write_addr == 9'h134;
-  assign ch1_cfg_w5_write = write_en & \$612 ;
-  assign \$613  = write_addr == 9'h135;
-  assign ch1_cfg_w5_crc_write = write_en & \$613 ;
-  assign \$614  = write_addr == 9'h136;
-  assign ch1_cfg_w5_crc_start_write = write_en & \$614 ;
-  assign \$615  = write_addr == 9'h138;
-  assign ch1_cfg_w6_write = write_en & \$615 ;
-  assign \$616  = write_addr == 9'h139;
-  assign ch1_cfg_w6_crc_write = write_en & \$616 ;
-  assign \$617  = write_addr == 9'h13a;
-  assign ch1_cfg_w6_crc_start_write = write_en & \$617 ;
-  assign \$618  = write_addr == 9'h13c;
-  assign ch1_cfg_w7_write = write_en & \$618 ;
-  assign \$619  = write_addr == 9'h13d;
-  assign ch1_cfg_w7_crc_write = write_en & \$619 ;
-  assign \$620  = write_addr == 9'h13e;
-  assign ch1_cfg_w7_crc_start_write = write_en & \$620 ;
-  assign \$621  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$621 ;
-  assign \$622  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$622 ;
-  assign \$623  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$623 ;
-  assign \$624  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$624 ;
-  assign \$625  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$625 ;
-  assign \$626  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$626 ;
-  assign \$627  = write_addr[10:4] == 5'h15;
-  assign \$628  = write_en & \$627 ;
-  assign ch1__ca_wbuf_en = \$628  ? write_strb : 4'h0;
-  assign \$629  = bus__w_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$629 ;
-  assign \$630  = write_addr == 9'h17c;
-  assign ch1_chain_flags_write = write_en & \$630 ;
-  assign \$631  = write_addr == 9'h17d;
-  assign ch1_chain_updates_write = write_en & \$631 ;
-  assign \$632  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
-  assign \$633  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
-  assign \$634  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
-  assign \$635  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
-  assign \$636  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
-  assign \$637  = ~ ch1_config_written;
-  assign \$638  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$637 ;
+  assign \$471  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$472  = \$470  | \$471 ;
+  assign \$477  = ch1_read_select_110 ? { 2'h0, \port$14092$0 [182:177], 4'h0, \port$14092$0 [186:183], 1'h0, \port$14092$0 [176:174], 1'h0, \port$14092$0 [133:131], 3'h0, \port$14092$0 [49], \port$14092$0 [3:0] } : 32'd0;
+  assign \$478  = \$476  | \$477 ;
+  assign \$479  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$480  = \$478  | \$479 ;
+  assign \$481  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$482  = \$480  | \$481 ;
+  assign \$483  = ch1_read_select_113 ? ch1_result_w0_hi_data_snapshot : 32'd0;
+  assign \$484  = \$482  | \$483 ;
+  assign \$485  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$486  = \$484  | \$485 ;
+  assign \$487  = ch1_read_select_115 ? ch1_result_w1_hi_data_snapshot : 32'd0;
+  assign \$488  = \$486  | \$487 ;
+  assign \$489  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$490  = \$488  | \$489 ;
+  assign \$491  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
+  assign \$492  = \$490  | \$491 ;
+  assign \$537  = ch1_read_select_142 ? { 17'h00000, \port$14180$0 [9:3], 1'h0, \port$14180$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$538  = \$536  | \$537 ;
+  assign \$539  = ch1_read_select_143 ? \port$14103$0 [31:0] : 32'd0;
+  assign \$540  = \$538  | \$539 ;
+  assign \$541  = ch1_read_select_144 ? \port$14103$0 [63:32] : 32'd0;
+  assign \$542  = \$540  | \$541 ;
+  assign \$543  = ch1_read_select_145 ? { 16'h0000, \port$14103$0 [79:64] } : 32'd0;
+  assign \$544  = \$542  | \$543 ;
+  assign \$547  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
+  assign \$548  = \$546  | \$547 ;
+  assign \$549  = ch1_window0_read ? ch1__count_data : 32'd0;
+  assign \$550  = \$548  | \$549 ;
+  assign \$553  = ch1_window2_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$554  = \$552  | \$553 ;
+  assign \$555  = ch1_window3_read ? ch1_config_read_data : 32'd0;
+  assign \$556  = \$554  | \$555 ;
+  assign \$557  = ! write_addr;
+  assign g_id_write = write_en & \$557 ;
+  assign \$558  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$558 ;
+  assign \$559  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$559 ;
+  assign \$560  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$560 ;
+  assign \$561  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$561 ;
+  assign \$562  = bus__w_addr[10:3] == 5'h13;
+  assign ch0__count_en = bus__r_en & \$562 ;
+  assign \$563  = bus__w_addr[10:4] == 4'hf;
+  assign \$564  = bus__r_en & \$563 ;
+  assign \$565  = bus__w_addr[3:0] < 4'hc;
+  assign ch0__chain_en = \$564  & \$565 ;
+  assign \$566  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$566 ;
+  assign \$567  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$567 ;
+  assign \$568  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$568 ;
+  assign \$569  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$569 ;
+  assign \$570  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$570 ;
+  assign \$571  = write_addr == 8'h86;
+  assign ch0_caps_chain_write = write_en & \$571 ;
+  assign \$572  = write_addr == 8'h87;
+  assign ch0_caps_chain2_write = write_en & \$572 ;
+  assign \$573  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$573 ;
+  assign ch0_cfg_ma_config_write = ch0_cfg_ma_config_addressed & ch0_config_go;
+  assign \$574  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$574 ;
+  assign ch0_cfg_period_config_write = ch0_cfg_period_config_addressed & ch0_config_go;
+  assign \$575  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$575 ;
+  assign ch0_cfg_break_config_write = ch0_cfg_break_config_addressed & ch0_config_go;
+  assign \$576  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$576 ;
+  assign ch0_cfg_ack_config_write = ch0_cfg_ack_config_addressed & ch0_config_go;
+  assign \$577  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$577 ;
+  assign ch0_cfg_timeout_config_write = ch0_cfg_timeout_config_addressed & ch0_config_go;
+  assign \$578  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$578 ;
+  assign ch0_cfg_words_config_write = ch0_cfg_words_config_addressed & ch0_config_go;
+  assign \$579  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$579 ;
+  assign ch0_cfg_checks_config_write = ch0_cfg_checks_config_addressed & ch0_config_go;
+  assign \$580  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$580 ;
+  assign ch0_cfg_quiet_config_write = ch0_cfg_quiet_config_addressed & ch0_config_go;
+  assign \$581  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$581 ;
+  assign \$582  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$582 ;
+  assign \$583  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$583 ;
+  assign \$584  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$584 ;
+  assign \$585  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$585 ;
+  assign \$586  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$586 ;
+  assign \$587  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$587 ;
+  assign \$588  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$588 ;
+  assign \$589  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$589 ;
+  assign ch0_cfg_crc0_config_write = ch0_cfg_crc0_config_addressed & ch0_config_go;
+  assign \$590  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$590 ;
+  assign ch0_cfg_crc0_start_config_write = ch0_cfg_crc0_start_config_addressed & ch0_config_go;
+  assign \$591  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$591 ;
+  assign ch0_cfg_crc1_config_write = ch0_cfg_crc1_config_addressed & ch0_config_go;
+  assign \$592  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$592 ;
+  assign ch0_cfg_crc1_start_config_write = ch0_cfg_crc1_start_config_addressed & ch0_config_go;
+  assign \$593  = write_addr == 8'ha4;
+  assign ch0_cfg_ssi_write = write_en & \$593 ;
+  assign ch0_cfg_ssi_config_write = ch0_cfg_ssi_config_addressed & ch0_config_go;
+  assign \$594  = write_addr == 8'ha5;
+  assign ch0_count_chain_write = write_en & \$594 ;
+  assign \$595  = write_addr == 8'ha6;
+  assign ch0_count_chain2_write = write_en & \$595 ;
+  assign \$596  = write_addr == 8'ha7;
+  assign ch0_count_chain3_write = write_en & \$596 ;
+  assign \$597  = write_addr == 8'ha8;
+  assign ch0_cfg_w2_write = write_en & \$597 ;
+  assign \$598  = write_addr == 8'ha9;
+  assign ch0_cfg_w2_crc_write = write_en & \$598 ;
+  assign \$599  = write_addr == 8'haa;
+  assign ch0_cfg_w2_crc_start_write = write_en & \$599 ;
+  assign \$600  = write_addr == 8'hac;
+  assign ch0_cfg_w3_write = write_en & \$600 ;
+  assign \$601  = write_addr == 8'had;
+  assign ch0_cfg_w3_crc_write = write_en & \$601 ;
+  assign \$602  = write_addr == 8'hae;
+  assign ch0_cfg_w3_crc_start_write = write_en & \$602 ;
+  assign \$603  = write_addr == 8'hb0;
+  assign ch0_cfg_w4_write = write_en & \$603 ;
+  assign \$604  = write_addr == 8'hb1;
+  assign ch0_cfg_w4_crc_write = write_en & \$604 ;
+  assign \$605  = write_addr == 8'hb2;
+  assign ch0_cfg_w4_crc_start_write = write_en & \$605 ;
+  assign \$606  = write_addr == 8'hb4;
+  assign ch0_cfg_w5_write = write_en & \$606 ;
+  assign \$607  = write_addr == 8'hb5;
+  assign ch0_cfg_w5_crc_write = write_en & \$607 ;
+  assign \$608  = write_addr == 8'hb6;
+  assign ch0_cfg_w5_crc_start_write = write_en & \$608 ;
+  assign \$609  = write_addr == 8'hb8;
+  assign ch0_cfg_w6_write = write_en & \$609 ;
+  assign \$610  = write_addr == 8'hb9;
+  assign ch0_cfg_w6_crc_write = write_en & \$610 ;
+  assign \$611  = write_addr == 8'hba;
+  assign ch0_cfg_w6_crc_start_write = write_en & \$611 ;
+  assign \$612  = write_addr == 8'hbc;
+  assign ch0_cfg_w7_write = write_en & \$612 ;
+  assign \$613  = write_addr == 8'hbd;
+  assign ch0_cfg_w7_crc_write = write_en & \$613 ;
+  assign \$614  = write_addr == 8'hbe;
+  assign ch0_cfg_w7_crc_start_write = write_en & \$614 ;
+  assign \$615  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$615 ;
+  assign \$616  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$616 ;
+  assign \$617  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$617 ;
+  assign \$618  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$618 ;
+  assign \$619  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$619 ;
+  assign \$620  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$620 ;
+  assign \$621  = write_addr[10:4] == 4'hd;
+  assign \$622  = write_en & \$621 ;
+  assign ch0__ca_wbuf_en = \$622  ? write_strb : 4'h0;
+  assign \$623  = bus__w_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$623 ;
+  assign \$624  = write_addr == 8'hfc;
+  assign ch0_chain_flags_write = write_en & \$624 ;
+  assign \$625  = write_addr == 8'hfd;
+  assign ch0_chain_updates_write = write_en & \$625 ;
+  assign \$626  = | { ch0_cfg_ssi_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write, ch0_cfg_checks_config_write, ch0_cfg_timeout_config_write, ch0_cfg_break_config_write, ch0_cfg_ma_config_write };
+  assign \$627  = | { ch0_ca_request_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write };
+  assign \$628  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write };
+  assign \$629  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write };
+  assign \$630  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
+  assign \$631  = ~ ch0_config_written;
+  assign \$632  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$631 ;
+  assign \$633  = | \$632 ;
+  assign \$634  = ~ ch0_config_written;
+  assign \$635  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$634 ;
+  assign \$636  = | \$635 ;
+  assign \$637  = ~ ch0_config_written;
+  assign \$638  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$637 ;
   assign \$639  = | \$638 ;
-  assign \$640  = ~ ch1_config_written;
-  assign \$641  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$640 ;
+  assign \$640  = ~ ch0_config_written;
+  assign \$641  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$640 ;
   assign \$642  = | \$641 ;
-  assign \$643  = ~ ch1_config_written;
-  assign \$644  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$643 ;
-  assign \$645  = | \$644 ;
-  assign \$646  = ~ ch1_config_written;
-  assign \$647  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$646 ;
-  assign \$648  = | \$647 ;
-  assign \$649  = config_write_strb | { \$648 , \$645 , \$642 , \$639  };
-  assign \wr__en$890  = \$636  ? \$649  : 4'h0;
-  assign \$650  = bus__w_addr[10:7] == 2'h2;
-  assign \$651  = bus__r_en & \$650 ;
-  assign ch1_config_read = \$651  & config_memory0_read_hit;
-  assign \$652  = ch1_config_written >> ch1_config_read_index;
-  assign \$653  = \$652  ? \rd__data$892  : 32'd0;
-  assign \$654  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$656  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$658  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$659 , \$657 , \$655  };
-  assign \$661  = \$660  | ch0_read_data;
-  assign bus__r_data = \$661  | ch1_read_data;
+  assign \$643  = config_write_strb | { \$642 , \$639 , \$636 , \$633  };
+  assign wr__en = \$630  ? \$643  : 4'h0;
+  assign \$644  = bus__w_addr[10:7] == 1'h1;
+  assign \$645  = bus__r_en & \$644 ;
+  assign ch0_config_read = \$645  & config_memory0_read_hit;
+  assign \$646  = ch0_config_written >> ch0_config_read_index;
+  assign \$647  = \$646  ? rd__data : 32'd0;
+  assign \$648  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$650  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$652  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$653 , \$651 , \$649  };
+  assign \$654  = bus__w_addr[10:3] == 6'h23;
+  assign ch1__count_en = bus__r_en & \$654 ;
+  assign \$655  = bus__w_addr[10:4] == 5'h17;
+  assign \$656  = bus__r_en & \$655 ;
+  assign \$657  = bus__w_addr[3:0] < 4'hc;
+  assign ch1__chain_en = \$656  & \$657 ;
+  assign \$658  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$658 ;
+  assign \$659  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$659 ;
+  assign \$660  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$660 ;
+  assign \$661  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$661 ;
+  assign \$662  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$662 ;
+  assign \$663  = write_addr == 9'h106;
+  assign ch1_caps_chain_write = write_en & \$663 ;
+  assign \$664  = write_addr == 9'h107;
+  assign ch1_caps_chain2_write = write_en & \$664 ;
+  assign \$665  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$665 ;
+  assign ch1_cfg_ma_config_write = ch1_cfg_ma_config_addressed & ch1_config_go;
+  assign \$666  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$666 ;
+  assign ch1_cfg_period_config_write = ch1_cfg_period_config_addressed & ch1_config_go;
+  assign \$667  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$667 ;
+  assign ch1_cfg_break_config_write = ch1_cfg_break_config_addressed & ch1_config_go;
+  assign \$668  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$668 ;
+  assign ch1_cfg_ack_config_write = ch1_cfg_ack_config_addressed & ch1_config_go;
+  assign \$669  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$669 ;
+  assign ch1_cfg_timeout_config_write = ch1_cfg_timeout_config_addressed & ch1_config_go;
+  assign \$670  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$670 ;
+  assign ch1_cfg_words_config_write = ch1_cfg_words_config_addressed & ch1_config_go;
+  assign \$671  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$671 ;
+  assign ch1_cfg_checks_config_write = ch1_cfg_checks_config_addressed & ch1_config_go;
+  assign \$672  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$672 ;
+  assign ch1_cfg_quiet_config_write = ch1_cfg_quiet_config_addressed & ch1_config_go;
+  assign \$673  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$673 ;
+  assign \$674  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$674 ;
+  assign \$675  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$675 ;
+  assign \$676  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$676 ;
+  assign \$677  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$677 ;
+  assign \$678  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$678 ;
+  assign \$679  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$679 ;
+  assign \$680  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$680 ;
+  assign \$681  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$681 ;
+  assign ch1_cfg_crc0_config_write = ch1_cfg_crc0_config_addressed & ch1_config_go;
+  assign \$682  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$682 ;
+  assign ch1_cfg_crc0_start_config_write = ch1_cfg_crc0_start_config_addressed & ch1_config_go;
+  assign \$683  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$683 ;
+  assign ch1_cfg_crc1_config_write = ch1_cfg_crc1_config_addressed & ch1_config_go;
+  assign \$684  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$684 ;
+  assign ch1_cfg_crc1_start_config_write = ch1_cfg_crc1_start_config_addressed & ch1_config_go;
+  assign \$685  = write_addr == 9'h124;
+  assign ch1_cfg_ssi_write = write_en & \$685 ;
+  assign ch1_cfg_ssi_config_write = ch1_cfg_ssi_config_addressed & ch1_config_go;
+  assign \$686  = write_addr == 9'h125;
+  assign ch1_count_chain_write = write_en & \$686 ;
+  assign \$687  = write_addr == 9'h126;
+  assign ch1_count_chain2_write = write_en & \$687 ;
+  assign \$688  = write_addr == 9'h127;
+  assign ch1_count_chain3_write = write_en & \$688 ;
+  assign \$689  = write_addr == 9'h128;
+  assign ch1_cfg_w2_write = write_en & \$689 ;
+  assign \$690  = write_addr == 9'h129;
+  assign ch1_cfg_w2_crc_write = write_en & \$690 ;
+  assign \$691  = write_addr == 9'h12a;
+  assign ch1_cfg_w2_crc_start_write = write_en & \$691 ;
+  assign \$692  = write_addr == 9'h12c;
+  assign ch1_cfg_w3_write = write_en & \$692 ;
+  assign \$693  = write_addr == 9'h12d;
+  assign ch1_cfg_w3_crc_write = write_en & \$693 ;
+  assign \$694  = write_addr == 9'h12e;
+  assign ch1_cfg_w3_crc_start_write = write_en & \$694 ;
+  assign \$695  = write_addr == 9'h130;
+  assign ch1_cfg_w4_write = write_en & \$695 ;
+  assign \$696  = write_addr == 9'h131;
+  assign ch1_cfg_w4_crc_write = write_en & \$696 ;
+  assign \$697  = write_addr == 9'h132;
+  assign ch1_cfg_w4_crc_start_write = write_en & \$697 ;
+  assign \$698  = write_addr == 9'h134;
+  assign ch1_cfg_w5_write = write_en & \$698 ;
+  assign \$699  = write_addr == 9'h135;
+  assign ch1_cfg_w5_crc_write = write_en & \$699 ;
+  assign \$700  = write_addr == 9'h136;
+  assign ch1_cfg_w5_crc_start_write = write_en & \$700 ;
+  assign \$701  = write_addr == 9'h138;
+  assign ch1_cfg_w6_write = write_en & \$701 ;
+  assign \$702  = write_addr == 9'h139;
+  assign ch1_cfg_w6_crc_write = write_en & \$702 ;
+  assign \$703  = write_addr == 9'h13a;
+  assign ch1_cfg_w6_crc_start_write = write_en & \$703 ;
+  assign \$704  = write_addr == 9'h13c;
+  assign ch1_cfg_w7_write = write_en & \$704 ;
+  assign \$705  = write_addr == 9'h13d;
+  assign ch1_cfg_w7_crc_write = write_en & \$705 ;
+  assign \$706  = write_addr == 9'h13e;
+  assign ch1_cfg_w7_crc_start_write = write_en & \$706 ;
+  assign \$707  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$707 ;
+  assign \$708  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$708 ;
+  assign \$709  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$709 ;
+  assign \$710  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$710 ;
+  assign \$711  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$711 ;
+  assign \$712  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$712 ;
+  assign \$713  = write_addr[10:4] == 5'h15;
+  assign \$714  = write_en & \$713 ;
+  assign ch1__ca_wbuf_en = \$714  ? write_strb : 4'h0;
+  assign \$715  = bus__w_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$715 ;
+  assign \$716  = write_addr == 9'h17c;
+  assign ch1_chain_flags_write = write_en & \$716 ;
+  assign \$717  = write_addr == 9'h17d;
+  assign ch1_chain_updates_write = write_en & \$717 ;
+  assign \$718  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
+  assign \$719  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
+  assign \$720  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
+  assign \$721  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
+  assign \$722  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$723  = ~ ch1_config_written;
+  assign \$724  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$723 ;
+  assign \$725  = | \$724 ;
+  assign \$726  = ~ ch1_config_written;
+  assign \$727  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$726 ;
+  assign \$728  = | \$727 ;
+  assign \$729  = ~ ch1_config_written;
+  assign \$730  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$729 ;
+  assign \$731  = | \$730 ;
+  assign \$732  = ~ ch1_config_written;
+  assign \$733  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$732 ;
+  assign \$734  = | \$733 ;
+  assign \$735  = config_write_strb | { \$734 , \$731 , \$728 , \$725  };
+  assign \wr__en$922  = \$722  ? \$735  : 4'h0;
+  assign \$736  = bus__w_addr[10:7] == 2'h2;
+  assign \$737  = bus__r_en & \$736 ;
+  assign ch1_config_read = \$737  & config_memory0_read_hit;
+  assign \$738  = ch1_config_written >> ch1_config_read_index;
+  assign \$739  = \$738  ? \rd__data$924  : 32'd0;
+  assign \$740  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$742  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$744  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$745 , \$743 , \$741  };
+  assign \$746  = | { ch1_config_wait, ch0_config_wait };
+  assign bus__w_busy = write_en | \$746 ;
+  assign \$748  = \$747  | ch0_read_data;
+  assign bus__r_data = \$748  | ch1_read_data;
   always @(posedge clk)
-    write_en <= \$662 ;
+    write_en <= \$749 ;
   always @(posedge clk)
-    write_addr <= \$663 ;
+    write_addr <= \$750 ;
   always @(posedge clk)
-    write_data <= \$664 ;
+    write_data <= \$751 ;
   always @(posedge clk)
-    write_strb <= \$665 ;
+    write_strb <= \$752 ;
   always @(posedge clk)
-    config_write_data <= \$666 ;
+    config_write_data <= \$753 ;
   always @(posedge clk)
-    config_write_strb <= \$667 ;
+    config_write_strb <= \$754 ;
   always @(posedge clk)
-    g_trigger_start <= \$668 ;
+    g_trigger_start <= \$755 ;
   always @(posedge clk)
-    g_read_select_0 <= \$669 ;
+    g_read_select_0 <= \$756 ;
   always @(posedge clk)
-    g_read_select_1 <= \$670 ;
+    g_read_select_1 <= \$757 ;
   always @(posedge clk)
-    g_read_select_2 <= \$671 ;
+    g_read_select_2 <= \$758 ;
   always @(posedge clk)
-    g_read_select_3 <= \$672 ;
+    g_read_select_3 <= \$759 ;
   always @(posedge clk)
-    g_read_select_4 <= \$673 ;
+    g_read_select_4 <= \$760 ;
   always @(posedge clk)
-    g_read_data <= \$674 ;
+    g_read_data <= \$761 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$675 ;
+    ch0_config_wait <= \$762 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$676 ;
+    ch0_config_go <= \$763 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$677 ;
+    ch0_ctrl_start <= \$764 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$678 ;
+    ch0_ctrl_abort <= \$765 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$679 ;
+    ch0_ctrl_clear_counters <= \$766 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$680 ;
+    ch0_ctrl_periodic <= \$767 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$681 ;
+    ch0_ctrl_trigger_enable <= \$768 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$682 ;
+    ch0_irq_status_done <= \$769 ;
   always @(posedge clk)
-    ch0_irq_enable_config_write <= \$683 ;
+    ch0_irq_status_error <= \$770 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$684 ;
+    ch0_irq_status_access_done <= \$771 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$685 ;
+    ch0_irq_enable_config_write <= \$772 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$686 ;
+    ch0_irq_enable_done <= \$773 ;
   always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$687 ;
+    ch0_irq_enable_error <= \$774 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$688 ;
+    ch0_irq_enable_access_done <= \$775 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$689 ;
+    ch0_cfg_ma_config_addressed <= \$776 ;
   always @(posedge clk)
-    ch0_cfg_period_config_write <= \$690 ;
+    ch0_cfg_ma_ma_half_period <= \$777 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$691 ;
+    ch0_cfg_ma_delay_limit <= \$778 ;
   always @(posedge clk)
-    ch0_cfg_break_config_write <= \$692 ;
+    ch0_cfg_period_config_addressed <= \$779 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$693 ;
+    ch0_cfg_period_request_period <= \$780 ;
   always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$694 ;
+    ch0_cfg_break_config_addressed <= \$781 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$695 ;
+    ch0_cfg_break_break_time <= \$782 ;
   always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$696 ;
+    ch0_cfg_ack_config_addressed <= \$783 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$697 ;
+    ch0_cfg_ack_ack_limit <= \$784 ;
   always @(posedge clk)
-    ch0_cfg_words_config_write <= \$698 ;
+    ch0_cfg_timeout_config_addressed <= \$785 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$699 ;
+    ch0_cfg_timeout_timeout_limit <= \$786 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$700 ;
+    ch0_cfg_words_config_addressed <= \$787 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$701 ;
+    ch0_cfg_words_w0_data_bits <= \$788 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$702 ;
+    ch0_cfg_words_w0_nenw <= \$789 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$703 ;
+    ch0_cfg_words_w0_lc <= \$790 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_signed <= \$704 ;
+    ch0_cfg_words_w0_crc <= \$791 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$705 ;
+    ch0_cfg_words_w0_gray <= \$792 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$706 ;
+    ch0_cfg_words_w0_signed <= \$793 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$707 ;
+    ch0_cfg_words_w1_data_bits <= \$794 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$708 ;
+    ch0_cfg_words_w1_nenw <= \$795 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$709 ;
+    ch0_cfg_words_w1_lc <= \$796 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_signed <= \$710 ;
+    ch0_cfg_words_w1_crc <= \$797 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$711 ;
+    ch0_cfg_words_w1_gray <= \$798 ;
   always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$712 ;
+    ch0_cfg_words_w1_signed <= \$799 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$713 ;
+    ch0_cfg_words_w1_enable <= \$800 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$714 ;
+    ch0_cfg_checks_config_addressed <= \$801 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$715 ;
+    ch0_cfg_checks_end_check <= \$802 ;
   always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$716 ;
+    ch0_cfg_checks_spw_check <= \$803 ;
   always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$717 ;
+    ch0_cfg_checks_spw_tolerance <= \$804 ;
   always @(posedge clk)
-    ch0_cfg_checks_confirm_frames <= \$718 ;
+    ch0_cfg_checks_noise_limit <= \$805 ;
   always @(posedge clk)
-    ch0_cfg_quiet_config_write <= \$719 ;
+    ch0_cfg_checks_delay_tolerance <= \$806 ;
   always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$720 ;
+    ch0_cfg_checks_confirm_frames <= \$807 ;
   always @(posedge clk)
-    ch0_cfg_crc0_config_write <= \$721 ;
+    ch0_cfg_quiet_config_addressed <= \$808 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_poly <= \$722 ;
+    ch0_cfg_quiet_quiet_time <= \$809 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$723 ;
+    ch0_cfg_crc0_config_addressed <= \$810 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_inverted <= \$724 ;
+    ch0_cfg_crc0_w0_crc_poly <= \$811 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_config_write <= \$725 ;
+    ch0_cfg_crc0_w0_crc_width <= \$812 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_w0_crc_start <= \$726 ;
+    ch0_cfg_crc0_w0_crc_inverted <= \$813 ;
   always @(posedge clk)
-    ch0_cfg_crc1_config_write <= \$727 ;
+    ch0_cfg_crc0_start_config_addressed <= \$814 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_poly <= \$728 ;
+    ch0_cfg_crc0_start_w0_crc_start <= \$815 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$729 ;
+    ch0_cfg_crc1_config_addressed <= \$816 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_inverted <= \$730 ;
+    ch0_cfg_crc1_w1_crc_poly <= \$817 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_config_write <= \$731 ;
+    ch0_cfg_crc1_w1_crc_width <= \$818 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_w1_crc_start <= \$732 ;
+    ch0_cfg_crc1_w1_crc_inverted <= \$819 ;
   always @(posedge clk)
-    ch0_cfg_ssi_config_write <= \$733 ;
+    ch0_cfg_crc1_start_config_addressed <= \$820 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi <= \$734 ;
+    ch0_cfg_crc1_start_w1_crc_start <= \$821 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_error <= \$735 ;
+    ch0_cfg_ssi_config_addressed <= \$822 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_error_low <= \$736 ;
+    ch0_cfg_ssi_ssi <= \$823 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_double <= \$737 ;
+    ch0_cfg_ssi_ssi_error <= \$824 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_delay <= \$738 ;
+    ch0_cfg_ssi_ssi_error_low <= \$825 ;
   always @(posedge clk)
-    ch0_cfg_w2_config_write <= \$739 ;
+    ch0_cfg_ssi_ssi_double <= \$826 ;
   always @(posedge clk)
-    ch0_cfg_w2_crc_config_write <= \$740 ;
+    ch0_cfg_ssi_ssi_delay <= \$827 ;
   always @(posedge clk)
-    ch0_cfg_w2_crc_start_config_write <= \$741 ;
+    ch0_cfg_w2_config_write <= \$828 ;
   always @(posedge clk)
-    ch0_cfg_w3_config_write <= \$742 ;
+    ch0_cfg_w2_crc_config_write <= \$829 ;
   always @(posedge clk)
-    ch0_cfg_w3_crc_config_write <= \$743 ;
+    ch0_cfg_w2_crc_start_config_write <= \$830 ;
   always @(posedge clk)
-    ch0_cfg_w3_crc_start_config_write <= \$744 ;
+    ch0_cfg_w3_config_write <= \$831 ;
   always @(posedge clk)
-    ch0_cfg_w4_config_write <= \$745 ;
+    ch0_cfg_w3_crc_config_write <= \$832 ;
   always @(posedge clk)
-    ch0_cfg_w4_crc_config_write <= \$746 ;
+    ch0_cfg_w3_crc_start_config_write <= \$833 ;
   always @(posedge clk)
-    ch0_cfg_w4_crc_start_config_write <= \$747 ;
+    ch0_cfg_w4_config_write <= \$834 ;
   always @(posedge clk)
-    ch0_cfg_w5_config_write <= \$748 ;
+    ch0_cfg_w4_crc_config_write <= \$835 ;
   always @(posedge clk)
-    ch0_cfg_w5_crc_config_write <= \$749 ;
+    ch0_cfg_w4_crc_start_config_write <= \$836 ;
   always @(posedge clk)
-    ch0_cfg_w5_crc_start_config_write <= \$750 ;
+    ch0_cfg_w5_config_write <= \$837 ;
   always @(posedge clk)
-    ch0_cfg_w6_config_write <= \$751 ;
+    ch0_cfg_w5_crc_config_write <= \$838 ;
   always @(posedge clk)
-    ch0_cfg_w6_crc_config_write <= \$752 ;
+    ch0_cfg_w5_crc_start_config_write <= \$839 ;
   always @(posedge clk)
-    ch0_cfg_w6_crc_start_config_write <= \$753 ;
+    ch0_cfg_w6_config_write <= \$840 ;
   always @(posedge clk)
-    ch0_cfg_w7_config_write <= \$754 ;
+    ch0_cfg_w6_crc_config_write <= \$841 ;
   always @(posedge clk)
-    ch0_cfg_w7_crc_config_write <= \$755 ;
+    ch0_cfg_w6_crc_start_config_write <= \$842 ;
   always @(posedge clk)
-    ch0_cfg_w7_crc_start_config_write <= \$756 ;
+    ch0_cfg_w7_config_write <= \$843 ;
   always @(posedge clk)
-    ch0_ca_request_config_write <= \$757 ;
+    ch0_cfg_w7_crc_config_write <= \$844 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$758 ;
+    ch0_cfg_w7_crc_start_config_write <= \$845 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$759 ;
+    ch0_ca_request_config_write <= \$846 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$760 ;
+    ch0_ca_request_slave_id <= \$847 ;
   always @(posedge clk)
-    \ch0_ca_request_write$149  <= \$761 ;
+    ch0_ca_request_address <= \$848 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$762 ;
+    ch0_ca_request_count <= \$849 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$763 ;
+    \ch0_ca_request_write$152  <= \$850 ;
   always @(posedge clk)
-    config_memory0_write_data <= \$764 ;
+    ch0_ca_ctrl_start <= \$851 ;
   always @(posedge clk)
-    ch0_config_written <= \$765 ;
+    ch0_ca_ctrl_abort <= \$852 ;
   always @(posedge clk)
-    ch0_config_read_index <= \$766 ;
+    config_memory0_write_data <= \$853 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$767 ;
+    ch0_config_written <= \$854 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$768 ;
+    ch0_config_read_index <= \$855 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$769 ;
+    ch0_read_select_80 <= \$856 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$770 ;
+    ch0_read_select_81 <= \$857 ;
   always @(posedge clk)
-    ch0_read_select_86 <= \$771 ;
+    ch0_read_select_82 <= \$858 ;
   always @(posedge clk)
-    ch0_read_select_87 <= \$772 ;
+    ch0_read_select_84 <= \$859 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$773 ;
+    ch0_read_select_86 <= \$860 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$774 ;
+    ch0_read_select_87 <= \$861 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$775 ;
+    ch0_read_select_90 <= \$862 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$776 ;
+    ch0_read_select_91 <= \$863 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$777 ;
+    ch0_read_select_92 <= \$864 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$778 ;
+    ch0_read_select_93 <= \$865 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$779 ;
+    ch0_read_select_94 <= \$866 ;
   always @(posedge clk)
-    ch0_read_select_97 <= \$780 ;
+    ch0_read_select_95 <= \$867 ;
   always @(posedge clk)
-    ch0_read_select_a5 <= \$781 ;
+    ch0_read_select_96 <= \$868 ;
   always @(posedge clk)
-    ch0_read_select_a6 <= \$782 ;
+    ch0_read_select_97 <= \$869 ;
   always @(posedge clk)
-    ch0_read_select_a7 <= \$783 ;
+    ch0_read_select_a5 <= \$870 ;
   always @(posedge clk)
-    ch0_read_select_a8 <= \$784 ;
+    ch0_read_select_a6 <= \$871 ;
   always @(posedge clk)
-    ch0_read_select_a9 <= \$785 ;
+    ch0_read_select_a7 <= \$872 ;
   always @(posedge clk)
-    ch0_read_select_aa <= \$786 ;
+    ch0_read_select_a8 <= \$873 ;
   always @(posedge clk)
-    ch0_read_select_ac <= \$787 ;
+    ch0_read_select_a9 <= \$874 ;
   always @(posedge clk)
-    ch0_read_select_ad <= \$788 ;
+    ch0_read_select_aa <= \$875 ;
   always @(posedge clk)
-    ch0_read_select_ae <= \$789 ;
+    ch0_read_select_ac <= \$876 ;
   always @(posedge clk)
-    ch0_read_select_b0 <= \$790 ;
+    ch0_read_select_ad <= \$877 ;
   always @(posedge clk)
-    ch0_read_select_b1 <= \$791 ;
+    ch0_read_select_ae <= \$878 ;
   always @(posedge clk)
-    ch0_read_select_b2 <= \$792 ;
+    ch0_read_select_b0 <= \$879 ;
   always @(posedge clk)
-    ch0_read_select_b4 <= \$793 ;
+    ch0_read_select_b1 <= \$880 ;
   always @(posedge clk)
-    ch0_read_select_b5 <= \$794 ;
+    ch0_read_select_b2 <= \$881 ;
   always @(posedge clk)
-    ch0_read_select_b6 <= \$795 ;
+    ch0_read_select_b4 <= \$882 ;
   always @(posedge clk)
-    ch0_read_select_b8 <= \$796 ;
+    ch0_read_select_b5 <= \$883 ;
   always @(posedge clk)
-    ch0_read_select_b9 <= \$797 ;
+    ch0_read_select_b6 <= \$884 ;
   always @(posedge clk)
-    ch0_read_select_ba <= \$798 ;
+    ch0_read_select_b8 <= \$885 ;
   always @(posedge clk)
-    ch0_read_select_bc <= \$799 ;
+    ch0_read_select_b9 <= \$886 ;
   always @(posedge clk)
-    ch0_read_select_bd <= \$800 ;
+    ch0_read_select_ba <= \$887 ;
   always @(posedge clk)
-    ch0_read_select_be <= \$801 ;
+    ch0_read_select_bc <= \$888 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$802 ;
+    ch0_read_select_bd <= \$889 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$803 ;
+    ch0_read_select_be <= \$890 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$804 ;
+    ch0_read_select_c1 <= \$891 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$805 ;
+    ch0_read_select_c2 <= \$892 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$806 ;
+    ch0_read_select_c3 <= \$893 ;
   always @(posedge clk)
-    ch0_read_select_fc <= \$807 ;
+    ch0_read_select_c4 <= \$894 ;
   always @(posedge clk)
-    ch0_read_select_fd <= \$808 ;
+    ch0_read_select_c5 <= \$895 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$809 ;
+    ch0_read_select_fc <= \$896 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$810 ;
+    ch0_read_select_fd <= \$897 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$811 ;
+    ch0_result_status_status_snapshot <= \$898 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$812 ;
+    ch0_result_status_cds_snapshot <= \$899 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$813 ;
+    ch0_result_status_w0_ne_snapshot <= \$900 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$814 ;
+    ch0_result_status_w0_nw_snapshot <= \$901 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$815 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$902 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$816 ;
+    ch0_result_status_w1_ne_snapshot <= \$903 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$817 ;
+    ch0_result_status_w1_nw_snapshot <= \$904 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$818 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$905 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$819 ;
+    ch0_result_status_lc_repeat_snapshot <= \$906 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$820 ;
+    ch0_result_status_lc_skip_snapshot <= \$907 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$821 ;
+    ch0_result_status_lc_zero_snapshot <= \$908 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$822 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$909 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$823 ;
+    ch0_result_status_lc_snapshot <= \$910 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$824 ;
+    ch0_result_seq_seq_snapshot <= \$911 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$825 ;
+    ch0_result_seq_line_delay_snapshot <= \$912 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$826 ;
+    ch0_result_w0_lo_data_snapshot <= \$913 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$827 ;
+    ch0_result_w0_hi_data_snapshot <= \$914 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$828 ;
+    ch0_result_w1_lo_data_snapshot <= \$915 ;
   always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$829 ;
+    ch0_result_w1_hi_data_snapshot <= \$916 ;
   always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$830 ;
+    ch0_result_timestamp_time_snapshot <= \$917 ;
   always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$831 ;
+    ch0_result_line_noise_events_snapshot <= \$918 ;
   always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$832 ;
+    ch0_result_line_delay_settled_snapshot <= \$919 ;
   always @(posedge clk)
-    ch0_window0_read <= \$833 ;
+    ch0_result_line_delay_spread_snapshot <= \$920 ;
   always @(posedge clk)
-    ch0_window1_read <= \$834 ;
+    ch0_result_line_settled_delay_snapshot <= \$921 ;
   always @(posedge clk)
-    ch0_window2_read <= \$835 ;
+    ch0_window0_read <= \$922 ;
   always @(posedge clk)
-    ch0_window3_read <= \$836 ;
+    ch0_window1_read <= \$923 ;
   always @(posedge clk)
-    ch0_read_data <= \$837 ;
+    ch0_window2_read <= \$924 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$838 ;
+    ch0_window3_read <= \$925 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$839 ;
+    ch0_read_data <= \$926 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$840 ;
+    ch1_config_wait <= \$927 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$841 ;
+    ch1_config_go <= \$928 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$842 ;
+    ch1_ctrl_start <= \$929 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$843 ;
+    ch1_ctrl_abort <= \$930 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$844 ;
+    ch1_ctrl_clear_counters <= \$931 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$845 ;
+    ch1_ctrl_periodic <= \$932 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$846 ;
+    ch1_ctrl_trigger_enable <= \$933 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$847 ;
+    ch1_irq_status_done <= \$934 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$848 ;
+    ch1_irq_status_error <= \$935 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$849 ;
+    ch1_irq_status_access_done <= \$936 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$850 ;
+    ch1_irq_enable_config_write <= \$937 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$851 ;
+    ch1_irq_enable_done <= \$938 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$852 ;
+    ch1_irq_enable_error <= \$939 ;
   always @(posedge clk)
-    ch1_cfg_period_config_write <= \$853 ;
+    ch1_irq_enable_access_done <= \$940 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$854 ;
+    ch1_cfg_ma_config_addressed <= \$941 ;
   always @(posedge clk)
-    ch1_cfg_break_config_write <= \$855 ;
+    ch1_cfg_ma_ma_half_period <= \$942 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$856 ;
+    ch1_cfg_ma_delay_limit <= \$943 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$857 ;
+    ch1_cfg_period_config_addressed <= \$944 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$858 ;
+    ch1_cfg_period_request_period <= \$945 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$859 ;
+    ch1_cfg_break_config_addressed <= \$946 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$860 ;
+    ch1_cfg_break_break_time <= \$947 ;
   always @(posedge clk)
-    ch1_cfg_words_config_write <= \$861 ;
+    ch1_cfg_ack_config_addressed <= \$948 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$862 ;
+    ch1_cfg_ack_ack_limit <= \$949 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$863 ;
+    ch1_cfg_timeout_config_addressed <= \$950 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$864 ;
+    ch1_cfg_timeout_timeout_limit <= \$951 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$865 ;
+    ch1_cfg_words_config_addressed <= \$952 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$866 ;
+    ch1_cfg_words_w0_data_bits <= \$953 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_signed <= \$867 ;
+    ch1_cfg_words_w0_nenw <= \$954 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$868 ;
+    ch1_cfg_words_w0_lc <= \$955 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$869 ;
+    ch1_cfg_words_w0_crc <= \$956 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$870 ;
+    ch1_cfg_words_w0_gray <= \$957 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$871 ;
+    ch1_cfg_words_w0_signed <= \$958 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$872 ;
+    ch1_cfg_words_w1_data_bits <= \$959 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_signed <= \$873 ;
+    ch1_cfg_words_w1_nenw <= \$960 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$874 ;
+    ch1_cfg_words_w1_lc <= \$961 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$875 ;
+    ch1_cfg_words_w1_crc <= \$962 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$876 ;
+    ch1_cfg_words_w1_gray <= \$963 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$877 ;
+    ch1_cfg_words_w1_signed <= \$964 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$878 ;
+    ch1_cfg_words_w1_enable <= \$965 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$879 ;
+    ch1_cfg_checks_config_addressed <= \$966 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$880 ;
+    ch1_cfg_checks_end_check <= \$967 ;
   always @(posedge clk)
-    ch1_cfg_checks_confirm_frames <= \$881 ;
+    ch1_cfg_checks_spw_check <= \$968 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_write <= \$882 ;
+    ch1_cfg_checks_spw_tolerance <= \$969 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$883 ;
+    ch1_cfg_checks_noise_limit <= \$970 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_write <= \$884 ;
+    ch1_cfg_checks_delay_tolerance <= \$971 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_poly <= \$885 ;
+    ch1_cfg_checks_confirm_frames <= \$972 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$886 ;
+    ch1_cfg_quiet_config_addressed <= \$973 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_inverted <= \$887 ;
+    ch1_cfg_quiet_quiet_time <= \$974 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_write <= \$888 ;
+    ch1_cfg_crc0_config_addressed <= \$975 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_w0_crc_start <= \$889 ;
+    ch1_cfg_crc0_w0_crc_poly <= \$976 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_write <= \$890 ;
+    ch1_cfg_crc0_w0_crc_width <= \$977 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_poly <= \$891 ;
+    ch1_cfg_crc0_w0_crc_inverted <= \$978 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$892 ;
+    ch1_cfg_crc0_start_config_addressed <= \$979 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_inverted <= \$893 ;
+    ch1_cfg_crc0_start_w0_crc_start <= \$980 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_write <= \$894 ;
+    ch1_cfg_crc1_config_addressed <= \$981 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_w1_crc_start <= \$895 ;
+    ch1_cfg_crc1_w1_crc_poly <= \$982 ;
   always @(posedge clk)
-    ch1_cfg_ssi_config_write <= \$896 ;
+    ch1_cfg_crc1_w1_crc_width <= \$983 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi <= \$897 ;
+    ch1_cfg_crc1_w1_crc_inverted <= \$984 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error <= \$898 ;
+    ch1_cfg_crc1_start_config_addressed <= \$985 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error_low <= \$899 ;
+    ch1_cfg_crc1_start_w1_crc_start <= \$986 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_double <= \$900 ;
+    ch1_cfg_ssi_config_addressed <= \$987 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_delay <= \$901 ;
+    ch1_cfg_ssi_ssi <= \$988 ;
   always @(posedge clk)
-    ch1_cfg_w2_config_write <= \$902 ;
+    ch1_cfg_ssi_ssi_error <= \$989 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_config_write <= \$903 ;
+    ch1_cfg_ssi_ssi_error_low <= \$990 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_start_config_write <= \$904 ;
+    ch1_cfg_ssi_ssi_double <= \$991 ;
   always @(posedge clk)
-    ch1_cfg_w3_config_write <= \$905 ;
+    ch1_cfg_ssi_ssi_delay <= \$992 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_config_write <= \$906 ;
+    ch1_cfg_w2_config_write <= \$993 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_start_config_write <= \$907 ;
+    ch1_cfg_w2_crc_config_write <= \$994 ;
   always @(posedge clk)
-    ch1_cfg_w4_config_write <= \$908 ;
+    ch1_cfg_w2_crc_start_config_write <= \$995 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_config_write <= \$909 ;
+    ch1_cfg_w3_config_write <= \$996 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_start_config_write <= \$910 ;
+    ch1_cfg_w3_crc_config_write <= \$997 ;
   always @(posedge clk)
-    ch1_cfg_w5_config_write <= \$911 ;
+    ch1_cfg_w3_crc_start_config_write <= \$998 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_config_write <= \$912 ;
+    ch1_cfg_w4_config_write <= \$999 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_start_config_write <= \$913 ;
+    ch1_cfg_w4_crc_config_write <= \$1000 ;
   always @(posedge clk)
-    ch1_cfg_w6_config_write <= \$914 ;
+    ch1_cfg_w4_crc_start_config_write <= \$1001 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_config_write <= \$915 ;
+    ch1_cfg_w5_config_write <= \$1002 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_start_config_write <= \$916 ;
+    ch1_cfg_w5_crc_config_write <= \$1003 ;
   always @(posedge clk)
-    ch1_cfg_w7_config_write <= \$917 ;
+    ch1_cfg_w5_crc_start_config_write <= \$1004 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_config_write <= \$918 ;
+    ch1_cfg_w6_config_write <= \$1005 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_start_config_write <= \$919 ;
+    ch1_cfg_w6_crc_config_write <= \$1006 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$920 ;
+    ch1_cfg_w6_crc_start_config_write <= \$1007 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$921 ;
+    ch1_cfg_w7_config_write <= \$1008 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$922 ;
+    ch1_cfg_w7_crc_config_write <= \$1009 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$923 ;
+    ch1_cfg_w7_crc_start_config_write <= \$1010 ;
   always @(posedge clk)
-    \ch1_ca_request_write$430  <= \$924 ;
+    ch1_ca_request_config_write <= \$1011 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$925 ;
+    ch1_ca_request_slave_id <= \$1012 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$926 ;
+    ch1_ca_request_address <= \$1013 ;
   always @(posedge clk)
-    ch1_config_written <= \$927 ;
+    ch1_ca_request_count <= \$1014 ;
   always @(posedge clk)
-    ch1_config_read_index <= \$928 ;
+    \ch1_ca_request_write$435  <= \$1015 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$929 ;
+    ch1_ca_ctrl_start <= \$1016 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$930 ;
+    ch1_ca_ctrl_abort <= \$1017 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$931 ;
+    ch1_config_written <= \$1018 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$932 ;
+    ch1_config_read_index <= \$1019 ;
   always @(posedge clk)
-    ch1_read_select_106 <= \$933 ;
+    ch1_read_select_100 <= \$1020 ;
   always @(posedge clk)
-    ch1_read_select_107 <= \$934 ;
+    ch1_read_select_101 <= \$1021 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$935 ;
+    ch1_read_select_102 <= \$1022 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$936 ;
+    ch1_read_select_104 <= \$1023 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$937 ;
+    ch1_read_select_106 <= \$1024 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$938 ;
+    ch1_read_select_107 <= \$1025 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$939 ;
+    ch1_read_select_110 <= \$1026 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$940 ;
+    ch1_read_select_111 <= \$1027 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$941 ;
+    ch1_read_select_112 <= \$1028 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$942 ;
+    ch1_read_select_113 <= \$1029 ;
   always @(posedge clk)
-    ch1_read_select_125 <= \$943 ;
+    ch1_read_select_114 <= \$1030 ;
   always @(posedge clk)
-    ch1_read_select_126 <= \$944 ;
+    ch1_read_select_115 <= \$1031 ;
   always @(posedge clk)
-    ch1_read_select_127 <= \$945 ;
+    ch1_read_select_116 <= \$1032 ;
   always @(posedge clk)
-    ch1_read_select_128 <= \$946 ;
+    ch1_read_select_117 <= \$1033 ;
   always @(posedge clk)
-    ch1_read_select_129 <= \$947 ;
+    ch1_read_select_125 <= \$1034 ;
   always @(posedge clk)
-    ch1_read_select_12a <= \$948 ;
+    ch1_read_select_126 <= \$1035 ;
   always @(posedge clk)
-    ch1_read_select_12c <= \$949 ;
+    ch1_read_select_127 <= \$1036 ;
   always @(posedge clk)
-    ch1_read_select_12d <= \$950 ;
+    ch1_read_select_128 <= \$1037 ;
   always @(posedge clk)
-    ch1_read_select_12e <= \$951 ;
+    ch1_read_select_129 <= \$1038 ;
   always @(posedge clk)
-    ch1_read_select_130 <= \$952 ;
+    ch1_read_select_12a <= \$1039 ;
   always @(posedge clk)
-    ch1_read_select_131 <= \$953 ;
+    ch1_read_select_12c <= \$1040 ;
   always @(posedge clk)
-    ch1_read_select_132 <= \$954 ;
+    ch1_read_select_12d <= \$1041 ;
   always @(posedge clk)
-    ch1_read_select_134 <= \$955 ;
+    ch1_read_select_12e <= \$1042 ;
   always @(posedge clk)
-    ch1_read_select_135 <= \$956 ;
+    ch1_read_select_130 <= \$1043 ;
   always @(posedge clk)
-    ch1_read_select_136 <= \$957 ;
+    ch1_read_select_131 <= \$1044 ;
   always @(posedge clk)
-    ch1_read_select_138 <= \$958 ;
+    ch1_read_select_132 <= \$1045 ;
   always @(posedge clk)
-    ch1_read_select_139 <= \$959 ;
+    ch1_read_select_134 <= \$1046 ;
   always @(posedge clk)
-    ch1_read_select_13a <= \$960 ;
+    ch1_read_select_135 <= \$1047 ;
   always @(posedge clk)
-    ch1_read_select_13c <= \$961 ;
+    ch1_read_select_136 <= \$1048 ;
   always @(posedge clk)
-    ch1_read_select_13d <= \$962 ;
+    ch1_read_select_138 <= \$1049 ;
   always @(posedge clk)
-    ch1_read_select_13e <= \$963 ;
+    ch1_read_select_139 <= \$1050 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$964 ;
+    ch1_read_select_13a <= \$1051 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$965 ;
+    ch1_read_select_13c <= \$1052 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$966 ;
+    ch1_read_select_13d <= \$1053 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$967 ;
+    ch1_read_select_13e <= \$1054 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$968 ;
+    ch1_read_select_141 <= \$1055 ;
   always @(posedge clk)
-    ch1_read_select_17c <= \$969 ;
+    ch1_read_select_142 <= \$1056 ;
   always @(posedge clk)
-    ch1_read_select_17d <= \$970 ;
+    ch1_read_select_143 <= \$1057 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$971 ;
+    ch1_read_select_144 <= \$1058 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$972 ;
+    ch1_read_select_145 <= \$1059 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$973 ;
+    ch1_read_select_17c <= \$1060 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$974 ;
+    ch1_read_select_17d <= \$1061 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$975 ;
+    ch1_result_status_status_snapshot <= \$1062 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$976 ;
+    ch1_result_status_cds_snapshot <= \$1063 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$977 ;
+    ch1_result_status_w0_ne_snapshot <= \$1064 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$978 ;
+    ch1_result_status_w0_nw_snapshot <= \$1065 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$979 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$1066 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$980 ;
+    ch1_result_status_w1_ne_snapshot <= \$1067 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$981 ;
+    ch1_result_status_w1_nw_snapshot <= \$1068 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$982 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$1069 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$983 ;
+    ch1_result_status_lc_repeat_snapshot <= \$1070 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$984 ;
+    ch1_result_status_lc_skip_snapshot <= \$1071 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$985 ;
+    ch1_result_status_lc_zero_snapshot <= \$1072 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$986 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$1073 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$987 ;
+    ch1_result_status_lc_snapshot <= \$1074 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$988 ;
+    ch1_result_seq_seq_snapshot <= \$1075 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$989 ;
+    ch1_result_seq_line_delay_snapshot <= \$1076 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$990 ;
+    ch1_result_w0_lo_data_snapshot <= \$1077 ;
   always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$991 ;
+    ch1_result_w0_hi_data_snapshot <= \$1078 ;
   always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$992 ;
+    ch1_result_w1_lo_data_snapshot <= \$1079 ;
   always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$993 ;
+    ch1_result_w1_hi_data_snapshot <= \$1080 ;
   always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$994 ;
+    ch1_result_timestamp_time_snapshot <= \$1081 ;
   always @(posedge clk)
-    ch1_window0_read <= \$995 ;
+    ch1_result_line_noise_events_snapshot <= \$1082 ;
   always @(posedge clk)
-    ch1_window1_read <= \$996 ;
+    ch1_result_line_delay_settled_snapshot <= \$1083 ;
   always @(posedge clk)
-    ch1_window2_read <= \$997 ;
+    ch1_result_line_delay_spread_snapshot <= \$1084 ;
   always @(posedge clk)
-    ch1_window3_read <= \$998 ;
+    ch1_result_line_settled_delay_snapshot <= \$1085 ;
   always @(posedge clk)
-    ch1_read_data <= \$999 ;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$662  = bus__w_en;
-    if (rst) begin
-      \$662  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$663  = write_addr;
-    if (bus__w_en) begin
-      \$663  = bus__w_addr;
-    end
-    if (rst) begin
-      \$663  = 11'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$664  = write_data;
-    if (bus__w_en) begin
-      \$664  = bus__w_data;
-    end
-    if (rst) begin
-      \$664  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$665  = write_strb;
-    if (bus__w_en) begin
-      \$665  = bus__w_strb;
-    end
-    if (rst) begin
-      \$665  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$666  = config_write_data;
-    if (write_en) begin
-      \$666  = write_data;
-    end
-    if (rst) begin
-      \$666  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$667  = config_write_strb;
-    if (write_en) begin
-      \$667  = write_strb;
-    end
-    if (rst) begin
-      \$667  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$668  = \$2 ;
-    if (rst) begin
-      \$668  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$669  = g_read_select_0;
-    if (bus__r_en) begin
-      \$669  = \$3 ;
-    end
-    if (rst) begin
-      \$669  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$670  = g_read_select_1;
-    if (bus__r_en) begin
-      \$670  = \$4 ;
-    end
-    if (rst) begin
-      \$670  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$671  = g_read_select_2;
-    if (bus__r_en) begin
-      \$671  = \$5 ;
-    end
-    if (rst) begin
-      \$671  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$672  = g_read_select_3;
-    if (bus__r_en) begin
-      \$672  = \$6 ;
-    end
-    if (rst) begin
-      \$672  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$673  = g_read_select_4;
-    if (bus__r_en) begin
-      \$673  = \$7 ;
-    end
-    if (rst) begin
-      \$673  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$674  = g_read_data;
-    if (bus__r_load) begin
-      \$674  = \$17 ;
-    end
-    if (rst) begin
-      \$674  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$675  = \$19 ;
-    if (rst) begin
-      \$675  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$676  = \$21 ;
-    if (rst) begin
-      \$676  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$677  = \$23 ;
-    if (rst) begin
-      \$677  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$678  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$678  = write_data[8];
-    end
-    if (rst) begin
-      \$678  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$679  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$679  = write_data[9];
-    end
-    if (rst) begin
-      \$679  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$680  = ch0_irq_status_done;
-    if (ch0__frame_done) begin
-      \$680  = 1'h1;
-    end else if (\$27 ) begin
-      \$680  = 1'h0;
-    end
-    if (rst) begin
-      \$680  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$681  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$681  = 1'h1;
-    end else if (\$29 ) begin
-      \$681  = 1'h0;
-    end
-    if (rst) begin
-      \$681  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$682  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$682  = 1'h1;
-    end else if (\$31 ) begin
-      \$682  = 1'h0;
-    end
-    if (rst) begin
-      \$682  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$683  = ch0_irq_enable_write;
-    if (rst) begin
-      \$683  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$684  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$684  = config_write_data[0];
-    end
-    if (rst) begin
-      \$684  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$685  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$685  = config_write_data[1];
-    end
-    if (rst) begin
-      \$685  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$686  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$686  = config_write_data[2];
-    end
-    if (rst) begin
-      \$686  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$687  = ch0_cfg_ma_write;
-    if (rst) begin
-      \$687  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$688  = ch0_cfg_ma_ma_half_period;
-    if (\$35 ) begin
-      \$688 [7:0] = config_write_data[7:0];
-    end
-    if (\$36 ) begin
-      \$688 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$688  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$689  = ch0_cfg_ma_delay_limit;
-    if (\$37 ) begin
-      \$689 [7:0] = config_write_data[23:16];
-    end
-    if (\$38 ) begin
-      \$689 [11:8] = config_write_data[27:24];
-    end
-    if (rst) begin
-      \$689  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$690  = ch0_cfg_period_write;
-    if (rst) begin
-      \$690  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$691  = ch0_cfg_period_request_period;
-    if (\$39 ) begin
-      \$691 [7:0] = config_write_data[7:0];
-    end
-    if (\$40 ) begin
-      \$691 [15:8] = config_write_data[15:8];
-    end
-    if (\$41 ) begin
-      \$691 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$691  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$692  = ch0_cfg_break_write;
-    if (rst) begin
-      \$692  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$693  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
-      \$693 [7:0] = config_write_data[7:0];
-    end
-    if (\$43 ) begin
-      \$693 [15:8] = config_write_data[15:8];
-    end
-    if (\$44 ) begin
-      \$693 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$693  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$694  = ch0_cfg_ack_write;
-    if (rst) begin
-      \$694  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$695  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
-      \$695 [7:0] = config_write_data[7:0];
-    end
-    if (\$46 ) begin
-      \$695 [15:8] = config_write_data[15:8];
-    end
-    if (\$47 ) begin
-      \$695 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$695  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$696  = ch0_cfg_timeout_write;
-    if (rst) begin
-      \$696  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$697  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
-      \$697 [7:0] = config_write_data[7:0];
-    end
-    if (\$49 ) begin
-      \$697 [15:8] = config_write_data[15:8];
-    end
-    if (\$50 ) begin
-      \$697 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$697  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$698  = ch0_cfg_words_write;
-    if (rst) begin
-      \$698  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$699  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$699  = config_write_data[6:0];
-    end
-    if (rst) begin
-      \$699  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$700  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$700  = config_write_data[7];
-    end
-    if (rst) begin
-      \$700  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$701  = ch0_cfg_words_w0_lc;
-    if (\$53 ) begin
-      \$701  = config_write_data[8];
-    end
-    if (rst) begin
-      \$701  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$702  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$702  = config_write_data[10:9];
-    end
-    if (rst) begin
-      \$702  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$703  = ch0_cfg_words_w0_gray;
-    if (\$55 ) begin
-      \$703  = config_write_data[11];
-    end
-    if (rst) begin
-      \$703  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$704  = ch0_cfg_words_w0_signed;
-    if (\$56 ) begin
-      \$704  = config_write_data[12];
-    end
-    if (rst) begin
-      \$704  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$705  = ch0_cfg_words_w1_data_bits;
-    if (\$57 ) begin
-      \$705  = config_write_data[22:16];
-    end
-    if (rst) begin
-      \$705  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$706  = ch0_cfg_words_w1_nenw;
-    if (\$58 ) begin
-      \$706  = config_write_data[23];
-    end
-    if (rst) begin
-      \$706  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$707  = ch0_cfg_words_w1_lc;
-    if (\$59 ) begin
-      \$707  = config_write_data[24];
-    end
-    if (rst) begin
-      \$707  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$708  = ch0_cfg_words_w1_crc;
-    if (\$60 ) begin
-      \$708  = config_write_data[26:25];
-    end
-    if (rst) begin
-      \$708  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$709  = ch0_cfg_words_w1_gray;
-    if (\$61 ) begin
-      \$709  = config_write_data[27];
-    end
-    if (rst) begin
-      \$709  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$710  = ch0_cfg_words_w1_signed;
-    if (\$62 ) begin
-      \$710  = config_write_data[28];
-    end
-    if (rst) begin
-      \$710  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$711  = ch0_cfg_words_w1_enable;
-    if (\$63 ) begin
-      \$711  = config_write_data[31];
-    end
-    if (rst) begin
-      \$711  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$712  = ch0_cfg_checks_write;
-    if (rst) begin
-      \$712  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$713  = ch0_cfg_checks_end_check;
-    if (\$64 ) begin
-      \$713  = config_write_data[0];
-    end
-    if (rst) begin
-      \$713  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$714  = ch0_cfg_checks_spw_check;
-    if (\$65 ) begin
-      \$714  = config_write_data[1];
-    end
-    if (rst) begin
-      \$714  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$715  = ch0_cfg_checks_spw_tolerance;
-    if (\$66 ) begin
-      \$715  = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$715  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$716  = ch0_cfg_checks_noise_limit;
-    if (\$67 ) begin
-      \$716  = config_write_data[19:16];
-    end
-    if (rst) begin
-      \$716  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$717  = ch0_cfg_checks_delay_tolerance;
-    if (\$68 ) begin
-      \$717  = config_write_data[23:20];
-    end
-    if (rst) begin
-      \$717  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$718  = ch0_cfg_checks_confirm_frames;
-    if (\$69 ) begin
-      \$718  = config_write_data[27:24];
-    end
-    if (rst) begin
-      \$718  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$719  = ch0_cfg_quiet_write;
-    if (rst) begin
-      \$719  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$720  = ch0_cfg_quiet_quiet_time;
-    if (\$70 ) begin
-      \$720 [7:0] = config_write_data[7:0];
-    end
-    if (\$71 ) begin
-      \$720 [11:8] = config_write_data[11:8];
-    end
-    if (rst) begin
-      \$720  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$721  = ch0_cfg_crc0_write;
-    if (rst) begin
-      \$721  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$722  = ch0_cfg_crc0_w0_crc_poly;
-    if (\$72 ) begin
-      \$722 [7:0] = config_write_data[7:0];
-    end
-    if (\$73 ) begin
-      \$722 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$722  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$723  = ch0_cfg_crc0_w0_crc_width;
-    if (\$74 ) begin
-      \$723  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$723  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$724  = ch0_cfg_crc0_w0_crc_inverted;
-    if (\$75 ) begin
-      \$724  = config_write_data[24];
-    end
-    if (rst) begin
-      \$724  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$725  = ch0_cfg_crc0_start_write;
-    if (rst) begin
-      \$725  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$726  = ch0_cfg_crc0_start_w0_crc_start;
-    if (\$76 ) begin
-      \$726 [7:0] = config_write_data[7:0];
-    end
-    if (\$77 ) begin
-      \$726 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$726  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$727  = ch0_cfg_crc1_write;
-    if (rst) begin
-      \$727  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$728  = ch0_cfg_crc1_w1_crc_poly;
-    if (\$78 ) begin
-      \$728 [7:0] = config_write_data[7:0];
-    end
-    if (\$79 ) begin
-      \$728 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$728  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$729  = ch0_cfg_crc1_w1_crc_width;
-    if (\$80 ) begin
-      \$729  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$729  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$730  = ch0_cfg_crc1_w1_crc_inverted;
-    if (\$81 ) begin
-      \$730  = config_write_data[24];
-    end
-    if (rst) begin
-      \$730  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$731  = ch0_cfg_crc1_start_write;
-    if (rst) begin
-      \$731  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$732  = ch0_cfg_crc1_start_w1_crc_start;
-    if (\$82 ) begin
-      \$732 [7:0] = config_write_data[7:0];
-    end
-    if (\$83 ) begin
-      \$732 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$732  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$733  = ch0_cfg_ssi_write;
-    if (rst) begin
-      \$733  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$734  = ch0_cfg_ssi_ssi;
-    if (\$84 ) begin
-      \$734  = config_write_data[0];
-    end
-    if (rst) begin
-      \$734  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$735  = ch0_cfg_ssi_ssi_error;
-    if (\$85 ) begin
-      \$735  = config_write_data[1];
-    end
-    if (rst) begin
-      \$735  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$736  = ch0_cfg_ssi_ssi_error_low;
-    if (\$86 ) begin
-      \$736  = config_write_data[2];
-    end
-    if (rst) begin
-      \$736  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$737  = ch0_cfg_ssi_ssi_double;
-    if (\$87 ) begin
-      \$737  = config_write_data[3];
-    end
-    if (rst) begin
-      \$737  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$738  = ch0_cfg_ssi_ssi_delay;
-    if (\$88 ) begin
-      \$738 [7:0] = config_write_data[23:16];
-    end
-    if (\$89 ) begin
-      \$738 [11:8] = config_write_data[27:24];
-    end
-    if (rst) begin
-      \$738  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$739  = ch0_cfg_w2_write;
-    if (rst) begin
-      \$739  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$740  = ch0_cfg_w2_crc_write;
-    if (rst) begin
-      \$740  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$741  = ch0_cfg_w2_crc_start_write;
-    if (rst) begin
-      \$741  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$742  = ch0_cfg_w3_write;
-    if (rst) begin
-      \$742  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$743  = ch0_cfg_w3_crc_write;
-    if (rst) begin
-      \$743  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$744  = ch0_cfg_w3_crc_start_write;
-    if (rst) begin
-      \$744  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$745  = ch0_cfg_w4_write;
-    if (rst) begin
-      \$745  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$746  = ch0_cfg_w4_crc_write;
-    if (rst) begin
-      \$746  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$747  = ch0_cfg_w4_crc_start_write;
-    if (rst) begin
-      \$747  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$748  = ch0_cfg_w5_write;
-    if (rst) begin
-      \$748  = 1'h0;
-    end
-  end
+    ch1_window0_read <= \$1086 ;
+  always @(posedge clk)
+    ch1_window1_read <= \$1087 ;
+  always @(posedge clk)
+    ch1_window2_read <= \$1088 ;
+  always @(posedge clk)
+    ch1_window3_read <= \$1089 ;
+  always @(posedge clk)
+    ch1_read_data <= \$1090 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$749  = ch0_cfg_w5_crc_write;
+    \$749  = bus__w_en;
     if (rst) begin
       \$749  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$750  = ch0_cfg_w5_crc_start_write;
+    \$750  = write_addr;
+    if (bus__w_en) begin
+      \$750  = bus__w_addr;
+    end
     if (rst) begin
-      \$750  = 1'h0;
+      \$750  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$751  = ch0_cfg_w6_write;
+    \$751  = write_data;
+    if (bus__w_en) begin
+      \$751  = bus__w_data;
+    end
     if (rst) begin
-      \$751  = 1'h0;
+      \$751  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$752  = ch0_cfg_w6_crc_write;
+    \$752  = write_strb;
+    if (bus__w_en) begin
+      \$752  = bus__w_strb;
+    end
     if (rst) begin
-      \$752  = 1'h0;
+      \$752  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$753  = ch0_cfg_w6_crc_start_write;
+    \$753  = config_write_data;
+    if (write_en) begin
+      \$753  = write_data;
+    end
     if (rst) begin
-      \$753  = 1'h0;
+      \$753  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$754  = ch0_cfg_w7_write;
+    \$754  = config_write_strb;
+    if (write_en) begin
+      \$754  = write_strb;
+    end
     if (rst) begin
-      \$754  = 1'h0;
+      \$754  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$755  = ch0_cfg_w7_crc_write;
+    \$755  = \$2 ;
     if (rst) begin
       \$755  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$756  = ch0_cfg_w7_crc_start_write;
+    \$756  = g_read_select_0;
+    if (bus__r_en) begin
+      \$756  = \$3 ;
+    end
     if (rst) begin
       \$756  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$757  = ch0_ca_request_write;
+    \$757  = g_read_select_1;
+    if (bus__r_en) begin
+      \$757  = \$4 ;
+    end
     if (rst) begin
       \$757  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$758  = ch0_ca_request_slave_id;
-    if (\$90 ) begin
-      \$758  = config_write_data[2:0];
+    \$758  = g_read_select_2;
+    if (bus__r_en) begin
+      \$758  = \$5 ;
     end
     if (rst) begin
-      \$758  = 3'h0;
+      \$758  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$759  = ch0_ca_request_address;
-    if (\$91 ) begin
-      \$759  = config_write_data[14:8];
+    \$759  = g_read_select_3;
+    if (bus__r_en) begin
+      \$759  = \$6 ;
     end
     if (rst) begin
-      \$759  = 7'h00;
+      \$759  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$760  = ch0_ca_request_count;
-    if (\$92 ) begin
-      \$760  = config_write_data[22:16];
+    \$760  = g_read_select_4;
+    if (bus__r_en) begin
+      \$760  = \$7 ;
     end
     if (rst) begin
-      \$760  = 7'h00;
+      \$760  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$761  = \ch0_ca_request_write$149 ;
-    if (\$93 ) begin
-      \$761  = config_write_data[24];
+    \$761  = g_read_data;
+    if (bus__r_load) begin
+      \$761  = \$17 ;
     end
     if (rst) begin
-      \$761  = 1'h0;
+      \$761  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$762  = \$95 ;
+    \$762  = ch0_config_wait;
+    if (\$44 ) begin
+      \$762  = 1'h1;
+    end else if (ch0_config_go) begin
+      \$762  = 1'h0;
+    end
     if (rst) begin
       \$762  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$763  = \$97 ;
+    \$763  = \$47 ;
     if (rst) begin
       \$763  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$764  = config_memory0_write_data;
-    if (write_en) begin
-      \$764  = \$102 ;
-    end
+    \$764  = \$49 ;
     if (rst) begin
-      \$764  = 32'd0;
+      \$764  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$765  = \$103 ;
+    \$765  = \$51 ;
     if (rst) begin
-      \$765  = 15'h0000;
+      \$765  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$766  = ch0_config_read_index;
-    if (ch0_config_read) begin
-      \$766  = config_memory0_read_index;
-    end
+    \$766  = \$53 ;
     if (rst) begin
-      \$766  = 4'h0;
+      \$766  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$767  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$767  = \$104 ;
+    \$767  = ch0_ctrl_periodic;
+    if (\$54 ) begin
+      \$767  = write_data[8];
     end
     if (rst) begin
       \$767  = 1'h0;
@@ -6557,9 +6010,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$768  = ch0_read_select_81;
-    if (bus__r_en) begin
-      \$768  = \$105 ;
+    \$768  = ch0_ctrl_trigger_enable;
+    if (\$55 ) begin
+      \$768  = write_data[9];
     end
     if (rst) begin
       \$768  = 1'h0;
@@ -6567,9 +6020,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$769  = ch0_read_select_82;
-    if (bus__r_en) begin
-      \$769  = \$106 ;
+    \$769  = ch0_irq_status_done;
+    if (ch0__frame_done) begin
+      \$769  = 1'h1;
+    end else if (\$57 ) begin
+      \$769  = 1'h0;
     end
     if (rst) begin
       \$769  = 1'h0;
@@ -6577,9 +6032,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$770  = ch0_read_select_84;
-    if (bus__r_en) begin
-      \$770  = \$107 ;
+    \$770  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$770  = 1'h1;
+    end else if (\$59 ) begin
+      \$770  = 1'h0;
     end
     if (rst) begin
       \$770  = 1'h0;
@@ -6587,9 +6044,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$771  = ch0_read_select_86;
-    if (bus__r_en) begin
-      \$771  = \$108 ;
+    \$771  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$771  = 1'h1;
+    end else if (\$61 ) begin
+      \$771  = 1'h0;
     end
     if (rst) begin
       \$771  = 1'h0;
@@ -6597,19 +6056,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$772  = ch0_read_select_87;
-    if (bus__r_en) begin
-      \$772  = \$109 ;
-    end
+    \$772  = ch0_irq_enable_write;
     if (rst) begin
       \$772  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$773  = ch0_read_select_90;
-    if (bus__r_en) begin
-      \$773  = \$110 ;
+    \$773  = ch0_irq_enable_done;
+    if (\$62 ) begin
+      \$773  = config_write_data[0];
     end
     if (rst) begin
       \$773  = 1'h0;
@@ -6617,9 +6073,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$774  = ch0_read_select_91;
-    if (bus__r_en) begin
-      \$774  = \$111 ;
+    \$774  = ch0_irq_enable_error;
+    if (\$63 ) begin
+      \$774  = config_write_data[1];
     end
     if (rst) begin
       \$774  = 1'h0;
@@ -6627,9 +6083,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$775  = ch0_read_select_92;
-    if (bus__r_en) begin
-      \$775  = \$112 ;
+    \$775  = ch0_irq_enable_access_done;
+    if (\$64 ) begin
+      \$775  = config_write_data[2];
     end
     if (rst) begin
       \$775  = 1'h0;
@@ -6637,139 +6093,151 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$776  = ch0_read_select_93;
-    if (bus__r_en) begin
-      \$776  = \$113 ;
-    end
+    \$776  = \$65 ;
     if (rst) begin
       \$776  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$777  = ch0_read_select_94;
-    if (bus__r_en) begin
-      \$777  = \$114 ;
+    \$777  = ch0_cfg_ma_ma_half_period;
+    if (\$66 ) begin
+      \$777 [7:0] = config_write_data[7:0];
+    end
+    if (\$67 ) begin
+      \$777 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$777  = 1'h0;
+      \$777  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$778  = ch0_read_select_95;
-    if (bus__r_en) begin
-      \$778  = \$115 ;
+    \$778  = ch0_cfg_ma_delay_limit;
+    if (\$68 ) begin
+      \$778 [7:0] = config_write_data[23:16];
+    end
+    if (\$69 ) begin
+      \$778 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$778  = 1'h0;
+      \$778  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$779  = ch0_read_select_96;
-    if (bus__r_en) begin
-      \$779  = \$116 ;
-    end
+    \$779  = \$70 ;
     if (rst) begin
       \$779  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$780  = ch0_read_select_97;
-    if (bus__r_en) begin
-      \$780  = \$117 ;
+    \$780  = ch0_cfg_period_request_period;
+    if (\$71 ) begin
+      \$780 [7:0] = config_write_data[7:0];
+    end
+    if (\$72 ) begin
+      \$780 [15:8] = config_write_data[15:8];
+    end
+    if (\$73 ) begin
+      \$780 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$780  = 1'h0;
+      \$780  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$781  = ch0_read_select_a5;
-    if (bus__r_en) begin
-      \$781  = \$118 ;
-    end
+    \$781  = \$74 ;
     if (rst) begin
       \$781  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$782  = ch0_read_select_a6;
-    if (bus__r_en) begin
-      \$782  = \$119 ;
+    \$782  = ch0_cfg_break_break_time;
+    if (\$75 ) begin
+      \$782 [7:0] = config_write_data[7:0];
+    end
+    if (\$76 ) begin
+      \$782 [15:8] = config_write_data[15:8];
+    end
+    if (\$77 ) begin
+      \$782 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$782  = 1'h0;
+      \$782  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$783  = ch0_read_select_a7;
-    if (bus__r_en) begin
-      \$783  = \$120 ;
-    end
+    \$783  = \$78 ;
     if (rst) begin
       \$783  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$784  = ch0_read_select_a8;
-    if (bus__r_en) begin
-      \$784  = \$121 ;
+    \$784  = ch0_cfg_ack_ack_limit;
+    if (\$79 ) begin
+      \$784 [7:0] = config_write_data[7:0];
+    end
+    if (\$80 ) begin
+      \$784 [15:8] = config_write_data[15:8];
+    end
+    if (\$81 ) begin
+      \$784 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$784  = 1'h0;
+      \$784  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$785  = ch0_read_select_a9;
-    if (bus__r_en) begin
-      \$785  = \$122 ;
-    end
+    \$785  = \$82 ;
     if (rst) begin
       \$785  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$786  = ch0_read_select_aa;
-    if (bus__r_en) begin
-      \$786  = \$123 ;
+    \$786  = ch0_cfg_timeout_timeout_limit;
+    if (\$83 ) begin
+      \$786 [7:0] = config_write_data[7:0];
+    end
+    if (\$84 ) begin
+      \$786 [15:8] = config_write_data[15:8];
+    end
+    if (\$85 ) begin
+      \$786 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$786  = 1'h0;
+      \$786  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$787  = ch0_read_select_ac;
-    if (bus__r_en) begin
-      \$787  = \$124 ;
-    end
+    \$787  = \$86 ;
     if (rst) begin
       \$787  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$788  = ch0_read_select_ad;
-    if (bus__r_en) begin
-      \$788  = \$125 ;
+    \$788  = ch0_cfg_words_w0_data_bits;
+    if (\$87 ) begin
+      \$788  = config_write_data[6:0];
     end
     if (rst) begin
-      \$788  = 1'h0;
+      \$788  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$789  = ch0_read_select_ae;
-    if (bus__r_en) begin
-      \$789  = \$126 ;
+    \$789  = ch0_cfg_words_w0_nenw;
+    if (\$88 ) begin
+      \$789  = config_write_data[7];
     end
     if (rst) begin
       \$789  = 1'h0;
@@ -6777,9 +6245,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$790  = ch0_read_select_b0;
-    if (bus__r_en) begin
-      \$790  = \$127 ;
+    \$790  = ch0_cfg_words_w0_lc;
+    if (\$89 ) begin
+      \$790  = config_write_data[8];
     end
     if (rst) begin
       \$790  = 1'h0;
@@ -6787,19 +6255,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$791  = ch0_read_select_b1;
-    if (bus__r_en) begin
-      \$791  = \$128 ;
+    \$791  = ch0_cfg_words_w0_crc;
+    if (\$90 ) begin
+      \$791  = config_write_data[10:9];
     end
     if (rst) begin
-      \$791  = 1'h0;
+      \$791  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$792  = ch0_read_select_b2;
-    if (bus__r_en) begin
-      \$792  = \$129 ;
+    \$792  = ch0_cfg_words_w0_gray;
+    if (\$91 ) begin
+      \$792  = config_write_data[11];
     end
     if (rst) begin
       \$792  = 1'h0;
@@ -6807,9 +6275,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$793  = ch0_read_select_b4;
-    if (bus__r_en) begin
-      \$793  = \$130 ;
+    \$793  = ch0_cfg_words_w0_signed;
+    if (\$92 ) begin
+      \$793  = config_write_data[12];
     end
     if (rst) begin
       \$793  = 1'h0;
@@ -6817,19 +6285,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$794  = ch0_read_select_b5;
-    if (bus__r_en) begin
-      \$794  = \$131 ;
+    \$794  = ch0_cfg_words_w1_data_bits;
+    if (\$93 ) begin
+      \$794  = config_write_data[22:16];
     end
     if (rst) begin
-      \$794  = 1'h0;
+      \$794  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$795  = ch0_read_select_b6;
-    if (bus__r_en) begin
-      \$795  = \$132 ;
+    \$795  = ch0_cfg_words_w1_nenw;
+    if (\$94 ) begin
+      \$795  = config_write_data[23];
     end
     if (rst) begin
       \$795  = 1'h0;
@@ -6837,9 +6305,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$796  = ch0_read_select_b8;
-    if (bus__r_en) begin
-      \$796  = \$133 ;
+    \$796  = ch0_cfg_words_w1_lc;
+    if (\$95 ) begin
+      \$796  = config_write_data[24];
     end
     if (rst) begin
       \$796  = 1'h0;
@@ -6847,19 +6315,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$797  = ch0_read_select_b9;
-    if (bus__r_en) begin
-      \$797  = \$134 ;
+    \$797  = ch0_cfg_words_w1_crc;
+    if (\$96 ) begin
+      \$797  = config_write_data[26:25];
     end
     if (rst) begin
-      \$797  = 1'h0;
+      \$797  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$798  = ch0_read_select_ba;
-    if (bus__r_en) begin
-      \$798  = \$135 ;
+    \$798  = ch0_cfg_words_w1_gray;
+    if (\$97 ) begin
+      \$798  = config_write_data[27];
     end
     if (rst) begin
       \$798  = 1'h0;
@@ -6867,9 +6335,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$799  = ch0_read_select_bc;
-    if (bus__r_en) begin
-      \$799  = \$136 ;
+    \$799  = ch0_cfg_words_w1_signed;
+    if (\$98 ) begin
+      \$799  = config_write_data[28];
     end
     if (rst) begin
       \$799  = 1'h0;
@@ -6877,9 +6345,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$800  = ch0_read_select_bd;
-    if (bus__r_en) begin
-      \$800  = \$137 ;
+    \$800  = ch0_cfg_words_w1_enable;
+    if (\$99 ) begin
+      \$800  = config_write_data[31];
     end
     if (rst) begin
       \$800  = 1'h0;
@@ -6887,19 +6355,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$801  = ch0_read_select_be;
-    if (bus__r_en) begin
-      \$801  = \$138 ;
-    end
+    \$801  = \$100 ;
     if (rst) begin
       \$801  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$802  = ch0_read_select_c1;
-    if (bus__r_en) begin
-      \$802  = \$139 ;
+    \$802  = ch0_cfg_checks_end_check;
+    if (\$101 ) begin
+      \$802  = config_write_data[0];
     end
     if (rst) begin
       \$802  = 1'h0;
@@ -6907,9 +6372,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$803  = ch0_read_select_c2;
-    if (bus__r_en) begin
-      \$803  = \$140 ;
+    \$803  = ch0_cfg_checks_spw_check;
+    if (\$102 ) begin
+      \$803  = config_write_data[1];
     end
     if (rst) begin
       \$803  = 1'h0;
@@ -6917,99 +6382,99 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$804  = ch0_read_select_c3;
-    if (bus__r_en) begin
-      \$804  = \$141 ;
+    \$804  = ch0_cfg_checks_spw_tolerance;
+    if (\$103 ) begin
+      \$804  = config_write_data[15:8];
     end
     if (rst) begin
-      \$804  = 1'h0;
+      \$804  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$805  = ch0_read_select_c4;
-    if (bus__r_en) begin
-      \$805  = \$142 ;
+    \$805  = ch0_cfg_checks_noise_limit;
+    if (\$104 ) begin
+      \$805  = config_write_data[19:16];
     end
     if (rst) begin
-      \$805  = 1'h0;
+      \$805  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$806  = ch0_read_select_c5;
-    if (bus__r_en) begin
-      \$806  = \$143 ;
+    \$806  = ch0_cfg_checks_delay_tolerance;
+    if (\$105 ) begin
+      \$806  = config_write_data[23:20];
     end
     if (rst) begin
-      \$806  = 1'h0;
+      \$806  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$807  = ch0_read_select_fc;
-    if (bus__r_en) begin
-      \$807  = \$144 ;
+    \$807  = ch0_cfg_checks_confirm_frames;
+    if (\$106 ) begin
+      \$807  = config_write_data[27:24];
     end
     if (rst) begin
-      \$807  = 1'h0;
+      \$807  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$808  = ch0_read_select_fd;
-    if (bus__r_en) begin
-      \$808  = \$145 ;
-    end
+    \$808  = \$107 ;
     if (rst) begin
       \$808  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$809  = ch0_result_status_status_snapshot;
-    if (\$146 ) begin
-      \$809  = \port$13356$0 [3:0];
+    \$809  = ch0_cfg_quiet_quiet_time;
+    if (\$108 ) begin
+      \$809 [7:0] = config_write_data[7:0];
+    end
+    if (\$109 ) begin
+      \$809 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$809  = 4'h0;
+      \$809  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$810  = ch0_result_status_cds_snapshot;
-    if (\$146 ) begin
-      \$810  = \port$13356$0 [49];
-    end
+    \$810  = \$110 ;
     if (rst) begin
       \$810  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$811  = ch0_result_status_w0_ne_snapshot;
-    if (\$146 ) begin
-      \$811  = \port$13356$0 [131];
+    \$811  = ch0_cfg_crc0_w0_crc_poly;
+    if (\$111 ) begin
+      \$811 [7:0] = config_write_data[7:0];
+    end
+    if (\$112 ) begin
+      \$811 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$811  = 1'h0;
+      \$811  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$812  = ch0_result_status_w0_nw_snapshot;
-    if (\$146 ) begin
-      \$812  = \port$13356$0 [132];
+    \$812  = ch0_cfg_crc0_w0_crc_width;
+    if (\$113 ) begin
+      \$812  = config_write_data[20:16];
     end
     if (rst) begin
-      \$812  = 1'h0;
+      \$812  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$813  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$146 ) begin
-      \$813  = \port$13356$0 [133];
+    \$813  = ch0_cfg_crc0_w0_crc_inverted;
+    if (\$114 ) begin
+      \$813  = config_write_data[24];
     end
     if (rst) begin
       \$813  = 1'h0;
@@ -7017,59 +6482,59 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$814  = ch0_result_status_w1_ne_snapshot;
-    if (\$146 ) begin
-      \$814  = \port$13356$0 [174];
-    end
+    \$814  = \$115 ;
     if (rst) begin
       \$814  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$815  = ch0_result_status_w1_nw_snapshot;
-    if (\$146 ) begin
-      \$815  = \port$13356$0 [175];
+    \$815  = ch0_cfg_crc0_start_w0_crc_start;
+    if (\$116 ) begin
+      \$815 [7:0] = config_write_data[7:0];
+    end
+    if (\$117 ) begin
+      \$815 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$815  = 1'h0;
+      \$815  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$816  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$146 ) begin
-      \$816  = \port$13356$0 [176];
-    end
+    \$816  = \$118 ;
     if (rst) begin
       \$816  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$817  = ch0_result_status_lc_repeat_snapshot;
-    if (\$146 ) begin
-      \$817  = \port$13356$0 [183];
+    \$817  = ch0_cfg_crc1_w1_crc_poly;
+    if (\$119 ) begin
+      \$817 [7:0] = config_write_data[7:0];
+    end
+    if (\$120 ) begin
+      \$817 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$817  = 1'h0;
+      \$817  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$818  = ch0_result_status_lc_skip_snapshot;
-    if (\$146 ) begin
-      \$818  = \port$13356$0 [184];
+    \$818  = ch0_cfg_crc1_w1_crc_width;
+    if (\$121 ) begin
+      \$818  = config_write_data[20:16];
     end
     if (rst) begin
-      \$818  = 1'h0;
+      \$818  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$819  = ch0_result_status_lc_zero_snapshot;
-    if (\$146 ) begin
-      \$819  = \port$13356$0 [185];
+    \$819  = ch0_cfg_crc1_w1_crc_inverted;
+    if (\$122 ) begin
+      \$819  = config_write_data[24];
     end
     if (rst) begin
       \$819  = 1'h0;
@@ -7077,445 +6542,373 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$820  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$146 ) begin
-      \$820  = \port$13356$0 [186];
-    end
+    \$820  = \$123 ;
     if (rst) begin
       \$820  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$821  = ch0_result_status_lc_snapshot;
-    if (\$146 ) begin
-      \$821  = \port$13356$0 [182:177];
+    \$821  = ch0_cfg_crc1_start_w1_crc_start;
+    if (\$124 ) begin
+      \$821 [7:0] = config_write_data[7:0];
+    end
+    if (\$125 ) begin
+      \$821 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$821  = 6'h00;
+      \$821  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$822  = ch0_result_seq_seq_snapshot;
-    if (\$146 ) begin
-      \$822  = ch0__done_count;
-    end
+    \$822  = \$126 ;
     if (rst) begin
-      \$822  = 16'h0000;
+      \$822  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$823  = ch0_result_seq_line_delay_snapshot;
-    if (\$146 ) begin
-      \$823  = \port$13356$0 [48:36];
+    \$823  = ch0_cfg_ssi_ssi;
+    if (\$127 ) begin
+      \$823  = config_write_data[0];
     end
     if (rst) begin
-      \$823  = 13'h0000;
+      \$823  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$824  = ch0_result_w0_lo_data_snapshot;
-    if (\$146 ) begin
-      \$824  = \port$13356$0 [107:76];
+    \$824  = ch0_cfg_ssi_ssi_error;
+    if (\$128 ) begin
+      \$824  = config_write_data[1];
     end
     if (rst) begin
-      \$824  = 32'd0;
+      \$824  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$825  = ch0_result_w0_hi_data_snapshot;
-    if (\$146 ) begin
-      \$825  = { 9'h000, \port$13356$0 [130:108] };
+    \$825  = ch0_cfg_ssi_ssi_error_low;
+    if (\$129 ) begin
+      \$825  = config_write_data[2];
     end
     if (rst) begin
-      \$825  = 32'd0;
+      \$825  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$826  = ch0_result_w1_lo_data_snapshot;
-    if (\$146 ) begin
-      \$826  = \port$13356$0 [165:134];
+    \$826  = ch0_cfg_ssi_ssi_double;
+    if (\$130 ) begin
+      \$826  = config_write_data[3];
     end
     if (rst) begin
-      \$826  = 32'd0;
+      \$826  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$827  = ch0_result_w1_hi_data_snapshot;
-    if (\$146 ) begin
-      \$827  = { 24'h000000, \port$13356$0 [173:166] };
+    \$827  = ch0_cfg_ssi_ssi_delay;
+    if (\$131 ) begin
+      \$827 [7:0] = config_write_data[23:16];
+    end
+    if (\$132 ) begin
+      \$827 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$827  = 32'd0;
+      \$827  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$828  = ch0_result_timestamp_time_snapshot;
-    if (\$146 ) begin
-      \$828  = \port$13356$0 [35:4];
-    end
+    \$828  = ch0_cfg_w2_write;
     if (rst) begin
-      \$828  = 32'd0;
+      \$828  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$829  = ch0_result_line_noise_events_snapshot;
-    if (\$146 ) begin
-      \$829  = \port$13356$0 [53:50];
-    end
+    \$829  = ch0_cfg_w2_crc_write;
     if (rst) begin
-      \$829  = 4'h0;
+      \$829  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$830  = ch0_result_line_delay_settled_snapshot;
-    if (\$146 ) begin
-      \$830  = \port$13356$0 [54];
-    end
+    \$830  = ch0_cfg_w2_crc_start_write;
     if (rst) begin
       \$830  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$831  = ch0_result_line_delay_spread_snapshot;
-    if (\$146 ) begin
-      \$831  = \port$13356$0 [75:68];
-    end
+    \$831  = ch0_cfg_w3_write;
     if (rst) begin
-      \$831  = 8'h00;
+      \$831  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$832  = ch0_result_line_settled_delay_snapshot;
-    if (\$146 ) begin
-      \$832  = \port$13356$0 [67:55];
-    end
+    \$832  = ch0_cfg_w3_crc_write;
     if (rst) begin
-      \$832  = 13'h0000;
+      \$832  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$833  = ch0_window0_read;
-    if (bus__r_en) begin
-      \$833  = \$148 ;
-    end
+    \$833  = ch0_cfg_w3_crc_start_write;
     if (rst) begin
       \$833  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$834  = ch0_window1_read;
-    if (bus__r_en) begin
-      \$834  = \$152 ;
-    end
+    \$834  = ch0_cfg_w4_write;
     if (rst) begin
       \$834  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$835  = ch0_window2_read;
-    if (bus__r_en) begin
-      \$835  = \$154 ;
-    end
+    \$835  = ch0_cfg_w4_crc_write;
     if (rst) begin
       \$835  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$836  = ch0_window3_read;
-    if (bus__r_en) begin
-      \$836  = ch0_config_read;
-    end
+    \$836  = ch0_cfg_w4_crc_start_write;
     if (rst) begin
       \$836  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$837  = ch0_read_data;
-    if (bus__r_load) begin
-      \$837  = \$246 ;
-    end
+    \$837  = ch0_cfg_w5_write;
     if (rst) begin
-      \$837  = 32'd0;
+      \$837  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$838  = \$248 ;
+    \$838  = ch0_cfg_w5_crc_write;
     if (rst) begin
       \$838  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$839  = \$250 ;
+    \$839  = ch0_cfg_w5_crc_start_write;
     if (rst) begin
       \$839  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$840  = \$252 ;
+    \$840  = ch0_cfg_w6_write;
     if (rst) begin
       \$840  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$841  = ch1_ctrl_periodic;
-    if (\$253 ) begin
-      \$841  = write_data[8];
-    end
+    \$841  = ch0_cfg_w6_crc_write;
     if (rst) begin
       \$841  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$842  = ch1_ctrl_trigger_enable;
-    if (\$254 ) begin
-      \$842  = write_data[9];
-    end
+    \$842  = ch0_cfg_w6_crc_start_write;
     if (rst) begin
       \$842  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$843  = ch1_irq_status_done;
-    if (ch1__frame_done) begin
-      \$843  = 1'h1;
-    end else if (\$256 ) begin
-      \$843  = 1'h0;
-    end
+    \$843  = ch0_cfg_w7_write;
     if (rst) begin
       \$843  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$844  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$844  = 1'h1;
-    end else if (\$258 ) begin
-      \$844  = 1'h0;
-    end
+    \$844  = ch0_cfg_w7_crc_write;
     if (rst) begin
       \$844  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$845  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$845  = 1'h1;
-    end else if (\$260 ) begin
-      \$845  = 1'h0;
-    end
+    \$845  = ch0_cfg_w7_crc_start_write;
     if (rst) begin
       \$845  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$846  = ch1_irq_enable_write;
+    \$846  = ch0_ca_request_write;
     if (rst) begin
       \$846  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$847  = ch1_irq_enable_done;
-    if (\$261 ) begin
-      \$847  = config_write_data[0];
+    \$847  = ch0_ca_request_slave_id;
+    if (\$133 ) begin
+      \$847  = config_write_data[2:0];
     end
     if (rst) begin
-      \$847  = 1'h0;
+      \$847  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$848  = ch1_irq_enable_error;
-    if (\$262 ) begin
-      \$848  = config_write_data[1];
+    \$848  = ch0_ca_request_address;
+    if (\$134 ) begin
+      \$848  = config_write_data[14:8];
     end
     if (rst) begin
-      \$848  = 1'h0;
+      \$848  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$849  = ch1_irq_enable_access_done;
-    if (\$263 ) begin
-      \$849  = config_write_data[2];
+    \$849  = ch0_ca_request_count;
+    if (\$135 ) begin
+      \$849  = config_write_data[22:16];
     end
     if (rst) begin
-      \$849  = 1'h0;
+      \$849  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$850  = ch1_cfg_ma_write;
+    \$850  = \ch0_ca_request_write$152 ;
+    if (\$136 ) begin
+      \$850  = config_write_data[24];
+    end
     if (rst) begin
       \$850  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$851  = ch1_cfg_ma_ma_half_period;
-    if (\$264 ) begin
-      \$851 [7:0] = config_write_data[7:0];
-    end
-    if (\$265 ) begin
-      \$851 [15:8] = config_write_data[15:8];
-    end
+    \$851  = \$138 ;
     if (rst) begin
-      \$851  = 16'h0000;
+      \$851  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$852  = ch1_cfg_ma_delay_limit;
-    if (\$266 ) begin
-      \$852 [7:0] = config_write_data[23:16];
-    end
-    if (\$267 ) begin
-      \$852 [11:8] = config_write_data[27:24];
-    end
+    \$852  = \$140 ;
     if (rst) begin
-      \$852  = 12'h000;
+      \$852  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$853  = ch1_cfg_period_write;
+    \$853  = config_memory0_write_data;
+    if (write_en) begin
+      \$853  = \$145 ;
+    end
     if (rst) begin
-      \$853  = 1'h0;
+      \$853  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$854  = ch1_cfg_period_request_period;
-    if (\$268 ) begin
-      \$854 [7:0] = config_write_data[7:0];
-    end
-    if (\$269 ) begin
-      \$854 [15:8] = config_write_data[15:8];
-    end
-    if (\$270 ) begin
-      \$854 [23:16] = config_write_data[23:16];
-    end
+    \$854  = \$146 ;
     if (rst) begin
-      \$854  = 24'h000000;
+      \$854  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$855  = ch1_cfg_break_write;
+    \$855  = ch0_config_read_index;
+    if (ch0_config_read) begin
+      \$855  = config_memory0_read_index;
+    end
     if (rst) begin
-      \$855  = 1'h0;
+      \$855  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$856  = ch1_cfg_break_break_time;
-    if (\$271 ) begin
-      \$856 [7:0] = config_write_data[7:0];
-    end
-    if (\$272 ) begin
-      \$856 [15:8] = config_write_data[15:8];
-    end
-    if (\$273 ) begin
-      \$856 [23:16] = config_write_data[23:16];
+    \$856  = ch0_read_select_80;
+    if (bus__r_en) begin
+      \$856  = \$147 ;
     end
     if (rst) begin
-      \$856  = 24'h000000;
+      \$856  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$857  = ch1_cfg_ack_write;
+    \$857  = ch0_read_select_81;
+    if (bus__r_en) begin
+      \$857  = \$148 ;
+    end
     if (rst) begin
       \$857  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$858  = ch1_cfg_ack_ack_limit;
-    if (\$274 ) begin
-      \$858 [7:0] = config_write_data[7:0];
-    end
-    if (\$275 ) begin
-      \$858 [15:8] = config_write_data[15:8];
-    end
-    if (\$276 ) begin
-      \$858 [23:16] = config_write_data[23:16];
+    \$858  = ch0_read_select_82;
+    if (bus__r_en) begin
+      \$858  = \$149 ;
     end
     if (rst) begin
-      \$858  = 24'h000000;
+      \$858  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$859  = ch1_cfg_timeout_write;
+    \$859  = ch0_read_select_84;
+    if (bus__r_en) begin
+      \$859  = \$150 ;
+    end
     if (rst) begin
       \$859  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$860  = ch1_cfg_timeout_timeout_limit;
-    if (\$277 ) begin
-      \$860 [7:0] = config_write_data[7:0];
-    end
-    if (\$278 ) begin
-      \$860 [15:8] = config_write_data[15:8];
-    end
-    if (\$279 ) begin
-      \$860 [23:16] = config_write_data[23:16];
+    \$860  = ch0_read_select_86;
+    if (bus__r_en) begin
+      \$860  = \$151 ;
     end
     if (rst) begin
-      \$860  = 24'h000000;
+      \$860  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$861  = ch1_cfg_words_write;
+    \$861  = ch0_read_select_87;
+    if (bus__r_en) begin
+      \$861  = \$152 ;
+    end
     if (rst) begin
       \$861  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$862  = ch1_cfg_words_w0_data_bits;
-    if (\$280 ) begin
-      \$862  = config_write_data[6:0];
+    \$862  = ch0_read_select_90;
+    if (bus__r_en) begin
+      \$862  = \$153 ;
     end
     if (rst) begin
-      \$862  = 7'h00;
+      \$862  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$863  = ch1_cfg_words_w0_nenw;
-    if (\$281 ) begin
-      \$863  = config_write_data[7];
+    \$863  = ch0_read_select_91;
+    if (bus__r_en) begin
+      \$863  = \$154 ;
     end
     if (rst) begin
       \$863  = 1'h0;
@@ -7523,9 +6916,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$864  = ch1_cfg_words_w0_lc;
-    if (\$282 ) begin
-      \$864  = config_write_data[8];
+    \$864  = ch0_read_select_92;
+    if (bus__r_en) begin
+      \$864  = \$155 ;
     end
     if (rst) begin
       \$864  = 1'h0;
@@ -7533,19 +6926,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$865  = ch1_cfg_words_w0_crc;
-    if (\$283 ) begin
-      \$865  = config_write_data[10:9];
+    \$865  = ch0_read_select_93;
+    if (bus__r_en) begin
+      \$865  = \$156 ;
     end
     if (rst) begin
-      \$865  = 2'h0;
+      \$865  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$866  = ch1_cfg_words_w0_gray;
-    if (\$284 ) begin
-      \$866  = config_write_data[11];
+    \$866  = ch0_read_select_94;
+    if (bus__r_en) begin
+      \$866  = \$157 ;
     end
     if (rst) begin
       \$866  = 1'h0;
@@ -7553,9 +6946,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$867  = ch1_cfg_words_w0_signed;
-    if (\$285 ) begin
-      \$867  = config_write_data[12];
+    \$867  = ch0_read_select_95;
+    if (bus__r_en) begin
+      \$867  = \$158 ;
     end
     if (rst) begin
       \$867  = 1'h0;
@@ -7563,19 +6956,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$868  = ch1_cfg_words_w1_data_bits;
-    if (\$286 ) begin
-      \$868  = config_write_data[22:16];
+    \$868  = ch0_read_select_96;
+    if (bus__r_en) begin
+      \$868  = \$159 ;
     end
     if (rst) begin
-      \$868  = 7'h00;
+      \$868  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$869  = ch1_cfg_words_w1_nenw;
-    if (\$287 ) begin
-      \$869  = config_write_data[23];
+    \$869  = ch0_read_select_97;
+    if (bus__r_en) begin
+      \$869  = \$160 ;
     end
     if (rst) begin
       \$869  = 1'h0;
@@ -7583,9 +6976,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$870  = ch1_cfg_words_w1_lc;
-    if (\$288 ) begin
-      \$870  = config_write_data[24];
+    \$870  = ch0_read_select_a5;
+    if (bus__r_en) begin
+      \$870  = \$161 ;
     end
     if (rst) begin
       \$870  = 1'h0;
@@ -7593,19 +6986,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$871  = ch1_cfg_words_w1_crc;
-    if (\$289 ) begin
-      \$871  = config_write_data[26:25];
+    \$871  = ch0_read_select_a6;
+    if (bus__r_en) begin
+      \$871  = \$162 ;
     end
     if (rst) begin
-      \$871  = 2'h0;
+      \$871  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$872  = ch1_cfg_words_w1_gray;
-    if (\$290 ) begin
-      \$872  = config_write_data[27];
+    \$872  = ch0_read_select_a7;
+    if (bus__r_en) begin
+      \$872  = \$163 ;
     end
     if (rst) begin
       \$872  = 1'h0;
@@ -7613,9 +7006,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$873  = ch1_cfg_words_w1_signed;
-    if (\$291 ) begin
-      \$873  = config_write_data[28];
+    \$873  = ch0_read_select_a8;
+    if (bus__r_en) begin
+      \$873  = \$164 ;
     end
     if (rst) begin
       \$873  = 1'h0;
@@ -7623,9 +7016,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$874  = ch1_cfg_words_w1_enable;
-    if (\$292 ) begin
-      \$874  = config_write_data[31];
+    \$874  = ch0_read_select_a9;
+    if (bus__r_en) begin
+      \$874  = \$165 ;
     end
     if (rst) begin
       \$874  = 1'h0;
@@ -7633,16 +7026,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$875  = ch1_cfg_checks_write;
+    \$875  = ch0_read_select_aa;
+    if (bus__r_en) begin
+      \$875  = \$166 ;
+    end
     if (rst) begin
       \$875  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$876  = ch1_cfg_checks_end_check;
-    if (\$293 ) begin
-      \$876  = config_write_data[0];
+    \$876  = ch0_read_select_ac;
+    if (bus__r_en) begin
+      \$876  = \$167 ;
     end
     if (rst) begin
       \$876  = 1'h0;
@@ -7650,9 +7046,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$877  = ch1_cfg_checks_spw_check;
-    if (\$294 ) begin
-      \$877  = config_write_data[1];
+    \$877  = ch0_read_select_ad;
+    if (bus__r_en) begin
+      \$877  = \$168 ;
     end
     if (rst) begin
       \$877  = 1'h0;
@@ -7660,99 +7056,99 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$878  = ch1_cfg_checks_spw_tolerance;
-    if (\$295 ) begin
-      \$878  = config_write_data[15:8];
+    \$878  = ch0_read_select_ae;
+    if (bus__r_en) begin
+      \$878  = \$169 ;
     end
     if (rst) begin
-      \$878  = 8'h00;
+      \$878  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$879  = ch1_cfg_checks_noise_limit;
-    if (\$296 ) begin
-      \$879  = config_write_data[19:16];
+    \$879  = ch0_read_select_b0;
+    if (bus__r_en) begin
+      \$879  = \$170 ;
     end
     if (rst) begin
-      \$879  = 4'h0;
+      \$879  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$880  = ch1_cfg_checks_delay_tolerance;
-    if (\$297 ) begin
-      \$880  = config_write_data[23:20];
+    \$880  = ch0_read_select_b1;
+    if (bus__r_en) begin
+      \$880  = \$171 ;
     end
     if (rst) begin
-      \$880  = 4'h0;
+      \$880  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$881  = ch1_cfg_checks_confirm_frames;
-    if (\$298 ) begin
-      \$881  = config_write_data[27:24];
+    \$881  = ch0_read_select_b2;
+    if (bus__r_en) begin
+      \$881  = \$172 ;
     end
     if (rst) begin
-      \$881  = 4'h0;
+      \$881  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$882  = ch1_cfg_quiet_write;
+    \$882  = ch0_read_select_b4;
+    if (bus__r_en) begin
+      \$882  = \$173 ;
+    end
     if (rst) begin
       \$882  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$883  = ch1_cfg_quiet_quiet_time;
-    if (\$299 ) begin
-      \$883 [7:0] = config_write_data[7:0];
-    end
-    if (\$300 ) begin
-      \$883 [11:8] = config_write_data[11:8];
+    \$883  = ch0_read_select_b5;
+    if (bus__r_en) begin
+      \$883  = \$174 ;
     end
     if (rst) begin
-      \$883  = 12'h000;
+      \$883  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$884  = ch1_cfg_crc0_write;
+    \$884  = ch0_read_select_b6;
+    if (bus__r_en) begin
+      \$884  = \$175 ;
+    end
     if (rst) begin
       \$884  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$885  = ch1_cfg_crc0_w0_crc_poly;
-    if (\$301 ) begin
-      \$885 [7:0] = config_write_data[7:0];
-    end
-    if (\$302 ) begin
-      \$885 [15:8] = config_write_data[15:8];
+    \$885  = ch0_read_select_b8;
+    if (bus__r_en) begin
+      \$885  = \$176 ;
     end
     if (rst) begin
-      \$885  = 16'h0000;
+      \$885  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$886  = ch1_cfg_crc0_w0_crc_width;
-    if (\$303 ) begin
-      \$886  = config_write_data[20:16];
+    \$886  = ch0_read_select_b9;
+    if (bus__r_en) begin
+      \$886  = \$177 ;
     end
     if (rst) begin
-      \$886  = 5'h00;
+      \$886  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$887  = ch1_cfg_crc0_w0_crc_inverted;
-    if (\$304 ) begin
-      \$887  = config_write_data[24];
+    \$887  = ch0_read_select_ba;
+    if (bus__r_en) begin
+      \$887  = \$178 ;
     end
     if (rst) begin
       \$887  = 1'h0;
@@ -7760,59 +7156,59 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$888  = ch1_cfg_crc0_start_write;
+    \$888  = ch0_read_select_bc;
+    if (bus__r_en) begin
+      \$888  = \$179 ;
+    end
     if (rst) begin
       \$888  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$889  = ch1_cfg_crc0_start_w0_crc_start;
-    if (\$305 ) begin
-      \$889 [7:0] = config_write_data[7:0];
-    end
-    if (\$306 ) begin
-      \$889 [15:8] = config_write_data[15:8];
+    \$889  = ch0_read_select_bd;
+    if (bus__r_en) begin
+      \$889  = \$180 ;
     end
     if (rst) begin
-      \$889  = 16'h0000;
+      \$889  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$890  = ch1_cfg_crc1_write;
+    \$890  = ch0_read_select_be;
+    if (bus__r_en) begin
+      \$890  = \$181 ;
+    end
     if (rst) begin
       \$890  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$891  = ch1_cfg_crc1_w1_crc_poly;
-    if (\$307 ) begin
-      \$891 [7:0] = config_write_data[7:0];
-    end
-    if (\$308 ) begin
-      \$891 [15:8] = config_write_data[15:8];
+    \$891  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$891  = \$182 ;
     end
     if (rst) begin
-      \$891  = 16'h0000;
+      \$891  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$892  = ch1_cfg_crc1_w1_crc_width;
-    if (\$309 ) begin
-      \$892  = config_write_data[20:16];
+    \$892  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$892  = \$183 ;
     end
     if (rst) begin
-      \$892  = 5'h00;
+      \$892  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$893  = ch1_cfg_crc1_w1_crc_inverted;
-    if (\$310 ) begin
-      \$893  = config_write_data[24];
+    \$893  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$893  = \$184 ;
     end
     if (rst) begin
       \$893  = 1'h0;
@@ -7820,36 +7216,39 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$894  = ch1_cfg_crc1_start_write;
+    \$894  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$894  = \$185 ;
+    end
     if (rst) begin
       \$894  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$895  = ch1_cfg_crc1_start_w1_crc_start;
-    if (\$311 ) begin
-      \$895 [7:0] = config_write_data[7:0];
-    end
-    if (\$312 ) begin
-      \$895 [15:8] = config_write_data[15:8];
+    \$895  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$895  = \$186 ;
     end
     if (rst) begin
-      \$895  = 16'h0000;
+      \$895  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$896  = ch1_cfg_ssi_write;
+    \$896  = ch0_read_select_fc;
+    if (bus__r_en) begin
+      \$896  = \$187 ;
+    end
     if (rst) begin
       \$896  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$897  = ch1_cfg_ssi_ssi;
-    if (\$313 ) begin
-      \$897  = config_write_data[0];
+    \$897  = ch0_read_select_fd;
+    if (bus__r_en) begin
+      \$897  = \$188 ;
     end
     if (rst) begin
       \$897  = 1'h0;
@@ -7857,19 +7256,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$898  = ch1_cfg_ssi_ssi_error;
-    if (\$314 ) begin
-      \$898  = config_write_data[1];
+    \$898  = ch0_result_status_status_snapshot;
+    if (\$189 ) begin
+      \$898  = \port$13541$0 [3:0];
     end
     if (rst) begin
-      \$898  = 1'h0;
+      \$898  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$899  = ch1_cfg_ssi_ssi_error_low;
-    if (\$315 ) begin
-      \$899  = config_write_data[2];
+    \$899  = ch0_result_status_cds_snapshot;
+    if (\$189 ) begin
+      \$899  = \port$13541$0 [49];
     end
     if (rst) begin
       \$899  = 1'h0;
@@ -7877,9 +7276,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$900  = ch1_cfg_ssi_ssi_double;
-    if (\$316 ) begin
-      \$900  = config_write_data[3];
+    \$900  = ch0_result_status_w0_ne_snapshot;
+    if (\$189 ) begin
+      \$900  = \port$13541$0 [131];
     end
     if (rst) begin
       \$900  = 1'h0;
@@ -7887,185 +7286,239 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$901  = ch1_cfg_ssi_ssi_delay;
-    if (\$317 ) begin
-      \$901 [7:0] = config_write_data[23:16];
-    end
-    if (\$318 ) begin
-      \$901 [11:8] = config_write_data[27:24];
+    \$901  = ch0_result_status_w0_nw_snapshot;
+    if (\$189 ) begin
+      \$901  = \port$13541$0 [132];
     end
     if (rst) begin
-      \$901  = 12'h000;
+      \$901  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$902  = ch1_cfg_w2_write;
+    \$902  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$189 ) begin
+      \$902  = \port$13541$0 [133];
+    end
     if (rst) begin
       \$902  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$903  = ch1_cfg_w2_crc_write;
+    \$903  = ch0_result_status_w1_ne_snapshot;
+    if (\$189 ) begin
+      \$903  = \port$13541$0 [174];
+    end
     if (rst) begin
       \$903  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$904  = ch1_cfg_w2_crc_start_write;
+    \$904  = ch0_result_status_w1_nw_snapshot;
+    if (\$189 ) begin
+      \$904  = \port$13541$0 [175];
+    end
     if (rst) begin
       \$904  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$905  = ch1_cfg_w3_write;
+    \$905  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$189 ) begin
+      \$905  = \port$13541$0 [176];
+    end
     if (rst) begin
       \$905  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$906  = ch1_cfg_w3_crc_write;
+    \$906  = ch0_result_status_lc_repeat_snapshot;
+    if (\$189 ) begin
+      \$906  = \port$13541$0 [183];
+    end
     if (rst) begin
       \$906  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$907  = ch1_cfg_w3_crc_start_write;
+    \$907  = ch0_result_status_lc_skip_snapshot;
+    if (\$189 ) begin
+      \$907  = \port$13541$0 [184];
+    end
     if (rst) begin
       \$907  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$908  = ch1_cfg_w4_write;
+    \$908  = ch0_result_status_lc_zero_snapshot;
+    if (\$189 ) begin
+      \$908  = \port$13541$0 [185];
+    end
     if (rst) begin
       \$908  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$909  = ch1_cfg_w4_crc_write;
+    \$909  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$189 ) begin
+      \$909  = \port$13541$0 [186];
+    end
     if (rst) begin
       \$909  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$910  = ch1_cfg_w4_crc_start_write;
+    \$910  = ch0_result_status_lc_snapshot;
+    if (\$189 ) begin
+      \$910  = \port$13541$0 [182:177];
+    end
     if (rst) begin
-      \$910  = 1'h0;
+      \$910  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$911  = ch1_cfg_w5_write;
+    \$911  = ch0_result_seq_seq_snapshot;
+    if (\$189 ) begin
+      \$911  = ch0__done_count;
+    end
     if (rst) begin
-      \$911  = 1'h0;
+      \$911  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$912  = ch1_cfg_w5_crc_write;
+    \$912  = ch0_result_seq_line_delay_snapshot;
+    if (\$189 ) begin
+      \$912  = \port$13541$0 [48:36];
+    end
     if (rst) begin
-      \$912  = 1'h0;
+      \$912  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$913  = ch1_cfg_w5_crc_start_write;
+    \$913  = ch0_result_w0_lo_data_snapshot;
+    if (\$189 ) begin
+      \$913  = \port$13541$0 [107:76];
+    end
     if (rst) begin
-      \$913  = 1'h0;
+      \$913  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$914  = ch1_cfg_w6_write;
+    \$914  = ch0_result_w0_hi_data_snapshot;
+    if (\$189 ) begin
+      \$914  = { 9'h000, \port$13541$0 [130:108] };
+    end
     if (rst) begin
-      \$914  = 1'h0;
+      \$914  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$915  = ch1_cfg_w6_crc_write;
+    \$915  = ch0_result_w1_lo_data_snapshot;
+    if (\$189 ) begin
+      \$915  = \port$13541$0 [165:134];
+    end
     if (rst) begin
-      \$915  = 1'h0;
+      \$915  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$916  = ch1_cfg_w6_crc_start_write;
+    \$916  = ch0_result_w1_hi_data_snapshot;
+    if (\$189 ) begin
+      \$916  = { 24'h000000, \port$13541$0 [173:166] };
+    end
     if (rst) begin
-      \$916  = 1'h0;
+      \$916  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$917  = ch1_cfg_w7_write;
+    \$917  = ch0_result_timestamp_time_snapshot;
+    if (\$189 ) begin
+      \$917  = \port$13541$0 [35:4];
+    end
     if (rst) begin
-      \$917  = 1'h0;
+      \$917  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$918  = ch1_cfg_w7_crc_write;
+    \$918  = ch0_result_line_noise_events_snapshot;
+    if (\$189 ) begin
+      \$918  = \port$13541$0 [53:50];
+    end
     if (rst) begin
-      \$918  = 1'h0;
+      \$918  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$919  = ch1_cfg_w7_crc_start_write;
+    \$919  = ch0_result_line_delay_settled_snapshot;
+    if (\$189 ) begin
+      \$919  = \port$13541$0 [54];
+    end
     if (rst) begin
       \$919  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$920  = ch1_ca_request_write;
+    \$920  = ch0_result_line_delay_spread_snapshot;
+    if (\$189 ) begin
+      \$920  = \port$13541$0 [75:68];
+    end
     if (rst) begin
-      \$920  = 1'h0;
+      \$920  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$921  = ch1_ca_request_slave_id;
-    if (\$319 ) begin
-      \$921  = config_write_data[2:0];
+    \$921  = ch0_result_line_settled_delay_snapshot;
+    if (\$189 ) begin
+      \$921  = \port$13541$0 [67:55];
     end
     if (rst) begin
-      \$921  = 3'h0;
+      \$921  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$922  = ch1_ca_request_address;
-    if (\$320 ) begin
-      \$922  = config_write_data[14:8];
+    \$922  = ch0_window0_read;
+    if (bus__r_en) begin
+      \$922  = \$191 ;
     end
     if (rst) begin
-      \$922  = 7'h00;
+      \$922  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$923  = ch1_ca_request_count;
-    if (\$321 ) begin
-      \$923  = config_write_data[22:16];
+    \$923  = ch0_window1_read;
+    if (bus__r_en) begin
+      \$923  = \$195 ;
     end
     if (rst) begin
-      \$923  = 7'h00;
+      \$923  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$924  = \ch1_ca_request_write$430 ;
-    if (\$322 ) begin
-      \$924  = config_write_data[24];
+    \$924  = ch0_window2_read;
+    if (bus__r_en) begin
+      \$924  = \$197 ;
     end
     if (rst) begin
       \$924  = 1'h0;
@@ -8073,70 +7526,69 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$925  = \$324 ;
+    \$925  = ch0_window3_read;
+    if (bus__r_en) begin
+      \$925  = ch0_config_read;
+    end
     if (rst) begin
       \$925  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$926  = \$326 ;
+    \$926  = ch0_read_data;
+    if (bus__r_load) begin
+      \$926  = \$289 ;
+    end
     if (rst) begin
-      \$926  = 1'h0;
+      \$926  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$927  = \$327 ;
+    \$927  = ch1_config_wait;
+    if (\$316 ) begin
+      \$927  = 1'h1;
+    end else if (ch1_config_go) begin
+      \$927  = 1'h0;
+    end
     if (rst) begin
-      \$927  = 15'h0000;
+      \$927  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$928  = ch1_config_read_index;
-    if (ch1_config_read) begin
-      \$928  = config_memory0_read_index;
-    end
+    \$928  = \$319 ;
     if (rst) begin
-      \$928  = 4'h0;
+      \$928  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$929  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$929  = \$328 ;
-    end
+    \$929  = \$321 ;
     if (rst) begin
       \$929  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$930  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$930  = \$329 ;
-    end
+    \$930  = \$323 ;
     if (rst) begin
       \$930  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$931  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$931  = \$330 ;
-    end
+    \$931  = \$325 ;
     if (rst) begin
       \$931  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$932  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$932  = \$331 ;
+    \$932  = ch1_ctrl_periodic;
+    if (\$326 ) begin
+      \$932  = write_data[8];
     end
     if (rst) begin
       \$932  = 1'h0;
@@ -8144,9 +7596,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$933  = ch1_read_select_106;
-    if (bus__r_en) begin
-      \$933  = \$332 ;
+    \$933  = ch1_ctrl_trigger_enable;
+    if (\$327 ) begin
+      \$933  = write_data[9];
     end
     if (rst) begin
       \$933  = 1'h0;
@@ -8154,9 +7606,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$934  = ch1_read_select_107;
-    if (bus__r_en) begin
-      \$934  = \$333 ;
+    \$934  = ch1_irq_status_done;
+    if (ch1__frame_done) begin
+      \$934  = 1'h1;
+    end else if (\$329 ) begin
+      \$934  = 1'h0;
     end
     if (rst) begin
       \$934  = 1'h0;
@@ -8164,9 +7618,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$935  = ch1_read_select_110;
-    if (bus__r_en) begin
-      \$935  = \$334 ;
+    \$935  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$935  = 1'h1;
+    end else if (\$331 ) begin
+      \$935  = 1'h0;
     end
     if (rst) begin
       \$935  = 1'h0;
@@ -8174,9 +7630,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$936  = ch1_read_select_111;
-    if (bus__r_en) begin
-      \$936  = \$335 ;
+    \$936  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$936  = 1'h1;
+    end else if (\$333 ) begin
+      \$936  = 1'h0;
     end
     if (rst) begin
       \$936  = 1'h0;
@@ -8184,19 +7642,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$937  = ch1_read_select_112;
-    if (bus__r_en) begin
-      \$937  = \$336 ;
-    end
+    \$937  = ch1_irq_enable_write;
     if (rst) begin
       \$937  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$938  = ch1_read_select_113;
-    if (bus__r_en) begin
-      \$938  = \$337 ;
+    \$938  = ch1_irq_enable_done;
+    if (\$334 ) begin
+      \$938  = config_write_data[0];
     end
     if (rst) begin
       \$938  = 1'h0;
@@ -8204,9 +7659,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$939  = ch1_read_select_114;
-    if (bus__r_en) begin
-      \$939  = \$338 ;
+    \$939  = ch1_irq_enable_error;
+    if (\$335 ) begin
+      \$939  = config_write_data[1];
     end
     if (rst) begin
       \$939  = 1'h0;
@@ -8214,9 +7669,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$940  = ch1_read_select_115;
-    if (bus__r_en) begin
-      \$940  = \$339 ;
+    \$940  = ch1_irq_enable_access_done;
+    if (\$336 ) begin
+      \$940  = config_write_data[2];
     end
     if (rst) begin
       \$940  = 1'h0;
@@ -8224,139 +7679,151 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$941  = ch1_read_select_116;
-    if (bus__r_en) begin
-      \$941  = \$340 ;
-    end
+    \$941  = \$337 ;
     if (rst) begin
       \$941  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$942  = ch1_read_select_117;
-    if (bus__r_en) begin
-      \$942  = \$341 ;
+    \$942  = ch1_cfg_ma_ma_half_period;
+    if (\$338 ) begin
+      \$942 [7:0] = config_write_data[7:0];
+    end
+    if (\$339 ) begin
+      \$942 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$942  = 1'h0;
+      \$942  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$943  = ch1_read_select_125;
-    if (bus__r_en) begin
-      \$943  = \$342 ;
+    \$943  = ch1_cfg_ma_delay_limit;
+    if (\$340 ) begin
+      \$943 [7:0] = config_write_data[23:16];
+    end
+    if (\$341 ) begin
+      \$943 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$943  = 1'h0;
+      \$943  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$944  = ch1_read_select_126;
-    if (bus__r_en) begin
-      \$944  = \$343 ;
-    end
+    \$944  = \$342 ;
     if (rst) begin
       \$944  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$945  = ch1_read_select_127;
-    if (bus__r_en) begin
-      \$945  = \$344 ;
+    \$945  = ch1_cfg_period_request_period;
+    if (\$343 ) begin
+      \$945 [7:0] = config_write_data[7:0];
+    end
+    if (\$344 ) begin
+      \$945 [15:8] = config_write_data[15:8];
+    end
+    if (\$345 ) begin
+      \$945 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$945  = 1'h0;
+      \$945  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$946  = ch1_read_select_128;
-    if (bus__r_en) begin
-      \$946  = \$345 ;
-    end
+    \$946  = \$346 ;
     if (rst) begin
       \$946  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$947  = ch1_read_select_129;
-    if (bus__r_en) begin
-      \$947  = \$346 ;
+    \$947  = ch1_cfg_break_break_time;
+    if (\$347 ) begin
+      \$947 [7:0] = config_write_data[7:0];
+    end
+    if (\$348 ) begin
+      \$947 [15:8] = config_write_data[15:8];
+    end
+    if (\$349 ) begin
+      \$947 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$947  = 1'h0;
+      \$947  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$948  = ch1_read_select_12a;
-    if (bus__r_en) begin
-      \$948  = \$347 ;
-    end
+    \$948  = \$350 ;
     if (rst) begin
       \$948  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$949  = ch1_read_select_12c;
-    if (bus__r_en) begin
-      \$949  = \$348 ;
+    \$949  = ch1_cfg_ack_ack_limit;
+    if (\$351 ) begin
+      \$949 [7:0] = config_write_data[7:0];
+    end
+    if (\$352 ) begin
+      \$949 [15:8] = config_write_data[15:8];
+    end
+    if (\$353 ) begin
+      \$949 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$949  = 1'h0;
+      \$949  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$950  = ch1_read_select_12d;
-    if (bus__r_en) begin
-      \$950  = \$349 ;
-    end
+    \$950  = \$354 ;
     if (rst) begin
       \$950  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$951  = ch1_read_select_12e;
-    if (bus__r_en) begin
-      \$951  = \$350 ;
+    \$951  = ch1_cfg_timeout_timeout_limit;
+    if (\$355 ) begin
+      \$951 [7:0] = config_write_data[7:0];
+    end
+    if (\$356 ) begin
+      \$951 [15:8] = config_write_data[15:8];
+    end
+    if (\$357 ) begin
+      \$951 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$951  = 1'h0;
+      \$951  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$952  = ch1_read_select_130;
-    if (bus__r_en) begin
-      \$952  = \$351 ;
-    end
+    \$952  = \$358 ;
     if (rst) begin
       \$952  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$953  = ch1_read_select_131;
-    if (bus__r_en) begin
-      \$953  = \$352 ;
+    \$953  = ch1_cfg_words_w0_data_bits;
+    if (\$359 ) begin
+      \$953  = config_write_data[6:0];
     end
     if (rst) begin
-      \$953  = 1'h0;
+      \$953  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$954  = ch1_read_select_132;
-    if (bus__r_en) begin
-      \$954  = \$353 ;
+    \$954  = ch1_cfg_words_w0_nenw;
+    if (\$360 ) begin
+      \$954  = config_write_data[7];
     end
     if (rst) begin
       \$954  = 1'h0;
@@ -8364,9 +7831,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$955  = ch1_read_select_134;
-    if (bus__r_en) begin
-      \$955  = \$354 ;
+    \$955  = ch1_cfg_words_w0_lc;
+    if (\$361 ) begin
+      \$955  = config_write_data[8];
     end
     if (rst) begin
       \$955  = 1'h0;
@@ -8374,19 +7841,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$956  = ch1_read_select_135;
-    if (bus__r_en) begin
-      \$956  = \$355 ;
+    \$956  = ch1_cfg_words_w0_crc;
+    if (\$362 ) begin
+      \$956  = config_write_data[10:9];
     end
     if (rst) begin
-      \$956  = 1'h0;
+      \$956  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$957  = ch1_read_select_136;
-    if (bus__r_en) begin
-      \$957  = \$356 ;
+    \$957  = ch1_cfg_words_w0_gray;
+    if (\$363 ) begin
+      \$957  = config_write_data[11];
     end
     if (rst) begin
       \$957  = 1'h0;
@@ -8394,9 +7861,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$958  = ch1_read_select_138;
-    if (bus__r_en) begin
-      \$958  = \$357 ;
+    \$958  = ch1_cfg_words_w0_signed;
+    if (\$364 ) begin
+      \$958  = config_write_data[12];
     end
     if (rst) begin
       \$958  = 1'h0;
@@ -8404,19 +7871,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$959  = ch1_read_select_139;
-    if (bus__r_en) begin
-      \$959  = \$358 ;
+    \$959  = ch1_cfg_words_w1_data_bits;
+    if (\$365 ) begin
+      \$959  = config_write_data[22:16];
     end
     if (rst) begin
-      \$959  = 1'h0;
+      \$959  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$960  = ch1_read_select_13a;
-    if (bus__r_en) begin
-      \$960  = \$359 ;
+    \$960  = ch1_cfg_words_w1_nenw;
+    if (\$366 ) begin
+      \$960  = config_write_data[23];
     end
     if (rst) begin
       \$960  = 1'h0;
@@ -8424,9 +7891,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$961  = ch1_read_select_13c;
-    if (bus__r_en) begin
-      \$961  = \$360 ;
+    \$961  = ch1_cfg_words_w1_lc;
+    if (\$367 ) begin
+      \$961  = config_write_data[24];
     end
     if (rst) begin
       \$961  = 1'h0;
@@ -8434,19 +7901,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$962  = ch1_read_select_13d;
-    if (bus__r_en) begin
-      \$962  = \$361 ;
+    \$962  = ch1_cfg_words_w1_crc;
+    if (\$368 ) begin
+      \$962  = config_write_data[26:25];
     end
     if (rst) begin
-      \$962  = 1'h0;
+      \$962  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$963  = ch1_read_select_13e;
-    if (bus__r_en) begin
-      \$963  = \$362 ;
+    \$963  = ch1_cfg_words_w1_gray;
+    if (\$369 ) begin
+      \$963  = config_write_data[27];
     end
     if (rst) begin
       \$963  = 1'h0;
@@ -8454,9 +7921,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$964  = ch1_read_select_141;
-    if (bus__r_en) begin
-      \$964  = \$363 ;
+    \$964  = ch1_cfg_words_w1_signed;
+    if (\$370 ) begin
+      \$964  = config_write_data[28];
     end
     if (rst) begin
       \$964  = 1'h0;
@@ -8464,9 +7931,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$965  = ch1_read_select_142;
-    if (bus__r_en) begin
-      \$965  = \$364 ;
+    \$965  = ch1_cfg_words_w1_enable;
+    if (\$371 ) begin
+      \$965  = config_write_data[31];
     end
     if (rst) begin
       \$965  = 1'h0;
@@ -8474,19 +7941,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$966  = ch1_read_select_143;
-    if (bus__r_en) begin
-      \$966  = \$365 ;
-    end
+    \$966  = \$372 ;
     if (rst) begin
       \$966  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$967  = ch1_read_select_144;
-    if (bus__r_en) begin
-      \$967  = \$366 ;
+    \$967  = ch1_cfg_checks_end_check;
+    if (\$373 ) begin
+      \$967  = config_write_data[0];
     end
     if (rst) begin
       \$967  = 1'h0;
@@ -8494,9 +7958,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$968  = ch1_read_select_145;
-    if (bus__r_en) begin
-      \$968  = \$367 ;
+    \$968  = ch1_cfg_checks_spw_check;
+    if (\$374 ) begin
+      \$968  = config_write_data[1];
     end
     if (rst) begin
       \$968  = 1'h0;
@@ -8504,29 +7968,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$969  = ch1_read_select_17c;
-    if (bus__r_en) begin
-      \$969  = \$368 ;
+    \$969  = ch1_cfg_checks_spw_tolerance;
+    if (\$375 ) begin
+      \$969  = config_write_data[15:8];
     end
     if (rst) begin
-      \$969  = 1'h0;
+      \$969  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$970  = ch1_read_select_17d;
-    if (bus__r_en) begin
-      \$970  = \$369 ;
+    \$970  = ch1_cfg_checks_noise_limit;
+    if (\$376 ) begin
+      \$970  = config_write_data[19:16];
     end
     if (rst) begin
-      \$970  = 1'h0;
+      \$970  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$971  = ch1_result_status_status_snapshot;
-    if (\$370 ) begin
-      \$971  = \port$13903$0 [3:0];
+    \$971  = ch1_cfg_checks_delay_tolerance;
+    if (\$377 ) begin
+      \$971  = config_write_data[23:20];
     end
     if (rst) begin
       \$971  = 4'h0;
@@ -8534,69 +7998,69 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$972  = ch1_result_status_cds_snapshot;
-    if (\$370 ) begin
-      \$972  = \port$13903$0 [49];
+    \$972  = ch1_cfg_checks_confirm_frames;
+    if (\$378 ) begin
+      \$972  = config_write_data[27:24];
     end
     if (rst) begin
-      \$972  = 1'h0;
+      \$972  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$973  = ch1_result_status_w0_ne_snapshot;
-    if (\$370 ) begin
-      \$973  = \port$13903$0 [131];
-    end
+    \$973  = \$379 ;
     if (rst) begin
       \$973  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$974  = ch1_result_status_w0_nw_snapshot;
-    if (\$370 ) begin
-      \$974  = \port$13903$0 [132];
+    \$974  = ch1_cfg_quiet_quiet_time;
+    if (\$380 ) begin
+      \$974 [7:0] = config_write_data[7:0];
+    end
+    if (\$381 ) begin
+      \$974 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$974  = 1'h0;
+      \$974  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$975  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$370 ) begin
-      \$975  = \port$13903$0 [133];
-    end
+    \$975  = \$382 ;
     if (rst) begin
       \$975  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$976  = ch1_result_status_w1_ne_snapshot;
-    if (\$370 ) begin
-      \$976  = \port$13903$0 [174];
+    \$976  = ch1_cfg_crc0_w0_crc_poly;
+    if (\$383 ) begin
+      \$976 [7:0] = config_write_data[7:0];
+    end
+    if (\$384 ) begin
+      \$976 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$976  = 1'h0;
+      \$976  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$977  = ch1_result_status_w1_nw_snapshot;
-    if (\$370 ) begin
-      \$977  = \port$13903$0 [175];
+    \$977  = ch1_cfg_crc0_w0_crc_width;
+    if (\$385 ) begin
+      \$977  = config_write_data[20:16];
     end
     if (rst) begin
-      \$977  = 1'h0;
+      \$977  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$978  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$370 ) begin
-      \$978  = \port$13903$0 [176];
+    \$978  = ch1_cfg_crc0_w0_crc_inverted;
+    if (\$386 ) begin
+      \$978  = config_write_data[24];
     end
     if (rst) begin
       \$978  = 1'h0;
@@ -8604,212 +8068,1056 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$979  = ch1_result_status_lc_repeat_snapshot;
-    if (\$370 ) begin
-      \$979  = \port$13903$0 [183];
-    end
+    \$979  = \$387 ;
     if (rst) begin
       \$979  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$980  = ch1_result_status_lc_skip_snapshot;
-    if (\$370 ) begin
-      \$980  = \port$13903$0 [184];
+    \$980  = ch1_cfg_crc0_start_w0_crc_start;
+    if (\$388 ) begin
+      \$980 [7:0] = config_write_data[7:0];
+    end
+    if (\$389 ) begin
+      \$980 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$980  = 1'h0;
+      \$980  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$981  = ch1_result_status_lc_zero_snapshot;
-    if (\$370 ) begin
-      \$981  = \port$13903$0 [185];
-    end
+    \$981  = \$390 ;
     if (rst) begin
       \$981  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$982  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$370 ) begin
-      \$982  = \port$13903$0 [186];
+    \$982  = ch1_cfg_crc1_w1_crc_poly;
+    if (\$391 ) begin
+      \$982 [7:0] = config_write_data[7:0];
+    end
+    if (\$392 ) begin
+      \$982 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$982  = 1'h0;
+      \$982  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$983  = ch1_result_status_lc_snapshot;
-    if (\$370 ) begin
-      \$983  = \port$13903$0 [182:177];
+    \$983  = ch1_cfg_crc1_w1_crc_width;
+    if (\$393 ) begin
+      \$983  = config_write_data[20:16];
     end
     if (rst) begin
-      \$983  = 6'h00;
+      \$983  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$984  = ch1_result_seq_seq_snapshot;
-    if (\$370 ) begin
-      \$984  = ch1__done_count;
+    \$984  = ch1_cfg_crc1_w1_crc_inverted;
+    if (\$394 ) begin
+      \$984  = config_write_data[24];
     end
     if (rst) begin
-      \$984  = 16'h0000;
+      \$984  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$985  = ch1_result_seq_line_delay_snapshot;
-    if (\$370 ) begin
-      \$985  = \port$13903$0 [48:36];
-    end
+    \$985  = \$395 ;
     if (rst) begin
-      \$985  = 13'h0000;
+      \$985  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$986  = ch1_result_w0_lo_data_snapshot;
-    if (\$370 ) begin
-      \$986  = \port$13903$0 [107:76];
+    \$986  = ch1_cfg_crc1_start_w1_crc_start;
+    if (\$396 ) begin
+      \$986 [7:0] = config_write_data[7:0];
+    end
+    if (\$397 ) begin
+      \$986 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$986  = 32'd0;
+      \$986  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$987  = ch1_result_w0_hi_data_snapshot;
-    if (\$370 ) begin
-      \$987  = { 9'h000, \port$13903$0 [130:108] };
-    end
+    \$987  = \$398 ;
     if (rst) begin
-      \$987  = 32'd0;
+      \$987  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$988  = ch1_result_w1_lo_data_snapshot;
-    if (\$370 ) begin
-      \$988  = \port$13903$0 [165:134];
+    \$988  = ch1_cfg_ssi_ssi;
+    if (\$399 ) begin
+      \$988  = config_write_data[0];
     end
     if (rst) begin
-      \$988  = 32'd0;
+      \$988  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$989  = ch1_result_w1_hi_data_snapshot;
-    if (\$370 ) begin
-      \$989  = { 24'h000000, \port$13903$0 [173:166] };
+    \$989  = ch1_cfg_ssi_ssi_error;
+    if (\$400 ) begin
+      \$989  = config_write_data[1];
     end
     if (rst) begin
-      \$989  = 32'd0;
+      \$989  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$990  = ch1_result_timestamp_time_snapshot;
-    if (\$370 ) begin
-      \$990  = \port$13903$0 [35:4];
+    \$990  = ch1_cfg_ssi_ssi_error_low;
+    if (\$401 ) begin
+      \$990  = config_write_data[2];
     end
     if (rst) begin
-      \$990  = 32'd0;
+      \$990  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$991  = ch1_result_line_noise_events_snapshot;
-    if (\$370 ) begin
-      \$991  = \port$13903$0 [53:50];
+    \$991  = ch1_cfg_ssi_ssi_double;
+    if (\$402 ) begin
+      \$991  = config_write_data[3];
     end
     if (rst) begin
-      \$991  = 4'h0;
+      \$991  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$992  = ch1_result_line_delay_settled_snapshot;
-    if (\$370 ) begin
-      \$992  = \port$13903$0 [54];
+    \$992  = ch1_cfg_ssi_ssi_delay;
+    if (\$403 ) begin
+      \$992 [7:0] = config_write_data[23:16];
+    end
+    if (\$404 ) begin
+      \$992 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$992  = 1'h0;
+      \$992  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$993  = ch1_result_line_delay_spread_snapshot;
-    if (\$370 ) begin
-      \$993  = \port$13903$0 [75:68];
-    end
+    \$993  = ch1_cfg_w2_write;
     if (rst) begin
-      \$993  = 8'h00;
+      \$993  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$994  = ch1_result_line_settled_delay_snapshot;
-    if (\$370 ) begin
-      \$994  = \port$13903$0 [67:55];
-    end
+    \$994  = ch1_cfg_w2_crc_write;
     if (rst) begin
-      \$994  = 13'h0000;
+      \$994  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$995  = ch1_window0_read;
-    if (bus__r_en) begin
-      \$995  = \$372 ;
-    end
+    \$995  = ch1_cfg_w2_crc_start_write;
     if (rst) begin
       \$995  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$996  = ch1_window1_read;
-    if (bus__r_en) begin
-      \$996  = \$376 ;
-    end
+    \$996  = ch1_cfg_w3_write;
     if (rst) begin
       \$996  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$997  = ch1_window2_read;
-    if (bus__r_en) begin
-      \$997  = \$378 ;
-    end
+    \$997  = ch1_cfg_w3_crc_write;
     if (rst) begin
       \$997  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$998  = ch1_window3_read;
-    if (bus__r_en) begin
-      \$998  = ch1_config_read;
-    end
+    \$998  = ch1_cfg_w3_crc_start_write;
     if (rst) begin
       \$998  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$999  = ch1_read_data;
-    if (bus__r_load) begin
-      \$999  = \$470 ;
+    \$999  = ch1_cfg_w4_write;
+    if (rst) begin
+      \$999  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1000  = ch1_cfg_w4_crc_write;
+    if (rst) begin
+      \$1000  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1001  = ch1_cfg_w4_crc_start_write;
+    if (rst) begin
+      \$1001  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1002  = ch1_cfg_w5_write;
+    if (rst) begin
+      \$1002  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1003  = ch1_cfg_w5_crc_write;
+    if (rst) begin
+      \$1003  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1004  = ch1_cfg_w5_crc_start_write;
+    if (rst) begin
+      \$1004  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1005  = ch1_cfg_w6_write;
+    if (rst) begin
+      \$1005  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1006  = ch1_cfg_w6_crc_write;
+    if (rst) begin
+      \$1006  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1007  = ch1_cfg_w6_crc_start_write;
+    if (rst) begin
+      \$1007  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1008  = ch1_cfg_w7_write;
+    if (rst) begin
+      \$1008  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1009  = ch1_cfg_w7_crc_write;
+    if (rst) begin
+      \$1009  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1010  = ch1_cfg_w7_crc_start_write;
+    if (rst) begin
+      \$1010  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1011  = ch1_ca_request_write;
+    if (rst) begin
+      \$1011  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1012  = ch1_ca_request_slave_id;
+    if (\$405 ) begin
+      \$1012  = config_write_data[2:0];
     end
     if (rst) begin
-      \$999  = 32'd0;
+      \$1012  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1013  = ch1_ca_request_address;
+    if (\$406 ) begin
+      \$1013  = config_write_data[14:8];
+    end
+    if (rst) begin
+      \$1013  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1014  = ch1_ca_request_count;
+    if (\$407 ) begin
+      \$1014  = config_write_data[22:16];
+    end
+    if (rst) begin
+      \$1014  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1015  = \ch1_ca_request_write$435 ;
+    if (\$408 ) begin
+      \$1015  = config_write_data[24];
+    end
+    if (rst) begin
+      \$1015  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1016  = \$410 ;
+    if (rst) begin
+      \$1016  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1017  = \$412 ;
+    if (rst) begin
+      \$1017  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1018  = \$413 ;
+    if (rst) begin
+      \$1018  = 15'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1019  = ch1_config_read_index;
+    if (ch1_config_read) begin
+      \$1019  = config_memory0_read_index;
+    end
+    if (rst) begin
+      \$1019  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1020  = ch1_read_select_100;
+    if (bus__r_en) begin
+      \$1020  = \$414 ;
+    end
+    if (rst) begin
+      \$1020  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1021  = ch1_read_select_101;
+    if (bus__r_en) begin
+      \$1021  = \$415 ;
+    end
+    if (rst) begin
+      \$1021  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1022  = ch1_read_select_102;
+    if (bus__r_en) begin
+      \$1022  = \$416 ;
+    end
+    if (rst) begin
+      \$1022  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1023  = ch1_read_select_104;
+    if (bus__r_en) begin
+      \$1023  = \$417 ;
+    end
+    if (rst) begin
+      \$1023  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1024  = ch1_read_select_106;
+    if (bus__r_en) begin
+      \$1024  = \$418 ;
+    end
+    if (rst) begin
+      \$1024  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1025  = ch1_read_select_107;
+    if (bus__r_en) begin
+      \$1025  = \$419 ;
+    end
+    if (rst) begin
+      \$1025  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1026  = ch1_read_select_110;
+    if (bus__r_en) begin
+      \$1026  = \$420 ;
+    end
+    if (rst) begin
+      \$1026  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1027  = ch1_read_select_111;
+    if (bus__r_en) begin
+      \$1027  = \$421 ;
+    end
+    if (rst) begin
+      \$1027  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1028  = ch1_read_select_112;
+    if (bus__r_en) begin
+      \$1028  = \$422 ;
+    end
+    if (rst) begin
+      \$1028  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1029  = ch1_read_select_113;
+    if (bus__r_en) begin
+      \$1029  = \$423 ;
+    end
+    if (rst) begin
+      \$1029  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1030  = ch1_read_select_114;
+    if (bus__r_en) begin
+      \$1030  = \$424 ;
+    end
+    if (rst) begin
+      \$1030  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1031  = ch1_read_select_115;
+    if (bus__r_en) begin
+      \$1031  = \$425 ;
+    end
+    if (rst) begin
+      \$1031  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1032  = ch1_read_select_116;
+    if (bus__r_en) begin
+      \$1032  = \$426 ;
+    end
+    if (rst) begin
+      \$1032  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1033  = ch1_read_select_117;
+    if (bus__r_en) begin
+      \$1033  = \$427 ;
+    end
+    if (rst) begin
+      \$1033  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1034  = ch1_read_select_125;
+    if (bus__r_en) begin
+      \$1034  = \$428 ;
+    end
+    if (rst) begin
+      \$1034  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1035  = ch1_read_select_126;
+    if (bus__r_en) begin
+      \$1035  = \$429 ;
+    end
+    if (rst) begin
+      \$1035  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1036  = ch1_read_select_127;
+    if (bus__r_en) begin
+      \$1036  = \$430 ;
+    end
+    if (rst) begin
+      \$1036  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1037  = ch1_read_select_128;
+    if (bus__r_en) begin
+      \$1037  = \$431 ;
+    end
+    if (rst) begin
+      \$1037  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1038  = ch1_read_select_129;
+    if (bus__r_en) begin
+      \$1038  = \$432 ;
+    end
+    if (rst) begin
+      \$1038  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1039  = ch1_read_select_12a;
+    if (bus__r_en) begin
+      \$1039  = \$433 ;
+    end
+    if (rst) begin
+      \$1039  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1040  = ch1_read_select_12c;
+    if (bus__r_en) begin
+      \$1040  = \$434 ;
+    end
+    if (rst) begin
+      \$1040  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1041  = ch1_read_select_12d;
+    if (bus__r_en) begin
+      \$1041  = \$435 ;
+    end
+    if (rst) begin
+      \$1041  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1042  = ch1_read_select_12e;
+    if (bus__r_en) begin
+      \$1042  = \$436 ;
+    end
+    if (rst) begin
+      \$1042  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1043  = ch1_read_select_130;
+    if (bus__r_en) begin
+      \$1043  = \$437 ;
+    end
+    if (rst) begin
+      \$1043  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1044  = ch1_read_select_131;
+    if (bus__r_en) begin
+      \$1044  = \$438 ;
+    end
+    if (rst) begin
+      \$1044  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1045  = ch1_read_select_132;
+    if (bus__r_en) begin
+      \$1045  = \$439 ;
+    end
+    if (rst) begin
+      \$1045  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1046  = ch1_read_select_134;
+    if (bus__r_en) begin
+      \$1046  = \$440 ;
+    end
+    if (rst) begin
+      \$1046  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1047  = ch1_read_select_135;
+    if (bus__r_en) begin
+      \$1047  = \$441 ;
+    end
+    if (rst) begin
+      \$1047  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1048  = ch1_read_select_136;
+    if (bus__r_en) begin
+      \$1048  = \$442 ;
+    end
+    if (rst) begin
+      \$1048  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1049  = ch1_read_select_138;
+    if (bus__r_en) begin
+      \$1049  = \$443 ;
+    end
+    if (rst) begin
+      \$1049  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1050  = ch1_read_select_139;
+    if (bus__r_en) begin
+      \$1050  = \$444 ;
+    end
+    if (rst) begin
+      \$1050  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1051  = ch1_read_select_13a;
+    if (bus__r_en) begin
+      \$1051  = \$445 ;
+    end
+    if (rst) begin
+      \$1051  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1052  = ch1_read_select_13c;
+    if (bus__r_en) begin
+      \$1052  = \$446 ;
+    end
+    if (rst) begin
+      \$1052  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1053  = ch1_read_select_13d;
+    if (bus__r_en) begin
+      \$1053  = \$447 ;
+    end
+    if (rst) begin
+      \$1053  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1054  = ch1_read_select_13e;
+    if (bus__r_en) begin
+      \$1054  = \$448 ;
+    end
+    if (rst) begin
+      \$1054  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1055  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$1055  = \$449 ;
+    end
+    if (rst) begin
+      \$1055  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1056  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$1056  = \$450 ;
+    end
+    if (rst) begin
+      \$1056  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1057  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$1057  = \$451 ;
+    end
+    if (rst) begin
+      \$1057  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1058  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$1058  = \$452 ;
+    end
+    if (rst) begin
+      \$1058  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1059  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$1059  = \$453 ;
+    end
+    if (rst) begin
+      \$1059  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1060  = ch1_read_select_17c;
+    if (bus__r_en) begin
+      \$1060  = \$454 ;
+    end
+    if (rst) begin
+      \$1060  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1061  = ch1_read_select_17d;
+    if (bus__r_en) begin
+      \$1061  = \$455 ;
+    end
+    if (rst) begin
+      \$1061  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1062  = ch1_result_status_status_snapshot;
+    if (\$456 ) begin
+      \$1062  = \port$14092$0 [3:0];
+    end
+    if (rst) begin
+      \$1062  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1063  = ch1_result_status_cds_snapshot;
+    if (\$456 ) begin
+      \$1063  = \port$14092$0 [49];
+    end
+    if (rst) begin
+      \$1063  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1064  = ch1_result_status_w0_ne_snapshot;
+    if (\$456 ) begin
+      \$1064  = \port$14092$0 [131];
+    end
+    if (rst) begin
+      \$1064  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1065  = ch1_result_status_w0_nw_snapshot;
+    if (\$456 ) begin
+      \$1065  = \port$14092$0 [132];
+    end
+    if (rst) begin
+      \$1065  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1066  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$456 ) begin
+      \$1066  = \port$14092$0 [133];
+    end
+    if (rst) begin
+      \$1066  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1067  = ch1_result_status_w1_ne_snapshot;
+    if (\$456 ) begin
+      \$1067  = \port$14092$0 [174];
+    end
+    if (rst) begin
+      \$1067  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1068  = ch1_result_status_w1_nw_snapshot;
+    if (\$456 ) begin
+      \$1068  = \port$14092$0 [175];
+    end
+    if (rst) begin
+      \$1068  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1069  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$456 ) begin
+      \$1069  = \port$14092$0 [176];
+    end
+    if (rst) begin
+      \$1069  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1070  = ch1_result_status_lc_repeat_snapshot;
+    if (\$456 ) begin
+      \$1070  = \port$14092$0 [183];
+    end
+    if (rst) begin
+      \$1070  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1071  = ch1_result_status_lc_skip_snapshot;
+    if (\$456 ) begin
+      \$1071  = \port$14092$0 [184];
+    end
+    if (rst) begin
+      \$1071  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1072  = ch1_result_status_lc_zero_snapshot;
+    if (\$456 ) begin
+      \$1072  = \port$14092$0 [185];
+    end
+    if (rst) begin
+      \$1072  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1073  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$456 ) begin
+      \$1073  = \port$14092$0 [186];
+    end
+    if (rst) begin
+      \$1073  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1074  = ch1_result_status_lc_snapshot;
+    if (\$456 ) begin
+      \$1074  = \port$14092$0 [182:177];
+    end
+    if (rst) begin
+      \$1074  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1075  = ch1_result_seq_seq_snapshot;
+    if (\$456 ) begin
+      \$1075  = ch1__done_count;
+    end
+    if (rst) begin
+      \$1075  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1076  = ch1_result_seq_line_delay_snapshot;
+    if (\$456 ) begin
+      \$1076  = \port$14092$0 [48:36];
+    end
+    if (rst) begin
+      \$1076  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1077  = ch1_result_w0_lo_data_snapshot;
+    if (\$456 ) begin
+      \$1077  = \port$14092$0 [107:76];
+    end
+    if (rst) begin
+      \$1077  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1078  = ch1_result_w0_hi_data_snapshot;
+    if (\$456 ) begin
+      \$1078  = { 9'h000, \port$14092$0 [130:108] };
+    end
+    if (rst) begin
+      \$1078  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1079  = ch1_result_w1_lo_data_snapshot;
+    if (\$456 ) begin
+      \$1079  = \port$14092$0 [165:134];
+    end
+    if (rst) begin
+      \$1079  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1080  = ch1_result_w1_hi_data_snapshot;
+    if (\$456 ) begin
+      \$1080  = { 24'h000000, \port$14092$0 [173:166] };
+    end
+    if (rst) begin
+      \$1080  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1081  = ch1_result_timestamp_time_snapshot;
+    if (\$456 ) begin
+      \$1081  = \port$14092$0 [35:4];
+    end
+    if (rst) begin
+      \$1081  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1082  = ch1_result_line_noise_events_snapshot;
+    if (\$456 ) begin
+      \$1082  = \port$14092$0 [53:50];
+    end
+    if (rst) begin
+      \$1082  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1083  = ch1_result_line_delay_settled_snapshot;
+    if (\$456 ) begin
+      \$1083  = \port$14092$0 [54];
+    end
+    if (rst) begin
+      \$1083  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1084  = ch1_result_line_delay_spread_snapshot;
+    if (\$456 ) begin
+      \$1084  = \port$14092$0 [75:68];
+    end
+    if (rst) begin
+      \$1084  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1085  = ch1_result_line_settled_delay_snapshot;
+    if (\$456 ) begin
+      \$1085  = \port$14092$0 [67:55];
+    end
+    if (rst) begin
+      \$1085  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1086  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$1086  = \$458 ;
+    end
+    if (rst) begin
+      \$1086  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1087  = ch1_window1_read;
+    if (bus__r_en) begin
+      \$1087  = \$462 ;
+    end
+    if (rst) begin
+      \$1087  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1088  = ch1_window2_read;
+    if (bus__r_en) begin
+      \$1088  = \$464 ;
+    end
+    if (rst) begin
+      \$1088  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1089  = ch1_window3_read;
+    if (bus__r_en) begin
+      \$1089  = ch1_config_read;
+    end
+    if (rst) begin
+      \$1089  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1090  = ch1_read_data;
+    if (bus__r_load) begin
+      \$1090  = \$556 ;
+    end
+    if (rst) begin
+      \$1090  = 32'd0;
     end
   end
   always @* begin
@@ -8959,27 +9267,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$13356$0 [3:0];
-  assign ch0__cds = \port$13356$0 [49];
-  assign ch0__word0_ne = \port$13356$0 [131];
-  assign ch0__word0_nw = \port$13356$0 [132];
-  assign ch0__word0_crc_ok = \port$13356$0 [133];
-  assign ch0__word1_ne = \port$13356$0 [174];
-  assign ch0__word1_nw = \port$13356$0 [175];
-  assign ch0__word1_crc_ok = \port$13356$0 [176];
-  assign ch0__lc_repeat = \port$13356$0 [183];
-  assign ch0__lc_skip = \port$13356$0 [184];
-  assign ch0__lc_zero = \port$13356$0 [185];
-  assign ch0__spw_mismatch = \port$13356$0 [186];
-  assign ch0__lc = \port$13356$0 [182:177];
-  assign ch0__line_delay = \port$13356$0 [48:36];
-  assign ch0__word0_position = { 9'h000, \port$13356$0 [130:76] };
-  assign ch0__word1_position = { 24'h000000, \port$13356$0 [173:134] };
-  assign ch0__timestamp = \port$13356$0 [35:4];
-  assign ch0__noise_events = \port$13356$0 [53:50];
-  assign ch0__delay_settled = \port$13356$0 [54];
-  assign ch0__delay_spread = \port$13356$0 [75:68];
-  assign ch0__settled_delay = \port$13356$0 [67:55];
+  assign ch0__status = \port$13541$0 [3:0];
+  assign ch0__cds = \port$13541$0 [49];
+  assign ch0__word0_ne = \port$13541$0 [131];
+  assign ch0__word0_nw = \port$13541$0 [132];
+  assign ch0__word0_crc_ok = \port$13541$0 [133];
+  assign ch0__word1_ne = \port$13541$0 [174];
+  assign ch0__word1_nw = \port$13541$0 [175];
+  assign ch0__word1_crc_ok = \port$13541$0 [176];
+  assign ch0__lc_repeat = \port$13541$0 [183];
+  assign ch0__lc_skip = \port$13541$0 [184];
+  assign ch0__lc_zero = \port$13541$0 [185];
+  assign ch0__spw_mismatch = \port$13541$0 [186];
+  assign ch0__lc = \port$13541$0 [182:177];
+  assign ch0__line_delay = \port$13541$0 [48:36];
+  assign ch0__word0_position = { 9'h000, \port$13541$0 [130:76] };
+  assign ch0__word1_position = { 24'h000000, \port$13541$0 [173:134] };
+  assign ch0__timestamp = \port$13541$0 [35:4];
+  assign ch0__noise_events = \port$13541$0 [53:50];
+  assign ch0__delay_settled = \port$13541$0 [54];
+  assign ch0__delay_spread = \port$13541$0 [75:68];
+  assign ch0__settled_delay = \port$13541$0 [67:55];
   assign ch0__cap_data_bits_w0 = 7'h37;
   assign ch0__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9000,13 +9308,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$13444$0 [2:0];
-  assign ch0__ca_bytes_done = \port$13444$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$13367$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$13367$0 [31:16];
-  assign ch0__count_ca_refused = \port$13367$0 [47:32];
-  assign ch0__count_ca_aborted = \port$13367$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$13367$0 [79:64];
+  assign ch0__ca_status = \port$13629$0 [2:0];
+  assign ch0__ca_bytes_done = \port$13629$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$13552$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$13552$0 [31:16];
+  assign ch0__count_ca_refused = \port$13552$0 [47:32];
+  assign ch0__count_ca_aborted = \port$13552$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$13552$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9026,27 +9334,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$13903$0 [3:0];
-  assign ch1__cds = \port$13903$0 [49];
-  assign ch1__word0_ne = \port$13903$0 [131];
-  assign ch1__word0_nw = \port$13903$0 [132];
-  assign ch1__word0_crc_ok = \port$13903$0 [133];
-  assign ch1__word1_ne = \port$13903$0 [174];
-  assign ch1__word1_nw = \port$13903$0 [175];
-  assign ch1__word1_crc_ok = \port$13903$0 [176];
-  assign ch1__lc_repeat = \port$13903$0 [183];
-  assign ch1__lc_skip = \port$13903$0 [184];
-  assign ch1__lc_zero = \port$13903$0 [185];
-  assign ch1__spw_mismatch = \port$13903$0 [186];
-  assign ch1__lc = \port$13903$0 [182:177];
-  assign ch1__line_delay = \port$13903$0 [48:36];
-  assign ch1__word0_position = { 9'h000, \port$13903$0 [130:76] };
-  assign ch1__word1_position = { 24'h000000, \port$13903$0 [173:134] };
-  assign ch1__timestamp = \port$13903$0 [35:4];
-  assign ch1__noise_events = \port$13903$0 [53:50];
-  assign ch1__delay_settled = \port$13903$0 [54];
-  assign ch1__delay_spread = \port$13903$0 [75:68];
-  assign ch1__settled_delay = \port$13903$0 [67:55];
+  assign ch1__status = \port$14092$0 [3:0];
+  assign ch1__cds = \port$14092$0 [49];
+  assign ch1__word0_ne = \port$14092$0 [131];
+  assign ch1__word0_nw = \port$14092$0 [132];
+  assign ch1__word0_crc_ok = \port$14092$0 [133];
+  assign ch1__word1_ne = \port$14092$0 [174];
+  assign ch1__word1_nw = \port$14092$0 [175];
+  assign ch1__word1_crc_ok = \port$14092$0 [176];
+  assign ch1__lc_repeat = \port$14092$0 [183];
+  assign ch1__lc_skip = \port$14092$0 [184];
+  assign ch1__lc_zero = \port$14092$0 [185];
+  assign ch1__spw_mismatch = \port$14092$0 [186];
+  assign ch1__lc = \port$14092$0 [182:177];
+  assign ch1__line_delay = \port$14092$0 [48:36];
+  assign ch1__word0_position = { 9'h000, \port$14092$0 [130:76] };
+  assign ch1__word1_position = { 24'h000000, \port$14092$0 [173:134] };
+  assign ch1__timestamp = \port$14092$0 [35:4];
+  assign ch1__noise_events = \port$14092$0 [53:50];
+  assign ch1__delay_settled = \port$14092$0 [54];
+  assign ch1__delay_spread = \port$14092$0 [75:68];
+  assign ch1__settled_delay = \port$14092$0 [67:55];
   assign ch1__cap_data_bits_w0 = 7'h37;
   assign ch1__cap_data_bits_w1 = 7'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9067,13 +9375,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$13991$0 [2:0];
-  assign ch1__ca_bytes_done = \port$13991$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$13914$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$13914$0 [31:16];
-  assign ch1__count_ca_refused = \port$13914$0 [47:32];
-  assign ch1__count_ca_aborted = \port$13914$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$13914$0 [79:64];
+  assign ch1__ca_status = \port$14180$0 [2:0];
+  assign ch1__ca_bytes_done = \port$14180$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$14103$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$14103$0 [31:16];
+  assign ch1__count_ca_refused = \port$14103$0 [47:32];
+  assign ch1__count_ca_aborted = \port$14103$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$14103$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9209,12 +9517,12 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__ca_slave_id = ch0_ca_request_slave_id;
   assign ch0__ca_address = ch0_ca_request_address;
   assign ch0__ca_count = ch0_ca_request_count;
-  assign ch0__ca_write = \ch0_ca_request_write$149 ;
+  assign ch0__ca_write = \ch0_ca_request_write$152 ;
   assign ch0__ca_start = ch0_ca_ctrl_start;
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
   assign ch0__ca_rbuf_addr = bus__w_addr[3:0];
-  assign wr__addr = { \$543 , \$542 , \$541 , \$540  };
+  assign wr__addr = { \$629 , \$628 , \$627 , \$626  };
   assign wr__data = config_memory0_write_data;
   assign rd__addr = ch0_config_read_index;
   assign ch1__count_addr = bus__w_addr[2:0];
@@ -9332,140 +9640,142 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$430 ;
+  assign ch1__ca_write = \ch1_ca_request_write$435 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
   assign ch1__ca_wbuf_data = write_data;
   assign ch1__ca_rbuf_addr = bus__w_addr[3:0];
-  assign \wr__addr$888  = { \$635 , \$634 , \$633 , \$632  };
-  assign \wr__data$889  = config_memory0_write_data;
-  assign \rd__addr$891  = ch1_config_read_index;
+  assign \wr__addr$920  = { \$721 , \$720 , \$719 , \$718  };
+  assign \wr__data$921  = config_memory0_write_data;
+  assign \rd__addr$923  = ch1_config_read_index;
   assign irq = { ch1_irq, ch0_irq };
   assign ch0__ca_wbuf_addr = write_addr[3:0];
+  assign cfg_hold[1] = ch1_config_wait;
+  assign cfg_hold[0] = ch0_config_wait;
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$563  = \$562 ;
-  assign \$565  = \$564 ;
-  assign \$567  = \$566 ;
-  assign \$655  = \$654 ;
-  assign \$657  = \$656 ;
-  assign \$659  = \$658 ;
-  assign \$156  = \$155 ;
-  assign \$163  = 32'd0;
-  assign \$164  = \$162 ;
-  assign \$165  = 32'd0;
-  assign \$166  = \$162 ;
-  assign \$183  = 32'd0;
-  assign \$184  = \$182 ;
-  assign \$185  = 32'd0;
-  assign \$186  = \$182 ;
-  assign \$187  = 32'd0;
-  assign \$188  = \$182 ;
-  assign \$189  = 32'd0;
-  assign \$190  = \$182 ;
-  assign \$191  = 32'd0;
-  assign \$192  = \$182 ;
-  assign \$193  = 32'd0;
-  assign \$194  = \$182 ;
-  assign \$195  = 32'd0;
-  assign \$196  = \$182 ;
-  assign \$197  = 32'd0;
-  assign \$198  = \$182 ;
-  assign \$199  = 32'd0;
-  assign \$200  = \$182 ;
-  assign \$201  = 32'd0;
-  assign \$202  = \$182 ;
-  assign \$203  = 32'd0;
-  assign \$204  = \$182 ;
-  assign \$205  = 32'd0;
-  assign \$206  = \$182 ;
-  assign \$207  = 32'd0;
-  assign \$208  = \$182 ;
-  assign \$209  = 32'd0;
-  assign \$210  = \$182 ;
-  assign \$211  = 32'd0;
-  assign \$212  = \$182 ;
-  assign \$213  = 32'd0;
-  assign \$214  = \$182 ;
-  assign \$215  = 32'd0;
-  assign \$216  = \$182 ;
-  assign \$217  = 32'd0;
-  assign \$218  = \$182 ;
-  assign \$219  = 32'd0;
-  assign \$220  = \$182 ;
-  assign \$221  = 32'd0;
-  assign \$222  = \$182 ;
-  assign \$223  = 32'd0;
-  assign \$224  = \$182 ;
-  assign \$225  = 32'd0;
-  assign \$226  = \$182 ;
-  assign \$235  = 32'd0;
-  assign \$236  = \$234 ;
-  assign \$241  = 32'd0;
-  assign \$242  = \$240 ;
-  assign ch0_config_read_data = \$561 ;
-  assign \$380  = \$379 ;
-  assign \$387  = 32'd0;
-  assign \$388  = \$386 ;
-  assign \$389  = 32'd0;
-  assign \$390  = \$386 ;
-  assign \$407  = 32'd0;
-  assign \$408  = \$406 ;
-  assign \$409  = 32'd0;
-  assign \$410  = \$406 ;
-  assign \$411  = 32'd0;
-  assign \$412  = \$406 ;
-  assign \$413  = 32'd0;
-  assign \$414  = \$406 ;
-  assign \$415  = 32'd0;
-  assign \$416  = \$406 ;
-  assign \$417  = 32'd0;
-  assign \$418  = \$406 ;
-  assign \$419  = 32'd0;
-  assign \$420  = \$406 ;
-  assign \$421  = 32'd0;
-  assign \$422  = \$406 ;
-  assign \$423  = 32'd0;
-  assign \$424  = \$406 ;
-  assign \$425  = 32'd0;
-  assign \$426  = \$406 ;
-  assign \$427  = 32'd0;
-  assign \$428  = \$406 ;
-  assign \$429  = 32'd0;
-  assign \$430  = \$406 ;
-  assign \$431  = 32'd0;
-  assign \$432  = \$406 ;
-  assign \$433  = 32'd0;
-  assign \$434  = \$406 ;
-  assign \$435  = 32'd0;
-  assign \$436  = \$406 ;
-  assign \$437  = 32'd0;
-  assign \$438  = \$406 ;
-  assign \$439  = 32'd0;
-  assign \$440  = \$406 ;
-  assign \$441  = 32'd0;
-  assign \$442  = \$406 ;
-  assign \$443  = 32'd0;
-  assign \$444  = \$406 ;
-  assign \$445  = 32'd0;
-  assign \$446  = \$406 ;
-  assign \$447  = 32'd0;
-  assign \$448  = \$406 ;
-  assign \$449  = 32'd0;
-  assign \$450  = \$406 ;
-  assign \$459  = 32'd0;
-  assign \$460  = \$458 ;
-  assign \$465  = 32'd0;
-  assign \$466  = \$464 ;
-  assign ch1_config_read_data = \$653 ;
+  assign \$649  = \$648 ;
+  assign \$651  = \$650 ;
+  assign \$653  = \$652 ;
+  assign \$741  = \$740 ;
+  assign \$743  = \$742 ;
+  assign \$745  = \$744 ;
+  assign \$199  = \$198 ;
+  assign \$206  = 32'd0;
+  assign \$207  = \$205 ;
+  assign \$208  = 32'd0;
+  assign \$209  = \$205 ;
+  assign \$226  = 32'd0;
+  assign \$227  = \$225 ;
+  assign \$228  = 32'd0;
+  assign \$229  = \$225 ;
+  assign \$230  = 32'd0;
+  assign \$231  = \$225 ;
+  assign \$232  = 32'd0;
+  assign \$233  = \$225 ;
+  assign \$234  = 32'd0;
+  assign \$235  = \$225 ;
+  assign \$236  = 32'd0;
+  assign \$237  = \$225 ;
+  assign \$238  = 32'd0;
+  assign \$239  = \$225 ;
+  assign \$240  = 32'd0;
+  assign \$241  = \$225 ;
+  assign \$242  = 32'd0;
+  assign \$243  = \$225 ;
+  assign \$244  = 32'd0;
+  assign \$245  = \$225 ;
+  assign \$246  = 32'd0;
+  assign \$247  = \$225 ;
+  assign \$248  = 32'd0;
+  assign \$249  = \$225 ;
+  assign \$250  = 32'd0;
+  assign \$251  = \$225 ;
+  assign \$252  = 32'd0;
+  assign \$253  = \$225 ;
+  assign \$254  = 32'd0;
+  assign \$255  = \$225 ;
+  assign \$256  = 32'd0;
+  assign \$257  = \$225 ;
+  assign \$258  = 32'd0;
+  assign \$259  = \$225 ;
+  assign \$260  = 32'd0;
+  assign \$261  = \$225 ;
+  assign \$262  = 32'd0;
+  assign \$263  = \$225 ;
+  assign \$264  = 32'd0;
+  assign \$265  = \$225 ;
+  assign \$266  = 32'd0;
+  assign \$267  = \$225 ;
+  assign \$268  = 32'd0;
+  assign \$269  = \$225 ;
+  assign \$278  = 32'd0;
+  assign \$279  = \$277 ;
+  assign \$284  = 32'd0;
+  assign \$285  = \$283 ;
+  assign ch0_config_read_data = \$647 ;
+  assign \$466  = \$465 ;
+  assign \$473  = 32'd0;
+  assign \$474  = \$472 ;
+  assign \$475  = 32'd0;
+  assign \$476  = \$472 ;
+  assign \$493  = 32'd0;
+  assign \$494  = \$492 ;
+  assign \$495  = 32'd0;
+  assign \$496  = \$492 ;
+  assign \$497  = 32'd0;
+  assign \$498  = \$492 ;
+  assign \$499  = 32'd0;
+  assign \$500  = \$492 ;
+  assign \$501  = 32'd0;
+  assign \$502  = \$492 ;
+  assign \$503  = 32'd0;
+  assign \$504  = \$492 ;
+  assign \$505  = 32'd0;
+  assign \$506  = \$492 ;
+  assign \$507  = 32'd0;
+  assign \$508  = \$492 ;
+  assign \$509  = 32'd0;
+  assign \$510  = \$492 ;
+  assign \$511  = 32'd0;
+  assign \$512  = \$492 ;
+  assign \$513  = 32'd0;
+  assign \$514  = \$492 ;
+  assign \$515  = 32'd0;
+  assign \$516  = \$492 ;
+  assign \$517  = 32'd0;
+  assign \$518  = \$492 ;
+  assign \$519  = 32'd0;
+  assign \$520  = \$492 ;
+  assign \$521  = 32'd0;
+  assign \$522  = \$492 ;
+  assign \$523  = 32'd0;
+  assign \$524  = \$492 ;
+  assign \$525  = 32'd0;
+  assign \$526  = \$492 ;
+  assign \$527  = 32'd0;
+  assign \$528  = \$492 ;
+  assign \$529  = 32'd0;
+  assign \$530  = \$492 ;
+  assign \$531  = 32'd0;
+  assign \$532  = \$492 ;
+  assign \$533  = 32'd0;
+  assign \$534  = \$492 ;
+  assign \$535  = 32'd0;
+  assign \$536  = \$492 ;
+  assign \$545  = 32'd0;
+  assign \$546  = \$544 ;
+  assign \$551  = 32'd0;
+  assign \$552  = \$550 ;
+  assign ch1_config_read_data = \$739 ;
   assign g_irq = 1'h0;
-  assign \$660  = g_read_data;
+  assign \$747  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.bus (wb__stb, wb__we, regs__r_addr, regs__w_data, regs__w_strb, clk, rst, regs__r_en, regs__w_en, wb__stall, wb__dat_r, wb__ack, pending, wb__cyc);
+module \biss_master_wb.bus (wb__stb, wb__we, regs__r_addr, regs__w_data, regs__w_strb, clk, rst, regs__r_en, regs__w_en, wb__stall, regs__w_busy, wb__dat_r, wb__ack, regs__r_load, wb__cyc);
   reg \$auto$verilog_backend.cc:2355:dump_module$11  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -9481,9 +9791,19 @@ module \biss_master_wb.bus (wb__stb, wb__we, regs__r_addr, regs__w_data, regs__w
   wire \$2 ;
   wire \$20 ;
   wire \$21 ;
-  reg \$22 ;
-  reg \$23 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
   wire \$3 ;
+  wire \$30 ;
+  reg \$31 ;
+  reg \$32 ;
+  reg \$33 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
@@ -9491,18 +9811,20 @@ module \biss_master_wb.bus (wb__stb, wb__we, regs__r_addr, regs__w_data, regs__w
   wire \$8 ;
   wire \$9 ;
   reg \$signal  = 1'h0;
+  reg \$signal$5  = 1'h0;
   input clk;
   wire clk;
-  output pending;
-  reg pending = 1'h0;
   input [10:0] regs__r_addr;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   output regs__r_en;
   wire regs__r_en;
   (* init = 1'h0 *)
+  output regs__r_load;
   wire regs__r_load;
   wire [10:0] regs__w_addr;
+  input regs__w_busy;
+  wire regs__w_busy;
   input [31:0] regs__w_data;
   wire [31:0] regs__w_data;
   output regs__w_en;
@@ -9527,62 +9849,81 @@ module \biss_master_wb.bus (wb__stb, wb__we, regs__r_addr, regs__w_data, regs__w
   wire wb__stb;
   input wb__we;
   wire wb__we;
-  assign \$1  = wb__cyc & wb__stb;
-  assign \$2  = \$signal  | pending;
-  assign \$3  = ~ \$2 ;
-  assign \$4  = \$1  & \$3 ;
-  assign \$5  = \$4  & wb__we;
-  assign \$6  = \$5  | pending;
-  assign \$7  = wb__cyc & wb__stb;
-  assign \$8  = \$signal  | pending;
-  assign \$9  = ~ \$8 ;
-  assign \$10  = \$7  & \$9 ;
-  assign \$11  = ~ wb__we;
-  assign \$12  = \$10  & \$11 ;
-  assign \$13  = wb__cyc & wb__stb;
-  assign \$14  = \$signal  | pending;
-  assign \$15  = ~ \$14 ;
-  assign \$16  = \$13  & \$15 ;
-  assign \$17  = ~ wb__we;
-  assign regs__r_en = \$16  & \$17 ;
-  assign \$18  = wb__cyc & wb__stb;
-  assign \$19  = \$signal  | pending;
-  assign \$20  = ~ \$19 ;
-  assign \$21  = \$18  & \$20 ;
-  assign regs__w_en = \$21  & wb__we;
-  assign wb__stall = \$signal  | pending;
+  reg writing = 1'h0;
+  assign \$1  = ~ regs__w_busy;
+  assign \$2  = writing & \$1 ;
+  assign \$3  = \$2  | \$signal$5 ;
+  assign \$4  = wb__cyc & wb__stb;
+  assign \$5  = \$signal  | \$signal$5 ;
+  assign \$6  = \$5  | writing;
+  assign \$7  = ~ \$6 ;
+  assign \$8  = \$4  & \$7 ;
+  assign \$9  = ~ wb__we;
+  assign \$10  = \$8  & \$9 ;
+  assign \$11  = wb__cyc & wb__stb;
+  assign \$12  = \$signal  | \$signal$5 ;
+  assign \$13  = \$12  | writing;
+  assign \$14  = ~ \$13 ;
+  assign \$15  = \$11  & \$14 ;
+  assign \$16  = \$15  & wb__we;
+  assign \$17  = writing & regs__w_busy;
+  assign \$18  = \$16  | \$17 ;
+  assign \$19  = wb__cyc & wb__stb;
+  assign \$20  = \$signal  | \$signal$5 ;
+  assign \$21  = \$20  | writing;
+  assign \$22  = ~ \$21 ;
+  assign \$23  = \$19  & \$22 ;
+  assign \$24  = ~ wb__we;
+  assign regs__r_en = \$23  & \$24 ;
+  assign \$25  = wb__cyc & wb__stb;
+  assign \$26  = \$signal  | \$signal$5 ;
+  assign \$27  = \$26  | writing;
+  assign \$28  = ~ \$27 ;
+  assign \$29  = \$25  & \$28 ;
+  assign regs__w_en = \$29  & wb__we;
+  assign \$30  = \$signal  | \$signal$5 ;
+  assign wb__stall = \$30  | writing;
   always @(posedge clk)
-    \$signal  <= \$22 ;
+    \$signal  <= \$31 ;
   always @(posedge clk)
-    pending <= \$23 ;
+    \$signal$5  <= \$32 ;
+  always @(posedge clk)
+    writing <= \$33 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
-    \$22  = \$6 ;
+    \$31  = \$3 ;
     if (rst) begin
-      \$22  = 1'h0;
+      \$31  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
-    \$23  = \$12 ;
+    \$32  = \$10 ;
     if (rst) begin
-      \$23  = 1'h0;
+      \$32  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
+    \$33  = \$18 ;
+    if (rst) begin
+      \$33  = 1'h0;
     end
   end
   assign wb__adr = regs__r_addr;
-  assign regs__r_load = pending;
   assign regs__w_addr = regs__r_addr;
   assign wb__dat_w = regs__w_data;
   assign wb__sel = regs__w_strb;
   assign regs__r_data = wb__dat_r;
   assign wb__ack = \$signal ;
+  assign regs__r_load = \$signal$5 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
-, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
-, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13356$0 , \port$13367$0 , regs__ca_done, \port$13444$0 , ca_rbuf_addr);
+module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic
+, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check
+, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address
+, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13541$0 , \port$13552$0 , regs__ca_done, \port$13629$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -9661,6 +10002,11 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [3:0] cfg_delay_tolerance;
   input cfg_end_check;
   wire cfg_end_check;
+  output cfg_free;
+  wire cfg_free;
+  input cfg_hold;
+  wire cfg_hold;
+  wire \cfg_hold$211 ;
   input [15:0] cfg_ma_half_period;
   wire [15:0] cfg_ma_half_period;
   input [3:0] cfg_noise_limit;
@@ -9768,12 +10114,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$13356$0 ;
-  wire [186:0] \port$13356$0 ;
-  output [79:0] \port$13367$0 ;
-  wire [79:0] \port$13367$0 ;
-  output [9:0] \port$13444$0 ;
-  wire [9:0] \port$13444$0 ;
+  output [186:0] \port$13541$0 ;
+  wire [186:0] \port$13541$0 ;
+  output [79:0] \port$13552$0 ;
+  wire [79:0] \port$13552$0 ;
+  output [9:0] \port$13629$0 ;
+  wire [9:0] \port$13629$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -9962,6 +10308,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \$7  = \$6  ? 7'h00 : regs__cfg_w0_data_bits;
   assign \$9  = \$8  ? 7'h00 : regs__cfg_w1_data_bits;
   assign trigger = \trigger$204  & regs__trigger_enable;
+  assign cfg_free = ~ regs__busy;
   assign \$10  = ~ report;
   assign \$11  = \$signal  & \$10 ;
   assign \$12  = waited + 1'h1;
@@ -9986,8 +10333,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     regs__result_updates <= \$23 ;
   \biss_master_wb.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$267 (ca_abort),
-    .\busy$316 (regs__busy),
+    .\abort$269 (ca_abort),
+    .\busy$318 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -10036,14 +10383,15 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$292 (clear_counters),
+    .\clear$294 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$25 ),
-    .\done$319 (done),
+    .\done$321 (done),
     .frames(regs__ca_busy),
+    .hold(cfg_hold),
     .ma(ma),
     .now(time_now),
     .\periodic$45 (periodic),
@@ -10051,13 +10399,13 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$26 ),
-    .\result$324 (\$24 ),
+    .\result$326 (\$24 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$265 (ca_start),
+    .\start$267 (ca_start),
     .trigger(trigger),
-    .\valid$321 (valid)
+    .\valid$323 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
@@ -10266,18 +10614,19 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$13356$0  = \$24 ;
-  assign \port$13367$0  = \$25 ;
-  assign \port$13444$0  = \$26 ;
+  assign \cfg_hold$211  = cfg_hold;
+  assign \port$13541$0  = \$24 ;
+  assign \port$13552$0  = \$25 ;
+  assign \port$13629$0  = \$26 ;
   assign \$6  = regs__cfg_w0_data_bits[6];
   assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$316 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$292 , \periodic$45 
+module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$318 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$294 , \periodic$45 
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
-, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$265 
-, \abort$267 , abort, ma, \done$319 , \valid$321 , \result$324 , counts, ca_done, result, rbuf_addr);
+, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$267 
+, \abort$269 , hold, abort, ma, \done$321 , \valid$323 , \result$326 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10311,26 +10660,26 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$267 ;
-  wire \abort$267 ;
-  wire \abort$57 ;
+  input \abort$269 ;
+  wire \abort$269 ;
+  wire \abort$59 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$92 ;
+  wire \ack_expired$94 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$113 ;
+  wire [23:0] \ack_limit$115 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$348 ;
+  wire \bit$350 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$90 ;
+  wire \break_over$92 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$276 ;
-  wire \busy$313 ;
-  output \busy$316 ;
-  wire \busy$316 ;
+  wire \busy$278 ;
+  wire \busy$315 ;
+  output \busy$318 ;
+  wire \busy$318 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -10365,10 +10714,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$280 ;
+  wire \cdm$282 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$327 ;
+  wire \cds$329 ;
   wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -10435,6 +10784,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire [3:0] cfg_delay_tolerance;
   input cfg_end_check;
   wire cfg_end_check;
+  wire cfg_hold;
   input [15:0] cfg_ma_half_period;
   wire [15:0] cfg_ma_half_period;
   input [3:0] cfg_noise_limit;
@@ -10512,16 +10862,16 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$172 ;
+  wire \check$174 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$177 ;
-  wire \clean$349 ;
+  wire \clean$179 ;
+  wire \clean$351 ;
   wire clear;
-  wire \clear$137 ;
-  input \clear$292 ;
-  wire \clear$292 ;
-  wire \clear$305 ;
+  wire \clear$139 ;
+  input \clear$294 ;
+  wire \clear$294 ;
+  wire \clear$307 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -10550,17 +10900,17 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$190 ;
+  wire [39:0] \cpw_top$192 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$215 ;
+  wire [1:0] \crc_ok$217 ;
   wire [9:0] crc_widths;
-  wire [9:0] \crc_widths$185 ;
-  wire [4:0] \crc_widths$185[0] ;
-  wire [4:0] \crc_widths$185[1] ;
-  wire [9:0] \crc_widths$186 ;
-  wire [4:0] \crc_widths$186[0] ;
-  wire [4:0] \crc_widths$186[1] ;
+  wire [9:0] \crc_widths$187 ;
+  wire [4:0] \crc_widths$187[0] ;
+  wire [4:0] \crc_widths$187[1] ;
+  wire [9:0] \crc_widths$188 ;
+  wire [4:0] \crc_widths$188[0] ;
+  wire [4:0] \crc_widths$188[1] ;
   wire [4:0] \crc_widths[0] ;
   wire [4:0] \crc_widths[1] ;
   wire [75:0] customs;
@@ -10635,54 +10985,54 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$119 ;
-  wire [12:0] \delay$171 ;
+  wire [12:0] \delay$121 ;
+  wire [12:0] \delay$173 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$121 ;
+  wire [11:0] \delay_limit$123 ;
   wire delay_over;
-  wire \delay_over$100 ;
+  wire \delay_over$102 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  output \done$319 ;
-  wire \done$319 ;
-  wire \done$320 ;
+  output \done$321 ;
+  wire \done$321 ;
+  wire \done$322 ;
   wire doubtful;
   wire early;
-  wire \early$73 ;
+  wire \early$75 ;
   wire enable;
   wire [1:0] enables;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$291 ;
-  wire \events$291.ca_aborted ;
-  wire \events$291.ca_crc4_error ;
-  wire \events$291.ca_data_fault ;
-  wire \events$291.ca_no_answer ;
-  wire \events$291.ca_refused ;
-  wire [15:0] \events$300 ;
-  wire \events$300.aborted ;
-  wire \events$300.crc_word0 ;
-  wire \events$300.crc_word1 ;
-  wire \events$300.delay_jump ;
-  wire \events$300.delay_range ;
-  wire \events$300.lc_repeat ;
-  wire \events$300.lc_skip ;
-  wire \events$300.lc_zero ;
-  wire \events$300.no_ack ;
-  wire \events$300.no_start ;
-  wire \events$300.no_stop ;
-  wire \events$300.noise_event ;
-  wire \events$300.noisy_line ;
-  wire \events$300.overrun ;
-  wire \events$300.slo_stuck_low ;
-  wire \events$300.spw_mismatch ;
+  wire [4:0] \events$293 ;
+  wire \events$293.ca_aborted ;
+  wire \events$293.ca_crc4_error ;
+  wire \events$293.ca_data_fault ;
+  wire \events$293.ca_no_answer ;
+  wire \events$293.ca_refused ;
+  wire [15:0] \events$302 ;
+  wire \events$302.aborted ;
+  wire \events$302.crc_word0 ;
+  wire \events$302.crc_word1 ;
+  wire \events$302.delay_jump ;
+  wire \events$302.delay_range ;
+  wire \events$302.lc_repeat ;
+  wire \events$302.lc_skip ;
+  wire \events$302.lc_zero ;
+  wire \events$302.no_ack ;
+  wire \events$302.no_start ;
+  wire \events$302.no_stop ;
+  wire \events$302.noise_event ;
+  wire \events$302.noisy_line ;
+  wire \events$302.overrun ;
+  wire \events$302.slo_stuck_low ;
+  wire \events$302.spw_mismatch ;
   wire fault;
-  wire \fault$211 ;
+  wire \fault$213 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -10718,7 +11068,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$213 ;
+  wire [3:0] \fault_status$215 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -10728,7 +11078,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$249 ;
+  wire \first_rise$251 ;
   wire [31:0] first_rise_time;
   wire fixed;
   wire [12:0] fixed_delay;
@@ -10778,39 +11128,41 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
-  wire \frame_end$285 ;
+  wire \frame_end$287 ;
   wire frame_ok;
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$143 ;
+  wire [15:0] \half_period$145 ;
   wire held;
+  input hold;
   wire hold;
+  wire \hold$285 ;
   wire idle;
   wire \idle$41 ;
   wire \idle$50 ;
   wire in_clock;
-  wire \in_clock$107 ;
+  wire \in_clock$109 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$149 ;
-  wire [5:0] \lc$340 ;
+  wire [5:0] \lc$151 ;
+  wire [5:0] \lc$342 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$151 ;
+  wire [5:0] \lc_next$153 ;
   wire lc_repeat;
-  wire \lc_repeat$341 ;
+  wire \lc_repeat$343 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$342 ;
+  wire \lc_skip$344 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$343 ;
+  wire \lc_zero$345 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$160 ;
+  wire \level$162 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
   wire [274:0] live;
@@ -10869,13 +11221,13 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$71 ;
+  wire \locked$73 ;
   output ma;
   wire ma;
-  wire \ma$315 ;
+  wire \ma$317 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$102 ;
+  wire \ma_busy$104 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -10884,19 +11236,19 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire mismatch;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$94 ;
+  wire \no_start_expired$96 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$117 ;
+  wire [24:0] \no_start_limit$119 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$179 ;
+  wire \noisy$181 ;
   input [31:0] now;
   wire [31:0] now;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$318 ;
+  wire \overrun$320 ;
   wire passed;
   wire pending;
   wire [23:0] period;
@@ -10904,10 +11256,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   input \periodic$45 ;
   wire \periodic$45 ;
   wire quiet;
-  wire \quiet$126 ;
+  wire \quiet$128 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$128 ;
+  wire \quiet_live$130 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -10923,38 +11275,38 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$225 ;
-  wire \report$229 ;
+  wire \report$227 ;
+  wire \report$231 ;
   wire report_delay;
-  wire \report_delay$232 ;
+  wire \report_delay$234 ;
   wire report_frame;
-  wire \report_frame$210 ;
-  wire \report_frame$230 ;
+  wire \report_frame$212 ;
+  wire \report_frame$232 ;
   wire request;
-  wire [17:0] \request$253 ;
-  wire [6:0] \request$253.address ;
-  wire [6:0] \request$253.count ;
-  wire [2:0] \request$253.slave_id ;
-  wire \request$253.write ;
-  wire \request$56 ;
+  wire [17:0] \request$255 ;
+  wire [6:0] \request$255.address ;
+  wire [6:0] \request$255.count ;
+  wire [2:0] \request$255.slave_id ;
+  wire \request$255.write ;
+  wire \request$58 ;
   wire restart;
-  wire \restart$164 ;
+  wire \restart$166 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$324 ;
-  wire [186:0] \result$324 ;
-  wire \result$324.cds ;
-  wire \result$324.delay_settled ;
-  wire [7:0] \result$324.delay_spread ;
-  wire [5:0] \result$324.lc ;
-  wire \result$324.lc_repeat ;
-  wire \result$324.lc_skip ;
-  wire \result$324.lc_zero ;
-  wire [12:0] \result$324.line_delay ;
-  wire [3:0] \result$324.noise_events ;
-  wire [12:0] \result$324.settled_delay ;
-  wire \result$324.spw_mismatch ;
+  output [186:0] \result$326 ;
+  wire [186:0] \result$326 ;
+  wire \result$326.cds ;
+  wire \result$326.delay_settled ;
+  wire [7:0] \result$326.delay_spread ;
+  wire [5:0] \result$326.lc ;
+  wire \result$326.lc_repeat ;
+  wire \result$326.lc_skip ;
+  wire \result$326.lc_zero ;
+  wire [12:0] \result$326.line_delay ;
+  wire [3:0] \result$326.noise_events ;
+  wire [12:0] \result$326.settled_delay ;
+  wire \result$326.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -10972,18 +11324,18 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$324.status ;
-  wire [31:0] \result$324.timestamp ;
-  wire [57:0] \result$324.word0 ;
-  wire \result$324.word0.crc_ok ;
-  wire \result$324.word0.ne ;
-  wire \result$324.word0.nw ;
-  wire [54:0] \result$324.word0.position ;
-  wire [42:0] \result$324.word1 ;
-  wire \result$324.word1.crc_ok ;
-  wire \result$324.word1.ne ;
-  wire \result$324.word1.nw ;
-  wire [39:0] \result$324.word1.position ;
+  wire [3:0] \result$326.status ;
+  wire [31:0] \result$326.timestamp ;
+  wire [57:0] \result$326.word0 ;
+  wire \result$326.word0.crc_ok ;
+  wire \result$326.word0.ne ;
+  wire \result$326.word0.nw ;
+  wire [54:0] \result$326.word0.position ;
+  wire [42:0] \result$326.word1 ;
+  wire \result$326.word1.crc_ok ;
+  wire \result$326.word1.ne ;
+  wire \result$326.word1.nw ;
+  wire [39:0] \result$326.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -10995,55 +11347,55 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$157 ;
+  wire \resync$159 ;
   wire [15:0] rises;
-  wire [15:0] \rises$136 ;
+  wire [15:0] \rises$138 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$347 ;
+  wire \sample$349 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$330 ;
+  wire [12:0] \settled_delay$332 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$101 ;
+  wire \slo$103 ;
   wire \slo$52 ;
-  wire \slo$62 ;
+  wire \slo$64 ;
   wire slo_stuck;
-  wire \slo_stuck$96 ;
+  wire \slo_stuck$98 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$98 ;
+  wire \slo_stuck_live$100 ;
   wire slots_full;
-  wire \slots_full$82 ;
+  wire \slots_full$84 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$344 ;
+  wire \spw_mismatch$346 ;
   wire ssi;
-  wire \ssi$199 ;
-  wire \ssi$203 ;
+  wire \ssi$201 ;
+  wire \ssi$205 ;
   wire ssi_double;
-  wire \ssi_double$204 ;
+  wire \ssi_double$206 ;
   wire ssi_error;
-  wire \ssi_error$205 ;
+  wire \ssi_error$207 ;
   wire ssi_error_low;
   input start;
   wire start;
-  input \start$265 ;
-  wire \start$265 ;
+  input \start$267 ;
+  wire \start$267 ;
   wire \start$43 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$134 ;
+  wire [15:0] \start_slot$136 ;
   wire started;
-  wire \started$132 ;
-  wire \started$80 ;
+  wire \started$134 ;
+  wire \started$82 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -11080,7 +11432,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$227 ;
+  wire [3:0] \status$229 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -11098,29 +11450,29 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$323 ;
+  wire [3:0] \status$325 ;
   wire stop_bit;
-  wire \stop_bit$86 ;
+  wire \stop_bit$88 ;
   wire stopped;
-  wire \stopped$84 ;
+  wire \stopped$86 ;
   wire [31:0] time_now;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$115 ;
+  wire [23:0] \timeout_limit$117 ;
   wire [23:0] timeout_live;
   wire timeout_over;
-  wire \timeout_over$78 ;
+  wire \timeout_over$80 ;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$194 ;
+  wire [7:0] \tolerance$196 ;
   input trigger;
   wire trigger;
   wire \trigger$54 ;
   wire unconfirmed;
   wire valid;
-  wire \valid$234 ;
-  output \valid$321 ;
-  wire \valid$321 ;
+  wire \valid$236 ;
+  output \valid$323 ;
+  wire \valid$323 ;
   wire valid_out;
   wire waiting;
   wire watch;
@@ -11137,34 +11489,34 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$147 ;
+  wire [1:0] \word_count$149 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$183 ;
-  wire [11:0] \words$183[0] ;
+  wire [23:0] \words$185 ;
+  wire [11:0] \words$185[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$183[0].crc ;
-  wire [5:0] \words$183[0].data_bits ;
-  wire \words$183[0].gray ;
-  wire \words$183[0].lc ;
-  wire \words$183[0].nenw ;
-  wire \words$183[0].signed ;
-  wire [11:0] \words$183[1] ;
+  wire [1:0] \words$185[0].crc ;
+  wire [5:0] \words$185[0].data_bits ;
+  wire \words$185[0].gray ;
+  wire \words$185[0].lc ;
+  wire \words$185[0].nenw ;
+  wire \words$185[0].signed ;
+  wire [11:0] \words$185[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$183[1].crc ;
-  wire [5:0] \words$183[1].data_bits ;
-  wire \words$183[1].gray ;
-  wire \words$183[1].lc ;
-  wire \words$183[1].nenw ;
-  wire \words$183[1].signed ;
+  wire [1:0] \words$185[1].crc ;
+  wire [5:0] \words$185[1].data_bits ;
+  wire \words$185[1].gray ;
+  wire \words$185[1].lc ;
+  wire \words$185[1].nenw ;
+  wire \words$185[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -11191,16 +11543,16 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \words[1].signed ;
   wire zero;
   assign periodic = \periodic$45  | frames;
-  assign arm = cycle[259] ? first_rise : ma_arm;
-  assign \$1  = cycle[144:141] != 4'hf;
-  assign \$2  = ~ cycle[259];
+  assign arm = live[259] ? first_rise : ma_arm;
+  assign \$1  = live[144:141] != 4'hf;
+  assign \$2  = ~ live[259];
   assign enable = \$1  & \$2 ;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$3  = ~ started_before;
-  assign \check$172  = started & \$3 ;
-  assign \$4  = ~ cycle[259];
-  assign cdm = \cdm$280  & \$4 ;
-  assign \$5  = ~ cycle[259];
+  assign \check$174  = started & \$3 ;
+  assign \$4  = ~ live[259];
+  assign cdm = \cdm$282  & \$4 ;
+  assign \$5  = ~ live[259];
   assign frame_ok = passed & \$5 ;
   assign \$6  = result[2:0] == 1'h1;
   assign \$7  = ca_done & \$6 ;
@@ -11217,10 +11569,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \$18  = report_frame & \$17 ;
   assign \$19  = status == 4'he;
   assign \$20  = report_frame & \$19 ;
-  assign \busy$316  = ~ idle;
+  assign \busy$318  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$21  = ~ \clear$137 ;
-  assign \$22  = \sample$347  & \$21 ;
+  assign \$21  = ~ \clear$139 ;
+  assign \$22  = \sample$349  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -11235,7 +11587,6 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .ack_limit(ack_limit),
     .clk(clk),
     .crc_widths(crc_widths),
-    .cycle(cycle),
     .delay_limit(delay_limit),
     .delay_tolerance(tolerance),
     .idle(idle),
@@ -11252,7 +11603,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .pending(unconfirmed),
     .report(report),
     .rst(rst),
-    .setting(cycle[148:145]),
+    .setting(live[148:145]),
     .status(status)
   );
   \biss_master_wb.ch0.core.controller  controller (
@@ -11265,8 +11616,8 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .config_ok(config_ok),
     .delay_over(delay_over),
     .early(early),
-    .end_check(cycle[124]),
-    .fault(\restart$164 ),
+    .end_check(live[124]),
+    .fault(\restart$166 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -11278,23 +11629,23 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .ma_busy(ma_busy),
     .ma_enough(ma_enough),
     .ma_held(ma_held),
-    .ma_hold(hold),
+    .ma_hold(\hold$285 ),
     .ma_run(run),
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$137 ),
+    .receiver_clear(\clear$139 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$62 ),
+    .slo(\slo$64 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
-    .ssi(cycle[259]),
+    .ssi(live[259]),
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
@@ -11304,19 +11655,19 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   );
   \biss_master_wb.ch0.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$292 ),
+    .clear(\clear$294 ),
     .clk(clk),
-    .events(\events$300 ),
+    .events(\events$302 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_wb.ch0.core.counters  counters (
-    .clear(\clear$292 ),
+    .clear(\clear$294 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$291 ),
+    .events(\events$293 ),
     .rst(rst)
   );
   \biss_master_wb.ch0.core.decoder  decoder (
@@ -11335,12 +11686,12 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$12998$272 (cycle[274:272]),
-    .receiver_clear(\clear$137 ),
+    .\port$13153$272 (live[274:272]),
+    .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
-    .ssi(cycle[259]),
+    .ssi(live[259]),
     .start_slot(start_slot),
     .started(started),
     .stop_bit(stop_bit),
@@ -11349,7 +11700,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .words(words)
   );
   \biss_master_wb.ch0.core.delay_check  delay_check (
-    .check(\check$172 ),
+    .check(\check$174 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -11368,10 +11719,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$62 ),
-    .limit(cycle[140:137]),
+    .level(\slo$64 ),
+    .limit(live[140:137]),
     .noisy(noisy),
-    .restart(\restart$164 ),
+    .restart(\restart$166 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -11379,11 +11730,11 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   \biss_master_wb.ch0.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$102 ),
+    .\clocking (\ma_busy$104 ),
     .first_rise(first_rise),
-    .half_period(cycle[15:0]),
+    .half_period(live[15:0]),
     .held(ma_held),
-    .hold(hold),
+    .hold(\hold$285 ),
     .ma(ma),
     .rises(rises),
     .rst(rst),
@@ -11391,24 +11742,24 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .second_rise(ma_arm)
   );
   \biss_master_wb.ch0.core.ma_stop  ma_stop (
-    .clear(\clear$137 ),
+    .clear(\clear$139 ),
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$12998$199 (cycle[199]),
+    .\port$13153$199 (live[199]),
     .rises(rises),
     .rst(rst),
-    .ssi(cycle[259]),
-    .ssi_double(cycle[274]),
-    .ssi_error(cycle[272]),
+    .ssi(live[259]),
+    .ssi_double(live[274]),
+    .ssi_error(live[272]),
     .start_slot(start_slot),
     .\started$23 (started),
-    .words(\words$183 )
+    .words(\words$185 )
   );
   \biss_master_wb.ch0.core.register_access  register_access (
-    .abort(\abort$267 ),
+    .abort(\abort$269 ),
     .busy(frames),
-    .cdm(\cdm$280 ),
+    .cdm(\cdm$282 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -11418,43 +11769,44 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$253 ),
+    .request(\request$255 ),
     .result(result),
     .rst(rst),
-    .start(\start$265 ),
+    .start(\start$267 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch0.core.results  results (
     .clk(clk),
-    .done(\done$319 ),
+    .done(\done$321 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$324 ),
+    .result(\result$326 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$321 )
+    .valid_out(\valid$323 )
   );
   \biss_master_wb.ch0.core.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$348 ),
+    .\bit (\bit$350 ),
     .clk(clk),
     .delay(delay),
     .early(early),
-    .half_period(cycle[15:0]),
-    .level(\slo$62 ),
+    .half_period(live[15:0]),
+    .level(\slo$64 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$12998$259 (cycle[271:259]),
-    .receiver_clear(\clear$137 ),
+    .\port$13153$259 (live[271:259]),
+    .receiver_clear(\clear$139 ),
     .rst(rst),
-    .sample(\sample$347 ),
+    .sample(\sample$349 ),
     .slo(slo)
   );
   \biss_master_wb.ch0.core.scheduler  scheduler (
     .abort(abort),
     .clk(clk),
+    .hold(hold),
     .idle(idle),
     .overrun(overrun),
     .period(cfg_request_period),
@@ -11470,20 +11822,20 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$12986$0 (\bit ),
+    .\port$13167$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_wb.ch0.core.spw_check  spw_check (
-    .bits(cycle[205:200]),
+    .bits(live[205:200]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .tolerance(cycle[258:251])
+    .tolerance(live[258:251])
   );
   \biss_master_wb.ch0.core.time_base  time_base (
     .clk(clk),
@@ -11503,7 +11855,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$102 ),
+    .ma_busy(\ma_busy$104 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -11512,7 +11864,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$62 ),
+    .slo(\slo$64 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -11520,14 +11872,14 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .timeout_over(timeout_over)
   );
   \biss_master_wb.ch0.core.verdict  verdict (
-    .cfg(cycle),
-    .clean(\clean$349 ),
+    .cfg(live),
+    .clean(\clean$351 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$164 ),
+    .fault(\restart$166 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -11538,7 +11890,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5908$0 (\$28 ),
+    .\port$6057$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -11556,7 +11908,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$24  = \bit$348 ;
+    \$24  = \bit$350 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -11577,7 +11929,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$27  = \clean$349 ;
+    \$27  = \clean$351 ;
     if (rst) begin
       \$27  = 1'h0;
     end
@@ -11589,163 +11941,165 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \idle$50  = idle;
   assign \slo$52  = slo;
   assign \trigger$54  = trigger;
-  assign \request$56  = request;
-  assign \abort$57  = abort;
+  assign cfg_hold = hold;
+  assign \request$58  = request;
+  assign \abort$59  = abort;
   assign ok = config_ok;
-  assign end_check = cycle[124];
-  assign level = \slo$62 ;
+  assign end_check = live[124];
+  assign cycle = live;
+  assign level = \slo$64 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$71  = locked;
-  assign \early$73  = early;
+  assign \locked$73  = locked;
+  assign \early$75  = early;
   assign frame_end = frame_done;
-  assign ssi = cycle[259];
-  assign \timeout_over$78  = timeout_over;
-  assign \started$80  = started;
-  assign \slots_full$82  = slots_full;
-  assign \stopped$84  = stopped;
-  assign \stop_bit$86  = stop_bit;
+  assign ssi = live[259];
+  assign \timeout_over$80  = timeout_over;
+  assign \started$82  = started;
+  assign \slots_full$84  = slots_full;
+  assign \stopped$86  = stopped;
+  assign \stop_bit$88  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$90  = break_over;
-  assign \ack_expired$92  = ack_expired;
-  assign \no_start_expired$94  = no_start_expired;
-  assign \slo_stuck$96  = slo_stuck;
-  assign \slo_stuck_live$98  = slo_stuck_live;
-  assign \delay_over$100  = delay_over;
-  assign \slo$101  = \slo$62 ;
-  assign \clocking  = \ma_busy$102 ;
+  assign \break_over$92  = break_over;
+  assign \ack_expired$94  = ack_expired;
+  assign \no_start_expired$96  = no_start_expired;
+  assign \slo_stuck$98  = slo_stuck;
+  assign \slo_stuck_live$100  = slo_stuck_live;
+  assign \delay_over$102  = delay_over;
+  assign \slo$103  = \slo$64 ;
+  assign \clocking  = \ma_busy$104 ;
   assign timer_clear = clear;
-  assign \in_clock$107  = in_clock;
+  assign \in_clock$109  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$113  = ack_limit;
-  assign \timeout_limit$115  = timeout_limit;
-  assign \no_start_limit$117  = no_start_limit;
-  assign \delay$119  = delay;
-  assign \delay_limit$121  = delay_limit;
+  assign \ack_limit$115  = ack_limit;
+  assign \timeout_limit$117  = timeout_limit;
+  assign \no_start_limit$119  = no_start_limit;
+  assign \delay$121  = delay;
+  assign \delay_limit$123  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$126  = quiet;
-  assign \quiet_live$128  = quiet_live;
+  assign \quiet$128  = quiet;
+  assign \quiet_live$130  = quiet_live;
   assign ma_run = run;
-  assign half_period = cycle[15:0];
-  assign \started$132  = started;
-  assign \start_slot$134  = start_slot;
-  assign \rises$136  = rises;
-  assign receiver_clear = \clear$137 ;
+  assign half_period = live[15:0];
+  assign \started$134  = started;
+  assign \start_slot$136  = start_slot;
+  assign \rises$138  = rises;
+  assign receiver_clear = \clear$139 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$143  = cycle[15:0];
-  assign \word_count$147  = word_count;
-  assign \lc$149  = lc;
+  assign \half_period$145  = live[15:0];
+  assign \word_count$149  = word_count;
+  assign \lc$151  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$151  = { lc[4:0], \bit  };
+  assign \lc_next$153  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$157  = resync;
+  assign \resync$159  = resync;
   assign waiting = watch;
-  assign \level$160  = \slo$62 ;
+  assign \level$162  = \slo$64 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$164 ;
-  assign limit = cycle[140:137];
+  assign fault = \restart$166 ;
+  assign limit = live[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$171  = delay;
+  assign \delay$173  = delay;
   assign \$signal  = learn;
-  assign \clean$177  = clean;
-  assign \noisy$179  = noisy;
+  assign \clean$179  = clean;
+  assign \noisy$181  = noisy;
   assign jump = delay_jump;
-  assign \crc_widths$185  = crc_widths;
-  assign \crc_widths$186  = crc_widths;
-  assign enables = { cycle[199], 1'h1 };
-  assign \cpw_top$190  = cpw_top;
+  assign \crc_widths$187  = crc_widths;
+  assign \crc_widths$188  = crc_widths;
+  assign enables = { live[199], 1'h1 };
+  assign \cpw_top$192  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[205:200];
-  assign \tolerance$194  = cycle[258:251];
+  assign bits = live[205:200];
+  assign \tolerance$196  = live[258:251];
   assign match = spw_match;
-  assign fixed = cycle[259];
-  assign fixed_delay = { 1'h0, cycle[271:260] };
-  assign \ssi$199  = cycle[259];
-  assign ssi_error = cycle[272];
-  assign ssi_error_low = cycle[273];
-  assign ssi_double = cycle[274];
-  assign \ssi$203  = cycle[259];
-  assign \ssi_double$204  = cycle[274];
-  assign \ssi_error$205  = cycle[272];
+  assign fixed = live[259];
+  assign fixed_delay = { 1'h0, live[271:260] };
+  assign \ssi$201  = live[259];
+  assign ssi_error = live[272];
+  assign ssi_error_low = live[273];
+  assign ssi_double = live[274];
+  assign \ssi$205  = live[259];
+  assign \ssi_double$206  = live[274];
+  assign \ssi_error$207  = live[272];
   assign mismatch = copy_mismatch;
-  assign cfg = cycle;
-  assign \report_frame$210  = report_frame;
-  assign \fault$211  = \restart$164 ;
-  assign \fault_status$213  = fault_status;
-  assign \crc_ok$215  = crc_ok;
+  assign cfg = live;
+  assign \report_frame$212  = report_frame;
+  assign \fault$213  = \restart$166 ;
+  assign \fault_status$215  = fault_status;
+  assign \crc_ok$217  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$225  = report;
-  assign \status$227  = status;
-  assign setting = cycle[148:145];
-  assign \report$229  = report;
-  assign \report_frame$230  = report_frame;
-  assign \report_delay$232  = report_delay;
-  assign \valid$234  = valid;
+  assign \report$227  = report;
+  assign \status$229  = status;
+  assign setting = live[148:145];
+  assign \report$231  = report;
+  assign \report_frame$232  = report_frame;
+  assign \report_delay$234  = report_delay;
+  assign \valid$236  = valid;
   assign word_crc_ok = { \$28 , crc_ok[0] };
-  assign \first_rise$249  = first_rise;
+  assign \first_rise$251  = first_rise;
   assign time_now = now;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$265 ;
-  assign ca_abort = \abort$267 ;
+  assign ca_start = \start$267 ;
+  assign ca_abort = \abort$269 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$276  = frames;
+  assign \busy$278  = frames;
   assign done = ca_done;
   assign held = ma_held;
-  assign ma_hold = hold;
-  assign \frame_end$285  = report;
+  assign ma_hold = \hold$285 ;
+  assign \frame_end$287  = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$292 ;
+  assign clear_counters = \clear$294 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$305  = \clear$292 ;
+  assign \clear$307  = \clear$294 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$313  = count_busy;
-  assign \ma$315  = ma;
-  assign \overrun$318  = overrun;
-  assign \done$320  = \done$319 ;
-  assign valid_out = \valid$321 ;
-  assign \status$323  = \result$324 [3:0];
-  assign timestamp = \result$324 [35:4];
-  assign line_delay = \result$324 [48:36];
-  assign \cds$327  = \result$324 [49];
-  assign noise_events = \result$324 [53:50];
-  assign delay_settled = \result$324 [54];
-  assign \settled_delay$330  = \result$324 [67:55];
-  assign delay_spread = \result$324 [75:68];
-  assign word0_position = \result$324 [130:76];
-  assign word0_ne = \result$324 [131];
-  assign word0_nw = \result$324 [132];
-  assign word0_crc_ok = \result$324 [133];
-  assign word1_position = \result$324 [173:134];
-  assign word1_ne = \result$324 [174];
-  assign word1_nw = \result$324 [175];
-  assign word1_crc_ok = \result$324 [176];
-  assign \lc$340  = \result$324 [182:177];
-  assign \lc_repeat$341  = \result$324 [183];
-  assign \lc_skip$342  = \result$324 [184];
-  assign \lc_zero$343  = \result$324 [185];
-  assign \spw_mismatch$344  = \result$324 [186];
+  assign \busy$315  = count_busy;
+  assign \ma$317  = ma;
+  assign \overrun$320  = overrun;
+  assign \done$322  = \done$321 ;
+  assign valid_out = \valid$323 ;
+  assign \status$325  = \result$326 [3:0];
+  assign timestamp = \result$326 [35:4];
+  assign line_delay = \result$326 [48:36];
+  assign \cds$329  = \result$326 [49];
+  assign noise_events = \result$326 [53:50];
+  assign delay_settled = \result$326 [54];
+  assign \settled_delay$332  = \result$326 [67:55];
+  assign delay_spread = \result$326 [75:68];
+  assign word0_position = \result$326 [130:76];
+  assign word0_ne = \result$326 [131];
+  assign word0_nw = \result$326 [132];
+  assign word0_crc_ok = \result$326 [133];
+  assign word1_position = \result$326 [173:134];
+  assign word1_ne = \result$326 [174];
+  assign word1_nw = \result$326 [175];
+  assign word1_crc_ok = \result$326 [176];
+  assign \lc$342  = \result$326 [182:177];
+  assign \lc_repeat$343  = \result$326 [183];
+  assign \lc_skip$344  = \result$326 [184];
+  assign \lc_zero$345  = \result$326 [185];
+  assign \spw_mismatch$346  = \result$326 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -11789,49 +12143,49 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \live.ssi_error  = live[272];
   assign \live.ssi_error_low  = live[273];
   assign \live.ssi_double  = live[274];
-  assign \cycle.ma_half_period  = cycle[15:0];
-  assign \cycle.request_period  = cycle[39:16];
-  assign \cycle.break_time  = cycle[63:40];
-  assign \cycle.ack_limit  = cycle[87:64];
-  assign \cycle.timeout_limit  = cycle[111:88];
-  assign \cycle.delay_limit  = cycle[123:112];
-  assign \cycle.end_check  = cycle[124];
-  assign \cycle.quiet_time  = cycle[136:125];
-  assign \cycle.noise_limit  = cycle[140:137];
-  assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.confirm_frames  = cycle[148:145];
-  assign \cycle.w0  = cycle[160:149];
-  assign \cycle.w0.data_bits  = cycle[154:149];
-  assign \cycle.w0.nenw  = cycle[155];
-  assign \cycle.w0.lc  = cycle[156];
-  assign \cycle.w0.crc  = cycle[158:157];
-  assign \cycle.w0.gray  = cycle[159];
-  assign \cycle.w0.signed  = cycle[160];
-  assign \cycle.w0_crc  = cycle[198:161];
-  assign \cycle.w0_crc.width  = cycle[165:161];
-  assign \cycle.w0_crc.poly  = cycle[181:166];
-  assign \cycle.w0_crc.start  = cycle[197:182];
-  assign \cycle.w0_crc.inverted  = cycle[198];
-  assign \cycle.w1_enable  = cycle[199];
-  assign \cycle.w1  = cycle[211:200];
-  assign \cycle.w1.data_bits  = cycle[205:200];
-  assign \cycle.w1.nenw  = cycle[206];
-  assign \cycle.w1.lc  = cycle[207];
-  assign \cycle.w1.crc  = cycle[209:208];
-  assign \cycle.w1.gray  = cycle[210];
-  assign \cycle.w1.signed  = cycle[211];
-  assign \cycle.w1_crc  = cycle[249:212];
-  assign \cycle.w1_crc.width  = cycle[216:212];
-  assign \cycle.w1_crc.poly  = cycle[232:217];
-  assign \cycle.w1_crc.start  = cycle[248:233];
-  assign \cycle.w1_crc.inverted  = cycle[249];
-  assign \cycle.spw_check  = cycle[250];
-  assign \cycle.spw_tolerance  = cycle[258:251];
-  assign \cycle.ssi  = cycle[259];
-  assign \cycle.ssi_delay  = cycle[271:260];
-  assign \cycle.ssi_error  = cycle[272];
-  assign \cycle.ssi_error_low  = cycle[273];
-  assign \cycle.ssi_double  = cycle[274];
+  assign \cycle.ma_half_period  = live[15:0];
+  assign \cycle.request_period  = live[39:16];
+  assign \cycle.break_time  = live[63:40];
+  assign \cycle.ack_limit  = live[87:64];
+  assign \cycle.timeout_limit  = live[111:88];
+  assign \cycle.delay_limit  = live[123:112];
+  assign \cycle.end_check  = live[124];
+  assign \cycle.quiet_time  = live[136:125];
+  assign \cycle.noise_limit  = live[140:137];
+  assign \cycle.delay_tolerance  = live[144:141];
+  assign \cycle.confirm_frames  = live[148:145];
+  assign \cycle.w0  = live[160:149];
+  assign \cycle.w0.data_bits  = live[154:149];
+  assign \cycle.w0.nenw  = live[155];
+  assign \cycle.w0.lc  = live[156];
+  assign \cycle.w0.crc  = live[158:157];
+  assign \cycle.w0.gray  = live[159];
+  assign \cycle.w0.signed  = live[160];
+  assign \cycle.w0_crc  = live[198:161];
+  assign \cycle.w0_crc.width  = live[165:161];
+  assign \cycle.w0_crc.poly  = live[181:166];
+  assign \cycle.w0_crc.start  = live[197:182];
+  assign \cycle.w0_crc.inverted  = live[198];
+  assign \cycle.w1_enable  = live[199];
+  assign \cycle.w1  = live[211:200];
+  assign \cycle.w1.data_bits  = live[205:200];
+  assign \cycle.w1.nenw  = live[206];
+  assign \cycle.w1.lc  = live[207];
+  assign \cycle.w1.crc  = live[209:208];
+  assign \cycle.w1.gray  = live[210];
+  assign \cycle.w1.signed  = live[211];
+  assign \cycle.w1_crc  = live[249:212];
+  assign \cycle.w1_crc.width  = live[216:212];
+  assign \cycle.w1_crc.poly  = live[232:217];
+  assign \cycle.w1_crc.start  = live[248:233];
+  assign \cycle.w1_crc.inverted  = live[249];
+  assign \cycle.spw_check  = live[250];
+  assign \cycle.spw_tolerance  = live[258:251];
+  assign \cycle.ssi  = live[259];
+  assign \cycle.ssi_delay  = live[271:260];
+  assign \cycle.ssi_error  = live[272];
+  assign \cycle.ssi_error_low  = live[273];
+  assign \cycle.ssi_double  = live[274];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -11846,26 +12200,26 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$183[0]  = \words$183 [11:0];
-  assign \words$183[0].data_bits  = \words$183 [5:0];
-  assign \words$183[0].nenw  = \words$183 [6];
-  assign \words$183[0].lc  = \words$183 [7];
-  assign \words$183[0].crc  = \words$183 [9:8];
-  assign \words$183[0].gray  = \words$183 [10];
-  assign \words$183[0].signed  = \words$183 [11];
-  assign \words$183[1]  = \words$183 [23:12];
-  assign \words$183[1].data_bits  = \words$183 [17:12];
-  assign \words$183[1].nenw  = \words$183 [18];
-  assign \words$183[1].lc  = \words$183 [19];
-  assign \words$183[1].crc  = \words$183 [21:20];
-  assign \words$183[1].gray  = \words$183 [22];
-  assign \words$183[1].signed  = \words$183 [23];
+  assign \words$185[0]  = \words$185 [11:0];
+  assign \words$185[0].data_bits  = \words$185 [5:0];
+  assign \words$185[0].nenw  = \words$185 [6];
+  assign \words$185[0].lc  = \words$185 [7];
+  assign \words$185[0].crc  = \words$185 [9:8];
+  assign \words$185[0].gray  = \words$185 [10];
+  assign \words$185[0].signed  = \words$185 [11];
+  assign \words$185[1]  = \words$185 [23:12];
+  assign \words$185[1].data_bits  = \words$185 [17:12];
+  assign \words$185[1].nenw  = \words$185 [18];
+  assign \words$185[1].lc  = \words$185 [19];
+  assign \words$185[1].crc  = \words$185 [21:20];
+  assign \words$185[1].gray  = \words$185 [22];
+  assign \words$185[1].signed  = \words$185 [23];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign \crc_widths$185[0]  = crc_widths[4:0];
-  assign \crc_widths$185[1]  = crc_widths[9:5];
-  assign \crc_widths$186[0]  = crc_widths[4:0];
-  assign \crc_widths$186[1]  = crc_widths[9:5];
+  assign \crc_widths$187[0]  = crc_widths[4:0];
+  assign \crc_widths$187[1]  = crc_widths[9:5];
+  assign \crc_widths$188[0]  = crc_widths[4:0];
+  assign \crc_widths$188[1]  = crc_widths[9:5];
   assign \customs[0]  = customs[37:0];
   assign \customs[0].width  = customs[4:0];
   assign \customs[0].poly  = customs[20:5];
@@ -11876,49 +12230,49 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \customs[1].poly  = customs[58:43];
   assign \customs[1].start  = customs[74:59];
   assign \customs[1].inverted  = customs[75];
-  assign \cfg.ma_half_period  = cycle[15:0];
-  assign \cfg.request_period  = cycle[39:16];
-  assign \cfg.break_time  = cycle[63:40];
-  assign \cfg.ack_limit  = cycle[87:64];
-  assign \cfg.timeout_limit  = cycle[111:88];
-  assign \cfg.delay_limit  = cycle[123:112];
-  assign \cfg.end_check  = cycle[124];
-  assign \cfg.quiet_time  = cycle[136:125];
-  assign \cfg.noise_limit  = cycle[140:137];
-  assign \cfg.delay_tolerance  = cycle[144:141];
-  assign \cfg.confirm_frames  = cycle[148:145];
-  assign \cfg.w0  = cycle[160:149];
-  assign \cfg.w0.data_bits  = cycle[154:149];
-  assign \cfg.w0.nenw  = cycle[155];
-  assign \cfg.w0.lc  = cycle[156];
-  assign \cfg.w0.crc  = cycle[158:157];
-  assign \cfg.w0.gray  = cycle[159];
-  assign \cfg.w0.signed  = cycle[160];
-  assign \cfg.w0_crc  = cycle[198:161];
-  assign \cfg.w0_crc.width  = cycle[165:161];
-  assign \cfg.w0_crc.poly  = cycle[181:166];
-  assign \cfg.w0_crc.start  = cycle[197:182];
-  assign \cfg.w0_crc.inverted  = cycle[198];
-  assign \cfg.w1_enable  = cycle[199];
-  assign \cfg.w1  = cycle[211:200];
-  assign \cfg.w1.data_bits  = cycle[205:200];
-  assign \cfg.w1.nenw  = cycle[206];
-  assign \cfg.w1.lc  = cycle[207];
-  assign \cfg.w1.crc  = cycle[209:208];
-  assign \cfg.w1.gray  = cycle[210];
-  assign \cfg.w1.signed  = cycle[211];
-  assign \cfg.w1_crc  = cycle[249:212];
-  assign \cfg.w1_crc.width  = cycle[216:212];
-  assign \cfg.w1_crc.poly  = cycle[232:217];
-  assign \cfg.w1_crc.start  = cycle[248:233];
-  assign \cfg.w1_crc.inverted  = cycle[249];
-  assign \cfg.spw_check  = cycle[250];
-  assign \cfg.spw_tolerance  = cycle[258:251];
-  assign \cfg.ssi  = cycle[259];
-  assign \cfg.ssi_delay  = cycle[271:260];
-  assign \cfg.ssi_error  = cycle[272];
-  assign \cfg.ssi_error_low  = cycle[273];
-  assign \cfg.ssi_double  = cycle[274];
+  assign \cfg.ma_half_period  = live[15:0];
+  assign \cfg.request_period  = live[39:16];
+  assign \cfg.break_time  = live[63:40];
+  assign \cfg.ack_limit  = live[87:64];
+  assign \cfg.timeout_limit  = live[111:88];
+  assign \cfg.delay_limit  = live[123:112];
+  assign \cfg.end_check  = live[124];
+  assign \cfg.quiet_time  = live[136:125];
+  assign \cfg.noise_limit  = live[140:137];
+  assign \cfg.delay_tolerance  = live[144:141];
+  assign \cfg.confirm_frames  = live[148:145];
+  assign \cfg.w0  = live[160:149];
+  assign \cfg.w0.data_bits  = live[154:149];
+  assign \cfg.w0.nenw  = live[155];
+  assign \cfg.w0.lc  = live[156];
+  assign \cfg.w0.crc  = live[158:157];
+  assign \cfg.w0.gray  = live[159];
+  assign \cfg.w0.signed  = live[160];
+  assign \cfg.w0_crc  = live[198:161];
+  assign \cfg.w0_crc.width  = live[165:161];
+  assign \cfg.w0_crc.poly  = live[181:166];
+  assign \cfg.w0_crc.start  = live[197:182];
+  assign \cfg.w0_crc.inverted  = live[198];
+  assign \cfg.w1_enable  = live[199];
+  assign \cfg.w1  = live[211:200];
+  assign \cfg.w1.data_bits  = live[205:200];
+  assign \cfg.w1.nenw  = live[206];
+  assign \cfg.w1.lc  = live[207];
+  assign \cfg.w1.crc  = live[209:208];
+  assign \cfg.w1.gray  = live[210];
+  assign \cfg.w1.signed  = live[211];
+  assign \cfg.w1_crc  = live[249:212];
+  assign \cfg.w1_crc.width  = live[216:212];
+  assign \cfg.w1_crc.poly  = live[232:217];
+  assign \cfg.w1_crc.start  = live[248:233];
+  assign \cfg.w1_crc.inverted  = live[249];
+  assign \cfg.spw_check  = live[250];
+  assign \cfg.spw_tolerance  = live[258:251];
+  assign \cfg.ssi  = live[259];
+  assign \cfg.ssi_delay  = live[271:260];
+  assign \cfg.ssi_error  = live[272];
+  assign \cfg.ssi_error_low  = live[273];
+  assign \cfg.ssi_double  = live[274];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -11942,41 +12296,41 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$253.slave_id  = \request$253 [2:0];
-  assign \request$253.address  = \request$253 [9:3];
-  assign \request$253.count  = \request$253 [16:10];
-  assign \request$253.write  = \request$253 [17];
+  assign \request$255.slave_id  = \request$255 [2:0];
+  assign \request$255.address  = \request$255 [9:3];
+  assign \request$255.count  = \request$255 [16:10];
+  assign \request$255.write  = \request$255 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$291.ca_crc4_error  = \events$291 [0];
-  assign \events$291.ca_no_answer  = \events$291 [1];
-  assign \events$291.ca_refused  = \events$291 [2];
-  assign \events$291.ca_aborted  = \events$291 [3];
-  assign \events$291.ca_data_fault  = \events$291 [4];
+  assign \events$293.ca_crc4_error  = \events$293 [0];
+  assign \events$293.ca_no_answer  = \events$293 [1];
+  assign \events$293.ca_refused  = \events$293 [2];
+  assign \events$293.ca_aborted  = \events$293 [3];
+  assign \events$293.ca_data_fault  = \events$293 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$300.crc_word0  = \events$300 [0];
-  assign \events$300.crc_word1  = \events$300 [1];
-  assign \events$300.no_ack  = \events$300 [2];
-  assign \events$300.no_start  = \events$300 [3];
-  assign \events$300.delay_range  = \events$300 [4];
-  assign \events$300.slo_stuck_low  = \events$300 [5];
-  assign \events$300.lc_repeat  = \events$300 [6];
-  assign \events$300.lc_skip  = \events$300 [7];
-  assign \events$300.lc_zero  = \events$300 [8];
-  assign \events$300.spw_mismatch  = \events$300 [9];
-  assign \events$300.overrun  = \events$300 [10];
-  assign \events$300.aborted  = \events$300 [11];
-  assign \events$300.no_stop  = \events$300 [12];
-  assign \events$300.noisy_line  = \events$300 [13];
-  assign \events$300.delay_jump  = \events$300 [14];
-  assign \events$300.noise_event  = \events$300 [15];
+  assign \events$302.crc_word0  = \events$302 [0];
+  assign \events$302.crc_word1  = \events$302 [1];
+  assign \events$302.no_ack  = \events$302 [2];
+  assign \events$302.no_start  = \events$302 [3];
+  assign \events$302.delay_range  = \events$302 [4];
+  assign \events$302.slo_stuck_low  = \events$302 [5];
+  assign \events$302.lc_repeat  = \events$302 [6];
+  assign \events$302.lc_skip  = \events$302 [7];
+  assign \events$302.lc_zero  = \events$302 [8];
+  assign \events$302.spw_mismatch  = \events$302 [9];
+  assign \events$302.overrun  = \events$302 [10];
+  assign \events$302.aborted  = \events$302 [11];
+  assign \events$302.no_stop  = \events$302 [12];
+  assign \events$302.noisy_line  = \events$302 [13];
+  assign \events$302.delay_jump  = \events$302 [14];
+  assign \events$302.noise_event  = \events$302 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -11984,57 +12338,57 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$324.status  = \result$324 [3:0];
-  assign \result$324.timestamp  = \result$324 [35:4];
-  assign \result$324.line_delay  = \result$324 [48:36];
-  assign \result$324.cds  = \result$324 [49];
-  assign \result$324.noise_events  = \result$324 [53:50];
-  assign \result$324.delay_settled  = \result$324 [54];
-  assign \result$324.settled_delay  = \result$324 [67:55];
-  assign \result$324.delay_spread  = \result$324 [75:68];
-  assign \result$324.word0  = \result$324 [133:76];
-  assign \result$324.word0.position  = \result$324 [130:76];
-  assign \result$324.word0.ne  = \result$324 [131];
-  assign \result$324.word0.nw  = \result$324 [132];
-  assign \result$324.word0.crc_ok  = \result$324 [133];
-  assign \result$324.word1  = \result$324 [176:134];
-  assign \result$324.word1.position  = \result$324 [173:134];
-  assign \result$324.word1.ne  = \result$324 [174];
-  assign \result$324.word1.nw  = \result$324 [175];
-  assign \result$324.word1.crc_ok  = \result$324 [176];
-  assign \result$324.lc  = \result$324 [182:177];
-  assign \result$324.lc_repeat  = \result$324 [183];
-  assign \result$324.lc_skip  = \result$324 [184];
-  assign \result$324.lc_zero  = \result$324 [185];
-  assign \result$324.spw_mismatch  = \result$324 [186];
-  assign \events$300 [15] = \event ;
-  assign \events$300 [14] = \$20 ;
-  assign \events$300 [13] = \$18 ;
-  assign \events$300 [12] = faults[6];
-  assign \events$300 [11] = faults[4];
-  assign \events$300 [10] = overrun;
-  assign \events$300 [9] = \$16 ;
-  assign \events$300 [8] = lc_zero;
-  assign \events$300 [7] = lc_skip;
-  assign \events$300 [6] = lc_repeat;
-  assign \events$300 [5] = faults[3];
-  assign \events$300 [4] = faults[2];
-  assign \events$300 [3] = faults[1];
-  assign \events$300 [2] = faults[0];
-  assign \events$300 [1] = crc_error[1];
-  assign \events$300 [0] = crc_error[0];
-  assign \events$291 [4] = \$15 ;
-  assign \events$291 [3] = \$13 ;
-  assign \events$291 [2] = \$11 ;
-  assign \events$291 [1] = \$9 ;
-  assign \events$291 [0] = \$7 ;
+  assign \result$326.status  = \result$326 [3:0];
+  assign \result$326.timestamp  = \result$326 [35:4];
+  assign \result$326.line_delay  = \result$326 [48:36];
+  assign \result$326.cds  = \result$326 [49];
+  assign \result$326.noise_events  = \result$326 [53:50];
+  assign \result$326.delay_settled  = \result$326 [54];
+  assign \result$326.settled_delay  = \result$326 [67:55];
+  assign \result$326.delay_spread  = \result$326 [75:68];
+  assign \result$326.word0  = \result$326 [133:76];
+  assign \result$326.word0.position  = \result$326 [130:76];
+  assign \result$326.word0.ne  = \result$326 [131];
+  assign \result$326.word0.nw  = \result$326 [132];
+  assign \result$326.word0.crc_ok  = \result$326 [133];
+  assign \result$326.word1  = \result$326 [176:134];
+  assign \result$326.word1.position  = \result$326 [173:134];
+  assign \result$326.word1.ne  = \result$326 [174];
+  assign \result$326.word1.nw  = \result$326 [175];
+  assign \result$326.word1.crc_ok  = \result$326 [176];
+  assign \result$326.lc  = \result$326 [182:177];
+  assign \result$326.lc_repeat  = \result$326 [183];
+  assign \result$326.lc_skip  = \result$326 [184];
+  assign \result$326.lc_zero  = \result$326 [185];
+  assign \result$326.spw_mismatch  = \result$326 [186];
+  assign \events$302 [15] = \event ;
+  assign \events$302 [14] = \$20 ;
+  assign \events$302 [13] = \$18 ;
+  assign \events$302 [12] = faults[6];
+  assign \events$302 [11] = faults[4];
+  assign \events$302 [10] = overrun;
+  assign \events$302 [9] = \$16 ;
+  assign \events$302 [8] = lc_zero;
+  assign \events$302 [7] = lc_skip;
+  assign \events$302 [6] = lc_repeat;
+  assign \events$302 [5] = faults[3];
+  assign \events$302 [4] = faults[2];
+  assign \events$302 [3] = faults[1];
+  assign \events$302 [2] = faults[0];
+  assign \events$302 [1] = crc_error[1];
+  assign \events$302 [0] = crc_error[0];
+  assign \events$293 [4] = \$15 ;
+  assign \events$293 [3] = \$13 ;
+  assign \events$293 [2] = \$11 ;
+  assign \events$293 [1] = \$9 ;
+  assign \events$293 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$253 [17] = ca_write;
-  assign \request$253 [16:10] = ca_count;
-  assign \request$253 [9:3] = ca_address;
-  assign \request$253 [2:0] = ca_slave_id;
+  assign \request$255 [17] = ca_write;
+  assign \request$255 [16:10] = ca_count;
+  assign \request$255 [9:3] = ca_address;
+  assign \request$255 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$28 ;
@@ -12056,12 +12410,12 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign customs[75:38] = cycle[249:212];
-  assign customs[37:0] = cycle[198:161];
-  assign \words$183 [23:12] = cycle[211:200];
-  assign \words$183 [11:0] = cycle[160:149];
-  assign words[23:12] = cycle[211:200];
-  assign words[11:0] = cycle[160:149];
+  assign customs[75:38] = live[249:212];
+  assign customs[37:0] = live[198:161];
+  assign \words$185 [23:12] = live[211:200];
+  assign \words$185 [11:0] = live[160:149];
+  assign words[23:12] = live[211:200];
+  assign words[11:0] = live[160:149];
   assign live[274] = cfg_ssi_double;
   assign live[273] = cfg_ssi_error_low;
   assign live[272] = cfg_ssi_error;
@@ -12104,7 +12458,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, no_start_limit, crc_widths, idle, clk);
+module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, no_start_limit, crc_widths, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -12156,14 +12510,13 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   wire [1:0] \$141 ;
   wire [2:0] \$142 ;
   reg \$143 ;
-  reg [274:0] \$144 ;
+  reg [23:0] \$144 ;
   reg [23:0] \$145 ;
-  reg [23:0] \$146 ;
+  reg [11:0] \$146 ;
   reg [11:0] \$147 ;
-  reg [11:0] \$148 ;
-  reg [16:0] \$149 ;
+  reg [16:0] \$148 ;
+  reg [24:0] \$149 ;
   wire \$15 ;
-  reg [24:0] \$150 ;
   wire \$16 ;
   wire \$17 ;
   wire \$18 ;
@@ -12264,8 +12617,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   wire [9:0] crc_widths;
   wire [4:0] \crc_widths[0] ;
   wire [4:0] \crc_widths[1] ;
-  output [274:0] cycle;
-  reg [274:0] cycle = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
+  wire [274:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [3:0] \cycle.confirm_frames ;
@@ -12518,36 +12870,34 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \$125  = ! live[144:141];
   assign \$126  = \$125  ? 4'h2 : live[144:141];
   assign \$127  = live[15:0] + \$126 ;
-  assign \$128  = ack_limit + { cycle[15:0], 1'h1 };
-  assign \$129  = cycle[158:157] == 2'h3;
-  assign \$130  = cycle[158:157] == 2'h2;
-  assign \$131  = cycle[158:157] == 1'h1;
+  assign \$128  = ack_limit + { live[15:0], 1'h1 };
+  assign \$129  = live[158:157] == 2'h3;
+  assign \$130  = live[158:157] == 2'h2;
+  assign \$131  = live[158:157] == 1'h1;
   assign \$132  = \$131  ? 38'h2000000066 : 38'h0000000000;
   assign \$133  = \$130  ? 38'h2000121b30 : \$132 ;
-  assign \$134  = \$129  ? cycle[198:161] : \$133 ;
-  assign \$135  = cycle[209:208] == 2'h3;
-  assign \$136  = cycle[209:208] == 2'h2;
-  assign \$137  = cycle[209:208] == 1'h1;
+  assign \$134  = \$129  ? live[198:161] : \$133 ;
+  assign \$135  = live[209:208] == 2'h3;
+  assign \$136  = live[209:208] == 2'h2;
+  assign \$137  = live[209:208] == 1'h1;
   assign \$138  = \$137  ? 38'h2000000066 : 38'h0000000000;
   assign \$139  = \$136  ? 38'h2000121b30 : \$138 ;
-  assign \$140  = \$135  ? cycle[249:212] : \$139 ;
-  assign \$142  = 2'h1 + cycle[199];
+  assign \$140  = \$135  ? live[249:212] : \$139 ;
+  assign \$142  = 2'h1 + live[199];
   always @(posedge clk)
     ok <= \$143 ;
   always @(posedge clk)
-    cycle <= \$144 ;
+    ack_limit <= \$144 ;
   always @(posedge clk)
-    ack_limit <= \$145 ;
+    timeout_limit <= \$145 ;
   always @(posedge clk)
-    timeout_limit <= \$146 ;
+    delay_limit <= \$146 ;
   always @(posedge clk)
-    delay_limit <= \$147 ;
+    quiet_time <= \$147 ;
   always @(posedge clk)
-    quiet_time <= \$148 ;
+    delay_tolerance <= \$148 ;
   always @(posedge clk)
-    delay_tolerance <= \$149 ;
-  always @(posedge clk)
-    no_start_limit <= \$150 ;
+    no_start_limit <= \$149 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$143  = \$116 ;
@@ -12557,19 +12907,19 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$144  = cycle;
+    \$144  = ack_limit;
     if (idle) begin
-      \$144  = live;
+      \$144  = \$118 ;
     end
     if (rst) begin
-      \$144  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
+      \$144  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$145  = ack_limit;
+    \$145  = timeout_limit;
     if (idle) begin
-      \$145  = \$118 ;
+      \$145  = \$120 ;
     end
     if (rst) begin
       \$145  = 24'h000000;
@@ -12577,19 +12927,19 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$146  = timeout_limit;
+    \$146  = delay_limit;
     if (idle) begin
-      \$146  = \$120 ;
+      \$146  = \$122 ;
     end
     if (rst) begin
-      \$146  = 24'h000000;
+      \$146  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$147  = delay_limit;
+    \$147  = quiet_time;
     if (idle) begin
-      \$147  = \$122 ;
+      \$147  = \$124 ;
     end
     if (rst) begin
       \$147  = 12'h000;
@@ -12597,31 +12947,22 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$148  = quiet_time;
+    \$148  = delay_tolerance;
     if (idle) begin
-      \$148  = \$124 ;
+      \$148  = \$127 ;
     end
     if (rst) begin
-      \$148  = 12'h000;
+      \$148  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$149  = delay_tolerance;
-    if (idle) begin
-      \$149  = \$127 ;
-    end
+    \$149  = \$128 ;
     if (rst) begin
-      \$149  = 17'h00000;
+      \$149  = 25'h0000000;
     end
   end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$150  = \$128 ;
-    if (rst) begin
-      \$150  = 25'h0000000;
-    end
-  end
+  assign cycle = live;
   assign word_count = \$142 [1:0];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
@@ -12666,49 +13007,49 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \live.ssi_error  = live[272];
   assign \live.ssi_error_low  = live[273];
   assign \live.ssi_double  = live[274];
-  assign \cycle.ma_half_period  = cycle[15:0];
-  assign \cycle.request_period  = cycle[39:16];
-  assign \cycle.break_time  = cycle[63:40];
-  assign \cycle.ack_limit  = cycle[87:64];
-  assign \cycle.timeout_limit  = cycle[111:88];
-  assign \cycle.delay_limit  = cycle[123:112];
-  assign \cycle.end_check  = cycle[124];
-  assign \cycle.quiet_time  = cycle[136:125];
-  assign \cycle.noise_limit  = cycle[140:137];
-  assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.confirm_frames  = cycle[148:145];
-  assign \cycle.w0  = cycle[160:149];
-  assign \cycle.w0.data_bits  = cycle[154:149];
-  assign \cycle.w0.nenw  = cycle[155];
-  assign \cycle.w0.lc  = cycle[156];
-  assign \cycle.w0.crc  = cycle[158:157];
-  assign \cycle.w0.gray  = cycle[159];
-  assign \cycle.w0.signed  = cycle[160];
-  assign \cycle.w0_crc  = cycle[198:161];
-  assign \cycle.w0_crc.width  = cycle[165:161];
-  assign \cycle.w0_crc.poly  = cycle[181:166];
-  assign \cycle.w0_crc.start  = cycle[197:182];
-  assign \cycle.w0_crc.inverted  = cycle[198];
-  assign \cycle.w1_enable  = cycle[199];
-  assign \cycle.w1  = cycle[211:200];
-  assign \cycle.w1.data_bits  = cycle[205:200];
-  assign \cycle.w1.nenw  = cycle[206];
-  assign \cycle.w1.lc  = cycle[207];
-  assign \cycle.w1.crc  = cycle[209:208];
-  assign \cycle.w1.gray  = cycle[210];
-  assign \cycle.w1.signed  = cycle[211];
-  assign \cycle.w1_crc  = cycle[249:212];
-  assign \cycle.w1_crc.width  = cycle[216:212];
-  assign \cycle.w1_crc.poly  = cycle[232:217];
-  assign \cycle.w1_crc.start  = cycle[248:233];
-  assign \cycle.w1_crc.inverted  = cycle[249];
-  assign \cycle.spw_check  = cycle[250];
-  assign \cycle.spw_tolerance  = cycle[258:251];
-  assign \cycle.ssi  = cycle[259];
-  assign \cycle.ssi_delay  = cycle[271:260];
-  assign \cycle.ssi_error  = cycle[272];
-  assign \cycle.ssi_error_low  = cycle[273];
-  assign \cycle.ssi_double  = cycle[274];
+  assign \cycle.ma_half_period  = live[15:0];
+  assign \cycle.request_period  = live[39:16];
+  assign \cycle.break_time  = live[63:40];
+  assign \cycle.ack_limit  = live[87:64];
+  assign \cycle.timeout_limit  = live[111:88];
+  assign \cycle.delay_limit  = live[123:112];
+  assign \cycle.end_check  = live[124];
+  assign \cycle.quiet_time  = live[136:125];
+  assign \cycle.noise_limit  = live[140:137];
+  assign \cycle.delay_tolerance  = live[144:141];
+  assign \cycle.confirm_frames  = live[148:145];
+  assign \cycle.w0  = live[160:149];
+  assign \cycle.w0.data_bits  = live[154:149];
+  assign \cycle.w0.nenw  = live[155];
+  assign \cycle.w0.lc  = live[156];
+  assign \cycle.w0.crc  = live[158:157];
+  assign \cycle.w0.gray  = live[159];
+  assign \cycle.w0.signed  = live[160];
+  assign \cycle.w0_crc  = live[198:161];
+  assign \cycle.w0_crc.width  = live[165:161];
+  assign \cycle.w0_crc.poly  = live[181:166];
+  assign \cycle.w0_crc.start  = live[197:182];
+  assign \cycle.w0_crc.inverted  = live[198];
+  assign \cycle.w1_enable  = live[199];
+  assign \cycle.w1  = live[211:200];
+  assign \cycle.w1.data_bits  = live[205:200];
+  assign \cycle.w1.nenw  = live[206];
+  assign \cycle.w1.lc  = live[207];
+  assign \cycle.w1.crc  = live[209:208];
+  assign \cycle.w1.gray  = live[210];
+  assign \cycle.w1.signed  = live[211];
+  assign \cycle.w1_crc  = live[249:212];
+  assign \cycle.w1_crc.width  = live[216:212];
+  assign \cycle.w1_crc.poly  = live[232:217];
+  assign \cycle.w1_crc.start  = live[248:233];
+  assign \cycle.w1_crc.inverted  = live[249];
+  assign \cycle.spw_check  = live[250];
+  assign \cycle.spw_tolerance  = live[258:251];
+  assign \cycle.ssi  = live[259];
+  assign \cycle.ssi_delay  = live[271:260];
+  assign \cycle.ssi_error  = live[272];
+  assign \cycle.ssi_error_low  = live[273];
+  assign \cycle.ssi_double  = live[274];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
   assign crc_widths[9:5] = \$140 [4:0];
@@ -12801,7 +13142,7 @@ module \biss_master_wb.ch0.core.confirmation (rst, report, status, pending, sett
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.controller (rst, cdm, request, restart_timer, report_delay, frame_done, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
+module \biss_master_wb.ch0.core.controller (rst, cdm, request, restart_timer, report_delay, frame_done, frame_doubtful, abort, end_check, ssi, config_ok, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
 , faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full
 , started, stop_bit, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
@@ -15690,7 +16031,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$12998$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13153$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -16299,8 +16640,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   reg \begin ;
   input \bit ;
   wire \bit ;
-  wire \bit$13 ;
-  wire \bit$41 ;
+  wire \bit$11 ;
+  wire \bit$40 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -16341,17 +16682,17 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   wire [6:0] \current.word_end_m1 ;
   input [75:0] customs;
   wire [75:0] customs;
-  wire [75:0] \customs$35 ;
-  wire [37:0] \customs$35[0] ;
-  wire \customs$35[0].inverted ;
-  wire [15:0] \customs$35[0].poly ;
-  wire [15:0] \customs$35[0].start ;
-  wire [4:0] \customs$35[0].width ;
-  wire [37:0] \customs$35[1] ;
-  wire \customs$35[1].inverted ;
-  wire [15:0] \customs$35[1].poly ;
-  wire [15:0] \customs$35[1].start ;
-  wire [4:0] \customs$35[1].width ;
+  wire [75:0] \customs$34 ;
+  wire [37:0] \customs$34[0] ;
+  wire \customs$34[0].inverted ;
+  wire [15:0] \customs$34[0].poly ;
+  wire [15:0] \customs$34[0].start ;
+  wire [4:0] \customs$34[0].width ;
+  wire [37:0] \customs$34[1] ;
+  wire \customs$34[1].inverted ;
+  wire [15:0] \customs$34[1].poly ;
+  wire [15:0] \customs$34[1].start ;
+  wire [4:0] \customs$34[1].width ;
   wire [37:0] \customs[0] ;
   wire \customs[0].inverted ;
   wire [15:0] \customs[0].poly ;
@@ -16386,10 +16727,9 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
-  reg index = 1'h0;
-  wire [6:0] \index$14 ;
+  wire [6:0] index;
   (* init = 1'h0 *)
-  wire \index$44 ;
+  wire \index$43 ;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -16400,14 +16740,14 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   wire load_index;
   output mismatch;
   wire mismatch;
-  wire \mismatch$17 ;
+  wire \mismatch$15 ;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$12998$272 ;
-  wire [2:0] \port$12998$272 ;
+  input [2:0] \port$13153$272 ;
+  wire [2:0] \port$13153$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -16432,8 +16772,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   reg stop_bit = 1'h0;
   output stopped;
   reg stopped = 1'h0;
-  (* init = 1'h0 *)
-  wire word;
+  reg word = 1'h0;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [23:0] words;
@@ -16694,7 +17033,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   always @(posedge clk)
     in_top <= \$589 ;
   always @(posedge clk)
-    index <= \$590 ;
+    word <= \$590 ;
   always @(posedge clk)
     decoder_fsm_state <= \$591 ;
   always @(posedge clk)
@@ -16717,12 +17056,12 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$12998$272 [0];
+  assign error_bit = ssi & \port$13153$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
   assign \$3  = word_count - 1'h1;
-  assign \$4  = index == \$3 ;
+  assign \$4  = word == \$3 ;
   assign first = in_word & ssi;
   assign lc_load = in_word & in_lc;
   assign \$5  = idx == current[34:28];
@@ -16733,7 +17072,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign check = in_word & in_crc;
   assign \$8  = idx == current[34:28];
   assign last = in_word & \$8 ;
-  assign \$9  = index + 1'h1;
+  assign \$9  = word + 1'h1;
   assign \$10  = at_cds ? 2'h0 : \$9 ;
   assign \$11  = ! decoder_fsm_state;
   assign \$12  = decoder_fsm_state == 1'h1;
@@ -16748,19 +17087,19 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$12998$272 [0];
+  assign \$24  = ssi & \port$13153$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$12998$272 [0];
+  assign \$28  = ssi & \port$13153$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$12998$272 [0];
+  assign \$35  = ssi & \port$13153$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$12998$272 [0];
+  assign \$39  = ssi & \port$13153$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -16780,12 +17119,12 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$57  = in_top & \$56 ;
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
-  assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$12998$272 [2];
-  assign \$62  = index + 1'h1;
+  assign \$60  = word == \$59 ;
+  assign \$61  = ssi & \port$13153$272 [2];
+  assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
-  assign \$65  = ! index;
+  assign \$65  = ! word;
   assign \$66  = in_word & \$65 ;
   assign \$67  = \$66  & in_data;
   assign \$68  = words[10] & data0[0];
@@ -17067,19 +17406,19 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$12998$272 [0];
+  assign \$347  = ssi & \port$13153$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
-  assign \$350  = ! index;
+  assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$12998$272 [0];
-  assign \$355  = ~ \port$12998$272 [1];
+  assign \$354  = ssi & \port$13153$272 [0];
+  assign \$355  = ~ \port$13153$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
-  assign \$359  = ! index;
+  assign \$359  = ! word;
   assign \$360  = in_word & \$359 ;
   assign \$361  = idx == current[6:0];
   assign \$362  = \$360  & \$361 ;
@@ -17128,7 +17467,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
     .codes(codes),
     .\cover (\cover ),
     .customs(customs),
-    .index(index),
+    .index(word),
     .last(last),
     .load(load),
     .load_index(\$10 [0]),
@@ -17144,7 +17483,6 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
     .current(current),
     .error_bit(error_bit),
     .following(following),
-    .index(index),
     .receiver_clear(receiver_clear),
     .rst(rst),
     .words(words)
@@ -17467,7 +17805,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$590  = index;
+    \$590  = word;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
@@ -17811,19 +18149,18 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign word = index;
-  assign ssi_error = \port$12998$272 [0];
-  assign \bit$13  = \bit ;
-  assign \index$14  = current[34:28];
-  assign \mismatch$17  = mismatch;
+  assign ssi_error = \port$13153$272 [0];
+  assign \bit$11  = \bit ;
+  assign index = current[34:28];
+  assign \mismatch$15  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
-  assign \customs$35  = customs;
-  assign \bit$41  = \bit ;
+  assign \customs$34  = customs;
+  assign \bit$40  = \bit ;
   assign ok = crc_ok;
-  assign \index$44  = index;
+  assign \index$43  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$12998$272 [2];
-  assign ssi_error_low = \port$12998$272 [1];
+  assign ssi_double = \port$13153$272 [2];
+  assign ssi_error_low = \port$13153$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -17875,16 +18212,16 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \customs[1].poly  = customs[58:43];
   assign \customs[1].start  = customs[74:59];
   assign \customs[1].inverted  = customs[75];
-  assign \customs$35[0]  = customs[37:0];
-  assign \customs$35[0].width  = customs[4:0];
-  assign \customs$35[0].poly  = customs[20:5];
-  assign \customs$35[0].start  = customs[36:21];
-  assign \customs$35[0].inverted  = customs[37];
-  assign \customs$35[1]  = customs[75:38];
-  assign \customs$35[1].width  = customs[42:38];
-  assign \customs$35[1].poly  = customs[58:43];
-  assign \customs$35[1].start  = customs[74:59];
-  assign \customs$35[1].inverted  = customs[75];
+  assign \customs$34[0]  = customs[37:0];
+  assign \customs$34[0].width  = customs[4:0];
+  assign \customs$34[0].poly  = customs[20:5];
+  assign \customs$34[0].start  = customs[36:21];
+  assign \customs$34[0].inverted  = customs[37];
+  assign \customs$34[1]  = customs[75:38];
+  assign \customs$34[1].width  = customs[42:38];
+  assign \customs$34[1].poly  = customs[58:43];
+  assign \customs$34[1].start  = customs[74:59];
+  assign \customs$34[1].inverted  = customs[75];
   assign \following.data_end_p1  = following[6:0];
   assign \following.data_end_m1  = following[13:7];
   assign \following.nenw_end_m1  = following[20:14];
@@ -17894,9 +18231,9 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \following.lc_at0  = following[36];
   assign codes[3:2] = words[21:20];
   assign codes[1:0] = words[9:8];
-  assign \$363  = index;
-  assign \$570  = index;
-  assign \$574  = index;
+  assign \$363  = word;
+  assign \$570  = word;
+  assign \$574  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -18376,252 +18713,253 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder.field_ends (rst, error_bit, words, crc_widths, receiver_clear, \begin , advance, index, current, following, clk);
+module \biss_master_wb.ch0.core.decoder.field_ends (rst, error_bit, words, crc_widths, receiver_clear, \begin , advance, current, following, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
-  wire [2:0] \$1 ;
-  wire [7:0] \$10 ;
-  wire [11:0] \$100 ;
-  wire \$101 ;
+  wire [6:0] \$1 ;
+  wire \$10 ;
+  wire \$100 ;
+  wire [11:0] \$101 ;
   wire [11:0] \$102 ;
-  wire [11:0] \$103 ;
-  wire \$104 ;
-  wire [11:0] \$105 ;
-  wire \$106 ;
+  wire \$103 ;
+  wire [11:0] \$104 ;
+  wire \$105 ;
+  wire [11:0] \$106 ;
   wire [11:0] \$107 ;
-  wire [11:0] \$108 ;
-  reg [1:0] \$109 ;
-  wire \$11 ;
-  wire [6:0] \$110 ;
+  reg [1:0] \$108 ;
+  wire [6:0] \$109 ;
+  reg [1:0] \$11 ;
+  wire \$110 ;
   wire \$111 ;
-  wire \$112 ;
-  wire [11:0] \$113 ;
-  wire \$114 ;
+  wire [11:0] \$112 ;
+  wire \$113 ;
+  wire [11:0] \$114 ;
   wire [11:0] \$115 ;
-  wire [11:0] \$116 ;
-  wire \$117 ;
-  wire [11:0] \$118 ;
-  wire \$119 ;
-  reg [1:0] \$12 ;
+  wire \$116 ;
+  wire [11:0] \$117 ;
+  wire \$118 ;
+  wire [11:0] \$119 ;
+  wire [6:0] \$12 ;
   wire [11:0] \$120 ;
-  wire [11:0] \$121 ;
-  wire \$122 ;
-  wire [11:0] \$123 ;
-  wire \$124 ;
+  wire \$121 ;
+  wire [11:0] \$122 ;
+  wire \$123 ;
+  wire [11:0] \$124 ;
   wire [11:0] \$125 ;
-  wire [11:0] \$126 ;
-  reg [3:0] \$127 ;
-  wire [6:0] \$128 ;
+  reg [3:0] \$126 ;
+  wire [6:0] \$127 ;
+  wire \$128 ;
   wire \$129 ;
-  wire [6:0] \$13 ;
+  wire \$13 ;
   wire \$130 ;
-  wire \$131 ;
-  wire [11:0] \$132 ;
-  wire \$133 ;
+  wire [11:0] \$131 ;
+  wire \$132 ;
+  wire [11:0] \$133 ;
   wire [11:0] \$134 ;
-  wire [11:0] \$135 ;
-  wire [6:0] \$136 ;
-  wire \$137 ;
-  wire [11:0] \$138 ;
-  wire \$139 ;
-  wire \$14 ;
+  wire [6:0] \$135 ;
+  wire \$136 ;
+  wire [11:0] \$137 ;
+  wire \$138 ;
+  wire [11:0] \$139 ;
+  reg [3:0] \$14 ;
   wire [11:0] \$140 ;
-  wire [11:0] \$141 ;
-  wire [7:0] \$142 ;
-  wire \$143 ;
-  wire [11:0] \$144 ;
-  wire \$145 ;
+  wire [7:0] \$141 ;
+  wire \$142 ;
+  wire [11:0] \$143 ;
+  wire \$144 ;
+  wire [11:0] \$145 ;
   wire [11:0] \$146 ;
-  wire [11:0] \$147 ;
-  wire \$148 ;
-  wire [11:0] \$149 ;
-  reg [3:0] \$15 ;
-  wire \$150 ;
+  wire \$147 ;
+  wire [11:0] \$148 ;
+  wire \$149 ;
+  wire [6:0] \$15 ;
+  wire [11:0] \$150 ;
   wire [11:0] \$151 ;
-  wire [11:0] \$152 ;
-  wire \$153 ;
-  wire [11:0] \$154 ;
-  wire \$155 ;
+  wire \$152 ;
+  wire [11:0] \$153 ;
+  wire \$154 ;
+  wire [11:0] \$155 ;
   wire [11:0] \$156 ;
-  wire [11:0] \$157 ;
-  reg [6:0] \$158 ;
-  wire [7:0] \$159 ;
-  wire [6:0] \$16 ;
-  wire \$160 ;
-  wire [11:0] \$161 ;
-  wire \$162 ;
+  reg [6:0] \$157 ;
+  wire [7:0] \$158 ;
+  wire \$159 ;
+  wire \$16 ;
+  wire [11:0] \$160 ;
+  wire \$161 ;
+  wire [11:0] \$162 ;
   wire [11:0] \$163 ;
-  wire [11:0] \$164 ;
-  wire \$165 ;
-  wire [11:0] \$166 ;
-  wire \$167 ;
+  wire \$164 ;
+  wire [11:0] \$165 ;
+  wire \$166 ;
+  wire [11:0] \$167 ;
   wire [11:0] \$168 ;
-  wire [11:0] \$169 ;
+  wire \$169 ;
   wire \$17 ;
-  wire \$170 ;
-  wire [11:0] \$171 ;
-  wire \$172 ;
+  wire [11:0] \$170 ;
+  wire \$171 ;
+  wire [11:0] \$172 ;
   wire [11:0] \$173 ;
-  wire [11:0] \$174 ;
-  reg [6:0] \$175 ;
-  wire [7:0] \$176 ;
-  wire \$177 ;
-  wire [11:0] \$178 ;
-  wire \$179 ;
+  reg [6:0] \$174 ;
+  wire [7:0] \$175 ;
+  wire \$176 ;
+  wire [11:0] \$177 ;
+  wire \$178 ;
+  wire [11:0] \$179 ;
   wire \$18 ;
   wire [11:0] \$180 ;
-  wire [11:0] \$181 ;
-  wire \$182 ;
-  wire [11:0] \$183 ;
-  wire \$184 ;
+  wire \$181 ;
+  wire [11:0] \$182 ;
+  wire \$183 ;
+  wire [11:0] \$184 ;
   wire [11:0] \$185 ;
-  wire [11:0] \$186 ;
-  wire \$187 ;
-  wire [11:0] \$188 ;
-  wire \$189 ;
-  wire \$19 ;
+  wire \$186 ;
+  wire [11:0] \$187 ;
+  wire \$188 ;
+  wire [11:0] \$189 ;
+  wire [11:0] \$19 ;
   wire [11:0] \$190 ;
-  wire [11:0] \$191 ;
-  reg [6:0] \$192 ;
-  wire \$193 ;
-  wire [4:0] \$194 ;
-  wire \$195 ;
+  reg [6:0] \$191 ;
+  wire \$192 ;
+  wire [4:0] \$193 ;
+  wire \$194 ;
+  wire [4:0] \$195 ;
   wire [4:0] \$196 ;
-  wire [4:0] \$197 ;
+  wire [7:0] \$197 ;
   wire [7:0] \$198 ;
-  wire [7:0] \$199 ;
-  wire [6:0] \$2 ;
-  wire [11:0] \$20 ;
-  wire \$200 ;
-  wire [11:0] \$201 ;
-  wire \$202 ;
+  wire \$199 ;
+  wire [7:0] \$2 ;
+  wire \$20 ;
+  wire [11:0] \$200 ;
+  wire \$201 ;
+  wire [11:0] \$202 ;
   wire [11:0] \$203 ;
-  wire [11:0] \$204 ;
+  wire \$204 ;
   wire \$205 ;
-  wire \$206 ;
-  wire [11:0] \$207 ;
-  wire \$208 ;
+  wire [11:0] \$206 ;
+  wire \$207 ;
+  wire [11:0] \$208 ;
   wire [11:0] \$209 ;
-  wire \$21 ;
-  wire [11:0] \$210 ;
-  wire \$211 ;
-  wire [11:0] \$212 ;
-  wire \$213 ;
+  wire [11:0] \$21 ;
+  wire \$210 ;
+  wire [11:0] \$211 ;
+  wire \$212 ;
+  wire [11:0] \$213 ;
   wire [11:0] \$214 ;
-  wire [11:0] \$215 ;
-  wire \$216 ;
-  wire [11:0] \$217 ;
-  wire \$218 ;
+  wire \$215 ;
+  wire [11:0] \$216 ;
+  wire \$217 ;
+  wire [11:0] \$218 ;
   wire [11:0] \$219 ;
   wire [11:0] \$22 ;
-  wire [11:0] \$220 ;
-  reg [1:0] \$221 ;
-  wire [6:0] \$222 ;
+  reg [1:0] \$220 ;
+  wire [6:0] \$221 ;
+  wire \$222 ;
   wire \$223 ;
-  wire \$224 ;
-  wire [11:0] \$225 ;
-  wire \$226 ;
+  wire [11:0] \$224 ;
+  wire \$225 ;
+  wire [11:0] \$226 ;
   wire [11:0] \$227 ;
-  wire [11:0] \$228 ;
-  wire \$229 ;
-  wire [11:0] \$23 ;
-  wire [11:0] \$230 ;
-  wire \$231 ;
+  wire \$228 ;
+  wire [11:0] \$229 ;
+  wire [6:0] \$23 ;
+  wire \$230 ;
+  wire [11:0] \$231 ;
   wire [11:0] \$232 ;
-  wire [11:0] \$233 ;
-  wire \$234 ;
-  wire [11:0] \$235 ;
-  wire \$236 ;
+  wire \$233 ;
+  wire [11:0] \$234 ;
+  wire \$235 ;
+  wire [11:0] \$236 ;
   wire [11:0] \$237 ;
-  wire [11:0] \$238 ;
-  reg [3:0] \$239 ;
-  wire [6:0] \$24 ;
-  wire [6:0] \$240 ;
+  reg [3:0] \$238 ;
+  wire [6:0] \$239 ;
+  wire \$24 ;
+  wire \$240 ;
   wire \$241 ;
-  wire \$242 ;
+  wire [2:0] \$242 ;
   reg [36:0] \$243 ;
   reg [36:0] \$244 ;
-  wire \$25 ;
-  wire [11:0] \$26 ;
-  wire \$27 ;
+  reg [1:0] \$245 ;
+  wire [11:0] \$25 ;
+  wire \$26 ;
+  wire [11:0] \$27 ;
   wire [11:0] \$28 ;
-  wire [11:0] \$29 ;
-  wire [7:0] \$3 ;
-  wire [7:0] \$30 ;
-  wire \$31 ;
-  wire [11:0] \$32 ;
-  wire \$33 ;
+  wire [7:0] \$29 ;
+  reg [6:0] \$3 ;
+  wire \$30 ;
+  wire [11:0] \$31 ;
+  wire \$32 ;
+  wire [11:0] \$33 ;
   wire [11:0] \$34 ;
-  wire [11:0] \$35 ;
-  wire \$36 ;
-  wire [11:0] \$37 ;
-  wire \$38 ;
+  wire \$35 ;
+  wire [11:0] \$36 ;
+  wire \$37 ;
+  wire [11:0] \$38 ;
   wire [11:0] \$39 ;
-  reg [6:0] \$4 ;
-  wire [11:0] \$40 ;
-  wire \$41 ;
-  wire [11:0] \$42 ;
-  wire \$43 ;
+  wire [7:0] \$4 ;
+  wire \$40 ;
+  wire [11:0] \$41 ;
+  wire \$42 ;
+  wire [11:0] \$43 ;
   wire [11:0] \$44 ;
-  wire [11:0] \$45 ;
-  reg [6:0] \$46 ;
-  wire [7:0] \$47 ;
-  wire \$48 ;
-  wire [11:0] \$49 ;
-  wire [7:0] \$5 ;
-  wire \$50 ;
+  reg [6:0] \$45 ;
+  wire [7:0] \$46 ;
+  wire \$47 ;
+  wire [11:0] \$48 ;
+  wire \$49 ;
+  reg [6:0] \$5 ;
+  wire [11:0] \$50 ;
   wire [11:0] \$51 ;
-  wire [11:0] \$52 ;
-  wire \$53 ;
-  wire [11:0] \$54 ;
-  wire \$55 ;
+  wire \$52 ;
+  wire [11:0] \$53 ;
+  wire \$54 ;
+  wire [11:0] \$55 ;
   wire [11:0] \$56 ;
-  wire [11:0] \$57 ;
-  wire \$58 ;
-  wire [11:0] \$59 ;
-  reg [6:0] \$6 ;
-  wire \$60 ;
+  wire \$57 ;
+  wire [11:0] \$58 ;
+  wire \$59 ;
+  wire [7:0] \$6 ;
+  wire [11:0] \$60 ;
   wire [11:0] \$61 ;
-  wire [11:0] \$62 ;
-  reg [6:0] \$63 ;
-  wire [7:0] \$64 ;
-  wire \$65 ;
-  wire [11:0] \$66 ;
-  wire \$67 ;
+  reg [6:0] \$62 ;
+  wire [7:0] \$63 ;
+  wire \$64 ;
+  wire [11:0] \$65 ;
+  wire \$66 ;
+  wire [11:0] \$67 ;
   wire [11:0] \$68 ;
-  wire [11:0] \$69 ;
-  wire [7:0] \$7 ;
-  wire \$70 ;
-  wire [11:0] \$71 ;
-  wire \$72 ;
+  wire \$69 ;
+  reg [6:0] \$7 ;
+  wire [11:0] \$70 ;
+  wire \$71 ;
+  wire [11:0] \$72 ;
   wire [11:0] \$73 ;
-  wire [11:0] \$74 ;
-  wire \$75 ;
-  wire [11:0] \$76 ;
-  wire \$77 ;
+  wire \$74 ;
+  wire [11:0] \$75 ;
+  wire \$76 ;
+  wire [11:0] \$77 ;
   wire [11:0] \$78 ;
-  wire [11:0] \$79 ;
-  reg [6:0] \$8 ;
-  reg [6:0] \$80 ;
-  wire \$81 ;
-  wire [4:0] \$82 ;
-  wire \$83 ;
+  reg [6:0] \$79 ;
+  wire [7:0] \$8 ;
+  wire \$80 ;
+  wire [4:0] \$81 ;
+  wire \$82 ;
+  wire [4:0] \$83 ;
   wire [4:0] \$84 ;
-  wire [4:0] \$85 ;
+  wire [7:0] \$85 ;
   wire [7:0] \$86 ;
-  wire [7:0] \$87 ;
-  wire \$88 ;
-  wire [11:0] \$89 ;
+  wire \$87 ;
+  wire [11:0] \$88 ;
+  wire \$89 ;
   wire [7:0] \$9 ;
-  wire \$90 ;
+  wire [11:0] \$90 ;
   wire [11:0] \$91 ;
-  wire [11:0] \$92 ;
+  wire \$92 ;
   wire \$93 ;
-  wire \$94 ;
-  wire [11:0] \$95 ;
-  wire \$96 ;
+  wire [11:0] \$94 ;
+  wire \$95 ;
+  wire [11:0] \$96 ;
   wire [11:0] \$97 ;
-  wire [11:0] \$98 ;
-  wire \$99 ;
+  wire \$98 ;
+  wire [11:0] \$99 ;
   input advance;
   wire advance;
   input \begin ;
@@ -18670,9 +19008,7 @@ module \biss_master_wb.ch0.core.decoder.field_ends (rst, error_bit, words, crc_w
   wire [6:0] \following_ends.lc_end_m1 ;
   wire [6:0] \following_ends.nenw_end_m1 ;
   wire [6:0] \following_ends.word_end_m1 ;
-  wire following_word;
-  input index;
-  wire index;
+  reg [1:0] following_word = 2'h1;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -18703,242 +19039,259 @@ module \biss_master_wb.ch0.core.decoder.field_ends (rst, error_bit, words, crc_w
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$1  = index + 2'h2;
-  assign following_word = \begin  ? 1'h1 : \$1 [0];
-  assign \$2  = words[5:0] + 1'h1;
-  assign \$3  = words[5:0] + 7'h7f;
-  assign \$5  = words[5:0] + \$4 ;
-  assign \$7  = words[5:0] + \$6 ;
-  assign \$9  = \$8  + crc_widths[4:0];
-  assign \$10  = words[5:0] + \$9 [6:0];
-  assign \$11  = | words[5:0];
-  assign \$13  = words[5:0] + \$12 ;
-  assign \$14  = ! \$13 ;
-  assign \$16  = words[5:0] + \$15 ;
-  assign \$17  = | \$16 ;
-  assign \$18  = \$14  & \$17 ;
-  assign \$19  = ! following_word;
-  assign \$20  = following_word ? 12'h000 : words[11:0];
-  assign \$22  = \$21  ? words[23:12] : 12'h000;
-  assign \$23  = \$20  | \$22 ;
-  assign \$24  = \$23 [5:0] + 1'h1;
-  assign \$25  = ! following_word;
-  assign \$26  = following_word ? 12'h000 : words[11:0];
-  assign \$28  = \$27  ? words[23:12] : 12'h000;
-  assign \$29  = \$26  | \$28 ;
-  assign \$30  = \$29 [5:0] + 7'h7f;
-  assign \$31  = ! following_word;
-  assign \$32  = following_word ? 12'h000 : words[11:0];
-  assign \$34  = \$33  ? words[23:12] : 12'h000;
-  assign \$35  = \$32  | \$34 ;
-  assign \$36  = ! following_word;
-  assign \$37  = following_word ? 12'h000 : words[11:0];
-  assign \$39  = \$38  ? words[23:12] : 12'h000;
-  assign \$40  = \$37  | \$39 ;
-  assign \$41  = ! following_word;
-  assign \$42  = following_word ? 12'h000 : words[11:0];
-  assign \$44  = \$43  ? words[23:12] : 12'h000;
-  assign \$45  = \$42  | \$44 ;
-  assign \$47  = \$35 [5:0] + \$46 ;
-  assign \$48  = ! following_word;
-  assign \$49  = following_word ? 12'h000 : words[11:0];
-  assign \$51  = \$50  ? words[23:12] : 12'h000;
-  assign \$52  = \$49  | \$51 ;
-  assign \$53  = ! following_word;
-  assign \$54  = following_word ? 12'h000 : words[11:0];
-  assign \$56  = \$55  ? words[23:12] : 12'h000;
-  assign \$57  = \$54  | \$56 ;
-  assign \$58  = ! following_word;
-  assign \$59  = following_word ? 12'h000 : words[11:0];
-  assign \$61  = \$60  ? words[23:12] : 12'h000;
-  assign \$62  = \$59  | \$61 ;
-  assign \$64  = \$52 [5:0] + \$63 ;
-  assign \$65  = ! following_word;
-  assign \$66  = following_word ? 12'h000 : words[11:0];
-  assign \$68  = \$67  ? words[23:12] : 12'h000;
-  assign \$69  = \$66  | \$68 ;
-  assign \$70  = ! following_word;
-  assign \$71  = following_word ? 12'h000 : words[11:0];
-  assign \$73  = \$72  ? words[23:12] : 12'h000;
-  assign \$74  = \$71  | \$73 ;
-  assign \$75  = ! following_word;
-  assign \$76  = following_word ? 12'h000 : words[11:0];
-  assign \$78  = \$77  ? words[23:12] : 12'h000;
-  assign \$79  = \$76  | \$78 ;
-  assign \$81  = ! following_word;
-  assign \$82  = following_word ? 5'h00 : crc_widths[4:0];
-  assign \$84  = \$83  ? crc_widths[9:5] : 5'h00;
-  assign \$85  = \$82  | \$84 ;
-  assign \$86  = \$80  + \$85 ;
-  assign \$87  = \$69 [5:0] + \$86 [6:0];
-  assign \$88  = ! following_word;
-  assign \$89  = following_word ? 12'h000 : words[11:0];
-  assign \$91  = \$90  ? words[23:12] : 12'h000;
-  assign \$92  = \$89  | \$91 ;
-  assign \$93  = | \$92 [5:0];
-  assign \$94  = ! following_word;
-  assign \$95  = following_word ? 12'h000 : words[11:0];
-  assign \$97  = \$96  ? words[23:12] : 12'h000;
-  assign \$98  = \$95  | \$97 ;
-  assign \$99  = ! following_word;
-  assign \$100  = following_word ? 12'h000 : words[11:0];
-  assign \$102  = \$101  ? words[23:12] : 12'h000;
-  assign \$103  = \$100  | \$102 ;
-  assign \$104  = ! following_word;
-  assign \$105  = following_word ? 12'h000 : words[11:0];
-  assign \$107  = \$106  ? words[23:12] : 12'h000;
-  assign \$108  = \$105  | \$107 ;
-  assign \$110  = \$98 [5:0] + \$109 ;
-  assign \$111  = ! \$110 ;
-  assign \$112  = ! following_word;
-  assign \$113  = following_word ? 12'h000 : words[11:0];
-  assign \$115  = \$114  ? words[23:12] : 12'h000;
-  assign \$116  = \$113  | \$115 ;
-  assign \$117  = ! following_word;
-  assign \$118  = following_word ? 12'h000 : words[11:0];
-  assign \$120  = \$119  ? words[23:12] : 12'h000;
-  assign \$121  = \$118  | \$120 ;
-  assign \$122  = ! following_word;
-  assign \$123  = following_word ? 12'h000 : words[11:0];
-  assign \$125  = \$124  ? words[23:12] : 12'h000;
-  assign \$126  = \$123  | \$125 ;
-  assign \$128  = \$116 [5:0] + \$127 ;
-  assign \$129  = | \$128 ;
-  assign \$130  = \$111  & \$129 ;
-  assign \$131  = ! following_word;
-  assign \$132  = following_word ? 12'h000 : words[11:0];
-  assign \$134  = \$133  ? words[23:12] : 12'h000;
-  assign \$135  = \$132  | \$134 ;
-  assign \$136  = \$135 [5:0] + 1'h1;
-  assign \$137  = ! following_word;
-  assign \$138  = following_word ? 12'h000 : words[11:0];
-  assign \$140  = \$139  ? words[23:12] : 12'h000;
-  assign \$141  = \$138  | \$140 ;
-  assign \$142  = \$141 [5:0] + 7'h7f;
-  assign \$143  = ! following_word;
-  assign \$144  = following_word ? 12'h000 : words[11:0];
-  assign \$146  = \$145  ? words[23:12] : 12'h000;
-  assign \$147  = \$144  | \$146 ;
-  assign \$148  = ! following_word;
-  assign \$149  = following_word ? 12'h000 : words[11:0];
-  assign \$151  = \$150  ? words[23:12] : 12'h000;
-  assign \$152  = \$149  | \$151 ;
-  assign \$153  = ! following_word;
-  assign \$154  = following_word ? 12'h000 : words[11:0];
-  assign \$156  = \$155  ? words[23:12] : 12'h000;
-  assign \$157  = \$154  | \$156 ;
-  assign \$159  = \$147 [5:0] + \$158 ;
-  assign \$160  = ! following_word;
-  assign \$161  = following_word ? 12'h000 : words[11:0];
-  assign \$163  = \$162  ? words[23:12] : 12'h000;
-  assign \$164  = \$161  | \$163 ;
-  assign \$165  = ! following_word;
-  assign \$166  = following_word ? 12'h000 : words[11:0];
-  assign \$168  = \$167  ? words[23:12] : 12'h000;
-  assign \$169  = \$166  | \$168 ;
-  assign \$170  = ! following_word;
-  assign \$171  = following_word ? 12'h000 : words[11:0];
-  assign \$173  = \$172  ? words[23:12] : 12'h000;
-  assign \$174  = \$171  | \$173 ;
-  assign \$176  = \$164 [5:0] + \$175 ;
-  assign \$177  = ! following_word;
-  assign \$178  = following_word ? 12'h000 : words[11:0];
-  assign \$180  = \$179  ? words[23:12] : 12'h000;
-  assign \$181  = \$178  | \$180 ;
-  assign \$182  = ! following_word;
-  assign \$183  = following_word ? 12'h000 : words[11:0];
-  assign \$185  = \$184  ? words[23:12] : 12'h000;
-  assign \$186  = \$183  | \$185 ;
-  assign \$187  = ! following_word;
-  assign \$188  = following_word ? 12'h000 : words[11:0];
-  assign \$190  = \$189  ? words[23:12] : 12'h000;
-  assign \$191  = \$188  | \$190 ;
-  assign \$193  = ! following_word;
-  assign \$194  = following_word ? 5'h00 : crc_widths[4:0];
-  assign \$196  = \$195  ? crc_widths[9:5] : 5'h00;
-  assign \$197  = \$194  | \$196 ;
-  assign \$198  = \$192  + \$197 ;
-  assign \$199  = \$181 [5:0] + \$198 [6:0];
-  assign \$200  = ! following_word;
-  assign \$201  = following_word ? 12'h000 : words[11:0];
-  assign \$203  = \$202  ? words[23:12] : 12'h000;
-  assign \$204  = \$201  | \$203 ;
-  assign \$205  = | \$204 [5:0];
-  assign \$206  = ! following_word;
-  assign \$207  = following_word ? 12'h000 : words[11:0];
-  assign \$209  = \$208  ? words[23:12] : 12'h000;
-  assign \$210  = \$207  | \$209 ;
-  assign \$211  = ! following_word;
-  assign \$212  = following_word ? 12'h000 : words[11:0];
-  assign \$214  = \$213  ? words[23:12] : 12'h000;
-  assign \$215  = \$212  | \$214 ;
-  assign \$216  = ! following_word;
-  assign \$217  = following_word ? 12'h000 : words[11:0];
-  assign \$219  = \$218  ? words[23:12] : 12'h000;
-  assign \$220  = \$217  | \$219 ;
-  assign \$222  = \$210 [5:0] + \$221 ;
-  assign \$223  = ! \$222 ;
-  assign \$224  = ! following_word;
-  assign \$225  = following_word ? 12'h000 : words[11:0];
-  assign \$227  = \$226  ? words[23:12] : 12'h000;
-  assign \$228  = \$225  | \$227 ;
-  assign \$229  = ! following_word;
-  assign \$230  = following_word ? 12'h000 : words[11:0];
-  assign \$232  = \$231  ? words[23:12] : 12'h000;
-  assign \$233  = \$230  | \$232 ;
-  assign \$234  = ! following_word;
-  assign \$235  = following_word ? 12'h000 : words[11:0];
-  assign \$237  = \$236  ? words[23:12] : 12'h000;
-  assign \$238  = \$235  | \$237 ;
-  assign \$240  = \$228 [5:0] + \$239 ;
-  assign \$241  = | \$240 ;
-  assign \$242  = \$223  & \$241 ;
+  assign \$1  = words[5:0] + 1'h1;
+  assign \$2  = words[5:0] + 7'h7f;
+  assign \$4  = words[5:0] + \$3 ;
+  assign \$6  = words[5:0] + \$5 ;
+  assign \$8  = \$7  + crc_widths[4:0];
+  assign \$9  = words[5:0] + \$8 [6:0];
+  assign \$10  = | words[5:0];
+  assign \$12  = words[5:0] + \$11 ;
+  assign \$13  = ! \$12 ;
+  assign \$15  = words[5:0] + \$14 ;
+  assign \$16  = | \$15 ;
+  assign \$17  = \$13  & \$16 ;
+  assign \$18  = ! following_word;
+  assign \$19  = \$18  ? words[11:0] : 12'h000;
+  assign \$20  = following_word == 1'h1;
+  assign \$21  = \$20  ? words[23:12] : 12'h000;
+  assign \$22  = \$19  | \$21 ;
+  assign \$23  = \$22 [5:0] + 1'h1;
+  assign \$24  = ! following_word;
+  assign \$25  = \$24  ? words[11:0] : 12'h000;
+  assign \$26  = following_word == 1'h1;
+  assign \$27  = \$26  ? words[23:12] : 12'h000;
+  assign \$28  = \$25  | \$27 ;
+  assign \$29  = \$28 [5:0] + 7'h7f;
+  assign \$30  = ! following_word;
+  assign \$31  = \$30  ? words[11:0] : 12'h000;
+  assign \$32  = following_word == 1'h1;
+  assign \$33  = \$32  ? words[23:12] : 12'h000;
+  assign \$34  = \$31  | \$33 ;
+  assign \$35  = ! following_word;
+  assign \$36  = \$35  ? words[11:0] : 12'h000;
+  assign \$37  = following_word == 1'h1;
+  assign \$38  = \$37  ? words[23:12] : 12'h000;
+  assign \$39  = \$36  | \$38 ;
+  assign \$40  = ! following_word;
+  assign \$41  = \$40  ? words[11:0] : 12'h000;
+  assign \$42  = following_word == 1'h1;
+  assign \$43  = \$42  ? words[23:12] : 12'h000;
+  assign \$44  = \$41  | \$43 ;
+  assign \$46  = \$34 [5:0] + \$45 ;
+  assign \$47  = ! following_word;
+  assign \$48  = \$47  ? words[11:0] : 12'h000;
+  assign \$49  = following_word == 1'h1;
+  assign \$50  = \$49  ? words[23:12] : 12'h000;
+  assign \$51  = \$48  | \$50 ;
+  assign \$52  = ! following_word;
+  assign \$53  = \$52  ? words[11:0] : 12'h000;
+  assign \$54  = following_word == 1'h1;
+  assign \$55  = \$54  ? words[23:12] : 12'h000;
+  assign \$56  = \$53  | \$55 ;
+  assign \$57  = ! following_word;
+  assign \$58  = \$57  ? words[11:0] : 12'h000;
+  assign \$59  = following_word == 1'h1;
+  assign \$60  = \$59  ? words[23:12] : 12'h000;
+  assign \$61  = \$58  | \$60 ;
+  assign \$63  = \$51 [5:0] + \$62 ;
+  assign \$64  = ! following_word;
+  assign \$65  = \$64  ? words[11:0] : 12'h000;
+  assign \$66  = following_word == 1'h1;
+  assign \$67  = \$66  ? words[23:12] : 12'h000;
+  assign \$68  = \$65  | \$67 ;
+  assign \$69  = ! following_word;
+  assign \$70  = \$69  ? words[11:0] : 12'h000;
+  assign \$71  = following_word == 1'h1;
+  assign \$72  = \$71  ? words[23:12] : 12'h000;
+  assign \$73  = \$70  | \$72 ;
+  assign \$74  = ! following_word;
+  assign \$75  = \$74  ? words[11:0] : 12'h000;
+  assign \$76  = following_word == 1'h1;
+  assign \$77  = \$76  ? words[23:12] : 12'h000;
+  assign \$78  = \$75  | \$77 ;
+  assign \$80  = ! following_word;
+  assign \$81  = \$80  ? crc_widths[4:0] : 5'h00;
+  assign \$82  = following_word == 1'h1;
+  assign \$83  = \$82  ? crc_widths[9:5] : 5'h00;
+  assign \$84  = \$81  | \$83 ;
+  assign \$85  = \$79  + \$84 ;
+  assign \$86  = \$68 [5:0] + \$85 [6:0];
+  assign \$87  = ! following_word;
+  assign \$88  = \$87  ? words[11:0] : 12'h000;
+  assign \$89  = following_word == 1'h1;
+  assign \$90  = \$89  ? words[23:12] : 12'h000;
+  assign \$91  = \$88  | \$90 ;
+  assign \$92  = | \$91 [5:0];
+  assign \$93  = ! following_word;
+  assign \$94  = \$93  ? words[11:0] : 12'h000;
+  assign \$95  = following_word == 1'h1;
+  assign \$96  = \$95  ? words[23:12] : 12'h000;
+  assign \$97  = \$94  | \$96 ;
+  assign \$98  = ! following_word;
+  assign \$99  = \$98  ? words[11:0] : 12'h000;
+  assign \$100  = following_word == 1'h1;
+  assign \$101  = \$100  ? words[23:12] : 12'h000;
+  assign \$102  = \$99  | \$101 ;
+  assign \$103  = ! following_word;
+  assign \$104  = \$103  ? words[11:0] : 12'h000;
+  assign \$105  = following_word == 1'h1;
+  assign \$106  = \$105  ? words[23:12] : 12'h000;
+  assign \$107  = \$104  | \$106 ;
+  assign \$109  = \$97 [5:0] + \$108 ;
+  assign \$110  = ! \$109 ;
+  assign \$111  = ! following_word;
+  assign \$112  = \$111  ? words[11:0] : 12'h000;
+  assign \$113  = following_word == 1'h1;
+  assign \$114  = \$113  ? words[23:12] : 12'h000;
+  assign \$115  = \$112  | \$114 ;
+  assign \$116  = ! following_word;
+  assign \$117  = \$116  ? words[11:0] : 12'h000;
+  assign \$118  = following_word == 1'h1;
+  assign \$119  = \$118  ? words[23:12] : 12'h000;
+  assign \$120  = \$117  | \$119 ;
+  assign \$121  = ! following_word;
+  assign \$122  = \$121  ? words[11:0] : 12'h000;
+  assign \$123  = following_word == 1'h1;
+  assign \$124  = \$123  ? words[23:12] : 12'h000;
+  assign \$125  = \$122  | \$124 ;
+  assign \$127  = \$115 [5:0] + \$126 ;
+  assign \$128  = | \$127 ;
+  assign \$129  = \$110  & \$128 ;
+  assign \$130  = ! following_word;
+  assign \$131  = \$130  ? words[11:0] : 12'h000;
+  assign \$132  = following_word == 1'h1;
+  assign \$133  = \$132  ? words[23:12] : 12'h000;
+  assign \$134  = \$131  | \$133 ;
+  assign \$135  = \$134 [5:0] + 1'h1;
+  assign \$136  = ! following_word;
+  assign \$137  = \$136  ? words[11:0] : 12'h000;
+  assign \$138  = following_word == 1'h1;
+  assign \$139  = \$138  ? words[23:12] : 12'h000;
+  assign \$140  = \$137  | \$139 ;
+  assign \$141  = \$140 [5:0] + 7'h7f;
+  assign \$142  = ! following_word;
+  assign \$143  = \$142  ? words[11:0] : 12'h000;
+  assign \$144  = following_word == 1'h1;
+  assign \$145  = \$144  ? words[23:12] : 12'h000;
+  assign \$146  = \$143  | \$145 ;
+  assign \$147  = ! following_word;
+  assign \$148  = \$147  ? words[11:0] : 12'h000;
+  assign \$149  = following_word == 1'h1;
+  assign \$150  = \$149  ? words[23:12] : 12'h000;
+  assign \$151  = \$148  | \$150 ;
+  assign \$152  = ! following_word;
+  assign \$153  = \$152  ? words[11:0] : 12'h000;
+  assign \$154  = following_word == 1'h1;
+  assign \$155  = \$154  ? words[23:12] : 12'h000;
+  assign \$156  = \$153  | \$155 ;
+  assign \$158  = \$146 [5:0] + \$157 ;
+  assign \$159  = ! following_word;
+  assign \$160  = \$159  ? words[11:0] : 12'h000;
+  assign \$161  = following_word == 1'h1;
+  assign \$162  = \$161  ? words[23:12] : 12'h000;
+  assign \$163  = \$160  | \$162 ;
+  assign \$164  = ! following_word;
+  assign \$165  = \$164  ? words[11:0] : 12'h000;
+  assign \$166  = following_word == 1'h1;
+  assign \$167  = \$166  ? words[23:12] : 12'h000;
+  assign \$168  = \$165  | \$167 ;
+  assign \$169  = ! following_word;
+  assign \$170  = \$169  ? words[11:0] : 12'h000;
+  assign \$171  = following_word == 1'h1;
+  assign \$172  = \$171  ? words[23:12] : 12'h000;
+  assign \$173  = \$170  | \$172 ;
+  assign \$175  = \$163 [5:0] + \$174 ;
+  assign \$176  = ! following_word;
+  assign \$177  = \$176  ? words[11:0] : 12'h000;
+  assign \$178  = following_word == 1'h1;
+  assign \$179  = \$178  ? words[23:12] : 12'h000;
+  assign \$180  = \$177  | \$179 ;
+  assign \$181  = ! following_word;
+  assign \$182  = \$181  ? words[11:0] : 12'h000;
+  assign \$183  = following_word == 1'h1;
+  assign \$184  = \$183  ? words[23:12] : 12'h000;
+  assign \$185  = \$182  | \$184 ;
+  assign \$186  = ! following_word;
+  assign \$187  = \$186  ? words[11:0] : 12'h000;
+  assign \$188  = following_word == 1'h1;
+  assign \$189  = \$188  ? words[23:12] : 12'h000;
+  assign \$190  = \$187  | \$189 ;
+  assign \$192  = ! following_word;
+  assign \$193  = \$192  ? crc_widths[4:0] : 5'h00;
+  assign \$194  = following_word == 1'h1;
+  assign \$195  = \$194  ? crc_widths[9:5] : 5'h00;
+  assign \$196  = \$193  | \$195 ;
+  assign \$197  = \$191  + \$196 ;
+  assign \$198  = \$180 [5:0] + \$197 [6:0];
+  assign \$199  = ! following_word;
+  assign \$200  = \$199  ? words[11:0] : 12'h000;
+  assign \$201  = following_word == 1'h1;
+  assign \$202  = \$201  ? words[23:12] : 12'h000;
+  assign \$203  = \$200  | \$202 ;
+  assign \$204  = | \$203 [5:0];
+  assign \$205  = ! following_word;
+  assign \$206  = \$205  ? words[11:0] : 12'h000;
+  assign \$207  = following_word == 1'h1;
+  assign \$208  = \$207  ? words[23:12] : 12'h000;
+  assign \$209  = \$206  | \$208 ;
+  assign \$210  = ! following_word;
+  assign \$211  = \$210  ? words[11:0] : 12'h000;
+  assign \$212  = following_word == 1'h1;
+  assign \$213  = \$212  ? words[23:12] : 12'h000;
+  assign \$214  = \$211  | \$213 ;
+  assign \$215  = ! following_word;
+  assign \$216  = \$215  ? words[11:0] : 12'h000;
+  assign \$217  = following_word == 1'h1;
+  assign \$218  = \$217  ? words[23:12] : 12'h000;
+  assign \$219  = \$216  | \$218 ;
+  assign \$221  = \$209 [5:0] + \$220 ;
+  assign \$222  = ! \$221 ;
+  assign \$223  = ! following_word;
+  assign \$224  = \$223  ? words[11:0] : 12'h000;
+  assign \$225  = following_word == 1'h1;
+  assign \$226  = \$225  ? words[23:12] : 12'h000;
+  assign \$227  = \$224  | \$226 ;
+  assign \$228  = ! following_word;
+  assign \$229  = \$228  ? words[11:0] : 12'h000;
+  assign \$230  = following_word == 1'h1;
+  assign \$231  = \$230  ? words[23:12] : 12'h000;
+  assign \$232  = \$229  | \$231 ;
+  assign \$233  = ! following_word;
+  assign \$234  = \$233  ? words[11:0] : 12'h000;
+  assign \$235  = following_word == 1'h1;
+  assign \$236  = \$235  ? words[23:12] : 12'h000;
+  assign \$237  = \$234  | \$236 ;
+  assign \$239  = \$227 [5:0] + \$238 ;
+  assign \$240  = | \$239 ;
+  assign \$241  = \$222  & \$240 ;
+  assign \$242  = following_word + 1'h1;
   always @(posedge clk)
     current <= \$243 ;
   always @(posedge clk)
     following <= \$244 ;
+  always @(posedge clk)
+    following_word <= \$245 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$4  = 7'h7f;
+          \$3  = 7'h7f;
       3'h1:
-          \$4  = 7'h01;
+          \$3  = 7'h01;
       3'h2:
-          \$4  = 7'h7f;
+          \$3  = 7'h7f;
       3'h3:
-          \$4  = 7'h01;
+          \$3  = 7'h01;
       3'h4:
-          \$4  = 7'h00;
+          \$3  = 7'h00;
       3'h5:
-          \$4  = 7'h02;
+          \$3  = 7'h02;
       3'h6:
-          \$4  = 7'h00;
+          \$3  = 7'h00;
       3'h7:
-          \$4  = 7'h02;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ error_bit, words[7:6] })
-      3'h0:
-          \$6  = 7'h7f;
-      3'h1:
-          \$6  = 7'h01;
-      3'h2:
-          \$6  = 7'h05;
-      3'h3:
-          \$6  = 7'h07;
-      3'h4:
-          \$6  = 7'h00;
-      3'h5:
-          \$6  = 7'h02;
-      3'h6:
-          \$6  = 7'h06;
-      3'h7:
-          \$6  = 7'h08;
+          \$3  = 7'h02;
     endcase
   end
   always @* begin
@@ -18946,21 +19299,21 @@ module \biss_master_wb.ch0.core.decoder.field_ends (rst, error_bit, words, crc_w
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$8  = 7'h7f;
+          \$5  = 7'h7f;
       3'h1:
-          \$8  = 7'h01;
+          \$5  = 7'h01;
       3'h2:
-          \$8  = 7'h05;
+          \$5  = 7'h05;
       3'h3:
-          \$8  = 7'h07;
+          \$5  = 7'h07;
       3'h4:
-          \$8  = 7'h00;
+          \$5  = 7'h00;
       3'h5:
-          \$8  = 7'h02;
+          \$5  = 7'h02;
       3'h6:
-          \$8  = 7'h06;
+          \$5  = 7'h06;
       3'h7:
-          \$8  = 7'h08;
+          \$5  = 7'h08;
     endcase
   end
   always @* begin
@@ -18968,21 +19321,21 @@ module \biss_master_wb.ch0.core.decoder.field_ends (rst, error_bit, words, crc_w
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$12  = 2'h0;
+          \$7  = 7'h7f;
       3'h1:
-          \$12  = 2'h2;
+          \$7  = 7'h01;
       3'h2:
-          \$12  = 2'h0;
+          \$7  = 7'h05;
       3'h3:
-          \$12  = 2'h2;
+          \$7  = 7'h07;
       3'h4:
-          \$12  = 2'h1;
+          \$7  = 7'h00;
       3'h5:
-          \$12  = 2'h3;
+          \$7  = 7'h02;
       3'h6:
-          \$12  = 2'h1;
+          \$7  = 7'h06;
       3'h7:
-          \$12  = 2'h3;
+          \$7  = 7'h08;
     endcase
   end
   always @* begin
@@ -18990,174 +19343,196 @@ module \biss_master_wb.ch0.core.decoder.field_ends (rst, error_bit, words, crc_w
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$15  = 4'h0;
+          \$11  = 2'h0;
       3'h1:
-          \$15  = 4'h2;
+          \$11  = 2'h2;
       3'h2:
-          \$15  = 4'h6;
+          \$11  = 2'h0;
       3'h3:
-          \$15  = 4'h8;
+          \$11  = 2'h2;
       3'h4:
-          \$15  = 4'h1;
+          \$11  = 2'h1;
       3'h5:
-          \$15  = 4'h3;
+          \$11  = 2'h3;
       3'h6:
-          \$15  = 4'h7;
+          \$11  = 2'h1;
       3'h7:
-          \$15  = 4'h9;
+          \$11  = 2'h3;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$45 [7], \$40 [6] })
-      2'h0:
-          \$46  = 7'h7f;
-      2'h1:
-          \$46  = 7'h01;
-      2'h2:
-          \$46  = 7'h7f;
-      2'h3:
-          \$46  = 7'h01;
+    casez ({ error_bit, words[7:6] })
+      3'h0:
+          \$14  = 4'h0;
+      3'h1:
+          \$14  = 4'h2;
+      3'h2:
+          \$14  = 4'h6;
+      3'h3:
+          \$14  = 4'h8;
+      3'h4:
+          \$14  = 4'h1;
+      3'h5:
+          \$14  = 4'h3;
+      3'h6:
+          \$14  = 4'h7;
+      3'h7:
+          \$14  = 4'h9;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$62 [7], \$57 [6] })
+    casez ({ \$44 [7], \$39 [6] })
       2'h0:
-          \$63  = 7'h7f;
+          \$45  = 7'h7f;
       2'h1:
-          \$63  = 7'h01;
+          \$45  = 7'h01;
       2'h2:
-          \$63  = 7'h05;
+          \$45  = 7'h7f;
       2'h3:
-          \$63  = 7'h07;
+          \$45  = 7'h01;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$79 [7], \$74 [6] })
+    casez ({ \$61 [7], \$56 [6] })
       2'h0:
-          \$80  = 7'h7f;
+          \$62  = 7'h7f;
       2'h1:
-          \$80  = 7'h01;
+          \$62  = 7'h01;
       2'h2:
-          \$80  = 7'h05;
+          \$62  = 7'h05;
       2'h3:
-          \$80  = 7'h07;
+          \$62  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$108 [7], \$103 [6] })
+    casez ({ \$78 [7], \$73 [6] })
       2'h0:
-          \$109  = 2'h0;
+          \$79  = 7'h7f;
       2'h1:
-          \$109  = 2'h2;
+          \$79  = 7'h01;
       2'h2:
-          \$109  = 2'h0;
+          \$79  = 7'h05;
       2'h3:
-          \$109  = 2'h2;
+          \$79  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$126 [7], \$121 [6] })
+    casez ({ \$107 [7], \$102 [6] })
       2'h0:
-          \$127  = 4'h0;
+          \$108  = 2'h0;
       2'h1:
-          \$127  = 4'h2;
+          \$108  = 2'h2;
       2'h2:
-          \$127  = 4'h6;
+          \$108  = 2'h0;
       2'h3:
-          \$127  = 4'h8;
+          \$108  = 2'h2;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$157 [7], \$152 [6] })
+    casez ({ \$125 [7], \$120 [6] })
       2'h0:
-          \$158  = 7'h7f;
+          \$126  = 4'h0;
       2'h1:
-          \$158  = 7'h01;
+          \$126  = 4'h2;
       2'h2:
-          \$158  = 7'h7f;
+          \$126  = 4'h6;
       2'h3:
-          \$158  = 7'h01;
+          \$126  = 4'h8;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$174 [7], \$169 [6] })
+    casez ({ \$156 [7], \$151 [6] })
       2'h0:
-          \$175  = 7'h7f;
+          \$157  = 7'h7f;
       2'h1:
-          \$175  = 7'h01;
+          \$157  = 7'h01;
       2'h2:
-          \$175  = 7'h05;
+          \$157  = 7'h7f;
       2'h3:
-          \$175  = 7'h07;
+          \$157  = 7'h01;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$191 [7], \$186 [6] })
+    casez ({ \$173 [7], \$168 [6] })
       2'h0:
-          \$192  = 7'h7f;
+          \$174  = 7'h7f;
       2'h1:
-          \$192  = 7'h01;
+          \$174  = 7'h01;
       2'h2:
-          \$192  = 7'h05;
+          \$174  = 7'h05;
       2'h3:
-          \$192  = 7'h07;
+          \$174  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$220 [7], \$215 [6] })
+    casez ({ \$190 [7], \$185 [6] })
       2'h0:
-          \$221  = 2'h0;
+          \$191  = 7'h7f;
       2'h1:
-          \$221  = 2'h2;
+          \$191  = 7'h01;
       2'h2:
-          \$221  = 2'h0;
+          \$191  = 7'h05;
       2'h3:
-          \$221  = 2'h2;
+          \$191  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$238 [7], \$233 [6] })
+    casez ({ \$219 [7], \$214 [6] })
       2'h0:
-          \$239  = 4'h0;
+          \$220  = 2'h0;
       2'h1:
-          \$239  = 4'h2;
+          \$220  = 2'h2;
       2'h2:
-          \$239  = 4'h6;
+          \$220  = 2'h0;
       2'h3:
-          \$239  = 4'h8;
+          \$220  = 2'h2;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$237 [7], \$232 [6] })
+      2'h0:
+          \$238  = 4'h0;
+      2'h1:
+          \$238  = 4'h2;
+      2'h2:
+          \$238  = 4'h6;
+      2'h3:
+          \$238  = 4'h8;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$243  = current;
     if (\begin ) begin
-      \$243 [6:0] = \$2 ;
-      \$243 [13:7] = \$3 [6:0];
-      \$243 [20:14] = \$5 [6:0];
-      \$243 [27:21] = \$7 [6:0];
-      \$243 [34:28] = \$10 [6:0];
-      \$243 [35] = \$11 ;
-      \$243 [36] = \$18 ;
+      \$243 [6:0] = \$1 ;
+      \$243 [13:7] = \$2 [6:0];
+      \$243 [20:14] = \$4 [6:0];
+      \$243 [27:21] = \$6 [6:0];
+      \$243 [34:28] = \$9 [6:0];
+      \$243 [35] = \$10 ;
+      \$243 [36] = \$17 ;
     end else if (advance) begin
       \$243  = following;
     end
@@ -19166,21 +19541,36 @@ module \biss_master_wb.ch0.core.decoder.field_ends (rst, error_bit, words, crc_w
     if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$244  = following;
     if (\begin ) begin
-      \$244 [6:0] = \$24 ;
-      \$244 [13:7] = \$30 [6:0];
-      \$244 [20:14] = \$47 [6:0];
-      \$244 [27:21] = \$64 [6:0];
-      \$244 [34:28] = \$87 [6:0];
-      \$244 [35] = \$93 ;
-      \$244 [36] = \$130 ;
+      \$244 [6:0] = \$23 ;
+      \$244 [13:7] = \$29 [6:0];
+      \$244 [20:14] = \$46 [6:0];
+      \$244 [27:21] = \$63 [6:0];
+      \$244 [34:28] = \$86 [6:0];
+      \$244 [35] = \$92 ;
+      \$244 [36] = \$129 ;
     end else if (advance) begin
-      \$244 [6:0] = \$136 ;
-      \$244 [13:7] = \$142 [6:0];
-      \$244 [20:14] = \$159 [6:0];
-      \$244 [27:21] = \$176 [6:0];
-      \$244 [34:28] = \$199 [6:0];
-      \$244 [35] = \$205 ;
-      \$244 [36] = \$242 ;
+      \$244 [6:0] = \$135 ;
+      \$244 [13:7] = \$141 [6:0];
+      \$244 [20:14] = \$158 [6:0];
+      \$244 [27:21] = \$175 [6:0];
+      \$244 [34:28] = \$198 [6:0];
+      \$244 [35] = \$204 ;
+      \$244 [36] = \$241 ;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    \$245  = following_word;
+    if (\begin ) begin
+      \$245  = 2'h2;
+    end else if (advance) begin
+      \$245  = \$242 [1:0];
+    end
+    if (receiver_clear) begin
+      \$245  = 2'h1;
+    end
+    if (rst) begin
+      \$245  = 2'h1;
     end
   end
   assign current_ends = current;
@@ -19229,44 +19619,6 @@ module \biss_master_wb.ch0.core.decoder.field_ends (rst, error_bit, words, crc_w
   assign \words[1].signed  = words[23];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign \$21  = following_word;
-  assign \$27  = following_word;
-  assign \$33  = following_word;
-  assign \$38  = following_word;
-  assign \$43  = following_word;
-  assign \$50  = following_word;
-  assign \$55  = following_word;
-  assign \$60  = following_word;
-  assign \$67  = following_word;
-  assign \$72  = following_word;
-  assign \$77  = following_word;
-  assign \$83  = following_word;
-  assign \$90  = following_word;
-  assign \$96  = following_word;
-  assign \$101  = following_word;
-  assign \$106  = following_word;
-  assign \$114  = following_word;
-  assign \$119  = following_word;
-  assign \$124  = following_word;
-  assign \$133  = following_word;
-  assign \$139  = following_word;
-  assign \$145  = following_word;
-  assign \$150  = following_word;
-  assign \$155  = following_word;
-  assign \$162  = following_word;
-  assign \$167  = following_word;
-  assign \$172  = following_word;
-  assign \$179  = following_word;
-  assign \$184  = following_word;
-  assign \$189  = following_word;
-  assign \$195  = following_word;
-  assign \$202  = following_word;
-  assign \$208  = following_word;
-  assign \$213  = following_word;
-  assign \$218  = following_word;
-  assign \$226  = following_word;
-  assign \$231  = following_word;
-  assign \$236  = following_word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -20122,7 +20474,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$12998$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch0.core.ma_stop (rst, \port$13153$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20211,8 +20563,8 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$12998$199 , ssi, ssi_
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$12998$199 ;
-  wire \port$12998$199 ;
+  input \port$13153$199 ;
+  wire \port$13153$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20332,7 +20684,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$12998$199 , ssi, ssi_
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$12998$199  : 1'h0;
+  assign \$13  = \$12  ? \port$13153$199  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -20500,7 +20852,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$12998$199 , ssi, ssi_
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$12998$199 , 1'h1 };
+  assign enables = { \port$13153$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22640,7 +22992,7 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$12998$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13153$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -23223,8 +23575,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$12998$259 ;
-  wire [12:0] \port$12998$259 ;
+  input [12:0] \port$13153$259 ;
+  wire [12:0] \port$13153$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -23247,7 +23599,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$12998$259 [12:1] + 1'h1;
+  assign \$460  = \port$13153$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -23823,7 +24175,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$12998$259 [0]),
+    .clear_high(\port$13153$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -23966,7 +24318,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$12998$259 [0]) begin
+            if (\port$13153$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -24051,7 +24403,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$12998$259 [0]) begin
+            if (\port$13153$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -24090,7 +24442,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$12998$259 [12:1] };
+            \$534  = { 1'h0, \port$13153$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -24475,11 +24827,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$12998$259 [12:1] };
-  assign fixed = \port$12998$259 [0];
+  assign fixed_delay = { 1'h0, \port$13153$259 [12:1] };
+  assign fixed = \port$13153$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$12998$259 [0];
+  assign clear_high = \port$13153$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -24740,7 +25092,7 @@ module \biss_master_wb.ch0.core.sampler.sync (clk, rst, receiver_clear, stage1, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
+module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, period, hold, abort, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -24838,13 +25190,31 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
   wire \$1082 ;
   wire \$1083 ;
   wire \$1084 ;
-  reg \$1085 ;
-  reg [24:0] \$1086 ;
-  reg \$1087 ;
-  reg \$1088 ;
+  wire \$1085 ;
+  wire \$1086 ;
+  wire \$1087 ;
+  wire \$1088 ;
+  wire \$1089 ;
   wire \$109 ;
+  wire \$1090 ;
+  wire \$1091 ;
+  wire \$1092 ;
+  wire \$1093 ;
+  wire \$1094 ;
+  wire \$1095 ;
+  wire \$1096 ;
+  wire \$1097 ;
+  wire \$1098 ;
+  wire \$1099 ;
   wire \$11 ;
   wire \$110 ;
+  wire \$1100 ;
+  wire \$1101 ;
+  reg \$1102 ;
+  reg [24:0] \$1103 ;
+  reg \$1104 ;
+  reg \$1105 ;
+  reg \$1106 ;
   wire \$111 ;
   wire \$112 ;
   wire \$113 ;
@@ -25835,6 +26205,9 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
   input clk;
   wire clk;
   reg [24:0] count_p2 = 25'h0000002;
+  reg deferred = 1'h0;
+  input hold;
+  wire hold;
   input idle;
   wire idle;
   output overrun;
@@ -26922,85 +27295,116 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
   assign \$1066  = ~ \$1065 ;
   assign \$1067  = count_p2 + 1'h1;
   assign \$1068  = count_p2 >= period;
-  assign \$1069  = start | trigger;
-  assign \$1070  = periodic & period_zero;
-  assign \$1071  = ~ \$1070 ;
-  assign \$1072  = periodic & \$1071 ;
-  assign \$1073  = \$1072  & period_start;
-  assign \$1074  = \$1069  | \$1073 ;
+  assign \$1069  = ~ hold;
+  assign \$1070  = idle & \$1069 ;
+  assign \$1071  = abort | \$1070 ;
+  assign \$1072  = ~ abort;
+  assign \$1073  = idle & \$1072 ;
+  assign \$1074  = start | trigger;
   assign \$1075  = periodic & period_zero;
-  assign request = \$1074  | \$1075 ;
-  assign \$1076  = start | trigger;
-  assign \$1077  = periodic & period_zero;
-  assign \$1078  = ~ \$1077 ;
-  assign \$1079  = periodic & \$1078 ;
-  assign \$1080  = \$1079  & period_start;
-  assign \$1081  = \$1076  | \$1080 ;
-  assign \$1082  = ~ abort;
-  assign \$1083  = idle & \$1082 ;
-  assign \$1084  = ~ \$1083 ;
-  assign overrun = \$1081  & \$1084 ;
+  assign \$1076  = ~ \$1075 ;
+  assign \$1077  = periodic & \$1076 ;
+  assign \$1078  = \$1077  & period_start;
+  assign \$1079  = \$1074  | \$1078 ;
+  assign \$1080  = \$1073  & \$1079 ;
+  assign \$1081  = start | trigger;
+  assign \$1082  = periodic & period_zero;
+  assign \$1083  = ~ \$1082 ;
+  assign \$1084  = periodic & \$1083 ;
+  assign \$1085  = \$1084  & period_start;
+  assign \$1086  = \$1081  | \$1085 ;
+  assign \$1087  = periodic & period_zero;
+  assign \$1088  = \$1086  | \$1087 ;
+  assign \$1089  = \$1088  | deferred;
+  assign \$1090  = ~ hold;
+  assign request = \$1089  & \$1090 ;
+  assign \$1091  = start | trigger;
+  assign \$1092  = periodic & period_zero;
+  assign \$1093  = ~ \$1092 ;
+  assign \$1094  = periodic & \$1093 ;
+  assign \$1095  = \$1094  & period_start;
+  assign \$1096  = \$1091  | \$1095 ;
+  assign \$1097  = ~ abort;
+  assign \$1098  = idle & \$1097 ;
+  assign \$1099  = ~ \$1098 ;
+  assign \$1100  = \$1096  & \$1099 ;
+  assign \$1101  = deferred & abort;
+  assign overrun = \$1100  | \$1101 ;
   always @(posedge clk)
-    period_zero <= \$1085 ;
+    period_zero <= \$1102 ;
   always @(posedge clk)
-    count_p2 <= \$1086 ;
+    count_p2 <= \$1103 ;
   always @(posedge clk)
-    period_start <= \$1087 ;
+    period_start <= \$1104 ;
   always @(posedge clk)
-    wrap <= \$1088 ;
+    wrap <= \$1105 ;
+  always @(posedge clk)
+    deferred <= \$1106 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    \$1085  = \$1 ;
+    \$1102  = \$1 ;
     if (rst) begin
-      \$1085  = 1'h0;
+      \$1102  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1086  = 25'h0000002;
+      \$1103  = 25'h0000002;
     end else if (\$7 ) begin
-      \$1086  = 25'h0000003;
+      \$1103  = 25'h0000003;
     end else begin
-      \$1086  = \$1067 [24:0];
+      \$1103  = \$1067 [24:0];
     end
     if (rst) begin
-      \$1086  = 25'h0000002;
+      \$1103  = 25'h0000002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1087  = 1'h1;
+      \$1104  = 1'h1;
     end else if (\$7 ) begin
-      \$1087  = 1'h0;
+      \$1104  = 1'h0;
     end else begin
-      \$1087  = 1'h0;
+      \$1104  = 1'h0;
     end
     if (rst) begin
-      \$1087  = 1'h1;
+      \$1104  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1088  = \$536 ;
+      \$1105  = \$536 ;
     end else if (\$7 ) begin
-      \$1088  = \$1066 ;
+      \$1105  = \$1066 ;
     end else begin
-      \$1088  = \$1068 ;
+      \$1105  = \$1068 ;
     end
     if (rst) begin
-      \$1088  = 1'h0;
+      \$1105  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    \$1106  = deferred;
+    if (\$1071 ) begin
+      \$1106  = 1'h0;
+    end else if (\$1080 ) begin
+      \$1106  = 1'h1;
+    end
+    if (rst) begin
+      \$1106  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$12986$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13167$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -27042,8 +27446,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$12986$0 ;
-  wire \port$12986$0 ;
+  input \port$13167$0 ;
+  wire \port$13167$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -27057,9 +27461,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$12986$0  };
-  assign \$2  = { lc[4:0], \port$12986$0  } == last;
-  assign \$3  = { lc[4:0], \port$12986$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13167$0  };
+  assign \$2  = { lc[4:0], \port$13167$0  } == last;
+  assign \$3  = { lc[4:0], \port$13167$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -27169,7 +27573,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$12986$0  };
+  assign lc_next = { lc[4:0], \port$13167$0  };
   assign zero = is_zero;
 endmodule
 
@@ -29966,7 +30370,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$5908$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6057$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -30144,8 +30548,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$5908$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$5908$0 ;
-  wire \port$5908$0 ;
+  output \port$6057$0 ;
+  wire \port$6057$0 ;
   output report;
   wire report;
   input report_frame;
@@ -30263,7 +30667,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$5908$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5908$0  = \$2 ;
+  assign \port$6057$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -30317,10 +30721,10 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$5908$0 , lc_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
-, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
-, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13903$0 , \port$13914$0 , regs__ca_done, \port$13991$0 , ca_rbuf_addr);
+module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic
+, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check
+, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address
+, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14092$0 , \port$14103$0 , regs__ca_done, \port$14180$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -30399,6 +30803,11 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [3:0] cfg_delay_tolerance;
   input cfg_end_check;
   wire cfg_end_check;
+  output cfg_free;
+  wire cfg_free;
+  input cfg_hold;
+  wire cfg_hold;
+  wire \cfg_hold$211 ;
   input [15:0] cfg_ma_half_period;
   wire [15:0] cfg_ma_half_period;
   input [3:0] cfg_noise_limit;
@@ -30506,12 +30915,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$13903$0 ;
-  wire [186:0] \port$13903$0 ;
-  output [79:0] \port$13914$0 ;
-  wire [79:0] \port$13914$0 ;
-  output [9:0] \port$13991$0 ;
-  wire [9:0] \port$13991$0 ;
+  output [186:0] \port$14092$0 ;
+  wire [186:0] \port$14092$0 ;
+  output [79:0] \port$14103$0 ;
+  wire [79:0] \port$14103$0 ;
+  output [9:0] \port$14180$0 ;
+  wire [9:0] \port$14180$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -30700,6 +31109,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \$7  = \$6  ? 7'h00 : regs__cfg_w0_data_bits;
   assign \$9  = \$8  ? 7'h00 : regs__cfg_w1_data_bits;
   assign trigger = \trigger$204  & regs__trigger_enable;
+  assign cfg_free = ~ regs__busy;
   assign \$10  = ~ report;
   assign \$11  = \$signal  & \$10 ;
   assign \$12  = waited + 1'h1;
@@ -30724,8 +31134,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     regs__result_updates <= \$23 ;
   \biss_master_wb.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$267 (ca_abort),
-    .\busy$316 (regs__busy),
+    .\abort$269 (ca_abort),
+    .\busy$318 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -30774,14 +31184,15 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$292 (clear_counters),
+    .\clear$294 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$25 ),
-    .\done$319 (done),
+    .\done$321 (done),
     .frames(regs__ca_busy),
+    .hold(cfg_hold),
     .ma(ma),
     .now(time_now),
     .\periodic$45 (periodic),
@@ -30789,13 +31200,13 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$26 ),
-    .\result$324 (\$24 ),
+    .\result$326 (\$24 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$265 (ca_start),
+    .\start$267 (ca_start),
     .trigger(trigger),
-    .\valid$321 (valid)
+    .\valid$323 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
@@ -31004,18 +31415,19 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$13903$0  = \$24 ;
-  assign \port$13914$0  = \$25 ;
-  assign \port$13991$0  = \$26 ;
+  assign \cfg_hold$211  = cfg_hold;
+  assign \port$14092$0  = \$24 ;
+  assign \port$14103$0  = \$25 ;
+  assign \port$14180$0  = \$26 ;
   assign \$6  = regs__cfg_w0_data_bits[6];
   assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$316 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$292 , \periodic$45 
+module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$318 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$294 , \periodic$45 
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
-, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$265 
-, \abort$267 , abort, ma, \done$319 , \valid$321 , \result$324 , counts, ca_done, result, rbuf_addr);
+, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$267 
+, \abort$269 , hold, abort, ma, \done$321 , \valid$323 , \result$326 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -31049,26 +31461,26 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$267 ;
-  wire \abort$267 ;
-  wire \abort$57 ;
+  input \abort$269 ;
+  wire \abort$269 ;
+  wire \abort$59 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$92 ;
+  wire \ack_expired$94 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$113 ;
+  wire [23:0] \ack_limit$115 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$348 ;
+  wire \bit$350 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$90 ;
+  wire \break_over$92 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$276 ;
-  wire \busy$313 ;
-  output \busy$316 ;
-  wire \busy$316 ;
+  wire \busy$278 ;
+  wire \busy$315 ;
+  output \busy$318 ;
+  wire \busy$318 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -31103,10 +31515,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$280 ;
+  wire \cdm$282 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$327 ;
+  wire \cds$329 ;
   wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -31173,6 +31585,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire [3:0] cfg_delay_tolerance;
   input cfg_end_check;
   wire cfg_end_check;
+  wire cfg_hold;
   input [15:0] cfg_ma_half_period;
   wire [15:0] cfg_ma_half_period;
   input [3:0] cfg_noise_limit;
@@ -31250,16 +31663,16 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$172 ;
+  wire \check$174 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$177 ;
-  wire \clean$349 ;
+  wire \clean$179 ;
+  wire \clean$351 ;
   wire clear;
-  wire \clear$137 ;
-  input \clear$292 ;
-  wire \clear$292 ;
-  wire \clear$305 ;
+  wire \clear$139 ;
+  input \clear$294 ;
+  wire \clear$294 ;
+  wire \clear$307 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -31288,17 +31701,17 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$190 ;
+  wire [39:0] \cpw_top$192 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$215 ;
+  wire [1:0] \crc_ok$217 ;
   wire [9:0] crc_widths;
-  wire [9:0] \crc_widths$185 ;
-  wire [4:0] \crc_widths$185[0] ;
-  wire [4:0] \crc_widths$185[1] ;
-  wire [9:0] \crc_widths$186 ;
-  wire [4:0] \crc_widths$186[0] ;
-  wire [4:0] \crc_widths$186[1] ;
+  wire [9:0] \crc_widths$187 ;
+  wire [4:0] \crc_widths$187[0] ;
+  wire [4:0] \crc_widths$187[1] ;
+  wire [9:0] \crc_widths$188 ;
+  wire [4:0] \crc_widths$188[0] ;
+  wire [4:0] \crc_widths$188[1] ;
   wire [4:0] \crc_widths[0] ;
   wire [4:0] \crc_widths[1] ;
   wire [75:0] customs;
@@ -31373,54 +31786,54 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$119 ;
-  wire [12:0] \delay$171 ;
+  wire [12:0] \delay$121 ;
+  wire [12:0] \delay$173 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$121 ;
+  wire [11:0] \delay_limit$123 ;
   wire delay_over;
-  wire \delay_over$100 ;
+  wire \delay_over$102 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  output \done$319 ;
-  wire \done$319 ;
-  wire \done$320 ;
+  output \done$321 ;
+  wire \done$321 ;
+  wire \done$322 ;
   wire doubtful;
   wire early;
-  wire \early$73 ;
+  wire \early$75 ;
   wire enable;
   wire [1:0] enables;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$291 ;
-  wire \events$291.ca_aborted ;
-  wire \events$291.ca_crc4_error ;
-  wire \events$291.ca_data_fault ;
-  wire \events$291.ca_no_answer ;
-  wire \events$291.ca_refused ;
-  wire [15:0] \events$300 ;
-  wire \events$300.aborted ;
-  wire \events$300.crc_word0 ;
-  wire \events$300.crc_word1 ;
-  wire \events$300.delay_jump ;
-  wire \events$300.delay_range ;
-  wire \events$300.lc_repeat ;
-  wire \events$300.lc_skip ;
-  wire \events$300.lc_zero ;
-  wire \events$300.no_ack ;
-  wire \events$300.no_start ;
-  wire \events$300.no_stop ;
-  wire \events$300.noise_event ;
-  wire \events$300.noisy_line ;
-  wire \events$300.overrun ;
-  wire \events$300.slo_stuck_low ;
-  wire \events$300.spw_mismatch ;
+  wire [4:0] \events$293 ;
+  wire \events$293.ca_aborted ;
+  wire \events$293.ca_crc4_error ;
+  wire \events$293.ca_data_fault ;
+  wire \events$293.ca_no_answer ;
+  wire \events$293.ca_refused ;
+  wire [15:0] \events$302 ;
+  wire \events$302.aborted ;
+  wire \events$302.crc_word0 ;
+  wire \events$302.crc_word1 ;
+  wire \events$302.delay_jump ;
+  wire \events$302.delay_range ;
+  wire \events$302.lc_repeat ;
+  wire \events$302.lc_skip ;
+  wire \events$302.lc_zero ;
+  wire \events$302.no_ack ;
+  wire \events$302.no_start ;
+  wire \events$302.no_stop ;
+  wire \events$302.noise_event ;
+  wire \events$302.noisy_line ;
+  wire \events$302.overrun ;
+  wire \events$302.slo_stuck_low ;
+  wire \events$302.spw_mismatch ;
   wire fault;
-  wire \fault$211 ;
+  wire \fault$213 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -31456,7 +31869,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$213 ;
+  wire [3:0] \fault_status$215 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -31466,7 +31879,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$249 ;
+  wire \first_rise$251 ;
   wire [31:0] first_rise_time;
   wire fixed;
   wire [12:0] fixed_delay;
@@ -31516,39 +31929,41 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
-  wire \frame_end$285 ;
+  wire \frame_end$287 ;
   wire frame_ok;
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$143 ;
+  wire [15:0] \half_period$145 ;
   wire held;
+  input hold;
   wire hold;
+  wire \hold$285 ;
   wire idle;
   wire \idle$41 ;
   wire \idle$50 ;
   wire in_clock;
-  wire \in_clock$107 ;
+  wire \in_clock$109 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$149 ;
-  wire [5:0] \lc$340 ;
+  wire [5:0] \lc$151 ;
+  wire [5:0] \lc$342 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$151 ;
+  wire [5:0] \lc_next$153 ;
   wire lc_repeat;
-  wire \lc_repeat$341 ;
+  wire \lc_repeat$343 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$342 ;
+  wire \lc_skip$344 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$343 ;
+  wire \lc_zero$345 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$160 ;
+  wire \level$162 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
   wire [274:0] live;
@@ -31607,13 +32022,13 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$71 ;
+  wire \locked$73 ;
   output ma;
   wire ma;
-  wire \ma$315 ;
+  wire \ma$317 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$102 ;
+  wire \ma_busy$104 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -31622,19 +32037,19 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire mismatch;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$94 ;
+  wire \no_start_expired$96 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$117 ;
+  wire [24:0] \no_start_limit$119 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$179 ;
+  wire \noisy$181 ;
   input [31:0] now;
   wire [31:0] now;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$318 ;
+  wire \overrun$320 ;
   wire passed;
   wire pending;
   wire [23:0] period;
@@ -31642,10 +32057,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   input \periodic$45 ;
   wire \periodic$45 ;
   wire quiet;
-  wire \quiet$126 ;
+  wire \quiet$128 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$128 ;
+  wire \quiet_live$130 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -31661,38 +32076,38 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$225 ;
-  wire \report$229 ;
+  wire \report$227 ;
+  wire \report$231 ;
   wire report_delay;
-  wire \report_delay$232 ;
+  wire \report_delay$234 ;
   wire report_frame;
-  wire \report_frame$210 ;
-  wire \report_frame$230 ;
+  wire \report_frame$212 ;
+  wire \report_frame$232 ;
   wire request;
-  wire [17:0] \request$253 ;
-  wire [6:0] \request$253.address ;
-  wire [6:0] \request$253.count ;
-  wire [2:0] \request$253.slave_id ;
-  wire \request$253.write ;
-  wire \request$56 ;
+  wire [17:0] \request$255 ;
+  wire [6:0] \request$255.address ;
+  wire [6:0] \request$255.count ;
+  wire [2:0] \request$255.slave_id ;
+  wire \request$255.write ;
+  wire \request$58 ;
   wire restart;
-  wire \restart$164 ;
+  wire \restart$166 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$324 ;
-  wire [186:0] \result$324 ;
-  wire \result$324.cds ;
-  wire \result$324.delay_settled ;
-  wire [7:0] \result$324.delay_spread ;
-  wire [5:0] \result$324.lc ;
-  wire \result$324.lc_repeat ;
-  wire \result$324.lc_skip ;
-  wire \result$324.lc_zero ;
-  wire [12:0] \result$324.line_delay ;
-  wire [3:0] \result$324.noise_events ;
-  wire [12:0] \result$324.settled_delay ;
-  wire \result$324.spw_mismatch ;
+  output [186:0] \result$326 ;
+  wire [186:0] \result$326 ;
+  wire \result$326.cds ;
+  wire \result$326.delay_settled ;
+  wire [7:0] \result$326.delay_spread ;
+  wire [5:0] \result$326.lc ;
+  wire \result$326.lc_repeat ;
+  wire \result$326.lc_skip ;
+  wire \result$326.lc_zero ;
+  wire [12:0] \result$326.line_delay ;
+  wire [3:0] \result$326.noise_events ;
+  wire [12:0] \result$326.settled_delay ;
+  wire \result$326.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -31710,18 +32125,18 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$324.status ;
-  wire [31:0] \result$324.timestamp ;
-  wire [57:0] \result$324.word0 ;
-  wire \result$324.word0.crc_ok ;
-  wire \result$324.word0.ne ;
-  wire \result$324.word0.nw ;
-  wire [54:0] \result$324.word0.position ;
-  wire [42:0] \result$324.word1 ;
-  wire \result$324.word1.crc_ok ;
-  wire \result$324.word1.ne ;
-  wire \result$324.word1.nw ;
-  wire [39:0] \result$324.word1.position ;
+  wire [3:0] \result$326.status ;
+  wire [31:0] \result$326.timestamp ;
+  wire [57:0] \result$326.word0 ;
+  wire \result$326.word0.crc_ok ;
+  wire \result$326.word0.ne ;
+  wire \result$326.word0.nw ;
+  wire [54:0] \result$326.word0.position ;
+  wire [42:0] \result$326.word1 ;
+  wire \result$326.word1.crc_ok ;
+  wire \result$326.word1.ne ;
+  wire \result$326.word1.nw ;
+  wire [39:0] \result$326.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -31733,55 +32148,55 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$157 ;
+  wire \resync$159 ;
   wire [15:0] rises;
-  wire [15:0] \rises$136 ;
+  wire [15:0] \rises$138 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$347 ;
+  wire \sample$349 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$330 ;
+  wire [12:0] \settled_delay$332 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$101 ;
+  wire \slo$103 ;
   wire \slo$52 ;
-  wire \slo$62 ;
+  wire \slo$64 ;
   wire slo_stuck;
-  wire \slo_stuck$96 ;
+  wire \slo_stuck$98 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$98 ;
+  wire \slo_stuck_live$100 ;
   wire slots_full;
-  wire \slots_full$82 ;
+  wire \slots_full$84 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$344 ;
+  wire \spw_mismatch$346 ;
   wire ssi;
-  wire \ssi$199 ;
-  wire \ssi$203 ;
+  wire \ssi$201 ;
+  wire \ssi$205 ;
   wire ssi_double;
-  wire \ssi_double$204 ;
+  wire \ssi_double$206 ;
   wire ssi_error;
-  wire \ssi_error$205 ;
+  wire \ssi_error$207 ;
   wire ssi_error_low;
   input start;
   wire start;
-  input \start$265 ;
-  wire \start$265 ;
+  input \start$267 ;
+  wire \start$267 ;
   wire \start$43 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$134 ;
+  wire [15:0] \start_slot$136 ;
   wire started;
-  wire \started$132 ;
-  wire \started$80 ;
+  wire \started$134 ;
+  wire \started$82 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -31818,7 +32233,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$227 ;
+  wire [3:0] \status$229 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -31836,29 +32251,29 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$323 ;
+  wire [3:0] \status$325 ;
   wire stop_bit;
-  wire \stop_bit$86 ;
+  wire \stop_bit$88 ;
   wire stopped;
-  wire \stopped$84 ;
+  wire \stopped$86 ;
   wire [31:0] time_now;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$115 ;
+  wire [23:0] \timeout_limit$117 ;
   wire [23:0] timeout_live;
   wire timeout_over;
-  wire \timeout_over$78 ;
+  wire \timeout_over$80 ;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$194 ;
+  wire [7:0] \tolerance$196 ;
   input trigger;
   wire trigger;
   wire \trigger$54 ;
   wire unconfirmed;
   wire valid;
-  wire \valid$234 ;
-  output \valid$321 ;
-  wire \valid$321 ;
+  wire \valid$236 ;
+  output \valid$323 ;
+  wire \valid$323 ;
   wire valid_out;
   wire waiting;
   wire watch;
@@ -31875,34 +32290,34 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$147 ;
+  wire [1:0] \word_count$149 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$183 ;
-  wire [11:0] \words$183[0] ;
+  wire [23:0] \words$185 ;
+  wire [11:0] \words$185[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$183[0].crc ;
-  wire [5:0] \words$183[0].data_bits ;
-  wire \words$183[0].gray ;
-  wire \words$183[0].lc ;
-  wire \words$183[0].nenw ;
-  wire \words$183[0].signed ;
-  wire [11:0] \words$183[1] ;
+  wire [1:0] \words$185[0].crc ;
+  wire [5:0] \words$185[0].data_bits ;
+  wire \words$185[0].gray ;
+  wire \words$185[0].lc ;
+  wire \words$185[0].nenw ;
+  wire \words$185[0].signed ;
+  wire [11:0] \words$185[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$183[1].crc ;
-  wire [5:0] \words$183[1].data_bits ;
-  wire \words$183[1].gray ;
-  wire \words$183[1].lc ;
-  wire \words$183[1].nenw ;
-  wire \words$183[1].signed ;
+  wire [1:0] \words$185[1].crc ;
+  wire [5:0] \words$185[1].data_bits ;
+  wire \words$185[1].gray ;
+  wire \words$185[1].lc ;
+  wire \words$185[1].nenw ;
+  wire \words$185[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -31929,16 +32344,16 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \words[1].signed ;
   wire zero;
   assign periodic = \periodic$45  | frames;
-  assign arm = cycle[259] ? first_rise : ma_arm;
-  assign \$1  = cycle[144:141] != 4'hf;
-  assign \$2  = ~ cycle[259];
+  assign arm = live[259] ? first_rise : ma_arm;
+  assign \$1  = live[144:141] != 4'hf;
+  assign \$2  = ~ live[259];
   assign enable = \$1  & \$2 ;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$3  = ~ started_before;
-  assign \check$172  = started & \$3 ;
-  assign \$4  = ~ cycle[259];
-  assign cdm = \cdm$280  & \$4 ;
-  assign \$5  = ~ cycle[259];
+  assign \check$174  = started & \$3 ;
+  assign \$4  = ~ live[259];
+  assign cdm = \cdm$282  & \$4 ;
+  assign \$5  = ~ live[259];
   assign frame_ok = passed & \$5 ;
   assign \$6  = result[2:0] == 1'h1;
   assign \$7  = ca_done & \$6 ;
@@ -31955,10 +32370,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \$18  = report_frame & \$17 ;
   assign \$19  = status == 4'he;
   assign \$20  = report_frame & \$19 ;
-  assign \busy$316  = ~ idle;
+  assign \busy$318  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$21  = ~ \clear$137 ;
-  assign \$22  = \sample$347  & \$21 ;
+  assign \$21  = ~ \clear$139 ;
+  assign \$22  = \sample$349  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -31973,7 +32388,6 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .ack_limit(ack_limit),
     .clk(clk),
     .crc_widths(crc_widths),
-    .cycle(cycle),
     .delay_limit(delay_limit),
     .delay_tolerance(tolerance),
     .idle(idle),
@@ -31990,7 +32404,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .pending(unconfirmed),
     .report(report),
     .rst(rst),
-    .setting(cycle[148:145]),
+    .setting(live[148:145]),
     .status(status)
   );
   \biss_master_wb.ch1.core.controller  controller (
@@ -32003,8 +32417,8 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .config_ok(config_ok),
     .delay_over(delay_over),
     .early(early),
-    .end_check(cycle[124]),
-    .fault(\restart$164 ),
+    .end_check(live[124]),
+    .fault(\restart$166 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -32016,23 +32430,23 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .ma_busy(ma_busy),
     .ma_enough(ma_enough),
     .ma_held(ma_held),
-    .ma_hold(hold),
+    .ma_hold(\hold$285 ),
     .ma_run(run),
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$137 ),
+    .receiver_clear(\clear$139 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$62 ),
+    .slo(\slo$64 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
-    .ssi(cycle[259]),
+    .ssi(live[259]),
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
@@ -32042,19 +32456,19 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   );
   \biss_master_wb.ch1.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$292 ),
+    .clear(\clear$294 ),
     .clk(clk),
-    .events(\events$300 ),
+    .events(\events$302 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_wb.ch1.core.counters  counters (
-    .clear(\clear$292 ),
+    .clear(\clear$294 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$291 ),
+    .events(\events$293 ),
     .rst(rst)
   );
   \biss_master_wb.ch1.core.decoder  decoder (
@@ -32073,12 +32487,12 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13545$272 (cycle[274:272]),
-    .receiver_clear(\clear$137 ),
+    .\port$13704$272 (live[274:272]),
+    .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
-    .ssi(cycle[259]),
+    .ssi(live[259]),
     .start_slot(start_slot),
     .started(started),
     .stop_bit(stop_bit),
@@ -32087,7 +32501,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .words(words)
   );
   \biss_master_wb.ch1.core.delay_check  delay_check (
-    .check(\check$172 ),
+    .check(\check$174 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -32106,10 +32520,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$62 ),
-    .limit(cycle[140:137]),
+    .level(\slo$64 ),
+    .limit(live[140:137]),
     .noisy(noisy),
-    .restart(\restart$164 ),
+    .restart(\restart$166 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -32117,11 +32531,11 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   \biss_master_wb.ch1.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$102 ),
+    .\clocking (\ma_busy$104 ),
     .first_rise(first_rise),
-    .half_period(cycle[15:0]),
+    .half_period(live[15:0]),
     .held(ma_held),
-    .hold(hold),
+    .hold(\hold$285 ),
     .ma(ma),
     .rises(rises),
     .rst(rst),
@@ -32129,24 +32543,24 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .second_rise(ma_arm)
   );
   \biss_master_wb.ch1.core.ma_stop  ma_stop (
-    .clear(\clear$137 ),
+    .clear(\clear$139 ),
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13545$199 (cycle[199]),
+    .\port$13704$199 (live[199]),
     .rises(rises),
     .rst(rst),
-    .ssi(cycle[259]),
-    .ssi_double(cycle[274]),
-    .ssi_error(cycle[272]),
+    .ssi(live[259]),
+    .ssi_double(live[274]),
+    .ssi_error(live[272]),
     .start_slot(start_slot),
     .\started$23 (started),
-    .words(\words$183 )
+    .words(\words$185 )
   );
   \biss_master_wb.ch1.core.register_access  register_access (
-    .abort(\abort$267 ),
+    .abort(\abort$269 ),
     .busy(frames),
-    .cdm(\cdm$280 ),
+    .cdm(\cdm$282 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -32156,43 +32570,44 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$253 ),
+    .request(\request$255 ),
     .result(result),
     .rst(rst),
-    .start(\start$265 ),
+    .start(\start$267 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch1.core.results  results (
     .clk(clk),
-    .done(\done$319 ),
+    .done(\done$321 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$324 ),
+    .result(\result$326 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$321 )
+    .valid_out(\valid$323 )
   );
   \biss_master_wb.ch1.core.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$348 ),
+    .\bit (\bit$350 ),
     .clk(clk),
     .delay(delay),
     .early(early),
-    .half_period(cycle[15:0]),
-    .level(\slo$62 ),
+    .half_period(live[15:0]),
+    .level(\slo$64 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13545$259 (cycle[271:259]),
-    .receiver_clear(\clear$137 ),
+    .\port$13704$259 (live[271:259]),
+    .receiver_clear(\clear$139 ),
     .rst(rst),
-    .sample(\sample$347 ),
+    .sample(\sample$349 ),
     .slo(slo)
   );
   \biss_master_wb.ch1.core.scheduler  scheduler (
     .abort(abort),
     .clk(clk),
+    .hold(hold),
     .idle(idle),
     .overrun(overrun),
     .period(cfg_request_period),
@@ -32208,20 +32623,20 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13533$0 (\bit ),
+    .\port$13718$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_wb.ch1.core.spw_check  spw_check (
-    .bits(cycle[205:200]),
+    .bits(live[205:200]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .tolerance(cycle[258:251])
+    .tolerance(live[258:251])
   );
   \biss_master_wb.ch1.core.time_base  time_base (
     .clk(clk),
@@ -32241,7 +32656,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$102 ),
+    .ma_busy(\ma_busy$104 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -32250,7 +32665,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$62 ),
+    .slo(\slo$64 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -32258,14 +32673,14 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .timeout_over(timeout_over)
   );
   \biss_master_wb.ch1.core.verdict  verdict (
-    .cfg(cycle),
-    .clean(\clean$349 ),
+    .cfg(live),
+    .clean(\clean$351 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$164 ),
+    .fault(\restart$166 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -32276,7 +32691,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$11457$0 (\$28 ),
+    .\port$11626$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -32294,7 +32709,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$24  = \bit$348 ;
+    \$24  = \bit$350 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -32315,7 +32730,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$27  = \clean$349 ;
+    \$27  = \clean$351 ;
     if (rst) begin
       \$27  = 1'h0;
     end
@@ -32327,163 +32742,165 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \idle$50  = idle;
   assign \slo$52  = slo;
   assign \trigger$54  = trigger;
-  assign \request$56  = request;
-  assign \abort$57  = abort;
+  assign cfg_hold = hold;
+  assign \request$58  = request;
+  assign \abort$59  = abort;
   assign ok = config_ok;
-  assign end_check = cycle[124];
-  assign level = \slo$62 ;
+  assign end_check = live[124];
+  assign cycle = live;
+  assign level = \slo$64 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$71  = locked;
-  assign \early$73  = early;
+  assign \locked$73  = locked;
+  assign \early$75  = early;
   assign frame_end = frame_done;
-  assign ssi = cycle[259];
-  assign \timeout_over$78  = timeout_over;
-  assign \started$80  = started;
-  assign \slots_full$82  = slots_full;
-  assign \stopped$84  = stopped;
-  assign \stop_bit$86  = stop_bit;
+  assign ssi = live[259];
+  assign \timeout_over$80  = timeout_over;
+  assign \started$82  = started;
+  assign \slots_full$84  = slots_full;
+  assign \stopped$86  = stopped;
+  assign \stop_bit$88  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$90  = break_over;
-  assign \ack_expired$92  = ack_expired;
-  assign \no_start_expired$94  = no_start_expired;
-  assign \slo_stuck$96  = slo_stuck;
-  assign \slo_stuck_live$98  = slo_stuck_live;
-  assign \delay_over$100  = delay_over;
-  assign \slo$101  = \slo$62 ;
-  assign \clocking  = \ma_busy$102 ;
+  assign \break_over$92  = break_over;
+  assign \ack_expired$94  = ack_expired;
+  assign \no_start_expired$96  = no_start_expired;
+  assign \slo_stuck$98  = slo_stuck;
+  assign \slo_stuck_live$100  = slo_stuck_live;
+  assign \delay_over$102  = delay_over;
+  assign \slo$103  = \slo$64 ;
+  assign \clocking  = \ma_busy$104 ;
   assign timer_clear = clear;
-  assign \in_clock$107  = in_clock;
+  assign \in_clock$109  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$113  = ack_limit;
-  assign \timeout_limit$115  = timeout_limit;
-  assign \no_start_limit$117  = no_start_limit;
-  assign \delay$119  = delay;
-  assign \delay_limit$121  = delay_limit;
+  assign \ack_limit$115  = ack_limit;
+  assign \timeout_limit$117  = timeout_limit;
+  assign \no_start_limit$119  = no_start_limit;
+  assign \delay$121  = delay;
+  assign \delay_limit$123  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$126  = quiet;
-  assign \quiet_live$128  = quiet_live;
+  assign \quiet$128  = quiet;
+  assign \quiet_live$130  = quiet_live;
   assign ma_run = run;
-  assign half_period = cycle[15:0];
-  assign \started$132  = started;
-  assign \start_slot$134  = start_slot;
-  assign \rises$136  = rises;
-  assign receiver_clear = \clear$137 ;
+  assign half_period = live[15:0];
+  assign \started$134  = started;
+  assign \start_slot$136  = start_slot;
+  assign \rises$138  = rises;
+  assign receiver_clear = \clear$139 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$143  = cycle[15:0];
-  assign \word_count$147  = word_count;
-  assign \lc$149  = lc;
+  assign \half_period$145  = live[15:0];
+  assign \word_count$149  = word_count;
+  assign \lc$151  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$151  = { lc[4:0], \bit  };
+  assign \lc_next$153  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$157  = resync;
+  assign \resync$159  = resync;
   assign waiting = watch;
-  assign \level$160  = \slo$62 ;
+  assign \level$162  = \slo$64 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$164 ;
-  assign limit = cycle[140:137];
+  assign fault = \restart$166 ;
+  assign limit = live[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$171  = delay;
+  assign \delay$173  = delay;
   assign \$signal  = learn;
-  assign \clean$177  = clean;
-  assign \noisy$179  = noisy;
+  assign \clean$179  = clean;
+  assign \noisy$181  = noisy;
   assign jump = delay_jump;
-  assign \crc_widths$185  = crc_widths;
-  assign \crc_widths$186  = crc_widths;
-  assign enables = { cycle[199], 1'h1 };
-  assign \cpw_top$190  = cpw_top;
+  assign \crc_widths$187  = crc_widths;
+  assign \crc_widths$188  = crc_widths;
+  assign enables = { live[199], 1'h1 };
+  assign \cpw_top$192  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[205:200];
-  assign \tolerance$194  = cycle[258:251];
+  assign bits = live[205:200];
+  assign \tolerance$196  = live[258:251];
   assign match = spw_match;
-  assign fixed = cycle[259];
-  assign fixed_delay = { 1'h0, cycle[271:260] };
-  assign \ssi$199  = cycle[259];
-  assign ssi_error = cycle[272];
-  assign ssi_error_low = cycle[273];
-  assign ssi_double = cycle[274];
-  assign \ssi$203  = cycle[259];
-  assign \ssi_double$204  = cycle[274];
-  assign \ssi_error$205  = cycle[272];
+  assign fixed = live[259];
+  assign fixed_delay = { 1'h0, live[271:260] };
+  assign \ssi$201  = live[259];
+  assign ssi_error = live[272];
+  assign ssi_error_low = live[273];
+  assign ssi_double = live[274];
+  assign \ssi$205  = live[259];
+  assign \ssi_double$206  = live[274];
+  assign \ssi_error$207  = live[272];
   assign mismatch = copy_mismatch;
-  assign cfg = cycle;
-  assign \report_frame$210  = report_frame;
-  assign \fault$211  = \restart$164 ;
-  assign \fault_status$213  = fault_status;
-  assign \crc_ok$215  = crc_ok;
+  assign cfg = live;
+  assign \report_frame$212  = report_frame;
+  assign \fault$213  = \restart$166 ;
+  assign \fault_status$215  = fault_status;
+  assign \crc_ok$217  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$225  = report;
-  assign \status$227  = status;
-  assign setting = cycle[148:145];
-  assign \report$229  = report;
-  assign \report_frame$230  = report_frame;
-  assign \report_delay$232  = report_delay;
-  assign \valid$234  = valid;
+  assign \report$227  = report;
+  assign \status$229  = status;
+  assign setting = live[148:145];
+  assign \report$231  = report;
+  assign \report_frame$232  = report_frame;
+  assign \report_delay$234  = report_delay;
+  assign \valid$236  = valid;
   assign word_crc_ok = { \$28 , crc_ok[0] };
-  assign \first_rise$249  = first_rise;
+  assign \first_rise$251  = first_rise;
   assign time_now = now;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$265 ;
-  assign ca_abort = \abort$267 ;
+  assign ca_start = \start$267 ;
+  assign ca_abort = \abort$269 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$276  = frames;
+  assign \busy$278  = frames;
   assign done = ca_done;
   assign held = ma_held;
-  assign ma_hold = hold;
-  assign \frame_end$285  = report;
+  assign ma_hold = \hold$285 ;
+  assign \frame_end$287  = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$292 ;
+  assign clear_counters = \clear$294 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$305  = \clear$292 ;
+  assign \clear$307  = \clear$294 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$313  = count_busy;
-  assign \ma$315  = ma;
-  assign \overrun$318  = overrun;
-  assign \done$320  = \done$319 ;
-  assign valid_out = \valid$321 ;
-  assign \status$323  = \result$324 [3:0];
-  assign timestamp = \result$324 [35:4];
-  assign line_delay = \result$324 [48:36];
-  assign \cds$327  = \result$324 [49];
-  assign noise_events = \result$324 [53:50];
-  assign delay_settled = \result$324 [54];
-  assign \settled_delay$330  = \result$324 [67:55];
-  assign delay_spread = \result$324 [75:68];
-  assign word0_position = \result$324 [130:76];
-  assign word0_ne = \result$324 [131];
-  assign word0_nw = \result$324 [132];
-  assign word0_crc_ok = \result$324 [133];
-  assign word1_position = \result$324 [173:134];
-  assign word1_ne = \result$324 [174];
-  assign word1_nw = \result$324 [175];
-  assign word1_crc_ok = \result$324 [176];
-  assign \lc$340  = \result$324 [182:177];
-  assign \lc_repeat$341  = \result$324 [183];
-  assign \lc_skip$342  = \result$324 [184];
-  assign \lc_zero$343  = \result$324 [185];
-  assign \spw_mismatch$344  = \result$324 [186];
+  assign \busy$315  = count_busy;
+  assign \ma$317  = ma;
+  assign \overrun$320  = overrun;
+  assign \done$322  = \done$321 ;
+  assign valid_out = \valid$323 ;
+  assign \status$325  = \result$326 [3:0];
+  assign timestamp = \result$326 [35:4];
+  assign line_delay = \result$326 [48:36];
+  assign \cds$329  = \result$326 [49];
+  assign noise_events = \result$326 [53:50];
+  assign delay_settled = \result$326 [54];
+  assign \settled_delay$332  = \result$326 [67:55];
+  assign delay_spread = \result$326 [75:68];
+  assign word0_position = \result$326 [130:76];
+  assign word0_ne = \result$326 [131];
+  assign word0_nw = \result$326 [132];
+  assign word0_crc_ok = \result$326 [133];
+  assign word1_position = \result$326 [173:134];
+  assign word1_ne = \result$326 [174];
+  assign word1_nw = \result$326 [175];
+  assign word1_crc_ok = \result$326 [176];
+  assign \lc$342  = \result$326 [182:177];
+  assign \lc_repeat$343  = \result$326 [183];
+  assign \lc_skip$344  = \result$326 [184];
+  assign \lc_zero$345  = \result$326 [185];
+  assign \spw_mismatch$346  = \result$326 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -32527,49 +32944,49 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \live.ssi_error  = live[272];
   assign \live.ssi_error_low  = live[273];
   assign \live.ssi_double  = live[274];
-  assign \cycle.ma_half_period  = cycle[15:0];
-  assign \cycle.request_period  = cycle[39:16];
-  assign \cycle.break_time  = cycle[63:40];
-  assign \cycle.ack_limit  = cycle[87:64];
-  assign \cycle.timeout_limit  = cycle[111:88];
-  assign \cycle.delay_limit  = cycle[123:112];
-  assign \cycle.end_check  = cycle[124];
-  assign \cycle.quiet_time  = cycle[136:125];
-  assign \cycle.noise_limit  = cycle[140:137];
-  assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.confirm_frames  = cycle[148:145];
-  assign \cycle.w0  = cycle[160:149];
-  assign \cycle.w0.data_bits  = cycle[154:149];
-  assign \cycle.w0.nenw  = cycle[155];
-  assign \cycle.w0.lc  = cycle[156];
-  assign \cycle.w0.crc  = cycle[158:157];
-  assign \cycle.w0.gray  = cycle[159];
-  assign \cycle.w0.signed  = cycle[160];
-  assign \cycle.w0_crc  = cycle[198:161];
-  assign \cycle.w0_crc.width  = cycle[165:161];
-  assign \cycle.w0_crc.poly  = cycle[181:166];
-  assign \cycle.w0_crc.start  = cycle[197:182];
-  assign \cycle.w0_crc.inverted  = cycle[198];
-  assign \cycle.w1_enable  = cycle[199];
-  assign \cycle.w1  = cycle[211:200];
-  assign \cycle.w1.data_bits  = cycle[205:200];
-  assign \cycle.w1.nenw  = cycle[206];
-  assign \cycle.w1.lc  = cycle[207];
-  assign \cycle.w1.crc  = cycle[209:208];
-  assign \cycle.w1.gray  = cycle[210];
-  assign \cycle.w1.signed  = cycle[211];
-  assign \cycle.w1_crc  = cycle[249:212];
-  assign \cycle.w1_crc.width  = cycle[216:212];
-  assign \cycle.w1_crc.poly  = cycle[232:217];
-  assign \cycle.w1_crc.start  = cycle[248:233];
-  assign \cycle.w1_crc.inverted  = cycle[249];
-  assign \cycle.spw_check  = cycle[250];
-  assign \cycle.spw_tolerance  = cycle[258:251];
-  assign \cycle.ssi  = cycle[259];
-  assign \cycle.ssi_delay  = cycle[271:260];
-  assign \cycle.ssi_error  = cycle[272];
-  assign \cycle.ssi_error_low  = cycle[273];
-  assign \cycle.ssi_double  = cycle[274];
+  assign \cycle.ma_half_period  = live[15:0];
+  assign \cycle.request_period  = live[39:16];
+  assign \cycle.break_time  = live[63:40];
+  assign \cycle.ack_limit  = live[87:64];
+  assign \cycle.timeout_limit  = live[111:88];
+  assign \cycle.delay_limit  = live[123:112];
+  assign \cycle.end_check  = live[124];
+  assign \cycle.quiet_time  = live[136:125];
+  assign \cycle.noise_limit  = live[140:137];
+  assign \cycle.delay_tolerance  = live[144:141];
+  assign \cycle.confirm_frames  = live[148:145];
+  assign \cycle.w0  = live[160:149];
+  assign \cycle.w0.data_bits  = live[154:149];
+  assign \cycle.w0.nenw  = live[155];
+  assign \cycle.w0.lc  = live[156];
+  assign \cycle.w0.crc  = live[158:157];
+  assign \cycle.w0.gray  = live[159];
+  assign \cycle.w0.signed  = live[160];
+  assign \cycle.w0_crc  = live[198:161];
+  assign \cycle.w0_crc.width  = live[165:161];
+  assign \cycle.w0_crc.poly  = live[181:166];
+  assign \cycle.w0_crc.start  = live[197:182];
+  assign \cycle.w0_crc.inverted  = live[198];
+  assign \cycle.w1_enable  = live[199];
+  assign \cycle.w1  = live[211:200];
+  assign \cycle.w1.data_bits  = live[205:200];
+  assign \cycle.w1.nenw  = live[206];
+  assign \cycle.w1.lc  = live[207];
+  assign \cycle.w1.crc  = live[209:208];
+  assign \cycle.w1.gray  = live[210];
+  assign \cycle.w1.signed  = live[211];
+  assign \cycle.w1_crc  = live[249:212];
+  assign \cycle.w1_crc.width  = live[216:212];
+  assign \cycle.w1_crc.poly  = live[232:217];
+  assign \cycle.w1_crc.start  = live[248:233];
+  assign \cycle.w1_crc.inverted  = live[249];
+  assign \cycle.spw_check  = live[250];
+  assign \cycle.spw_tolerance  = live[258:251];
+  assign \cycle.ssi  = live[259];
+  assign \cycle.ssi_delay  = live[271:260];
+  assign \cycle.ssi_error  = live[272];
+  assign \cycle.ssi_error_low  = live[273];
+  assign \cycle.ssi_double  = live[274];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -32584,26 +33001,26 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$183[0]  = \words$183 [11:0];
-  assign \words$183[0].data_bits  = \words$183 [5:0];
-  assign \words$183[0].nenw  = \words$183 [6];
-  assign \words$183[0].lc  = \words$183 [7];
-  assign \words$183[0].crc  = \words$183 [9:8];
-  assign \words$183[0].gray  = \words$183 [10];
-  assign \words$183[0].signed  = \words$183 [11];
-  assign \words$183[1]  = \words$183 [23:12];
-  assign \words$183[1].data_bits  = \words$183 [17:12];
-  assign \words$183[1].nenw  = \words$183 [18];
-  assign \words$183[1].lc  = \words$183 [19];
-  assign \words$183[1].crc  = \words$183 [21:20];
-  assign \words$183[1].gray  = \words$183 [22];
-  assign \words$183[1].signed  = \words$183 [23];
+  assign \words$185[0]  = \words$185 [11:0];
+  assign \words$185[0].data_bits  = \words$185 [5:0];
+  assign \words$185[0].nenw  = \words$185 [6];
+  assign \words$185[0].lc  = \words$185 [7];
+  assign \words$185[0].crc  = \words$185 [9:8];
+  assign \words$185[0].gray  = \words$185 [10];
+  assign \words$185[0].signed  = \words$185 [11];
+  assign \words$185[1]  = \words$185 [23:12];
+  assign \words$185[1].data_bits  = \words$185 [17:12];
+  assign \words$185[1].nenw  = \words$185 [18];
+  assign \words$185[1].lc  = \words$185 [19];
+  assign \words$185[1].crc  = \words$185 [21:20];
+  assign \words$185[1].gray  = \words$185 [22];
+  assign \words$185[1].signed  = \words$185 [23];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign \crc_widths$185[0]  = crc_widths[4:0];
-  assign \crc_widths$185[1]  = crc_widths[9:5];
-  assign \crc_widths$186[0]  = crc_widths[4:0];
-  assign \crc_widths$186[1]  = crc_widths[9:5];
+  assign \crc_widths$187[0]  = crc_widths[4:0];
+  assign \crc_widths$187[1]  = crc_widths[9:5];
+  assign \crc_widths$188[0]  = crc_widths[4:0];
+  assign \crc_widths$188[1]  = crc_widths[9:5];
   assign \customs[0]  = customs[37:0];
   assign \customs[0].width  = customs[4:0];
   assign \customs[0].poly  = customs[20:5];
@@ -32614,49 +33031,49 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \customs[1].poly  = customs[58:43];
   assign \customs[1].start  = customs[74:59];
   assign \customs[1].inverted  = customs[75];
-  assign \cfg.ma_half_period  = cycle[15:0];
-  assign \cfg.request_period  = cycle[39:16];
-  assign \cfg.break_time  = cycle[63:40];
-  assign \cfg.ack_limit  = cycle[87:64];
-  assign \cfg.timeout_limit  = cycle[111:88];
-  assign \cfg.delay_limit  = cycle[123:112];
-  assign \cfg.end_check  = cycle[124];
-  assign \cfg.quiet_time  = cycle[136:125];
-  assign \cfg.noise_limit  = cycle[140:137];
-  assign \cfg.delay_tolerance  = cycle[144:141];
-  assign \cfg.confirm_frames  = cycle[148:145];
-  assign \cfg.w0  = cycle[160:149];
-  assign \cfg.w0.data_bits  = cycle[154:149];
-  assign \cfg.w0.nenw  = cycle[155];
-  assign \cfg.w0.lc  = cycle[156];
-  assign \cfg.w0.crc  = cycle[158:157];
-  assign \cfg.w0.gray  = cycle[159];
-  assign \cfg.w0.signed  = cycle[160];
-  assign \cfg.w0_crc  = cycle[198:161];
-  assign \cfg.w0_crc.width  = cycle[165:161];
-  assign \cfg.w0_crc.poly  = cycle[181:166];
-  assign \cfg.w0_crc.start  = cycle[197:182];
-  assign \cfg.w0_crc.inverted  = cycle[198];
-  assign \cfg.w1_enable  = cycle[199];
-  assign \cfg.w1  = cycle[211:200];
-  assign \cfg.w1.data_bits  = cycle[205:200];
-  assign \cfg.w1.nenw  = cycle[206];
-  assign \cfg.w1.lc  = cycle[207];
-  assign \cfg.w1.crc  = cycle[209:208];
-  assign \cfg.w1.gray  = cycle[210];
-  assign \cfg.w1.signed  = cycle[211];
-  assign \cfg.w1_crc  = cycle[249:212];
-  assign \cfg.w1_crc.width  = cycle[216:212];
-  assign \cfg.w1_crc.poly  = cycle[232:217];
-  assign \cfg.w1_crc.start  = cycle[248:233];
-  assign \cfg.w1_crc.inverted  = cycle[249];
-  assign \cfg.spw_check  = cycle[250];
-  assign \cfg.spw_tolerance  = cycle[258:251];
-  assign \cfg.ssi  = cycle[259];
-  assign \cfg.ssi_delay  = cycle[271:260];
-  assign \cfg.ssi_error  = cycle[272];
-  assign \cfg.ssi_error_low  = cycle[273];
-  assign \cfg.ssi_double  = cycle[274];
+  assign \cfg.ma_half_period  = live[15:0];
+  assign \cfg.request_period  = live[39:16];
+  assign \cfg.break_time  = live[63:40];
+  assign \cfg.ack_limit  = live[87:64];
+  assign \cfg.timeout_limit  = live[111:88];
+  assign \cfg.delay_limit  = live[123:112];
+  assign \cfg.end_check  = live[124];
+  assign \cfg.quiet_time  = live[136:125];
+  assign \cfg.noise_limit  = live[140:137];
+  assign \cfg.delay_tolerance  = live[144:141];
+  assign \cfg.confirm_frames  = live[148:145];
+  assign \cfg.w0  = live[160:149];
+  assign \cfg.w0.data_bits  = live[154:149];
+  assign \cfg.w0.nenw  = live[155];
+  assign \cfg.w0.lc  = live[156];
+  assign \cfg.w0.crc  = live[158:157];
+  assign \cfg.w0.gray  = live[159];
+  assign \cfg.w0.signed  = live[160];
+  assign \cfg.w0_crc  = live[198:161];
+  assign \cfg.w0_crc.width  = live[165:161];
+  assign \cfg.w0_crc.poly  = live[181:166];
+  assign \cfg.w0_crc.start  = live[197:182];
+  assign \cfg.w0_crc.inverted  = live[198];
+  assign \cfg.w1_enable  = live[199];
+  assign \cfg.w1  = live[211:200];
+  assign \cfg.w1.data_bits  = live[205:200];
+  assign \cfg.w1.nenw  = live[206];
+  assign \cfg.w1.lc  = live[207];
+  assign \cfg.w1.crc  = live[209:208];
+  assign \cfg.w1.gray  = live[210];
+  assign \cfg.w1.signed  = live[211];
+  assign \cfg.w1_crc  = live[249:212];
+  assign \cfg.w1_crc.width  = live[216:212];
+  assign \cfg.w1_crc.poly  = live[232:217];
+  assign \cfg.w1_crc.start  = live[248:233];
+  assign \cfg.w1_crc.inverted  = live[249];
+  assign \cfg.spw_check  = live[250];
+  assign \cfg.spw_tolerance  = live[258:251];
+  assign \cfg.ssi  = live[259];
+  assign \cfg.ssi_delay  = live[271:260];
+  assign \cfg.ssi_error  = live[272];
+  assign \cfg.ssi_error_low  = live[273];
+  assign \cfg.ssi_double  = live[274];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -32680,41 +33097,41 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$253.slave_id  = \request$253 [2:0];
-  assign \request$253.address  = \request$253 [9:3];
-  assign \request$253.count  = \request$253 [16:10];
-  assign \request$253.write  = \request$253 [17];
+  assign \request$255.slave_id  = \request$255 [2:0];
+  assign \request$255.address  = \request$255 [9:3];
+  assign \request$255.count  = \request$255 [16:10];
+  assign \request$255.write  = \request$255 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$291.ca_crc4_error  = \events$291 [0];
-  assign \events$291.ca_no_answer  = \events$291 [1];
-  assign \events$291.ca_refused  = \events$291 [2];
-  assign \events$291.ca_aborted  = \events$291 [3];
-  assign \events$291.ca_data_fault  = \events$291 [4];
+  assign \events$293.ca_crc4_error  = \events$293 [0];
+  assign \events$293.ca_no_answer  = \events$293 [1];
+  assign \events$293.ca_refused  = \events$293 [2];
+  assign \events$293.ca_aborted  = \events$293 [3];
+  assign \events$293.ca_data_fault  = \events$293 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$300.crc_word0  = \events$300 [0];
-  assign \events$300.crc_word1  = \events$300 [1];
-  assign \events$300.no_ack  = \events$300 [2];
-  assign \events$300.no_start  = \events$300 [3];
-  assign \events$300.delay_range  = \events$300 [4];
-  assign \events$300.slo_stuck_low  = \events$300 [5];
-  assign \events$300.lc_repeat  = \events$300 [6];
-  assign \events$300.lc_skip  = \events$300 [7];
-  assign \events$300.lc_zero  = \events$300 [8];
-  assign \events$300.spw_mismatch  = \events$300 [9];
-  assign \events$300.overrun  = \events$300 [10];
-  assign \events$300.aborted  = \events$300 [11];
-  assign \events$300.no_stop  = \events$300 [12];
-  assign \events$300.noisy_line  = \events$300 [13];
-  assign \events$300.delay_jump  = \events$300 [14];
-  assign \events$300.noise_event  = \events$300 [15];
+  assign \events$302.crc_word0  = \events$302 [0];
+  assign \events$302.crc_word1  = \events$302 [1];
+  assign \events$302.no_ack  = \events$302 [2];
+  assign \events$302.no_start  = \events$302 [3];
+  assign \events$302.delay_range  = \events$302 [4];
+  assign \events$302.slo_stuck_low  = \events$302 [5];
+  assign \events$302.lc_repeat  = \events$302 [6];
+  assign \events$302.lc_skip  = \events$302 [7];
+  assign \events$302.lc_zero  = \events$302 [8];
+  assign \events$302.spw_mismatch  = \events$302 [9];
+  assign \events$302.overrun  = \events$302 [10];
+  assign \events$302.aborted  = \events$302 [11];
+  assign \events$302.no_stop  = \events$302 [12];
+  assign \events$302.noisy_line  = \events$302 [13];
+  assign \events$302.delay_jump  = \events$302 [14];
+  assign \events$302.noise_event  = \events$302 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -32722,57 +33139,57 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$324.status  = \result$324 [3:0];
-  assign \result$324.timestamp  = \result$324 [35:4];
-  assign \result$324.line_delay  = \result$324 [48:36];
-  assign \result$324.cds  = \result$324 [49];
-  assign \result$324.noise_events  = \result$324 [53:50];
-  assign \result$324.delay_settled  = \result$324 [54];
-  assign \result$324.settled_delay  = \result$324 [67:55];
-  assign \result$324.delay_spread  = \result$324 [75:68];
-  assign \result$324.word0  = \result$324 [133:76];
-  assign \result$324.word0.position  = \result$324 [130:76];
-  assign \result$324.word0.ne  = \result$324 [131];
-  assign \result$324.word0.nw  = \result$324 [132];
-  assign \result$324.word0.crc_ok  = \result$324 [133];
-  assign \result$324.word1  = \result$324 [176:134];
-  assign \result$324.word1.position  = \result$324 [173:134];
-  assign \result$324.word1.ne  = \result$324 [174];
-  assign \result$324.word1.nw  = \result$324 [175];
-  assign \result$324.word1.crc_ok  = \result$324 [176];
-  assign \result$324.lc  = \result$324 [182:177];
-  assign \result$324.lc_repeat  = \result$324 [183];
-  assign \result$324.lc_skip  = \result$324 [184];
-  assign \result$324.lc_zero  = \result$324 [185];
-  assign \result$324.spw_mismatch  = \result$324 [186];
-  assign \events$300 [15] = \event ;
-  assign \events$300 [14] = \$20 ;
-  assign \events$300 [13] = \$18 ;
-  assign \events$300 [12] = faults[6];
-  assign \events$300 [11] = faults[4];
-  assign \events$300 [10] = overrun;
-  assign \events$300 [9] = \$16 ;
-  assign \events$300 [8] = lc_zero;
-  assign \events$300 [7] = lc_skip;
-  assign \events$300 [6] = lc_repeat;
-  assign \events$300 [5] = faults[3];
-  assign \events$300 [4] = faults[2];
-  assign \events$300 [3] = faults[1];
-  assign \events$300 [2] = faults[0];
-  assign \events$300 [1] = crc_error[1];
-  assign \events$300 [0] = crc_error[0];
-  assign \events$291 [4] = \$15 ;
-  assign \events$291 [3] = \$13 ;
-  assign \events$291 [2] = \$11 ;
-  assign \events$291 [1] = \$9 ;
-  assign \events$291 [0] = \$7 ;
+  assign \result$326.status  = \result$326 [3:0];
+  assign \result$326.timestamp  = \result$326 [35:4];
+  assign \result$326.line_delay  = \result$326 [48:36];
+  assign \result$326.cds  = \result$326 [49];
+  assign \result$326.noise_events  = \result$326 [53:50];
+  assign \result$326.delay_settled  = \result$326 [54];
+  assign \result$326.settled_delay  = \result$326 [67:55];
+  assign \result$326.delay_spread  = \result$326 [75:68];
+  assign \result$326.word0  = \result$326 [133:76];
+  assign \result$326.word0.position  = \result$326 [130:76];
+  assign \result$326.word0.ne  = \result$326 [131];
+  assign \result$326.word0.nw  = \result$326 [132];
+  assign \result$326.word0.crc_ok  = \result$326 [133];
+  assign \result$326.word1  = \result$326 [176:134];
+  assign \result$326.word1.position  = \result$326 [173:134];
+  assign \result$326.word1.ne  = \result$326 [174];
+  assign \result$326.word1.nw  = \result$326 [175];
+  assign \result$326.word1.crc_ok  = \result$326 [176];
+  assign \result$326.lc  = \result$326 [182:177];
+  assign \result$326.lc_repeat  = \result$326 [183];
+  assign \result$326.lc_skip  = \result$326 [184];
+  assign \result$326.lc_zero  = \result$326 [185];
+  assign \result$326.spw_mismatch  = \result$326 [186];
+  assign \events$302 [15] = \event ;
+  assign \events$302 [14] = \$20 ;
+  assign \events$302 [13] = \$18 ;
+  assign \events$302 [12] = faults[6];
+  assign \events$302 [11] = faults[4];
+  assign \events$302 [10] = overrun;
+  assign \events$302 [9] = \$16 ;
+  assign \events$302 [8] = lc_zero;
+  assign \events$302 [7] = lc_skip;
+  assign \events$302 [6] = lc_repeat;
+  assign \events$302 [5] = faults[3];
+  assign \events$302 [4] = faults[2];
+  assign \events$302 [3] = faults[1];
+  assign \events$302 [2] = faults[0];
+  assign \events$302 [1] = crc_error[1];
+  assign \events$302 [0] = crc_error[0];
+  assign \events$293 [4] = \$15 ;
+  assign \events$293 [3] = \$13 ;
+  assign \events$293 [2] = \$11 ;
+  assign \events$293 [1] = \$9 ;
+  assign \events$293 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$253 [17] = ca_write;
-  assign \request$253 [16:10] = ca_count;
-  assign \request$253 [9:3] = ca_address;
-  assign \request$253 [2:0] = ca_slave_id;
+  assign \request$255 [17] = ca_write;
+  assign \request$255 [16:10] = ca_count;
+  assign \request$255 [9:3] = ca_address;
+  assign \request$255 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$28 ;
@@ -32794,12 +33211,12 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign customs[75:38] = cycle[249:212];
-  assign customs[37:0] = cycle[198:161];
-  assign \words$183 [23:12] = cycle[211:200];
-  assign \words$183 [11:0] = cycle[160:149];
-  assign words[23:12] = cycle[211:200];
-  assign words[11:0] = cycle[160:149];
+  assign customs[75:38] = live[249:212];
+  assign customs[37:0] = live[198:161];
+  assign \words$185 [23:12] = live[211:200];
+  assign \words$185 [11:0] = live[160:149];
+  assign words[23:12] = live[211:200];
+  assign words[11:0] = live[160:149];
   assign live[274] = cfg_ssi_double;
   assign live[273] = cfg_ssi_error_low;
   assign live[272] = cfg_ssi_error;
@@ -32842,7 +33259,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, no_start_limit, crc_widths, idle, clk);
+module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, no_start_limit, crc_widths, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -32894,14 +33311,13 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   wire [1:0] \$141 ;
   wire [2:0] \$142 ;
   reg \$143 ;
-  reg [274:0] \$144 ;
+  reg [23:0] \$144 ;
   reg [23:0] \$145 ;
-  reg [23:0] \$146 ;
+  reg [11:0] \$146 ;
   reg [11:0] \$147 ;
-  reg [11:0] \$148 ;
-  reg [16:0] \$149 ;
+  reg [16:0] \$148 ;
+  reg [24:0] \$149 ;
   wire \$15 ;
-  reg [24:0] \$150 ;
   wire \$16 ;
   wire \$17 ;
   wire \$18 ;
@@ -33002,8 +33418,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   wire [9:0] crc_widths;
   wire [4:0] \crc_widths[0] ;
   wire [4:0] \crc_widths[1] ;
-  output [274:0] cycle;
-  reg [274:0] cycle = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
+  wire [274:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [3:0] \cycle.confirm_frames ;
@@ -33256,36 +33671,34 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \$125  = ! live[144:141];
   assign \$126  = \$125  ? 4'h2 : live[144:141];
   assign \$127  = live[15:0] + \$126 ;
-  assign \$128  = ack_limit + { cycle[15:0], 1'h1 };
-  assign \$129  = cycle[158:157] == 2'h3;
-  assign \$130  = cycle[158:157] == 2'h2;
-  assign \$131  = cycle[158:157] == 1'h1;
+  assign \$128  = ack_limit + { live[15:0], 1'h1 };
+  assign \$129  = live[158:157] == 2'h3;
+  assign \$130  = live[158:157] == 2'h2;
+  assign \$131  = live[158:157] == 1'h1;
   assign \$132  = \$131  ? 38'h2000000066 : 38'h0000000000;
   assign \$133  = \$130  ? 38'h2000121b30 : \$132 ;
-  assign \$134  = \$129  ? cycle[198:161] : \$133 ;
-  assign \$135  = cycle[209:208] == 2'h3;
-  assign \$136  = cycle[209:208] == 2'h2;
-  assign \$137  = cycle[209:208] == 1'h1;
+  assign \$134  = \$129  ? live[198:161] : \$133 ;
+  assign \$135  = live[209:208] == 2'h3;
+  assign \$136  = live[209:208] == 2'h2;
+  assign \$137  = live[209:208] == 1'h1;
   assign \$138  = \$137  ? 38'h2000000066 : 38'h0000000000;
   assign \$139  = \$136  ? 38'h2000121b30 : \$138 ;
-  assign \$140  = \$135  ? cycle[249:212] : \$139 ;
-  assign \$142  = 2'h1 + cycle[199];
+  assign \$140  = \$135  ? live[249:212] : \$139 ;
+  assign \$142  = 2'h1 + live[199];
   always @(posedge clk)
     ok <= \$143 ;
   always @(posedge clk)
-    cycle <= \$144 ;
+    ack_limit <= \$144 ;
   always @(posedge clk)
-    ack_limit <= \$145 ;
+    timeout_limit <= \$145 ;
   always @(posedge clk)
-    timeout_limit <= \$146 ;
+    delay_limit <= \$146 ;
   always @(posedge clk)
-    delay_limit <= \$147 ;
+    quiet_time <= \$147 ;
   always @(posedge clk)
-    quiet_time <= \$148 ;
+    delay_tolerance <= \$148 ;
   always @(posedge clk)
-    delay_tolerance <= \$149 ;
-  always @(posedge clk)
-    no_start_limit <= \$150 ;
+    no_start_limit <= \$149 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$143  = \$116 ;
@@ -33295,19 +33708,19 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$144  = cycle;
+    \$144  = ack_limit;
     if (idle) begin
-      \$144  = live;
+      \$144  = \$118 ;
     end
     if (rst) begin
-      \$144  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
+      \$144  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$145  = ack_limit;
+    \$145  = timeout_limit;
     if (idle) begin
-      \$145  = \$118 ;
+      \$145  = \$120 ;
     end
     if (rst) begin
       \$145  = 24'h000000;
@@ -33315,19 +33728,19 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$146  = timeout_limit;
+    \$146  = delay_limit;
     if (idle) begin
-      \$146  = \$120 ;
+      \$146  = \$122 ;
     end
     if (rst) begin
-      \$146  = 24'h000000;
+      \$146  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$147  = delay_limit;
+    \$147  = quiet_time;
     if (idle) begin
-      \$147  = \$122 ;
+      \$147  = \$124 ;
     end
     if (rst) begin
       \$147  = 12'h000;
@@ -33335,31 +33748,22 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$148  = quiet_time;
+    \$148  = delay_tolerance;
     if (idle) begin
-      \$148  = \$124 ;
+      \$148  = \$127 ;
     end
     if (rst) begin
-      \$148  = 12'h000;
+      \$148  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$149  = delay_tolerance;
-    if (idle) begin
-      \$149  = \$127 ;
-    end
+    \$149  = \$128 ;
     if (rst) begin
-      \$149  = 17'h00000;
+      \$149  = 25'h0000000;
     end
   end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$150  = \$128 ;
-    if (rst) begin
-      \$150  = 25'h0000000;
-    end
-  end
+  assign cycle = live;
   assign word_count = \$142 [1:0];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
@@ -33404,49 +33808,49 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \live.ssi_error  = live[272];
   assign \live.ssi_error_low  = live[273];
   assign \live.ssi_double  = live[274];
-  assign \cycle.ma_half_period  = cycle[15:0];
-  assign \cycle.request_period  = cycle[39:16];
-  assign \cycle.break_time  = cycle[63:40];
-  assign \cycle.ack_limit  = cycle[87:64];
-  assign \cycle.timeout_limit  = cycle[111:88];
-  assign \cycle.delay_limit  = cycle[123:112];
-  assign \cycle.end_check  = cycle[124];
-  assign \cycle.quiet_time  = cycle[136:125];
-  assign \cycle.noise_limit  = cycle[140:137];
-  assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.confirm_frames  = cycle[148:145];
-  assign \cycle.w0  = cycle[160:149];
-  assign \cycle.w0.data_bits  = cycle[154:149];
-  assign \cycle.w0.nenw  = cycle[155];
-  assign \cycle.w0.lc  = cycle[156];
-  assign \cycle.w0.crc  = cycle[158:157];
-  assign \cycle.w0.gray  = cycle[159];
-  assign \cycle.w0.signed  = cycle[160];
-  assign \cycle.w0_crc  = cycle[198:161];
-  assign \cycle.w0_crc.width  = cycle[165:161];
-  assign \cycle.w0_crc.poly  = cycle[181:166];
-  assign \cycle.w0_crc.start  = cycle[197:182];
-  assign \cycle.w0_crc.inverted  = cycle[198];
-  assign \cycle.w1_enable  = cycle[199];
-  assign \cycle.w1  = cycle[211:200];
-  assign \cycle.w1.data_bits  = cycle[205:200];
-  assign \cycle.w1.nenw  = cycle[206];
-  assign \cycle.w1.lc  = cycle[207];
-  assign \cycle.w1.crc  = cycle[209:208];
-  assign \cycle.w1.gray  = cycle[210];
-  assign \cycle.w1.signed  = cycle[211];
-  assign \cycle.w1_crc  = cycle[249:212];
-  assign \cycle.w1_crc.width  = cycle[216:212];
-  assign \cycle.w1_crc.poly  = cycle[232:217];
-  assign \cycle.w1_crc.start  = cycle[248:233];
-  assign \cycle.w1_crc.inverted  = cycle[249];
-  assign \cycle.spw_check  = cycle[250];
-  assign \cycle.spw_tolerance  = cycle[258:251];
-  assign \cycle.ssi  = cycle[259];
-  assign \cycle.ssi_delay  = cycle[271:260];
-  assign \cycle.ssi_error  = cycle[272];
-  assign \cycle.ssi_error_low  = cycle[273];
-  assign \cycle.ssi_double  = cycle[274];
+  assign \cycle.ma_half_period  = live[15:0];
+  assign \cycle.request_period  = live[39:16];
+  assign \cycle.break_time  = live[63:40];
+  assign \cycle.ack_limit  = live[87:64];
+  assign \cycle.timeout_limit  = live[111:88];
+  assign \cycle.delay_limit  = live[123:112];
+  assign \cycle.end_check  = live[124];
+  assign \cycle.quiet_time  = live[136:125];
+  assign \cycle.noise_limit  = live[140:137];
+  assign \cycle.delay_tolerance  = live[144:141];
+  assign \cycle.confirm_frames  = live[148:145];
+  assign \cycle.w0  = live[160:149];
+  assign \cycle.w0.data_bits  = live[154:149];
+  assign \cycle.w0.nenw  = live[155];
+  assign \cycle.w0.lc  = live[156];
+  assign \cycle.w0.crc  = live[158:157];
+  assign \cycle.w0.gray  = live[159];
+  assign \cycle.w0.signed  = live[160];
+  assign \cycle.w0_crc  = live[198:161];
+  assign \cycle.w0_crc.width  = live[165:161];
+  assign \cycle.w0_crc.poly  = live[181:166];
+  assign \cycle.w0_crc.start  = live[197:182];
+  assign \cycle.w0_crc.inverted  = live[198];
+  assign \cycle.w1_enable  = live[199];
+  assign \cycle.w1  = live[211:200];
+  assign \cycle.w1.data_bits  = live[205:200];
+  assign \cycle.w1.nenw  = live[206];
+  assign \cycle.w1.lc  = live[207];
+  assign \cycle.w1.crc  = live[209:208];
+  assign \cycle.w1.gray  = live[210];
+  assign \cycle.w1.signed  = live[211];
+  assign \cycle.w1_crc  = live[249:212];
+  assign \cycle.w1_crc.width  = live[216:212];
+  assign \cycle.w1_crc.poly  = live[232:217];
+  assign \cycle.w1_crc.start  = live[248:233];
+  assign \cycle.w1_crc.inverted  = live[249];
+  assign \cycle.spw_check  = live[250];
+  assign \cycle.spw_tolerance  = live[258:251];
+  assign \cycle.ssi  = live[259];
+  assign \cycle.ssi_delay  = live[271:260];
+  assign \cycle.ssi_error  = live[272];
+  assign \cycle.ssi_error_low  = live[273];
+  assign \cycle.ssi_double  = live[274];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
   assign crc_widths[9:5] = \$140 [4:0];
@@ -33539,7 +33943,7 @@ module \biss_master_wb.ch1.core.confirmation (rst, report, status, pending, sett
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.controller (rst, cdm, request, restart_timer, report_delay, frame_done, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
+module \biss_master_wb.ch1.core.controller (rst, cdm, request, restart_timer, report_delay, frame_done, frame_doubtful, abort, end_check, ssi, config_ok, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
 , faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full
 , started, stop_bit, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
@@ -36428,7 +36832,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$13545$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13704$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -37037,8 +37441,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   reg \begin ;
   input \bit ;
   wire \bit ;
-  wire \bit$13 ;
-  wire \bit$41 ;
+  wire \bit$11 ;
+  wire \bit$40 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -37079,17 +37483,17 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   wire [6:0] \current.word_end_m1 ;
   input [75:0] customs;
   wire [75:0] customs;
-  wire [75:0] \customs$35 ;
-  wire [37:0] \customs$35[0] ;
-  wire \customs$35[0].inverted ;
-  wire [15:0] \customs$35[0].poly ;
-  wire [15:0] \customs$35[0].start ;
-  wire [4:0] \customs$35[0].width ;
-  wire [37:0] \customs$35[1] ;
-  wire \customs$35[1].inverted ;
-  wire [15:0] \customs$35[1].poly ;
-  wire [15:0] \customs$35[1].start ;
-  wire [4:0] \customs$35[1].width ;
+  wire [75:0] \customs$34 ;
+  wire [37:0] \customs$34[0] ;
+  wire \customs$34[0].inverted ;
+  wire [15:0] \customs$34[0].poly ;
+  wire [15:0] \customs$34[0].start ;
+  wire [4:0] \customs$34[0].width ;
+  wire [37:0] \customs$34[1] ;
+  wire \customs$34[1].inverted ;
+  wire [15:0] \customs$34[1].poly ;
+  wire [15:0] \customs$34[1].start ;
+  wire [4:0] \customs$34[1].width ;
   wire [37:0] \customs[0] ;
   wire \customs[0].inverted ;
   wire [15:0] \customs[0].poly ;
@@ -37124,10 +37528,9 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
-  reg index = 1'h0;
-  wire [6:0] \index$14 ;
+  wire [6:0] index;
   (* init = 1'h0 *)
-  wire \index$44 ;
+  wire \index$43 ;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -37138,14 +37541,14 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   wire load_index;
   output mismatch;
   wire mismatch;
-  wire \mismatch$17 ;
+  wire \mismatch$15 ;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13545$272 ;
-  wire [2:0] \port$13545$272 ;
+  input [2:0] \port$13704$272 ;
+  wire [2:0] \port$13704$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -37170,8 +37573,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   reg stop_bit = 1'h0;
   output stopped;
   reg stopped = 1'h0;
-  (* init = 1'h0 *)
-  wire word;
+  reg word = 1'h0;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [23:0] words;
@@ -37432,7 +37834,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   always @(posedge clk)
     in_top <= \$589 ;
   always @(posedge clk)
-    index <= \$590 ;
+    word <= \$590 ;
   always @(posedge clk)
     decoder_fsm_state <= \$591 ;
   always @(posedge clk)
@@ -37455,12 +37857,12 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13545$272 [0];
+  assign error_bit = ssi & \port$13704$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
   assign \$3  = word_count - 1'h1;
-  assign \$4  = index == \$3 ;
+  assign \$4  = word == \$3 ;
   assign first = in_word & ssi;
   assign lc_load = in_word & in_lc;
   assign \$5  = idx == current[34:28];
@@ -37471,7 +37873,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign check = in_word & in_crc;
   assign \$8  = idx == current[34:28];
   assign last = in_word & \$8 ;
-  assign \$9  = index + 1'h1;
+  assign \$9  = word + 1'h1;
   assign \$10  = at_cds ? 2'h0 : \$9 ;
   assign \$11  = ! decoder_fsm_state;
   assign \$12  = decoder_fsm_state == 1'h1;
@@ -37486,19 +37888,19 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13545$272 [0];
+  assign \$24  = ssi & \port$13704$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13545$272 [0];
+  assign \$28  = ssi & \port$13704$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13545$272 [0];
+  assign \$35  = ssi & \port$13704$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13545$272 [0];
+  assign \$39  = ssi & \port$13704$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -37518,12 +37920,12 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$57  = in_top & \$56 ;
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
-  assign \$60  = index == \$59 ;
-  assign \$61  = ssi & \port$13545$272 [2];
-  assign \$62  = index + 1'h1;
+  assign \$60  = word == \$59 ;
+  assign \$61  = ssi & \port$13704$272 [2];
+  assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
-  assign \$65  = ! index;
+  assign \$65  = ! word;
   assign \$66  = in_word & \$65 ;
   assign \$67  = \$66  & in_data;
   assign \$68  = words[10] & data0[0];
@@ -37805,19 +38207,19 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13545$272 [0];
+  assign \$347  = ssi & \port$13704$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
-  assign \$350  = ! index;
+  assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13545$272 [0];
-  assign \$355  = ~ \port$13545$272 [1];
+  assign \$354  = ssi & \port$13704$272 [0];
+  assign \$355  = ~ \port$13704$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
-  assign \$359  = ! index;
+  assign \$359  = ! word;
   assign \$360  = in_word & \$359 ;
   assign \$361  = idx == current[6:0];
   assign \$362  = \$360  & \$361 ;
@@ -37866,7 +38268,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
     .codes(codes),
     .\cover (\cover ),
     .customs(customs),
-    .index(index),
+    .index(word),
     .last(last),
     .load(load),
     .load_index(\$10 [0]),
@@ -37882,7 +38284,6 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
     .current(current),
     .error_bit(error_bit),
     .following(following),
-    .index(index),
     .receiver_clear(receiver_clear),
     .rst(rst),
     .words(words)
@@ -38205,7 +38606,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$590  = index;
+    \$590  = word;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
@@ -38549,19 +38950,18 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign word = index;
-  assign ssi_error = \port$13545$272 [0];
-  assign \bit$13  = \bit ;
-  assign \index$14  = current[34:28];
-  assign \mismatch$17  = mismatch;
+  assign ssi_error = \port$13704$272 [0];
+  assign \bit$11  = \bit ;
+  assign index = current[34:28];
+  assign \mismatch$15  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
-  assign \customs$35  = customs;
-  assign \bit$41  = \bit ;
+  assign \customs$34  = customs;
+  assign \bit$40  = \bit ;
   assign ok = crc_ok;
-  assign \index$44  = index;
+  assign \index$43  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13545$272 [2];
-  assign ssi_error_low = \port$13545$272 [1];
+  assign ssi_double = \port$13704$272 [2];
+  assign ssi_error_low = \port$13704$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -38613,16 +39013,16 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \customs[1].poly  = customs[58:43];
   assign \customs[1].start  = customs[74:59];
   assign \customs[1].inverted  = customs[75];
-  assign \customs$35[0]  = customs[37:0];
-  assign \customs$35[0].width  = customs[4:0];
-  assign \customs$35[0].poly  = customs[20:5];
-  assign \customs$35[0].start  = customs[36:21];
-  assign \customs$35[0].inverted  = customs[37];
-  assign \customs$35[1]  = customs[75:38];
-  assign \customs$35[1].width  = customs[42:38];
-  assign \customs$35[1].poly  = customs[58:43];
-  assign \customs$35[1].start  = customs[74:59];
-  assign \customs$35[1].inverted  = customs[75];
+  assign \customs$34[0]  = customs[37:0];
+  assign \customs$34[0].width  = customs[4:0];
+  assign \customs$34[0].poly  = customs[20:5];
+  assign \customs$34[0].start  = customs[36:21];
+  assign \customs$34[0].inverted  = customs[37];
+  assign \customs$34[1]  = customs[75:38];
+  assign \customs$34[1].width  = customs[42:38];
+  assign \customs$34[1].poly  = customs[58:43];
+  assign \customs$34[1].start  = customs[74:59];
+  assign \customs$34[1].inverted  = customs[75];
   assign \following.data_end_p1  = following[6:0];
   assign \following.data_end_m1  = following[13:7];
   assign \following.nenw_end_m1  = following[20:14];
@@ -38632,9 +39032,9 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \following.lc_at0  = following[36];
   assign codes[3:2] = words[21:20];
   assign codes[1:0] = words[9:8];
-  assign \$363  = index;
-  assign \$570  = index;
-  assign \$574  = index;
+  assign \$363  = word;
+  assign \$570  = word;
+  assign \$574  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -39114,252 +39514,253 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder.field_ends (rst, error_bit, words, crc_widths, receiver_clear, \begin , advance, index, current, following, clk);
+module \biss_master_wb.ch1.core.decoder.field_ends (rst, error_bit, words, crc_widths, receiver_clear, \begin , advance, current, following, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
-  wire [2:0] \$1 ;
-  wire [7:0] \$10 ;
-  wire [11:0] \$100 ;
-  wire \$101 ;
+  wire [6:0] \$1 ;
+  wire \$10 ;
+  wire \$100 ;
+  wire [11:0] \$101 ;
   wire [11:0] \$102 ;
-  wire [11:0] \$103 ;
-  wire \$104 ;
-  wire [11:0] \$105 ;
-  wire \$106 ;
+  wire \$103 ;
+  wire [11:0] \$104 ;
+  wire \$105 ;
+  wire [11:0] \$106 ;
   wire [11:0] \$107 ;
-  wire [11:0] \$108 ;
-  reg [1:0] \$109 ;
-  wire \$11 ;
-  wire [6:0] \$110 ;
+  reg [1:0] \$108 ;
+  wire [6:0] \$109 ;
+  reg [1:0] \$11 ;
+  wire \$110 ;
   wire \$111 ;
-  wire \$112 ;
-  wire [11:0] \$113 ;
-  wire \$114 ;
+  wire [11:0] \$112 ;
+  wire \$113 ;
+  wire [11:0] \$114 ;
   wire [11:0] \$115 ;
-  wire [11:0] \$116 ;
-  wire \$117 ;
-  wire [11:0] \$118 ;
-  wire \$119 ;
-  reg [1:0] \$12 ;
+  wire \$116 ;
+  wire [11:0] \$117 ;
+  wire \$118 ;
+  wire [11:0] \$119 ;
+  wire [6:0] \$12 ;
   wire [11:0] \$120 ;
-  wire [11:0] \$121 ;
-  wire \$122 ;
-  wire [11:0] \$123 ;
-  wire \$124 ;
+  wire \$121 ;
+  wire [11:0] \$122 ;
+  wire \$123 ;
+  wire [11:0] \$124 ;
   wire [11:0] \$125 ;
-  wire [11:0] \$126 ;
-  reg [3:0] \$127 ;
-  wire [6:0] \$128 ;
+  reg [3:0] \$126 ;
+  wire [6:0] \$127 ;
+  wire \$128 ;
   wire \$129 ;
-  wire [6:0] \$13 ;
+  wire \$13 ;
   wire \$130 ;
-  wire \$131 ;
-  wire [11:0] \$132 ;
-  wire \$133 ;
+  wire [11:0] \$131 ;
+  wire \$132 ;
+  wire [11:0] \$133 ;
   wire [11:0] \$134 ;
-  wire [11:0] \$135 ;
-  wire [6:0] \$136 ;
-  wire \$137 ;
-  wire [11:0] \$138 ;
-  wire \$139 ;
-  wire \$14 ;
+  wire [6:0] \$135 ;
+  wire \$136 ;
+  wire [11:0] \$137 ;
+  wire \$138 ;
+  wire [11:0] \$139 ;
+  reg [3:0] \$14 ;
   wire [11:0] \$140 ;
-  wire [11:0] \$141 ;
-  wire [7:0] \$142 ;
-  wire \$143 ;
-  wire [11:0] \$144 ;
-  wire \$145 ;
+  wire [7:0] \$141 ;
+  wire \$142 ;
+  wire [11:0] \$143 ;
+  wire \$144 ;
+  wire [11:0] \$145 ;
   wire [11:0] \$146 ;
-  wire [11:0] \$147 ;
-  wire \$148 ;
-  wire [11:0] \$149 ;
-  reg [3:0] \$15 ;
-  wire \$150 ;
+  wire \$147 ;
+  wire [11:0] \$148 ;
+  wire \$149 ;
+  wire [6:0] \$15 ;
+  wire [11:0] \$150 ;
   wire [11:0] \$151 ;
-  wire [11:0] \$152 ;
-  wire \$153 ;
-  wire [11:0] \$154 ;
-  wire \$155 ;
+  wire \$152 ;
+  wire [11:0] \$153 ;
+  wire \$154 ;
+  wire [11:0] \$155 ;
   wire [11:0] \$156 ;
-  wire [11:0] \$157 ;
-  reg [6:0] \$158 ;
-  wire [7:0] \$159 ;
-  wire [6:0] \$16 ;
-  wire \$160 ;
-  wire [11:0] \$161 ;
-  wire \$162 ;
+  reg [6:0] \$157 ;
+  wire [7:0] \$158 ;
+  wire \$159 ;
+  wire \$16 ;
+  wire [11:0] \$160 ;
+  wire \$161 ;
+  wire [11:0] \$162 ;
   wire [11:0] \$163 ;
-  wire [11:0] \$164 ;
-  wire \$165 ;
-  wire [11:0] \$166 ;
-  wire \$167 ;
+  wire \$164 ;
+  wire [11:0] \$165 ;
+  wire \$166 ;
+  wire [11:0] \$167 ;
   wire [11:0] \$168 ;
-  wire [11:0] \$169 ;
+  wire \$169 ;
   wire \$17 ;
-  wire \$170 ;
-  wire [11:0] \$171 ;
-  wire \$172 ;
+  wire [11:0] \$170 ;
+  wire \$171 ;
+  wire [11:0] \$172 ;
   wire [11:0] \$173 ;
-  wire [11:0] \$174 ;
-  reg [6:0] \$175 ;
-  wire [7:0] \$176 ;
-  wire \$177 ;
-  wire [11:0] \$178 ;
-  wire \$179 ;
+  reg [6:0] \$174 ;
+  wire [7:0] \$175 ;
+  wire \$176 ;
+  wire [11:0] \$177 ;
+  wire \$178 ;
+  wire [11:0] \$179 ;
   wire \$18 ;
   wire [11:0] \$180 ;
-  wire [11:0] \$181 ;
-  wire \$182 ;
-  wire [11:0] \$183 ;
-  wire \$184 ;
+  wire \$181 ;
+  wire [11:0] \$182 ;
+  wire \$183 ;
+  wire [11:0] \$184 ;
   wire [11:0] \$185 ;
-  wire [11:0] \$186 ;
-  wire \$187 ;
-  wire [11:0] \$188 ;
-  wire \$189 ;
-  wire \$19 ;
+  wire \$186 ;
+  wire [11:0] \$187 ;
+  wire \$188 ;
+  wire [11:0] \$189 ;
+  wire [11:0] \$19 ;
   wire [11:0] \$190 ;
-  wire [11:0] \$191 ;
-  reg [6:0] \$192 ;
-  wire \$193 ;
-  wire [4:0] \$194 ;
-  wire \$195 ;
+  reg [6:0] \$191 ;
+  wire \$192 ;
+  wire [4:0] \$193 ;
+  wire \$194 ;
+  wire [4:0] \$195 ;
   wire [4:0] \$196 ;
-  wire [4:0] \$197 ;
+  wire [7:0] \$197 ;
   wire [7:0] \$198 ;
-  wire [7:0] \$199 ;
-  wire [6:0] \$2 ;
-  wire [11:0] \$20 ;
-  wire \$200 ;
-  wire [11:0] \$201 ;
-  wire \$202 ;
+  wire \$199 ;
+  wire [7:0] \$2 ;
+  wire \$20 ;
+  wire [11:0] \$200 ;
+  wire \$201 ;
+  wire [11:0] \$202 ;
   wire [11:0] \$203 ;
-  wire [11:0] \$204 ;
+  wire \$204 ;
   wire \$205 ;
-  wire \$206 ;
-  wire [11:0] \$207 ;
-  wire \$208 ;
+  wire [11:0] \$206 ;
+  wire \$207 ;
+  wire [11:0] \$208 ;
   wire [11:0] \$209 ;
-  wire \$21 ;
-  wire [11:0] \$210 ;
-  wire \$211 ;
-  wire [11:0] \$212 ;
-  wire \$213 ;
+  wire [11:0] \$21 ;
+  wire \$210 ;
+  wire [11:0] \$211 ;
+  wire \$212 ;
+  wire [11:0] \$213 ;
   wire [11:0] \$214 ;
-  wire [11:0] \$215 ;
-  wire \$216 ;
-  wire [11:0] \$217 ;
-  wire \$218 ;
+  wire \$215 ;
+  wire [11:0] \$216 ;
+  wire \$217 ;
+  wire [11:0] \$218 ;
   wire [11:0] \$219 ;
   wire [11:0] \$22 ;
-  wire [11:0] \$220 ;
-  reg [1:0] \$221 ;
-  wire [6:0] \$222 ;
+  reg [1:0] \$220 ;
+  wire [6:0] \$221 ;
+  wire \$222 ;
   wire \$223 ;
-  wire \$224 ;
-  wire [11:0] \$225 ;
-  wire \$226 ;
+  wire [11:0] \$224 ;
+  wire \$225 ;
+  wire [11:0] \$226 ;
   wire [11:0] \$227 ;
-  wire [11:0] \$228 ;
-  wire \$229 ;
-  wire [11:0] \$23 ;
-  wire [11:0] \$230 ;
-  wire \$231 ;
+  wire \$228 ;
+  wire [11:0] \$229 ;
+  wire [6:0] \$23 ;
+  wire \$230 ;
+  wire [11:0] \$231 ;
   wire [11:0] \$232 ;
-  wire [11:0] \$233 ;
-  wire \$234 ;
-  wire [11:0] \$235 ;
-  wire \$236 ;
+  wire \$233 ;
+  wire [11:0] \$234 ;
+  wire \$235 ;
+  wire [11:0] \$236 ;
   wire [11:0] \$237 ;
-  wire [11:0] \$238 ;
-  reg [3:0] \$239 ;
-  wire [6:0] \$24 ;
-  wire [6:0] \$240 ;
+  reg [3:0] \$238 ;
+  wire [6:0] \$239 ;
+  wire \$24 ;
+  wire \$240 ;
   wire \$241 ;
-  wire \$242 ;
+  wire [2:0] \$242 ;
   reg [36:0] \$243 ;
   reg [36:0] \$244 ;
-  wire \$25 ;
-  wire [11:0] \$26 ;
-  wire \$27 ;
+  reg [1:0] \$245 ;
+  wire [11:0] \$25 ;
+  wire \$26 ;
+  wire [11:0] \$27 ;
   wire [11:0] \$28 ;
-  wire [11:0] \$29 ;
-  wire [7:0] \$3 ;
-  wire [7:0] \$30 ;
-  wire \$31 ;
-  wire [11:0] \$32 ;
-  wire \$33 ;
+  wire [7:0] \$29 ;
+  reg [6:0] \$3 ;
+  wire \$30 ;
+  wire [11:0] \$31 ;
+  wire \$32 ;
+  wire [11:0] \$33 ;
   wire [11:0] \$34 ;
-  wire [11:0] \$35 ;
-  wire \$36 ;
-  wire [11:0] \$37 ;
-  wire \$38 ;
+  wire \$35 ;
+  wire [11:0] \$36 ;
+  wire \$37 ;
+  wire [11:0] \$38 ;
   wire [11:0] \$39 ;
-  reg [6:0] \$4 ;
-  wire [11:0] \$40 ;
-  wire \$41 ;
-  wire [11:0] \$42 ;
-  wire \$43 ;
+  wire [7:0] \$4 ;
+  wire \$40 ;
+  wire [11:0] \$41 ;
+  wire \$42 ;
+  wire [11:0] \$43 ;
   wire [11:0] \$44 ;
-  wire [11:0] \$45 ;
-  reg [6:0] \$46 ;
-  wire [7:0] \$47 ;
-  wire \$48 ;
-  wire [11:0] \$49 ;
-  wire [7:0] \$5 ;
-  wire \$50 ;
+  reg [6:0] \$45 ;
+  wire [7:0] \$46 ;
+  wire \$47 ;
+  wire [11:0] \$48 ;
+  wire \$49 ;
+  reg [6:0] \$5 ;
+  wire [11:0] \$50 ;
   wire [11:0] \$51 ;
-  wire [11:0] \$52 ;
-  wire \$53 ;
-  wire [11:0] \$54 ;
-  wire \$55 ;
+  wire \$52 ;
+  wire [11:0] \$53 ;
+  wire \$54 ;
+  wire [11:0] \$55 ;
   wire [11:0] \$56 ;
-  wire [11:0] \$57 ;
-  wire \$58 ;
-  wire [11:0] \$59 ;
-  reg [6:0] \$6 ;
-  wire \$60 ;
+  wire \$57 ;
+  wire [11:0] \$58 ;
+  wire \$59 ;
+  wire [7:0] \$6 ;
+  wire [11:0] \$60 ;
   wire [11:0] \$61 ;
-  wire [11:0] \$62 ;
-  reg [6:0] \$63 ;
-  wire [7:0] \$64 ;
-  wire \$65 ;
-  wire [11:0] \$66 ;
-  wire \$67 ;
+  reg [6:0] \$62 ;
+  wire [7:0] \$63 ;
+  wire \$64 ;
+  wire [11:0] \$65 ;
+  wire \$66 ;
+  wire [11:0] \$67 ;
   wire [11:0] \$68 ;
-  wire [11:0] \$69 ;
-  wire [7:0] \$7 ;
-  wire \$70 ;
-  wire [11:0] \$71 ;
-  wire \$72 ;
+  wire \$69 ;
+  reg [6:0] \$7 ;
+  wire [11:0] \$70 ;
+  wire \$71 ;
+  wire [11:0] \$72 ;
   wire [11:0] \$73 ;
-  wire [11:0] \$74 ;
-  wire \$75 ;
-  wire [11:0] \$76 ;
-  wire \$77 ;
+  wire \$74 ;
+  wire [11:0] \$75 ;
+  wire \$76 ;
+  wire [11:0] \$77 ;
   wire [11:0] \$78 ;
-  wire [11:0] \$79 ;
-  reg [6:0] \$8 ;
-  reg [6:0] \$80 ;
-  wire \$81 ;
-  wire [4:0] \$82 ;
-  wire \$83 ;
+  reg [6:0] \$79 ;
+  wire [7:0] \$8 ;
+  wire \$80 ;
+  wire [4:0] \$81 ;
+  wire \$82 ;
+  wire [4:0] \$83 ;
   wire [4:0] \$84 ;
-  wire [4:0] \$85 ;
+  wire [7:0] \$85 ;
   wire [7:0] \$86 ;
-  wire [7:0] \$87 ;
-  wire \$88 ;
-  wire [11:0] \$89 ;
+  wire \$87 ;
+  wire [11:0] \$88 ;
+  wire \$89 ;
   wire [7:0] \$9 ;
-  wire \$90 ;
+  wire [11:0] \$90 ;
   wire [11:0] \$91 ;
-  wire [11:0] \$92 ;
+  wire \$92 ;
   wire \$93 ;
-  wire \$94 ;
-  wire [11:0] \$95 ;
-  wire \$96 ;
+  wire [11:0] \$94 ;
+  wire \$95 ;
+  wire [11:0] \$96 ;
   wire [11:0] \$97 ;
-  wire [11:0] \$98 ;
-  wire \$99 ;
+  wire \$98 ;
+  wire [11:0] \$99 ;
   input advance;
   wire advance;
   input \begin ;
@@ -39408,9 +39809,7 @@ module \biss_master_wb.ch1.core.decoder.field_ends (rst, error_bit, words, crc_w
   wire [6:0] \following_ends.lc_end_m1 ;
   wire [6:0] \following_ends.nenw_end_m1 ;
   wire [6:0] \following_ends.word_end_m1 ;
-  wire following_word;
-  input index;
-  wire index;
+  reg [1:0] following_word = 2'h1;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -39441,242 +39840,259 @@ module \biss_master_wb.ch1.core.decoder.field_ends (rst, error_bit, words, crc_w
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$1  = index + 2'h2;
-  assign following_word = \begin  ? 1'h1 : \$1 [0];
-  assign \$2  = words[5:0] + 1'h1;
-  assign \$3  = words[5:0] + 7'h7f;
-  assign \$5  = words[5:0] + \$4 ;
-  assign \$7  = words[5:0] + \$6 ;
-  assign \$9  = \$8  + crc_widths[4:0];
-  assign \$10  = words[5:0] + \$9 [6:0];
-  assign \$11  = | words[5:0];
-  assign \$13  = words[5:0] + \$12 ;
-  assign \$14  = ! \$13 ;
-  assign \$16  = words[5:0] + \$15 ;
-  assign \$17  = | \$16 ;
-  assign \$18  = \$14  & \$17 ;
-  assign \$19  = ! following_word;
-  assign \$20  = following_word ? 12'h000 : words[11:0];
-  assign \$22  = \$21  ? words[23:12] : 12'h000;
-  assign \$23  = \$20  | \$22 ;
-  assign \$24  = \$23 [5:0] + 1'h1;
-  assign \$25  = ! following_word;
-  assign \$26  = following_word ? 12'h000 : words[11:0];
-  assign \$28  = \$27  ? words[23:12] : 12'h000;
-  assign \$29  = \$26  | \$28 ;
-  assign \$30  = \$29 [5:0] + 7'h7f;
-  assign \$31  = ! following_word;
-  assign \$32  = following_word ? 12'h000 : words[11:0];
-  assign \$34  = \$33  ? words[23:12] : 12'h000;
-  assign \$35  = \$32  | \$34 ;
-  assign \$36  = ! following_word;
-  assign \$37  = following_word ? 12'h000 : words[11:0];
-  assign \$39  = \$38  ? words[23:12] : 12'h000;
-  assign \$40  = \$37  | \$39 ;
-  assign \$41  = ! following_word;
-  assign \$42  = following_word ? 12'h000 : words[11:0];
-  assign \$44  = \$43  ? words[23:12] : 12'h000;
-  assign \$45  = \$42  | \$44 ;
-  assign \$47  = \$35 [5:0] + \$46 ;
-  assign \$48  = ! following_word;
-  assign \$49  = following_word ? 12'h000 : words[11:0];
-  assign \$51  = \$50  ? words[23:12] : 12'h000;
-  assign \$52  = \$49  | \$51 ;
-  assign \$53  = ! following_word;
-  assign \$54  = following_word ? 12'h000 : words[11:0];
-  assign \$56  = \$55  ? words[23:12] : 12'h000;
-  assign \$57  = \$54  | \$56 ;
-  assign \$58  = ! following_word;
-  assign \$59  = following_word ? 12'h000 : words[11:0];
-  assign \$61  = \$60  ? words[23:12] : 12'h000;
-  assign \$62  = \$59  | \$61 ;
-  assign \$64  = \$52 [5:0] + \$63 ;
-  assign \$65  = ! following_word;
-  assign \$66  = following_word ? 12'h000 : words[11:0];
-  assign \$68  = \$67  ? words[23:12] : 12'h000;
-  assign \$69  = \$66  | \$68 ;
-  assign \$70  = ! following_word;
-  assign \$71  = following_word ? 12'h000 : words[11:0];
-  assign \$73  = \$72  ? words[23:12] : 12'h000;
-  assign \$74  = \$71  | \$73 ;
-  assign \$75  = ! following_word;
-  assign \$76  = following_word ? 12'h000 : words[11:0];
-  assign \$78  = \$77  ? words[23:12] : 12'h000;
-  assign \$79  = \$76  | \$78 ;
-  assign \$81  = ! following_word;
-  assign \$82  = following_word ? 5'h00 : crc_widths[4:0];
-  assign \$84  = \$83  ? crc_widths[9:5] : 5'h00;
-  assign \$85  = \$82  | \$84 ;
-  assign \$86  = \$80  + \$85 ;
-  assign \$87  = \$69 [5:0] + \$86 [6:0];
-  assign \$88  = ! following_word;
-  assign \$89  = following_word ? 12'h000 : words[11:0];
-  assign \$91  = \$90  ? words[23:12] : 12'h000;
-  assign \$92  = \$89  | \$91 ;
-  assign \$93  = | \$92 [5:0];
-  assign \$94  = ! following_word;
-  assign \$95  = following_word ? 12'h000 : words[11:0];
-  assign \$97  = \$96  ? words[23:12] : 12'h000;
-  assign \$98  = \$95  | \$97 ;
-  assign \$99  = ! following_word;
-  assign \$100  = following_word ? 12'h000 : words[11:0];
-  assign \$102  = \$101  ? words[23:12] : 12'h000;
-  assign \$103  = \$100  | \$102 ;
-  assign \$104  = ! following_word;
-  assign \$105  = following_word ? 12'h000 : words[11:0];
-  assign \$107  = \$106  ? words[23:12] : 12'h000;
-  assign \$108  = \$105  | \$107 ;
-  assign \$110  = \$98 [5:0] + \$109 ;
-  assign \$111  = ! \$110 ;
-  assign \$112  = ! following_word;
-  assign \$113  = following_word ? 12'h000 : words[11:0];
-  assign \$115  = \$114  ? words[23:12] : 12'h000;
-  assign \$116  = \$113  | \$115 ;
-  assign \$117  = ! following_word;
-  assign \$118  = following_word ? 12'h000 : words[11:0];
-  assign \$120  = \$119  ? words[23:12] : 12'h000;
-  assign \$121  = \$118  | \$120 ;
-  assign \$122  = ! following_word;
-  assign \$123  = following_word ? 12'h000 : words[11:0];
-  assign \$125  = \$124  ? words[23:12] : 12'h000;
-  assign \$126  = \$123  | \$125 ;
-  assign \$128  = \$116 [5:0] + \$127 ;
-  assign \$129  = | \$128 ;
-  assign \$130  = \$111  & \$129 ;
-  assign \$131  = ! following_word;
-  assign \$132  = following_word ? 12'h000 : words[11:0];
-  assign \$134  = \$133  ? words[23:12] : 12'h000;
-  assign \$135  = \$132  | \$134 ;
-  assign \$136  = \$135 [5:0] + 1'h1;
-  assign \$137  = ! following_word;
-  assign \$138  = following_word ? 12'h000 : words[11:0];
-  assign \$140  = \$139  ? words[23:12] : 12'h000;
-  assign \$141  = \$138  | \$140 ;
-  assign \$142  = \$141 [5:0] + 7'h7f;
-  assign \$143  = ! following_word;
-  assign \$144  = following_word ? 12'h000 : words[11:0];
-  assign \$146  = \$145  ? words[23:12] : 12'h000;
-  assign \$147  = \$144  | \$146 ;
-  assign \$148  = ! following_word;
-  assign \$149  = following_word ? 12'h000 : words[11:0];
-  assign \$151  = \$150  ? words[23:12] : 12'h000;
-  assign \$152  = \$149  | \$151 ;
-  assign \$153  = ! following_word;
-  assign \$154  = following_word ? 12'h000 : words[11:0];
-  assign \$156  = \$155  ? words[23:12] : 12'h000;
-  assign \$157  = \$154  | \$156 ;
-  assign \$159  = \$147 [5:0] + \$158 ;
-  assign \$160  = ! following_word;
-  assign \$161  = following_word ? 12'h000 : words[11:0];
-  assign \$163  = \$162  ? words[23:12] : 12'h000;
-  assign \$164  = \$161  | \$163 ;
-  assign \$165  = ! following_word;
-  assign \$166  = following_word ? 12'h000 : words[11:0];
-  assign \$168  = \$167  ? words[23:12] : 12'h000;
-  assign \$169  = \$166  | \$168 ;
-  assign \$170  = ! following_word;
-  assign \$171  = following_word ? 12'h000 : words[11:0];
-  assign \$173  = \$172  ? words[23:12] : 12'h000;
-  assign \$174  = \$171  | \$173 ;
-  assign \$176  = \$164 [5:0] + \$175 ;
-  assign \$177  = ! following_word;
-  assign \$178  = following_word ? 12'h000 : words[11:0];
-  assign \$180  = \$179  ? words[23:12] : 12'h000;
-  assign \$181  = \$178  | \$180 ;
-  assign \$182  = ! following_word;
-  assign \$183  = following_word ? 12'h000 : words[11:0];
-  assign \$185  = \$184  ? words[23:12] : 12'h000;
-  assign \$186  = \$183  | \$185 ;
-  assign \$187  = ! following_word;
-  assign \$188  = following_word ? 12'h000 : words[11:0];
-  assign \$190  = \$189  ? words[23:12] : 12'h000;
-  assign \$191  = \$188  | \$190 ;
-  assign \$193  = ! following_word;
-  assign \$194  = following_word ? 5'h00 : crc_widths[4:0];
-  assign \$196  = \$195  ? crc_widths[9:5] : 5'h00;
-  assign \$197  = \$194  | \$196 ;
-  assign \$198  = \$192  + \$197 ;
-  assign \$199  = \$181 [5:0] + \$198 [6:0];
-  assign \$200  = ! following_word;
-  assign \$201  = following_word ? 12'h000 : words[11:0];
-  assign \$203  = \$202  ? words[23:12] : 12'h000;
-  assign \$204  = \$201  | \$203 ;
-  assign \$205  = | \$204 [5:0];
-  assign \$206  = ! following_word;
-  assign \$207  = following_word ? 12'h000 : words[11:0];
-  assign \$209  = \$208  ? words[23:12] : 12'h000;
-  assign \$210  = \$207  | \$209 ;
-  assign \$211  = ! following_word;
-  assign \$212  = following_word ? 12'h000 : words[11:0];
-  assign \$214  = \$213  ? words[23:12] : 12'h000;
-  assign \$215  = \$212  | \$214 ;
-  assign \$216  = ! following_word;
-  assign \$217  = following_word ? 12'h000 : words[11:0];
-  assign \$219  = \$218  ? words[23:12] : 12'h000;
-  assign \$220  = \$217  | \$219 ;
-  assign \$222  = \$210 [5:0] + \$221 ;
-  assign \$223  = ! \$222 ;
-  assign \$224  = ! following_word;
-  assign \$225  = following_word ? 12'h000 : words[11:0];
-  assign \$227  = \$226  ? words[23:12] : 12'h000;
-  assign \$228  = \$225  | \$227 ;
-  assign \$229  = ! following_word;
-  assign \$230  = following_word ? 12'h000 : words[11:0];
-  assign \$232  = \$231  ? words[23:12] : 12'h000;
-  assign \$233  = \$230  | \$232 ;
-  assign \$234  = ! following_word;
-  assign \$235  = following_word ? 12'h000 : words[11:0];
-  assign \$237  = \$236  ? words[23:12] : 12'h000;
-  assign \$238  = \$235  | \$237 ;
-  assign \$240  = \$228 [5:0] + \$239 ;
-  assign \$241  = | \$240 ;
-  assign \$242  = \$223  & \$241 ;
+  assign \$1  = words[5:0] + 1'h1;
+  assign \$2  = words[5:0] + 7'h7f;
+  assign \$4  = words[5:0] + \$3 ;
+  assign \$6  = words[5:0] + \$5 ;
+  assign \$8  = \$7  + crc_widths[4:0];
+  assign \$9  = words[5:0] + \$8 [6:0];
+  assign \$10  = | words[5:0];
+  assign \$12  = words[5:0] + \$11 ;
+  assign \$13  = ! \$12 ;
+  assign \$15  = words[5:0] + \$14 ;
+  assign \$16  = | \$15 ;
+  assign \$17  = \$13  & \$16 ;
+  assign \$18  = ! following_word;
+  assign \$19  = \$18  ? words[11:0] : 12'h000;
+  assign \$20  = following_word == 1'h1;
+  assign \$21  = \$20  ? words[23:12] : 12'h000;
+  assign \$22  = \$19  | \$21 ;
+  assign \$23  = \$22 [5:0] + 1'h1;
+  assign \$24  = ! following_word;
+  assign \$25  = \$24  ? words[11:0] : 12'h000;
+  assign \$26  = following_word == 1'h1;
+  assign \$27  = \$26  ? words[23:12] : 12'h000;
+  assign \$28  = \$25  | \$27 ;
+  assign \$29  = \$28 [5:0] + 7'h7f;
+  assign \$30  = ! following_word;
+  assign \$31  = \$30  ? words[11:0] : 12'h000;
+  assign \$32  = following_word == 1'h1;
+  assign \$33  = \$32  ? words[23:12] : 12'h000;
+  assign \$34  = \$31  | \$33 ;
+  assign \$35  = ! following_word;
+  assign \$36  = \$35  ? words[11:0] : 12'h000;
+  assign \$37  = following_word == 1'h1;
+  assign \$38  = \$37  ? words[23:12] : 12'h000;
+  assign \$39  = \$36  | \$38 ;
+  assign \$40  = ! following_word;
+  assign \$41  = \$40  ? words[11:0] : 12'h000;
+  assign \$42  = following_word == 1'h1;
+  assign \$43  = \$42  ? words[23:12] : 12'h000;
+  assign \$44  = \$41  | \$43 ;
+  assign \$46  = \$34 [5:0] + \$45 ;
+  assign \$47  = ! following_word;
+  assign \$48  = \$47  ? words[11:0] : 12'h000;
+  assign \$49  = following_word == 1'h1;
+  assign \$50  = \$49  ? words[23:12] : 12'h000;
+  assign \$51  = \$48  | \$50 ;
+  assign \$52  = ! following_word;
+  assign \$53  = \$52  ? words[11:0] : 12'h000;
+  assign \$54  = following_word == 1'h1;
+  assign \$55  = \$54  ? words[23:12] : 12'h000;
+  assign \$56  = \$53  | \$55 ;
+  assign \$57  = ! following_word;
+  assign \$58  = \$57  ? words[11:0] : 12'h000;
+  assign \$59  = following_word == 1'h1;
+  assign \$60  = \$59  ? words[23:12] : 12'h000;
+  assign \$61  = \$58  | \$60 ;
+  assign \$63  = \$51 [5:0] + \$62 ;
+  assign \$64  = ! following_word;
+  assign \$65  = \$64  ? words[11:0] : 12'h000;
+  assign \$66  = following_word == 1'h1;
+  assign \$67  = \$66  ? words[23:12] : 12'h000;
+  assign \$68  = \$65  | \$67 ;
+  assign \$69  = ! following_word;
+  assign \$70  = \$69  ? words[11:0] : 12'h000;
+  assign \$71  = following_word == 1'h1;
+  assign \$72  = \$71  ? words[23:12] : 12'h000;
+  assign \$73  = \$70  | \$72 ;
+  assign \$74  = ! following_word;
+  assign \$75  = \$74  ? words[11:0] : 12'h000;
+  assign \$76  = following_word == 1'h1;
+  assign \$77  = \$76  ? words[23:12] : 12'h000;
+  assign \$78  = \$75  | \$77 ;
+  assign \$80  = ! following_word;
+  assign \$81  = \$80  ? crc_widths[4:0] : 5'h00;
+  assign \$82  = following_word == 1'h1;
+  assign \$83  = \$82  ? crc_widths[9:5] : 5'h00;
+  assign \$84  = \$81  | \$83 ;
+  assign \$85  = \$79  + \$84 ;
+  assign \$86  = \$68 [5:0] + \$85 [6:0];
+  assign \$87  = ! following_word;
+  assign \$88  = \$87  ? words[11:0] : 12'h000;
+  assign \$89  = following_word == 1'h1;
+  assign \$90  = \$89  ? words[23:12] : 12'h000;
+  assign \$91  = \$88  | \$90 ;
+  assign \$92  = | \$91 [5:0];
+  assign \$93  = ! following_word;
+  assign \$94  = \$93  ? words[11:0] : 12'h000;
+  assign \$95  = following_word == 1'h1;
+  assign \$96  = \$95  ? words[23:12] : 12'h000;
+  assign \$97  = \$94  | \$96 ;
+  assign \$98  = ! following_word;
+  assign \$99  = \$98  ? words[11:0] : 12'h000;
+  assign \$100  = following_word == 1'h1;
+  assign \$101  = \$100  ? words[23:12] : 12'h000;
+  assign \$102  = \$99  | \$101 ;
+  assign \$103  = ! following_word;
+  assign \$104  = \$103  ? words[11:0] : 12'h000;
+  assign \$105  = following_word == 1'h1;
+  assign \$106  = \$105  ? words[23:12] : 12'h000;
+  assign \$107  = \$104  | \$106 ;
+  assign \$109  = \$97 [5:0] + \$108 ;
+  assign \$110  = ! \$109 ;
+  assign \$111  = ! following_word;
+  assign \$112  = \$111  ? words[11:0] : 12'h000;
+  assign \$113  = following_word == 1'h1;
+  assign \$114  = \$113  ? words[23:12] : 12'h000;
+  assign \$115  = \$112  | \$114 ;
+  assign \$116  = ! following_word;
+  assign \$117  = \$116  ? words[11:0] : 12'h000;
+  assign \$118  = following_word == 1'h1;
+  assign \$119  = \$118  ? words[23:12] : 12'h000;
+  assign \$120  = \$117  | \$119 ;
+  assign \$121  = ! following_word;
+  assign \$122  = \$121  ? words[11:0] : 12'h000;
+  assign \$123  = following_word == 1'h1;
+  assign \$124  = \$123  ? words[23:12] : 12'h000;
+  assign \$125  = \$122  | \$124 ;
+  assign \$127  = \$115 [5:0] + \$126 ;
+  assign \$128  = | \$127 ;
+  assign \$129  = \$110  & \$128 ;
+  assign \$130  = ! following_word;
+  assign \$131  = \$130  ? words[11:0] : 12'h000;
+  assign \$132  = following_word == 1'h1;
+  assign \$133  = \$132  ? words[23:12] : 12'h000;
+  assign \$134  = \$131  | \$133 ;
+  assign \$135  = \$134 [5:0] + 1'h1;
+  assign \$136  = ! following_word;
+  assign \$137  = \$136  ? words[11:0] : 12'h000;
+  assign \$138  = following_word == 1'h1;
+  assign \$139  = \$138  ? words[23:12] : 12'h000;
+  assign \$140  = \$137  | \$139 ;
+  assign \$141  = \$140 [5:0] + 7'h7f;
+  assign \$142  = ! following_word;
+  assign \$143  = \$142  ? words[11:0] : 12'h000;
+  assign \$144  = following_word == 1'h1;
+  assign \$145  = \$144  ? words[23:12] : 12'h000;
+  assign \$146  = \$143  | \$145 ;
+  assign \$147  = ! following_word;
+  assign \$148  = \$147  ? words[11:0] : 12'h000;
+  assign \$149  = following_word == 1'h1;
+  assign \$150  = \$149  ? words[23:12] : 12'h000;
+  assign \$151  = \$148  | \$150 ;
+  assign \$152  = ! following_word;
+  assign \$153  = \$152  ? words[11:0] : 12'h000;
+  assign \$154  = following_word == 1'h1;
+  assign \$155  = \$154  ? words[23:12] : 12'h000;
+  assign \$156  = \$153  | \$155 ;
+  assign \$158  = \$146 [5:0] + \$157 ;
+  assign \$159  = ! following_word;
+  assign \$160  = \$159  ? words[11:0] : 12'h000;
+  assign \$161  = following_word == 1'h1;
+  assign \$162  = \$161  ? words[23:12] : 12'h000;
+  assign \$163  = \$160  | \$162 ;
+  assign \$164  = ! following_word;
+  assign \$165  = \$164  ? words[11:0] : 12'h000;
+  assign \$166  = following_word == 1'h1;
+  assign \$167  = \$166  ? words[23:12] : 12'h000;
+  assign \$168  = \$165  | \$167 ;
+  assign \$169  = ! following_word;
+  assign \$170  = \$169  ? words[11:0] : 12'h000;
+  assign \$171  = following_word == 1'h1;
+  assign \$172  = \$171  ? words[23:12] : 12'h000;
+  assign \$173  = \$170  | \$172 ;
+  assign \$175  = \$163 [5:0] + \$174 ;
+  assign \$176  = ! following_word;
+  assign \$177  = \$176  ? words[11:0] : 12'h000;
+  assign \$178  = following_word == 1'h1;
+  assign \$179  = \$178  ? words[23:12] : 12'h000;
+  assign \$180  = \$177  | \$179 ;
+  assign \$181  = ! following_word;
+  assign \$182  = \$181  ? words[11:0] : 12'h000;
+  assign \$183  = following_word == 1'h1;
+  assign \$184  = \$183  ? words[23:12] : 12'h000;
+  assign \$185  = \$182  | \$184 ;
+  assign \$186  = ! following_word;
+  assign \$187  = \$186  ? words[11:0] : 12'h000;
+  assign \$188  = following_word == 1'h1;
+  assign \$189  = \$188  ? words[23:12] : 12'h000;
+  assign \$190  = \$187  | \$189 ;
+  assign \$192  = ! following_word;
+  assign \$193  = \$192  ? crc_widths[4:0] : 5'h00;
+  assign \$194  = following_word == 1'h1;
+  assign \$195  = \$194  ? crc_widths[9:5] : 5'h00;
+  assign \$196  = \$193  | \$195 ;
+  assign \$197  = \$191  + \$196 ;
+  assign \$198  = \$180 [5:0] + \$197 [6:0];
+  assign \$199  = ! following_word;
+  assign \$200  = \$199  ? words[11:0] : 12'h000;
+  assign \$201  = following_word == 1'h1;
+  assign \$202  = \$201  ? words[23:12] : 12'h000;
+  assign \$203  = \$200  | \$202 ;
+  assign \$204  = | \$203 [5:0];
+  assign \$205  = ! following_word;
+  assign \$206  = \$205  ? words[11:0] : 12'h000;
+  assign \$207  = following_word == 1'h1;
+  assign \$208  = \$207  ? words[23:12] : 12'h000;
+  assign \$209  = \$206  | \$208 ;
+  assign \$210  = ! following_word;
+  assign \$211  = \$210  ? words[11:0] : 12'h000;
+  assign \$212  = following_word == 1'h1;
+  assign \$213  = \$212  ? words[23:12] : 12'h000;
+  assign \$214  = \$211  | \$213 ;
+  assign \$215  = ! following_word;
+  assign \$216  = \$215  ? words[11:0] : 12'h000;
+  assign \$217  = following_word == 1'h1;
+  assign \$218  = \$217  ? words[23:12] : 12'h000;
+  assign \$219  = \$216  | \$218 ;
+  assign \$221  = \$209 [5:0] + \$220 ;
+  assign \$222  = ! \$221 ;
+  assign \$223  = ! following_word;
+  assign \$224  = \$223  ? words[11:0] : 12'h000;
+  assign \$225  = following_word == 1'h1;
+  assign \$226  = \$225  ? words[23:12] : 12'h000;
+  assign \$227  = \$224  | \$226 ;
+  assign \$228  = ! following_word;
+  assign \$229  = \$228  ? words[11:0] : 12'h000;
+  assign \$230  = following_word == 1'h1;
+  assign \$231  = \$230  ? words[23:12] : 12'h000;
+  assign \$232  = \$229  | \$231 ;
+  assign \$233  = ! following_word;
+  assign \$234  = \$233  ? words[11:0] : 12'h000;
+  assign \$235  = following_word == 1'h1;
+  assign \$236  = \$235  ? words[23:12] : 12'h000;
+  assign \$237  = \$234  | \$236 ;
+  assign \$239  = \$227 [5:0] + \$238 ;
+  assign \$240  = | \$239 ;
+  assign \$241  = \$222  & \$240 ;
+  assign \$242  = following_word + 1'h1;
   always @(posedge clk)
     current <= \$243 ;
   always @(posedge clk)
     following <= \$244 ;
+  always @(posedge clk)
+    following_word <= \$245 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$4  = 7'h7f;
+          \$3  = 7'h7f;
       3'h1:
-          \$4  = 7'h01;
+          \$3  = 7'h01;
       3'h2:
-          \$4  = 7'h7f;
+          \$3  = 7'h7f;
       3'h3:
-          \$4  = 7'h01;
+          \$3  = 7'h01;
       3'h4:
-          \$4  = 7'h00;
+          \$3  = 7'h00;
       3'h5:
-          \$4  = 7'h02;
+          \$3  = 7'h02;
       3'h6:
-          \$4  = 7'h00;
+          \$3  = 7'h00;
       3'h7:
-          \$4  = 7'h02;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ error_bit, words[7:6] })
-      3'h0:
-          \$6  = 7'h7f;
-      3'h1:
-          \$6  = 7'h01;
-      3'h2:
-          \$6  = 7'h05;
-      3'h3:
-          \$6  = 7'h07;
-      3'h4:
-          \$6  = 7'h00;
-      3'h5:
-          \$6  = 7'h02;
-      3'h6:
-          \$6  = 7'h06;
-      3'h7:
-          \$6  = 7'h08;
+          \$3  = 7'h02;
     endcase
   end
   always @* begin
@@ -39684,21 +40100,21 @@ module \biss_master_wb.ch1.core.decoder.field_ends (rst, error_bit, words, crc_w
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$8  = 7'h7f;
+          \$5  = 7'h7f;
       3'h1:
-          \$8  = 7'h01;
+          \$5  = 7'h01;
       3'h2:
-          \$8  = 7'h05;
+          \$5  = 7'h05;
       3'h3:
-          \$8  = 7'h07;
+          \$5  = 7'h07;
       3'h4:
-          \$8  = 7'h00;
+          \$5  = 7'h00;
       3'h5:
-          \$8  = 7'h02;
+          \$5  = 7'h02;
       3'h6:
-          \$8  = 7'h06;
+          \$5  = 7'h06;
       3'h7:
-          \$8  = 7'h08;
+          \$5  = 7'h08;
     endcase
   end
   always @* begin
@@ -39706,21 +40122,21 @@ module \biss_master_wb.ch1.core.decoder.field_ends (rst, error_bit, words, crc_w
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$12  = 2'h0;
+          \$7  = 7'h7f;
       3'h1:
-          \$12  = 2'h2;
+          \$7  = 7'h01;
       3'h2:
-          \$12  = 2'h0;
+          \$7  = 7'h05;
       3'h3:
-          \$12  = 2'h2;
+          \$7  = 7'h07;
       3'h4:
-          \$12  = 2'h1;
+          \$7  = 7'h00;
       3'h5:
-          \$12  = 2'h3;
+          \$7  = 7'h02;
       3'h6:
-          \$12  = 2'h1;
+          \$7  = 7'h06;
       3'h7:
-          \$12  = 2'h3;
+          \$7  = 7'h08;
     endcase
   end
   always @* begin
@@ -39728,174 +40144,196 @@ module \biss_master_wb.ch1.core.decoder.field_ends (rst, error_bit, words, crc_w
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
-          \$15  = 4'h0;
+          \$11  = 2'h0;
       3'h1:
-          \$15  = 4'h2;
+          \$11  = 2'h2;
       3'h2:
-          \$15  = 4'h6;
+          \$11  = 2'h0;
       3'h3:
-          \$15  = 4'h8;
+          \$11  = 2'h2;
       3'h4:
-          \$15  = 4'h1;
+          \$11  = 2'h1;
       3'h5:
-          \$15  = 4'h3;
+          \$11  = 2'h3;
       3'h6:
-          \$15  = 4'h7;
+          \$11  = 2'h1;
       3'h7:
-          \$15  = 4'h9;
+          \$11  = 2'h3;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$45 [7], \$40 [6] })
-      2'h0:
-          \$46  = 7'h7f;
-      2'h1:
-          \$46  = 7'h01;
-      2'h2:
-          \$46  = 7'h7f;
-      2'h3:
-          \$46  = 7'h01;
+    casez ({ error_bit, words[7:6] })
+      3'h0:
+          \$14  = 4'h0;
+      3'h1:
+          \$14  = 4'h2;
+      3'h2:
+          \$14  = 4'h6;
+      3'h3:
+          \$14  = 4'h8;
+      3'h4:
+          \$14  = 4'h1;
+      3'h5:
+          \$14  = 4'h3;
+      3'h6:
+          \$14  = 4'h7;
+      3'h7:
+          \$14  = 4'h9;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$62 [7], \$57 [6] })
+    casez ({ \$44 [7], \$39 [6] })
       2'h0:
-          \$63  = 7'h7f;
+          \$45  = 7'h7f;
       2'h1:
-          \$63  = 7'h01;
+          \$45  = 7'h01;
       2'h2:
-          \$63  = 7'h05;
+          \$45  = 7'h7f;
       2'h3:
-          \$63  = 7'h07;
+          \$45  = 7'h01;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$79 [7], \$74 [6] })
+    casez ({ \$61 [7], \$56 [6] })
       2'h0:
-          \$80  = 7'h7f;
+          \$62  = 7'h7f;
       2'h1:
-          \$80  = 7'h01;
+          \$62  = 7'h01;
       2'h2:
-          \$80  = 7'h05;
+          \$62  = 7'h05;
       2'h3:
-          \$80  = 7'h07;
+          \$62  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$108 [7], \$103 [6] })
+    casez ({ \$78 [7], \$73 [6] })
       2'h0:
-          \$109  = 2'h0;
+          \$79  = 7'h7f;
       2'h1:
-          \$109  = 2'h2;
+          \$79  = 7'h01;
       2'h2:
-          \$109  = 2'h0;
+          \$79  = 7'h05;
       2'h3:
-          \$109  = 2'h2;
+          \$79  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$126 [7], \$121 [6] })
+    casez ({ \$107 [7], \$102 [6] })
       2'h0:
-          \$127  = 4'h0;
+          \$108  = 2'h0;
       2'h1:
-          \$127  = 4'h2;
+          \$108  = 2'h2;
       2'h2:
-          \$127  = 4'h6;
+          \$108  = 2'h0;
       2'h3:
-          \$127  = 4'h8;
+          \$108  = 2'h2;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$157 [7], \$152 [6] })
+    casez ({ \$125 [7], \$120 [6] })
       2'h0:
-          \$158  = 7'h7f;
+          \$126  = 4'h0;
       2'h1:
-          \$158  = 7'h01;
+          \$126  = 4'h2;
       2'h2:
-          \$158  = 7'h7f;
+          \$126  = 4'h6;
       2'h3:
-          \$158  = 7'h01;
+          \$126  = 4'h8;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$174 [7], \$169 [6] })
+    casez ({ \$156 [7], \$151 [6] })
       2'h0:
-          \$175  = 7'h7f;
+          \$157  = 7'h7f;
       2'h1:
-          \$175  = 7'h01;
+          \$157  = 7'h01;
       2'h2:
-          \$175  = 7'h05;
+          \$157  = 7'h7f;
       2'h3:
-          \$175  = 7'h07;
+          \$157  = 7'h01;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$191 [7], \$186 [6] })
+    casez ({ \$173 [7], \$168 [6] })
       2'h0:
-          \$192  = 7'h7f;
+          \$174  = 7'h7f;
       2'h1:
-          \$192  = 7'h01;
+          \$174  = 7'h01;
       2'h2:
-          \$192  = 7'h05;
+          \$174  = 7'h05;
       2'h3:
-          \$192  = 7'h07;
+          \$174  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$220 [7], \$215 [6] })
+    casez ({ \$190 [7], \$185 [6] })
       2'h0:
-          \$221  = 2'h0;
+          \$191  = 7'h7f;
       2'h1:
-          \$221  = 2'h2;
+          \$191  = 7'h01;
       2'h2:
-          \$221  = 2'h0;
+          \$191  = 7'h05;
       2'h3:
-          \$221  = 2'h2;
+          \$191  = 7'h07;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$238 [7], \$233 [6] })
+    casez ({ \$219 [7], \$214 [6] })
       2'h0:
-          \$239  = 4'h0;
+          \$220  = 2'h0;
       2'h1:
-          \$239  = 4'h2;
+          \$220  = 2'h2;
       2'h2:
-          \$239  = 4'h6;
+          \$220  = 2'h0;
       2'h3:
-          \$239  = 4'h8;
+          \$220  = 2'h2;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$237 [7], \$232 [6] })
+      2'h0:
+          \$238  = 4'h0;
+      2'h1:
+          \$238  = 4'h2;
+      2'h2:
+          \$238  = 4'h6;
+      2'h3:
+          \$238  = 4'h8;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$243  = current;
     if (\begin ) begin
-      \$243 [6:0] = \$2 ;
-      \$243 [13:7] = \$3 [6:0];
-      \$243 [20:14] = \$5 [6:0];
-      \$243 [27:21] = \$7 [6:0];
-      \$243 [34:28] = \$10 [6:0];
-      \$243 [35] = \$11 ;
-      \$243 [36] = \$18 ;
+      \$243 [6:0] = \$1 ;
+      \$243 [13:7] = \$2 [6:0];
+      \$243 [20:14] = \$4 [6:0];
+      \$243 [27:21] = \$6 [6:0];
+      \$243 [34:28] = \$9 [6:0];
+      \$243 [35] = \$10 ;
+      \$243 [36] = \$17 ;
     end else if (advance) begin
       \$243  = following;
     end
@@ -39904,21 +40342,36 @@ module \biss_master_wb.ch1.core.decoder.field_ends (rst, error_bit, words, crc_w
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$244  = following;
     if (\begin ) begin
-      \$244 [6:0] = \$24 ;
-      \$244 [13:7] = \$30 [6:0];
-      \$244 [20:14] = \$47 [6:0];
-      \$244 [27:21] = \$64 [6:0];
-      \$244 [34:28] = \$87 [6:0];
-      \$244 [35] = \$93 ;
-      \$244 [36] = \$130 ;
+      \$244 [6:0] = \$23 ;
+      \$244 [13:7] = \$29 [6:0];
+      \$244 [20:14] = \$46 [6:0];
+      \$244 [27:21] = \$63 [6:0];
+      \$244 [34:28] = \$86 [6:0];
+      \$244 [35] = \$92 ;
+      \$244 [36] = \$129 ;
     end else if (advance) begin
-      \$244 [6:0] = \$136 ;
-      \$244 [13:7] = \$142 [6:0];
-      \$244 [20:14] = \$159 [6:0];
-      \$244 [27:21] = \$176 [6:0];
-      \$244 [34:28] = \$199 [6:0];
-      \$244 [35] = \$205 ;
-      \$244 [36] = \$242 ;
+      \$244 [6:0] = \$135 ;
+      \$244 [13:7] = \$141 [6:0];
+      \$244 [20:14] = \$158 [6:0];
+      \$244 [27:21] = \$175 [6:0];
+      \$244 [34:28] = \$198 [6:0];
+      \$244 [35] = \$204 ;
+      \$244 [36] = \$241 ;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    \$245  = following_word;
+    if (\begin ) begin
+      \$245  = 2'h2;
+    end else if (advance) begin
+      \$245  = \$242 [1:0];
+    end
+    if (receiver_clear) begin
+      \$245  = 2'h1;
+    end
+    if (rst) begin
+      \$245  = 2'h1;
     end
   end
   assign current_ends = current;
@@ -39967,44 +40420,6 @@ module \biss_master_wb.ch1.core.decoder.field_ends (rst, error_bit, words, crc_w
   assign \words[1].signed  = words[23];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign \$21  = following_word;
-  assign \$27  = following_word;
-  assign \$33  = following_word;
-  assign \$38  = following_word;
-  assign \$43  = following_word;
-  assign \$50  = following_word;
-  assign \$55  = following_word;
-  assign \$60  = following_word;
-  assign \$67  = following_word;
-  assign \$72  = following_word;
-  assign \$77  = following_word;
-  assign \$83  = following_word;
-  assign \$90  = following_word;
-  assign \$96  = following_word;
-  assign \$101  = following_word;
-  assign \$106  = following_word;
-  assign \$114  = following_word;
-  assign \$119  = following_word;
-  assign \$124  = following_word;
-  assign \$133  = following_word;
-  assign \$139  = following_word;
-  assign \$145  = following_word;
-  assign \$150  = following_word;
-  assign \$155  = following_word;
-  assign \$162  = following_word;
-  assign \$167  = following_word;
-  assign \$172  = following_word;
-  assign \$179  = following_word;
-  assign \$184  = following_word;
-  assign \$189  = following_word;
-  assign \$195  = following_word;
-  assign \$202  = following_word;
-  assign \$208  = following_word;
-  assign \$213  = following_word;
-  assign \$218  = following_word;
-  assign \$226  = following_word;
-  assign \$231  = following_word;
-  assign \$236  = following_word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -40860,7 +41275,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13545$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch1.core.ma_stop (rst, \port$13704$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -40949,8 +41364,8 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13545$199 , ssi, ssi_
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13545$199 ;
-  wire \port$13545$199 ;
+  input \port$13704$199 ;
+  wire \port$13704$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -41070,7 +41485,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13545$199 , ssi, ssi_
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13545$199  : 1'h0;
+  assign \$13  = \$12  ? \port$13704$199  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -41238,7 +41653,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$13545$199 , ssi, ssi_
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13545$199 , 1'h1 };
+  assign enables = { \port$13704$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -43378,7 +43793,7 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13545$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13704$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -43961,8 +44376,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13545$259 ;
-  wire [12:0] \port$13545$259 ;
+  input [12:0] \port$13704$259 ;
+  wire [12:0] \port$13704$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -43985,7 +44400,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13545$259 [12:1] + 1'h1;
+  assign \$460  = \port$13704$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -44561,7 +44976,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13545$259 [0]),
+    .clear_high(\port$13704$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -44704,7 +45119,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13545$259 [0]) begin
+            if (\port$13704$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -44789,7 +45204,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13545$259 [0]) begin
+            if (\port$13704$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -44828,7 +45243,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13545$259 [12:1] };
+            \$534  = { 1'h0, \port$13704$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -45213,11 +45628,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13545$259 [12:1] };
-  assign fixed = \port$13545$259 [0];
+  assign fixed_delay = { 1'h0, \port$13704$259 [12:1] };
+  assign fixed = \port$13704$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13545$259 [0];
+  assign clear_high = \port$13704$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -45478,7 +45893,7 @@ module \biss_master_wb.ch1.core.sampler.sync (clk, rst, receiver_clear, stage1, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
+module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, period, hold, abort, idle, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -45576,13 +45991,31 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
   wire \$1082 ;
   wire \$1083 ;
   wire \$1084 ;
-  reg \$1085 ;
-  reg [24:0] \$1086 ;
-  reg \$1087 ;
-  reg \$1088 ;
+  wire \$1085 ;
+  wire \$1086 ;
+  wire \$1087 ;
+  wire \$1088 ;
+  wire \$1089 ;
   wire \$109 ;
+  wire \$1090 ;
+  wire \$1091 ;
+  wire \$1092 ;
+  wire \$1093 ;
+  wire \$1094 ;
+  wire \$1095 ;
+  wire \$1096 ;
+  wire \$1097 ;
+  wire \$1098 ;
+  wire \$1099 ;
   wire \$11 ;
   wire \$110 ;
+  wire \$1100 ;
+  wire \$1101 ;
+  reg \$1102 ;
+  reg [24:0] \$1103 ;
+  reg \$1104 ;
+  reg \$1105 ;
+  reg \$1106 ;
   wire \$111 ;
   wire \$112 ;
   wire \$113 ;
@@ -46573,6 +47006,9 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
   input clk;
   wire clk;
   reg [24:0] count_p2 = 25'h0000002;
+  reg deferred = 1'h0;
+  input hold;
+  wire hold;
   input idle;
   wire idle;
   output overrun;
@@ -47660,85 +48096,116 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
   assign \$1066  = ~ \$1065 ;
   assign \$1067  = count_p2 + 1'h1;
   assign \$1068  = count_p2 >= period;
-  assign \$1069  = start | trigger;
-  assign \$1070  = periodic & period_zero;
-  assign \$1071  = ~ \$1070 ;
-  assign \$1072  = periodic & \$1071 ;
-  assign \$1073  = \$1072  & period_start;
-  assign \$1074  = \$1069  | \$1073 ;
+  assign \$1069  = ~ hold;
+  assign \$1070  = idle & \$1069 ;
+  assign \$1071  = abort | \$1070 ;
+  assign \$1072  = ~ abort;
+  assign \$1073  = idle & \$1072 ;
+  assign \$1074  = start | trigger;
   assign \$1075  = periodic & period_zero;
-  assign request = \$1074  | \$1075 ;
-  assign \$1076  = start | trigger;
-  assign \$1077  = periodic & period_zero;
-  assign \$1078  = ~ \$1077 ;
-  assign \$1079  = periodic & \$1078 ;
-  assign \$1080  = \$1079  & period_start;
-  assign \$1081  = \$1076  | \$1080 ;
-  assign \$1082  = ~ abort;
-  assign \$1083  = idle & \$1082 ;
-  assign \$1084  = ~ \$1083 ;
-  assign overrun = \$1081  & \$1084 ;
+  assign \$1076  = ~ \$1075 ;
+  assign \$1077  = periodic & \$1076 ;
+  assign \$1078  = \$1077  & period_start;
+  assign \$1079  = \$1074  | \$1078 ;
+  assign \$1080  = \$1073  & \$1079 ;
+  assign \$1081  = start | trigger;
+  assign \$1082  = periodic & period_zero;
+  assign \$1083  = ~ \$1082 ;
+  assign \$1084  = periodic & \$1083 ;
+  assign \$1085  = \$1084  & period_start;
+  assign \$1086  = \$1081  | \$1085 ;
+  assign \$1087  = periodic & period_zero;
+  assign \$1088  = \$1086  | \$1087 ;
+  assign \$1089  = \$1088  | deferred;
+  assign \$1090  = ~ hold;
+  assign request = \$1089  & \$1090 ;
+  assign \$1091  = start | trigger;
+  assign \$1092  = periodic & period_zero;
+  assign \$1093  = ~ \$1092 ;
+  assign \$1094  = periodic & \$1093 ;
+  assign \$1095  = \$1094  & period_start;
+  assign \$1096  = \$1091  | \$1095 ;
+  assign \$1097  = ~ abort;
+  assign \$1098  = idle & \$1097 ;
+  assign \$1099  = ~ \$1098 ;
+  assign \$1100  = \$1096  & \$1099 ;
+  assign \$1101  = deferred & abort;
+  assign overrun = \$1100  | \$1101 ;
   always @(posedge clk)
-    period_zero <= \$1085 ;
+    period_zero <= \$1102 ;
   always @(posedge clk)
-    count_p2 <= \$1086 ;
+    count_p2 <= \$1103 ;
   always @(posedge clk)
-    period_start <= \$1087 ;
+    period_start <= \$1104 ;
   always @(posedge clk)
-    wrap <= \$1088 ;
+    wrap <= \$1105 ;
+  always @(posedge clk)
+    deferred <= \$1106 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$1085  = \$1 ;
+    \$1102  = \$1 ;
     if (rst) begin
-      \$1085  = 1'h0;
+      \$1102  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1086  = 25'h0000002;
+      \$1103  = 25'h0000002;
     end else if (\$7 ) begin
-      \$1086  = 25'h0000003;
+      \$1103  = 25'h0000003;
     end else begin
-      \$1086  = \$1067 [24:0];
+      \$1103  = \$1067 [24:0];
     end
     if (rst) begin
-      \$1086  = 25'h0000002;
+      \$1103  = 25'h0000002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1087  = 1'h1;
+      \$1104  = 1'h1;
     end else if (\$7 ) begin
-      \$1087  = 1'h0;
+      \$1104  = 1'h0;
     end else begin
-      \$1087  = 1'h0;
+      \$1104  = 1'h0;
     end
     if (rst) begin
-      \$1087  = 1'h1;
+      \$1104  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1088  = \$536 ;
+      \$1105  = \$536 ;
     end else if (\$7 ) begin
-      \$1088  = \$1066 ;
+      \$1105  = \$1066 ;
     end else begin
-      \$1088  = \$1068 ;
+      \$1105  = \$1068 ;
     end
     if (rst) begin
-      \$1088  = 1'h0;
+      \$1105  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    \$1106  = deferred;
+    if (\$1071 ) begin
+      \$1106  = 1'h0;
+    end else if (\$1080 ) begin
+      \$1106  = 1'h1;
+    end
+    if (rst) begin
+      \$1106  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13533$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13718$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -47780,8 +48247,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13533$0 ;
-  wire \port$13533$0 ;
+  input \port$13718$0 ;
+  wire \port$13718$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -47795,9 +48262,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13533$0  };
-  assign \$2  = { lc[4:0], \port$13533$0  } == last;
-  assign \$3  = { lc[4:0], \port$13533$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13718$0  };
+  assign \$2  = { lc[4:0], \port$13718$0  } == last;
+  assign \$3  = { lc[4:0], \port$13718$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -47907,7 +48374,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13533$0  };
+  assign lc_next = { lc[4:0], \port$13718$0  };
   assign zero = is_zero;
 endmodule
 
@@ -50704,7 +51171,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11457$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11626$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -50882,8 +51349,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11457$0 , lc
   wire noisy;
   output passed;
   wire passed;
-  output \port$11457$0 ;
-  wire \port$11457$0 ;
+  output \port$11626$0 ;
+  wire \port$11626$0 ;
   output report;
   wire report;
   input report_frame;
@@ -51001,7 +51468,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11457$0 , lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$11457$0  = \$2 ;
+  assign \port$11626$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

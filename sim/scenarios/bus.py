@@ -436,6 +436,46 @@ async def counters_in_memory_count_every_fault(dut):
 
 
 @cocotb.test()
+async def configuration_written_during_a_cycle_acts_after_it(dut):
+    """docs/bus.md, "Configuration writes": the core reads its settings through the cycle
+    without a copy, so a cfg_* write issued during a cycle is held by the bank until the cycle
+    has ended, and the bus answers it only then: state.busy reads 0 right after the answer (a
+    single request, nothing after it), the cycle's frame is the one sent, read with the
+    settings it began with, and the next request runs with the new ones (here a half period
+    of 1, refused: BAD_CONFIG). A write of another register (irq_enable) is answered during
+    the cycle."""
+    tb = BusTestbench(dut, seed=11)
+    await tb.start([BISS_C])
+    await tb.configure(0, BISS_C, 1e6)              # MA at 1 MHz: a cycle of about 60 us
+    await tb.encoders_ready()
+    tb.check_result(0, await tb.request(0))
+    good_ma = await tb.read("cfg_ma", 0)
+    irq_enable = await tb.read("irq_enable", 0)
+    await tb.wait_idle(0)
+    await tb.write("irq_status", tb.map.channel["irq_status"].fields["done"].mask, 0)
+    await tb.write_fields("ctrl", 0, start=1, **await tb._ctrl_keep(0))
+    assert (await tb.read_fields("state", 0))["busy"] == 1
+    await tb.write("irq_enable", irq_enable, 0)     # not a setting of the core: no wait
+    assert (await tb.read_fields("state", 0))["busy"] == 1, "irq_enable waited for the cycle"
+    t0 = get_sim_time("ns")
+    await tb.write_fields("cfg_ma", 0, ma_half_period=1)
+    waited_us = (get_sim_time("ns") - t0) / 1e3
+    assert (await tb.read_fields("state", 0))["busy"] == 0, "answered during the cycle"
+    await tb.wait_irq_status(0, "done")
+    tb.check_result(0, await tb.result(0))          # the old settings, to the end
+    assert (await tb.read_fields("state", 0))["config_error"] == 1
+    res = await tb.request(0)
+    assert res["status"] == STATUS["BAD_CONFIG"], res
+    await tb.write("cfg_ma", good_ma, 0)
+    assert (await tb.read_fields("state", 0))["config_error"] == 0
+    await tb.encoders_ready()
+    tb.check_result(0, await tb.request(0))
+    dut._log.info("the cfg_ma write issued during the cycle was answered %.1f us later",
+                  waited_us)
+    assert waited_us > 10
+
+
+@cocotb.test()
 async def break_time_over_the_bus(dut):
     """cfg_break.break_time written over the bus sets the break: an abort of an idle channel
     starts a break, and state.busy stays high for the break time written, not for the default

@@ -92,6 +92,7 @@ INTERNALS = {
     "decoder.crc_settings": ("signal", "crc", "settings"),      # the current word's CRC
     "decoder.ends_current": ("signal", "field_ends", "current_ends"),      # its field ends ...
     "decoder.ends_following": ("signal", "field_ends", "following_ends"),  # ... the next word's
+    "decoder.ends_pick": ("signal", "field_ends", "following_word"),  # ... the word loaded next
     "decoder.crc_ok": ("port", "", "crc_ok"),                   # the verdict per word
     "decoder.in_crc": ("signal", "", "in_crc"),                 # the bit is a received CRC bit
     # BissMaster
@@ -1239,6 +1240,15 @@ class DecoderCrcHarness(Harness):
                     m.d.comb += Assert(~(state["WORD"] & (parse.word == w))
                                        | (held == ends[w + 1]),
                                        "lemma: the following word's field ends")
+                # The word the field ends load next: word 1 until the frame's words begin
+                # (the decoder is reset before every frame), then two after the current one.
+                pick = inside("decoder.ends_pick")
+                before = state["ACK"] | state["CDS"]
+                m.d.comb += [
+                    Assert(~before | (pick == 1), "lemma: word 1's ends load first"),
+                    Assert(~state["WORD"] | (pick == (parse.word + 2)[:len(pick)]),
+                           "lemma: the word two after the current one loads next"),
+                ]
             if p.ssi:
                 # BiSS frames (``ssi`` left at 0): the SSI double transmission's states are
                 # never entered.

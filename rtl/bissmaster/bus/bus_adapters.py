@@ -49,12 +49,14 @@ class AxiLiteAdapter(wiring.Component):
     """AXI4-Lite subordinate -> register bus.
 
     Writes: the address and the data channel are taken independently (each may come first)
-    into one holding register each; the write goes to the bank in the clock both are held and
-    no earlier response is waiting, and its response (OKAY) follows in the next clock, the
-    clock in which the bank's registered write acts: a read whose address comes after the
-    response sees the write. A new
-    address and data can be taken while that response waits. Reads: two steps, as the bank's
-    read (:class:`~bissmaster.bus.register_bank.RegisterBus`): the address taken in a clock
+    into one holding register each; the write goes to the bank in a clock both are held, no
+    earlier write is waiting for the bank (``w_busy``) and no earlier response is waiting;
+    its response (OKAY) follows in the clock after the bank's ``w_busy`` is seen low (at the
+    earliest the third clock after the write; later for a channel's configuration while its
+    core is in a cycle), when the write has acted: a read whose address comes after the
+    response sees the write. A new address and data can be taken while the write waits.
+    Reads: two steps, as the bank's read
+    (:class:`~bissmaster.bus.register_bank.RegisterBus`): the address taken in a clock
     (``arvalid & arready``, the bank's ``r_en``) is pending in the next; a pending read's
     data is loaded (``r_load``) and ``rvalid`` rises in the following clock, unless read data
     is still waiting (``rvalid`` without ``rready``). The address is taken whenever no read
@@ -82,14 +84,17 @@ class AxiLiteAdapter(wiring.Component):
         with m.If(axil.wvalid & axil.wready):
             m.d.sync += [w_held.eq(1), w_data.eq(axil.wdata), w_strb.eq(axil.wstrb)]
 
-        # The write, and its response.
-        write = aw_held & w_held & (~axil.bvalid | axil.bready)
+        # The write, its wait for the bank, and its response.
+        waiting, bvalid = Signal(), Signal()
+        write = aw_held & w_held & ~waiting & (~axil.bvalid | axil.bready)
         m.d.comb += [regs.w_en.eq(write), regs.w_addr.eq(aw_addr), regs.w_data.eq(w_data),
                      regs.w_strb.eq(w_strb), axil.bresp.eq(RESP_OKAY)]
-        bvalid = Signal()
         m.d.comb += axil.bvalid.eq(bvalid)
         with m.If(write):
-            m.d.sync += [aw_held.eq(0), w_held.eq(0), bvalid.eq(1)]
+            m.d.sync += [aw_held.eq(0), w_held.eq(0), waiting.eq(1)]
+        acted = waiting & ~regs.w_busy
+        with m.If(acted):
+            m.d.sync += [waiting.eq(0), bvalid.eq(1)]
         with m.Elif(axil.bready):
             m.d.sync += bvalid.eq(0)
 
@@ -118,14 +123,16 @@ class WishboneAdapter(wiring.Component):
     """Wishbone B4 slave (classic and pipelined) -> register bus.
 
     A request (``cyc & stb``) is taken in a clock without ``stall``. A write is answered with
-    ``ack`` in the next clock (the clock in which the bank's registered write acts, so the
-    next request, taken after the ``ack``, sees it); a read, in two steps as the bank's read
-    (:class:`~bissmaster.bus.register_bank.RegisterBus`), two clocks after it is taken (one wait
+    ``ack`` in the clock after the bank's ``w_busy`` is seen low (at the earliest the third
+    clock after it is taken; later for a channel's configuration while its core is in a
+    cycle), when the write has acted, so the next request, taken after the ``ack``, sees it;
+    a read, in two steps as the bank's read (:class:`~bissmaster.bus.register_bank.RegisterBus`),
+    two clocks after it is taken (one wait
     state), with the read data. ``stall`` is high from the clock after a request is taken
     up to its ``ack`` clock: a classic master, which holds ``stb`` until ``ack``, is never
     seen twice, and a pipelined master puts its next request in the clock after the ``ack``.
-    One write per two clocks, one read per three, either way; never ``err`` or ``rty`` (an
-    unmapped address reads 0).
+    At most one write per four clocks, one read per three, either way; never ``err`` or
+    ``rty`` (an unmapped address reads 0).
     """
 
     def __init__(self, addr_width):
@@ -137,11 +144,14 @@ class WishboneAdapter(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         wb, regs = self.wb, self.regs
-        # pending: a read taken in the last clock, its data loaded now and acked next clock.
-        ack, pending = Signal(), Signal()
-        busy = ack | pending
+        # pending: a read taken in the last clock, its data loaded now and acked next clock;
+        # writing: a write taken, waiting for the bank to act on it (w_busy).
+        ack, pending, writing = Signal(), Signal(), Signal()
+        busy = ack | pending | writing
         take = wb.cyc & wb.stb & ~busy
-        m.d.sync += [ack.eq((take & wb.we) | pending), pending.eq(take & ~wb.we)]
+        acted = writing & ~regs.w_busy
+        m.d.sync += [ack.eq(acted | pending), pending.eq(take & ~wb.we),
+                     writing.eq((take & wb.we) | (writing & regs.w_busy))]
         m.d.comb += [
             regs.r_en.eq(take & ~wb.we), regs.r_addr.eq(wb.adr), regs.r_load.eq(pending),
             regs.w_en.eq(take & wb.we), regs.w_addr.eq(wb.adr),

@@ -16,7 +16,7 @@ from amaranth.lib.wiring import In, Out
 from . import regmap as regmap_mod
 from .bus_adapters import AxiLiteAdapter, AxiLiteSignature, WishboneAdapter, WishboneSignature
 from ..master import BissMaster
-from ..layouts import COUNT_SETTLE
+from ..layouts import COUNT_SETTLE, config_ports
 from ..params import COUNTER_HALF_BITS, DATA_BITS_MAX, MAX_WORDS, Crc, MasterParams
 from .register_bank import RegisterBank, block_signature
 from .uart import divider as uart_divider
@@ -122,7 +122,8 @@ class BusChannel(wiring.Component):
     params : MasterParams
         The core's; a core with counters is built with ``counter_ram`` (the map reads the
         counters from its memory), every core with ``chain_memory`` (the map reads words 2..7
-        from its chain memory; no change in a build of one or two words), and one with a
+        from its chain memory; no change in a build of one or two words) and ``config_hold``
+        (the bank writes its configuration only while it is idle), and one with a
         timestamp with ``time_input`` (the top's one time base), whatever ``params`` says.
     regs : wiring.Signature
         The bank's channel block (:func:`~bissmaster.bus.register_bank.block_signature`).
@@ -136,6 +137,10 @@ class BusChannel(wiring.Component):
         Only with a timestamp: the top's time base, captured by the core at its first MA rise.
     ma : Out(1)
     slo : In(1)
+    cfg_hold : In(1)
+        The bank's write of this channel's configuration waits: keep the core in IDLE.
+    cfg_free : Out(1)
+        The core is idle: the waiting write acts (the core is built with ``config_hold``).
     frame_valid, frame_error : Out(1)
         Only with ``status=True`` (a board's LEDs): one-clock pulses when a cycle ends with a
         valid frame, or with any other status (``frame_error`` of the register map).
@@ -148,8 +153,10 @@ class BusChannel(wiring.Component):
                                  f"counter_width is {params.counter_width}")
             # The map reads the data channel's counters from the core's counter memory.
             params = replace(params, counter_ram=True)
-        # The map reads words 2..7 from the core's chain memory (none in a two-word build).
-        params = replace(params, chain_memory=True)
+        # The map reads words 2..7 from the core's chain memory (none in a two-word build),
+        # and the bank writes the core's configuration only while it is idle (no copy per
+        # cycle in the core).
+        params = replace(params, chain_memory=True, config_hold=True)
         if params.timestamped:
             # One time base for every channel (BusTop's `time_now`), not a counter per core.
             params = replace(params, time_input=True)
@@ -163,6 +170,10 @@ class BusChannel(wiring.Component):
         self.absent = frozenset(name for name, member in regs.members.items()
                                 if member.flow == Out and name not in CHANNEL_GLUE
                                 and name not in core)
+        #: The map's configuration signals the core reads through its cycles (its ``cfg_*``
+        #: ports): the bank writes them only while the core is idle (``held``).
+        self.held = frozenset(name for name, _, _ in config_ports(params)
+                              if name in regs.members)
         for name, member in regs.members.items():
             if name in CHANNEL_GLUE:
                 continue
@@ -179,6 +190,8 @@ class BusChannel(wiring.Component):
             **({"time_now": In(params.timestamp_width)} if params.timestamped else {}),
             "ma": Out(1, init=1),
             "slo": In(1, init=1),
+            "cfg_hold": In(1),
+            "cfg_free": Out(1),
             **({"frame_valid": Out(1), "frame_error": Out(1)} if status else {}),
         })
 
@@ -257,6 +270,8 @@ class BusChannel(wiring.Component):
             core.trigger.eq(self.trigger & regs.trigger_enable),
             self.ma.eq(core.ma),
             core.slo.eq(self.slo),
+            core.cfg_hold.eq(self.cfg_hold),
+            self.cfg_free.eq(~core.busy),
         ]
         if self.status:
             m.d.comb += [self.frame_valid.eq(core.done & core.valid),
@@ -357,7 +372,8 @@ class BusTop(wiring.Component):
         m.submodules.bus = adapter = spec.adapter(self.regmap.addr_width, self.sys_clk_hz,
                                                   **self.options)
         m.submodules.bank = bank = RegisterBank(self.regmap, self.channels,
-                                                [c.absent for c in self._channels])
+                                                [c.absent for c in self._channels],
+                                                [c.held for c in self._channels])
         wiring.connect(m, adapter.regs, bank.bus)
 
         # The bus pins, flat.
@@ -386,6 +402,8 @@ class BusTop(wiring.Component):
                 m.d.comb += channel.time_now.eq(time_now[:channel.params.timestamp_width])
             wiring.connect(m, getattr(bank, f"ch{n}"), channel.regs)
             m.d.comb += [channel.trigger.eq(trigger),
+                         channel.cfg_hold.eq(bank.cfg_hold[n]),
+                         bank.cfg_free[n].eq(channel.cfg_free),
                          getattr(self, f"ch{n}_ma").eq(channel.ma),
                          channel.slo.eq(getattr(self, f"ch{n}_slo"))]
             if self.status:

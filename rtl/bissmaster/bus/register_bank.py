@@ -23,8 +23,11 @@ class RegisterBus(wiring.Signature):
     Word addresses. A write is issued by ``w_en`` high for one clock, byte lanes chosen by
     ``w_strb``; the bank registers it and it acts in the next clock (a pulse is high in the
     second clock after ``w_en``; a configuration register, one stage later, holds the new
-    value from the third clock after ``w_en``, unless it holds pulses too). A read takes two
-    steps, so that the address decode and the word select each have a clock of their own.
+    value from the third clock after ``w_en``, unless it holds pulses too; a channel's held
+    configuration from the fourth, or after its core's cycle: see ``w_busy``). ``w_busy`` is
+    high while the last write has not acted yet: the initiator issues no ``w_en`` while it is
+    high, and answers a write once it is low in a clock after its ``w_en``; everything the
+    write did is then visible. A read takes two steps, so that the address decode and the word select each have a clock of their own.
     ``r_en`` high in one clock: the address is decoded into a one-hot select, and a window's
     read enable acts then. ``r_load`` high in a later clock, at the latest the clock of the
     next ``r_en``: the selected register's value in that clock goes to ``r_data``, which holds
@@ -46,6 +49,7 @@ class RegisterBus(wiring.Signature):
             "w_addr": Out(addr_width),
             "w_data": Out(DATA_WIDTH),
             "w_strb": Out(STROBES),
+            "w_busy": In(1),
         })
 
 
@@ -88,6 +92,15 @@ class RegisterBank(wiring.Component):
     read AND-OR (issue 27: the flip-flops feed the core every clock, the memory answers the
     bus; ``_shadow``). It reads exactly what the flip-flops hold, in the same clock.
 
+    Held configuration (``held``, the bus tops: the settings their ``config_hold`` cores read
+    through a cycle without a copy): a write of a register with such a field waits, at its
+    second stage, for its channel's core to be idle (``cfg_free``), and holds the core in IDLE
+    (``cfg_hold``) while it waits; its flip-flops (and the read-back memory) take it in the
+    clock after the first clock both are true (the core is still held in IDLE then), so a
+    cycle never sees its configuration change. ``w_busy`` covers the wait: the next write,
+    and the bus's answer to this one, wait for it (up to the end of the cycle the core is
+    in).
+
     Writes: the request (``w_en``, address, data, strobes) is registered, and every write
     decodes from those flip-flops in the next clock. CONFIG fields are written one clock later
     still, lane by lane, from a per-register write flip-flop and a second copy of the data and
@@ -108,6 +121,9 @@ class RegisterBank(wiring.Component):
     absent : sequence of sets of str, one per channel, optional
         The signals of CONFIG fields that the channel's core does not have (a one-word build's
         word 1, a build without SSI or register access): those fields are not stored.
+    held : sequence of sets of str, one per channel, optional
+        The signals of CONFIG fields that the channel's core reads without a copy: a register
+        with one of them is written only while the core is idle (above).
 
     Attributes
     ----------
@@ -118,9 +134,13 @@ class RegisterBank(wiring.Component):
         Each channel's signals.
     irq : Out(channels)
         Per channel: a cause is set in its IRQ fields and enabled.
+    cfg_hold : Out(channels)
+        Per channel: a write of its held configuration waits; keep the core in IDLE.
+    cfg_free : In(channels)
+        Per channel: its core is idle (not ``busy``); a waiting write acts in the next clock.
     """
 
-    def __init__(self, regmap, channels, absent=None):
+    def __init__(self, regmap, channels, absent=None, held=None):
         if not isinstance(channels, int) or not 1 <= channels <= regmap.channel_slots:
             raise ValueError(f"channels must be an integer from 1 to {regmap.channel_slots}, "
                              f"not {channels!r}")
@@ -129,11 +149,16 @@ class RegisterBank(wiring.Component):
         self.absent = [frozenset(a) for a in (absent or [()] * channels)]
         if len(self.absent) != channels:
             raise ValueError(f"absent must name one set per channel ({channels})")
+        self.held = [frozenset(h) for h in (held or [()] * channels)]
+        if len(self.held) != channels:
+            raise ValueError(f"held must name one set per channel ({channels})")
         members = {
             "bus": In(RegisterBus(regmap.addr_width - 2)),
             "glob": Out(block_signature(regmap, regmap.globals)),
             **{f"ch{n}": Out(block_signature(regmap, regmap.channel)) for n in range(channels)},
             "irq": Out(channels),
+            "cfg_hold": Out(channels),
+            "cfg_free": In(channels),
         }
         super().__init__(members)
 
@@ -145,9 +170,9 @@ class RegisterBank(wiring.Component):
         # value every Amaranth register has: for an iCE40 platform (the board designs,
         # ``--family ice40``) the configuration is read back from its flip-flops.
         self._config_memory = getattr(platform, "family", None) != "iCE40"
-        blocks = [(self.glob, 0, rm.globals, "g", frozenset())]
+        blocks = [(self.glob, 0, rm.globals, "g", frozenset(), None)]
         blocks += [(getattr(self, f"ch{n}"), rm.channel_base + n * rm.channel_stride,
-                    rm.channel, f"ch{n}", self.absent[n]) for n in range(self.channels)]
+                    rm.channel, f"ch{n}", self.absent[n], n) for n in range(self.channels)]
         # The write request, registered: every write decodes from these flip-flops, in the
         # clock after w_en, so that no path runs from the bus through the decode.
         bus = self.bus
@@ -174,10 +199,11 @@ class RegisterBank(wiring.Component):
         self._block_bits = (rm.channel_stride // 4 - 1).bit_length()
         partials = []                  # each block's registered share of the read data
         irqs = []
-        for port, base, registers, prefix, absent in blocks:
+        waiting = []                   # per channel with held registers: a write waits
+        for port, base, registers, prefix, absent, channel in blocks:
             read_words, windows, snapshots = {}, [], {}
             irq = self._block(m, port, base, registers, prefix, read_words, windows, snapshots,
-                              absent)
+                              absent, channel, waiting)
             if prefix != "g":
                 irqs.append(irq)
             selects = self._read_select(m, prefix, read_words)
@@ -191,6 +217,8 @@ class RegisterBank(wiring.Component):
         # Whole signals, never bit by bit: Icarus runs a combinational block written per bit
         # only once an input changes, and would read X until then.
         m.d.comb += self.irq.eq(Cat(irqs))
+        # The next write (and the answer to this one) waits for this one to act.
+        m.d.comb += bus.w_busy.eq(self._w_en | Cat(waiting).any())
         merged = 0
         for partial in partials:
             merged = merged | partial
@@ -198,11 +226,34 @@ class RegisterBank(wiring.Component):
         return m
 
     def _block(self, m, port, base, registers, prefix, read_words, windows, snapshots,
-               absent):
+               absent, channel, waiting):
         """One block (the globals or a channel): storage, pulses, interrupts, windows and its
         read words; ``snapshots`` gets, per snapshot group, the word address of the register
         that takes it and the copies' assignments; CONFIG fields of ``absent`` signals read
-        their reset value. Returns the block's interrupt request."""
+        their reset value. A channel's registers of held configuration wait for its core
+        (``waiting`` gets the block's wait flag). Returns the block's interrupt request."""
+        held = frozenset() if channel is None else self.held[channel] - absent
+        held_regs = [reg for reg in registers
+                     if not reg.window and not reg.memory
+                     and not any(f.kind == Kind.PULSE for f in reg.fields)
+                     and any(f.kind == Kind.CONFIG and f.signal in held for f in reg.fields)]
+        if held_regs:
+            # A held write waits from its second stage until the core is idle, then acts in
+            # the next clock (``go``, one clock, a flip-flop: no path from the core's state
+            # into the write enables). The core is held from the first clock of the wait to
+            # the clock of ``go``, so it is still idle then. The write request's flip-flops
+            # hold the write meanwhile (``w_busy``).
+            wait = Signal(name=f"{prefix}_config_wait")
+            go = Signal(name=f"{prefix}_config_go")
+            hit = Cat(self._w_en & (self._w_addr == (base + reg.offset) // 4)
+                      for reg in held_regs).any()
+            with m.If(hit):
+                m.d.sync += wait.eq(1)
+            with m.Elif(go):
+                m.d.sync += wait.eq(0)
+            m.d.sync += go.eq(wait & ~go & self.cfg_free[channel])
+            m.d.comb += self.cfg_hold[channel].eq(wait)
+            waiting.append(wait)
         bus = self.bus
         w_en, w_addr, w_data, w_strb = self._w_en, self._w_addr, self._w_data, self._w_strb
         storage = {}                   # "register.field" -> the Signal that holds it
@@ -229,7 +280,14 @@ class RegisterBank(wiring.Component):
             # write of it acts all at once (``start`` with ``periodic``).
             staged = not any(f.kind == Kind.PULSE for f in reg.fields)
             config_write = None
-            if staged and any(f.kind == Kind.CONFIG for f in reg.fields):
+            if reg in held_regs:
+                # Addressed by the waiting write (the address holds until it has acted),
+                # written when the core is idle.
+                addressed = Signal(name=f"{reg_name}_config_addressed")
+                m.d.sync += addressed.eq(w_addr == word)
+                config_write = Signal(name=f"{reg_name}_config_write")
+                m.d.comb += config_write.eq(addressed & go)
+            elif staged and any(f.kind == Kind.CONFIG for f in reg.fields):
                 config_write = Signal(name=f"{reg_name}_config_write")
                 m.d.sync += config_write.eq(write)
             parts = []                 # (lsb, the field's read value)

@@ -112,7 +112,9 @@ class BridgeEngine(wiring.Component):
     CRC ends the memory (the host's tag changes from one request to the next, docs).
 
     Accessing: an OK WRITE is ``w_en`` in the checking clock (address ``addr[2:]``, every byte
-    strobe). A READ or READ_BURST reads each word just before its bytes are sent: ``r_en``,
+    strobe); its answer waits for the bank's ``w_busy`` to be low in a clock after the
+    checking clock (two clocks more than another answer at the least; longer for a channel's
+    configuration while its core is in a cycle): the write has then acted. A READ or READ_BURST reads each word just before its bytes are sent: ``r_en``,
     ``r_load`` in the next clock, the data taken from ``r_data`` in the clock after; the words
     of a burst in address order.
 
@@ -278,7 +280,16 @@ class BridgeEngine(wiring.Component):
                     m.d.sync += [last_write.eq(ok_write), last_cmd.eq(cmd),
                                  last_addr.eq(addr), last_data.eq(data)]
                 m.d.comb += regs.w_en.eq(ok_write & ~duplicate)
-                m.next = "HEADER"
+                with m.If(ok_write & ~duplicate):
+                    m.next = "ACT"
+                with m.Else():
+                    m.next = "HEADER"
+
+            with m.State("ACT"):
+                # A write's answer waits until it has acted (w_busy; the bank holds a channel's
+                # configuration while its core is in a cycle).
+                with m.If(~regs.w_busy):
+                    m.next = "HEADER"
 
             with m.State("HEADER"):
                 byte = Array([Const(SYNC_RESPONSE, 8), cmd, status.as_value()])[sent]

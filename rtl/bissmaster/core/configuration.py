@@ -22,6 +22,10 @@ class Configuration(wiring.Component):
     idle (MA stopped, receiver held in reset, no frame reported), so copying in every idle clock
     is the same as latching on acceptance, without the request decode in the enable.
 
+    A ``config_hold`` build (the bus tops) copies nothing: its ``live`` inputs change only in
+    the clock after one with the controller in IDLE and held there (``MasterParams``), so
+    ``cycle`` is ``live`` itself, the same values through the cycle as a copy would hold.
+
     The time limits are resolved (0 -> protocol default) in the same latch, so that no default
     mux sits in front of a comparator. Every default is >= 1, so each limit is >= 1.
 
@@ -148,9 +152,13 @@ class Configuration(wiring.Component):
 
         # Check every clock; latch and resolve the limits while idle.
         m.d.sync += self.ok.eq(self.valid(live))
+        if p.config_hold:
+            m.d.comb += cycle.eq(live)
+        else:
+            with m.If(self.idle):
+                m.d.sync += cycle.eq(live)
         with m.If(self.idle):
             m.d.sync += [
-                cycle.eq(live),
                 self.ack_limit.eq(or_default(live.ack_limit, p.ack_limit_default)),
                 self.timeout_limit.eq(or_default(live.timeout_limit, p.timeout_limit_default)),
                 self.delay_limit.eq(or_default(live.delay_limit, p.max_line_delay)),

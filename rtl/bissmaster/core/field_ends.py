@@ -98,9 +98,14 @@ class FieldEnds(wiring.Component):
 
     More words (issue 27: two sets of registers, not one per word): ``begin`` loads word 0's
     ends into ``current`` and word 1's into ``following``; ``advance`` (at a word's last bit,
-    when another word follows) moves ``following`` into ``current`` and loads the ends of word
-    ``index + 2``. Both are valid in the clock after, so a word may begin in the clock after
-    the one before ended (one sample per clock). The configuration must be stable from
+    when another word follows) moves ``following`` into ``current`` and loads the ends of the
+    word two after the one that ended (counted here: word 2 at the first ``advance`` after
+    ``begin``, then one more at each). Both are valid in the clock after, so a word may begin
+    in the clock after the one before ended (one sample per clock). The word to load next is a
+    register, so that no decode of the decoder's state sits in front of the word multiplexer
+    (it was the multi-word builds' critical path, docs/performance.md); it is word 1 from
+    reset, so every frame's ``begin`` must come after a reset (the master holds the decoder,
+    and this block in it, in reset between cycles) and at most once. The configuration must be stable from
     ``begin`` to the frame's end (the master's is latched for the cycle); ``following`` is
     meaningless in the last word.
 
@@ -120,8 +125,6 @@ class FieldEnds(wiring.Component):
         Word 0 has an SSI error bit (SSI builds: ``ssi & ssi_error``).
     begin, advance : In(1)
         Builds of more than one word: word 0 begins; the decoder moves on to the next word.
-    index : In(range(words))
-        Builds of more than one word: the word the decoder is in (read with ``advance``).
     current : Out(FIELD_ENDS)
         The current word's field ends (registered).
     following : Out(FIELD_ENDS)
@@ -135,7 +138,7 @@ class FieldEnds(wiring.Component):
             "words": In(data.ArrayLayout(word_layout, words)),
             "crc_widths": In(data.ArrayLayout(range(CRC_MAX_WIDTH + 1), words)),
             **({"error_bit": In(1)} if error_bit else {}),
-            **({"begin": In(1), "advance": In(1), "index": In(range(words)),
+            **({"begin": In(1), "advance": In(1),
                 "following": Out(FIELD_ENDS)} if words > 1 else {}),
             "current": Out(FIELD_ENDS),
         })
@@ -152,17 +155,20 @@ class FieldEnds(wiring.Component):
             return m
         following = Signal(FIELD_ENDS, name="following_ends", reset_less=True)
         m.d.comb += self.following.eq(following)
-        # The word whose ends go into ``following``: word 1 with ``begin``, else two after the
-        # current one (never word 0: only word 0 has the SSI error bit). One multiplexer on the
-        # settings, then one computation of the ends.
-        pick = Signal(range(n), name="following_word")
-        m.d.comb += pick.eq(Mux(self.begin, 1, (self.index + 2)[:len(pick)]))
+        # The word whose ends go into ``following`` next: word 1 at ``begin`` (from reset: the
+        # master holds the decoder in reset before every frame), then two after the current
+        # one at each ``advance`` (never word 0: only word 0 has the SSI error bit). A
+        # register: one multiplexer on the settings, then one computation of the ends, with
+        # nothing of the decoder's state in front of them.
+        pick = Signal(range(max(n, 3)), name="following_word", init=1)
         chosen = field_ends(select_word(pick, [self.words[w] for w in range(n)]),
                             select_word(pick, [self.crc_widths[w] for w in range(n)]))
         with m.If(self.begin):
             m.d.sync += [current[k].eq(v) for k, v in first.items()]
             m.d.sync += [following[k].eq(v) for k, v in chosen.items()]
+            m.d.sync += pick.eq(2)
         with m.Elif(self.advance):
             m.d.sync += current.eq(following)
             m.d.sync += [following[k].eq(v) for k, v in chosen.items()]
+            m.d.sync += pick.eq((pick + 1)[:len(pick)])
         return m

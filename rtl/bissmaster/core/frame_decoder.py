@@ -153,8 +153,6 @@ class FrameDecoder(wiring.Component):
         m.submodules.field_ends = field_ends = FieldEnds(p.words, error_bit=p.ssi,
                                                          word_layout=word_config(p))
         m.d.comb += [field_ends.words.eq(self.words), field_ends.crc_widths.eq(self.crc_widths)]
-        if p.words > 1:
-            m.d.comb += field_ends.index.eq(s.word)
         s.error_bit = None
         if p.ssi:
             # Word 0's SSI error bit: a flag bit after the data, like nE.

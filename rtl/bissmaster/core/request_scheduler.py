@@ -28,6 +28,13 @@ class RequestScheduler(wiring.Component):
     ``trigger`` is the seam for starting several channels in the same clock (a bus top drives
     it from one register write or an external pulse); it acts exactly like ``start``.
 
+    With ``hold`` (built for ``config_hold`` cores): while ``hold`` is high no request reaches
+    the controller (its configuration is being written). A ``start`` or a tick that comes in
+    an idle clock with ``hold`` high is deferred, not dropped: it is a request from the next
+    clock on until the controller takes it (an abort drops it, as an ``overrun``). A deferred
+    request and a new one taken in the same clock are one cycle, as a ``start`` and a tick in
+    one clock are.
+
     Attributes
     ----------
     start, trigger : In(1)
@@ -38,12 +45,15 @@ class RequestScheduler(wiring.Component):
     abort : In(1)
     idle : In(1)
         The controller is in IDLE.
+    hold : In(1)
+        Only with ``hold=True``: keep every request from the controller in this clock.
     request : Out(1)
         Start a cycle (the controller takes it when idle).
     overrun : Out(1)
     """
 
-    def __init__(self, timer_width):
+    def __init__(self, timer_width, hold=False):
+        self._hold = hold
         super().__init__({
             "start": In(1),
             "trigger": In(1),
@@ -51,6 +61,7 @@ class RequestScheduler(wiring.Component):
             "period": In(timer_width),
             "abort": In(1),
             "idle": In(1),
+            **({"hold": In(1)} if hold else {}),
             "request": Out(1),
             "overrun": Out(1),
         })
@@ -85,8 +96,22 @@ class RequestScheduler(wiring.Component):
             m.d.sync += [count_p2.eq(count_p2 + 1), period_start.eq(0),
                          wrap.eq(count_p2 >= self.period)]
 
+        takeable = self.idle & ~self.abort
+        if not self._hold:
+            m.d.comb += [
+                self.request.eq(start | tick | as_fast_as_possible),
+                self.overrun.eq((start | tick) & ~takeable),
+            ]
+            return m
+        # A request the hold keeps from an idle controller waits here (one is enough: the
+        # hold lasts one idle clock per configuration write, and requests in one clock merge).
+        deferred = Signal()
+        with m.If(self.abort | (self.idle & ~self.hold)):
+            m.d.sync += deferred.eq(0)
+        with m.Elif(takeable & (start | tick)):
+            m.d.sync += deferred.eq(1)
         m.d.comb += [
-            self.request.eq(start | tick | as_fast_as_possible),
-            self.overrun.eq((start | tick) & ~(self.idle & ~self.abort)),
+            self.request.eq((start | tick | as_fast_as_possible | deferred) & ~self.hold),
+            self.overrun.eq(((start | tick) & ~takeable) | (deferred & self.abort)),
         ]
         return m

@@ -191,8 +191,12 @@ def test_leds_follow_the_frames():
             for level in [1] * 25 * div + uart_levels(encode_request("WRITE", tag, address, value), div):
                 ctx.set(logic.uart_rx, level)
                 await step()
-            for _ in range(60 * div):
+            # The answer: a configuration write waits for the core to be idle (the break
+            # after reset, 40 us; docs/bus.md, "Configuration writes").
+            for _ in range(60 * div + 1000):
                 await step()
+                if len(line.bytes) - before == 4:
+                    break
             body = bytes([0x5A, tag << 4 | 0x2, 0x00])
             assert bytes(line.bytes[before:]) == body + bytes([crc8(body)]), hex(address)
 

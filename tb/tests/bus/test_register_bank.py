@@ -26,13 +26,13 @@ def offset(path):
     return CH0 + next(r for r in MAP.channel if r.path == path).offset
 
 
-def run(bench, channels=1, buffers=False, absent=None):
+def run(bench, channels=1, buffers=False, absent=None, held=None):
     """``buffers``: channel 0's windows on one memory of the test (16 words, byte lanes): the
     write window writes it, the read window reads it through a registered port. ``absent``:
-    the bank's per-channel signals the core lacks."""
+    the bank's per-channel signals the core lacks; ``held``: those it reads without a copy."""
     top = Module()
     top.domains.sync = ClockDomain()
-    top.submodules.bank = bank = RegisterBank(MAP, channels, absent)
+    top.submodules.bank = bank = RegisterBank(MAP, channels, absent, held)
     if buffers:
         top.submodules.mem = mem = Memory(shape=32, depth=16, init=[])
         wr, rd = mem.write_port(granularity=8), mem.read_port()
@@ -48,12 +48,12 @@ def run(bench, channels=1, buffers=False, absent=None):
     sim.run()
 
 
-def run_adapter(adapter, bench):
+def run_adapter(adapter, bench, held=None):
     """One channel's bank behind a bus adapter (AxiLiteAdapter or WishboneAdapter); ``bench``
-    gets (ctx, the adapter's bus side, the bank)."""
+    gets (ctx, the adapter's bus side, the bank). ``held``: as for :func:`run`."""
     top = Module()
     top.domains.sync = ClockDomain()
-    top.submodules.bank = bank = RegisterBank(MAP, 1)
+    top.submodules.bank = bank = RegisterBank(MAP, 1, None, held)
     top.submodules.adapter = dut = adapter(MAP.addr_width)
     wiring.connect(top, dut.regs, bank.bus)
     bus = dut.axil if adapter is AxiLiteAdapter else dut.wb
@@ -304,10 +304,10 @@ def test_axil_read_backpressure_reads_each_register_once():
     run_adapter(AxiLiteAdapter, bench)
 
 
-def test_wishbone_read_waits_one_state_and_write_does_not():
-    """Wishbone classic: a write is acked in the clock after it is taken, a read two clocks
-    after (one wait state), with its data; stall is high up to the ack, so a request held
-    through the ack is taken once."""
+def test_wishbone_read_waits_one_state_and_write_two():
+    """Wishbone classic: a write is acked three clocks after it is taken (once the bank's
+    w_busy is low: the write has acted), a read two clocks after (one wait state), with its
+    data; stall is high up to the ack, so a request held through the ack is taken once."""
     async def cycle(ctx, bus, addr, data=None):
         ctx.set(bus.cyc, 1)
         ctx.set(bus.stb, 1)
@@ -329,7 +329,7 @@ def test_wishbone_read_waits_one_state_and_write_does_not():
         raise AssertionError("no ack")
 
     async def bench(ctx, bus, bank):
-        assert (await cycle(ctx, bus, offset("cfg_ma"), 0x0777))[:2] == (1, [1])
+        assert (await cycle(ctx, bus, offset("cfg_ma"), 0x0777))[:2] == (3, [1, 1, 1])
         assert await cycle(ctx, bus, offset("cfg_ma")) == (2, [1, 1], 0x0777)
         assert await cycle(ctx, bus, 0) == (2, [1, 1], 0x42695353)
 
@@ -470,3 +470,98 @@ def test_configuration_read_returns_the_value_of_its_load_clock():
             await ctx.tick()
         assert await read(ctx, bank, period) == 0x000003
     run(bench)
+
+
+#: A channel's held configuration in these tests: the request period (register cfg_period).
+HELD = [{"cfg_request_period"}]
+
+
+def test_held_configuration_waits_for_the_idle_core():
+    """docs/bus.md, "Configuration writes": a write of a held register waits at its second
+    stage while the core is busy (cfg_free low), holds the core (cfg_hold) and keeps w_busy
+    high; the flip-flops and the read-back take it in the clock after the first clock the core
+    is idle (so with the core idle, from the fourth clock after w_en, one later than another
+    configuration register). Other registers of the channel do not wait."""
+    async def bench(ctx, bank):
+        ch, bus = bank.ch0, bank.bus
+        # Idle core: the value from the fourth clock; w_busy 1, 1, 1, 0.
+        ctx.set(bank.cfg_free, 1)
+        ctx.set(bus.w_en, 1)
+        ctx.set(bus.w_addr, offset("cfg_period") // 4)
+        ctx.set(bus.w_data, 0x000111)
+        ctx.set(bus.w_strb, 0xF)
+        seen = []
+        for _ in range(4):
+            await ctx.tick()
+            ctx.set(bus.w_en, 0)
+            seen.append((ctx.get(ch.cfg_request_period), ctx.get(bus.w_busy),
+                         ctx.get(bank.cfg_hold)))
+        assert seen == [(0, 1, 0), (0, 1, 1), (0, 1, 1), (0x111, 0, 0)]
+        # Busy core: the write waits, holding the core, as long as it is busy.
+        ctx.set(bank.cfg_free, 0)
+        ctx.set(bus.w_en, 1)
+        ctx.set(bus.w_data, 0x000222)
+        await ctx.tick()
+        ctx.set(bus.w_en, 0)
+        for _ in range(30):
+            await ctx.tick()
+            assert ctx.get(ch.cfg_request_period) == 0x111
+            assert ctx.get(bus.w_busy) and ctx.get(bank.cfg_hold)
+        assert await read(ctx, bank, offset("cfg_period")) == 0x111   # the read-back too
+        ctx.set(bank.cfg_free, 1)                  # the cycle ends: acts in the next clock
+        await ctx.tick()
+        assert ctx.get(ch.cfg_request_period) == 0x111 and ctx.get(bank.cfg_hold)
+        await ctx.tick()
+        assert ctx.get(ch.cfg_request_period) == 0x222
+        assert not ctx.get(bus.w_busy) and not ctx.get(bank.cfg_hold)
+        assert await read(ctx, bank, offset("cfg_period")) == 0x222
+        # A register without a held field (irq_enable) does not wait for a busy core.
+        ctx.set(bank.cfg_free, 0)
+        await write(ctx, bank, offset("irq_enable"), 1)
+        assert not ctx.get(bus.w_busy) and not ctx.get(bank.cfg_hold)
+        assert await read(ctx, bank, offset("irq_enable")) & 1 == 1
+    run(bench, held=HELD)
+
+
+async def _answered_after_release(ctx, bank, answered):
+    """With the core busy (cfg_free low) for 40 clocks nothing is ``answered()``; then the
+    core is idle: the clocks until it is (at most 10)."""
+    for _ in range(40):
+        await ctx.tick()
+        assert not answered()
+    ctx.set(bank.cfg_free, 1)
+    for clocks in range(1, 11):
+        await ctx.tick()
+        if answered():
+            return clocks
+    raise AssertionError("no answer 10 clocks after the core became idle")
+
+
+def test_bus_response_waits_for_a_held_write():
+    """AXI4-Lite and Wishbone: the response to a held write comes only once it has acted
+    (the core idle), three clocks after."""
+    async def axil(ctx, bus, bank):
+        ctx.set(bank.cfg_free, 0)
+        ctx.set(bus.bready, 1)
+        ctx.set(bus.awvalid, 1)
+        ctx.set(bus.awaddr, offset("cfg_period"))
+        ctx.set(bus.wvalid, 1)
+        ctx.set(bus.wdata, 0x345)
+        ctx.set(bus.wstrb, 0xF)
+        await ctx.tick()
+        ctx.set(bus.awvalid, 0)
+        ctx.set(bus.wvalid, 0)
+        assert await _answered_after_release(ctx, bank, lambda: ctx.get(bus.bvalid)) == 3
+        assert ctx.get(bank.ch0.cfg_request_period) == 0x345
+    run_adapter(AxiLiteAdapter, axil, held=HELD)
+
+    async def wishbone(ctx, bus, bank):
+        ctx.set(bank.cfg_free, 0)
+        for name, value in (("cyc", 1), ("stb", 1), ("we", 1), ("adr", offset("cfg_period") // 4),
+                            ("dat_w", 0x678), ("sel", 0xF)):
+            ctx.set(getattr(bus, name), value)
+        # stall high through the wait: the request held on the bus is taken once.
+        answered = lambda: ctx.get(bus.ack) or not ctx.get(bus.stall)
+        assert await _answered_after_release(ctx, bank, answered) == 3
+        assert ctx.get(bus.ack) and ctx.get(bank.ch0.cfg_request_period) == 0x678
+    run_adapter(WishboneAdapter, wishbone, held=HELD)

@@ -8,6 +8,7 @@ build measures).
 """
 
 import random
+from dataclasses import replace
 
 import pytest
 
@@ -263,14 +264,13 @@ def test_configuration_defaults_at_100_mhz_are_the_documented_clocks():
                                              "delay_limit": 4095}
 
 
-@pytest.mark.parametrize("build", BUILDS)
-def test_configuration_latch_while_idle_defaults_no_start_limit_word_count(build):
-    p = BUILDS[build]
+def _random_steps(p, seed, clocks):
+    """Random configurations, one per clock (limits 0 now and then: the defaults; odd half
+    periods), idle in runs (a cycle holds the latch for several clocks) and from clock 0."""
     layout = config_layout(p)
-    defaults = _defaults(p)
-    rng = random.Random(7200 + len(build))
+    rng = random.Random(seed)
     steps = []
-    for t in range(400):
+    for t in range(clocks):
         cfg = unpack(layout, rng.getrandbits(layout.size))
         for name in ("ack_limit", "timeout_limit", "delay_limit"):
             if rng.random() < 0.3:
@@ -280,9 +280,17 @@ def test_configuration_latch_while_idle_defaults_no_start_limit_word_count(build
         if p.timer_width == 16:
             # Keep the Ack limit + one MA period within 17 bits (see the RTL-bug test below).
             cfg["ma_half_period"] &= 0x3FFF
-        # Idle in runs (a cycle holds the latch for several clocks), and idle from clock 0.
         idle = 1 if t < 3 else int(rng.random() < (0.8 if steps[-1]["idle"] else 0.15))
         steps.append({"live": pack(layout, cfg), "idle": idle})
+    return steps
+
+
+@pytest.mark.parametrize("build", BUILDS)
+def test_configuration_latch_while_idle_defaults_no_start_limit_word_count(build):
+    p = BUILDS[build]
+    layout = config_layout(p)
+    defaults = _defaults(p)
+    steps = _random_steps(p, 7200 + len(build), 400)
     outputs = ["cycle", "ack_limit", "timeout_limit", "delay_limit", "no_start_limit", "word_count"]
     trace = run_clocks(Configuration(p), steps, outputs)
 
@@ -303,6 +311,29 @@ def test_configuration_latch_while_idle_defaults_no_start_limit_word_count(build
             before = trace[t - 1]
             hp = unpack(layout, before["cycle"])["ma_half_period"]
             assert got["no_start_limit"] == before["ack_limit"] + 2 * hp + 1, t
+
+
+@pytest.mark.parametrize("build", ["default", "chain"])
+def test_configuration_held_build_reads_live_and_latches_the_limits(build):
+    """A ``config_hold`` build (the bus tops; docs/bus.md, "Configuration writes") copies
+    nothing: ``cycle`` is the live configuration in the same clock (its writer changes it only
+    while the core is idle and held), the word count follows it, and the resolved limits are
+    still latched while idle."""
+    p = replace(BUILDS[build], config_hold=True)
+    layout = config_layout(p)
+    defaults = _defaults(p)
+    steps = _random_steps(p, 7210 + len(build), 200)
+    outputs = ["cycle", "ack_limit", "timeout_limit", "delay_limit", "word_count"]
+    trace = run_clocks(Configuration(p), steps, outputs)
+    latched = None
+    for t in range(1, len(steps)):
+        got = trace[t]
+        assert got["cycle"] == steps[t]["live"], t
+        assert got["word_count"] == sum(enabled(p, unpack(layout, steps[t]["live"]))), t
+        if steps[t - 1]["idle"]:
+            latched = unpack(layout, steps[t - 1]["live"])
+        assert {name: got[name] for name in defaults} == {
+            name: latched[name] or defaults[name] for name in defaults}, t
 
 
 def test_configuration_no_start_limit_one_clock_after_the_latch():

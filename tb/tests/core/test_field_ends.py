@@ -10,6 +10,9 @@ encoder model's ``WordFormat.total_bits`` gives the word's length.
 import random
 
 import pytest
+from amaranth.hdl import Module, ResetInserter
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In
 
 from bissmaster.core.field_ends import FIELD_ENDS, FieldEnds
 from encoder_model.frames import CRC6, CRC16, CRC_NONE, CustomCrc, WordFormat
@@ -45,6 +48,23 @@ def _ends(raw):
     return unpack(FIELD_ENDS, raw)
 
 
+class _ClearedFieldEnds(wiring.Component):
+    """FieldEnds with its reset as the input ``clear``: the master holds the decoder, and the
+    block in it, in reset before every frame."""
+
+    def __init__(self, *args, **kwargs):
+        self.inner = FieldEnds(*args, **kwargs)
+        super().__init__({**self.inner.signature.members, "clear": In(1)})
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.inner = ResetInserter(self.clear)(self.inner)
+        for name, member in self.inner.signature.members.items():
+            outer, inner = getattr(self, name), getattr(self.inner, name)
+            m.d.comb += inner.eq(outer) if member.flow == In else outer.eq(inner)
+        return m
+
+
 def test_field_ends_one_word_one_clock_after_the_settings():
     """One word: ``current`` follows the settings one clock later, in every clock."""
     rng = random.Random(7901)
@@ -61,12 +81,12 @@ def test_field_ends_one_word_one_clock_after_the_settings():
 @pytest.mark.parametrize("words, error_bit", [(2, False), (3, False), (8, False), (2, True)],
                          ids=["two_words", "three_words", "eight_words", "two_words_ssi"])
 def test_field_ends_current_and_following_word_through_frames(words, error_bit):
-    """More words: ``begin`` loads word 0 and word 1; each ``advance`` (with ``index`` = the
-    word that ended) moves on by one; both hold between (junk on ``index``), and are valid in
+    """More words: ``begin`` (after a reset) loads word 0 and word 1; each ``advance`` moves on
+    by one (the block counts the words itself); both hold between, and are valid in
     the clock after, so words may follow each other in consecutive clocks. Random settings per
     frame, frames of 1..``words`` words, 0..2 clocks between events."""
     rng = random.Random(7900 + words + 10 * error_bit)
-    dut = FieldEnds(words, error_bit=error_bit)
+    dut = _ClearedFieldEnds(words, error_bit=error_bit)
     steps, wanted = [], []          # wanted[t]: (current, following or None) after step t
     for _ in range(40):
         wfs = [_random_word(rng, 63) for _ in range(words)]
@@ -74,22 +94,24 @@ def test_field_ends_current_and_following_word_through_frames(words, error_bit):
         base = {"words": [_word(wf) for wf in wfs],
                 "crc_widths": [crc_settings(wf.crc)["width"] for wf in wfs],
                 **({"error_bit": error} if error_bit else {}),
-                "begin": 0, "advance": 0}
+                "begin": 0, "advance": 0, "clear": 0}
         ends = [expected(wf, error if w == 0 else 0) for w, wf in enumerate(wfs)]
 
         def state(k):
             return ends[k], (ends[k + 1] if k + 1 < words else None)
 
         for _ in range(rng.randrange(3)):       # settings change while no frame runs
-            steps.append(dict(base, index=rng.randrange(words)))
+            steps.append(dict(base))
             wanted.append(None)
-        steps.append(dict(base, begin=1, index=rng.randrange(words)))
+        steps.append(dict(base, clear=1))       # the decoder's reset before the frame
+        wanted.append(None)
+        steps.append(dict(base, begin=1))
         wanted.append(state(0))
         for k in range(rng.randint(1, words) - 1):
             for _ in range(rng.randrange(3)):
-                steps.append(dict(base, index=rng.randrange(words)))
+                steps.append(dict(base))
                 wanted.append(state(k))
-            steps.append(dict(base, advance=1, index=k))
+            steps.append(dict(base, advance=1))
             wanted.append(state(k + 1))
     trace = run_clocks(dut, steps, ["current", "following"])
     checked = 0

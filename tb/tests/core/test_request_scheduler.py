@@ -21,13 +21,14 @@ OUTPUTS = ["request", "overrun"]
 QUIET = {"start": 0, "trigger": 0, "periodic": 0, "period": 0, "abort": 0, "idle": 1}
 
 
-def reference(steps):
-    """(request, overrun) per clock. A tick comes in the first clock of ``periodic`` (with a
-    period), then in the first clock at least ``period`` clocks after the last tick. The period
-    is read live with a lag (docs/ports.md): the tick is decided on the period of two clocks
-    before, "a request in every clock" (period 0) on the one of the clock before; none is
-    known before reset (no tick in the first clock after a tick there, no period 0). Each
-    request of "every clock" counts as a tick, and the clock after it has none."""
+def _decisions(steps):
+    """Per clock: (a start, trigger or tick came, a request of "every clock"). A tick comes in
+    the first clock of ``periodic`` (with a period), then in the first clock at least
+    ``period`` clocks after the last tick. The period is read live with a lag
+    (docs/ports.md): the tick is decided on the period of two clocks before, "a request in
+    every clock" (period 0) on the one of the clock before; none is known before reset (no
+    tick in the first clock after a tick there, no period 0). Each request of "every clock"
+    counts as a tick, and the clock after it has none."""
     out, last = [], None
     period = lambda t: {**QUIET, **steps[t]}["period"] if t >= 0 else None
     for t, s in enumerate(steps):
@@ -42,15 +43,44 @@ def reference(steps):
             # (A period of 0 two clocks before: the clock before was the last request of
             # "every clock", and the period counts from there.)
             tick, last = 1, t
-        single = s["start"] or s["trigger"]
-        taken = s["idle"] and not s["abort"]
-        out.append({"request": int(bool(single or tick or continuous)),
-                    "overrun": int(bool((single or tick) and not taken))})
+        out.append((bool(s["start"] or s["trigger"] or tick), bool(continuous)))
     return out
 
 
-def _run(steps):
-    return run_clocks(RequestScheduler(TIMER_WIDTH), steps, OUTPUTS, defaults=QUIET)
+def reference(steps):
+    """(request, overrun) per clock (``_decisions``): a start, trigger or tick that the
+    controller cannot take (not idle, or an abort) is an overrun."""
+    out = []
+    for s, (new, continuous) in zip(steps, _decisions(steps)):
+        s = {**QUIET, **s}
+        taken = s["idle"] and not s["abort"]
+        out.append({"request": int(new or continuous),
+                    "overrun": int(new and not taken)})
+    return out
+
+
+def held_reference(steps):
+    """The same for a scheduler built with ``hold`` (a ``config_hold`` core; docs/bus.md,
+    "Configuration writes"): no request reaches the controller in a clock with ``hold``; a
+    start, trigger or tick that comes while the controller is idle and held waits (deferred)
+    and is a request from the next clock until the controller, idle and not held, takes it;
+    an abort drops it, as an overrun."""
+    out, deferred = [], False
+    for s, (new, continuous) in zip(steps, _decisions(steps)):
+        s = {**QUIET, "hold": 0, **s}
+        taken = s["idle"] and not s["abort"]
+        out.append({"request": int((new or continuous or deferred) and not s["hold"]),
+                    "overrun": int((new and not taken) or (deferred and s["abort"]))})
+        if s["abort"] or (s["idle"] and not s["hold"]):
+            deferred = False
+        elif taken and new:
+            deferred = True
+    return out
+
+
+def _run(steps, hold=False):
+    return run_clocks(RequestScheduler(TIMER_WIDTH, hold=hold), steps, OUTPUTS,
+                      defaults={**QUIET, "hold": 0} if hold else QUIET)
 
 
 @pytest.mark.parametrize("start, trigger, idle, abort",
@@ -136,15 +166,48 @@ def test_request_scheduler_periodic_dropped_and_raised_again_ticks_at_once():
     assert [t for t, x in enumerate(trace) if x["request"]] == [2, 6, 11, 15, 19]
 
 
-def test_request_scheduler_random_sweep():
-    rng = random.Random(7301)
+def _random_steps(seed, hold=False, clocks=2000):
+    """Random inputs: starts, triggers, aborts and idle clocks, ``periodic`` toggled and the
+    period changed now and then; with ``hold``, a held clock in five."""
+    rng = random.Random(seed)
     steps, periodic, period = [], 0, 5
-    for _ in range(2000):
+    for _ in range(clocks):
         if rng.random() < 0.03:
             periodic ^= 1
         if rng.random() < 0.02:
             period = rng.choice((0, 1, 2, 3, 5, 8, 13))
         steps.append({"start": int(rng.random() < 0.05), "trigger": int(rng.random() < 0.05),
                       "periodic": periodic, "period": period, "idle": int(rng.random() < 0.6),
-                      "abort": int(rng.random() < 0.1)})
+                      "abort": int(rng.random() < 0.1),
+                      **({"hold": int(rng.random() < 0.2)} if hold else {})})
+    return steps
+
+
+def test_request_scheduler_random_sweep():
+    steps = _random_steps(7301)
     assert _run(steps) == reference(steps)
+
+
+def test_request_scheduler_held_start_is_deferred_not_dropped():
+    """A start in an idle clock with ``hold`` (a configuration write acting) is no request
+    then, no overrun, and a request in the next clock; an abort drops a deferred one with an
+    overrun; a continuous request is kept off the controller only while held."""
+    trace = _run([{}, {"start": 1, "hold": 1}, {}, {}], hold=True)
+    assert [(x["request"], x["overrun"]) for x in trace] == [(0, 0), (0, 0), (1, 0), (0, 0)]
+    trace = _run([{"start": 1, "hold": 1}, {"abort": 1}, {}], hold=True)
+    assert [(x["request"], x["overrun"]) for x in trace] == [(0, 0), (1, 1), (0, 0)]
+    # Held for three clocks: the start waits through all of them.
+    trace = _run([{"start": 1, "hold": 1}, {"hold": 1}, {"hold": 1}, {}, {}], hold=True)
+    assert [x["request"] for x in trace] == [0, 0, 0, 1, 0]
+    steps = [{"periodic": 1, "period": 0, "hold": int(t == 4)} for t in range(7)]
+    assert [x["request"] for x in _run(steps, hold=True)] == [1, 1, 1, 1, 0, 1, 1]
+
+
+def test_request_scheduler_held_random_sweep():
+    steps = _random_steps(7302, hold=True)
+    assert _run(steps, hold=True) == held_reference(steps)
+    # Without hold, the held build is the plain one.
+    for step in steps:
+        step["hold"] = 0
+    assert _run(steps, hold=True) == reference([{k: v for k, v in s.items() if k != "hold"}
+                                                for s in steps])
