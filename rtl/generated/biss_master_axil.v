@@ -1109,12 +1109,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$13569$0 (\$10 ),
-    .\port$13580$0 (\$11 ),
-    .\port$13657$0 (\$12 ),
-    .\port$14120$0 (\$13 ),
-    .\port$14131$0 (\$14 ),
-    .\port$14208$0 (\$15 ),
+    .\port$13573$0 (\$10 ),
+    .\port$13584$0 (\$11 ),
+    .\port$13661$0 (\$12 ),
+    .\port$14124$0 (\$13 ),
+    .\port$14135$0 (\$14 ),
+    .\port$14212$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1200,9 +1200,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$13569$0 (\$10 ),
-    .\port$13580$0 (\$11 ),
-    .\port$13657$0 (\$12 ),
+    .\port$13573$0 (\$10 ),
+    .\port$13584$0 (\$11 ),
+    .\port$13661$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1279,9 +1279,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(\regs__count_en$789 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$813 ),
-    .\port$14120$0 (\$13 ),
-    .\port$14131$0 (\$14 ),
-    .\port$14208$0 (\$15 ),
+    .\port$14124$0 (\$13 ),
+    .\port$14135$0 (\$14 ),
+    .\port$14212$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$477 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -2055,8 +2055,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$152 
 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw
 , ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi
-, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$435 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13569$0 , \port$13580$0 , ch0__ca_done, \port$13657$0 , ch1__frame_done, ch1__done_count, ch1__result_updates
-, \port$14120$0 , \port$14131$0 , ch1__ca_done, \port$14208$0 , bus__r_addr);
+, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$435 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13573$0 , \port$13584$0 , ch0__ca_done, \port$13661$0 , ch1__frame_done, ch1__done_count, ch1__result_updates
+, \port$14124$0 , \port$14135$0 , ch1__ca_done, \port$14212$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -4309,18 +4309,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$13569$0 ;
-  wire [186:0] \port$13569$0 ;
-  input [79:0] \port$13580$0 ;
-  wire [79:0] \port$13580$0 ;
-  input [9:0] \port$13657$0 ;
-  wire [9:0] \port$13657$0 ;
-  input [186:0] \port$14120$0 ;
-  wire [186:0] \port$14120$0 ;
-  input [79:0] \port$14131$0 ;
-  wire [79:0] \port$14131$0 ;
-  input [9:0] \port$14208$0 ;
-  wire [9:0] \port$14208$0 ;
+  input [186:0] \port$13573$0 ;
+  wire [186:0] \port$13573$0 ;
+  input [79:0] \port$13584$0 ;
+  wire [79:0] \port$13584$0 ;
+  input [9:0] \port$13661$0 ;
+  wire [9:0] \port$13661$0 ;
+  input [186:0] \port$14124$0 ;
+  wire [186:0] \port$14124$0 ;
+  input [79:0] \port$14135$0 ;
+  wire [79:0] \port$14135$0 ;
+  input [9:0] \port$14212$0 ;
+  wire [9:0] \port$14212$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
@@ -4601,7 +4601,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$203  = \$201  | \$202 ;
   assign \$204  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$205  = \$203  | \$204 ;
-  assign \$210  = ch0_read_select_90 ? { 2'h0, \port$13569$0 [182:177], 4'h0, \port$13569$0 [186:183], 1'h0, \port$13569$0 [176:174], 1'h0, \port$13569$0 [133:131], 3'h0, \port$13569$0 [49], \port$13569$0 [3:0] } : 32'd0;
+  assign \$210  = ch0_read_select_90 ? { 2'h0, \port$13573$0 [182:177], 4'h0, \port$13573$0 [186:183], 1'h0, \port$13573$0 [176:174], 1'h0, \port$13573$0 [133:131], 3'h0, \port$13573$0 [49], \port$13573$0 [3:0] } : 32'd0;
   assign \$211  = \$209  | \$210 ;
   assign \$212  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$213  = \$211  | \$212 ;
@@ -4617,13 +4617,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$223  = \$221  | \$222 ;
   assign \$224  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$225  = \$223  | \$224 ;
-  assign \$270  = ch0_read_select_c2 ? { 17'h00000, \port$13657$0 [9:3], 1'h0, \port$13657$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$270  = ch0_read_select_c2 ? { 17'h00000, \port$13661$0 [9:3], 1'h0, \port$13661$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$271  = \$269  | \$270 ;
-  assign \$272  = ch0_read_select_c3 ? \port$13580$0 [31:0] : 32'd0;
+  assign \$272  = ch0_read_select_c3 ? \port$13584$0 [31:0] : 32'd0;
   assign \$273  = \$271  | \$272 ;
-  assign \$274  = ch0_read_select_c4 ? \port$13580$0 [63:32] : 32'd0;
+  assign \$274  = ch0_read_select_c4 ? \port$13584$0 [63:32] : 32'd0;
   assign \$275  = \$273  | \$274 ;
-  assign \$276  = ch0_read_select_c5 ? { 16'h0000, \port$13580$0 [79:64] } : 32'd0;
+  assign \$276  = ch0_read_select_c5 ? { 16'h0000, \port$13584$0 [79:64] } : 32'd0;
   assign \$277  = \$275  | \$276 ;
   assign \$280  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$281  = \$279  | \$280 ;
@@ -4815,7 +4815,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$470  = \$468  | \$469 ;
   assign \$471  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$472  = \$470  | \$471 ;
-  assign \$477  = ch1_read_select_110 ? { 2'h0, \port$14120$0 [182:177], 4'h0, \port$14120$0 [186:183], 1'h0, \port$14120$0 [176:174], 1'h0, \port$14120$0 [133:131], 3'h0, \port$14120$0 [49], \port$14120$0 [3:0] } : 32'd0;
+  assign \$477  = ch1_read_select_110 ? { 2'h0, \port$14124$0 [182:177], 4'h0, \port$14124$0 [186:183], 1'h0, \port$14124$0 [176:174], 1'h0, \port$14124$0 [133:131], 3'h0, \port$14124$0 [49], \port$14124$0 [3:0] } : 32'd0;
   assign \$478  = \$476  | \$477 ;
   assign \$479  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$480  = \$478  | \$479 ;
@@ -4831,13 +4831,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$490  = \$488  | \$489 ;
   assign \$491  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$492  = \$490  | \$491 ;
-  assign \$537  = ch1_read_select_142 ? { 17'h00000, \port$14208$0 [9:3], 1'h0, \port$14208$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$537  = ch1_read_select_142 ? { 17'h00000, \port$14212$0 [9:3], 1'h0, \port$14212$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$538  = \$536  | \$537 ;
-  assign \$539  = ch1_read_select_143 ? \port$14131$0 [31:0] : 32'd0;
+  assign \$539  = ch1_read_select_143 ? \port$14135$0 [31:0] : 32'd0;
   assign \$540  = \$538  | \$539 ;
-  assign \$541  = ch1_read_select_144 ? \port$14131$0 [63:32] : 32'd0;
+  assign \$541  = ch1_read_select_144 ? \port$14135$0 [63:32] : 32'd0;
   assign \$542  = \$540  | \$541 ;
-  assign \$543  = ch1_read_select_145 ? { 16'h0000, \port$14131$0 [79:64] } : 32'd0;
+  assign \$543  = ch1_read_select_145 ? { 16'h0000, \port$14135$0 [79:64] } : 32'd0;
   assign \$544  = \$542  | \$543 ;
   assign \$547  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$548  = \$546  | \$547 ;
@@ -7301,7 +7301,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$898  = ch0_result_status_status_snapshot;
     if (\$189 ) begin
-      \$898  = \port$13569$0 [3:0];
+      \$898  = \port$13573$0 [3:0];
     end
     if (rst) begin
       \$898  = 4'h0;
@@ -7311,7 +7311,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$899  = ch0_result_status_cds_snapshot;
     if (\$189 ) begin
-      \$899  = \port$13569$0 [49];
+      \$899  = \port$13573$0 [49];
     end
     if (rst) begin
       \$899  = 1'h0;
@@ -7321,7 +7321,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$900  = ch0_result_status_w0_ne_snapshot;
     if (\$189 ) begin
-      \$900  = \port$13569$0 [131];
+      \$900  = \port$13573$0 [131];
     end
     if (rst) begin
       \$900  = 1'h0;
@@ -7331,7 +7331,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$901  = ch0_result_status_w0_nw_snapshot;
     if (\$189 ) begin
-      \$901  = \port$13569$0 [132];
+      \$901  = \port$13573$0 [132];
     end
     if (rst) begin
       \$901  = 1'h0;
@@ -7341,7 +7341,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$902  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$189 ) begin
-      \$902  = \port$13569$0 [133];
+      \$902  = \port$13573$0 [133];
     end
     if (rst) begin
       \$902  = 1'h0;
@@ -7351,7 +7351,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$903  = ch0_result_status_w1_ne_snapshot;
     if (\$189 ) begin
-      \$903  = \port$13569$0 [174];
+      \$903  = \port$13573$0 [174];
     end
     if (rst) begin
       \$903  = 1'h0;
@@ -7361,7 +7361,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$904  = ch0_result_status_w1_nw_snapshot;
     if (\$189 ) begin
-      \$904  = \port$13569$0 [175];
+      \$904  = \port$13573$0 [175];
     end
     if (rst) begin
       \$904  = 1'h0;
@@ -7371,7 +7371,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$905  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$189 ) begin
-      \$905  = \port$13569$0 [176];
+      \$905  = \port$13573$0 [176];
     end
     if (rst) begin
       \$905  = 1'h0;
@@ -7381,7 +7381,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$906  = ch0_result_status_lc_repeat_snapshot;
     if (\$189 ) begin
-      \$906  = \port$13569$0 [183];
+      \$906  = \port$13573$0 [183];
     end
     if (rst) begin
       \$906  = 1'h0;
@@ -7391,7 +7391,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$907  = ch0_result_status_lc_skip_snapshot;
     if (\$189 ) begin
-      \$907  = \port$13569$0 [184];
+      \$907  = \port$13573$0 [184];
     end
     if (rst) begin
       \$907  = 1'h0;
@@ -7401,7 +7401,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$908  = ch0_result_status_lc_zero_snapshot;
     if (\$189 ) begin
-      \$908  = \port$13569$0 [185];
+      \$908  = \port$13573$0 [185];
     end
     if (rst) begin
       \$908  = 1'h0;
@@ -7411,7 +7411,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$909  = ch0_result_status_spw_mismatch_snapshot;
     if (\$189 ) begin
-      \$909  = \port$13569$0 [186];
+      \$909  = \port$13573$0 [186];
     end
     if (rst) begin
       \$909  = 1'h0;
@@ -7421,7 +7421,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$910  = ch0_result_status_lc_snapshot;
     if (\$189 ) begin
-      \$910  = \port$13569$0 [182:177];
+      \$910  = \port$13573$0 [182:177];
     end
     if (rst) begin
       \$910  = 6'h00;
@@ -7441,7 +7441,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$912  = ch0_result_seq_line_delay_snapshot;
     if (\$189 ) begin
-      \$912  = \port$13569$0 [48:36];
+      \$912  = \port$13573$0 [48:36];
     end
     if (rst) begin
       \$912  = 13'h0000;
@@ -7451,7 +7451,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$913  = ch0_result_w0_lo_data_snapshot;
     if (\$189 ) begin
-      \$913  = \port$13569$0 [107:76];
+      \$913  = \port$13573$0 [107:76];
     end
     if (rst) begin
       \$913  = 32'd0;
@@ -7461,7 +7461,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$914  = ch0_result_w0_hi_data_snapshot;
     if (\$189 ) begin
-      \$914  = { 9'h000, \port$13569$0 [130:108] };
+      \$914  = { 9'h000, \port$13573$0 [130:108] };
     end
     if (rst) begin
       \$914  = 32'd0;
@@ -7471,7 +7471,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$915  = ch0_result_w1_lo_data_snapshot;
     if (\$189 ) begin
-      \$915  = \port$13569$0 [165:134];
+      \$915  = \port$13573$0 [165:134];
     end
     if (rst) begin
       \$915  = 32'd0;
@@ -7481,7 +7481,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$916  = ch0_result_w1_hi_data_snapshot;
     if (\$189 ) begin
-      \$916  = { 24'h000000, \port$13569$0 [173:166] };
+      \$916  = { 24'h000000, \port$13573$0 [173:166] };
     end
     if (rst) begin
       \$916  = 32'd0;
@@ -7491,7 +7491,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$917  = ch0_result_timestamp_time_snapshot;
     if (\$189 ) begin
-      \$917  = \port$13569$0 [35:4];
+      \$917  = \port$13573$0 [35:4];
     end
     if (rst) begin
       \$917  = 32'd0;
@@ -7501,7 +7501,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$918  = ch0_result_line_noise_events_snapshot;
     if (\$189 ) begin
-      \$918  = \port$13569$0 [53:50];
+      \$918  = \port$13573$0 [53:50];
     end
     if (rst) begin
       \$918  = 4'h0;
@@ -7511,7 +7511,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$919  = ch0_result_line_delay_settled_snapshot;
     if (\$189 ) begin
-      \$919  = \port$13569$0 [54];
+      \$919  = \port$13573$0 [54];
     end
     if (rst) begin
       \$919  = 1'h0;
@@ -7521,7 +7521,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$920  = ch0_result_line_delay_spread_snapshot;
     if (\$189 ) begin
-      \$920  = \port$13569$0 [75:68];
+      \$920  = \port$13573$0 [75:68];
     end
     if (rst) begin
       \$920  = 8'h00;
@@ -7531,7 +7531,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$921  = ch0_result_line_settled_delay_snapshot;
     if (\$189 ) begin
-      \$921  = \port$13569$0 [67:55];
+      \$921  = \port$13573$0 [67:55];
     end
     if (rst) begin
       \$921  = 13'h0000;
@@ -8877,7 +8877,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1062  = ch1_result_status_status_snapshot;
     if (\$456 ) begin
-      \$1062  = \port$14120$0 [3:0];
+      \$1062  = \port$14124$0 [3:0];
     end
     if (rst) begin
       \$1062  = 4'h0;
@@ -8887,7 +8887,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1063  = ch1_result_status_cds_snapshot;
     if (\$456 ) begin
-      \$1063  = \port$14120$0 [49];
+      \$1063  = \port$14124$0 [49];
     end
     if (rst) begin
       \$1063  = 1'h0;
@@ -8897,7 +8897,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1064  = ch1_result_status_w0_ne_snapshot;
     if (\$456 ) begin
-      \$1064  = \port$14120$0 [131];
+      \$1064  = \port$14124$0 [131];
     end
     if (rst) begin
       \$1064  = 1'h0;
@@ -8907,7 +8907,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1065  = ch1_result_status_w0_nw_snapshot;
     if (\$456 ) begin
-      \$1065  = \port$14120$0 [132];
+      \$1065  = \port$14124$0 [132];
     end
     if (rst) begin
       \$1065  = 1'h0;
@@ -8917,7 +8917,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1066  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$456 ) begin
-      \$1066  = \port$14120$0 [133];
+      \$1066  = \port$14124$0 [133];
     end
     if (rst) begin
       \$1066  = 1'h0;
@@ -8927,7 +8927,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1067  = ch1_result_status_w1_ne_snapshot;
     if (\$456 ) begin
-      \$1067  = \port$14120$0 [174];
+      \$1067  = \port$14124$0 [174];
     end
     if (rst) begin
       \$1067  = 1'h0;
@@ -8937,7 +8937,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1068  = ch1_result_status_w1_nw_snapshot;
     if (\$456 ) begin
-      \$1068  = \port$14120$0 [175];
+      \$1068  = \port$14124$0 [175];
     end
     if (rst) begin
       \$1068  = 1'h0;
@@ -8947,7 +8947,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1069  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$456 ) begin
-      \$1069  = \port$14120$0 [176];
+      \$1069  = \port$14124$0 [176];
     end
     if (rst) begin
       \$1069  = 1'h0;
@@ -8957,7 +8957,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1070  = ch1_result_status_lc_repeat_snapshot;
     if (\$456 ) begin
-      \$1070  = \port$14120$0 [183];
+      \$1070  = \port$14124$0 [183];
     end
     if (rst) begin
       \$1070  = 1'h0;
@@ -8967,7 +8967,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1071  = ch1_result_status_lc_skip_snapshot;
     if (\$456 ) begin
-      \$1071  = \port$14120$0 [184];
+      \$1071  = \port$14124$0 [184];
     end
     if (rst) begin
       \$1071  = 1'h0;
@@ -8977,7 +8977,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1072  = ch1_result_status_lc_zero_snapshot;
     if (\$456 ) begin
-      \$1072  = \port$14120$0 [185];
+      \$1072  = \port$14124$0 [185];
     end
     if (rst) begin
       \$1072  = 1'h0;
@@ -8987,7 +8987,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1073  = ch1_result_status_spw_mismatch_snapshot;
     if (\$456 ) begin
-      \$1073  = \port$14120$0 [186];
+      \$1073  = \port$14124$0 [186];
     end
     if (rst) begin
       \$1073  = 1'h0;
@@ -8997,7 +8997,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1074  = ch1_result_status_lc_snapshot;
     if (\$456 ) begin
-      \$1074  = \port$14120$0 [182:177];
+      \$1074  = \port$14124$0 [182:177];
     end
     if (rst) begin
       \$1074  = 6'h00;
@@ -9017,7 +9017,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1076  = ch1_result_seq_line_delay_snapshot;
     if (\$456 ) begin
-      \$1076  = \port$14120$0 [48:36];
+      \$1076  = \port$14124$0 [48:36];
     end
     if (rst) begin
       \$1076  = 13'h0000;
@@ -9027,7 +9027,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1077  = ch1_result_w0_lo_data_snapshot;
     if (\$456 ) begin
-      \$1077  = \port$14120$0 [107:76];
+      \$1077  = \port$14124$0 [107:76];
     end
     if (rst) begin
       \$1077  = 32'd0;
@@ -9037,7 +9037,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1078  = ch1_result_w0_hi_data_snapshot;
     if (\$456 ) begin
-      \$1078  = { 9'h000, \port$14120$0 [130:108] };
+      \$1078  = { 9'h000, \port$14124$0 [130:108] };
     end
     if (rst) begin
       \$1078  = 32'd0;
@@ -9047,7 +9047,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1079  = ch1_result_w1_lo_data_snapshot;
     if (\$456 ) begin
-      \$1079  = \port$14120$0 [165:134];
+      \$1079  = \port$14124$0 [165:134];
     end
     if (rst) begin
       \$1079  = 32'd0;
@@ -9057,7 +9057,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1080  = ch1_result_w1_hi_data_snapshot;
     if (\$456 ) begin
-      \$1080  = { 24'h000000, \port$14120$0 [173:166] };
+      \$1080  = { 24'h000000, \port$14124$0 [173:166] };
     end
     if (rst) begin
       \$1080  = 32'd0;
@@ -9067,7 +9067,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1081  = ch1_result_timestamp_time_snapshot;
     if (\$456 ) begin
-      \$1081  = \port$14120$0 [35:4];
+      \$1081  = \port$14124$0 [35:4];
     end
     if (rst) begin
       \$1081  = 32'd0;
@@ -9077,7 +9077,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1082  = ch1_result_line_noise_events_snapshot;
     if (\$456 ) begin
-      \$1082  = \port$14120$0 [53:50];
+      \$1082  = \port$14124$0 [53:50];
     end
     if (rst) begin
       \$1082  = 4'h0;
@@ -9087,7 +9087,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1083  = ch1_result_line_delay_settled_snapshot;
     if (\$456 ) begin
-      \$1083  = \port$14120$0 [54];
+      \$1083  = \port$14124$0 [54];
     end
     if (rst) begin
       \$1083  = 1'h0;
@@ -9097,7 +9097,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1084  = ch1_result_line_delay_spread_snapshot;
     if (\$456 ) begin
-      \$1084  = \port$14120$0 [75:68];
+      \$1084  = \port$14124$0 [75:68];
     end
     if (rst) begin
       \$1084  = 8'h00;
@@ -9107,7 +9107,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1085  = ch1_result_line_settled_delay_snapshot;
     if (\$456 ) begin
-      \$1085  = \port$14120$0 [67:55];
+      \$1085  = \port$14124$0 [67:55];
     end
     if (rst) begin
       \$1085  = 13'h0000;
@@ -9309,27 +9309,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$13569$0 [3:0];
-  assign ch0__cds = \port$13569$0 [49];
-  assign ch0__word0_ne = \port$13569$0 [131];
-  assign ch0__word0_nw = \port$13569$0 [132];
-  assign ch0__word0_crc_ok = \port$13569$0 [133];
-  assign ch0__word1_ne = \port$13569$0 [174];
-  assign ch0__word1_nw = \port$13569$0 [175];
-  assign ch0__word1_crc_ok = \port$13569$0 [176];
-  assign ch0__lc_repeat = \port$13569$0 [183];
-  assign ch0__lc_skip = \port$13569$0 [184];
-  assign ch0__lc_zero = \port$13569$0 [185];
-  assign ch0__spw_mismatch = \port$13569$0 [186];
-  assign ch0__lc = \port$13569$0 [182:177];
-  assign ch0__line_delay = \port$13569$0 [48:36];
-  assign ch0__word0_position = { 9'h000, \port$13569$0 [130:76] };
-  assign ch0__word1_position = { 24'h000000, \port$13569$0 [173:134] };
-  assign ch0__timestamp = \port$13569$0 [35:4];
-  assign ch0__noise_events = \port$13569$0 [53:50];
-  assign ch0__delay_settled = \port$13569$0 [54];
-  assign ch0__delay_spread = \port$13569$0 [75:68];
-  assign ch0__settled_delay = \port$13569$0 [67:55];
+  assign ch0__status = \port$13573$0 [3:0];
+  assign ch0__cds = \port$13573$0 [49];
+  assign ch0__word0_ne = \port$13573$0 [131];
+  assign ch0__word0_nw = \port$13573$0 [132];
+  assign ch0__word0_crc_ok = \port$13573$0 [133];
+  assign ch0__word1_ne = \port$13573$0 [174];
+  assign ch0__word1_nw = \port$13573$0 [175];
+  assign ch0__word1_crc_ok = \port$13573$0 [176];
+  assign ch0__lc_repeat = \port$13573$0 [183];
+  assign ch0__lc_skip = \port$13573$0 [184];
+  assign ch0__lc_zero = \port$13573$0 [185];
+  assign ch0__spw_mismatch = \port$13573$0 [186];
+  assign ch0__lc = \port$13573$0 [182:177];
+  assign ch0__line_delay = \port$13573$0 [48:36];
+  assign ch0__word0_position = { 9'h000, \port$13573$0 [130:76] };
+  assign ch0__word1_position = { 24'h000000, \port$13573$0 [173:134] };
+  assign ch0__timestamp = \port$13573$0 [35:4];
+  assign ch0__noise_events = \port$13573$0 [53:50];
+  assign ch0__delay_settled = \port$13573$0 [54];
+  assign ch0__delay_spread = \port$13573$0 [75:68];
+  assign ch0__settled_delay = \port$13573$0 [67:55];
   assign ch0__cap_data_bits_w0 = 7'h37;
   assign ch0__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9350,13 +9350,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$13657$0 [2:0];
-  assign ch0__ca_bytes_done = \port$13657$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$13580$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$13580$0 [31:16];
-  assign ch0__count_ca_refused = \port$13580$0 [47:32];
-  assign ch0__count_ca_aborted = \port$13580$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$13580$0 [79:64];
+  assign ch0__ca_status = \port$13661$0 [2:0];
+  assign ch0__ca_bytes_done = \port$13661$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$13584$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$13584$0 [31:16];
+  assign ch0__count_ca_refused = \port$13584$0 [47:32];
+  assign ch0__count_ca_aborted = \port$13584$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$13584$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9376,27 +9376,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$14120$0 [3:0];
-  assign ch1__cds = \port$14120$0 [49];
-  assign ch1__word0_ne = \port$14120$0 [131];
-  assign ch1__word0_nw = \port$14120$0 [132];
-  assign ch1__word0_crc_ok = \port$14120$0 [133];
-  assign ch1__word1_ne = \port$14120$0 [174];
-  assign ch1__word1_nw = \port$14120$0 [175];
-  assign ch1__word1_crc_ok = \port$14120$0 [176];
-  assign ch1__lc_repeat = \port$14120$0 [183];
-  assign ch1__lc_skip = \port$14120$0 [184];
-  assign ch1__lc_zero = \port$14120$0 [185];
-  assign ch1__spw_mismatch = \port$14120$0 [186];
-  assign ch1__lc = \port$14120$0 [182:177];
-  assign ch1__line_delay = \port$14120$0 [48:36];
-  assign ch1__word0_position = { 9'h000, \port$14120$0 [130:76] };
-  assign ch1__word1_position = { 24'h000000, \port$14120$0 [173:134] };
-  assign ch1__timestamp = \port$14120$0 [35:4];
-  assign ch1__noise_events = \port$14120$0 [53:50];
-  assign ch1__delay_settled = \port$14120$0 [54];
-  assign ch1__delay_spread = \port$14120$0 [75:68];
-  assign ch1__settled_delay = \port$14120$0 [67:55];
+  assign ch1__status = \port$14124$0 [3:0];
+  assign ch1__cds = \port$14124$0 [49];
+  assign ch1__word0_ne = \port$14124$0 [131];
+  assign ch1__word0_nw = \port$14124$0 [132];
+  assign ch1__word0_crc_ok = \port$14124$0 [133];
+  assign ch1__word1_ne = \port$14124$0 [174];
+  assign ch1__word1_nw = \port$14124$0 [175];
+  assign ch1__word1_crc_ok = \port$14124$0 [176];
+  assign ch1__lc_repeat = \port$14124$0 [183];
+  assign ch1__lc_skip = \port$14124$0 [184];
+  assign ch1__lc_zero = \port$14124$0 [185];
+  assign ch1__spw_mismatch = \port$14124$0 [186];
+  assign ch1__lc = \port$14124$0 [182:177];
+  assign ch1__line_delay = \port$14124$0 [48:36];
+  assign ch1__word0_position = { 9'h000, \port$14124$0 [130:76] };
+  assign ch1__word1_position = { 24'h000000, \port$14124$0 [173:134] };
+  assign ch1__timestamp = \port$14124$0 [35:4];
+  assign ch1__noise_events = \port$14124$0 [53:50];
+  assign ch1__delay_settled = \port$14124$0 [54];
+  assign ch1__delay_spread = \port$14124$0 [75:68];
+  assign ch1__settled_delay = \port$14124$0 [67:55];
   assign ch1__cap_data_bits_w0 = 7'h37;
   assign ch1__cap_data_bits_w1 = 7'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9417,13 +9417,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$14208$0 [2:0];
-  assign ch1__ca_bytes_done = \port$14208$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$14131$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$14131$0 [31:16];
-  assign ch1__count_ca_refused = \port$14131$0 [47:32];
-  assign ch1__count_ca_aborted = \port$14131$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$14131$0 [79:64];
+  assign ch1__ca_status = \port$14212$0 [2:0];
+  assign ch1__ca_bytes_done = \port$14212$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$14135$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$14135$0 [31:16];
+  assign ch1__count_ca_refused = \port$14135$0 [47:32];
+  assign ch1__count_ca_aborted = \port$14135$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$14135$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -10095,7 +10095,7 @@ endmodule
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic
 , regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check
 , cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address
-, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13569$0 , \port$13580$0 , regs__ca_done, \port$13657$0 , ca_rbuf_addr);
+, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13573$0 , \port$13584$0 , regs__ca_done, \port$13661$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10286,12 +10286,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$13569$0 ;
-  wire [186:0] \port$13569$0 ;
-  output [79:0] \port$13580$0 ;
-  wire [79:0] \port$13580$0 ;
-  output [9:0] \port$13657$0 ;
-  wire [9:0] \port$13657$0 ;
+  output [186:0] \port$13573$0 ;
+  wire [186:0] \port$13573$0 ;
+  output [79:0] \port$13584$0 ;
+  wire [79:0] \port$13584$0 ;
+  output [9:0] \port$13661$0 ;
+  wire [9:0] \port$13661$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10787,9 +10787,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   assign \ma$207  = ma;
   assign \slo$209  = slo;
   assign \cfg_hold$211  = cfg_hold;
-  assign \port$13569$0  = \$24 ;
-  assign \port$13580$0  = \$25 ;
-  assign \port$13657$0  = \$26 ;
+  assign \port$13573$0  = \$24 ;
+  assign \port$13584$0  = \$25 ;
+  assign \port$13661$0  = \$26 ;
   assign \$6  = regs__cfg_w0_data_bits[6];
   assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
@@ -11858,7 +11858,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13181$272 (live[274:272]),
+    .\port$13185$272 (live[274:272]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(sample),
@@ -11918,7 +11918,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13181$199 (live[199]),
+    .\port$13185$199 (live[199]),
     .rises(rises),
     .rst(rst),
     .ssi(live[259]),
@@ -11969,7 +11969,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$64 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13181$259 (live[271:259]),
+    .\port$13185$259 (live[271:259]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(\sample$349 ),
@@ -11994,7 +11994,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13195$0 (\bit ),
+    .\port$13199$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -12062,7 +12062,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$6073$0 (\$28 ),
+    .\port$6075$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -16203,7 +16203,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13181$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13185$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -16918,8 +16918,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13181$272 ;
-  wire [2:0] \port$13181$272 ;
+  input [2:0] \port$13185$272 ;
+  wire [2:0] \port$13185$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -17228,7 +17228,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13181$272 [0];
+  assign error_bit = ssi & \port$13185$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -17259,19 +17259,19 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13181$272 [0];
+  assign \$24  = ssi & \port$13185$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13181$272 [0];
+  assign \$28  = ssi & \port$13185$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13181$272 [0];
+  assign \$35  = ssi & \port$13185$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13181$272 [0];
+  assign \$39  = ssi & \port$13185$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -17292,7 +17292,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$13181$272 [2];
+  assign \$61  = ssi & \port$13185$272 [2];
   assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -17578,15 +17578,15 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13181$272 [0];
+  assign \$347  = ssi & \port$13185$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13181$272 [0];
-  assign \$355  = ~ \port$13181$272 [1];
+  assign \$354  = ssi & \port$13185$272 [0];
+  assign \$355  = ~ \port$13185$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -18321,7 +18321,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13181$272 [0];
+  assign ssi_error = \port$13185$272 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -18331,8 +18331,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$43  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13181$272 [2];
-  assign ssi_error_low = \port$13181$272 [1];
+  assign ssi_double = \port$13185$272 [2];
+  assign ssi_error_low = \port$13185$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -20646,7 +20646,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.ma_stop (rst, \port$13181$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_axil.ch0.core.ma_stop (rst, \port$13185$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20735,8 +20735,8 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13181$199 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13181$199 ;
-  wire \port$13181$199 ;
+  input \port$13185$199 ;
+  wire \port$13185$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20856,7 +20856,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13181$199 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13181$199  : 1'h0;
+  assign \$13  = \$12  ? \port$13185$199  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -21024,7 +21024,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13181$199 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13181$199 , 1'h1 };
+  assign enables = { \port$13185$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -23164,7 +23164,7 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13181$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13185$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -23747,8 +23747,8 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13181$259 ;
-  wire [12:0] \port$13181$259 ;
+  input [12:0] \port$13185$259 ;
+  wire [12:0] \port$13185$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -23771,7 +23771,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13181$259 [12:1] + 1'h1;
+  assign \$460  = \port$13185$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -24347,7 +24347,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13181$259 [0]),
+    .clear_high(\port$13185$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -24490,7 +24490,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13181$259 [0]) begin
+            if (\port$13185$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -24575,7 +24575,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13181$259 [0]) begin
+            if (\port$13185$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -24614,7 +24614,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13181$259 [12:1] };
+            \$534  = { 1'h0, \port$13185$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -24999,11 +24999,11 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13181$259 [12:1] };
-  assign fixed = \port$13181$259 [0];
+  assign fixed_delay = { 1'h0, \port$13185$259 [12:1] };
+  assign fixed = \port$13185$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13181$259 [0];
+  assign clear_high = \port$13185$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -25382,11 +25382,13 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
   wire \$110 ;
   wire \$1100 ;
   wire \$1101 ;
-  reg \$1102 ;
-  reg [24:0] \$1103 ;
+  wire \$1102 ;
+  wire \$1103 ;
   reg \$1104 ;
-  reg \$1105 ;
+  reg [24:0] \$1105 ;
   reg \$1106 ;
+  reg \$1107 ;
+  reg \$1108 ;
   wire \$111 ;
   wire \$112 ;
   wire \$113 ;
@@ -27499,84 +27501,86 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
   assign \$1097  = ~ abort;
   assign \$1098  = idle & \$1097 ;
   assign \$1099  = ~ \$1098 ;
-  assign \$1100  = \$1096  & \$1099 ;
-  assign \$1101  = deferred & abort;
-  assign overrun = \$1100  | \$1101 ;
+  assign \$1100  = deferred & hold;
+  assign \$1101  = \$1099  | \$1100 ;
+  assign \$1102  = \$1096  & \$1101 ;
+  assign \$1103  = deferred & abort;
+  assign overrun = \$1102  | \$1103 ;
   always @(posedge clk)
-    period_zero <= \$1102 ;
+    period_zero <= \$1104 ;
   always @(posedge clk)
-    count_p2 <= \$1103 ;
+    count_p2 <= \$1105 ;
   always @(posedge clk)
-    period_start <= \$1104 ;
+    period_start <= \$1106 ;
   always @(posedge clk)
-    wrap <= \$1105 ;
+    wrap <= \$1107 ;
   always @(posedge clk)
-    deferred <= \$1106 ;
+    deferred <= \$1108 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    \$1102  = \$1 ;
+    \$1104  = \$1 ;
     if (rst) begin
-      \$1102  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$1103  = 25'h0000002;
-    end else if (\$7 ) begin
-      \$1103  = 25'h0000003;
-    end else begin
-      \$1103  = \$1067 [24:0];
-    end
-    if (rst) begin
-      \$1103  = 25'h0000002;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$1104  = 1'h1;
-    end else if (\$7 ) begin
-      \$1104  = 1'h0;
-    end else begin
       \$1104  = 1'h0;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$1105  = 25'h0000002;
+    end else if (\$7 ) begin
+      \$1105  = 25'h0000003;
+    end else begin
+      \$1105  = \$1067 [24:0];
+    end
     if (rst) begin
-      \$1104  = 1'h1;
+      \$1105  = 25'h0000002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1105  = \$536 ;
+      \$1106  = 1'h1;
     end else if (\$7 ) begin
-      \$1105  = \$1066 ;
-    end else begin
-      \$1105  = \$1068 ;
-    end
-    if (rst) begin
-      \$1105  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    \$1106  = deferred;
-    if (\$1071 ) begin
       \$1106  = 1'h0;
-    end else if (\$1080 ) begin
+    end else begin
+      \$1106  = 1'h0;
+    end
+    if (rst) begin
       \$1106  = 1'h1;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$1107  = \$536 ;
+    end else if (\$7 ) begin
+      \$1107  = \$1066 ;
+    end else begin
+      \$1107  = \$1068 ;
+    end
     if (rst) begin
-      \$1106  = 1'h0;
+      \$1107  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    \$1108  = deferred;
+    if (\$1071 ) begin
+      \$1108  = 1'h0;
+    end else if (\$1080 ) begin
+      \$1108  = 1'h1;
+    end
+    if (rst) begin
+      \$1108  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13195$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13199$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -27618,8 +27622,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13195$0 ;
-  wire \port$13195$0 ;
+  input \port$13199$0 ;
+  wire \port$13199$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -27633,9 +27637,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13195$0  };
-  assign \$2  = { lc[4:0], \port$13195$0  } == last;
-  assign \$3  = { lc[4:0], \port$13195$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13199$0  };
+  assign \$2  = { lc[4:0], \port$13199$0  } == last;
+  assign \$3  = { lc[4:0], \port$13199$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -27745,7 +27749,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13195$0  };
+  assign lc_next = { lc[4:0], \port$13199$0  };
   assign zero = is_zero;
 endmodule
 
@@ -30542,7 +30546,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$6073$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$6075$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -30720,8 +30724,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$6073$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$6073$0 ;
-  wire \port$6073$0 ;
+  output \port$6075$0 ;
+  wire \port$6075$0 ;
   output report;
   wire report;
   input report_frame;
@@ -30839,7 +30843,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$6073$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$6073$0  = \$2 ;
+  assign \port$6075$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -30896,7 +30900,7 @@ endmodule
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic
 , regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check
 , cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address
-, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14120$0 , \port$14131$0 , regs__ca_done, \port$14208$0 , ca_rbuf_addr);
+, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14124$0 , \port$14135$0 , regs__ca_done, \port$14212$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -31087,12 +31091,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$14120$0 ;
-  wire [186:0] \port$14120$0 ;
-  output [79:0] \port$14131$0 ;
-  wire [79:0] \port$14131$0 ;
-  output [9:0] \port$14208$0 ;
-  wire [9:0] \port$14208$0 ;
+  output [186:0] \port$14124$0 ;
+  wire [186:0] \port$14124$0 ;
+  output [79:0] \port$14135$0 ;
+  wire [79:0] \port$14135$0 ;
+  output [9:0] \port$14212$0 ;
+  wire [9:0] \port$14212$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -31588,9 +31592,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   assign \ma$207  = ma;
   assign \slo$209  = slo;
   assign \cfg_hold$211  = cfg_hold;
-  assign \port$14120$0  = \$24 ;
-  assign \port$14131$0  = \$25 ;
-  assign \port$14208$0  = \$26 ;
+  assign \port$14124$0  = \$24 ;
+  assign \port$14135$0  = \$25 ;
+  assign \port$14212$0  = \$26 ;
   assign \$6  = regs__cfg_w0_data_bits[6];
   assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
@@ -32659,7 +32663,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13732$272 (live[274:272]),
+    .\port$13736$272 (live[274:272]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(sample),
@@ -32719,7 +32723,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13732$199 (live[199]),
+    .\port$13736$199 (live[199]),
     .rises(rises),
     .rst(rst),
     .ssi(live[259]),
@@ -32770,7 +32774,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$64 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13732$259 (live[271:259]),
+    .\port$13736$259 (live[271:259]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(\sample$349 ),
@@ -32795,7 +32799,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13746$0 (\bit ),
+    .\port$13750$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -32863,7 +32867,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$11642$0 (\$28 ),
+    .\port$11646$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -37004,7 +37008,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13732$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13736$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -37719,8 +37723,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13732$272 ;
-  wire [2:0] \port$13732$272 ;
+  input [2:0] \port$13736$272 ;
+  wire [2:0] \port$13736$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -38029,7 +38033,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13732$272 [0];
+  assign error_bit = ssi & \port$13736$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -38060,19 +38064,19 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13732$272 [0];
+  assign \$24  = ssi & \port$13736$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13732$272 [0];
+  assign \$28  = ssi & \port$13736$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13732$272 [0];
+  assign \$35  = ssi & \port$13736$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13732$272 [0];
+  assign \$39  = ssi & \port$13736$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -38093,7 +38097,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$13732$272 [2];
+  assign \$61  = ssi & \port$13736$272 [2];
   assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -38379,15 +38383,15 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13732$272 [0];
+  assign \$347  = ssi & \port$13736$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13732$272 [0];
-  assign \$355  = ~ \port$13732$272 [1];
+  assign \$354  = ssi & \port$13736$272 [0];
+  assign \$355  = ~ \port$13736$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -39122,7 +39126,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13732$272 [0];
+  assign ssi_error = \port$13736$272 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -39132,8 +39136,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$43  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13732$272 [2];
-  assign ssi_error_low = \port$13732$272 [1];
+  assign ssi_double = \port$13736$272 [2];
+  assign ssi_error_low = \port$13736$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -41447,7 +41451,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.ma_stop (rst, \port$13732$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_axil.ch1.core.ma_stop (rst, \port$13736$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -41536,8 +41540,8 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13732$199 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13732$199 ;
-  wire \port$13732$199 ;
+  input \port$13736$199 ;
+  wire \port$13736$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -41657,7 +41661,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13732$199 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13732$199  : 1'h0;
+  assign \$13  = \$12  ? \port$13736$199  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -41825,7 +41829,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13732$199 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13732$199 , 1'h1 };
+  assign enables = { \port$13736$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -43965,7 +43969,7 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13732$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13736$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -44548,8 +44552,8 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13732$259 ;
-  wire [12:0] \port$13732$259 ;
+  input [12:0] \port$13736$259 ;
+  wire [12:0] \port$13736$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -44572,7 +44576,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13732$259 [12:1] + 1'h1;
+  assign \$460  = \port$13736$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -45148,7 +45152,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13732$259 [0]),
+    .clear_high(\port$13736$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -45291,7 +45295,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13732$259 [0]) begin
+            if (\port$13736$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -45376,7 +45380,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13732$259 [0]) begin
+            if (\port$13736$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -45415,7 +45419,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13732$259 [12:1] };
+            \$534  = { 1'h0, \port$13736$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -45800,11 +45804,11 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13732$259 [12:1] };
-  assign fixed = \port$13732$259 [0];
+  assign fixed_delay = { 1'h0, \port$13736$259 [12:1] };
+  assign fixed = \port$13736$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13732$259 [0];
+  assign clear_high = \port$13736$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -46183,11 +46187,13 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
   wire \$110 ;
   wire \$1100 ;
   wire \$1101 ;
-  reg \$1102 ;
-  reg [24:0] \$1103 ;
+  wire \$1102 ;
+  wire \$1103 ;
   reg \$1104 ;
-  reg \$1105 ;
+  reg [24:0] \$1105 ;
   reg \$1106 ;
+  reg \$1107 ;
+  reg \$1108 ;
   wire \$111 ;
   wire \$112 ;
   wire \$113 ;
@@ -48300,84 +48306,86 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
   assign \$1097  = ~ abort;
   assign \$1098  = idle & \$1097 ;
   assign \$1099  = ~ \$1098 ;
-  assign \$1100  = \$1096  & \$1099 ;
-  assign \$1101  = deferred & abort;
-  assign overrun = \$1100  | \$1101 ;
+  assign \$1100  = deferred & hold;
+  assign \$1101  = \$1099  | \$1100 ;
+  assign \$1102  = \$1096  & \$1101 ;
+  assign \$1103  = deferred & abort;
+  assign overrun = \$1102  | \$1103 ;
   always @(posedge clk)
-    period_zero <= \$1102 ;
+    period_zero <= \$1104 ;
   always @(posedge clk)
-    count_p2 <= \$1103 ;
+    count_p2 <= \$1105 ;
   always @(posedge clk)
-    period_start <= \$1104 ;
+    period_start <= \$1106 ;
   always @(posedge clk)
-    wrap <= \$1105 ;
+    wrap <= \$1107 ;
   always @(posedge clk)
-    deferred <= \$1106 ;
+    deferred <= \$1108 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$1102  = \$1 ;
+    \$1104  = \$1 ;
     if (rst) begin
-      \$1102  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$1103  = 25'h0000002;
-    end else if (\$7 ) begin
-      \$1103  = 25'h0000003;
-    end else begin
-      \$1103  = \$1067 [24:0];
-    end
-    if (rst) begin
-      \$1103  = 25'h0000002;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$1104  = 1'h1;
-    end else if (\$7 ) begin
-      \$1104  = 1'h0;
-    end else begin
       \$1104  = 1'h0;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$1105  = 25'h0000002;
+    end else if (\$7 ) begin
+      \$1105  = 25'h0000003;
+    end else begin
+      \$1105  = \$1067 [24:0];
+    end
     if (rst) begin
-      \$1104  = 1'h1;
+      \$1105  = 25'h0000002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1105  = \$536 ;
+      \$1106  = 1'h1;
     end else if (\$7 ) begin
-      \$1105  = \$1066 ;
-    end else begin
-      \$1105  = \$1068 ;
-    end
-    if (rst) begin
-      \$1105  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$1106  = deferred;
-    if (\$1071 ) begin
       \$1106  = 1'h0;
-    end else if (\$1080 ) begin
+    end else begin
+      \$1106  = 1'h0;
+    end
+    if (rst) begin
       \$1106  = 1'h1;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$1107  = \$536 ;
+    end else if (\$7 ) begin
+      \$1107  = \$1066 ;
+    end else begin
+      \$1107  = \$1068 ;
+    end
     if (rst) begin
-      \$1106  = 1'h0;
+      \$1107  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    \$1108  = deferred;
+    if (\$1071 ) begin
+      \$1108  = 1'h0;
+    end else if (\$1080 ) begin
+      \$1108  = 1'h1;
+    end
+    if (rst) begin
+      \$1108  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13746$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13750$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -48419,8 +48427,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13746$0 ;
-  wire \port$13746$0 ;
+  input \port$13750$0 ;
+  wire \port$13750$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -48434,9 +48442,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13746$0  };
-  assign \$2  = { lc[4:0], \port$13746$0  } == last;
-  assign \$3  = { lc[4:0], \port$13746$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13750$0  };
+  assign \$2  = { lc[4:0], \port$13750$0  } == last;
+  assign \$3  = { lc[4:0], \port$13750$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -48546,7 +48554,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13746$0  };
+  assign lc_next = { lc[4:0], \port$13750$0  };
   assign zero = is_zero;
 endmodule
 
@@ -51343,7 +51351,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11642$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11646$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -51521,8 +51529,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11642$0 , 
   wire noisy;
   output passed;
   wire passed;
-  output \port$11642$0 ;
-  wire \port$11642$0 ;
+  output \port$11646$0 ;
+  wire \port$11646$0 ;
   output report;
   wire report;
   input report_frame;
@@ -51640,7 +51648,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11642$0 , 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$11642$0  = \$2 ;
+  assign \port$11646$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -1064,12 +1064,12 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$14075$0 (\$10 ),
-    .\port$14086$0 (\$11 ),
-    .\port$14163$0 (\$12 ),
-    .\port$14626$0 (\$13 ),
-    .\port$14637$0 (\$14 ),
-    .\port$14714$0 (\$15 ),
+    .\port$14079$0 (\$10 ),
+    .\port$14090$0 (\$11 ),
+    .\port$14167$0 (\$12 ),
+    .\port$14630$0 (\$13 ),
+    .\port$14641$0 (\$14 ),
+    .\port$14718$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1143,9 +1143,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$14075$0 (\$10 ),
-    .\port$14086$0 (\$11 ),
-    .\port$14163$0 (\$12 ),
+    .\port$14079$0 (\$10 ),
+    .\port$14090$0 (\$11 ),
+    .\port$14167$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1222,9 +1222,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(\regs__count_en$759 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$783 ),
-    .\port$14626$0 (\$13 ),
-    .\port$14637$0 (\$14 ),
-    .\port$14714$0 (\$15 ),
+    .\port$14630$0 (\$13 ),
+    .\port$14641$0 (\$14 ),
+    .\port$14718$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$447 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1980,8 +1980,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
 , ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$152 , ch0_ca_ctrl_start
 , ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc
 , ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error
-, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$435 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$14075$0 , \port$14086$0 , ch0__ca_done, \port$14163$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$14626$0 
-, \port$14637$0 , ch1__ca_done, \port$14714$0 , clk);
+, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$435 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$14079$0 , \port$14090$0 , ch0__ca_done, \port$14167$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$14630$0 
+, \port$14641$0 , ch1__ca_done, \port$14718$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -4233,18 +4233,18 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$14075$0 ;
-  wire [186:0] \port$14075$0 ;
-  input [79:0] \port$14086$0 ;
-  wire [79:0] \port$14086$0 ;
-  input [9:0] \port$14163$0 ;
-  wire [9:0] \port$14163$0 ;
-  input [186:0] \port$14626$0 ;
-  wire [186:0] \port$14626$0 ;
-  input [79:0] \port$14637$0 ;
-  wire [79:0] \port$14637$0 ;
-  input [9:0] \port$14714$0 ;
-  wire [9:0] \port$14714$0 ;
+  input [186:0] \port$14079$0 ;
+  wire [186:0] \port$14079$0 ;
+  input [79:0] \port$14090$0 ;
+  wire [79:0] \port$14090$0 ;
+  input [9:0] \port$14167$0 ;
+  wire [9:0] \port$14167$0 ;
+  input [186:0] \port$14630$0 ;
+  wire [186:0] \port$14630$0 ;
+  input [79:0] \port$14641$0 ;
+  wire [79:0] \port$14641$0 ;
+  input [9:0] \port$14718$0 ;
+  wire [9:0] \port$14718$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
@@ -4525,7 +4525,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$203  = \$201  | \$202 ;
   assign \$204  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$205  = \$203  | \$204 ;
-  assign \$210  = ch0_read_select_90 ? { 2'h0, \port$14075$0 [182:177], 4'h0, \port$14075$0 [186:183], 1'h0, \port$14075$0 [176:174], 1'h0, \port$14075$0 [133:131], 3'h0, \port$14075$0 [49], \port$14075$0 [3:0] } : 32'd0;
+  assign \$210  = ch0_read_select_90 ? { 2'h0, \port$14079$0 [182:177], 4'h0, \port$14079$0 [186:183], 1'h0, \port$14079$0 [176:174], 1'h0, \port$14079$0 [133:131], 3'h0, \port$14079$0 [49], \port$14079$0 [3:0] } : 32'd0;
   assign \$211  = \$209  | \$210 ;
   assign \$212  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$213  = \$211  | \$212 ;
@@ -4541,13 +4541,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$223  = \$221  | \$222 ;
   assign \$224  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$225  = \$223  | \$224 ;
-  assign \$270  = ch0_read_select_c2 ? { 17'h00000, \port$14163$0 [9:3], 1'h0, \port$14163$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$270  = ch0_read_select_c2 ? { 17'h00000, \port$14167$0 [9:3], 1'h0, \port$14167$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$271  = \$269  | \$270 ;
-  assign \$272  = ch0_read_select_c3 ? \port$14086$0 [31:0] : 32'd0;
+  assign \$272  = ch0_read_select_c3 ? \port$14090$0 [31:0] : 32'd0;
   assign \$273  = \$271  | \$272 ;
-  assign \$274  = ch0_read_select_c4 ? \port$14086$0 [63:32] : 32'd0;
+  assign \$274  = ch0_read_select_c4 ? \port$14090$0 [63:32] : 32'd0;
   assign \$275  = \$273  | \$274 ;
-  assign \$276  = ch0_read_select_c5 ? { 16'h0000, \port$14086$0 [79:64] } : 32'd0;
+  assign \$276  = ch0_read_select_c5 ? { 16'h0000, \port$14090$0 [79:64] } : 32'd0;
   assign \$277  = \$275  | \$276 ;
   assign \$280  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$281  = \$279  | \$280 ;
@@ -4739,7 +4739,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$470  = \$468  | \$469 ;
   assign \$471  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$472  = \$470  | \$471 ;
-  assign \$477  = ch1_read_select_110 ? { 2'h0, \port$14626$0 [182:177], 4'h0, \port$14626$0 [186:183], 1'h0, \port$14626$0 [176:174], 1'h0, \port$14626$0 [133:131], 3'h0, \port$14626$0 [49], \port$14626$0 [3:0] } : 32'd0;
+  assign \$477  = ch1_read_select_110 ? { 2'h0, \port$14630$0 [182:177], 4'h0, \port$14630$0 [186:183], 1'h0, \port$14630$0 [176:174], 1'h0, \port$14630$0 [133:131], 3'h0, \port$14630$0 [49], \port$14630$0 [3:0] } : 32'd0;
   assign \$478  = \$476  | \$477 ;
   assign \$479  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$480  = \$478  | \$479 ;
@@ -4755,13 +4755,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$490  = \$488  | \$489 ;
   assign \$491  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$492  = \$490  | \$491 ;
-  assign \$537  = ch1_read_select_142 ? { 17'h00000, \port$14714$0 [9:3], 1'h0, \port$14714$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$537  = ch1_read_select_142 ? { 17'h00000, \port$14718$0 [9:3], 1'h0, \port$14718$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$538  = \$536  | \$537 ;
-  assign \$539  = ch1_read_select_143 ? \port$14637$0 [31:0] : 32'd0;
+  assign \$539  = ch1_read_select_143 ? \port$14641$0 [31:0] : 32'd0;
   assign \$540  = \$538  | \$539 ;
-  assign \$541  = ch1_read_select_144 ? \port$14637$0 [63:32] : 32'd0;
+  assign \$541  = ch1_read_select_144 ? \port$14641$0 [63:32] : 32'd0;
   assign \$542  = \$540  | \$541 ;
-  assign \$543  = ch1_read_select_145 ? { 16'h0000, \port$14637$0 [79:64] } : 32'd0;
+  assign \$543  = ch1_read_select_145 ? { 16'h0000, \port$14641$0 [79:64] } : 32'd0;
   assign \$544  = \$542  | \$543 ;
   assign \$547  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$548  = \$546  | \$547 ;
@@ -7225,7 +7225,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$898  = ch0_result_status_status_snapshot;
     if (\$189 ) begin
-      \$898  = \port$14075$0 [3:0];
+      \$898  = \port$14079$0 [3:0];
     end
     if (rst) begin
       \$898  = 4'h0;
@@ -7235,7 +7235,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$899  = ch0_result_status_cds_snapshot;
     if (\$189 ) begin
-      \$899  = \port$14075$0 [49];
+      \$899  = \port$14079$0 [49];
     end
     if (rst) begin
       \$899  = 1'h0;
@@ -7245,7 +7245,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$900  = ch0_result_status_w0_ne_snapshot;
     if (\$189 ) begin
-      \$900  = \port$14075$0 [131];
+      \$900  = \port$14079$0 [131];
     end
     if (rst) begin
       \$900  = 1'h0;
@@ -7255,7 +7255,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$901  = ch0_result_status_w0_nw_snapshot;
     if (\$189 ) begin
-      \$901  = \port$14075$0 [132];
+      \$901  = \port$14079$0 [132];
     end
     if (rst) begin
       \$901  = 1'h0;
@@ -7265,7 +7265,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$902  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$189 ) begin
-      \$902  = \port$14075$0 [133];
+      \$902  = \port$14079$0 [133];
     end
     if (rst) begin
       \$902  = 1'h0;
@@ -7275,7 +7275,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$903  = ch0_result_status_w1_ne_snapshot;
     if (\$189 ) begin
-      \$903  = \port$14075$0 [174];
+      \$903  = \port$14079$0 [174];
     end
     if (rst) begin
       \$903  = 1'h0;
@@ -7285,7 +7285,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$904  = ch0_result_status_w1_nw_snapshot;
     if (\$189 ) begin
-      \$904  = \port$14075$0 [175];
+      \$904  = \port$14079$0 [175];
     end
     if (rst) begin
       \$904  = 1'h0;
@@ -7295,7 +7295,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$905  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$189 ) begin
-      \$905  = \port$14075$0 [176];
+      \$905  = \port$14079$0 [176];
     end
     if (rst) begin
       \$905  = 1'h0;
@@ -7305,7 +7305,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$906  = ch0_result_status_lc_repeat_snapshot;
     if (\$189 ) begin
-      \$906  = \port$14075$0 [183];
+      \$906  = \port$14079$0 [183];
     end
     if (rst) begin
       \$906  = 1'h0;
@@ -7315,7 +7315,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$907  = ch0_result_status_lc_skip_snapshot;
     if (\$189 ) begin
-      \$907  = \port$14075$0 [184];
+      \$907  = \port$14079$0 [184];
     end
     if (rst) begin
       \$907  = 1'h0;
@@ -7325,7 +7325,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$908  = ch0_result_status_lc_zero_snapshot;
     if (\$189 ) begin
-      \$908  = \port$14075$0 [185];
+      \$908  = \port$14079$0 [185];
     end
     if (rst) begin
       \$908  = 1'h0;
@@ -7335,7 +7335,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$909  = ch0_result_status_spw_mismatch_snapshot;
     if (\$189 ) begin
-      \$909  = \port$14075$0 [186];
+      \$909  = \port$14079$0 [186];
     end
     if (rst) begin
       \$909  = 1'h0;
@@ -7345,7 +7345,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$910  = ch0_result_status_lc_snapshot;
     if (\$189 ) begin
-      \$910  = \port$14075$0 [182:177];
+      \$910  = \port$14079$0 [182:177];
     end
     if (rst) begin
       \$910  = 6'h00;
@@ -7365,7 +7365,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$912  = ch0_result_seq_line_delay_snapshot;
     if (\$189 ) begin
-      \$912  = \port$14075$0 [48:36];
+      \$912  = \port$14079$0 [48:36];
     end
     if (rst) begin
       \$912  = 13'h0000;
@@ -7375,7 +7375,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$913  = ch0_result_w0_lo_data_snapshot;
     if (\$189 ) begin
-      \$913  = \port$14075$0 [107:76];
+      \$913  = \port$14079$0 [107:76];
     end
     if (rst) begin
       \$913  = 32'd0;
@@ -7385,7 +7385,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$914  = ch0_result_w0_hi_data_snapshot;
     if (\$189 ) begin
-      \$914  = { 9'h000, \port$14075$0 [130:108] };
+      \$914  = { 9'h000, \port$14079$0 [130:108] };
     end
     if (rst) begin
       \$914  = 32'd0;
@@ -7395,7 +7395,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$915  = ch0_result_w1_lo_data_snapshot;
     if (\$189 ) begin
-      \$915  = \port$14075$0 [165:134];
+      \$915  = \port$14079$0 [165:134];
     end
     if (rst) begin
       \$915  = 32'd0;
@@ -7405,7 +7405,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$916  = ch0_result_w1_hi_data_snapshot;
     if (\$189 ) begin
-      \$916  = { 24'h000000, \port$14075$0 [173:166] };
+      \$916  = { 24'h000000, \port$14079$0 [173:166] };
     end
     if (rst) begin
       \$916  = 32'd0;
@@ -7415,7 +7415,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$917  = ch0_result_timestamp_time_snapshot;
     if (\$189 ) begin
-      \$917  = \port$14075$0 [35:4];
+      \$917  = \port$14079$0 [35:4];
     end
     if (rst) begin
       \$917  = 32'd0;
@@ -7425,7 +7425,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$918  = ch0_result_line_noise_events_snapshot;
     if (\$189 ) begin
-      \$918  = \port$14075$0 [53:50];
+      \$918  = \port$14079$0 [53:50];
     end
     if (rst) begin
       \$918  = 4'h0;
@@ -7435,7 +7435,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$919  = ch0_result_line_delay_settled_snapshot;
     if (\$189 ) begin
-      \$919  = \port$14075$0 [54];
+      \$919  = \port$14079$0 [54];
     end
     if (rst) begin
       \$919  = 1'h0;
@@ -7445,7 +7445,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$920  = ch0_result_line_delay_spread_snapshot;
     if (\$189 ) begin
-      \$920  = \port$14075$0 [75:68];
+      \$920  = \port$14079$0 [75:68];
     end
     if (rst) begin
       \$920  = 8'h00;
@@ -7455,7 +7455,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$921  = ch0_result_line_settled_delay_snapshot;
     if (\$189 ) begin
-      \$921  = \port$14075$0 [67:55];
+      \$921  = \port$14079$0 [67:55];
     end
     if (rst) begin
       \$921  = 13'h0000;
@@ -8801,7 +8801,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1062  = ch1_result_status_status_snapshot;
     if (\$456 ) begin
-      \$1062  = \port$14626$0 [3:0];
+      \$1062  = \port$14630$0 [3:0];
     end
     if (rst) begin
       \$1062  = 4'h0;
@@ -8811,7 +8811,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1063  = ch1_result_status_cds_snapshot;
     if (\$456 ) begin
-      \$1063  = \port$14626$0 [49];
+      \$1063  = \port$14630$0 [49];
     end
     if (rst) begin
       \$1063  = 1'h0;
@@ -8821,7 +8821,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1064  = ch1_result_status_w0_ne_snapshot;
     if (\$456 ) begin
-      \$1064  = \port$14626$0 [131];
+      \$1064  = \port$14630$0 [131];
     end
     if (rst) begin
       \$1064  = 1'h0;
@@ -8831,7 +8831,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1065  = ch1_result_status_w0_nw_snapshot;
     if (\$456 ) begin
-      \$1065  = \port$14626$0 [132];
+      \$1065  = \port$14630$0 [132];
     end
     if (rst) begin
       \$1065  = 1'h0;
@@ -8841,7 +8841,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1066  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$456 ) begin
-      \$1066  = \port$14626$0 [133];
+      \$1066  = \port$14630$0 [133];
     end
     if (rst) begin
       \$1066  = 1'h0;
@@ -8851,7 +8851,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1067  = ch1_result_status_w1_ne_snapshot;
     if (\$456 ) begin
-      \$1067  = \port$14626$0 [174];
+      \$1067  = \port$14630$0 [174];
     end
     if (rst) begin
       \$1067  = 1'h0;
@@ -8861,7 +8861,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1068  = ch1_result_status_w1_nw_snapshot;
     if (\$456 ) begin
-      \$1068  = \port$14626$0 [175];
+      \$1068  = \port$14630$0 [175];
     end
     if (rst) begin
       \$1068  = 1'h0;
@@ -8871,7 +8871,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1069  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$456 ) begin
-      \$1069  = \port$14626$0 [176];
+      \$1069  = \port$14630$0 [176];
     end
     if (rst) begin
       \$1069  = 1'h0;
@@ -8881,7 +8881,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1070  = ch1_result_status_lc_repeat_snapshot;
     if (\$456 ) begin
-      \$1070  = \port$14626$0 [183];
+      \$1070  = \port$14630$0 [183];
     end
     if (rst) begin
       \$1070  = 1'h0;
@@ -8891,7 +8891,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1071  = ch1_result_status_lc_skip_snapshot;
     if (\$456 ) begin
-      \$1071  = \port$14626$0 [184];
+      \$1071  = \port$14630$0 [184];
     end
     if (rst) begin
       \$1071  = 1'h0;
@@ -8901,7 +8901,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1072  = ch1_result_status_lc_zero_snapshot;
     if (\$456 ) begin
-      \$1072  = \port$14626$0 [185];
+      \$1072  = \port$14630$0 [185];
     end
     if (rst) begin
       \$1072  = 1'h0;
@@ -8911,7 +8911,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1073  = ch1_result_status_spw_mismatch_snapshot;
     if (\$456 ) begin
-      \$1073  = \port$14626$0 [186];
+      \$1073  = \port$14630$0 [186];
     end
     if (rst) begin
       \$1073  = 1'h0;
@@ -8921,7 +8921,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1074  = ch1_result_status_lc_snapshot;
     if (\$456 ) begin
-      \$1074  = \port$14626$0 [182:177];
+      \$1074  = \port$14630$0 [182:177];
     end
     if (rst) begin
       \$1074  = 6'h00;
@@ -8941,7 +8941,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1076  = ch1_result_seq_line_delay_snapshot;
     if (\$456 ) begin
-      \$1076  = \port$14626$0 [48:36];
+      \$1076  = \port$14630$0 [48:36];
     end
     if (rst) begin
       \$1076  = 13'h0000;
@@ -8951,7 +8951,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1077  = ch1_result_w0_lo_data_snapshot;
     if (\$456 ) begin
-      \$1077  = \port$14626$0 [107:76];
+      \$1077  = \port$14630$0 [107:76];
     end
     if (rst) begin
       \$1077  = 32'd0;
@@ -8961,7 +8961,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1078  = ch1_result_w0_hi_data_snapshot;
     if (\$456 ) begin
-      \$1078  = { 9'h000, \port$14626$0 [130:108] };
+      \$1078  = { 9'h000, \port$14630$0 [130:108] };
     end
     if (rst) begin
       \$1078  = 32'd0;
@@ -8971,7 +8971,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1079  = ch1_result_w1_lo_data_snapshot;
     if (\$456 ) begin
-      \$1079  = \port$14626$0 [165:134];
+      \$1079  = \port$14630$0 [165:134];
     end
     if (rst) begin
       \$1079  = 32'd0;
@@ -8981,7 +8981,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1080  = ch1_result_w1_hi_data_snapshot;
     if (\$456 ) begin
-      \$1080  = { 24'h000000, \port$14626$0 [173:166] };
+      \$1080  = { 24'h000000, \port$14630$0 [173:166] };
     end
     if (rst) begin
       \$1080  = 32'd0;
@@ -8991,7 +8991,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1081  = ch1_result_timestamp_time_snapshot;
     if (\$456 ) begin
-      \$1081  = \port$14626$0 [35:4];
+      \$1081  = \port$14630$0 [35:4];
     end
     if (rst) begin
       \$1081  = 32'd0;
@@ -9001,7 +9001,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1082  = ch1_result_line_noise_events_snapshot;
     if (\$456 ) begin
-      \$1082  = \port$14626$0 [53:50];
+      \$1082  = \port$14630$0 [53:50];
     end
     if (rst) begin
       \$1082  = 4'h0;
@@ -9011,7 +9011,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1083  = ch1_result_line_delay_settled_snapshot;
     if (\$456 ) begin
-      \$1083  = \port$14626$0 [54];
+      \$1083  = \port$14630$0 [54];
     end
     if (rst) begin
       \$1083  = 1'h0;
@@ -9021,7 +9021,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1084  = ch1_result_line_delay_spread_snapshot;
     if (\$456 ) begin
-      \$1084  = \port$14626$0 [75:68];
+      \$1084  = \port$14630$0 [75:68];
     end
     if (rst) begin
       \$1084  = 8'h00;
@@ -9031,7 +9031,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1085  = ch1_result_line_settled_delay_snapshot;
     if (\$456 ) begin
-      \$1085  = \port$14626$0 [67:55];
+      \$1085  = \port$14630$0 [67:55];
     end
     if (rst) begin
       \$1085  = 13'h0000;
@@ -9234,27 +9234,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$14075$0 [3:0];
-  assign ch0__cds = \port$14075$0 [49];
-  assign ch0__word0_ne = \port$14075$0 [131];
-  assign ch0__word0_nw = \port$14075$0 [132];
-  assign ch0__word0_crc_ok = \port$14075$0 [133];
-  assign ch0__word1_ne = \port$14075$0 [174];
-  assign ch0__word1_nw = \port$14075$0 [175];
-  assign ch0__word1_crc_ok = \port$14075$0 [176];
-  assign ch0__lc_repeat = \port$14075$0 [183];
-  assign ch0__lc_skip = \port$14075$0 [184];
-  assign ch0__lc_zero = \port$14075$0 [185];
-  assign ch0__spw_mismatch = \port$14075$0 [186];
-  assign ch0__lc = \port$14075$0 [182:177];
-  assign ch0__line_delay = \port$14075$0 [48:36];
-  assign ch0__word0_position = { 9'h000, \port$14075$0 [130:76] };
-  assign ch0__word1_position = { 24'h000000, \port$14075$0 [173:134] };
-  assign ch0__timestamp = \port$14075$0 [35:4];
-  assign ch0__noise_events = \port$14075$0 [53:50];
-  assign ch0__delay_settled = \port$14075$0 [54];
-  assign ch0__delay_spread = \port$14075$0 [75:68];
-  assign ch0__settled_delay = \port$14075$0 [67:55];
+  assign ch0__status = \port$14079$0 [3:0];
+  assign ch0__cds = \port$14079$0 [49];
+  assign ch0__word0_ne = \port$14079$0 [131];
+  assign ch0__word0_nw = \port$14079$0 [132];
+  assign ch0__word0_crc_ok = \port$14079$0 [133];
+  assign ch0__word1_ne = \port$14079$0 [174];
+  assign ch0__word1_nw = \port$14079$0 [175];
+  assign ch0__word1_crc_ok = \port$14079$0 [176];
+  assign ch0__lc_repeat = \port$14079$0 [183];
+  assign ch0__lc_skip = \port$14079$0 [184];
+  assign ch0__lc_zero = \port$14079$0 [185];
+  assign ch0__spw_mismatch = \port$14079$0 [186];
+  assign ch0__lc = \port$14079$0 [182:177];
+  assign ch0__line_delay = \port$14079$0 [48:36];
+  assign ch0__word0_position = { 9'h000, \port$14079$0 [130:76] };
+  assign ch0__word1_position = { 24'h000000, \port$14079$0 [173:134] };
+  assign ch0__timestamp = \port$14079$0 [35:4];
+  assign ch0__noise_events = \port$14079$0 [53:50];
+  assign ch0__delay_settled = \port$14079$0 [54];
+  assign ch0__delay_spread = \port$14079$0 [75:68];
+  assign ch0__settled_delay = \port$14079$0 [67:55];
   assign ch0__cap_data_bits_w0 = 7'h37;
   assign ch0__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9275,13 +9275,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$14163$0 [2:0];
-  assign ch0__ca_bytes_done = \port$14163$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$14086$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$14086$0 [31:16];
-  assign ch0__count_ca_refused = \port$14086$0 [47:32];
-  assign ch0__count_ca_aborted = \port$14086$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$14086$0 [79:64];
+  assign ch0__ca_status = \port$14167$0 [2:0];
+  assign ch0__ca_bytes_done = \port$14167$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$14090$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$14090$0 [31:16];
+  assign ch0__count_ca_refused = \port$14090$0 [47:32];
+  assign ch0__count_ca_aborted = \port$14090$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$14090$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9301,27 +9301,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$14626$0 [3:0];
-  assign ch1__cds = \port$14626$0 [49];
-  assign ch1__word0_ne = \port$14626$0 [131];
-  assign ch1__word0_nw = \port$14626$0 [132];
-  assign ch1__word0_crc_ok = \port$14626$0 [133];
-  assign ch1__word1_ne = \port$14626$0 [174];
-  assign ch1__word1_nw = \port$14626$0 [175];
-  assign ch1__word1_crc_ok = \port$14626$0 [176];
-  assign ch1__lc_repeat = \port$14626$0 [183];
-  assign ch1__lc_skip = \port$14626$0 [184];
-  assign ch1__lc_zero = \port$14626$0 [185];
-  assign ch1__spw_mismatch = \port$14626$0 [186];
-  assign ch1__lc = \port$14626$0 [182:177];
-  assign ch1__line_delay = \port$14626$0 [48:36];
-  assign ch1__word0_position = { 9'h000, \port$14626$0 [130:76] };
-  assign ch1__word1_position = { 24'h000000, \port$14626$0 [173:134] };
-  assign ch1__timestamp = \port$14626$0 [35:4];
-  assign ch1__noise_events = \port$14626$0 [53:50];
-  assign ch1__delay_settled = \port$14626$0 [54];
-  assign ch1__delay_spread = \port$14626$0 [75:68];
-  assign ch1__settled_delay = \port$14626$0 [67:55];
+  assign ch1__status = \port$14630$0 [3:0];
+  assign ch1__cds = \port$14630$0 [49];
+  assign ch1__word0_ne = \port$14630$0 [131];
+  assign ch1__word0_nw = \port$14630$0 [132];
+  assign ch1__word0_crc_ok = \port$14630$0 [133];
+  assign ch1__word1_ne = \port$14630$0 [174];
+  assign ch1__word1_nw = \port$14630$0 [175];
+  assign ch1__word1_crc_ok = \port$14630$0 [176];
+  assign ch1__lc_repeat = \port$14630$0 [183];
+  assign ch1__lc_skip = \port$14630$0 [184];
+  assign ch1__lc_zero = \port$14630$0 [185];
+  assign ch1__spw_mismatch = \port$14630$0 [186];
+  assign ch1__lc = \port$14630$0 [182:177];
+  assign ch1__line_delay = \port$14630$0 [48:36];
+  assign ch1__word0_position = { 9'h000, \port$14630$0 [130:76] };
+  assign ch1__word1_position = { 24'h000000, \port$14630$0 [173:134] };
+  assign ch1__timestamp = \port$14630$0 [35:4];
+  assign ch1__noise_events = \port$14630$0 [53:50];
+  assign ch1__delay_settled = \port$14630$0 [54];
+  assign ch1__delay_spread = \port$14630$0 [75:68];
+  assign ch1__settled_delay = \port$14630$0 [67:55];
   assign ch1__cap_data_bits_w0 = 7'h37;
   assign ch1__cap_data_bits_w1 = 7'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9342,13 +9342,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$14714$0 [2:0];
-  assign ch1__ca_bytes_done = \port$14714$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$14637$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$14637$0 [31:16];
-  assign ch1__count_ca_refused = \port$14637$0 [47:32];
-  assign ch1__count_ca_aborted = \port$14637$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$14637$0 [79:64];
+  assign ch1__ca_status = \port$14718$0 [2:0];
+  assign ch1__ca_bytes_done = \port$14718$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$14641$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$14641$0 [31:16];
+  assign ch1__count_ca_refused = \port$14641$0 [47:32];
+  assign ch1__count_ca_aborted = \port$14641$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$14641$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -11957,7 +11957,7 @@ endmodule
 module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic
 , regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check
 , cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address
-, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14075$0 , \port$14086$0 , regs__ca_done, \port$14163$0 , slo);
+, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14079$0 , \port$14090$0 , regs__ca_done, \port$14167$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -12148,12 +12148,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$14075$0 ;
-  wire [186:0] \port$14075$0 ;
-  output [79:0] \port$14086$0 ;
-  wire [79:0] \port$14086$0 ;
-  output [9:0] \port$14163$0 ;
-  wire [9:0] \port$14163$0 ;
+  output [186:0] \port$14079$0 ;
+  wire [186:0] \port$14079$0 ;
+  output [79:0] \port$14090$0 ;
+  wire [79:0] \port$14090$0 ;
+  output [9:0] \port$14167$0 ;
+  wire [9:0] \port$14167$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -12649,9 +12649,9 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign \ma$207  = ma;
   assign \slo$209  = slo;
   assign \cfg_hold$211  = cfg_hold;
-  assign \port$14075$0  = \$24 ;
-  assign \port$14086$0  = \$25 ;
-  assign \port$14163$0  = \$26 ;
+  assign \port$14079$0  = \$24 ;
+  assign \port$14090$0  = \$25 ;
+  assign \port$14167$0  = \$26 ;
   assign \$6  = regs__cfg_w0_data_bits[6];
   assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
@@ -13720,7 +13720,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13687$272 (live[274:272]),
+    .\port$13691$272 (live[274:272]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(sample),
@@ -13780,7 +13780,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13687$199 (live[199]),
+    .\port$13691$199 (live[199]),
     .rises(rises),
     .rst(rst),
     .ssi(live[259]),
@@ -13831,7 +13831,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w
     .level(\slo$64 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13687$259 (live[271:259]),
+    .\port$13691$259 (live[271:259]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(\sample$349 ),
@@ -13856,7 +13856,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13701$0 (\bit ),
+    .\port$13705$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -13924,7 +13924,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$6509$0 (\$28 ),
+    .\port$6511$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -18065,7 +18065,7 @@ module \biss_master_uart.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13687$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13691$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
@@ -18780,8 +18780,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13687$272 ;
-  wire [2:0] \port$13687$272 ;
+  input [2:0] \port$13691$272 ;
+  wire [2:0] \port$13691$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -19090,7 +19090,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13687$272 [0];
+  assign error_bit = ssi & \port$13691$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -19121,19 +19121,19 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13687$272 [0];
+  assign \$24  = ssi & \port$13691$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13687$272 [0];
+  assign \$28  = ssi & \port$13691$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13687$272 [0];
+  assign \$35  = ssi & \port$13691$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13687$272 [0];
+  assign \$39  = ssi & \port$13691$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -19154,7 +19154,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$13687$272 [2];
+  assign \$61  = ssi & \port$13691$272 [2];
   assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -19440,15 +19440,15 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13687$272 [0];
+  assign \$347  = ssi & \port$13691$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13687$272 [0];
-  assign \$355  = ~ \port$13687$272 [1];
+  assign \$354  = ssi & \port$13691$272 [0];
+  assign \$355  = ~ \port$13691$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -20183,7 +20183,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13687$272 [0];
+  assign ssi_error = \port$13691$272 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -20193,8 +20193,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$43  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13687$272 [2];
-  assign ssi_error_low = \port$13687$272 [1];
+  assign ssi_double = \port$13691$272 [2];
+  assign ssi_error_low = \port$13691$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22508,7 +22508,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.ma_stop (rst, \port$13687$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_uart.ch0.core.ma_stop (rst, \port$13691$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -22597,8 +22597,8 @@ module \biss_master_uart.ch0.core.ma_stop (rst, \port$13687$199 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13687$199 ;
-  wire \port$13687$199 ;
+  input \port$13691$199 ;
+  wire \port$13691$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -22718,7 +22718,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, \port$13687$199 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13687$199  : 1'h0;
+  assign \$13  = \$12  ? \port$13691$199  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -22886,7 +22886,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, \port$13687$199 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13687$199 , 1'h1 };
+  assign enables = { \port$13691$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -25026,7 +25026,7 @@ module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13687$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13691$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -25609,8 +25609,8 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13687$259 ;
-  wire [12:0] \port$13687$259 ;
+  input [12:0] \port$13691$259 ;
+  wire [12:0] \port$13691$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -25633,7 +25633,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13687$259 [12:1] + 1'h1;
+  assign \$460  = \port$13691$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -26209,7 +26209,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13687$259 [0]),
+    .clear_high(\port$13691$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -26352,7 +26352,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13687$259 [0]) begin
+            if (\port$13691$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -26437,7 +26437,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13687$259 [0]) begin
+            if (\port$13691$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -26476,7 +26476,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13687$259 [12:1] };
+            \$534  = { 1'h0, \port$13691$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -26861,11 +26861,11 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13687$259 [12:1] };
-  assign fixed = \port$13687$259 [0];
+  assign fixed_delay = { 1'h0, \port$13691$259 [12:1] };
+  assign fixed = \port$13691$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13687$259 [0];
+  assign clear_high = \port$13691$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -27244,11 +27244,13 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
   wire \$110 ;
   wire \$1100 ;
   wire \$1101 ;
-  reg \$1102 ;
-  reg [24:0] \$1103 ;
+  wire \$1102 ;
+  wire \$1103 ;
   reg \$1104 ;
-  reg \$1105 ;
+  reg [24:0] \$1105 ;
   reg \$1106 ;
+  reg \$1107 ;
+  reg \$1108 ;
   wire \$111 ;
   wire \$112 ;
   wire \$113 ;
@@ -29361,84 +29363,86 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
   assign \$1097  = ~ abort;
   assign \$1098  = idle & \$1097 ;
   assign \$1099  = ~ \$1098 ;
-  assign \$1100  = \$1096  & \$1099 ;
-  assign \$1101  = deferred & abort;
-  assign overrun = \$1100  | \$1101 ;
+  assign \$1100  = deferred & hold;
+  assign \$1101  = \$1099  | \$1100 ;
+  assign \$1102  = \$1096  & \$1101 ;
+  assign \$1103  = deferred & abort;
+  assign overrun = \$1102  | \$1103 ;
   always @(posedge clk)
-    period_zero <= \$1102 ;
+    period_zero <= \$1104 ;
   always @(posedge clk)
-    count_p2 <= \$1103 ;
+    count_p2 <= \$1105 ;
   always @(posedge clk)
-    period_start <= \$1104 ;
+    period_start <= \$1106 ;
   always @(posedge clk)
-    wrap <= \$1105 ;
+    wrap <= \$1107 ;
   always @(posedge clk)
-    deferred <= \$1106 ;
+    deferred <= \$1108 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$1102  = \$1 ;
+    \$1104  = \$1 ;
     if (rst) begin
-      \$1102  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$1103  = 25'h0000002;
-    end else if (\$7 ) begin
-      \$1103  = 25'h0000003;
-    end else begin
-      \$1103  = \$1067 [24:0];
-    end
-    if (rst) begin
-      \$1103  = 25'h0000002;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$1104  = 1'h1;
-    end else if (\$7 ) begin
-      \$1104  = 1'h0;
-    end else begin
       \$1104  = 1'h0;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$1105  = 25'h0000002;
+    end else if (\$7 ) begin
+      \$1105  = 25'h0000003;
+    end else begin
+      \$1105  = \$1067 [24:0];
+    end
     if (rst) begin
-      \$1104  = 1'h1;
+      \$1105  = 25'h0000002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1105  = \$536 ;
+      \$1106  = 1'h1;
     end else if (\$7 ) begin
-      \$1105  = \$1066 ;
-    end else begin
-      \$1105  = \$1068 ;
-    end
-    if (rst) begin
-      \$1105  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$1106  = deferred;
-    if (\$1071 ) begin
       \$1106  = 1'h0;
-    end else if (\$1080 ) begin
+    end else begin
+      \$1106  = 1'h0;
+    end
+    if (rst) begin
       \$1106  = 1'h1;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$1107  = \$536 ;
+    end else if (\$7 ) begin
+      \$1107  = \$1066 ;
+    end else begin
+      \$1107  = \$1068 ;
+    end
     if (rst) begin
-      \$1106  = 1'h0;
+      \$1107  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$1108  = deferred;
+    if (\$1071 ) begin
+      \$1108  = 1'h0;
+    end else if (\$1080 ) begin
+      \$1108  = 1'h1;
+    end
+    if (rst) begin
+      \$1108  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13701$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13705$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -29480,8 +29484,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13701$0 ;
-  wire \port$13701$0 ;
+  input \port$13705$0 ;
+  wire \port$13705$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -29495,9 +29499,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13701$0  };
-  assign \$2  = { lc[4:0], \port$13701$0  } == last;
-  assign \$3  = { lc[4:0], \port$13701$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13705$0  };
+  assign \$2  = { lc[4:0], \port$13705$0  } == last;
+  assign \$3  = { lc[4:0], \port$13705$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -29607,7 +29611,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13701$0  };
+  assign lc_next = { lc[4:0], \port$13705$0  };
   assign zero = is_zero;
 endmodule
 
@@ -32404,7 +32408,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$6509$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$6511$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
@@ -32582,8 +32586,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$6509$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$6509$0 ;
-  wire \port$6509$0 ;
+  output \port$6511$0 ;
+  wire \port$6511$0 ;
   output report;
   wire report;
   input report_frame;
@@ -32701,7 +32705,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$6509$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$6509$0  = \$2 ;
+  assign \port$6511$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -32758,7 +32762,7 @@ endmodule
 module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic
 , regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check
 , cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address
-, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14626$0 , \port$14637$0 , regs__ca_done, \port$14714$0 , slo);
+, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14630$0 , \port$14641$0 , regs__ca_done, \port$14718$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -32949,12 +32953,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$14626$0 ;
-  wire [186:0] \port$14626$0 ;
-  output [79:0] \port$14637$0 ;
-  wire [79:0] \port$14637$0 ;
-  output [9:0] \port$14714$0 ;
-  wire [9:0] \port$14714$0 ;
+  output [186:0] \port$14630$0 ;
+  wire [186:0] \port$14630$0 ;
+  output [79:0] \port$14641$0 ;
+  wire [79:0] \port$14641$0 ;
+  output [9:0] \port$14718$0 ;
+  wire [9:0] \port$14718$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -33450,9 +33454,9 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_
   assign \ma$207  = ma;
   assign \slo$209  = slo;
   assign \cfg_hold$211  = cfg_hold;
-  assign \port$14626$0  = \$24 ;
-  assign \port$14637$0  = \$25 ;
-  assign \port$14714$0  = \$26 ;
+  assign \port$14630$0  = \$24 ;
+  assign \port$14641$0  = \$25 ;
+  assign \port$14718$0  = \$26 ;
   assign \$6  = regs__cfg_w0_data_bits[6];
   assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
@@ -34521,7 +34525,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$14238$272 (live[274:272]),
+    .\port$14242$272 (live[274:272]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(sample),
@@ -34581,7 +34585,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$14238$199 (live[199]),
+    .\port$14242$199 (live[199]),
     .rises(rises),
     .rst(rst),
     .ssi(live[259]),
@@ -34632,7 +34636,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w
     .level(\slo$64 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$14238$259 (live[271:259]),
+    .\port$14242$259 (live[271:259]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(\sample$349 ),
@@ -34657,7 +34661,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$14252$0 (\bit ),
+    .\port$14256$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -34725,7 +34729,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$12078$0 (\$28 ),
+    .\port$12082$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -38866,7 +38870,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$14238$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$14242$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
@@ -39581,8 +39585,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$14238$272 ;
-  wire [2:0] \port$14238$272 ;
+  input [2:0] \port$14242$272 ;
+  wire [2:0] \port$14242$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -39891,7 +39895,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$14238$272 [0];
+  assign error_bit = ssi & \port$14242$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -39922,19 +39926,19 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$14238$272 [0];
+  assign \$24  = ssi & \port$14242$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$14238$272 [0];
+  assign \$28  = ssi & \port$14242$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$14238$272 [0];
+  assign \$35  = ssi & \port$14242$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$14238$272 [0];
+  assign \$39  = ssi & \port$14242$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -39955,7 +39959,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$14238$272 [2];
+  assign \$61  = ssi & \port$14242$272 [2];
   assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -40241,15 +40245,15 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$14238$272 [0];
+  assign \$347  = ssi & \port$14242$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$14238$272 [0];
-  assign \$355  = ~ \port$14238$272 [1];
+  assign \$354  = ssi & \port$14242$272 [0];
+  assign \$355  = ~ \port$14242$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -40984,7 +40988,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$14238$272 [0];
+  assign ssi_error = \port$14242$272 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -40994,8 +40998,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$43  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$14238$272 [2];
-  assign ssi_error_low = \port$14238$272 [1];
+  assign ssi_double = \port$14242$272 [2];
+  assign ssi_error_low = \port$14242$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -43309,7 +43313,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.ma_stop (rst, \port$14238$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_uart.ch1.core.ma_stop (rst, \port$14242$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -43398,8 +43402,8 @@ module \biss_master_uart.ch1.core.ma_stop (rst, \port$14238$199 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$14238$199 ;
-  wire \port$14238$199 ;
+  input \port$14242$199 ;
+  wire \port$14242$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -43519,7 +43523,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, \port$14238$199 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$14238$199  : 1'h0;
+  assign \$13  = \$12  ? \port$14242$199  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -43687,7 +43691,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, \port$14238$199 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$14238$199 , 1'h1 };
+  assign enables = { \port$14242$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -45827,7 +45831,7 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$14238$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$14242$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -46410,8 +46414,8 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$14238$259 ;
-  wire [12:0] \port$14238$259 ;
+  input [12:0] \port$14242$259 ;
+  wire [12:0] \port$14242$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -46434,7 +46438,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$14238$259 [12:1] + 1'h1;
+  assign \$460  = \port$14242$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -47010,7 +47014,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$14238$259 [0]),
+    .clear_high(\port$14242$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -47153,7 +47157,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$14238$259 [0]) begin
+            if (\port$14242$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -47238,7 +47242,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$14238$259 [0]) begin
+            if (\port$14242$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -47277,7 +47281,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$14238$259 [12:1] };
+            \$534  = { 1'h0, \port$14242$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -47662,11 +47666,11 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$14238$259 [12:1] };
-  assign fixed = \port$14238$259 [0];
+  assign fixed_delay = { 1'h0, \port$14242$259 [12:1] };
+  assign fixed = \port$14242$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$14238$259 [0];
+  assign clear_high = \port$14242$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -48045,11 +48049,13 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
   wire \$110 ;
   wire \$1100 ;
   wire \$1101 ;
-  reg \$1102 ;
-  reg [24:0] \$1103 ;
+  wire \$1102 ;
+  wire \$1103 ;
   reg \$1104 ;
-  reg \$1105 ;
+  reg [24:0] \$1105 ;
   reg \$1106 ;
+  reg \$1107 ;
+  reg \$1108 ;
   wire \$111 ;
   wire \$112 ;
   wire \$113 ;
@@ -50162,84 +50168,86 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
   assign \$1097  = ~ abort;
   assign \$1098  = idle & \$1097 ;
   assign \$1099  = ~ \$1098 ;
-  assign \$1100  = \$1096  & \$1099 ;
-  assign \$1101  = deferred & abort;
-  assign overrun = \$1100  | \$1101 ;
+  assign \$1100  = deferred & hold;
+  assign \$1101  = \$1099  | \$1100 ;
+  assign \$1102  = \$1096  & \$1101 ;
+  assign \$1103  = deferred & abort;
+  assign overrun = \$1102  | \$1103 ;
   always @(posedge clk)
-    period_zero <= \$1102 ;
+    period_zero <= \$1104 ;
   always @(posedge clk)
-    count_p2 <= \$1103 ;
+    count_p2 <= \$1105 ;
   always @(posedge clk)
-    period_start <= \$1104 ;
+    period_start <= \$1106 ;
   always @(posedge clk)
-    wrap <= \$1105 ;
+    wrap <= \$1107 ;
   always @(posedge clk)
-    deferred <= \$1106 ;
+    deferred <= \$1108 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$1102  = \$1 ;
+    \$1104  = \$1 ;
     if (rst) begin
-      \$1102  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$1103  = 25'h0000002;
-    end else if (\$7 ) begin
-      \$1103  = 25'h0000003;
-    end else begin
-      \$1103  = \$1067 [24:0];
-    end
-    if (rst) begin
-      \$1103  = 25'h0000002;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$1104  = 1'h1;
-    end else if (\$7 ) begin
-      \$1104  = 1'h0;
-    end else begin
       \$1104  = 1'h0;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$1105  = 25'h0000002;
+    end else if (\$7 ) begin
+      \$1105  = 25'h0000003;
+    end else begin
+      \$1105  = \$1067 [24:0];
+    end
     if (rst) begin
-      \$1104  = 1'h1;
+      \$1105  = 25'h0000002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1105  = \$536 ;
+      \$1106  = 1'h1;
     end else if (\$7 ) begin
-      \$1105  = \$1066 ;
-    end else begin
-      \$1105  = \$1068 ;
-    end
-    if (rst) begin
-      \$1105  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$1106  = deferred;
-    if (\$1071 ) begin
       \$1106  = 1'h0;
-    end else if (\$1080 ) begin
+    end else begin
+      \$1106  = 1'h0;
+    end
+    if (rst) begin
       \$1106  = 1'h1;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$1107  = \$536 ;
+    end else if (\$7 ) begin
+      \$1107  = \$1066 ;
+    end else begin
+      \$1107  = \$1068 ;
+    end
     if (rst) begin
-      \$1106  = 1'h0;
+      \$1107  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$1108  = deferred;
+    if (\$1071 ) begin
+      \$1108  = 1'h0;
+    end else if (\$1080 ) begin
+      \$1108  = 1'h1;
+    end
+    if (rst) begin
+      \$1108  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$14252$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$14256$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -50281,8 +50289,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$14252$0 ;
-  wire \port$14252$0 ;
+  input \port$14256$0 ;
+  wire \port$14256$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -50296,9 +50304,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$14252$0  };
-  assign \$2  = { lc[4:0], \port$14252$0  } == last;
-  assign \$3  = { lc[4:0], \port$14252$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$14256$0  };
+  assign \$2  = { lc[4:0], \port$14256$0  } == last;
+  assign \$3  = { lc[4:0], \port$14256$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -50408,7 +50416,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$14252$0  };
+  assign lc_next = { lc[4:0], \port$14256$0  };
   assign zero = is_zero;
 endmodule
 
@@ -53205,7 +53213,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$12078$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$12082$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire \$1 ;
@@ -53383,8 +53391,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$12078$0 , 
   wire noisy;
   output passed;
   wire passed;
-  output \port$12078$0 ;
-  wire \port$12078$0 ;
+  output \port$12082$0 ;
+  wire \port$12082$0 ;
   output report;
   wire report;
   input report_frame;
@@ -53502,7 +53510,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$12078$0 , 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$12078$0  = \$2 ;
+  assign \port$12082$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

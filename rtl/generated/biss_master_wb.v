@@ -1083,12 +1083,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$13541$0 (\$10 ),
-    .\port$13552$0 (\$11 ),
-    .\port$13629$0 (\$12 ),
-    .\port$14092$0 (\$13 ),
-    .\port$14103$0 (\$14 ),
-    .\port$14180$0 (\$15 ),
+    .\port$13545$0 (\$10 ),
+    .\port$13556$0 (\$11 ),
+    .\port$13633$0 (\$12 ),
+    .\port$14096$0 (\$13 ),
+    .\port$14107$0 (\$14 ),
+    .\port$14184$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1165,9 +1165,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$13541$0 (\$10 ),
-    .\port$13552$0 (\$11 ),
-    .\port$13629$0 (\$12 ),
+    .\port$13545$0 (\$10 ),
+    .\port$13556$0 (\$11 ),
+    .\port$13633$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1244,9 +1244,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(\regs__count_en$773 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$797 ),
-    .\port$14092$0 (\$13 ),
-    .\port$14103$0 (\$14 ),
-    .\port$14180$0 (\$15 ),
+    .\port$14096$0 (\$13 ),
+    .\port$14107$0 (\$14 ),
+    .\port$14184$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$461 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -2013,8 +2013,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$152 , ch0_ca_ctrl_start
 , ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc
 , ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error
-, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$435 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13541$0 , \port$13552$0 , ch0__ca_done, \port$13629$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$14092$0 
-, \port$14103$0 , ch1__ca_done, \port$14180$0 , bus__w_addr);
+, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$435 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13545$0 , \port$13556$0 , ch0__ca_done, \port$13633$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$14096$0 
+, \port$14107$0 , ch1__ca_done, \port$14184$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -4266,18 +4266,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$13541$0 ;
-  wire [186:0] \port$13541$0 ;
-  input [79:0] \port$13552$0 ;
-  wire [79:0] \port$13552$0 ;
-  input [9:0] \port$13629$0 ;
-  wire [9:0] \port$13629$0 ;
-  input [186:0] \port$14092$0 ;
-  wire [186:0] \port$14092$0 ;
-  input [79:0] \port$14103$0 ;
-  wire [79:0] \port$14103$0 ;
-  input [9:0] \port$14180$0 ;
-  wire [9:0] \port$14180$0 ;
+  input [186:0] \port$13545$0 ;
+  wire [186:0] \port$13545$0 ;
+  input [79:0] \port$13556$0 ;
+  wire [79:0] \port$13556$0 ;
+  input [9:0] \port$13633$0 ;
+  wire [9:0] \port$13633$0 ;
+  input [186:0] \port$14096$0 ;
+  wire [186:0] \port$14096$0 ;
+  input [79:0] \port$14107$0 ;
+  wire [79:0] \port$14107$0 ;
+  input [9:0] \port$14184$0 ;
+  wire [9:0] \port$14184$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
@@ -4558,7 +4558,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$203  = \$201  | \$202 ;
   assign \$204  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$205  = \$203  | \$204 ;
-  assign \$210  = ch0_read_select_90 ? { 2'h0, \port$13541$0 [182:177], 4'h0, \port$13541$0 [186:183], 1'h0, \port$13541$0 [176:174], 1'h0, \port$13541$0 [133:131], 3'h0, \port$13541$0 [49], \port$13541$0 [3:0] } : 32'd0;
+  assign \$210  = ch0_read_select_90 ? { 2'h0, \port$13545$0 [182:177], 4'h0, \port$13545$0 [186:183], 1'h0, \port$13545$0 [176:174], 1'h0, \port$13545$0 [133:131], 3'h0, \port$13545$0 [49], \port$13545$0 [3:0] } : 32'd0;
   assign \$211  = \$209  | \$210 ;
   assign \$212  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$213  = \$211  | \$212 ;
@@ -4574,13 +4574,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$223  = \$221  | \$222 ;
   assign \$224  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$225  = \$223  | \$224 ;
-  assign \$270  = ch0_read_select_c2 ? { 17'h00000, \port$13629$0 [9:3], 1'h0, \port$13629$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$270  = ch0_read_select_c2 ? { 17'h00000, \port$13633$0 [9:3], 1'h0, \port$13633$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$271  = \$269  | \$270 ;
-  assign \$272  = ch0_read_select_c3 ? \port$13552$0 [31:0] : 32'd0;
+  assign \$272  = ch0_read_select_c3 ? \port$13556$0 [31:0] : 32'd0;
   assign \$273  = \$271  | \$272 ;
-  assign \$274  = ch0_read_select_c4 ? \port$13552$0 [63:32] : 32'd0;
+  assign \$274  = ch0_read_select_c4 ? \port$13556$0 [63:32] : 32'd0;
   assign \$275  = \$273  | \$274 ;
-  assign \$276  = ch0_read_select_c5 ? { 16'h0000, \port$13552$0 [79:64] } : 32'd0;
+  assign \$276  = ch0_read_select_c5 ? { 16'h0000, \port$13556$0 [79:64] } : 32'd0;
   assign \$277  = \$275  | \$276 ;
   assign \$280  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$281  = \$279  | \$280 ;
@@ -4772,7 +4772,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$470  = \$468  | \$469 ;
   assign \$471  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$472  = \$470  | \$471 ;
-  assign \$477  = ch1_read_select_110 ? { 2'h0, \port$14092$0 [182:177], 4'h0, \port$14092$0 [186:183], 1'h0, \port$14092$0 [176:174], 1'h0, \port$14092$0 [133:131], 3'h0, \port$14092$0 [49], \port$14092$0 [3:0] } : 32'd0;
+  assign \$477  = ch1_read_select_110 ? { 2'h0, \port$14096$0 [182:177], 4'h0, \port$14096$0 [186:183], 1'h0, \port$14096$0 [176:174], 1'h0, \port$14096$0 [133:131], 3'h0, \port$14096$0 [49], \port$14096$0 [3:0] } : 32'd0;
   assign \$478  = \$476  | \$477 ;
   assign \$479  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$480  = \$478  | \$479 ;
@@ -4788,13 +4788,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$490  = \$488  | \$489 ;
   assign \$491  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$492  = \$490  | \$491 ;
-  assign \$537  = ch1_read_select_142 ? { 17'h00000, \port$14180$0 [9:3], 1'h0, \port$14180$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$537  = ch1_read_select_142 ? { 17'h00000, \port$14184$0 [9:3], 1'h0, \port$14184$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$538  = \$536  | \$537 ;
-  assign \$539  = ch1_read_select_143 ? \port$14103$0 [31:0] : 32'd0;
+  assign \$539  = ch1_read_select_143 ? \port$14107$0 [31:0] : 32'd0;
   assign \$540  = \$538  | \$539 ;
-  assign \$541  = ch1_read_select_144 ? \port$14103$0 [63:32] : 32'd0;
+  assign \$541  = ch1_read_select_144 ? \port$14107$0 [63:32] : 32'd0;
   assign \$542  = \$540  | \$541 ;
-  assign \$543  = ch1_read_select_145 ? { 16'h0000, \port$14103$0 [79:64] } : 32'd0;
+  assign \$543  = ch1_read_select_145 ? { 16'h0000, \port$14107$0 [79:64] } : 32'd0;
   assign \$544  = \$542  | \$543 ;
   assign \$547  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$548  = \$546  | \$547 ;
@@ -7258,7 +7258,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$898  = ch0_result_status_status_snapshot;
     if (\$189 ) begin
-      \$898  = \port$13541$0 [3:0];
+      \$898  = \port$13545$0 [3:0];
     end
     if (rst) begin
       \$898  = 4'h0;
@@ -7268,7 +7268,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$899  = ch0_result_status_cds_snapshot;
     if (\$189 ) begin
-      \$899  = \port$13541$0 [49];
+      \$899  = \port$13545$0 [49];
     end
     if (rst) begin
       \$899  = 1'h0;
@@ -7278,7 +7278,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$900  = ch0_result_status_w0_ne_snapshot;
     if (\$189 ) begin
-      \$900  = \port$13541$0 [131];
+      \$900  = \port$13545$0 [131];
     end
     if (rst) begin
       \$900  = 1'h0;
@@ -7288,7 +7288,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$901  = ch0_result_status_w0_nw_snapshot;
     if (\$189 ) begin
-      \$901  = \port$13541$0 [132];
+      \$901  = \port$13545$0 [132];
     end
     if (rst) begin
       \$901  = 1'h0;
@@ -7298,7 +7298,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$902  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$189 ) begin
-      \$902  = \port$13541$0 [133];
+      \$902  = \port$13545$0 [133];
     end
     if (rst) begin
       \$902  = 1'h0;
@@ -7308,7 +7308,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$903  = ch0_result_status_w1_ne_snapshot;
     if (\$189 ) begin
-      \$903  = \port$13541$0 [174];
+      \$903  = \port$13545$0 [174];
     end
     if (rst) begin
       \$903  = 1'h0;
@@ -7318,7 +7318,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$904  = ch0_result_status_w1_nw_snapshot;
     if (\$189 ) begin
-      \$904  = \port$13541$0 [175];
+      \$904  = \port$13545$0 [175];
     end
     if (rst) begin
       \$904  = 1'h0;
@@ -7328,7 +7328,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$905  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$189 ) begin
-      \$905  = \port$13541$0 [176];
+      \$905  = \port$13545$0 [176];
     end
     if (rst) begin
       \$905  = 1'h0;
@@ -7338,7 +7338,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$906  = ch0_result_status_lc_repeat_snapshot;
     if (\$189 ) begin
-      \$906  = \port$13541$0 [183];
+      \$906  = \port$13545$0 [183];
     end
     if (rst) begin
       \$906  = 1'h0;
@@ -7348,7 +7348,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$907  = ch0_result_status_lc_skip_snapshot;
     if (\$189 ) begin
-      \$907  = \port$13541$0 [184];
+      \$907  = \port$13545$0 [184];
     end
     if (rst) begin
       \$907  = 1'h0;
@@ -7358,7 +7358,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$908  = ch0_result_status_lc_zero_snapshot;
     if (\$189 ) begin
-      \$908  = \port$13541$0 [185];
+      \$908  = \port$13545$0 [185];
     end
     if (rst) begin
       \$908  = 1'h0;
@@ -7368,7 +7368,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$909  = ch0_result_status_spw_mismatch_snapshot;
     if (\$189 ) begin
-      \$909  = \port$13541$0 [186];
+      \$909  = \port$13545$0 [186];
     end
     if (rst) begin
       \$909  = 1'h0;
@@ -7378,7 +7378,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$910  = ch0_result_status_lc_snapshot;
     if (\$189 ) begin
-      \$910  = \port$13541$0 [182:177];
+      \$910  = \port$13545$0 [182:177];
     end
     if (rst) begin
       \$910  = 6'h00;
@@ -7398,7 +7398,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$912  = ch0_result_seq_line_delay_snapshot;
     if (\$189 ) begin
-      \$912  = \port$13541$0 [48:36];
+      \$912  = \port$13545$0 [48:36];
     end
     if (rst) begin
       \$912  = 13'h0000;
@@ -7408,7 +7408,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$913  = ch0_result_w0_lo_data_snapshot;
     if (\$189 ) begin
-      \$913  = \port$13541$0 [107:76];
+      \$913  = \port$13545$0 [107:76];
     end
     if (rst) begin
       \$913  = 32'd0;
@@ -7418,7 +7418,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$914  = ch0_result_w0_hi_data_snapshot;
     if (\$189 ) begin
-      \$914  = { 9'h000, \port$13541$0 [130:108] };
+      \$914  = { 9'h000, \port$13545$0 [130:108] };
     end
     if (rst) begin
       \$914  = 32'd0;
@@ -7428,7 +7428,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$915  = ch0_result_w1_lo_data_snapshot;
     if (\$189 ) begin
-      \$915  = \port$13541$0 [165:134];
+      \$915  = \port$13545$0 [165:134];
     end
     if (rst) begin
       \$915  = 32'd0;
@@ -7438,7 +7438,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$916  = ch0_result_w1_hi_data_snapshot;
     if (\$189 ) begin
-      \$916  = { 24'h000000, \port$13541$0 [173:166] };
+      \$916  = { 24'h000000, \port$13545$0 [173:166] };
     end
     if (rst) begin
       \$916  = 32'd0;
@@ -7448,7 +7448,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$917  = ch0_result_timestamp_time_snapshot;
     if (\$189 ) begin
-      \$917  = \port$13541$0 [35:4];
+      \$917  = \port$13545$0 [35:4];
     end
     if (rst) begin
       \$917  = 32'd0;
@@ -7458,7 +7458,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$918  = ch0_result_line_noise_events_snapshot;
     if (\$189 ) begin
-      \$918  = \port$13541$0 [53:50];
+      \$918  = \port$13545$0 [53:50];
     end
     if (rst) begin
       \$918  = 4'h0;
@@ -7468,7 +7468,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$919  = ch0_result_line_delay_settled_snapshot;
     if (\$189 ) begin
-      \$919  = \port$13541$0 [54];
+      \$919  = \port$13545$0 [54];
     end
     if (rst) begin
       \$919  = 1'h0;
@@ -7478,7 +7478,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$920  = ch0_result_line_delay_spread_snapshot;
     if (\$189 ) begin
-      \$920  = \port$13541$0 [75:68];
+      \$920  = \port$13545$0 [75:68];
     end
     if (rst) begin
       \$920  = 8'h00;
@@ -7488,7 +7488,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$921  = ch0_result_line_settled_delay_snapshot;
     if (\$189 ) begin
-      \$921  = \port$13541$0 [67:55];
+      \$921  = \port$13545$0 [67:55];
     end
     if (rst) begin
       \$921  = 13'h0000;
@@ -8834,7 +8834,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1062  = ch1_result_status_status_snapshot;
     if (\$456 ) begin
-      \$1062  = \port$14092$0 [3:0];
+      \$1062  = \port$14096$0 [3:0];
     end
     if (rst) begin
       \$1062  = 4'h0;
@@ -8844,7 +8844,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1063  = ch1_result_status_cds_snapshot;
     if (\$456 ) begin
-      \$1063  = \port$14092$0 [49];
+      \$1063  = \port$14096$0 [49];
     end
     if (rst) begin
       \$1063  = 1'h0;
@@ -8854,7 +8854,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1064  = ch1_result_status_w0_ne_snapshot;
     if (\$456 ) begin
-      \$1064  = \port$14092$0 [131];
+      \$1064  = \port$14096$0 [131];
     end
     if (rst) begin
       \$1064  = 1'h0;
@@ -8864,7 +8864,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1065  = ch1_result_status_w0_nw_snapshot;
     if (\$456 ) begin
-      \$1065  = \port$14092$0 [132];
+      \$1065  = \port$14096$0 [132];
     end
     if (rst) begin
       \$1065  = 1'h0;
@@ -8874,7 +8874,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1066  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$456 ) begin
-      \$1066  = \port$14092$0 [133];
+      \$1066  = \port$14096$0 [133];
     end
     if (rst) begin
       \$1066  = 1'h0;
@@ -8884,7 +8884,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1067  = ch1_result_status_w1_ne_snapshot;
     if (\$456 ) begin
-      \$1067  = \port$14092$0 [174];
+      \$1067  = \port$14096$0 [174];
     end
     if (rst) begin
       \$1067  = 1'h0;
@@ -8894,7 +8894,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1068  = ch1_result_status_w1_nw_snapshot;
     if (\$456 ) begin
-      \$1068  = \port$14092$0 [175];
+      \$1068  = \port$14096$0 [175];
     end
     if (rst) begin
       \$1068  = 1'h0;
@@ -8904,7 +8904,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1069  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$456 ) begin
-      \$1069  = \port$14092$0 [176];
+      \$1069  = \port$14096$0 [176];
     end
     if (rst) begin
       \$1069  = 1'h0;
@@ -8914,7 +8914,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1070  = ch1_result_status_lc_repeat_snapshot;
     if (\$456 ) begin
-      \$1070  = \port$14092$0 [183];
+      \$1070  = \port$14096$0 [183];
     end
     if (rst) begin
       \$1070  = 1'h0;
@@ -8924,7 +8924,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1071  = ch1_result_status_lc_skip_snapshot;
     if (\$456 ) begin
-      \$1071  = \port$14092$0 [184];
+      \$1071  = \port$14096$0 [184];
     end
     if (rst) begin
       \$1071  = 1'h0;
@@ -8934,7 +8934,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1072  = ch1_result_status_lc_zero_snapshot;
     if (\$456 ) begin
-      \$1072  = \port$14092$0 [185];
+      \$1072  = \port$14096$0 [185];
     end
     if (rst) begin
       \$1072  = 1'h0;
@@ -8944,7 +8944,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1073  = ch1_result_status_spw_mismatch_snapshot;
     if (\$456 ) begin
-      \$1073  = \port$14092$0 [186];
+      \$1073  = \port$14096$0 [186];
     end
     if (rst) begin
       \$1073  = 1'h0;
@@ -8954,7 +8954,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1074  = ch1_result_status_lc_snapshot;
     if (\$456 ) begin
-      \$1074  = \port$14092$0 [182:177];
+      \$1074  = \port$14096$0 [182:177];
     end
     if (rst) begin
       \$1074  = 6'h00;
@@ -8974,7 +8974,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1076  = ch1_result_seq_line_delay_snapshot;
     if (\$456 ) begin
-      \$1076  = \port$14092$0 [48:36];
+      \$1076  = \port$14096$0 [48:36];
     end
     if (rst) begin
       \$1076  = 13'h0000;
@@ -8984,7 +8984,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1077  = ch1_result_w0_lo_data_snapshot;
     if (\$456 ) begin
-      \$1077  = \port$14092$0 [107:76];
+      \$1077  = \port$14096$0 [107:76];
     end
     if (rst) begin
       \$1077  = 32'd0;
@@ -8994,7 +8994,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1078  = ch1_result_w0_hi_data_snapshot;
     if (\$456 ) begin
-      \$1078  = { 9'h000, \port$14092$0 [130:108] };
+      \$1078  = { 9'h000, \port$14096$0 [130:108] };
     end
     if (rst) begin
       \$1078  = 32'd0;
@@ -9004,7 +9004,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1079  = ch1_result_w1_lo_data_snapshot;
     if (\$456 ) begin
-      \$1079  = \port$14092$0 [165:134];
+      \$1079  = \port$14096$0 [165:134];
     end
     if (rst) begin
       \$1079  = 32'd0;
@@ -9014,7 +9014,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1080  = ch1_result_w1_hi_data_snapshot;
     if (\$456 ) begin
-      \$1080  = { 24'h000000, \port$14092$0 [173:166] };
+      \$1080  = { 24'h000000, \port$14096$0 [173:166] };
     end
     if (rst) begin
       \$1080  = 32'd0;
@@ -9024,7 +9024,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1081  = ch1_result_timestamp_time_snapshot;
     if (\$456 ) begin
-      \$1081  = \port$14092$0 [35:4];
+      \$1081  = \port$14096$0 [35:4];
     end
     if (rst) begin
       \$1081  = 32'd0;
@@ -9034,7 +9034,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1082  = ch1_result_line_noise_events_snapshot;
     if (\$456 ) begin
-      \$1082  = \port$14092$0 [53:50];
+      \$1082  = \port$14096$0 [53:50];
     end
     if (rst) begin
       \$1082  = 4'h0;
@@ -9044,7 +9044,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1083  = ch1_result_line_delay_settled_snapshot;
     if (\$456 ) begin
-      \$1083  = \port$14092$0 [54];
+      \$1083  = \port$14096$0 [54];
     end
     if (rst) begin
       \$1083  = 1'h0;
@@ -9054,7 +9054,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1084  = ch1_result_line_delay_spread_snapshot;
     if (\$456 ) begin
-      \$1084  = \port$14092$0 [75:68];
+      \$1084  = \port$14096$0 [75:68];
     end
     if (rst) begin
       \$1084  = 8'h00;
@@ -9064,7 +9064,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1085  = ch1_result_line_settled_delay_snapshot;
     if (\$456 ) begin
-      \$1085  = \port$14092$0 [67:55];
+      \$1085  = \port$14096$0 [67:55];
     end
     if (rst) begin
       \$1085  = 13'h0000;
@@ -9267,27 +9267,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$13541$0 [3:0];
-  assign ch0__cds = \port$13541$0 [49];
-  assign ch0__word0_ne = \port$13541$0 [131];
-  assign ch0__word0_nw = \port$13541$0 [132];
-  assign ch0__word0_crc_ok = \port$13541$0 [133];
-  assign ch0__word1_ne = \port$13541$0 [174];
-  assign ch0__word1_nw = \port$13541$0 [175];
-  assign ch0__word1_crc_ok = \port$13541$0 [176];
-  assign ch0__lc_repeat = \port$13541$0 [183];
-  assign ch0__lc_skip = \port$13541$0 [184];
-  assign ch0__lc_zero = \port$13541$0 [185];
-  assign ch0__spw_mismatch = \port$13541$0 [186];
-  assign ch0__lc = \port$13541$0 [182:177];
-  assign ch0__line_delay = \port$13541$0 [48:36];
-  assign ch0__word0_position = { 9'h000, \port$13541$0 [130:76] };
-  assign ch0__word1_position = { 24'h000000, \port$13541$0 [173:134] };
-  assign ch0__timestamp = \port$13541$0 [35:4];
-  assign ch0__noise_events = \port$13541$0 [53:50];
-  assign ch0__delay_settled = \port$13541$0 [54];
-  assign ch0__delay_spread = \port$13541$0 [75:68];
-  assign ch0__settled_delay = \port$13541$0 [67:55];
+  assign ch0__status = \port$13545$0 [3:0];
+  assign ch0__cds = \port$13545$0 [49];
+  assign ch0__word0_ne = \port$13545$0 [131];
+  assign ch0__word0_nw = \port$13545$0 [132];
+  assign ch0__word0_crc_ok = \port$13545$0 [133];
+  assign ch0__word1_ne = \port$13545$0 [174];
+  assign ch0__word1_nw = \port$13545$0 [175];
+  assign ch0__word1_crc_ok = \port$13545$0 [176];
+  assign ch0__lc_repeat = \port$13545$0 [183];
+  assign ch0__lc_skip = \port$13545$0 [184];
+  assign ch0__lc_zero = \port$13545$0 [185];
+  assign ch0__spw_mismatch = \port$13545$0 [186];
+  assign ch0__lc = \port$13545$0 [182:177];
+  assign ch0__line_delay = \port$13545$0 [48:36];
+  assign ch0__word0_position = { 9'h000, \port$13545$0 [130:76] };
+  assign ch0__word1_position = { 24'h000000, \port$13545$0 [173:134] };
+  assign ch0__timestamp = \port$13545$0 [35:4];
+  assign ch0__noise_events = \port$13545$0 [53:50];
+  assign ch0__delay_settled = \port$13545$0 [54];
+  assign ch0__delay_spread = \port$13545$0 [75:68];
+  assign ch0__settled_delay = \port$13545$0 [67:55];
   assign ch0__cap_data_bits_w0 = 7'h37;
   assign ch0__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9308,13 +9308,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$13629$0 [2:0];
-  assign ch0__ca_bytes_done = \port$13629$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$13552$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$13552$0 [31:16];
-  assign ch0__count_ca_refused = \port$13552$0 [47:32];
-  assign ch0__count_ca_aborted = \port$13552$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$13552$0 [79:64];
+  assign ch0__ca_status = \port$13633$0 [2:0];
+  assign ch0__ca_bytes_done = \port$13633$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$13556$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$13556$0 [31:16];
+  assign ch0__count_ca_refused = \port$13556$0 [47:32];
+  assign ch0__count_ca_aborted = \port$13556$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$13556$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9334,27 +9334,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$14092$0 [3:0];
-  assign ch1__cds = \port$14092$0 [49];
-  assign ch1__word0_ne = \port$14092$0 [131];
-  assign ch1__word0_nw = \port$14092$0 [132];
-  assign ch1__word0_crc_ok = \port$14092$0 [133];
-  assign ch1__word1_ne = \port$14092$0 [174];
-  assign ch1__word1_nw = \port$14092$0 [175];
-  assign ch1__word1_crc_ok = \port$14092$0 [176];
-  assign ch1__lc_repeat = \port$14092$0 [183];
-  assign ch1__lc_skip = \port$14092$0 [184];
-  assign ch1__lc_zero = \port$14092$0 [185];
-  assign ch1__spw_mismatch = \port$14092$0 [186];
-  assign ch1__lc = \port$14092$0 [182:177];
-  assign ch1__line_delay = \port$14092$0 [48:36];
-  assign ch1__word0_position = { 9'h000, \port$14092$0 [130:76] };
-  assign ch1__word1_position = { 24'h000000, \port$14092$0 [173:134] };
-  assign ch1__timestamp = \port$14092$0 [35:4];
-  assign ch1__noise_events = \port$14092$0 [53:50];
-  assign ch1__delay_settled = \port$14092$0 [54];
-  assign ch1__delay_spread = \port$14092$0 [75:68];
-  assign ch1__settled_delay = \port$14092$0 [67:55];
+  assign ch1__status = \port$14096$0 [3:0];
+  assign ch1__cds = \port$14096$0 [49];
+  assign ch1__word0_ne = \port$14096$0 [131];
+  assign ch1__word0_nw = \port$14096$0 [132];
+  assign ch1__word0_crc_ok = \port$14096$0 [133];
+  assign ch1__word1_ne = \port$14096$0 [174];
+  assign ch1__word1_nw = \port$14096$0 [175];
+  assign ch1__word1_crc_ok = \port$14096$0 [176];
+  assign ch1__lc_repeat = \port$14096$0 [183];
+  assign ch1__lc_skip = \port$14096$0 [184];
+  assign ch1__lc_zero = \port$14096$0 [185];
+  assign ch1__spw_mismatch = \port$14096$0 [186];
+  assign ch1__lc = \port$14096$0 [182:177];
+  assign ch1__line_delay = \port$14096$0 [48:36];
+  assign ch1__word0_position = { 9'h000, \port$14096$0 [130:76] };
+  assign ch1__word1_position = { 24'h000000, \port$14096$0 [173:134] };
+  assign ch1__timestamp = \port$14096$0 [35:4];
+  assign ch1__noise_events = \port$14096$0 [53:50];
+  assign ch1__delay_settled = \port$14096$0 [54];
+  assign ch1__delay_spread = \port$14096$0 [75:68];
+  assign ch1__settled_delay = \port$14096$0 [67:55];
   assign ch1__cap_data_bits_w0 = 7'h37;
   assign ch1__cap_data_bits_w1 = 7'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9375,13 +9375,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$14180$0 [2:0];
-  assign ch1__ca_bytes_done = \port$14180$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$14103$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$14103$0 [31:16];
-  assign ch1__count_ca_refused = \port$14103$0 [47:32];
-  assign ch1__count_ca_aborted = \port$14103$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$14103$0 [79:64];
+  assign ch1__ca_status = \port$14184$0 [2:0];
+  assign ch1__ca_bytes_done = \port$14184$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$14107$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$14107$0 [31:16];
+  assign ch1__count_ca_refused = \port$14107$0 [47:32];
+  assign ch1__count_ca_aborted = \port$14107$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$14107$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9923,7 +9923,7 @@ endmodule
 module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic
 , regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check
 , cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address
-, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13541$0 , \port$13552$0 , regs__ca_done, \port$13629$0 , ca_rbuf_addr);
+, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13545$0 , \port$13556$0 , regs__ca_done, \port$13633$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10114,12 +10114,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$13541$0 ;
-  wire [186:0] \port$13541$0 ;
-  output [79:0] \port$13552$0 ;
-  wire [79:0] \port$13552$0 ;
-  output [9:0] \port$13629$0 ;
-  wire [9:0] \port$13629$0 ;
+  output [186:0] \port$13545$0 ;
+  wire [186:0] \port$13545$0 ;
+  output [79:0] \port$13556$0 ;
+  wire [79:0] \port$13556$0 ;
+  output [9:0] \port$13633$0 ;
+  wire [9:0] \port$13633$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10615,9 +10615,9 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \ma$207  = ma;
   assign \slo$209  = slo;
   assign \cfg_hold$211  = cfg_hold;
-  assign \port$13541$0  = \$24 ;
-  assign \port$13552$0  = \$25 ;
-  assign \port$13629$0  = \$26 ;
+  assign \port$13545$0  = \$24 ;
+  assign \port$13556$0  = \$25 ;
+  assign \port$13633$0  = \$26 ;
   assign \$6  = regs__cfg_w0_data_bits[6];
   assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
@@ -11686,7 +11686,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13153$272 (live[274:272]),
+    .\port$13157$272 (live[274:272]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(sample),
@@ -11746,7 +11746,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13153$199 (live[199]),
+    .\port$13157$199 (live[199]),
     .rises(rises),
     .rst(rst),
     .ssi(live[259]),
@@ -11797,7 +11797,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .level(\slo$64 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13153$259 (live[271:259]),
+    .\port$13157$259 (live[271:259]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(\sample$349 ),
@@ -11822,7 +11822,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13167$0 (\bit ),
+    .\port$13171$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -11890,7 +11890,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$6057$0 (\$28 ),
+    .\port$6059$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -16031,7 +16031,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13153$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13157$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -16746,8 +16746,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13153$272 ;
-  wire [2:0] \port$13153$272 ;
+  input [2:0] \port$13157$272 ;
+  wire [2:0] \port$13157$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -17056,7 +17056,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13153$272 [0];
+  assign error_bit = ssi & \port$13157$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -17087,19 +17087,19 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13153$272 [0];
+  assign \$24  = ssi & \port$13157$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13153$272 [0];
+  assign \$28  = ssi & \port$13157$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13153$272 [0];
+  assign \$35  = ssi & \port$13157$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13153$272 [0];
+  assign \$39  = ssi & \port$13157$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -17120,7 +17120,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$13153$272 [2];
+  assign \$61  = ssi & \port$13157$272 [2];
   assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -17406,15 +17406,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13153$272 [0];
+  assign \$347  = ssi & \port$13157$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13153$272 [0];
-  assign \$355  = ~ \port$13153$272 [1];
+  assign \$354  = ssi & \port$13157$272 [0];
+  assign \$355  = ~ \port$13157$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -18149,7 +18149,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13153$272 [0];
+  assign ssi_error = \port$13157$272 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -18159,8 +18159,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign ok = crc_ok;
   assign \index$43  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13153$272 [2];
-  assign ssi_error_low = \port$13153$272 [1];
+  assign ssi_double = \port$13157$272 [2];
+  assign ssi_error_low = \port$13157$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -20474,7 +20474,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.ma_stop (rst, \port$13153$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch0.core.ma_stop (rst, \port$13157$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20563,8 +20563,8 @@ module \biss_master_wb.ch0.core.ma_stop (rst, \port$13153$199 , ssi, ssi_error, 
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13153$199 ;
-  wire \port$13153$199 ;
+  input \port$13157$199 ;
+  wire \port$13157$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20684,7 +20684,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, \port$13153$199 , ssi, ssi_error, 
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13153$199  : 1'h0;
+  assign \$13  = \$12  ? \port$13157$199  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -20852,7 +20852,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, \port$13153$199 , ssi, ssi_error, 
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13153$199 , 1'h1 };
+  assign enables = { \port$13157$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22992,7 +22992,7 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13153$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13157$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -23575,8 +23575,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13153$259 ;
-  wire [12:0] \port$13153$259 ;
+  input [12:0] \port$13157$259 ;
+  wire [12:0] \port$13157$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -23599,7 +23599,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13153$259 [12:1] + 1'h1;
+  assign \$460  = \port$13157$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -24175,7 +24175,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13153$259 [0]),
+    .clear_high(\port$13157$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -24318,7 +24318,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13153$259 [0]) begin
+            if (\port$13157$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -24403,7 +24403,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13153$259 [0]) begin
+            if (\port$13157$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -24442,7 +24442,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13153$259 [12:1] };
+            \$534  = { 1'h0, \port$13157$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -24827,11 +24827,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13153$259 [12:1] };
-  assign fixed = \port$13153$259 [0];
+  assign fixed_delay = { 1'h0, \port$13157$259 [12:1] };
+  assign fixed = \port$13157$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13153$259 [0];
+  assign clear_high = \port$13157$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -25210,11 +25210,13 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
   wire \$110 ;
   wire \$1100 ;
   wire \$1101 ;
-  reg \$1102 ;
-  reg [24:0] \$1103 ;
+  wire \$1102 ;
+  wire \$1103 ;
   reg \$1104 ;
-  reg \$1105 ;
+  reg [24:0] \$1105 ;
   reg \$1106 ;
+  reg \$1107 ;
+  reg \$1108 ;
   wire \$111 ;
   wire \$112 ;
   wire \$113 ;
@@ -27327,84 +27329,86 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
   assign \$1097  = ~ abort;
   assign \$1098  = idle & \$1097 ;
   assign \$1099  = ~ \$1098 ;
-  assign \$1100  = \$1096  & \$1099 ;
-  assign \$1101  = deferred & abort;
-  assign overrun = \$1100  | \$1101 ;
+  assign \$1100  = deferred & hold;
+  assign \$1101  = \$1099  | \$1100 ;
+  assign \$1102  = \$1096  & \$1101 ;
+  assign \$1103  = deferred & abort;
+  assign overrun = \$1102  | \$1103 ;
   always @(posedge clk)
-    period_zero <= \$1102 ;
+    period_zero <= \$1104 ;
   always @(posedge clk)
-    count_p2 <= \$1103 ;
+    count_p2 <= \$1105 ;
   always @(posedge clk)
-    period_start <= \$1104 ;
+    period_start <= \$1106 ;
   always @(posedge clk)
-    wrap <= \$1105 ;
+    wrap <= \$1107 ;
   always @(posedge clk)
-    deferred <= \$1106 ;
+    deferred <= \$1108 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    \$1102  = \$1 ;
+    \$1104  = \$1 ;
     if (rst) begin
-      \$1102  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$1103  = 25'h0000002;
-    end else if (\$7 ) begin
-      \$1103  = 25'h0000003;
-    end else begin
-      \$1103  = \$1067 [24:0];
-    end
-    if (rst) begin
-      \$1103  = 25'h0000002;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$1104  = 1'h1;
-    end else if (\$7 ) begin
-      \$1104  = 1'h0;
-    end else begin
       \$1104  = 1'h0;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$1105  = 25'h0000002;
+    end else if (\$7 ) begin
+      \$1105  = 25'h0000003;
+    end else begin
+      \$1105  = \$1067 [24:0];
+    end
     if (rst) begin
-      \$1104  = 1'h1;
+      \$1105  = 25'h0000002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1105  = \$536 ;
+      \$1106  = 1'h1;
     end else if (\$7 ) begin
-      \$1105  = \$1066 ;
-    end else begin
-      \$1105  = \$1068 ;
-    end
-    if (rst) begin
-      \$1105  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    \$1106  = deferred;
-    if (\$1071 ) begin
       \$1106  = 1'h0;
-    end else if (\$1080 ) begin
+    end else begin
+      \$1106  = 1'h0;
+    end
+    if (rst) begin
       \$1106  = 1'h1;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$1107  = \$536 ;
+    end else if (\$7 ) begin
+      \$1107  = \$1066 ;
+    end else begin
+      \$1107  = \$1068 ;
+    end
     if (rst) begin
-      \$1106  = 1'h0;
+      \$1107  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    \$1108  = deferred;
+    if (\$1071 ) begin
+      \$1108  = 1'h0;
+    end else if (\$1080 ) begin
+      \$1108  = 1'h1;
+    end
+    if (rst) begin
+      \$1108  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13167$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13171$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -27446,8 +27450,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13167$0 ;
-  wire \port$13167$0 ;
+  input \port$13171$0 ;
+  wire \port$13171$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -27461,9 +27465,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13167$0  };
-  assign \$2  = { lc[4:0], \port$13167$0  } == last;
-  assign \$3  = { lc[4:0], \port$13167$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13171$0  };
+  assign \$2  = { lc[4:0], \port$13171$0  } == last;
+  assign \$3  = { lc[4:0], \port$13171$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -27573,7 +27577,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13167$0  };
+  assign lc_next = { lc[4:0], \port$13171$0  };
   assign zero = is_zero;
 endmodule
 
@@ -30370,7 +30374,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6057$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6059$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -30548,8 +30552,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6057$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$6057$0 ;
-  wire \port$6057$0 ;
+  output \port$6059$0 ;
+  wire \port$6059$0 ;
   output report;
   wire report;
   input report_frame;
@@ -30667,7 +30671,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6057$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$6057$0  = \$2 ;
+  assign \port$6059$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -30724,7 +30728,7 @@ endmodule
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic
 , regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check
 , cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address
-, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14092$0 , \port$14103$0 , regs__ca_done, \port$14180$0 , ca_rbuf_addr);
+, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14096$0 , \port$14107$0 , regs__ca_done, \port$14184$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -30915,12 +30919,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$14092$0 ;
-  wire [186:0] \port$14092$0 ;
-  output [79:0] \port$14103$0 ;
-  wire [79:0] \port$14103$0 ;
-  output [9:0] \port$14180$0 ;
-  wire [9:0] \port$14180$0 ;
+  output [186:0] \port$14096$0 ;
+  wire [186:0] \port$14096$0 ;
+  output [79:0] \port$14107$0 ;
+  wire [79:0] \port$14107$0 ;
+  output [9:0] \port$14184$0 ;
+  wire [9:0] \port$14184$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -31416,9 +31420,9 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \ma$207  = ma;
   assign \slo$209  = slo;
   assign \cfg_hold$211  = cfg_hold;
-  assign \port$14092$0  = \$24 ;
-  assign \port$14103$0  = \$25 ;
-  assign \port$14180$0  = \$26 ;
+  assign \port$14096$0  = \$24 ;
+  assign \port$14107$0  = \$25 ;
+  assign \port$14184$0  = \$26 ;
   assign \$6  = regs__cfg_w0_data_bits[6];
   assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
@@ -32487,7 +32491,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13704$272 (live[274:272]),
+    .\port$13708$272 (live[274:272]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(sample),
@@ -32547,7 +32551,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13704$199 (live[199]),
+    .\port$13708$199 (live[199]),
     .rises(rises),
     .rst(rst),
     .ssi(live[259]),
@@ -32598,7 +32602,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .level(\slo$64 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13704$259 (live[271:259]),
+    .\port$13708$259 (live[271:259]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(\sample$349 ),
@@ -32623,7 +32627,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13718$0 (\bit ),
+    .\port$13722$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -32691,7 +32695,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$11626$0 (\$28 ),
+    .\port$11630$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -36832,7 +36836,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13704$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13708$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -37547,8 +37551,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13704$272 ;
-  wire [2:0] \port$13704$272 ;
+  input [2:0] \port$13708$272 ;
+  wire [2:0] \port$13708$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -37857,7 +37861,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13704$272 [0];
+  assign error_bit = ssi & \port$13708$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -37888,19 +37892,19 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13704$272 [0];
+  assign \$24  = ssi & \port$13708$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13704$272 [0];
+  assign \$28  = ssi & \port$13708$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13704$272 [0];
+  assign \$35  = ssi & \port$13708$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13704$272 [0];
+  assign \$39  = ssi & \port$13708$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -37921,7 +37925,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$13704$272 [2];
+  assign \$61  = ssi & \port$13708$272 [2];
   assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -38207,15 +38211,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13704$272 [0];
+  assign \$347  = ssi & \port$13708$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13704$272 [0];
-  assign \$355  = ~ \port$13704$272 [1];
+  assign \$354  = ssi & \port$13708$272 [0];
+  assign \$355  = ~ \port$13708$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -38950,7 +38954,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13704$272 [0];
+  assign ssi_error = \port$13708$272 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -38960,8 +38964,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign ok = crc_ok;
   assign \index$43  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13704$272 [2];
-  assign ssi_error_low = \port$13704$272 [1];
+  assign ssi_double = \port$13708$272 [2];
+  assign ssi_error_low = \port$13708$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -41275,7 +41279,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.ma_stop (rst, \port$13704$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch1.core.ma_stop (rst, \port$13708$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -41364,8 +41368,8 @@ module \biss_master_wb.ch1.core.ma_stop (rst, \port$13704$199 , ssi, ssi_error, 
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13704$199 ;
-  wire \port$13704$199 ;
+  input \port$13708$199 ;
+  wire \port$13708$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -41485,7 +41489,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, \port$13704$199 , ssi, ssi_error, 
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13704$199  : 1'h0;
+  assign \$13  = \$12  ? \port$13708$199  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -41653,7 +41657,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, \port$13704$199 , ssi, ssi_error, 
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13704$199 , 1'h1 };
+  assign enables = { \port$13708$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -43793,7 +43797,7 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13704$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13708$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -44376,8 +44380,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13704$259 ;
-  wire [12:0] \port$13704$259 ;
+  input [12:0] \port$13708$259 ;
+  wire [12:0] \port$13708$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -44400,7 +44404,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13704$259 [12:1] + 1'h1;
+  assign \$460  = \port$13708$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -44976,7 +44980,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13704$259 [0]),
+    .clear_high(\port$13708$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -45119,7 +45123,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13704$259 [0]) begin
+            if (\port$13708$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -45204,7 +45208,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13704$259 [0]) begin
+            if (\port$13708$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -45243,7 +45247,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13704$259 [12:1] };
+            \$534  = { 1'h0, \port$13708$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -45628,11 +45632,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13704$259 [12:1] };
-  assign fixed = \port$13704$259 [0];
+  assign fixed_delay = { 1'h0, \port$13708$259 [12:1] };
+  assign fixed = \port$13708$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13704$259 [0];
+  assign clear_high = \port$13708$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -46011,11 +46015,13 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
   wire \$110 ;
   wire \$1100 ;
   wire \$1101 ;
-  reg \$1102 ;
-  reg [24:0] \$1103 ;
+  wire \$1102 ;
+  wire \$1103 ;
   reg \$1104 ;
-  reg \$1105 ;
+  reg [24:0] \$1105 ;
   reg \$1106 ;
+  reg \$1107 ;
+  reg \$1108 ;
   wire \$111 ;
   wire \$112 ;
   wire \$113 ;
@@ -48128,84 +48134,86 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
   assign \$1097  = ~ abort;
   assign \$1098  = idle & \$1097 ;
   assign \$1099  = ~ \$1098 ;
-  assign \$1100  = \$1096  & \$1099 ;
-  assign \$1101  = deferred & abort;
-  assign overrun = \$1100  | \$1101 ;
+  assign \$1100  = deferred & hold;
+  assign \$1101  = \$1099  | \$1100 ;
+  assign \$1102  = \$1096  & \$1101 ;
+  assign \$1103  = deferred & abort;
+  assign overrun = \$1102  | \$1103 ;
   always @(posedge clk)
-    period_zero <= \$1102 ;
+    period_zero <= \$1104 ;
   always @(posedge clk)
-    count_p2 <= \$1103 ;
+    count_p2 <= \$1105 ;
   always @(posedge clk)
-    period_start <= \$1104 ;
+    period_start <= \$1106 ;
   always @(posedge clk)
-    wrap <= \$1105 ;
+    wrap <= \$1107 ;
   always @(posedge clk)
-    deferred <= \$1106 ;
+    deferred <= \$1108 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$1102  = \$1 ;
+    \$1104  = \$1 ;
     if (rst) begin
-      \$1102  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$1103  = 25'h0000002;
-    end else if (\$7 ) begin
-      \$1103  = 25'h0000003;
-    end else begin
-      \$1103  = \$1067 [24:0];
-    end
-    if (rst) begin
-      \$1103  = 25'h0000002;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$6 ) begin
-      \$1104  = 1'h1;
-    end else if (\$7 ) begin
-      \$1104  = 1'h0;
-    end else begin
       \$1104  = 1'h0;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$1105  = 25'h0000002;
+    end else if (\$7 ) begin
+      \$1105  = 25'h0000003;
+    end else begin
+      \$1105  = \$1067 [24:0];
+    end
     if (rst) begin
-      \$1104  = 1'h1;
+      \$1105  = 25'h0000002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1105  = \$536 ;
+      \$1106  = 1'h1;
     end else if (\$7 ) begin
-      \$1105  = \$1066 ;
-    end else begin
-      \$1105  = \$1068 ;
-    end
-    if (rst) begin
-      \$1105  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$1106  = deferred;
-    if (\$1071 ) begin
       \$1106  = 1'h0;
-    end else if (\$1080 ) begin
+    end else begin
+      \$1106  = 1'h0;
+    end
+    if (rst) begin
       \$1106  = 1'h1;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    (* full_case = 32'd1 *)
+    if (\$6 ) begin
+      \$1107  = \$536 ;
+    end else if (\$7 ) begin
+      \$1107  = \$1066 ;
+    end else begin
+      \$1107  = \$1068 ;
+    end
     if (rst) begin
-      \$1106  = 1'h0;
+      \$1107  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    \$1108  = deferred;
+    if (\$1071 ) begin
+      \$1108  = 1'h0;
+    end else if (\$1080 ) begin
+      \$1108  = 1'h1;
+    end
+    if (rst) begin
+      \$1108  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13718$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13722$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -48247,8 +48255,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13718$0 ;
-  wire \port$13718$0 ;
+  input \port$13722$0 ;
+  wire \port$13722$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -48262,9 +48270,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13718$0  };
-  assign \$2  = { lc[4:0], \port$13718$0  } == last;
-  assign \$3  = { lc[4:0], \port$13718$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13722$0  };
+  assign \$2  = { lc[4:0], \port$13722$0  } == last;
+  assign \$3  = { lc[4:0], \port$13722$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -48374,7 +48382,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13718$0  };
+  assign lc_next = { lc[4:0], \port$13722$0  };
   assign zero = is_zero;
 endmodule
 
@@ -51171,7 +51179,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11626$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11630$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -51349,8 +51357,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11626$0 , lc
   wire noisy;
   output passed;
   wire passed;
-  output \port$11626$0 ;
-  wire \port$11626$0 ;
+  output \port$11630$0 ;
+  wire \port$11630$0 ;
   output report;
   wire report;
   input report_frame;
@@ -51468,7 +51476,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11626$0 , lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$11626$0  = \$2 ;
+  assign \port$11630$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

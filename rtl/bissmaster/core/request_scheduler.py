@@ -31,9 +31,10 @@ class RequestScheduler(wiring.Component):
     With ``hold`` (built for ``config_hold`` cores): while ``hold`` is high no request reaches
     the controller (its configuration is being written). A ``start`` or a tick that comes in
     an idle clock with ``hold`` high is deferred, not dropped: it is a request from the next
-    clock on until the controller takes it (an abort drops it, as an ``overrun``). A deferred
-    request and a new one taken in the same clock are one cycle, as a ``start`` and a tick in
-    one clock are.
+    clock on until the controller takes it (an abort drops it, as an ``overrun``). Another
+    ``start`` or tick while one waits and ``hold`` is still high is an ``overrun``, as one
+    during a cycle is; one in the clock the waiting request is taken is the same cycle, as a
+    ``start`` and a tick in one clock are.
 
     Attributes
     ----------
@@ -103,8 +104,9 @@ class RequestScheduler(wiring.Component):
                 self.overrun.eq((start | tick) & ~takeable),
             ]
             return m
-        # A request the hold keeps from an idle controller waits here (one is enough: the
-        # hold lasts one idle clock per configuration write, and requests in one clock merge).
+        # A request the hold keeps from an idle controller waits here (one: the bank holds
+        # the core for two idle clocks per configuration write; a second request while one
+        # waits is an overrun, as a request during a cycle is).
         deferred = Signal()
         with m.If(self.abort | (self.idle & ~self.hold)):
             m.d.sync += deferred.eq(0)
@@ -112,6 +114,7 @@ class RequestScheduler(wiring.Component):
             m.d.sync += deferred.eq(1)
         m.d.comb += [
             self.request.eq((start | tick | as_fast_as_possible | deferred) & ~self.hold),
-            self.overrun.eq(((start | tick) & ~takeable) | (deferred & self.abort)),
+            self.overrun.eq(((start | tick) & (~takeable | (deferred & self.hold)))
+                            | (deferred & self.abort)),
         ]
         return m

@@ -64,13 +64,15 @@ def held_reference(steps):
     "Configuration writes"): no request reaches the controller in a clock with ``hold``; a
     start, trigger or tick that comes while the controller is idle and held waits (deferred)
     and is a request from the next clock until the controller, idle and not held, takes it;
-    an abort drops it, as an overrun."""
+    an abort drops it, as an overrun; another one while it waits and the hold lasts is an
+    overrun too (one in the clock it is taken joins it)."""
     out, deferred = [], False
     for s, (new, continuous) in zip(steps, _decisions(steps)):
         s = {**QUIET, "hold": 0, **s}
         taken = s["idle"] and not s["abort"]
         out.append({"request": int((new or continuous or deferred) and not s["hold"]),
-                    "overrun": int((new and not taken) or (deferred and s["abort"]))})
+                    "overrun": int((new and (not taken or (deferred and s["hold"])))
+                                   or (deferred and s["abort"]))})
         if s["abort"] or (s["idle"] and not s["hold"]):
             deferred = False
         elif taken and new:
@@ -196,9 +198,12 @@ def test_request_scheduler_held_start_is_deferred_not_dropped():
     assert [(x["request"], x["overrun"]) for x in trace] == [(0, 0), (0, 0), (1, 0), (0, 0)]
     trace = _run([{"start": 1, "hold": 1}, {"abort": 1}, {}], hold=True)
     assert [(x["request"], x["overrun"]) for x in trace] == [(0, 0), (1, 1), (0, 0)]
-    # Held for three clocks: the start waits through all of them.
-    trace = _run([{"start": 1, "hold": 1}, {"hold": 1}, {"hold": 1}, {}, {}], hold=True)
-    assert [x["request"] for x in trace] == [0, 0, 0, 1, 0]
+    # Held for three clocks: the start waits through all of them; a second start while it
+    # waits is an overrun.
+    trace = _run([{"start": 1, "hold": 1}, {"start": 1, "hold": 1}, {"hold": 1}, {}, {}],
+                 hold=True)
+    assert [(x["request"], x["overrun"]) for x in trace] == [(0, 0), (0, 1), (0, 0), (1, 0),
+                                                             (0, 0)]
     steps = [{"periodic": 1, "period": 0, "hold": int(t == 4)} for t in range(7)]
     assert [x["request"] for x in _run(steps, hold=True)] == [1, 1, 1, 1, 0, 1, 1]
 
