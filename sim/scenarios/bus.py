@@ -476,6 +476,40 @@ async def configuration_written_during_a_cycle_acts_after_it(dut):
 
 
 @cocotb.test()
+async def configuration_written_while_requests_run_back_to_back(dut):
+    """docs/bus.md, "Configuration writes": with a request in every clock (periodic, period 0)
+    the core is idle between cycles for a clock or two only, and a cfg_* write still gets
+    them: each of ten writes is answered within 100 us (a cycle here is about 30 us), every
+    frame read meanwhile is the one sent at its timestamp, none was lost (result.seq) and
+    nothing was counted (no overrun, no error)."""
+    tb = BusTestbench(dut, seed=12)
+    await tb.start([BISS_C])
+    await tb.configure(0, BISS_C, 5e6, request_period=0)
+    await tb.encoders_ready()
+    await tb.wait_idle(0)
+    await tb.write_fields("ctrl", 0, periodic=1)
+    longest_us = 0
+    for n in range(10):
+        t0 = get_sim_time("ns")
+        await with_timeout(tb.write_fields("cfg_quiet", 0, quiet_time=40 * (n % 2)), 100, "us")
+        longest_us = max(longest_us, (get_sim_time("ns") - t0) / 1e3)
+        assert (await tb.read_fields("cfg_quiet", 0))["quiet_time"] == 40 * (n % 2)
+        res = await tb.result(0)
+        assert res["seq"], "no frame yet"
+        tb.check_result(0, res, seq=True)
+        await Timer(13, "us")
+    await tb.write_fields("ctrl", 0, periodic=0)
+    await Timer(100, "us")
+    res = await tb.result(0)
+    tb.check_result(0, res, seq=True)
+    assert res["seq"] == len(tb.channels[0].sent), "every frame sent was counted"
+    for path in COUNTER_REGISTERS:
+        assert await tb.read(path, 0) == 0, path
+    dut._log.info("%d frames; the longest of ten cfg_quiet writes took %.1f us",
+                  res["seq"], longest_us)
+
+
+@cocotb.test()
 async def break_time_over_the_bus(dut):
     """cfg_break.break_time written over the bus sets the break: an abort of an idle channel
     starts a break, and state.busy stays high for the break time written, not for the default
