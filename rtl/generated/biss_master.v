@@ -1124,7 +1124,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$5304$272 (cycle[274:272]),
+    .\port$5311$272 (cycle[274:272]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(sample),
@@ -1184,7 +1184,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$5304$199 (cycle[199]),
+    .\port$5311$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -1235,7 +1235,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$5304$259 (cycle[271:259]),
+    .\port$5311$259 (cycle[271:259]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(\sample$349 ),
@@ -1258,7 +1258,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$213 ),
     .load(load),
-    .\port$5292$0 (\bit ),
+    .\port$5299$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1325,7 +1325,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$4724$0 (\$28 ),
+    .\port$4731$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -5657,7 +5657,7 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$5304$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$5311$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
@@ -6372,8 +6372,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$5304$272 ;
-  wire [2:0] \port$5304$272 ;
+  input [2:0] \port$5311$272 ;
+  wire [2:0] \port$5311$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -6682,7 +6682,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$5304$272 [0];
+  assign error_bit = ssi & \port$5311$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -6713,19 +6713,19 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$5304$272 [0];
+  assign \$24  = ssi & \port$5311$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$5304$272 [0];
+  assign \$28  = ssi & \port$5311$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$5304$272 [0];
+  assign \$35  = ssi & \port$5311$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$5304$272 [0];
+  assign \$39  = ssi & \port$5311$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -6746,7 +6746,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$5304$272 [2];
+  assign \$61  = ssi & \port$5311$272 [2];
   assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -7032,15 +7032,15 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$5304$272 [0];
+  assign \$347  = ssi & \port$5311$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$5304$272 [0];
-  assign \$355  = ~ \port$5304$272 [1];
+  assign \$354  = ssi & \port$5311$272 [0];
+  assign \$355  = ~ \port$5311$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -7775,7 +7775,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$5304$272 [0];
+  assign ssi_error = \port$5311$272 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -7785,8 +7785,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign ok = crc_ok;
   assign \index$43  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$5304$272 [2];
-  assign ssi_error_low = \port$5304$272 [1];
+  assign ssi_double = \port$5311$272 [2];
+  assign ssi_error_low = \port$5311$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -10100,7 +10100,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_stop (rst, words, \port$5304$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master.ma_stop (rst, words, \port$5311$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10189,8 +10189,8 @@ module \biss_master.ma_stop (rst, words, \port$5304$199 , ssi, ssi_error, ssi_do
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$5304$199 ;
-  wire \port$5304$199 ;
+  input \port$5311$199 ;
+  wire \port$5311$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -10310,7 +10310,7 @@ module \biss_master.ma_stop (rst, words, \port$5304$199 , ssi, ssi_error, ssi_do
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$5304$199  : 1'h0;
+  assign \$13  = \$12  ? \port$5311$199  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -10478,7 +10478,7 @@ module \biss_master.ma_stop (rst, words, \port$5304$199 , ssi, ssi_error, ssi_do
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$5304$199 , 1'h1 };
+  assign enables = { \port$5311$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -12618,7 +12618,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$5304$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$5311$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -13201,8 +13201,8 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$5304$259 ;
-  wire [12:0] \port$5304$259 ;
+  input [12:0] \port$5311$259 ;
+  wire [12:0] \port$5311$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -13225,7 +13225,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$5304$259 [12:1] + 1'h1;
+  assign \$460  = \port$5311$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -13801,7 +13801,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$5304$259 [0]),
+    .clear_high(\port$5311$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -13944,7 +13944,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$5304$259 [0]) begin
+            if (\port$5311$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -14029,7 +14029,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$5304$259 [0]) begin
+            if (\port$5311$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -14068,7 +14068,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$5304$259 [12:1] };
+            \$534  = { 1'h0, \port$5311$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -14453,11 +14453,11 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$530
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$5304$259 [12:1] };
-  assign fixed = \port$5304$259 [0];
+  assign fixed_delay = { 1'h0, \port$5311$259 [12:1] };
+  assign fixed = \port$5311$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$5304$259 [0];
+  assign clear_high = \port$5311$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -14816,11 +14816,18 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   wire \$1082 ;
   wire \$1083 ;
   wire \$1084 ;
-  reg \$1085 ;
-  reg [24:0] \$1086 ;
-  reg \$1087 ;
-  reg \$1088 ;
+  wire \$1085 ;
+  wire \$1086 ;
+  wire \$1087 ;
+  wire \$1088 ;
+  wire \$1089 ;
   wire \$109 ;
+  wire \$1090 ;
+  wire \$1091 ;
+  reg \$1092 ;
+  reg [24:0] \$1093 ;
+  reg \$1094 ;
+  reg \$1095 ;
   wire \$11 ;
   wire \$110 ;
   wire \$111 ;
@@ -16905,80 +16912,87 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   assign \$1073  = \$1072  & period_start;
   assign \$1074  = \$1069  | \$1073 ;
   assign \$1075  = periodic & period_zero;
-  assign request = \$1074  | \$1075 ;
-  assign \$1077  = periodic & period_zero;
-  assign \$1078  = ~ \$1077 ;
-  assign \$1079  = periodic & \$1078 ;
-  assign \$1080  = \$1079  & period_start;
-  assign \$1081  = \$1076  | \$1080 ;
-  assign \$1082  = ~ abort;
-  assign \$1083  = idle & \$1082 ;
-  assign \$1084  = ~ \$1083 ;
-  assign overrun = \$1081  & \$1084 ;
+  assign \$1076  = \$1074  | \$1075 ;
+  assign \$1080  = periodic & period_zero;
+  assign \$1081  = ~ \$1080 ;
+  assign \$1082  = periodic & \$1081 ;
+  assign \$1083  = \$1082  & period_start;
+  assign \$1084  = \$1079  | \$1083 ;
+  assign \$1085  = ~ abort;
+  assign \$1086  = idle & \$1085 ;
+  assign \$1087  = ~ \$1086 ;
+  assign \$1090  = \$1084  & \$1089 ;
   always @(posedge clk)
-    period_zero <= \$1085 ;
+    period_zero <= \$1092 ;
   always @(posedge clk)
-    count_p2 <= \$1086 ;
+    count_p2 <= \$1093 ;
   always @(posedge clk)
-    period_start <= \$1087 ;
+    period_start <= \$1094 ;
   always @(posedge clk)
-    wrap <= \$1088 ;
+    wrap <= \$1095 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$1085  = \$1 ;
+    \$1092  = \$1 ;
     if (rst) begin
-      \$1085  = 1'h0;
+      \$1092  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1086  = 25'h0000002;
+      \$1093  = 25'h0000002;
     end else if (\$7 ) begin
-      \$1086  = 25'h0000003;
+      \$1093  = 25'h0000003;
     end else begin
-      \$1086  = \$1067 [24:0];
+      \$1093  = \$1067 [24:0];
     end
     if (rst) begin
-      \$1086  = 25'h0000002;
+      \$1093  = 25'h0000002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1087  = 1'h1;
+      \$1094  = 1'h1;
     end else if (\$7 ) begin
-      \$1087  = 1'h0;
+      \$1094  = 1'h0;
     end else begin
-      \$1087  = 1'h0;
+      \$1094  = 1'h0;
     end
     if (rst) begin
-      \$1087  = 1'h1;
+      \$1094  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
-      \$1088  = \$536 ;
+      \$1095  = \$536 ;
     end else if (\$7 ) begin
-      \$1088  = \$1066 ;
+      \$1095  = \$1066 ;
     end else begin
-      \$1088  = \$1068 ;
+      \$1095  = \$1068 ;
     end
     if (rst) begin
-      \$1088  = 1'h0;
+      \$1095  = 1'h0;
     end
   end
   assign trigger = 1'h0;
   assign \$1069  = start;
-  assign \$1076  = start;
+  assign \$1077  = \$1076 ;
+  assign \$1078  = 1'h1;
+  assign request = \$1076 ;
+  assign \$1079  = start;
+  assign \$1088  = 1'h0;
+  assign \$1089  = \$1087 ;
+  assign \$1091  = 1'h0;
+  assign overrun = \$1090 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5292$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5299$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -17020,8 +17034,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5292$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5292$0 ;
-  wire \port$5292$0 ;
+  input \port$5299$0 ;
+  wire \port$5299$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -17035,9 +17049,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5292$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5292$0  };
-  assign \$2  = { lc[4:0], \port$5292$0  } == last;
-  assign \$3  = { lc[4:0], \port$5292$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5299$0  };
+  assign \$2  = { lc[4:0], \port$5299$0  } == last;
+  assign \$3  = { lc[4:0], \port$5299$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -17147,7 +17161,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5292$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5292$0  };
+  assign lc_next = { lc[4:0], \port$5299$0  };
   assign zero = is_zero;
 endmodule
 
@@ -19955,7 +19969,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$4724$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master.verdict (lc_skip_seen, noisy, \port$4731$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
@@ -20133,8 +20147,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$4724$0 , lc_check, lc_re
   wire noisy;
   output passed;
   wire passed;
-  output \port$4724$0 ;
-  wire \port$4724$0 ;
+  output \port$4731$0 ;
+  wire \port$4731$0 ;
   output report;
   wire report;
   input report_frame;
@@ -20252,7 +20266,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$4724$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4724$0  = \$2 ;
+  assign \port$4731$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

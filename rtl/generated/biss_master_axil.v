@@ -1061,7 +1061,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_ca_request_address(\regs__ca_address$483 ),
     .ch1_ca_request_count(\regs__ca_count$489 ),
     .ch1_ca_request_slave_id(\regs__ca_slave_id$499 ),
-    .\ch1_ca_request_write$435 (\regs__ca_write$511 ),
+    .\ch1_ca_request_write$448 (\regs__ca_write$511 ),
     .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$543 ),
     .ch1_cfg_break_break_time(\regs__cfg_break_time$545 ),
     .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$547 ),
@@ -1109,12 +1109,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$13573$0 (\$10 ),
-    .\port$13584$0 (\$11 ),
-    .\port$13661$0 (\$12 ),
-    .\port$14124$0 (\$13 ),
-    .\port$14135$0 (\$14 ),
-    .\port$14212$0 (\$15 ),
+    .\port$13521$0 (\$10 ),
+    .\port$13532$0 (\$11 ),
+    .\port$13609$0 (\$12 ),
+    .\port$14072$0 (\$13 ),
+    .\port$14083$0 (\$14 ),
+    .\port$14160$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1200,9 +1200,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$13573$0 (\$10 ),
-    .\port$13584$0 (\$11 ),
-    .\port$13661$0 (\$12 ),
+    .\port$13521$0 (\$10 ),
+    .\port$13532$0 (\$11 ),
+    .\port$13609$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1279,9 +1279,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(\regs__count_en$789 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$813 ),
-    .\port$14124$0 (\$13 ),
-    .\port$14135$0 (\$14 ),
-    .\port$14212$0 (\$15 ),
+    .\port$14072$0 (\$13 ),
+    .\port$14083$0 (\$14 ),
+    .\port$14160$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$477 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -2055,8 +2055,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$152 
 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw
 , ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi
-, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$435 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13573$0 , \port$13584$0 , ch0__ca_done, \port$13661$0 , ch1__frame_done, ch1__done_count, ch1__result_updates
-, \port$14124$0 , \port$14135$0 , ch1__ca_done, \port$14212$0 , bus__r_addr);
+, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$448 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13521$0 , \port$13532$0 , ch0__ca_done, \port$13609$0 , ch1__frame_done, ch1__done_count, ch1__result_updates
+, \port$14072$0 , \port$14083$0 , ch1__ca_done, \port$14160$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2072,108 +2072,56 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$1008 ;
   reg \$1009 ;
   wire \$101 ;
-  reg \$1010 ;
+  reg [3:0] \$1010 ;
   reg \$1011 ;
-  reg [2:0] \$1012 ;
-  reg [6:0] \$1013 ;
-  reg [6:0] \$1014 ;
+  reg \$1012 ;
+  reg \$1013 ;
+  reg \$1014 ;
   reg \$1015 ;
   reg \$1016 ;
   reg \$1017 ;
-  reg [14:0] \$1018 ;
-  reg [3:0] \$1019 ;
+  reg \$1018 ;
+  reg \$1019 ;
   wire \$102 ;
   reg \$1020 ;
   reg \$1021 ;
-  reg \$1022 ;
-  reg \$1023 ;
-  reg \$1024 ;
-  reg \$1025 ;
-  reg \$1026 ;
-  reg \$1027 ;
-  reg \$1028 ;
-  reg \$1029 ;
+  reg [5:0] \$1022 ;
+  reg [15:0] \$1023 ;
+  reg [12:0] \$1024 ;
+  reg [31:0] \$1025 ;
+  reg [31:0] \$1026 ;
+  reg [31:0] \$1027 ;
+  reg [31:0] \$1028 ;
+  reg [31:0] \$1029 ;
   wire \$103 ;
-  reg \$1030 ;
+  reg [3:0] \$1030 ;
   reg \$1031 ;
-  reg \$1032 ;
-  reg \$1033 ;
+  reg [7:0] \$1032 ;
+  reg [12:0] \$1033 ;
   reg \$1034 ;
   reg \$1035 ;
   reg \$1036 ;
   reg \$1037 ;
-  reg \$1038 ;
-  reg \$1039 ;
+  reg [31:0] \$1038 ;
   wire \$104 ;
-  reg \$1040 ;
-  reg \$1041 ;
-  reg \$1042 ;
-  reg \$1043 ;
-  reg \$1044 ;
-  reg \$1045 ;
-  reg \$1046 ;
-  reg \$1047 ;
-  reg \$1048 ;
-  reg \$1049 ;
   wire \$105 ;
-  reg \$1050 ;
-  reg \$1051 ;
-  reg \$1052 ;
-  reg \$1053 ;
-  reg \$1054 ;
-  reg \$1055 ;
-  reg \$1056 ;
-  reg \$1057 ;
-  reg \$1058 ;
-  reg \$1059 ;
   wire \$106 ;
-  reg \$1060 ;
-  reg \$1061 ;
-  reg [3:0] \$1062 ;
-  reg \$1063 ;
-  reg \$1064 ;
-  reg \$1065 ;
-  reg \$1066 ;
-  reg \$1067 ;
-  reg \$1068 ;
-  reg \$1069 ;
   wire \$107 ;
-  reg \$1070 ;
-  reg \$1071 ;
-  reg \$1072 ;
-  reg \$1073 ;
-  reg [5:0] \$1074 ;
-  reg [15:0] \$1075 ;
-  reg [12:0] \$1076 ;
-  reg [31:0] \$1077 ;
-  reg [31:0] \$1078 ;
-  reg [31:0] \$1079 ;
   wire \$108 ;
-  reg [31:0] \$1080 ;
-  reg [31:0] \$1081 ;
-  reg [3:0] \$1082 ;
-  reg \$1083 ;
-  reg [7:0] \$1084 ;
-  reg [12:0] \$1085 ;
-  reg \$1086 ;
-  reg \$1087 ;
-  reg \$1088 ;
-  reg \$1089 ;
   wire \$109 ;
-  reg [31:0] \$1090 ;
   wire [31:0] \$11 ;
   wire \$110 ;
   wire \$111 ;
   wire \$112 ;
   wire \$113 ;
   wire \$114 ;
-  wire \$115 ;
-  wire \$116 ;
-  wire \$117 ;
-  wire \$118 ;
-  wire \$119 ;
+  wire [31:0] \$115 ;
+  wire [31:0] \$116 ;
+  wire [31:0] \$117 ;
+  wire [31:0] \$118 ;
+  wire [31:0] \$119 ;
   wire [31:0] \$12 ;
-  wire \$120 ;
+  wire [14:0] \$120 ;
   wire \$121 ;
   wire \$122 ;
   wire \$123 ;
@@ -2196,12 +2144,12 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$139 ;
   wire [31:0] \$14 ;
   wire \$140 ;
-  wire [31:0] \$141 ;
-  wire [31:0] \$142 ;
-  wire [31:0] \$143 ;
-  wire [31:0] \$144 ;
-  wire [31:0] \$145 ;
-  wire [14:0] \$146 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
   wire \$147 ;
   wire \$148 ;
   wire \$149 ;
@@ -2230,34 +2178,34 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$17 ;
   wire \$170 ;
   wire \$171 ;
-  wire \$172 ;
-  wire \$173 ;
-  wire \$174 ;
-  wire \$175 ;
-  wire \$176 ;
-  wire \$177 ;
-  wire \$178 ;
-  wire \$179 ;
+  wire [31:0] \$172 ;
+  wire [31:0] \$173 ;
+  wire [31:0] \$174 ;
+  wire [31:0] \$175 ;
+  wire [31:0] \$176 ;
+  wire [31:0] \$177 ;
+  wire [31:0] \$178 ;
+  wire [31:0] \$179 ;
   wire \$18 ;
-  wire \$180 ;
-  wire \$181 ;
-  wire \$182 ;
-  wire \$183 ;
-  wire \$184 ;
-  wire \$185 ;
-  wire \$186 ;
-  wire \$187 ;
-  wire \$188 ;
-  wire \$189 ;
+  wire [31:0] \$180 ;
+  wire [31:0] \$181 ;
+  wire [31:0] \$182 ;
+  wire [31:0] \$183 ;
+  wire [31:0] \$184 ;
+  wire [31:0] \$185 ;
+  wire [31:0] \$186 ;
+  wire [31:0] \$187 ;
+  wire [31:0] \$188 ;
+  wire [31:0] \$189 ;
   wire \$19 ;
-  wire \$190 ;
-  wire \$191 ;
-  wire \$192 ;
-  wire \$193 ;
-  wire \$194 ;
-  wire \$195 ;
-  wire \$196 ;
-  wire \$197 ;
+  wire [31:0] \$190 ;
+  wire [31:0] \$191 ;
+  wire [31:0] \$192 ;
+  wire [31:0] \$193 ;
+  wire [31:0] \$194 ;
+  wire [31:0] \$195 ;
+  wire [31:0] \$196 ;
+  wire [31:0] \$197 ;
   wire [31:0] \$198 ;
   wire [31:0] \$199 ;
   wire \$2 ;
@@ -2332,34 +2280,34 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$261 ;
   wire [31:0] \$262 ;
   wire [31:0] \$263 ;
-  wire [31:0] \$264 ;
-  wire [31:0] \$265 ;
-  wire [31:0] \$266 ;
-  wire [31:0] \$267 ;
-  wire [31:0] \$268 ;
-  wire [31:0] \$269 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire \$269 ;
   wire \$27 ;
-  wire [31:0] \$270 ;
-  wire [31:0] \$271 ;
-  wire [31:0] \$272 ;
-  wire [31:0] \$273 ;
-  wire [31:0] \$274 ;
-  wire [31:0] \$275 ;
-  wire [31:0] \$276 ;
-  wire [31:0] \$277 ;
-  wire [31:0] \$278 ;
-  wire [31:0] \$279 ;
+  wire \$270 ;
+  wire \$271 ;
+  wire \$272 ;
+  wire \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
   wire \$28 ;
-  wire [31:0] \$280 ;
-  wire [31:0] \$281 ;
-  wire [31:0] \$282 ;
-  wire [31:0] \$283 ;
-  wire [31:0] \$284 ;
-  wire [31:0] \$285 ;
-  wire [31:0] \$286 ;
-  wire [31:0] \$287 ;
-  wire [31:0] \$288 ;
-  wire [31:0] \$289 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
   wire \$29 ;
   wire \$290 ;
   wire \$291 ;
@@ -2440,7 +2388,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$359 ;
   wire \$36 ;
   wire \$360 ;
-  wire \$361 ;
+  wire [14:0] \$361 ;
   wire \$362 ;
   wire \$363 ;
   wire \$364 ;
@@ -2498,63 +2446,63 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$410 ;
   wire \$411 ;
   wire \$412 ;
-  wire [14:0] \$413 ;
-  wire \$414 ;
-  wire \$415 ;
-  wire \$416 ;
-  wire \$417 ;
-  wire \$418 ;
-  wire \$419 ;
+  wire [31:0] \$413 ;
+  wire [31:0] \$414 ;
+  wire [31:0] \$415 ;
+  wire [31:0] \$416 ;
+  wire [31:0] \$417 ;
+  wire [31:0] \$418 ;
+  wire [31:0] \$419 ;
   wire \$42 ;
-  wire \$420 ;
-  wire \$421 ;
-  wire \$422 ;
-  wire \$423 ;
-  wire \$424 ;
-  wire \$425 ;
-  wire \$426 ;
-  wire \$427 ;
-  wire \$428 ;
-  wire \$429 ;
+  wire [31:0] \$420 ;
+  wire [31:0] \$421 ;
+  wire [31:0] \$422 ;
+  wire [31:0] \$423 ;
+  wire [31:0] \$424 ;
+  wire [31:0] \$425 ;
+  wire [31:0] \$426 ;
+  wire [31:0] \$427 ;
+  wire [31:0] \$428 ;
+  wire [31:0] \$429 ;
   wire \$43 ;
-  wire \$430 ;
-  wire \$431 ;
-  wire \$432 ;
-  wire \$433 ;
-  wire \$434 ;
-  wire \$435 ;
-  wire \$436 ;
-  wire \$437 ;
-  wire \$438 ;
-  wire \$439 ;
+  wire [31:0] \$430 ;
+  wire [31:0] \$431 ;
+  wire [31:0] \$432 ;
+  wire [31:0] \$433 ;
+  wire [31:0] \$434 ;
+  wire [31:0] \$435 ;
+  wire [31:0] \$436 ;
+  wire [31:0] \$437 ;
+  wire [31:0] \$438 ;
+  wire [31:0] \$439 ;
   wire \$44 ;
-  wire \$440 ;
-  wire \$441 ;
-  wire \$442 ;
-  wire \$443 ;
-  wire \$444 ;
-  wire \$445 ;
-  wire \$446 ;
-  wire \$447 ;
-  wire \$448 ;
-  wire \$449 ;
+  wire [31:0] \$440 ;
+  wire [31:0] \$441 ;
+  wire [31:0] \$442 ;
+  wire [31:0] \$443 ;
+  wire [31:0] \$444 ;
+  wire [31:0] \$445 ;
+  wire [31:0] \$446 ;
+  wire [31:0] \$447 ;
+  wire [31:0] \$448 ;
+  wire [31:0] \$449 ;
   wire \$45 ;
-  wire \$450 ;
-  wire \$451 ;
-  wire \$452 ;
-  wire \$453 ;
-  wire \$454 ;
-  wire \$455 ;
-  wire \$456 ;
-  wire \$457 ;
-  wire \$458 ;
-  wire \$459 ;
+  wire [31:0] \$450 ;
+  wire [31:0] \$451 ;
+  wire [31:0] \$452 ;
+  wire [31:0] \$453 ;
+  wire [31:0] \$454 ;
+  wire [31:0] \$455 ;
+  wire [31:0] \$456 ;
+  wire [31:0] \$457 ;
+  wire [31:0] \$458 ;
+  wire [31:0] \$459 ;
   wire \$46 ;
-  wire \$460 ;
-  wire \$461 ;
-  wire \$462 ;
-  wire \$463 ;
-  wire \$464 ;
+  wire [31:0] \$460 ;
+  wire [31:0] \$461 ;
+  wire [31:0] \$462 ;
+  wire [31:0] \$463 ;
+  wire [31:0] \$464 ;
   wire [31:0] \$465 ;
   wire [31:0] \$466 ;
   wire [31:0] \$467 ;
@@ -2600,63 +2548,63 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$502 ;
   wire [31:0] \$503 ;
   wire [31:0] \$504 ;
-  wire [31:0] \$505 ;
-  wire [31:0] \$506 ;
-  wire [31:0] \$507 ;
-  wire [31:0] \$508 ;
-  wire [31:0] \$509 ;
+  wire \$505 ;
+  wire \$506 ;
+  wire \$507 ;
+  wire \$508 ;
+  wire \$509 ;
   wire \$51 ;
-  wire [31:0] \$510 ;
-  wire [31:0] \$511 ;
-  wire [31:0] \$512 ;
-  wire [31:0] \$513 ;
-  wire [31:0] \$514 ;
-  wire [31:0] \$515 ;
-  wire [31:0] \$516 ;
-  wire [31:0] \$517 ;
-  wire [31:0] \$518 ;
-  wire [31:0] \$519 ;
+  wire \$510 ;
+  wire \$511 ;
+  wire \$512 ;
+  wire \$513 ;
+  wire \$514 ;
+  wire \$515 ;
+  wire \$516 ;
+  wire \$517 ;
+  wire \$518 ;
+  wire \$519 ;
   wire \$52 ;
-  wire [31:0] \$520 ;
-  wire [31:0] \$521 ;
-  wire [31:0] \$522 ;
-  wire [31:0] \$523 ;
-  wire [31:0] \$524 ;
-  wire [31:0] \$525 ;
-  wire [31:0] \$526 ;
-  wire [31:0] \$527 ;
-  wire [31:0] \$528 ;
-  wire [31:0] \$529 ;
+  wire \$520 ;
+  wire \$521 ;
+  wire \$522 ;
+  wire \$523 ;
+  wire \$524 ;
+  wire \$525 ;
+  wire \$526 ;
+  wire \$527 ;
+  wire \$528 ;
+  wire \$529 ;
   wire \$53 ;
-  wire [31:0] \$530 ;
-  wire [31:0] \$531 ;
-  wire [31:0] \$532 ;
-  wire [31:0] \$533 ;
-  wire [31:0] \$534 ;
-  wire [31:0] \$535 ;
-  wire [31:0] \$536 ;
-  wire [31:0] \$537 ;
-  wire [31:0] \$538 ;
-  wire [31:0] \$539 ;
+  wire \$530 ;
+  wire \$531 ;
+  wire \$532 ;
+  wire \$533 ;
+  wire \$534 ;
+  wire \$535 ;
+  wire \$536 ;
+  wire \$537 ;
+  wire \$538 ;
+  wire \$539 ;
   wire \$54 ;
-  wire [31:0] \$540 ;
-  wire [31:0] \$541 ;
-  wire [31:0] \$542 ;
-  wire [31:0] \$543 ;
-  wire [31:0] \$544 ;
-  wire [31:0] \$545 ;
-  wire [31:0] \$546 ;
-  wire [31:0] \$547 ;
-  wire [31:0] \$548 ;
-  wire [31:0] \$549 ;
+  wire \$540 ;
+  wire \$541 ;
+  wire \$542 ;
+  wire \$543 ;
+  wire \$544 ;
+  wire \$545 ;
+  wire \$546 ;
+  wire \$547 ;
+  wire \$548 ;
+  wire \$549 ;
   wire \$55 ;
-  wire [31:0] \$550 ;
-  wire [31:0] \$551 ;
-  wire [31:0] \$552 ;
-  wire [31:0] \$553 ;
-  wire [31:0] \$554 ;
-  wire [31:0] \$555 ;
-  wire [31:0] \$556 ;
+  wire \$550 ;
+  wire \$551 ;
+  wire \$552 ;
+  wire \$553 ;
+  wire \$554 ;
+  wire \$555 ;
+  wire \$556 ;
   wire \$557 ;
   wire \$558 ;
   wire \$559 ;
@@ -2681,25 +2629,25 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$576 ;
   wire \$577 ;
   wire \$578 ;
-  wire \$579 ;
+  wire [14:0] \$579 ;
   wire \$58 ;
-  wire \$580 ;
+  wire [14:0] \$580 ;
   wire \$581 ;
-  wire \$582 ;
-  wire \$583 ;
+  wire [14:0] \$582 ;
+  wire [14:0] \$583 ;
   wire \$584 ;
-  wire \$585 ;
-  wire \$586 ;
+  wire [14:0] \$585 ;
+  wire [14:0] \$586 ;
   wire \$587 ;
-  wire \$588 ;
-  wire \$589 ;
+  wire [14:0] \$588 ;
+  wire [14:0] \$589 ;
   wire \$59 ;
   wire \$590 ;
-  wire \$591 ;
+  wire [3:0] \$591 ;
   wire \$592 ;
   wire \$593 ;
   wire \$594 ;
-  wire \$595 ;
+  wire [31:0] \$595 ;
   wire \$596 ;
   wire \$597 ;
   wire \$598 ;
@@ -2740,24 +2688,24 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$629 ;
   wire \$63 ;
   wire \$630 ;
-  wire [14:0] \$631 ;
-  wire [14:0] \$632 ;
+  wire \$631 ;
+  wire \$632 ;
   wire \$633 ;
-  wire [14:0] \$634 ;
-  wire [14:0] \$635 ;
+  wire \$634 ;
+  wire \$635 ;
   wire \$636 ;
-  wire [14:0] \$637 ;
-  wire [14:0] \$638 ;
+  wire \$637 ;
+  wire \$638 ;
   wire \$639 ;
   wire \$64 ;
-  wire [14:0] \$640 ;
-  wire [14:0] \$641 ;
+  wire \$640 ;
+  wire \$641 ;
   wire \$642 ;
-  wire [3:0] \$643 ;
+  wire \$643 ;
   wire \$644 ;
   wire \$645 ;
   wire \$646 ;
-  wire [31:0] \$647 ;
+  wire \$647 ;
   wire \$648 ;
   wire \$649 ;
   wire \$65 ;
@@ -2784,24 +2732,24 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$669 ;
   wire \$67 ;
   wire \$670 ;
-  wire \$671 ;
-  wire \$672 ;
+  wire [14:0] \$671 ;
+  wire [14:0] \$672 ;
   wire \$673 ;
-  wire \$674 ;
-  wire \$675 ;
+  wire [14:0] \$674 ;
+  wire [14:0] \$675 ;
   wire \$676 ;
-  wire \$677 ;
-  wire \$678 ;
+  wire [14:0] \$677 ;
+  wire [14:0] \$678 ;
   wire \$679 ;
   wire \$68 ;
-  wire \$680 ;
-  wire \$681 ;
+  wire [14:0] \$680 ;
+  wire [14:0] \$681 ;
   wire \$682 ;
-  wire \$683 ;
+  wire [3:0] \$683 ;
   wire \$684 ;
   wire \$685 ;
   wire \$686 ;
-  wire \$687 ;
+  wire [31:0] \$687 ;
   wire \$688 ;
   wire \$689 ;
   wire \$69 ;
@@ -2810,154 +2758,154 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$692 ;
   wire \$693 ;
   wire \$694 ;
-  wire \$695 ;
-  wire \$696 ;
-  wire \$697 ;
-  wire \$698 ;
-  wire \$699 ;
+  wire [31:0] \$695 ;
+  wire [31:0] \$696 ;
+  reg \$697 ;
+  reg [10:0] \$698 ;
+  reg [31:0] \$699 ;
   wire \$7 ;
   wire \$70 ;
-  wire \$700 ;
-  wire \$701 ;
-  wire \$702 ;
-  wire \$703 ;
-  wire \$704 ;
-  wire \$705 ;
-  wire \$706 ;
-  wire \$707 ;
-  wire \$708 ;
-  wire \$709 ;
+  reg [3:0] \$700 ;
+  reg [31:0] \$701 ;
+  reg [3:0] \$702 ;
+  reg \$703 ;
+  reg \$704 ;
+  reg \$705 ;
+  reg \$706 ;
+  reg \$707 ;
+  reg \$708 ;
+  reg [31:0] \$709 ;
   wire \$71 ;
-  wire \$710 ;
-  wire \$711 ;
-  wire \$712 ;
-  wire \$713 ;
-  wire \$714 ;
-  wire \$715 ;
-  wire \$716 ;
-  wire \$717 ;
-  wire \$718 ;
-  wire \$719 ;
+  reg \$710 ;
+  reg \$711 ;
+  reg \$712 ;
+  reg \$713 ;
+  reg \$714 ;
+  reg \$715 ;
+  reg \$716 ;
+  reg \$717 ;
+  reg \$718 ;
+  reg \$719 ;
   wire \$72 ;
-  wire \$720 ;
-  wire \$721 ;
-  wire \$722 ;
-  wire [14:0] \$723 ;
-  wire [14:0] \$724 ;
-  wire \$725 ;
-  wire [14:0] \$726 ;
-  wire [14:0] \$727 ;
-  wire \$728 ;
-  wire [14:0] \$729 ;
+  reg \$720 ;
+  reg \$721 ;
+  reg \$722 ;
+  reg \$723 ;
+  reg [15:0] \$724 ;
+  reg [11:0] \$725 ;
+  reg \$726 ;
+  reg [23:0] \$727 ;
+  reg \$728 ;
+  reg [23:0] \$729 ;
   wire \$73 ;
-  wire [14:0] \$730 ;
-  wire \$731 ;
-  wire [14:0] \$732 ;
-  wire [14:0] \$733 ;
-  wire \$734 ;
-  wire [3:0] \$735 ;
-  wire \$736 ;
-  wire \$737 ;
-  wire \$738 ;
-  wire [31:0] \$739 ;
+  reg \$730 ;
+  reg [23:0] \$731 ;
+  reg \$732 ;
+  reg [23:0] \$733 ;
+  reg \$734 ;
+  reg [6:0] \$735 ;
+  reg \$736 ;
+  reg \$737 ;
+  reg [1:0] \$738 ;
+  reg \$739 ;
   wire \$74 ;
-  wire \$740 ;
-  wire \$741 ;
-  wire \$742 ;
-  wire \$743 ;
-  wire \$744 ;
-  wire \$745 ;
-  wire \$746 ;
-  wire [31:0] \$747 ;
-  wire [31:0] \$748 ;
+  reg \$740 ;
+  reg [6:0] \$741 ;
+  reg \$742 ;
+  reg \$743 ;
+  reg [1:0] \$744 ;
+  reg \$745 ;
+  reg \$746 ;
+  reg \$747 ;
+  reg \$748 ;
   reg \$749 ;
   wire \$75 ;
-  reg [10:0] \$750 ;
-  reg [31:0] \$751 ;
+  reg \$750 ;
+  reg [7:0] \$751 ;
   reg [3:0] \$752 ;
-  reg [31:0] \$753 ;
+  reg [3:0] \$753 ;
   reg [3:0] \$754 ;
   reg \$755 ;
-  reg \$756 ;
+  reg [11:0] \$756 ;
   reg \$757 ;
-  reg \$758 ;
-  reg \$759 ;
+  reg [15:0] \$758 ;
+  reg [4:0] \$759 ;
   wire \$76 ;
   reg \$760 ;
-  reg [31:0] \$761 ;
-  reg \$762 ;
+  reg \$761 ;
+  reg [15:0] \$762 ;
   reg \$763 ;
-  reg \$764 ;
-  reg \$765 ;
+  reg [15:0] \$764 ;
+  reg [4:0] \$765 ;
   reg \$766 ;
   reg \$767 ;
-  reg \$768 ;
+  reg [15:0] \$768 ;
   reg \$769 ;
   wire \$77 ;
   reg \$770 ;
   reg \$771 ;
   reg \$772 ;
   reg \$773 ;
-  reg \$774 ;
+  reg [11:0] \$774 ;
   reg \$775 ;
   reg \$776 ;
-  reg [15:0] \$777 ;
-  reg [11:0] \$778 ;
+  reg \$777 ;
+  reg \$778 ;
   reg \$779 ;
   wire \$78 ;
-  reg [23:0] \$780 ;
+  reg \$780 ;
   reg \$781 ;
-  reg [23:0] \$782 ;
+  reg \$782 ;
   reg \$783 ;
-  reg [23:0] \$784 ;
+  reg \$784 ;
   reg \$785 ;
-  reg [23:0] \$786 ;
+  reg \$786 ;
   reg \$787 ;
-  reg [6:0] \$788 ;
+  reg \$788 ;
   reg \$789 ;
   wire \$79 ;
   reg \$790 ;
-  reg [1:0] \$791 ;
+  reg \$791 ;
   reg \$792 ;
   reg \$793 ;
-  reg [6:0] \$794 ;
-  reg \$795 ;
-  reg \$796 ;
-  reg [1:0] \$797 ;
+  reg [2:0] \$794 ;
+  reg [6:0] \$795 ;
+  reg [6:0] \$796 ;
+  reg \$797 ;
   reg \$798 ;
   reg \$799 ;
   wire [31:0] \$8 ;
   wire \$80 ;
   reg \$800 ;
-  reg \$801 ;
-  reg \$802 ;
-  reg \$803 ;
-  reg [7:0] \$804 ;
-  reg [3:0] \$805 ;
-  reg [3:0] \$806 ;
-  reg [3:0] \$807 ;
+  reg [31:0] \$801 ;
+  reg [14:0] \$802 ;
+  reg [3:0] \$803 ;
+  reg \$804 ;
+  reg \$805 ;
+  reg \$806 ;
+  reg \$807 ;
   reg \$808 ;
-  reg [11:0] \$809 ;
+  reg \$809 ;
   wire \$81 ;
   reg \$810 ;
-  reg [15:0] \$811 ;
-  reg [4:0] \$812 ;
+  reg \$811 ;
+  reg \$812 ;
   reg \$813 ;
   reg \$814 ;
-  reg [15:0] \$815 ;
+  reg \$815 ;
   reg \$816 ;
-  reg [15:0] \$817 ;
-  reg [4:0] \$818 ;
+  reg \$817 ;
+  reg \$818 ;
   reg \$819 ;
   wire \$82 ;
   reg \$820 ;
-  reg [15:0] \$821 ;
+  reg \$821 ;
   reg \$822 ;
   reg \$823 ;
   reg \$824 ;
   reg \$825 ;
   reg \$826 ;
-  reg [11:0] \$827 ;
+  reg \$827 ;
   reg \$828 ;
   reg \$829 ;
   wire \$83 ;
@@ -2978,38 +2926,38 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$843 ;
   reg \$844 ;
   reg \$845 ;
-  reg \$846 ;
-  reg [2:0] \$847 ;
-  reg [6:0] \$848 ;
-  reg [6:0] \$849 ;
+  reg [3:0] \$846 ;
+  reg \$847 ;
+  reg \$848 ;
+  reg \$849 ;
   wire \$85 ;
   reg \$850 ;
   reg \$851 ;
   reg \$852 ;
-  reg [31:0] \$853 ;
-  reg [14:0] \$854 ;
-  reg [3:0] \$855 ;
+  reg \$853 ;
+  reg \$854 ;
+  reg \$855 ;
   reg \$856 ;
   reg \$857 ;
-  reg \$858 ;
-  reg \$859 ;
+  reg [5:0] \$858 ;
+  reg [15:0] \$859 ;
   wire \$86 ;
-  reg \$860 ;
-  reg \$861 ;
-  reg \$862 ;
-  reg \$863 ;
-  reg \$864 ;
-  reg \$865 ;
-  reg \$866 ;
+  reg [12:0] \$860 ;
+  reg [31:0] \$861 ;
+  reg [31:0] \$862 ;
+  reg [31:0] \$863 ;
+  reg [31:0] \$864 ;
+  reg [31:0] \$865 ;
+  reg [3:0] \$866 ;
   reg \$867 ;
-  reg \$868 ;
-  reg \$869 ;
+  reg [7:0] \$868 ;
+  reg [12:0] \$869 ;
   wire \$87 ;
   reg \$870 ;
   reg \$871 ;
   reg \$872 ;
   reg \$873 ;
-  reg \$874 ;
+  reg [31:0] \$874 ;
   reg \$875 ;
   reg \$876 ;
   reg \$877 ;
@@ -3025,122 +2973,122 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$886 ;
   reg \$887 ;
   reg \$888 ;
-  reg \$889 ;
+  reg [15:0] \$889 ;
   wire \$89 ;
-  reg \$890 ;
+  reg [11:0] \$890 ;
   reg \$891 ;
-  reg \$892 ;
+  reg [23:0] \$892 ;
   reg \$893 ;
-  reg \$894 ;
+  reg [23:0] \$894 ;
   reg \$895 ;
-  reg \$896 ;
+  reg [23:0] \$896 ;
   reg \$897 ;
-  reg [3:0] \$898 ;
+  reg [23:0] \$898 ;
   reg \$899 ;
   wire [31:0] \$9 ;
   wire \$90 ;
-  reg \$900 ;
+  reg [6:0] \$900 ;
   reg \$901 ;
   reg \$902 ;
-  reg \$903 ;
+  reg [1:0] \$903 ;
   reg \$904 ;
   reg \$905 ;
-  reg \$906 ;
+  reg [6:0] \$906 ;
   reg \$907 ;
   reg \$908 ;
-  reg \$909 ;
+  reg [1:0] \$909 ;
   wire \$91 ;
-  reg [5:0] \$910 ;
-  reg [15:0] \$911 ;
-  reg [12:0] \$912 ;
-  reg [31:0] \$913 ;
-  reg [31:0] \$914 ;
-  reg [31:0] \$915 ;
-  reg [31:0] \$916 ;
-  reg [31:0] \$917 ;
+  reg \$910 ;
+  reg \$911 ;
+  reg \$912 ;
+  reg \$913 ;
+  reg \$914 ;
+  reg \$915 ;
+  reg [7:0] \$916 ;
+  reg [3:0] \$917 ;
   reg [3:0] \$918 ;
-  reg \$919 ;
+  reg [3:0] \$919 ;
   wire \$92 ;
-  reg [7:0] \$920 ;
-  reg [12:0] \$921 ;
+  reg \$920 ;
+  reg [11:0] \$921 ;
   reg \$922 ;
-  reg \$923 ;
-  reg \$924 ;
+  reg [15:0] \$923 ;
+  reg [4:0] \$924 ;
   reg \$925 ;
-  reg [31:0] \$926 ;
-  reg \$927 ;
+  reg \$926 ;
+  reg [15:0] \$927 ;
   reg \$928 ;
-  reg \$929 ;
+  reg [15:0] \$929 ;
   wire \$93 ;
-  reg \$930 ;
+  reg [4:0] \$930 ;
   reg \$931 ;
   reg \$932 ;
-  reg \$933 ;
+  reg [15:0] \$933 ;
   reg \$934 ;
   reg \$935 ;
   reg \$936 ;
   reg \$937 ;
   reg \$938 ;
-  reg \$939 ;
+  reg [11:0] \$939 ;
   wire \$94 ;
   reg \$940 ;
   reg \$941 ;
-  reg [15:0] \$942 ;
-  reg [11:0] \$943 ;
+  reg \$942 ;
+  reg \$943 ;
   reg \$944 ;
-  reg [23:0] \$945 ;
+  reg \$945 ;
   reg \$946 ;
-  reg [23:0] \$947 ;
+  reg \$947 ;
   reg \$948 ;
-  reg [23:0] \$949 ;
+  reg \$949 ;
   wire \$95 ;
   reg \$950 ;
-  reg [23:0] \$951 ;
+  reg \$951 ;
   reg \$952 ;
-  reg [6:0] \$953 ;
+  reg \$953 ;
   reg \$954 ;
   reg \$955 ;
-  reg [1:0] \$956 ;
+  reg \$956 ;
   reg \$957 ;
   reg \$958 ;
-  reg [6:0] \$959 ;
+  reg [2:0] \$959 ;
   wire \$96 ;
-  reg \$960 ;
-  reg \$961 ;
-  reg [1:0] \$962 ;
+  reg [6:0] \$960 ;
+  reg [6:0] \$961 ;
+  reg \$962 ;
   reg \$963 ;
   reg \$964 ;
   reg \$965 ;
-  reg \$966 ;
-  reg \$967 ;
+  reg [14:0] \$966 ;
+  reg [3:0] \$967 ;
   reg \$968 ;
-  reg [7:0] \$969 ;
+  reg \$969 ;
   wire \$97 ;
-  reg [3:0] \$970 ;
-  reg [3:0] \$971 ;
-  reg [3:0] \$972 ;
+  reg \$970 ;
+  reg \$971 ;
+  reg \$972 ;
   reg \$973 ;
-  reg [11:0] \$974 ;
+  reg \$974 ;
   reg \$975 ;
-  reg [15:0] \$976 ;
-  reg [4:0] \$977 ;
+  reg \$976 ;
+  reg \$977 ;
   reg \$978 ;
   reg \$979 ;
   wire \$98 ;
-  reg [15:0] \$980 ;
+  reg \$980 ;
   reg \$981 ;
-  reg [15:0] \$982 ;
-  reg [4:0] \$983 ;
+  reg \$982 ;
+  reg \$983 ;
   reg \$984 ;
   reg \$985 ;
-  reg [15:0] \$986 ;
+  reg \$986 ;
   reg \$987 ;
   reg \$988 ;
   reg \$989 ;
   wire \$99 ;
   reg \$990 ;
   reg \$991 ;
-  reg [11:0] \$992 ;
+  reg \$992 ;
   reg \$993 ;
   reg \$994 ;
   reg \$995 ;
@@ -4009,8 +3957,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$435 ;
-  reg \ch1_ca_request_write$435  = 1'h0;
+  output \ch1_ca_request_write$448 ;
+  reg \ch1_ca_request_write$448  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_chain2_write;
   wire ch1_caps_chain_write;
@@ -4309,18 +4257,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$13573$0 ;
-  wire [186:0] \port$13573$0 ;
-  input [79:0] \port$13584$0 ;
-  wire [79:0] \port$13584$0 ;
-  input [9:0] \port$13661$0 ;
-  wire [9:0] \port$13661$0 ;
-  input [186:0] \port$14124$0 ;
-  wire [186:0] \port$14124$0 ;
-  input [79:0] \port$14135$0 ;
-  wire [79:0] \port$14135$0 ;
-  input [9:0] \port$14212$0 ;
-  wire [9:0] \port$14212$0 ;
+  input [186:0] \port$13521$0 ;
+  wire [186:0] \port$13521$0 ;
+  input [79:0] \port$13532$0 ;
+  wire [79:0] \port$13532$0 ;
+  input [9:0] \port$13609$0 ;
+  wire [9:0] \port$13609$0 ;
+  input [186:0] \port$14072$0 ;
+  wire [186:0] \port$14072$0 ;
+  input [79:0] \port$14083$0 ;
+  wire [79:0] \port$14083$0 ;
+  input [9:0] \port$14160$0 ;
+  wire [9:0] \port$14160$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   (* init = 4'h0 *)
@@ -4362,13 +4310,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @(posedge clk) begin
     if (wr__en[0])
-      ch0_config_memory[{ \$629 , \$628 , \$627 , \$626  }][7:0] <= config_memory0_write_data[7:0];
+      ch0_config_memory[{ \$577 , \$576 , \$575 , \$574  }][7:0] <= config_memory0_write_data[7:0];
     if (wr__en[1])
-      ch0_config_memory[{ \$629 , \$628 , \$627 , \$626  }][15:8] <= config_memory0_write_data[15:8];
+      ch0_config_memory[{ \$577 , \$576 , \$575 , \$574  }][15:8] <= config_memory0_write_data[15:8];
     if (wr__en[2])
-      ch0_config_memory[{ \$629 , \$628 , \$627 , \$626  }][23:16] <= config_memory0_write_data[23:16];
+      ch0_config_memory[{ \$577 , \$576 , \$575 , \$574  }][23:16] <= config_memory0_write_data[23:16];
     if (wr__en[3])
-      ch0_config_memory[{ \$629 , \$628 , \$627 , \$626  }][31:24] <= config_memory0_write_data[31:24];
+      ch0_config_memory[{ \$577 , \$576 , \$575 , \$574  }][31:24] <= config_memory0_write_data[31:24];
   end
   assign rd__data = ch0_config_memory[ch0_config_read_index];
   reg [31:0] ch1_config_memory [14:0];
@@ -4391,13 +4339,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @(posedge clk) begin
     if (\wr__en$922 [0])
-      ch1_config_memory[{ \$721 , \$720 , \$719 , \$718  }][7:0] <= config_memory0_write_data[7:0];
+      ch1_config_memory[{ \$669 , \$668 , \$667 , \$666  }][7:0] <= config_memory0_write_data[7:0];
     if (\wr__en$922 [1])
-      ch1_config_memory[{ \$721 , \$720 , \$719 , \$718  }][15:8] <= config_memory0_write_data[15:8];
+      ch1_config_memory[{ \$669 , \$668 , \$667 , \$666  }][15:8] <= config_memory0_write_data[15:8];
     if (\wr__en$922 [2])
-      ch1_config_memory[{ \$721 , \$720 , \$719 , \$718  }][23:16] <= config_memory0_write_data[23:16];
+      ch1_config_memory[{ \$669 , \$668 , \$667 , \$666  }][23:16] <= config_memory0_write_data[23:16];
     if (\wr__en$922 [3])
-      ch1_config_memory[{ \$721 , \$720 , \$719 , \$718  }][31:24] <= config_memory0_write_data[31:24];
+      ch1_config_memory[{ \$669 , \$668 , \$667 , \$666  }][31:24] <= config_memory0_write_data[31:24];
   end
   assign \rd__data$924  = ch1_config_memory[ch1_config_read_index];
   assign \$1  = write_data[0] & write_strb[0];
@@ -4414,1501 +4362,1966 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$13  = \$11  | \$12 ;
   assign \$16  = g_read_select_4 ? { 30'h00000000, ch1_irq, ch0_irq } : 32'd0;
   assign \$17  = \$15  | \$16 ;
-  assign \$18  = write_addr == 8'h88;
-  assign \$19  = write_en & \$18 ;
-  assign \$20  = write_addr == 8'h89;
-  assign \$21  = write_en & \$20 ;
-  assign \$22  = write_addr == 8'h8a;
-  assign \$23  = write_en & \$22 ;
-  assign \$24  = write_addr == 8'h8b;
-  assign \$25  = write_en & \$24 ;
-  assign \$26  = write_addr == 8'h8c;
-  assign \$27  = write_en & \$26 ;
-  assign \$28  = write_addr == 8'h8d;
-  assign \$29  = write_en & \$28 ;
-  assign \$30  = write_addr == 8'h8e;
-  assign \$31  = write_en & \$30 ;
-  assign \$32  = write_addr == 8'h8f;
-  assign \$33  = write_en & \$32 ;
-  assign \$34  = write_addr == 8'ha0;
-  assign \$35  = write_en & \$34 ;
-  assign \$36  = write_addr == 8'ha1;
-  assign \$37  = write_en & \$36 ;
-  assign \$38  = write_addr == 8'ha2;
-  assign \$39  = write_en & \$38 ;
-  assign \$40  = write_addr == 8'ha3;
-  assign \$41  = write_en & \$40 ;
-  assign \$42  = write_addr == 8'ha4;
-  assign \$43  = write_en & \$42 ;
-  assign \$44  = | { \$43 , \$41 , \$39 , \$37 , \$35 , \$33 , \$31 , \$29 , \$27 , \$25 , \$23 , \$21 , \$19  };
-  assign \$45  = ~ ch0_config_go;
-  assign \$46  = ch0_config_wait & \$45 ;
-  assign \$47  = \$46  & cfg_free[0];
-  assign \$48  = write_data[0] & write_strb[0];
-  assign \$49  = ch0_ctrl_write ? \$48  : 1'h0;
-  assign \$50  = write_data[1] & write_strb[0];
-  assign \$51  = ch0_ctrl_write ? \$50  : 1'h0;
-  assign \$52  = write_data[2] & write_strb[0];
-  assign \$53  = ch0_ctrl_write ? \$52  : 1'h0;
-  assign \$54  = ch0_ctrl_write & write_strb[1];
-  assign \$55  = ch0_ctrl_write & write_strb[1];
-  assign \$56  = write_data[0] & write_strb[0];
-  assign \$57  = ch0_irq_status_write ? \$56  : 1'h0;
-  assign \$58  = write_data[1] & write_strb[0];
-  assign \$59  = ch0_irq_status_write ? \$58  : 1'h0;
-  assign \$60  = write_data[2] & write_strb[0];
-  assign \$61  = ch0_irq_status_write ? \$60  : 1'h0;
-  assign \$62  = ch0_irq_enable_config_write & config_write_strb[0];
-  assign \$63  = ch0_irq_enable_config_write & config_write_strb[0];
-  assign \$64  = ch0_irq_enable_config_write & config_write_strb[0];
-  assign \$65  = write_addr == 8'h88;
-  assign \$66  = ch0_cfg_ma_config_write & config_write_strb[0];
-  assign \$67  = ch0_cfg_ma_config_write & config_write_strb[1];
-  assign \$68  = ch0_cfg_ma_config_write & config_write_strb[2];
-  assign \$69  = ch0_cfg_ma_config_write & config_write_strb[3];
-  assign \$70  = write_addr == 8'h89;
-  assign \$71  = ch0_cfg_period_config_write & config_write_strb[0];
-  assign \$72  = ch0_cfg_period_config_write & config_write_strb[1];
-  assign \$73  = ch0_cfg_period_config_write & config_write_strb[2];
-  assign \$74  = write_addr == 8'h8a;
-  assign \$75  = ch0_cfg_break_config_write & config_write_strb[0];
-  assign \$76  = ch0_cfg_break_config_write & config_write_strb[1];
-  assign \$77  = ch0_cfg_break_config_write & config_write_strb[2];
-  assign \$78  = write_addr == 8'h8b;
-  assign \$79  = ch0_cfg_ack_config_write & config_write_strb[0];
-  assign \$80  = ch0_cfg_ack_config_write & config_write_strb[1];
-  assign \$81  = ch0_cfg_ack_config_write & config_write_strb[2];
-  assign \$82  = write_addr == 8'h8c;
-  assign \$83  = ch0_cfg_timeout_config_write & config_write_strb[0];
-  assign \$84  = ch0_cfg_timeout_config_write & config_write_strb[1];
-  assign \$85  = ch0_cfg_timeout_config_write & config_write_strb[2];
-  assign \$86  = write_addr == 8'h8d;
-  assign \$87  = ch0_cfg_words_config_write & config_write_strb[0];
-  assign \$88  = ch0_cfg_words_config_write & config_write_strb[0];
-  assign \$89  = ch0_cfg_words_config_write & config_write_strb[1];
-  assign \$90  = ch0_cfg_words_config_write & config_write_strb[1];
-  assign \$91  = ch0_cfg_words_config_write & config_write_strb[1];
-  assign \$92  = ch0_cfg_words_config_write & config_write_strb[1];
-  assign \$93  = ch0_cfg_words_config_write & config_write_strb[2];
-  assign \$94  = ch0_cfg_words_config_write & config_write_strb[2];
-  assign \$95  = ch0_cfg_words_config_write & config_write_strb[3];
-  assign \$96  = ch0_cfg_words_config_write & config_write_strb[3];
-  assign \$97  = ch0_cfg_words_config_write & config_write_strb[3];
-  assign \$98  = ch0_cfg_words_config_write & config_write_strb[3];
-  assign \$99  = ch0_cfg_words_config_write & config_write_strb[3];
-  assign \$100  = write_addr == 8'h8e;
-  assign \$101  = ch0_cfg_checks_config_write & config_write_strb[0];
-  assign \$102  = ch0_cfg_checks_config_write & config_write_strb[0];
-  assign \$103  = ch0_cfg_checks_config_write & config_write_strb[1];
-  assign \$104  = ch0_cfg_checks_config_write & config_write_strb[2];
-  assign \$105  = ch0_cfg_checks_config_write & config_write_strb[2];
-  assign \$106  = ch0_cfg_checks_config_write & config_write_strb[3];
-  assign \$107  = write_addr == 8'h8f;
-  assign \$108  = ch0_cfg_quiet_config_write & config_write_strb[0];
-  assign \$109  = ch0_cfg_quiet_config_write & config_write_strb[1];
-  assign \$110  = write_addr == 8'ha0;
-  assign \$111  = ch0_cfg_crc0_config_write & config_write_strb[0];
-  assign \$112  = ch0_cfg_crc0_config_write & config_write_strb[1];
-  assign \$113  = ch0_cfg_crc0_config_write & config_write_strb[2];
-  assign \$114  = ch0_cfg_crc0_config_write & config_write_strb[3];
-  assign \$115  = write_addr == 8'ha1;
-  assign \$116  = ch0_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$117  = ch0_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$118  = write_addr == 8'ha2;
-  assign \$119  = ch0_cfg_crc1_config_write & config_write_strb[0];
-  assign \$120  = ch0_cfg_crc1_config_write & config_write_strb[1];
-  assign \$121  = ch0_cfg_crc1_config_write & config_write_strb[2];
-  assign \$122  = ch0_cfg_crc1_config_write & config_write_strb[3];
-  assign \$123  = write_addr == 8'ha3;
-  assign \$124  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$125  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$126  = write_addr == 8'ha4;
-  assign \$127  = ch0_cfg_ssi_config_write & config_write_strb[0];
-  assign \$128  = ch0_cfg_ssi_config_write & config_write_strb[0];
-  assign \$129  = ch0_cfg_ssi_config_write & config_write_strb[0];
-  assign \$130  = ch0_cfg_ssi_config_write & config_write_strb[0];
-  assign \$131  = ch0_cfg_ssi_config_write & config_write_strb[2];
-  assign \$132  = ch0_cfg_ssi_config_write & config_write_strb[3];
-  assign \$133  = ch0_ca_request_config_write & config_write_strb[0];
-  assign \$134  = ch0_ca_request_config_write & config_write_strb[1];
-  assign \$135  = ch0_ca_request_config_write & config_write_strb[2];
-  assign \$136  = ch0_ca_request_config_write & config_write_strb[3];
-  assign \$137  = write_data[0] & write_strb[0];
-  assign \$138  = ch0_ca_ctrl_write ? \$137  : 1'h0;
-  assign \$139  = write_data[1] & write_strb[0];
-  assign \$140  = ch0_ca_ctrl_write ? \$139  : 1'h0;
-  assign \$141  = write_data & config_memory0_write_mask;
-  assign \$142  = \$141  & { write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3:2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2:1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1:0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0] };
-  assign \$143  = ~ { write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3:2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2:1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1:0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0] };
-  assign \$144  = config_memory0_write_fill & \$143 ;
-  assign \$145  = \$142  | \$144 ;
-  assign \$146  = ch0_config_written | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
-  assign \$147  = bus__r_addr == 8'h80;
-  assign \$148  = bus__r_addr == 8'h81;
-  assign \$149  = bus__r_addr == 8'h82;
-  assign \$150  = bus__r_addr == 8'h84;
-  assign \$151  = bus__r_addr == 8'h86;
-  assign \$152  = bus__r_addr == 8'h87;
-  assign \$153  = bus__r_addr == 8'h90;
-  assign \$154  = bus__r_addr == 8'h91;
-  assign \$155  = bus__r_addr == 8'h92;
-  assign \$156  = bus__r_addr == 8'h93;
-  assign \$157  = bus__r_addr == 8'h94;
-  assign \$158  = bus__r_addr == 8'h95;
-  assign \$159  = bus__r_addr == 8'h96;
-  assign \$160  = bus__r_addr == 8'h97;
-  assign \$161  = bus__r_addr == 8'ha5;
-  assign \$162  = bus__r_addr == 8'ha6;
-  assign \$163  = bus__r_addr == 8'ha7;
-  assign \$164  = bus__r_addr == 8'ha8;
-  assign \$165  = bus__r_addr == 8'ha9;
-  assign \$166  = bus__r_addr == 8'haa;
-  assign \$167  = bus__r_addr == 8'hac;
-  assign \$168  = bus__r_addr == 8'had;
-  assign \$169  = bus__r_addr == 8'hae;
-  assign \$170  = bus__r_addr == 8'hb0;
-  assign \$171  = bus__r_addr == 8'hb1;
-  assign \$172  = bus__r_addr == 8'hb2;
-  assign \$173  = bus__r_addr == 8'hb4;
-  assign \$174  = bus__r_addr == 8'hb5;
-  assign \$175  = bus__r_addr == 8'hb6;
-  assign \$176  = bus__r_addr == 8'hb8;
-  assign \$177  = bus__r_addr == 8'hb9;
-  assign \$178  = bus__r_addr == 8'hba;
-  assign \$179  = bus__r_addr == 8'hbc;
-  assign \$180  = bus__r_addr == 8'hbd;
-  assign \$181  = bus__r_addr == 8'hbe;
-  assign \$182  = bus__r_addr == 8'hc1;
-  assign \$183  = bus__r_addr == 8'hc2;
-  assign \$184  = bus__r_addr == 8'hc3;
-  assign \$185  = bus__r_addr == 8'hc4;
-  assign \$186  = bus__r_addr == 8'hc5;
-  assign \$187  = bus__r_addr == 8'hfc;
-  assign \$188  = bus__r_addr == 8'hfd;
-  assign \$189  = ch0_read_select_90 & bus__r_load;
-  assign \$190  = bus__r_addr[10:3] == 5'h13;
-  assign \$191  = bus__r_en & \$190 ;
-  assign \$192  = bus__r_addr[10:4] == 4'hf;
-  assign \$193  = bus__r_en & \$192 ;
-  assign \$194  = bus__r_addr[3:0] < 4'hc;
-  assign \$195  = \$193  & \$194 ;
-  assign \$196  = bus__r_addr[10:4] == 4'he;
-  assign \$197  = bus__r_en & \$196 ;
-  assign \$198  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$200  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$201  = \$199  | \$200 ;
-  assign \$202  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
-  assign \$203  = \$201  | \$202 ;
-  assign \$204  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
-  assign \$205  = \$203  | \$204 ;
-  assign \$210  = ch0_read_select_90 ? { 2'h0, \port$13573$0 [182:177], 4'h0, \port$13573$0 [186:183], 1'h0, \port$13573$0 [176:174], 1'h0, \port$13573$0 [133:131], 3'h0, \port$13573$0 [49], \port$13573$0 [3:0] } : 32'd0;
-  assign \$211  = \$209  | \$210 ;
-  assign \$212  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
-  assign \$213  = \$211  | \$212 ;
-  assign \$214  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
-  assign \$215  = \$213  | \$214 ;
-  assign \$216  = ch0_read_select_93 ? ch0_result_w0_hi_data_snapshot : 32'd0;
-  assign \$217  = \$215  | \$216 ;
-  assign \$218  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
-  assign \$219  = \$217  | \$218 ;
-  assign \$220  = ch0_read_select_95 ? ch0_result_w1_hi_data_snapshot : 32'd0;
-  assign \$221  = \$219  | \$220 ;
-  assign \$222  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
-  assign \$223  = \$221  | \$222 ;
-  assign \$224  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
-  assign \$225  = \$223  | \$224 ;
-  assign \$270  = ch0_read_select_c2 ? { 17'h00000, \port$13661$0 [9:3], 1'h0, \port$13661$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$271  = \$269  | \$270 ;
-  assign \$272  = ch0_read_select_c3 ? \port$13584$0 [31:0] : 32'd0;
-  assign \$273  = \$271  | \$272 ;
-  assign \$274  = ch0_read_select_c4 ? \port$13584$0 [63:32] : 32'd0;
-  assign \$275  = \$273  | \$274 ;
-  assign \$276  = ch0_read_select_c5 ? { 16'h0000, \port$13584$0 [79:64] } : 32'd0;
-  assign \$277  = \$275  | \$276 ;
-  assign \$280  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
-  assign \$281  = \$279  | \$280 ;
-  assign \$282  = ch0_window0_read ? ch0__count_data : 32'd0;
-  assign \$283  = \$281  | \$282 ;
-  assign \$286  = ch0_window2_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$287  = \$285  | \$286 ;
-  assign \$288  = ch0_window3_read ? ch0_config_read_data : 32'd0;
-  assign \$289  = \$287  | \$288 ;
-  assign \$290  = write_addr == 9'h108;
-  assign \$291  = write_en & \$290 ;
-  assign \$292  = write_addr == 9'h109;
-  assign \$293  = write_en & \$292 ;
-  assign \$294  = write_addr == 9'h10a;
-  assign \$295  = write_en & \$294 ;
-  assign \$296  = write_addr == 9'h10b;
-  assign \$297  = write_en & \$296 ;
-  assign \$298  = write_addr == 9'h10c;
-  assign \$299  = write_en & \$298 ;
-  assign \$300  = write_addr == 9'h10d;
-  assign \$301  = write_en & \$300 ;
-  assign \$302  = write_addr == 9'h10e;
-  assign \$303  = write_en & \$302 ;
-  assign \$304  = write_addr == 9'h10f;
-  assign \$305  = write_en & \$304 ;
-  assign \$306  = write_addr == 9'h120;
-  assign \$307  = write_en & \$306 ;
-  assign \$308  = write_addr == 9'h121;
-  assign \$309  = write_en & \$308 ;
-  assign \$310  = write_addr == 9'h122;
-  assign \$311  = write_en & \$310 ;
-  assign \$312  = write_addr == 9'h123;
-  assign \$313  = write_en & \$312 ;
-  assign \$314  = write_addr == 9'h124;
-  assign \$315  = write_en & \$314 ;
-  assign \$316  = | { \$315 , \$313 , \$311 , \$309 , \$307 , \$305 , \$303 , \$301 , \$299 , \$297 , \$295 , \$293 , \$291  };
-  assign \$317  = ~ ch1_config_go;
-  assign \$318  = ch1_config_wait & \$317 ;
-  assign \$319  = \$318  & cfg_free[1];
-  assign \$320  = write_data[0] & write_strb[0];
-  assign \$321  = ch1_ctrl_write ? \$320  : 1'h0;
-  assign \$322  = write_data[1] & write_strb[0];
-  assign \$323  = ch1_ctrl_write ? \$322  : 1'h0;
-  assign \$324  = write_data[2] & write_strb[0];
-  assign \$325  = ch1_ctrl_write ? \$324  : 1'h0;
-  assign \$326  = ch1_ctrl_write & write_strb[1];
-  assign \$327  = ch1_ctrl_write & write_strb[1];
-  assign \$328  = write_data[0] & write_strb[0];
-  assign \$329  = ch1_irq_status_write ? \$328  : 1'h0;
-  assign \$330  = write_data[1] & write_strb[0];
-  assign \$331  = ch1_irq_status_write ? \$330  : 1'h0;
-  assign \$332  = write_data[2] & write_strb[0];
-  assign \$333  = ch1_irq_status_write ? \$332  : 1'h0;
-  assign \$334  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$335  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$336  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$337  = write_addr == 9'h108;
-  assign \$338  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$339  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$340  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$341  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$342  = write_addr == 9'h109;
-  assign \$343  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$344  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$345  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$346  = write_addr == 9'h10a;
-  assign \$347  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$348  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$349  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$350  = write_addr == 9'h10b;
-  assign \$351  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$352  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$353  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$354  = write_addr == 9'h10c;
-  assign \$355  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$356  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$357  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$358  = write_addr == 9'h10d;
-  assign \$359  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$360  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$361  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$362  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$363  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$364  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$365  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$366  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$367  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$368  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$369  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$370  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$371  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$372  = write_addr == 9'h10e;
-  assign \$373  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$374  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$375  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$376  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$377  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$378  = ch1_cfg_checks_config_write & config_write_strb[3];
-  assign \$379  = write_addr == 9'h10f;
-  assign \$380  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$381  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$382  = write_addr == 9'h120;
-  assign \$383  = ch1_cfg_crc0_config_write & config_write_strb[0];
-  assign \$384  = ch1_cfg_crc0_config_write & config_write_strb[1];
-  assign \$385  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$386  = ch1_cfg_crc0_config_write & config_write_strb[3];
-  assign \$387  = write_addr == 9'h121;
-  assign \$388  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$389  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$390  = write_addr == 9'h122;
-  assign \$391  = ch1_cfg_crc1_config_write & config_write_strb[0];
-  assign \$392  = ch1_cfg_crc1_config_write & config_write_strb[1];
-  assign \$393  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$394  = ch1_cfg_crc1_config_write & config_write_strb[3];
-  assign \$395  = write_addr == 9'h123;
-  assign \$396  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$397  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$398  = write_addr == 9'h124;
-  assign \$399  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$400  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$401  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$402  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$403  = ch1_cfg_ssi_config_write & config_write_strb[2];
-  assign \$404  = ch1_cfg_ssi_config_write & config_write_strb[3];
-  assign \$405  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$406  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$407  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$408  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$409  = write_data[0] & write_strb[0];
-  assign \$410  = ch1_ca_ctrl_write ? \$409  : 1'h0;
-  assign \$411  = write_data[1] & write_strb[0];
-  assign \$412  = ch1_ca_ctrl_write ? \$411  : 1'h0;
-  assign \$413  = ch1_config_written | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
-  assign \$414  = bus__r_addr == 9'h100;
-  assign \$415  = bus__r_addr == 9'h101;
-  assign \$416  = bus__r_addr == 9'h102;
-  assign \$417  = bus__r_addr == 9'h104;
-  assign \$418  = bus__r_addr == 9'h106;
-  assign \$419  = bus__r_addr == 9'h107;
-  assign \$420  = bus__r_addr == 9'h110;
-  assign \$421  = bus__r_addr == 9'h111;
-  assign \$422  = bus__r_addr == 9'h112;
-  assign \$423  = bus__r_addr == 9'h113;
-  assign \$424  = bus__r_addr == 9'h114;
-  assign \$425  = bus__r_addr == 9'h115;
-  assign \$426  = bus__r_addr == 9'h116;
-  assign \$427  = bus__r_addr == 9'h117;
-  assign \$428  = bus__r_addr == 9'h125;
-  assign \$429  = bus__r_addr == 9'h126;
-  assign \$430  = bus__r_addr == 9'h127;
-  assign \$431  = bus__r_addr == 9'h128;
-  assign \$432  = bus__r_addr == 9'h129;
-  assign \$433  = bus__r_addr == 9'h12a;
-  assign \$434  = bus__r_addr == 9'h12c;
-  assign \$435  = bus__r_addr == 9'h12d;
-  assign \$436  = bus__r_addr == 9'h12e;
-  assign \$437  = bus__r_addr == 9'h130;
-  assign \$438  = bus__r_addr == 9'h131;
-  assign \$439  = bus__r_addr == 9'h132;
-  assign \$440  = bus__r_addr == 9'h134;
-  assign \$441  = bus__r_addr == 9'h135;
-  assign \$442  = bus__r_addr == 9'h136;
-  assign \$443  = bus__r_addr == 9'h138;
-  assign \$444  = bus__r_addr == 9'h139;
-  assign \$445  = bus__r_addr == 9'h13a;
-  assign \$446  = bus__r_addr == 9'h13c;
-  assign \$447  = bus__r_addr == 9'h13d;
-  assign \$448  = bus__r_addr == 9'h13e;
-  assign \$449  = bus__r_addr == 9'h141;
-  assign \$450  = bus__r_addr == 9'h142;
-  assign \$451  = bus__r_addr == 9'h143;
-  assign \$452  = bus__r_addr == 9'h144;
-  assign \$453  = bus__r_addr == 9'h145;
-  assign \$454  = bus__r_addr == 9'h17c;
-  assign \$455  = bus__r_addr == 9'h17d;
-  assign \$456  = ch1_read_select_110 & bus__r_load;
-  assign \$457  = bus__r_addr[10:3] == 6'h23;
-  assign \$458  = bus__r_en & \$457 ;
-  assign \$459  = bus__r_addr[10:4] == 5'h17;
-  assign \$460  = bus__r_en & \$459 ;
-  assign \$461  = bus__r_addr[3:0] < 4'hc;
-  assign \$462  = \$460  & \$461 ;
-  assign \$463  = bus__r_addr[10:4] == 5'h16;
-  assign \$464  = bus__r_en & \$463 ;
-  assign \$465  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$467  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$468  = \$466  | \$467 ;
-  assign \$469  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
-  assign \$470  = \$468  | \$469 ;
-  assign \$471  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
-  assign \$472  = \$470  | \$471 ;
-  assign \$477  = ch1_read_select_110 ? { 2'h0, \port$14124$0 [182:177], 4'h0, \port$14124$0 [186:183], 1'h0, \port$14124$0 [176:174], 1'h0, \port$14124$0 [133:131], 3'h0, \port$14124$0 [49], \port$14124$0 [3:0] } : 32'd0;
-  assign \$478  = \$476  | \$477 ;
-  assign \$479  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
-  assign \$480  = \$478  | \$479 ;
-  assign \$481  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
-  assign \$482  = \$480  | \$481 ;
-  assign \$483  = ch1_read_select_113 ? ch1_result_w0_hi_data_snapshot : 32'd0;
-  assign \$484  = \$482  | \$483 ;
-  assign \$485  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$18  = ~ ch0_config_go;
+  assign \$19  = ch0_config_wait & \$18 ;
+  assign \$20  = \$19  & cfg_free[0];
+  assign \$21  = write_data[0] & write_strb[0];
+  assign \$22  = ch0_ctrl_write ? \$21  : 1'h0;
+  assign \$23  = write_data[1] & write_strb[0];
+  assign \$24  = ch0_ctrl_write ? \$23  : 1'h0;
+  assign \$25  = write_data[2] & write_strb[0];
+  assign \$26  = ch0_ctrl_write ? \$25  : 1'h0;
+  assign \$27  = ch0_ctrl_write & write_strb[1];
+  assign \$28  = ch0_ctrl_write & write_strb[1];
+  assign \$29  = write_data[0] & write_strb[0];
+  assign \$30  = ch0_irq_status_write ? \$29  : 1'h0;
+  assign \$31  = write_data[1] & write_strb[0];
+  assign \$32  = ch0_irq_status_write ? \$31  : 1'h0;
+  assign \$33  = write_data[2] & write_strb[0];
+  assign \$34  = ch0_irq_status_write ? \$33  : 1'h0;
+  assign \$35  = ch0_irq_enable_config_write & config_write_strb[0];
+  assign \$36  = ch0_irq_enable_config_write & config_write_strb[0];
+  assign \$37  = ch0_irq_enable_config_write & config_write_strb[0];
+  assign \$38  = write_addr == 8'h88;
+  assign \$39  = ch0_cfg_ma_config_write & config_write_strb[0];
+  assign \$40  = ch0_cfg_ma_config_write & config_write_strb[1];
+  assign \$41  = ch0_cfg_ma_config_write & config_write_strb[2];
+  assign \$42  = ch0_cfg_ma_config_write & config_write_strb[3];
+  assign \$43  = write_addr == 8'h89;
+  assign \$44  = ch0_cfg_period_config_write & config_write_strb[0];
+  assign \$45  = ch0_cfg_period_config_write & config_write_strb[1];
+  assign \$46  = ch0_cfg_period_config_write & config_write_strb[2];
+  assign \$47  = write_addr == 8'h8a;
+  assign \$48  = ch0_cfg_break_config_write & config_write_strb[0];
+  assign \$49  = ch0_cfg_break_config_write & config_write_strb[1];
+  assign \$50  = ch0_cfg_break_config_write & config_write_strb[2];
+  assign \$51  = write_addr == 8'h8b;
+  assign \$52  = ch0_cfg_ack_config_write & config_write_strb[0];
+  assign \$53  = ch0_cfg_ack_config_write & config_write_strb[1];
+  assign \$54  = ch0_cfg_ack_config_write & config_write_strb[2];
+  assign \$55  = write_addr == 8'h8c;
+  assign \$56  = ch0_cfg_timeout_config_write & config_write_strb[0];
+  assign \$57  = ch0_cfg_timeout_config_write & config_write_strb[1];
+  assign \$58  = ch0_cfg_timeout_config_write & config_write_strb[2];
+  assign \$59  = write_addr == 8'h8d;
+  assign \$60  = ch0_cfg_words_config_write & config_write_strb[0];
+  assign \$61  = ch0_cfg_words_config_write & config_write_strb[0];
+  assign \$62  = ch0_cfg_words_config_write & config_write_strb[1];
+  assign \$63  = ch0_cfg_words_config_write & config_write_strb[1];
+  assign \$64  = ch0_cfg_words_config_write & config_write_strb[1];
+  assign \$65  = ch0_cfg_words_config_write & config_write_strb[1];
+  assign \$66  = ch0_cfg_words_config_write & config_write_strb[2];
+  assign \$67  = ch0_cfg_words_config_write & config_write_strb[2];
+  assign \$68  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$69  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$70  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$71  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$72  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$73  = write_addr == 8'h8e;
+  assign \$74  = ch0_cfg_checks_config_write & config_write_strb[0];
+  assign \$75  = ch0_cfg_checks_config_write & config_write_strb[0];
+  assign \$76  = ch0_cfg_checks_config_write & config_write_strb[1];
+  assign \$77  = ch0_cfg_checks_config_write & config_write_strb[2];
+  assign \$78  = ch0_cfg_checks_config_write & config_write_strb[2];
+  assign \$79  = ch0_cfg_checks_config_write & config_write_strb[3];
+  assign \$80  = write_addr == 8'h8f;
+  assign \$81  = ch0_cfg_quiet_config_write & config_write_strb[0];
+  assign \$82  = ch0_cfg_quiet_config_write & config_write_strb[1];
+  assign \$83  = write_addr == 8'ha0;
+  assign \$84  = ch0_cfg_crc0_config_write & config_write_strb[0];
+  assign \$85  = ch0_cfg_crc0_config_write & config_write_strb[1];
+  assign \$86  = ch0_cfg_crc0_config_write & config_write_strb[2];
+  assign \$87  = ch0_cfg_crc0_config_write & config_write_strb[3];
+  assign \$88  = write_addr == 8'ha1;
+  assign \$89  = ch0_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$90  = ch0_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$91  = write_addr == 8'ha2;
+  assign \$92  = ch0_cfg_crc1_config_write & config_write_strb[0];
+  assign \$93  = ch0_cfg_crc1_config_write & config_write_strb[1];
+  assign \$94  = ch0_cfg_crc1_config_write & config_write_strb[2];
+  assign \$95  = ch0_cfg_crc1_config_write & config_write_strb[3];
+  assign \$96  = write_addr == 8'ha3;
+  assign \$97  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$98  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$99  = write_addr == 8'ha4;
+  assign \$100  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$101  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$102  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$103  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$104  = ch0_cfg_ssi_config_write & config_write_strb[2];
+  assign \$105  = ch0_cfg_ssi_config_write & config_write_strb[3];
+  assign \$106  = ch0_ca_request_config_write & config_write_strb[0];
+  assign \$107  = ch0_ca_request_config_write & config_write_strb[1];
+  assign \$108  = ch0_ca_request_config_write & config_write_strb[2];
+  assign \$109  = ch0_ca_request_config_write & config_write_strb[3];
+  assign \$110  = write_data[0] & write_strb[0];
+  assign \$111  = ch0_ca_ctrl_write ? \$110  : 1'h0;
+  assign \$112  = write_data[1] & write_strb[0];
+  assign \$113  = ch0_ca_ctrl_write ? \$112  : 1'h0;
+  assign \$114  = | { ch0_cfg_ssi_write, ch0_cfg_crc1_start_write, ch0_cfg_crc1_write, ch0_cfg_crc0_start_write, ch0_cfg_crc0_write, ch0_cfg_quiet_write, ch0_cfg_checks_write, ch0_cfg_words_write, ch0_cfg_timeout_write, ch0_cfg_ack_write, ch0_cfg_break_write, ch0_cfg_period_write, ch0_cfg_ma_write };
+  assign \$115  = write_data & config_memory0_write_mask;
+  assign \$116  = \$115  & { write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3:2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2:1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1:0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0] };
+  assign \$117  = ~ { write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3:2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2:1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1:0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0] };
+  assign \$118  = config_memory0_write_fill & \$117 ;
+  assign \$119  = \$116  | \$118 ;
+  assign \$120  = ch0_config_written | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
+  assign \$121  = bus__r_addr == 8'h80;
+  assign \$122  = bus__r_addr == 8'h81;
+  assign \$123  = bus__r_addr == 8'h82;
+  assign \$124  = bus__r_addr == 8'h84;
+  assign \$125  = bus__r_addr == 8'h86;
+  assign \$126  = bus__r_addr == 8'h87;
+  assign \$127  = bus__r_addr == 8'h90;
+  assign \$128  = bus__r_addr == 8'h91;
+  assign \$129  = bus__r_addr == 8'h92;
+  assign \$130  = bus__r_addr == 8'h93;
+  assign \$131  = bus__r_addr == 8'h94;
+  assign \$132  = bus__r_addr == 8'h95;
+  assign \$133  = bus__r_addr == 8'h96;
+  assign \$134  = bus__r_addr == 8'h97;
+  assign \$135  = bus__r_addr == 8'ha5;
+  assign \$136  = bus__r_addr == 8'ha6;
+  assign \$137  = bus__r_addr == 8'ha7;
+  assign \$138  = bus__r_addr == 8'ha8;
+  assign \$139  = bus__r_addr == 8'ha9;
+  assign \$140  = bus__r_addr == 8'haa;
+  assign \$141  = bus__r_addr == 8'hac;
+  assign \$142  = bus__r_addr == 8'had;
+  assign \$143  = bus__r_addr == 8'hae;
+  assign \$144  = bus__r_addr == 8'hb0;
+  assign \$145  = bus__r_addr == 8'hb1;
+  assign \$146  = bus__r_addr == 8'hb2;
+  assign \$147  = bus__r_addr == 8'hb4;
+  assign \$148  = bus__r_addr == 8'hb5;
+  assign \$149  = bus__r_addr == 8'hb6;
+  assign \$150  = bus__r_addr == 8'hb8;
+  assign \$151  = bus__r_addr == 8'hb9;
+  assign \$152  = bus__r_addr == 8'hba;
+  assign \$153  = bus__r_addr == 8'hbc;
+  assign \$154  = bus__r_addr == 8'hbd;
+  assign \$155  = bus__r_addr == 8'hbe;
+  assign \$156  = bus__r_addr == 8'hc1;
+  assign \$157  = bus__r_addr == 8'hc2;
+  assign \$158  = bus__r_addr == 8'hc3;
+  assign \$159  = bus__r_addr == 8'hc4;
+  assign \$160  = bus__r_addr == 8'hc5;
+  assign \$161  = bus__r_addr == 8'hfc;
+  assign \$162  = bus__r_addr == 8'hfd;
+  assign \$163  = ch0_read_select_90 & bus__r_load;
+  assign \$164  = bus__r_addr[10:3] == 5'h13;
+  assign \$165  = bus__r_en & \$164 ;
+  assign \$166  = bus__r_addr[10:4] == 4'hf;
+  assign \$167  = bus__r_en & \$166 ;
+  assign \$168  = bus__r_addr[3:0] < 4'hc;
+  assign \$169  = \$167  & \$168 ;
+  assign \$170  = bus__r_addr[10:4] == 4'he;
+  assign \$171  = bus__r_en & \$170 ;
+  assign \$172  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$174  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$175  = \$173  | \$174 ;
+  assign \$176  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
+  assign \$177  = \$175  | \$176 ;
+  assign \$178  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$179  = \$177  | \$178 ;
+  assign \$184  = ch0_read_select_90 ? { 2'h0, \port$13521$0 [182:177], 4'h0, \port$13521$0 [186:183], 1'h0, \port$13521$0 [176:174], 1'h0, \port$13521$0 [133:131], 3'h0, \port$13521$0 [49], \port$13521$0 [3:0] } : 32'd0;
+  assign \$185  = \$183  | \$184 ;
+  assign \$186  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$187  = \$185  | \$186 ;
+  assign \$188  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$189  = \$187  | \$188 ;
+  assign \$190  = ch0_read_select_93 ? ch0_result_w0_hi_data_snapshot : 32'd0;
+  assign \$191  = \$189  | \$190 ;
+  assign \$192  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$193  = \$191  | \$192 ;
+  assign \$194  = ch0_read_select_95 ? ch0_result_w1_hi_data_snapshot : 32'd0;
+  assign \$195  = \$193  | \$194 ;
+  assign \$196  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$197  = \$195  | \$196 ;
+  assign \$198  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
+  assign \$199  = \$197  | \$198 ;
+  assign \$244  = ch0_read_select_c2 ? { 17'h00000, \port$13609$0 [9:3], 1'h0, \port$13609$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$245  = \$243  | \$244 ;
+  assign \$246  = ch0_read_select_c3 ? \port$13532$0 [31:0] : 32'd0;
+  assign \$247  = \$245  | \$246 ;
+  assign \$248  = ch0_read_select_c4 ? \port$13532$0 [63:32] : 32'd0;
+  assign \$249  = \$247  | \$248 ;
+  assign \$250  = ch0_read_select_c5 ? { 16'h0000, \port$13532$0 [79:64] } : 32'd0;
+  assign \$251  = \$249  | \$250 ;
+  assign \$254  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
+  assign \$255  = \$253  | \$254 ;
+  assign \$256  = ch0_window0_read ? ch0__count_data : 32'd0;
+  assign \$257  = \$255  | \$256 ;
+  assign \$260  = ch0_window2_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$261  = \$259  | \$260 ;
+  assign \$262  = ch0_window3_read ? ch0_config_read_data : 32'd0;
+  assign \$263  = \$261  | \$262 ;
+  assign \$264  = ~ ch1_config_go;
+  assign \$265  = ch1_config_wait & \$264 ;
+  assign \$266  = \$265  & cfg_free[1];
+  assign \$267  = write_data[0] & write_strb[0];
+  assign \$268  = ch1_ctrl_write ? \$267  : 1'h0;
+  assign \$269  = write_data[1] & write_strb[0];
+  assign \$270  = ch1_ctrl_write ? \$269  : 1'h0;
+  assign \$271  = write_data[2] & write_strb[0];
+  assign \$272  = ch1_ctrl_write ? \$271  : 1'h0;
+  assign \$273  = ch1_ctrl_write & write_strb[1];
+  assign \$274  = ch1_ctrl_write & write_strb[1];
+  assign \$275  = write_data[0] & write_strb[0];
+  assign \$276  = ch1_irq_status_write ? \$275  : 1'h0;
+  assign \$277  = write_data[1] & write_strb[0];
+  assign \$278  = ch1_irq_status_write ? \$277  : 1'h0;
+  assign \$279  = write_data[2] & write_strb[0];
+  assign \$280  = ch1_irq_status_write ? \$279  : 1'h0;
+  assign \$281  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$282  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$283  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$284  = write_addr == 9'h108;
+  assign \$285  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$286  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$287  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$288  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$289  = write_addr == 9'h109;
+  assign \$290  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$291  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$292  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$293  = write_addr == 9'h10a;
+  assign \$294  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$295  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$296  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$297  = write_addr == 9'h10b;
+  assign \$298  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$299  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$300  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$301  = write_addr == 9'h10c;
+  assign \$302  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$303  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$304  = ch1_cfg_timeout_config_write & config_write_strb[2];
+  assign \$305  = write_addr == 9'h10d;
+  assign \$306  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$307  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$308  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$309  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$310  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$311  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$312  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$313  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$314  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$315  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$316  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$317  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$318  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$319  = write_addr == 9'h10e;
+  assign \$320  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$321  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$322  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$323  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$324  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$325  = ch1_cfg_checks_config_write & config_write_strb[3];
+  assign \$326  = write_addr == 9'h10f;
+  assign \$327  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$328  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$329  = write_addr == 9'h120;
+  assign \$330  = ch1_cfg_crc0_config_write & config_write_strb[0];
+  assign \$331  = ch1_cfg_crc0_config_write & config_write_strb[1];
+  assign \$332  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$333  = ch1_cfg_crc0_config_write & config_write_strb[3];
+  assign \$334  = write_addr == 9'h121;
+  assign \$335  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$336  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$337  = write_addr == 9'h122;
+  assign \$338  = ch1_cfg_crc1_config_write & config_write_strb[0];
+  assign \$339  = ch1_cfg_crc1_config_write & config_write_strb[1];
+  assign \$340  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$341  = ch1_cfg_crc1_config_write & config_write_strb[3];
+  assign \$342  = write_addr == 9'h123;
+  assign \$343  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$344  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$345  = write_addr == 9'h124;
+  assign \$346  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$347  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$348  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$349  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$350  = ch1_cfg_ssi_config_write & config_write_strb[2];
+  assign \$351  = ch1_cfg_ssi_config_write & config_write_strb[3];
+  assign \$352  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$353  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$354  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$355  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$356  = write_data[0] & write_strb[0];
+  assign \$357  = ch1_ca_ctrl_write ? \$356  : 1'h0;
+  assign \$358  = write_data[1] & write_strb[0];
+  assign \$359  = ch1_ca_ctrl_write ? \$358  : 1'h0;
+  assign \$360  = | { ch1_cfg_ssi_write, ch1_cfg_crc1_start_write, ch1_cfg_crc1_write, ch1_cfg_crc0_start_write, ch1_cfg_crc0_write, ch1_cfg_quiet_write, ch1_cfg_checks_write, ch1_cfg_words_write, ch1_cfg_timeout_write, ch1_cfg_ack_write, ch1_cfg_break_write, ch1_cfg_period_write, ch1_cfg_ma_write };
+  assign \$361  = ch1_config_written | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$362  = bus__r_addr == 9'h100;
+  assign \$363  = bus__r_addr == 9'h101;
+  assign \$364  = bus__r_addr == 9'h102;
+  assign \$365  = bus__r_addr == 9'h104;
+  assign \$366  = bus__r_addr == 9'h106;
+  assign \$367  = bus__r_addr == 9'h107;
+  assign \$368  = bus__r_addr == 9'h110;
+  assign \$369  = bus__r_addr == 9'h111;
+  assign \$370  = bus__r_addr == 9'h112;
+  assign \$371  = bus__r_addr == 9'h113;
+  assign \$372  = bus__r_addr == 9'h114;
+  assign \$373  = bus__r_addr == 9'h115;
+  assign \$374  = bus__r_addr == 9'h116;
+  assign \$375  = bus__r_addr == 9'h117;
+  assign \$376  = bus__r_addr == 9'h125;
+  assign \$377  = bus__r_addr == 9'h126;
+  assign \$378  = bus__r_addr == 9'h127;
+  assign \$379  = bus__r_addr == 9'h128;
+  assign \$380  = bus__r_addr == 9'h129;
+  assign \$381  = bus__r_addr == 9'h12a;
+  assign \$382  = bus__r_addr == 9'h12c;
+  assign \$383  = bus__r_addr == 9'h12d;
+  assign \$384  = bus__r_addr == 9'h12e;
+  assign \$385  = bus__r_addr == 9'h130;
+  assign \$386  = bus__r_addr == 9'h131;
+  assign \$387  = bus__r_addr == 9'h132;
+  assign \$388  = bus__r_addr == 9'h134;
+  assign \$389  = bus__r_addr == 9'h135;
+  assign \$390  = bus__r_addr == 9'h136;
+  assign \$391  = bus__r_addr == 9'h138;
+  assign \$392  = bus__r_addr == 9'h139;
+  assign \$393  = bus__r_addr == 9'h13a;
+  assign \$394  = bus__r_addr == 9'h13c;
+  assign \$395  = bus__r_addr == 9'h13d;
+  assign \$396  = bus__r_addr == 9'h13e;
+  assign \$397  = bus__r_addr == 9'h141;
+  assign \$398  = bus__r_addr == 9'h142;
+  assign \$399  = bus__r_addr == 9'h143;
+  assign \$400  = bus__r_addr == 9'h144;
+  assign \$401  = bus__r_addr == 9'h145;
+  assign \$402  = bus__r_addr == 9'h17c;
+  assign \$403  = bus__r_addr == 9'h17d;
+  assign \$404  = ch1_read_select_110 & bus__r_load;
+  assign \$405  = bus__r_addr[10:3] == 6'h23;
+  assign \$406  = bus__r_en & \$405 ;
+  assign \$407  = bus__r_addr[10:4] == 5'h17;
+  assign \$408  = bus__r_en & \$407 ;
+  assign \$409  = bus__r_addr[3:0] < 4'hc;
+  assign \$410  = \$408  & \$409 ;
+  assign \$411  = bus__r_addr[10:4] == 5'h16;
+  assign \$412  = bus__r_en & \$411 ;
+  assign \$413  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$415  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
+  assign \$416  = \$414  | \$415 ;
+  assign \$417  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
+  assign \$418  = \$416  | \$417 ;
+  assign \$419  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$420  = \$418  | \$419 ;
+  assign \$425  = ch1_read_select_110 ? { 2'h0, \port$14072$0 [182:177], 4'h0, \port$14072$0 [186:183], 1'h0, \port$14072$0 [176:174], 1'h0, \port$14072$0 [133:131], 3'h0, \port$14072$0 [49], \port$14072$0 [3:0] } : 32'd0;
+  assign \$426  = \$424  | \$425 ;
+  assign \$427  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$428  = \$426  | \$427 ;
+  assign \$429  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$430  = \$428  | \$429 ;
+  assign \$431  = ch1_read_select_113 ? ch1_result_w0_hi_data_snapshot : 32'd0;
+  assign \$432  = \$430  | \$431 ;
+  assign \$433  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$434  = \$432  | \$433 ;
+  assign \$435  = ch1_read_select_115 ? ch1_result_w1_hi_data_snapshot : 32'd0;
+  assign \$436  = \$434  | \$435 ;
+  assign \$437  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$438  = \$436  | \$437 ;
+  assign \$439  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
+  assign \$440  = \$438  | \$439 ;
+  assign \$485  = ch1_read_select_142 ? { 17'h00000, \port$14160$0 [9:3], 1'h0, \port$14160$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$486  = \$484  | \$485 ;
-  assign \$487  = ch1_read_select_115 ? ch1_result_w1_hi_data_snapshot : 32'd0;
+  assign \$487  = ch1_read_select_143 ? \port$14083$0 [31:0] : 32'd0;
   assign \$488  = \$486  | \$487 ;
-  assign \$489  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$489  = ch1_read_select_144 ? \port$14083$0 [63:32] : 32'd0;
   assign \$490  = \$488  | \$489 ;
-  assign \$491  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
+  assign \$491  = ch1_read_select_145 ? { 16'h0000, \port$14083$0 [79:64] } : 32'd0;
   assign \$492  = \$490  | \$491 ;
-  assign \$537  = ch1_read_select_142 ? { 17'h00000, \port$14212$0 [9:3], 1'h0, \port$14212$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
-  assign \$538  = \$536  | \$537 ;
-  assign \$539  = ch1_read_select_143 ? \port$14135$0 [31:0] : 32'd0;
-  assign \$540  = \$538  | \$539 ;
-  assign \$541  = ch1_read_select_144 ? \port$14135$0 [63:32] : 32'd0;
-  assign \$542  = \$540  | \$541 ;
-  assign \$543  = ch1_read_select_145 ? { 16'h0000, \port$14135$0 [79:64] } : 32'd0;
-  assign \$544  = \$542  | \$543 ;
-  assign \$547  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
-  assign \$548  = \$546  | \$547 ;
-  assign \$549  = ch1_window0_read ? ch1__count_data : 32'd0;
-  assign \$550  = \$548  | \$549 ;
-  assign \$553  = ch1_window2_read ? ch1__ca_rbuf_data : 32'd0;
-  assign \$554  = \$552  | \$553 ;
-  assign \$555  = ch1_window3_read ? ch1_config_read_data : 32'd0;
-  assign \$556  = \$554  | \$555 ;
-  assign \$557  = ! write_addr;
-  assign g_id_write = write_en & \$557 ;
-  assign \$558  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$558 ;
-  assign \$559  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$559 ;
-  assign \$560  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$560 ;
-  assign \$561  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$561 ;
-  assign \$562  = bus__r_addr[10:3] == 5'h13;
-  assign ch0__count_en = bus__r_en & \$562 ;
-  assign \$563  = bus__r_addr[10:4] == 4'hf;
-  assign \$564  = bus__r_en & \$563 ;
-  assign \$565  = bus__r_addr[3:0] < 4'hc;
-  assign ch0__chain_en = \$564  & \$565 ;
-  assign \$566  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$566 ;
-  assign \$567  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$567 ;
-  assign \$568  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$568 ;
-  assign \$569  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$569 ;
-  assign \$570  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$570 ;
-  assign \$571  = write_addr == 8'h86;
-  assign ch0_caps_chain_write = write_en & \$571 ;
-  assign \$572  = write_addr == 8'h87;
-  assign ch0_caps_chain2_write = write_en & \$572 ;
-  assign \$573  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$573 ;
+  assign \$495  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
+  assign \$496  = \$494  | \$495 ;
+  assign \$497  = ch1_window0_read ? ch1__count_data : 32'd0;
+  assign \$498  = \$496  | \$497 ;
+  assign \$501  = ch1_window2_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$502  = \$500  | \$501 ;
+  assign \$503  = ch1_window3_read ? ch1_config_read_data : 32'd0;
+  assign \$504  = \$502  | \$503 ;
+  assign \$505  = ! write_addr;
+  assign g_id_write = write_en & \$505 ;
+  assign \$506  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$506 ;
+  assign \$507  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$507 ;
+  assign \$508  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$508 ;
+  assign \$509  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$509 ;
+  assign \$510  = bus__r_addr[10:3] == 5'h13;
+  assign ch0__count_en = bus__r_en & \$510 ;
+  assign \$511  = bus__r_addr[10:4] == 4'hf;
+  assign \$512  = bus__r_en & \$511 ;
+  assign \$513  = bus__r_addr[3:0] < 4'hc;
+  assign ch0__chain_en = \$512  & \$513 ;
+  assign \$514  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$514 ;
+  assign \$515  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$515 ;
+  assign \$516  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$516 ;
+  assign \$517  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$517 ;
+  assign \$518  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$518 ;
+  assign \$519  = write_addr == 8'h86;
+  assign ch0_caps_chain_write = write_en & \$519 ;
+  assign \$520  = write_addr == 8'h87;
+  assign ch0_caps_chain2_write = write_en & \$520 ;
+  assign \$521  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$521 ;
   assign ch0_cfg_ma_config_write = ch0_cfg_ma_config_addressed & ch0_config_go;
-  assign \$574  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$574 ;
+  assign \$522  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$522 ;
   assign ch0_cfg_period_config_write = ch0_cfg_period_config_addressed & ch0_config_go;
-  assign \$575  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$575 ;
+  assign \$523  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$523 ;
   assign ch0_cfg_break_config_write = ch0_cfg_break_config_addressed & ch0_config_go;
-  assign \$576  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$576 ;
+  assign \$524  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$524 ;
   assign ch0_cfg_ack_config_write = ch0_cfg_ack_config_addressed & ch0_config_go;
-  assign \$577  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$577 ;
+  assign \$525  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$525 ;
   assign ch0_cfg_timeout_config_write = ch0_cfg_timeout_config_addressed & ch0_config_go;
-  assign \$578  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$578 ;
+  assign \$526  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$526 ;
   assign ch0_cfg_words_config_write = ch0_cfg_words_config_addressed & ch0_config_go;
-  assign \$579  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$579 ;
+  assign \$527  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$527 ;
   assign ch0_cfg_checks_config_write = ch0_cfg_checks_config_addressed & ch0_config_go;
-  assign \$580  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$580 ;
+  assign \$528  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$528 ;
   assign ch0_cfg_quiet_config_write = ch0_cfg_quiet_config_addressed & ch0_config_go;
-  assign \$581  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$581 ;
-  assign \$582  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$582 ;
-  assign \$583  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$583 ;
-  assign \$584  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$584 ;
-  assign \$585  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$585 ;
-  assign \$586  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$586 ;
-  assign \$587  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$587 ;
-  assign \$588  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$588 ;
-  assign \$589  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$589 ;
+  assign \$529  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$529 ;
+  assign \$530  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$530 ;
+  assign \$531  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$531 ;
+  assign \$532  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$532 ;
+  assign \$533  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$533 ;
+  assign \$534  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$534 ;
+  assign \$535  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$535 ;
+  assign \$536  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$536 ;
+  assign \$537  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$537 ;
   assign ch0_cfg_crc0_config_write = ch0_cfg_crc0_config_addressed & ch0_config_go;
-  assign \$590  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$590 ;
+  assign \$538  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$538 ;
   assign ch0_cfg_crc0_start_config_write = ch0_cfg_crc0_start_config_addressed & ch0_config_go;
-  assign \$591  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$591 ;
+  assign \$539  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$539 ;
   assign ch0_cfg_crc1_config_write = ch0_cfg_crc1_config_addressed & ch0_config_go;
-  assign \$592  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$592 ;
+  assign \$540  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$540 ;
   assign ch0_cfg_crc1_start_config_write = ch0_cfg_crc1_start_config_addressed & ch0_config_go;
-  assign \$593  = write_addr == 8'ha4;
-  assign ch0_cfg_ssi_write = write_en & \$593 ;
+  assign \$541  = write_addr == 8'ha4;
+  assign ch0_cfg_ssi_write = write_en & \$541 ;
   assign ch0_cfg_ssi_config_write = ch0_cfg_ssi_config_addressed & ch0_config_go;
-  assign \$594  = write_addr == 8'ha5;
-  assign ch0_count_chain_write = write_en & \$594 ;
-  assign \$595  = write_addr == 8'ha6;
-  assign ch0_count_chain2_write = write_en & \$595 ;
-  assign \$596  = write_addr == 8'ha7;
-  assign ch0_count_chain3_write = write_en & \$596 ;
-  assign \$597  = write_addr == 8'ha8;
-  assign ch0_cfg_w2_write = write_en & \$597 ;
-  assign \$598  = write_addr == 8'ha9;
-  assign ch0_cfg_w2_crc_write = write_en & \$598 ;
-  assign \$599  = write_addr == 8'haa;
-  assign ch0_cfg_w2_crc_start_write = write_en & \$599 ;
-  assign \$600  = write_addr == 8'hac;
-  assign ch0_cfg_w3_write = write_en & \$600 ;
-  assign \$601  = write_addr == 8'had;
-  assign ch0_cfg_w3_crc_write = write_en & \$601 ;
-  assign \$602  = write_addr == 8'hae;
-  assign ch0_cfg_w3_crc_start_write = write_en & \$602 ;
-  assign \$603  = write_addr == 8'hb0;
-  assign ch0_cfg_w4_write = write_en & \$603 ;
-  assign \$604  = write_addr == 8'hb1;
-  assign ch0_cfg_w4_crc_write = write_en & \$604 ;
-  assign \$605  = write_addr == 8'hb2;
-  assign ch0_cfg_w4_crc_start_write = write_en & \$605 ;
-  assign \$606  = write_addr == 8'hb4;
-  assign ch0_cfg_w5_write = write_en & \$606 ;
-  assign \$607  = write_addr == 8'hb5;
-  assign ch0_cfg_w5_crc_write = write_en & \$607 ;
-  assign \$608  = write_addr == 8'hb6;
-  assign ch0_cfg_w5_crc_start_write = write_en & \$608 ;
-  assign \$609  = write_addr == 8'hb8;
-  assign ch0_cfg_w6_write = write_en & \$609 ;
-  assign \$610  = write_addr == 8'hb9;
-  assign ch0_cfg_w6_crc_write = write_en & \$610 ;
-  assign \$611  = write_addr == 8'hba;
-  assign ch0_cfg_w6_crc_start_write = write_en & \$611 ;
-  assign \$612  = write_addr == 8'hbc;
-  assign ch0_cfg_w7_write = write_en & \$612 ;
-  assign \$613  = write_addr == 8'hbd;
-  assign ch0_cfg_w7_crc_write = write_en & \$613 ;
-  assign \$614  = write_addr == 8'hbe;
-  assign ch0_cfg_w7_crc_start_write = write_en & \$614 ;
-  assign \$615  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$615 ;
-  assign \$616  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$616 ;
-  assign \$617  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$617 ;
-  assign \$618  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$618 ;
-  assign \$619  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$619 ;
-  assign \$620  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$620 ;
-  assign \$621  = write_addr[10:4] == 4'hd;
-  assign \$622  = write_en & \$621 ;
-  assign ch0__ca_wbuf_en = \$622  ? write_strb : 4'h0;
-  assign \$623  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$623 ;
-  assign \$624  = write_addr == 8'hfc;
-  assign ch0_chain_flags_write = write_en & \$624 ;
-  assign \$625  = write_addr == 8'hfd;
-  assign ch0_chain_updates_write = write_en & \$625 ;
-  assign \$626  = | { ch0_cfg_ssi_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write, ch0_cfg_checks_config_write, ch0_cfg_timeout_config_write, ch0_cfg_break_config_write, ch0_cfg_ma_config_write };
-  assign \$627  = | { ch0_ca_request_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write };
-  assign \$628  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write };
-  assign \$629  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write };
-  assign \$630  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
-  assign \$631  = ~ ch0_config_written;
-  assign \$632  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$631 ;
-  assign \$633  = | \$632 ;
-  assign \$634  = ~ ch0_config_written;
-  assign \$635  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$634 ;
-  assign \$636  = | \$635 ;
-  assign \$637  = ~ ch0_config_written;
-  assign \$638  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$637 ;
-  assign \$639  = | \$638 ;
-  assign \$640  = ~ ch0_config_written;
-  assign \$641  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$640 ;
-  assign \$642  = | \$641 ;
-  assign \$643  = config_write_strb | { \$642 , \$639 , \$636 , \$633  };
-  assign wr__en = \$630  ? \$643  : 4'h0;
-  assign \$644  = bus__r_addr[10:7] == 1'h1;
-  assign \$645  = bus__r_en & \$644 ;
-  assign ch0_config_read = \$645  & config_memory0_read_hit;
-  assign \$646  = ch0_config_written >> ch0_config_read_index;
-  assign \$647  = \$646  ? rd__data : 32'd0;
-  assign \$648  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$650  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$652  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$653 , \$651 , \$649  };
-  assign \$654  = bus__r_addr[10:3] == 6'h23;
-  assign ch1__count_en = bus__r_en & \$654 ;
-  assign \$655  = bus__r_addr[10:4] == 5'h17;
-  assign \$656  = bus__r_en & \$655 ;
-  assign \$657  = bus__r_addr[3:0] < 4'hc;
-  assign ch1__chain_en = \$656  & \$657 ;
-  assign \$658  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$658 ;
-  assign \$659  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$659 ;
-  assign \$660  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$660 ;
-  assign \$661  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$661 ;
-  assign \$662  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$662 ;
-  assign \$663  = write_addr == 9'h106;
-  assign ch1_caps_chain_write = write_en & \$663 ;
-  assign \$664  = write_addr == 9'h107;
-  assign ch1_caps_chain2_write = write_en & \$664 ;
-  assign \$665  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$665 ;
+  assign \$542  = write_addr == 8'ha5;
+  assign ch0_count_chain_write = write_en & \$542 ;
+  assign \$543  = write_addr == 8'ha6;
+  assign ch0_count_chain2_write = write_en & \$543 ;
+  assign \$544  = write_addr == 8'ha7;
+  assign ch0_count_chain3_write = write_en & \$544 ;
+  assign \$545  = write_addr == 8'ha8;
+  assign ch0_cfg_w2_write = write_en & \$545 ;
+  assign \$546  = write_addr == 8'ha9;
+  assign ch0_cfg_w2_crc_write = write_en & \$546 ;
+  assign \$547  = write_addr == 8'haa;
+  assign ch0_cfg_w2_crc_start_write = write_en & \$547 ;
+  assign \$548  = write_addr == 8'hac;
+  assign ch0_cfg_w3_write = write_en & \$548 ;
+  assign \$549  = write_addr == 8'had;
+  assign ch0_cfg_w3_crc_write = write_en & \$549 ;
+  assign \$550  = write_addr == 8'hae;
+  assign ch0_cfg_w3_crc_start_write = write_en & \$550 ;
+  assign \$551  = write_addr == 8'hb0;
+  assign ch0_cfg_w4_write = write_en & \$551 ;
+  assign \$552  = write_addr == 8'hb1;
+  assign ch0_cfg_w4_crc_write = write_en & \$552 ;
+  assign \$553  = write_addr == 8'hb2;
+  assign ch0_cfg_w4_crc_start_write = write_en & \$553 ;
+  assign \$554  = write_addr == 8'hb4;
+  assign ch0_cfg_w5_write = write_en & \$554 ;
+  assign \$555  = write_addr == 8'hb5;
+  assign ch0_cfg_w5_crc_write = write_en & \$555 ;
+  assign \$556  = write_addr == 8'hb6;
+  assign ch0_cfg_w5_crc_start_write = write_en & \$556 ;
+  assign \$557  = write_addr == 8'hb8;
+  assign ch0_cfg_w6_write = write_en & \$557 ;
+  assign \$558  = write_addr == 8'hb9;
+  assign ch0_cfg_w6_crc_write = write_en & \$558 ;
+  assign \$559  = write_addr == 8'hba;
+  assign ch0_cfg_w6_crc_start_write = write_en & \$559 ;
+  assign \$560  = write_addr == 8'hbc;
+  assign ch0_cfg_w7_write = write_en & \$560 ;
+  assign \$561  = write_addr == 8'hbd;
+  assign ch0_cfg_w7_crc_write = write_en & \$561 ;
+  assign \$562  = write_addr == 8'hbe;
+  assign ch0_cfg_w7_crc_start_write = write_en & \$562 ;
+  assign \$563  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$563 ;
+  assign \$564  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$564 ;
+  assign \$565  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$565 ;
+  assign \$566  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$566 ;
+  assign \$567  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$567 ;
+  assign \$568  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$568 ;
+  assign \$569  = write_addr[10:4] == 4'hd;
+  assign \$570  = write_en & \$569 ;
+  assign ch0__ca_wbuf_en = \$570  ? write_strb : 4'h0;
+  assign \$571  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$571 ;
+  assign \$572  = write_addr == 8'hfc;
+  assign ch0_chain_flags_write = write_en & \$572 ;
+  assign \$573  = write_addr == 8'hfd;
+  assign ch0_chain_updates_write = write_en & \$573 ;
+  assign \$574  = | { ch0_cfg_ssi_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write, ch0_cfg_checks_config_write, ch0_cfg_timeout_config_write, ch0_cfg_break_config_write, ch0_cfg_ma_config_write };
+  assign \$575  = | { ch0_ca_request_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write };
+  assign \$576  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write };
+  assign \$577  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write };
+  assign \$578  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
+  assign \$579  = ~ ch0_config_written;
+  assign \$580  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$579 ;
+  assign \$581  = | \$580 ;
+  assign \$582  = ~ ch0_config_written;
+  assign \$583  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$582 ;
+  assign \$584  = | \$583 ;
+  assign \$585  = ~ ch0_config_written;
+  assign \$586  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$585 ;
+  assign \$587  = | \$586 ;
+  assign \$588  = ~ ch0_config_written;
+  assign \$589  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$588 ;
+  assign \$590  = | \$589 ;
+  assign \$591  = config_write_strb | { \$590 , \$587 , \$584 , \$581  };
+  assign wr__en = \$578  ? \$591  : 4'h0;
+  assign \$592  = bus__r_addr[10:7] == 1'h1;
+  assign \$593  = bus__r_en & \$592 ;
+  assign ch0_config_read = \$593  & config_memory0_read_hit;
+  assign \$594  = ch0_config_written >> ch0_config_read_index;
+  assign \$595  = \$594  ? rd__data : 32'd0;
+  assign \$596  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$598  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$600  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$601 , \$599 , \$597  };
+  assign \$602  = bus__r_addr[10:3] == 6'h23;
+  assign ch1__count_en = bus__r_en & \$602 ;
+  assign \$603  = bus__r_addr[10:4] == 5'h17;
+  assign \$604  = bus__r_en & \$603 ;
+  assign \$605  = bus__r_addr[3:0] < 4'hc;
+  assign ch1__chain_en = \$604  & \$605 ;
+  assign \$606  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$606 ;
+  assign \$607  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$607 ;
+  assign \$608  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$608 ;
+  assign \$609  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$609 ;
+  assign \$610  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$610 ;
+  assign \$611  = write_addr == 9'h106;
+  assign ch1_caps_chain_write = write_en & \$611 ;
+  assign \$612  = write_addr == 9'h107;
+  assign ch1_caps_chain2_write = write_en & \$612 ;
+  assign \$613  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$613 ;
   assign ch1_cfg_ma_config_write = ch1_cfg_ma_config_addressed & ch1_config_go;
-  assign \$666  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$666 ;
+  assign \$614  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$614 ;
   assign ch1_cfg_period_config_write = ch1_cfg_period_config_addressed & ch1_config_go;
-  assign \$667  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$667 ;
+  assign \$615  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$615 ;
   assign ch1_cfg_break_config_write = ch1_cfg_break_config_addressed & ch1_config_go;
-  assign \$668  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$668 ;
+  assign \$616  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$616 ;
   assign ch1_cfg_ack_config_write = ch1_cfg_ack_config_addressed & ch1_config_go;
-  assign \$669  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$669 ;
+  assign \$617  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$617 ;
   assign ch1_cfg_timeout_config_write = ch1_cfg_timeout_config_addressed & ch1_config_go;
-  assign \$670  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$670 ;
+  assign \$618  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$618 ;
   assign ch1_cfg_words_config_write = ch1_cfg_words_config_addressed & ch1_config_go;
-  assign \$671  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$671 ;
+  assign \$619  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$619 ;
   assign ch1_cfg_checks_config_write = ch1_cfg_checks_config_addressed & ch1_config_go;
-  assign \$672  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$672 ;
+  assign \$620  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$620 ;
   assign ch1_cfg_quiet_config_write = ch1_cfg_quiet_config_addressed & ch1_config_go;
-  assign \$673  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$673 ;
-  assign \$674  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$674 ;
-  assign \$675  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$675 ;
-  assign \$676  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$676 ;
-  assign \$677  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$677 ;
-  assign \$678  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$678 ;
-  assign \$679  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$679 ;
-  assign \$680  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$680 ;
-  assign \$681  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$681 ;
+  assign \$621  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$621 ;
+  assign \$622  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$622 ;
+  assign \$623  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$623 ;
+  assign \$624  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$624 ;
+  assign \$625  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$625 ;
+  assign \$626  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$626 ;
+  assign \$627  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$627 ;
+  assign \$628  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$628 ;
+  assign \$629  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$629 ;
   assign ch1_cfg_crc0_config_write = ch1_cfg_crc0_config_addressed & ch1_config_go;
-  assign \$682  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$682 ;
+  assign \$630  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$630 ;
   assign ch1_cfg_crc0_start_config_write = ch1_cfg_crc0_start_config_addressed & ch1_config_go;
-  assign \$683  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$683 ;
+  assign \$631  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$631 ;
   assign ch1_cfg_crc1_config_write = ch1_cfg_crc1_config_addressed & ch1_config_go;
-  assign \$684  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$684 ;
+  assign \$632  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$632 ;
   assign ch1_cfg_crc1_start_config_write = ch1_cfg_crc1_start_config_addressed & ch1_config_go;
-  assign \$685  = write_addr == 9'h124;
-  assign ch1_cfg_ssi_write = write_en & \$685 ;
+  assign \$633  = write_addr == 9'h124;
+  assign ch1_cfg_ssi_write = write_en & \$633 ;
   assign ch1_cfg_ssi_config_write = ch1_cfg_ssi_config_addressed & ch1_config_go;
-  assign \$686  = write_addr == 9'h125;
-  assign ch1_count_chain_write = write_en & \$686 ;
-  assign \$687  = write_addr == 9'h126;
-  assign ch1_count_chain2_write = write_en & \$687 ;
-  assign \$688  = write_addr == 9'h127;
-  assign ch1_count_chain3_write = write_en & \$688 ;
-  assign \$689  = write_addr == 9'h128;
-  assign ch1_cfg_w2_write = write_en & \$689 ;
-  assign \$690  = write_addr == 9'h129;
-  assign ch1_cfg_w2_crc_write = write_en & \$690 ;
-  assign \$691  = write_addr == 9'h12a;
-  assign ch1_cfg_w2_crc_start_write = write_en & \$691 ;
-  assign \$692  = write_addr == 9'h12c;
-  assign ch1_cfg_w3_write = write_en & \$692 ;
-  assign \$693  = write_addr == 9'h12d;
-  assign ch1_cfg_w3_crc_write = write_en & \$693 ;
-  assign \$694  = write_addr == 9'h12e;
-  assign ch1_cfg_w3_crc_start_write = write_en & \$694 ;
-  assign \$695  = write_addr == 9'h130;
-  assign ch1_cfg_w4_write = write_en & \$695 ;
-  assign \$696  = write_addr == 9'h131;
-  assign ch1_cfg_w4_crc_write = write_en & \$696 ;
-  assign \$697  = write_addr == 9'h132;
-  assign ch1_cfg_w4_crc_start_write = write_en & \$697 ;
-  assign \$698  = write_addr == 9'h134;
-  assign ch1_cfg_w5_write = write_en & \$698 ;
-  assign \$699  = write_addr == 9'h135;
-  assign ch1_cfg_w5_crc_write = write_en & \$699 ;
-  assign \$700  = write_addr == 9'h136;
-  assign ch1_cfg_w5_crc_start_write = write_en & \$700 ;
-  assign \$701  = write_addr == 9'h138;
-  assign ch1_cfg_w6_write = write_en & \$701 ;
-  assign \$702  = write_addr == 9'h139;
-  assign ch1_cfg_w6_crc_write = write_en & \$702 ;
-  assign \$703  = write_addr == 9'h13a;
-  assign ch1_cfg_w6_crc_start_write = write_en & \$703 ;
-  assign \$704  = write_addr == 9'h13c;
-  assign ch1_cfg_w7_write = write_en & \$704 ;
-  assign \$705  = write_addr == 9'h13d;
-  assign ch1_cfg_w7_crc_write = write_en & \$705 ;
-  assign \$706  = write_addr == 9'h13e;
-  assign ch1_cfg_w7_crc_start_write = write_en & \$706 ;
-  assign \$707  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$707 ;
-  assign \$708  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$708 ;
-  assign \$709  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$709 ;
-  assign \$710  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$710 ;
-  assign \$711  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$711 ;
-  assign \$712  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$712 ;
-  assign \$713  = write_addr[10:4] == 5'h15;
-  assign \$714  = write_en & \$713 ;
-  assign ch1__ca_wbuf_en = \$714  ? write_strb : 4'h0;
-  assign \$715  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$715 ;
-  assign \$716  = write_addr == 9'h17c;
-  assign ch1_chain_flags_write = write_en & \$716 ;
-  assign \$717  = write_addr == 9'h17d;
-  assign ch1_chain_updates_write = write_en & \$717 ;
-  assign \$718  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
-  assign \$719  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
-  assign \$720  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
-  assign \$721  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
-  assign \$722  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
-  assign \$723  = ~ ch1_config_written;
-  assign \$724  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$723 ;
-  assign \$725  = | \$724 ;
-  assign \$726  = ~ ch1_config_written;
-  assign \$727  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$726 ;
-  assign \$728  = | \$727 ;
-  assign \$729  = ~ ch1_config_written;
-  assign \$730  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$729 ;
-  assign \$731  = | \$730 ;
-  assign \$732  = ~ ch1_config_written;
-  assign \$733  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$732 ;
-  assign \$734  = | \$733 ;
-  assign \$735  = config_write_strb | { \$734 , \$731 , \$728 , \$725  };
-  assign \wr__en$922  = \$722  ? \$735  : 4'h0;
-  assign \$736  = bus__r_addr[10:7] == 2'h2;
-  assign \$737  = bus__r_en & \$736 ;
-  assign ch1_config_read = \$737  & config_memory0_read_hit;
-  assign \$738  = ch1_config_written >> ch1_config_read_index;
-  assign \$739  = \$738  ? \rd__data$924  : 32'd0;
-  assign \$740  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$742  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$744  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$745 , \$743 , \$741  };
-  assign \$746  = | { ch1_config_wait, ch0_config_wait };
-  assign bus__w_busy = write_en | \$746 ;
-  assign \$748  = \$747  | ch0_read_data;
-  assign bus__r_data = \$748  | ch1_read_data;
+  assign \$634  = write_addr == 9'h125;
+  assign ch1_count_chain_write = write_en & \$634 ;
+  assign \$635  = write_addr == 9'h126;
+  assign ch1_count_chain2_write = write_en & \$635 ;
+  assign \$636  = write_addr == 9'h127;
+  assign ch1_count_chain3_write = write_en & \$636 ;
+  assign \$637  = write_addr == 9'h128;
+  assign ch1_cfg_w2_write = write_en & \$637 ;
+  assign \$638  = write_addr == 9'h129;
+  assign ch1_cfg_w2_crc_write = write_en & \$638 ;
+  assign \$639  = write_addr == 9'h12a;
+  assign ch1_cfg_w2_crc_start_write = write_en & \$639 ;
+  assign \$640  = write_addr == 9'h12c;
+  assign ch1_cfg_w3_write = write_en & \$640 ;
+  assign \$641  = write_addr == 9'h12d;
+  assign ch1_cfg_w3_crc_write = write_en & \$641 ;
+  assign \$642  = write_addr == 9'h12e;
+  assign ch1_cfg_w3_crc_start_write = write_en & \$642 ;
+  assign \$643  = write_addr == 9'h130;
+  assign ch1_cfg_w4_write = write_en & \$643 ;
+  assign \$644  = write_addr == 9'h131;
+  assign ch1_cfg_w4_crc_write = write_en & \$644 ;
+  assign \$645  = write_addr == 9'h132;
+  assign ch1_cfg_w4_crc_start_write = write_en & \$645 ;
+  assign \$646  = write_addr == 9'h134;
+  assign ch1_cfg_w5_write = write_en & \$646 ;
+  assign \$647  = write_addr == 9'h135;
+  assign ch1_cfg_w5_crc_write = write_en & \$647 ;
+  assign \$648  = write_addr == 9'h136;
+  assign ch1_cfg_w5_crc_start_write = write_en & \$648 ;
+  assign \$649  = write_addr == 9'h138;
+  assign ch1_cfg_w6_write = write_en & \$649 ;
+  assign \$650  = write_addr == 9'h139;
+  assign ch1_cfg_w6_crc_write = write_en & \$650 ;
+  assign \$651  = write_addr == 9'h13a;
+  assign ch1_cfg_w6_crc_start_write = write_en & \$651 ;
+  assign \$652  = write_addr == 9'h13c;
+  assign ch1_cfg_w7_write = write_en & \$652 ;
+  assign \$653  = write_addr == 9'h13d;
+  assign ch1_cfg_w7_crc_write = write_en & \$653 ;
+  assign \$654  = write_addr == 9'h13e;
+  assign ch1_cfg_w7_crc_start_write = write_en & \$654 ;
+  assign \$655  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$655 ;
+  assign \$656  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$656 ;
+  assign \$657  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$657 ;
+  assign \$658  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$658 ;
+  assign \$659  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$659 ;
+  assign \$660  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$660 ;
+  assign \$661  = write_addr[10:4] == 5'h15;
+  assign \$662  = write_en & \$661 ;
+  assign ch1__ca_wbuf_en = \$662  ? write_strb : 4'h0;
+  assign \$663  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$663 ;
+  assign \$664  = write_addr == 9'h17c;
+  assign ch1_chain_flags_write = write_en & \$664 ;
+  assign \$665  = write_addr == 9'h17d;
+  assign ch1_chain_updates_write = write_en & \$665 ;
+  assign \$666  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
+  assign \$667  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
+  assign \$668  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
+  assign \$669  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
+  assign \$670  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$671  = ~ ch1_config_written;
+  assign \$672  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$671 ;
+  assign \$673  = | \$672 ;
+  assign \$674  = ~ ch1_config_written;
+  assign \$675  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$674 ;
+  assign \$676  = | \$675 ;
+  assign \$677  = ~ ch1_config_written;
+  assign \$678  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$677 ;
+  assign \$679  = | \$678 ;
+  assign \$680  = ~ ch1_config_written;
+  assign \$681  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$680 ;
+  assign \$682  = | \$681 ;
+  assign \$683  = config_write_strb | { \$682 , \$679 , \$676 , \$673  };
+  assign \wr__en$922  = \$670  ? \$683  : 4'h0;
+  assign \$684  = bus__r_addr[10:7] == 2'h2;
+  assign \$685  = bus__r_en & \$684 ;
+  assign ch1_config_read = \$685  & config_memory0_read_hit;
+  assign \$686  = ch1_config_written >> ch1_config_read_index;
+  assign \$687  = \$686  ? \rd__data$924  : 32'd0;
+  assign \$688  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$690  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$692  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$693 , \$691 , \$689  };
+  assign \$694  = | { ch1_config_wait, ch0_config_wait };
+  assign bus__w_busy = write_en | \$694 ;
+  assign \$696  = \$695  | ch0_read_data;
+  assign bus__r_data = \$696  | ch1_read_data;
   always @(posedge clk)
-    write_en <= \$749 ;
+    write_en <= \$697 ;
   always @(posedge clk)
-    write_addr <= \$750 ;
+    write_addr <= \$698 ;
   always @(posedge clk)
-    write_data <= \$751 ;
+    write_data <= \$699 ;
   always @(posedge clk)
-    write_strb <= \$752 ;
+    write_strb <= \$700 ;
   always @(posedge clk)
-    config_write_data <= \$753 ;
+    config_write_data <= \$701 ;
   always @(posedge clk)
-    config_write_strb <= \$754 ;
+    config_write_strb <= \$702 ;
   always @(posedge clk)
-    g_trigger_start <= \$755 ;
+    g_trigger_start <= \$703 ;
   always @(posedge clk)
-    g_read_select_0 <= \$756 ;
+    g_read_select_0 <= \$704 ;
   always @(posedge clk)
-    g_read_select_1 <= \$757 ;
+    g_read_select_1 <= \$705 ;
   always @(posedge clk)
-    g_read_select_2 <= \$758 ;
+    g_read_select_2 <= \$706 ;
   always @(posedge clk)
-    g_read_select_3 <= \$759 ;
+    g_read_select_3 <= \$707 ;
   always @(posedge clk)
-    g_read_select_4 <= \$760 ;
+    g_read_select_4 <= \$708 ;
   always @(posedge clk)
-    g_read_data <= \$761 ;
+    g_read_data <= \$709 ;
   always @(posedge clk)
-    ch0_config_wait <= \$762 ;
+    ch0_config_go <= \$710 ;
   always @(posedge clk)
-    ch0_config_go <= \$763 ;
+    ch0_ctrl_start <= \$711 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$764 ;
+    ch0_ctrl_abort <= \$712 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$765 ;
+    ch0_ctrl_clear_counters <= \$713 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$766 ;
+    ch0_ctrl_periodic <= \$714 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$767 ;
+    ch0_ctrl_trigger_enable <= \$715 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$768 ;
+    ch0_irq_status_done <= \$716 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$769 ;
+    ch0_irq_status_error <= \$717 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$770 ;
+    ch0_irq_status_access_done <= \$718 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$771 ;
+    ch0_irq_enable_config_write <= \$719 ;
   always @(posedge clk)
-    ch0_irq_enable_config_write <= \$772 ;
+    ch0_irq_enable_done <= \$720 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$773 ;
+    ch0_irq_enable_error <= \$721 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$774 ;
+    ch0_irq_enable_access_done <= \$722 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$775 ;
+    ch0_cfg_ma_config_addressed <= \$723 ;
   always @(posedge clk)
-    ch0_cfg_ma_config_addressed <= \$776 ;
+    ch0_cfg_ma_ma_half_period <= \$724 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$777 ;
+    ch0_cfg_ma_delay_limit <= \$725 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$778 ;
+    ch0_cfg_period_config_addressed <= \$726 ;
   always @(posedge clk)
-    ch0_cfg_period_config_addressed <= \$779 ;
+    ch0_cfg_period_request_period <= \$727 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$780 ;
+    ch0_cfg_break_config_addressed <= \$728 ;
   always @(posedge clk)
-    ch0_cfg_break_config_addressed <= \$781 ;
+    ch0_cfg_break_break_time <= \$729 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$782 ;
+    ch0_cfg_ack_config_addressed <= \$730 ;
   always @(posedge clk)
-    ch0_cfg_ack_config_addressed <= \$783 ;
+    ch0_cfg_ack_ack_limit <= \$731 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$784 ;
+    ch0_cfg_timeout_config_addressed <= \$732 ;
   always @(posedge clk)
-    ch0_cfg_timeout_config_addressed <= \$785 ;
+    ch0_cfg_timeout_timeout_limit <= \$733 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$786 ;
+    ch0_cfg_words_config_addressed <= \$734 ;
   always @(posedge clk)
-    ch0_cfg_words_config_addressed <= \$787 ;
+    ch0_cfg_words_w0_data_bits <= \$735 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$788 ;
+    ch0_cfg_words_w0_nenw <= \$736 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$789 ;
+    ch0_cfg_words_w0_lc <= \$737 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$790 ;
+    ch0_cfg_words_w0_crc <= \$738 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$791 ;
+    ch0_cfg_words_w0_gray <= \$739 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$792 ;
+    ch0_cfg_words_w0_signed <= \$740 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_signed <= \$793 ;
+    ch0_cfg_words_w1_data_bits <= \$741 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$794 ;
+    ch0_cfg_words_w1_nenw <= \$742 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$795 ;
+    ch0_cfg_words_w1_lc <= \$743 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$796 ;
+    ch0_cfg_words_w1_crc <= \$744 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$797 ;
+    ch0_cfg_words_w1_gray <= \$745 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$798 ;
+    ch0_cfg_words_w1_signed <= \$746 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_signed <= \$799 ;
+    ch0_cfg_words_w1_enable <= \$747 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$800 ;
+    ch0_cfg_checks_config_addressed <= \$748 ;
   always @(posedge clk)
-    ch0_cfg_checks_config_addressed <= \$801 ;
+    ch0_cfg_checks_end_check <= \$749 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$802 ;
+    ch0_cfg_checks_spw_check <= \$750 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$803 ;
+    ch0_cfg_checks_spw_tolerance <= \$751 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$804 ;
+    ch0_cfg_checks_noise_limit <= \$752 ;
   always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$805 ;
+    ch0_cfg_checks_delay_tolerance <= \$753 ;
   always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$806 ;
+    ch0_cfg_checks_confirm_frames <= \$754 ;
   always @(posedge clk)
-    ch0_cfg_checks_confirm_frames <= \$807 ;
+    ch0_cfg_quiet_config_addressed <= \$755 ;
   always @(posedge clk)
-    ch0_cfg_quiet_config_addressed <= \$808 ;
+    ch0_cfg_quiet_quiet_time <= \$756 ;
   always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$809 ;
+    ch0_cfg_crc0_config_addressed <= \$757 ;
   always @(posedge clk)
-    ch0_cfg_crc0_config_addressed <= \$810 ;
+    ch0_cfg_crc0_w0_crc_poly <= \$758 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_poly <= \$811 ;
+    ch0_cfg_crc0_w0_crc_width <= \$759 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$812 ;
+    ch0_cfg_crc0_w0_crc_inverted <= \$760 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_inverted <= \$813 ;
+    ch0_cfg_crc0_start_config_addressed <= \$761 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_config_addressed <= \$814 ;
+    ch0_cfg_crc0_start_w0_crc_start <= \$762 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_w0_crc_start <= \$815 ;
+    ch0_cfg_crc1_config_addressed <= \$763 ;
   always @(posedge clk)
-    ch0_cfg_crc1_config_addressed <= \$816 ;
+    ch0_cfg_crc1_w1_crc_poly <= \$764 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_poly <= \$817 ;
+    ch0_cfg_crc1_w1_crc_width <= \$765 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$818 ;
+    ch0_cfg_crc1_w1_crc_inverted <= \$766 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_inverted <= \$819 ;
+    ch0_cfg_crc1_start_config_addressed <= \$767 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_config_addressed <= \$820 ;
+    ch0_cfg_crc1_start_w1_crc_start <= \$768 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_w1_crc_start <= \$821 ;
+    ch0_cfg_ssi_config_addressed <= \$769 ;
   always @(posedge clk)
-    ch0_cfg_ssi_config_addressed <= \$822 ;
+    ch0_cfg_ssi_ssi <= \$770 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi <= \$823 ;
+    ch0_cfg_ssi_ssi_error <= \$771 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_error <= \$824 ;
+    ch0_cfg_ssi_ssi_error_low <= \$772 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_error_low <= \$825 ;
+    ch0_cfg_ssi_ssi_double <= \$773 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_double <= \$826 ;
+    ch0_cfg_ssi_ssi_delay <= \$774 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_delay <= \$827 ;
+    ch0_cfg_w2_config_write <= \$775 ;
   always @(posedge clk)
-    ch0_cfg_w2_config_write <= \$828 ;
+    ch0_cfg_w2_crc_config_write <= \$776 ;
   always @(posedge clk)
-    ch0_cfg_w2_crc_config_write <= \$829 ;
+    ch0_cfg_w2_crc_start_config_write <= \$777 ;
   always @(posedge clk)
-    ch0_cfg_w2_crc_start_config_write <= \$830 ;
+    ch0_cfg_w3_config_write <= \$778 ;
   always @(posedge clk)
-    ch0_cfg_w3_config_write <= \$831 ;
+    ch0_cfg_w3_crc_config_write <= \$779 ;
   always @(posedge clk)
-    ch0_cfg_w3_crc_config_write <= \$832 ;
+    ch0_cfg_w3_crc_start_config_write <= \$780 ;
   always @(posedge clk)
-    ch0_cfg_w3_crc_start_config_write <= \$833 ;
+    ch0_cfg_w4_config_write <= \$781 ;
   always @(posedge clk)
-    ch0_cfg_w4_config_write <= \$834 ;
+    ch0_cfg_w4_crc_config_write <= \$782 ;
   always @(posedge clk)
-    ch0_cfg_w4_crc_config_write <= \$835 ;
+    ch0_cfg_w4_crc_start_config_write <= \$783 ;
   always @(posedge clk)
-    ch0_cfg_w4_crc_start_config_write <= \$836 ;
+    ch0_cfg_w5_config_write <= \$784 ;
   always @(posedge clk)
-    ch0_cfg_w5_config_write <= \$837 ;
+    ch0_cfg_w5_crc_config_write <= \$785 ;
   always @(posedge clk)
-    ch0_cfg_w5_crc_config_write <= \$838 ;
+    ch0_cfg_w5_crc_start_config_write <= \$786 ;
   always @(posedge clk)
-    ch0_cfg_w5_crc_start_config_write <= \$839 ;
+    ch0_cfg_w6_config_write <= \$787 ;
   always @(posedge clk)
-    ch0_cfg_w6_config_write <= \$840 ;
+    ch0_cfg_w6_crc_config_write <= \$788 ;
   always @(posedge clk)
-    ch0_cfg_w6_crc_config_write <= \$841 ;
+    ch0_cfg_w6_crc_start_config_write <= \$789 ;
   always @(posedge clk)
-    ch0_cfg_w6_crc_start_config_write <= \$842 ;
+    ch0_cfg_w7_config_write <= \$790 ;
   always @(posedge clk)
-    ch0_cfg_w7_config_write <= \$843 ;
+    ch0_cfg_w7_crc_config_write <= \$791 ;
   always @(posedge clk)
-    ch0_cfg_w7_crc_config_write <= \$844 ;
+    ch0_cfg_w7_crc_start_config_write <= \$792 ;
   always @(posedge clk)
-    ch0_cfg_w7_crc_start_config_write <= \$845 ;
+    ch0_ca_request_config_write <= \$793 ;
   always @(posedge clk)
-    ch0_ca_request_config_write <= \$846 ;
+    ch0_ca_request_slave_id <= \$794 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$847 ;
+    ch0_ca_request_address <= \$795 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$848 ;
+    ch0_ca_request_count <= \$796 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$849 ;
+    \ch0_ca_request_write$152  <= \$797 ;
   always @(posedge clk)
-    \ch0_ca_request_write$152  <= \$850 ;
+    ch0_ca_ctrl_start <= \$798 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$851 ;
+    ch0_ca_ctrl_abort <= \$799 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$852 ;
+    ch0_config_wait <= \$800 ;
   always @(posedge clk)
-    config_memory0_write_data <= \$853 ;
+    config_memory0_write_data <= \$801 ;
   always @(posedge clk)
-    ch0_config_written <= \$854 ;
+    ch0_config_written <= \$802 ;
   always @(posedge clk)
-    ch0_config_read_index <= \$855 ;
+    ch0_config_read_index <= \$803 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$856 ;
+    ch0_read_select_80 <= \$804 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$857 ;
+    ch0_read_select_81 <= \$805 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$858 ;
+    ch0_read_select_82 <= \$806 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$859 ;
+    ch0_read_select_84 <= \$807 ;
   always @(posedge clk)
-    ch0_read_select_86 <= \$860 ;
+    ch0_read_select_86 <= \$808 ;
   always @(posedge clk)
-    ch0_read_select_87 <= \$861 ;
+    ch0_read_select_87 <= \$809 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$862 ;
+    ch0_read_select_90 <= \$810 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$863 ;
+    ch0_read_select_91 <= \$811 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$864 ;
+    ch0_read_select_92 <= \$812 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$865 ;
+    ch0_read_select_93 <= \$813 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$866 ;
+    ch0_read_select_94 <= \$814 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$867 ;
+    ch0_read_select_95 <= \$815 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$868 ;
+    ch0_read_select_96 <= \$816 ;
   always @(posedge clk)
-    ch0_read_select_97 <= \$869 ;
+    ch0_read_select_97 <= \$817 ;
   always @(posedge clk)
-    ch0_read_select_a5 <= \$870 ;
+    ch0_read_select_a5 <= \$818 ;
   always @(posedge clk)
-    ch0_read_select_a6 <= \$871 ;
+    ch0_read_select_a6 <= \$819 ;
   always @(posedge clk)
-    ch0_read_select_a7 <= \$872 ;
+    ch0_read_select_a7 <= \$820 ;
   always @(posedge clk)
-    ch0_read_select_a8 <= \$873 ;
+    ch0_read_select_a8 <= \$821 ;
   always @(posedge clk)
-    ch0_read_select_a9 <= \$874 ;
+    ch0_read_select_a9 <= \$822 ;
   always @(posedge clk)
-    ch0_read_select_aa <= \$875 ;
+    ch0_read_select_aa <= \$823 ;
   always @(posedge clk)
-    ch0_read_select_ac <= \$876 ;
+    ch0_read_select_ac <= \$824 ;
   always @(posedge clk)
-    ch0_read_select_ad <= \$877 ;
+    ch0_read_select_ad <= \$825 ;
   always @(posedge clk)
-    ch0_read_select_ae <= \$878 ;
+    ch0_read_select_ae <= \$826 ;
   always @(posedge clk)
-    ch0_read_select_b0 <= \$879 ;
+    ch0_read_select_b0 <= \$827 ;
   always @(posedge clk)
-    ch0_read_select_b1 <= \$880 ;
+    ch0_read_select_b1 <= \$828 ;
   always @(posedge clk)
-    ch0_read_select_b2 <= \$881 ;
+    ch0_read_select_b2 <= \$829 ;
   always @(posedge clk)
-    ch0_read_select_b4 <= \$882 ;
+    ch0_read_select_b4 <= \$830 ;
   always @(posedge clk)
-    ch0_read_select_b5 <= \$883 ;
+    ch0_read_select_b5 <= \$831 ;
   always @(posedge clk)
-    ch0_read_select_b6 <= \$884 ;
+    ch0_read_select_b6 <= \$832 ;
   always @(posedge clk)
-    ch0_read_select_b8 <= \$885 ;
+    ch0_read_select_b8 <= \$833 ;
   always @(posedge clk)
-    ch0_read_select_b9 <= \$886 ;
+    ch0_read_select_b9 <= \$834 ;
   always @(posedge clk)
-    ch0_read_select_ba <= \$887 ;
+    ch0_read_select_ba <= \$835 ;
   always @(posedge clk)
-    ch0_read_select_bc <= \$888 ;
+    ch0_read_select_bc <= \$836 ;
   always @(posedge clk)
-    ch0_read_select_bd <= \$889 ;
+    ch0_read_select_bd <= \$837 ;
   always @(posedge clk)
-    ch0_read_select_be <= \$890 ;
+    ch0_read_select_be <= \$838 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$891 ;
+    ch0_read_select_c1 <= \$839 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$892 ;
+    ch0_read_select_c2 <= \$840 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$893 ;
+    ch0_read_select_c3 <= \$841 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$894 ;
+    ch0_read_select_c4 <= \$842 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$895 ;
+    ch0_read_select_c5 <= \$843 ;
   always @(posedge clk)
-    ch0_read_select_fc <= \$896 ;
+    ch0_read_select_fc <= \$844 ;
   always @(posedge clk)
-    ch0_read_select_fd <= \$897 ;
+    ch0_read_select_fd <= \$845 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$898 ;
+    ch0_result_status_status_snapshot <= \$846 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$899 ;
+    ch0_result_status_cds_snapshot <= \$847 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$900 ;
+    ch0_result_status_w0_ne_snapshot <= \$848 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$901 ;
+    ch0_result_status_w0_nw_snapshot <= \$849 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$902 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$850 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$903 ;
+    ch0_result_status_w1_ne_snapshot <= \$851 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$904 ;
+    ch0_result_status_w1_nw_snapshot <= \$852 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$905 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$853 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$906 ;
+    ch0_result_status_lc_repeat_snapshot <= \$854 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$907 ;
+    ch0_result_status_lc_skip_snapshot <= \$855 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$908 ;
+    ch0_result_status_lc_zero_snapshot <= \$856 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$909 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$857 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$910 ;
+    ch0_result_status_lc_snapshot <= \$858 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$911 ;
+    ch0_result_seq_seq_snapshot <= \$859 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$912 ;
+    ch0_result_seq_line_delay_snapshot <= \$860 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$913 ;
+    ch0_result_w0_lo_data_snapshot <= \$861 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$914 ;
+    ch0_result_w0_hi_data_snapshot <= \$862 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$915 ;
+    ch0_result_w1_lo_data_snapshot <= \$863 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$916 ;
+    ch0_result_w1_hi_data_snapshot <= \$864 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$917 ;
+    ch0_result_timestamp_time_snapshot <= \$865 ;
   always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$918 ;
+    ch0_result_line_noise_events_snapshot <= \$866 ;
   always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$919 ;
+    ch0_result_line_delay_settled_snapshot <= \$867 ;
   always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$920 ;
+    ch0_result_line_delay_spread_snapshot <= \$868 ;
   always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$921 ;
+    ch0_result_line_settled_delay_snapshot <= \$869 ;
   always @(posedge clk)
-    ch0_window0_read <= \$922 ;
+    ch0_window0_read <= \$870 ;
   always @(posedge clk)
-    ch0_window1_read <= \$923 ;
+    ch0_window1_read <= \$871 ;
   always @(posedge clk)
-    ch0_window2_read <= \$924 ;
+    ch0_window2_read <= \$872 ;
   always @(posedge clk)
-    ch0_window3_read <= \$925 ;
+    ch0_window3_read <= \$873 ;
   always @(posedge clk)
-    ch0_read_data <= \$926 ;
+    ch0_read_data <= \$874 ;
   always @(posedge clk)
-    ch1_config_wait <= \$927 ;
+    ch1_config_go <= \$875 ;
   always @(posedge clk)
-    ch1_config_go <= \$928 ;
+    ch1_ctrl_start <= \$876 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$929 ;
+    ch1_ctrl_abort <= \$877 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$930 ;
+    ch1_ctrl_clear_counters <= \$878 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$931 ;
+    ch1_ctrl_periodic <= \$879 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$932 ;
+    ch1_ctrl_trigger_enable <= \$880 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$933 ;
+    ch1_irq_status_done <= \$881 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$934 ;
+    ch1_irq_status_error <= \$882 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$935 ;
+    ch1_irq_status_access_done <= \$883 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$936 ;
+    ch1_irq_enable_config_write <= \$884 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$937 ;
+    ch1_irq_enable_done <= \$885 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$938 ;
+    ch1_irq_enable_error <= \$886 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$939 ;
+    ch1_irq_enable_access_done <= \$887 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$940 ;
+    ch1_cfg_ma_config_addressed <= \$888 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_addressed <= \$941 ;
+    ch1_cfg_ma_ma_half_period <= \$889 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$942 ;
+    ch1_cfg_ma_delay_limit <= \$890 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$943 ;
+    ch1_cfg_period_config_addressed <= \$891 ;
   always @(posedge clk)
-    ch1_cfg_period_config_addressed <= \$944 ;
+    ch1_cfg_period_request_period <= \$892 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$945 ;
+    ch1_cfg_break_config_addressed <= \$893 ;
   always @(posedge clk)
-    ch1_cfg_break_config_addressed <= \$946 ;
+    ch1_cfg_break_break_time <= \$894 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$947 ;
+    ch1_cfg_ack_config_addressed <= \$895 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_addressed <= \$948 ;
+    ch1_cfg_ack_ack_limit <= \$896 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$949 ;
+    ch1_cfg_timeout_config_addressed <= \$897 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_addressed <= \$950 ;
+    ch1_cfg_timeout_timeout_limit <= \$898 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$951 ;
+    ch1_cfg_words_config_addressed <= \$899 ;
   always @(posedge clk)
-    ch1_cfg_words_config_addressed <= \$952 ;
+    ch1_cfg_words_w0_data_bits <= \$900 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$953 ;
+    ch1_cfg_words_w0_nenw <= \$901 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$954 ;
+    ch1_cfg_words_w0_lc <= \$902 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$955 ;
+    ch1_cfg_words_w0_crc <= \$903 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$956 ;
+    ch1_cfg_words_w0_gray <= \$904 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$957 ;
+    ch1_cfg_words_w0_signed <= \$905 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_signed <= \$958 ;
+    ch1_cfg_words_w1_data_bits <= \$906 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$959 ;
+    ch1_cfg_words_w1_nenw <= \$907 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$960 ;
+    ch1_cfg_words_w1_lc <= \$908 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$961 ;
+    ch1_cfg_words_w1_crc <= \$909 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$962 ;
+    ch1_cfg_words_w1_gray <= \$910 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$963 ;
+    ch1_cfg_words_w1_signed <= \$911 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_signed <= \$964 ;
+    ch1_cfg_words_w1_enable <= \$912 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$965 ;
+    ch1_cfg_checks_config_addressed <= \$913 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_addressed <= \$966 ;
+    ch1_cfg_checks_end_check <= \$914 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$967 ;
+    ch1_cfg_checks_spw_check <= \$915 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$968 ;
+    ch1_cfg_checks_spw_tolerance <= \$916 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$969 ;
+    ch1_cfg_checks_noise_limit <= \$917 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$970 ;
+    ch1_cfg_checks_delay_tolerance <= \$918 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$971 ;
+    ch1_cfg_checks_confirm_frames <= \$919 ;
   always @(posedge clk)
-    ch1_cfg_checks_confirm_frames <= \$972 ;
+    ch1_cfg_quiet_config_addressed <= \$920 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_addressed <= \$973 ;
+    ch1_cfg_quiet_quiet_time <= \$921 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$974 ;
+    ch1_cfg_crc0_config_addressed <= \$922 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_addressed <= \$975 ;
+    ch1_cfg_crc0_w0_crc_poly <= \$923 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_poly <= \$976 ;
+    ch1_cfg_crc0_w0_crc_width <= \$924 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$977 ;
+    ch1_cfg_crc0_w0_crc_inverted <= \$925 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_inverted <= \$978 ;
+    ch1_cfg_crc0_start_config_addressed <= \$926 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_addressed <= \$979 ;
+    ch1_cfg_crc0_start_w0_crc_start <= \$927 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_w0_crc_start <= \$980 ;
+    ch1_cfg_crc1_config_addressed <= \$928 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_addressed <= \$981 ;
+    ch1_cfg_crc1_w1_crc_poly <= \$929 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_poly <= \$982 ;
+    ch1_cfg_crc1_w1_crc_width <= \$930 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$983 ;
+    ch1_cfg_crc1_w1_crc_inverted <= \$931 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_inverted <= \$984 ;
+    ch1_cfg_crc1_start_config_addressed <= \$932 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_addressed <= \$985 ;
+    ch1_cfg_crc1_start_w1_crc_start <= \$933 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_w1_crc_start <= \$986 ;
+    ch1_cfg_ssi_config_addressed <= \$934 ;
   always @(posedge clk)
-    ch1_cfg_ssi_config_addressed <= \$987 ;
+    ch1_cfg_ssi_ssi <= \$935 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi <= \$988 ;
+    ch1_cfg_ssi_ssi_error <= \$936 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error <= \$989 ;
+    ch1_cfg_ssi_ssi_error_low <= \$937 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error_low <= \$990 ;
+    ch1_cfg_ssi_ssi_double <= \$938 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_double <= \$991 ;
+    ch1_cfg_ssi_ssi_delay <= \$939 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_delay <= \$992 ;
+    ch1_cfg_w2_config_write <= \$940 ;
   always @(posedge clk)
-    ch1_cfg_w2_config_write <= \$993 ;
+    ch1_cfg_w2_crc_config_write <= \$941 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_config_write <= \$994 ;
+    ch1_cfg_w2_crc_start_config_write <= \$942 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_start_config_write <= \$995 ;
+    ch1_cfg_w3_config_write <= \$943 ;
   always @(posedge clk)
-    ch1_cfg_w3_config_write <= \$996 ;
+    ch1_cfg_w3_crc_config_write <= \$944 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_config_write <= \$997 ;
+    ch1_cfg_w3_crc_start_config_write <= \$945 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_start_config_write <= \$998 ;
+    ch1_cfg_w4_config_write <= \$946 ;
   always @(posedge clk)
-    ch1_cfg_w4_config_write <= \$999 ;
+    ch1_cfg_w4_crc_config_write <= \$947 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_config_write <= \$1000 ;
+    ch1_cfg_w4_crc_start_config_write <= \$948 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_start_config_write <= \$1001 ;
+    ch1_cfg_w5_config_write <= \$949 ;
   always @(posedge clk)
-    ch1_cfg_w5_config_write <= \$1002 ;
+    ch1_cfg_w5_crc_config_write <= \$950 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_config_write <= \$1003 ;
+    ch1_cfg_w5_crc_start_config_write <= \$951 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_start_config_write <= \$1004 ;
+    ch1_cfg_w6_config_write <= \$952 ;
   always @(posedge clk)
-    ch1_cfg_w6_config_write <= \$1005 ;
+    ch1_cfg_w6_crc_config_write <= \$953 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_config_write <= \$1006 ;
+    ch1_cfg_w6_crc_start_config_write <= \$954 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_start_config_write <= \$1007 ;
+    ch1_cfg_w7_config_write <= \$955 ;
   always @(posedge clk)
-    ch1_cfg_w7_config_write <= \$1008 ;
+    ch1_cfg_w7_crc_config_write <= \$956 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_config_write <= \$1009 ;
+    ch1_cfg_w7_crc_start_config_write <= \$957 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_start_config_write <= \$1010 ;
+    ch1_ca_request_config_write <= \$958 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$1011 ;
+    ch1_ca_request_slave_id <= \$959 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$1012 ;
+    ch1_ca_request_address <= \$960 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$1013 ;
+    ch1_ca_request_count <= \$961 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$1014 ;
+    \ch1_ca_request_write$448  <= \$962 ;
   always @(posedge clk)
-    \ch1_ca_request_write$435  <= \$1015 ;
+    ch1_ca_ctrl_start <= \$963 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$1016 ;
+    ch1_ca_ctrl_abort <= \$964 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$1017 ;
+    ch1_config_wait <= \$965 ;
   always @(posedge clk)
-    ch1_config_written <= \$1018 ;
+    ch1_config_written <= \$966 ;
   always @(posedge clk)
-    ch1_config_read_index <= \$1019 ;
+    ch1_config_read_index <= \$967 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$1020 ;
+    ch1_read_select_100 <= \$968 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$1021 ;
+    ch1_read_select_101 <= \$969 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$1022 ;
+    ch1_read_select_102 <= \$970 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$1023 ;
+    ch1_read_select_104 <= \$971 ;
   always @(posedge clk)
-    ch1_read_select_106 <= \$1024 ;
+    ch1_read_select_106 <= \$972 ;
   always @(posedge clk)
-    ch1_read_select_107 <= \$1025 ;
+    ch1_read_select_107 <= \$973 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$1026 ;
+    ch1_read_select_110 <= \$974 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$1027 ;
+    ch1_read_select_111 <= \$975 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$1028 ;
+    ch1_read_select_112 <= \$976 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$1029 ;
+    ch1_read_select_113 <= \$977 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$1030 ;
+    ch1_read_select_114 <= \$978 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$1031 ;
+    ch1_read_select_115 <= \$979 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$1032 ;
+    ch1_read_select_116 <= \$980 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$1033 ;
+    ch1_read_select_117 <= \$981 ;
   always @(posedge clk)
-    ch1_read_select_125 <= \$1034 ;
+    ch1_read_select_125 <= \$982 ;
   always @(posedge clk)
-    ch1_read_select_126 <= \$1035 ;
+    ch1_read_select_126 <= \$983 ;
   always @(posedge clk)
-    ch1_read_select_127 <= \$1036 ;
+    ch1_read_select_127 <= \$984 ;
   always @(posedge clk)
-    ch1_read_select_128 <= \$1037 ;
+    ch1_read_select_128 <= \$985 ;
   always @(posedge clk)
-    ch1_read_select_129 <= \$1038 ;
+    ch1_read_select_129 <= \$986 ;
   always @(posedge clk)
-    ch1_read_select_12a <= \$1039 ;
+    ch1_read_select_12a <= \$987 ;
   always @(posedge clk)
-    ch1_read_select_12c <= \$1040 ;
+    ch1_read_select_12c <= \$988 ;
   always @(posedge clk)
-    ch1_read_select_12d <= \$1041 ;
+    ch1_read_select_12d <= \$989 ;
   always @(posedge clk)
-    ch1_read_select_12e <= \$1042 ;
+    ch1_read_select_12e <= \$990 ;
   always @(posedge clk)
-    ch1_read_select_130 <= \$1043 ;
+    ch1_read_select_130 <= \$991 ;
   always @(posedge clk)
-    ch1_read_select_131 <= \$1044 ;
+    ch1_read_select_131 <= \$992 ;
   always @(posedge clk)
-    ch1_read_select_132 <= \$1045 ;
+    ch1_read_select_132 <= \$993 ;
   always @(posedge clk)
-    ch1_read_select_134 <= \$1046 ;
+    ch1_read_select_134 <= \$994 ;
   always @(posedge clk)
-    ch1_read_select_135 <= \$1047 ;
+    ch1_read_select_135 <= \$995 ;
   always @(posedge clk)
-    ch1_read_select_136 <= \$1048 ;
+    ch1_read_select_136 <= \$996 ;
   always @(posedge clk)
-    ch1_read_select_138 <= \$1049 ;
+    ch1_read_select_138 <= \$997 ;
   always @(posedge clk)
-    ch1_read_select_139 <= \$1050 ;
+    ch1_read_select_139 <= \$998 ;
   always @(posedge clk)
-    ch1_read_select_13a <= \$1051 ;
+    ch1_read_select_13a <= \$999 ;
   always @(posedge clk)
-    ch1_read_select_13c <= \$1052 ;
+    ch1_read_select_13c <= \$1000 ;
   always @(posedge clk)
-    ch1_read_select_13d <= \$1053 ;
+    ch1_read_select_13d <= \$1001 ;
   always @(posedge clk)
-    ch1_read_select_13e <= \$1054 ;
+    ch1_read_select_13e <= \$1002 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$1055 ;
+    ch1_read_select_141 <= \$1003 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$1056 ;
+    ch1_read_select_142 <= \$1004 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$1057 ;
+    ch1_read_select_143 <= \$1005 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$1058 ;
+    ch1_read_select_144 <= \$1006 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$1059 ;
+    ch1_read_select_145 <= \$1007 ;
   always @(posedge clk)
-    ch1_read_select_17c <= \$1060 ;
+    ch1_read_select_17c <= \$1008 ;
   always @(posedge clk)
-    ch1_read_select_17d <= \$1061 ;
+    ch1_read_select_17d <= \$1009 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$1062 ;
+    ch1_result_status_status_snapshot <= \$1010 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$1063 ;
+    ch1_result_status_cds_snapshot <= \$1011 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$1064 ;
+    ch1_result_status_w0_ne_snapshot <= \$1012 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$1065 ;
+    ch1_result_status_w0_nw_snapshot <= \$1013 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$1066 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$1014 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$1067 ;
+    ch1_result_status_w1_ne_snapshot <= \$1015 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$1068 ;
+    ch1_result_status_w1_nw_snapshot <= \$1016 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$1069 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$1017 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$1070 ;
+    ch1_result_status_lc_repeat_snapshot <= \$1018 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$1071 ;
+    ch1_result_status_lc_skip_snapshot <= \$1019 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$1072 ;
+    ch1_result_status_lc_zero_snapshot <= \$1020 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$1073 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$1021 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$1074 ;
+    ch1_result_status_lc_snapshot <= \$1022 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$1075 ;
+    ch1_result_seq_seq_snapshot <= \$1023 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$1076 ;
+    ch1_result_seq_line_delay_snapshot <= \$1024 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$1077 ;
+    ch1_result_w0_lo_data_snapshot <= \$1025 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$1078 ;
+    ch1_result_w0_hi_data_snapshot <= \$1026 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$1079 ;
+    ch1_result_w1_lo_data_snapshot <= \$1027 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$1080 ;
+    ch1_result_w1_hi_data_snapshot <= \$1028 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$1081 ;
+    ch1_result_timestamp_time_snapshot <= \$1029 ;
   always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$1082 ;
+    ch1_result_line_noise_events_snapshot <= \$1030 ;
   always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$1083 ;
+    ch1_result_line_delay_settled_snapshot <= \$1031 ;
   always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$1084 ;
+    ch1_result_line_delay_spread_snapshot <= \$1032 ;
   always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$1085 ;
+    ch1_result_line_settled_delay_snapshot <= \$1033 ;
   always @(posedge clk)
-    ch1_window0_read <= \$1086 ;
+    ch1_window0_read <= \$1034 ;
   always @(posedge clk)
-    ch1_window1_read <= \$1087 ;
+    ch1_window1_read <= \$1035 ;
   always @(posedge clk)
-    ch1_window2_read <= \$1088 ;
+    ch1_window2_read <= \$1036 ;
   always @(posedge clk)
-    ch1_window3_read <= \$1089 ;
+    ch1_window3_read <= \$1037 ;
   always @(posedge clk)
-    ch1_read_data <= \$1090 ;
+    ch1_read_data <= \$1038 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$749  = bus__w_en;
+    \$697  = bus__w_en;
+    if (rst) begin
+      \$697  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$698  = write_addr;
+    if (bus__w_en) begin
+      \$698  = bus__w_addr;
+    end
+    if (rst) begin
+      \$698  = 11'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$699  = write_data;
+    if (bus__w_en) begin
+      \$699  = bus__w_data;
+    end
+    if (rst) begin
+      \$699  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$700  = write_strb;
+    if (bus__w_en) begin
+      \$700  = bus__w_strb;
+    end
+    if (rst) begin
+      \$700  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$701  = config_write_data;
+    if (write_en) begin
+      \$701  = write_data;
+    end
+    if (rst) begin
+      \$701  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$702  = config_write_strb;
+    if (write_en) begin
+      \$702  = write_strb;
+    end
+    if (rst) begin
+      \$702  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$703  = \$2 ;
+    if (rst) begin
+      \$703  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$704  = g_read_select_0;
+    if (bus__r_en) begin
+      \$704  = \$3 ;
+    end
+    if (rst) begin
+      \$704  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$705  = g_read_select_1;
+    if (bus__r_en) begin
+      \$705  = \$4 ;
+    end
+    if (rst) begin
+      \$705  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$706  = g_read_select_2;
+    if (bus__r_en) begin
+      \$706  = \$5 ;
+    end
+    if (rst) begin
+      \$706  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$707  = g_read_select_3;
+    if (bus__r_en) begin
+      \$707  = \$6 ;
+    end
+    if (rst) begin
+      \$707  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$708  = g_read_select_4;
+    if (bus__r_en) begin
+      \$708  = \$7 ;
+    end
+    if (rst) begin
+      \$708  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$709  = g_read_data;
+    if (bus__r_load) begin
+      \$709  = \$17 ;
+    end
+    if (rst) begin
+      \$709  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$710  = \$20 ;
+    if (rst) begin
+      \$710  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$711  = \$22 ;
+    if (rst) begin
+      \$711  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$712  = \$24 ;
+    if (rst) begin
+      \$712  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$713  = \$26 ;
+    if (rst) begin
+      \$713  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$714  = ch0_ctrl_periodic;
+    if (\$27 ) begin
+      \$714  = write_data[8];
+    end
+    if (rst) begin
+      \$714  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$715  = ch0_ctrl_trigger_enable;
+    if (\$28 ) begin
+      \$715  = write_data[9];
+    end
+    if (rst) begin
+      \$715  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$716  = ch0_irq_status_done;
+    if (ch0__frame_done) begin
+      \$716  = 1'h1;
+    end else if (\$30 ) begin
+      \$716  = 1'h0;
+    end
+    if (rst) begin
+      \$716  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$717  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$717  = 1'h1;
+    end else if (\$32 ) begin
+      \$717  = 1'h0;
+    end
+    if (rst) begin
+      \$717  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$718  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$718  = 1'h1;
+    end else if (\$34 ) begin
+      \$718  = 1'h0;
+    end
+    if (rst) begin
+      \$718  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$719  = ch0_irq_enable_write;
+    if (rst) begin
+      \$719  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$720  = ch0_irq_enable_done;
+    if (\$35 ) begin
+      \$720  = config_write_data[0];
+    end
+    if (rst) begin
+      \$720  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$721  = ch0_irq_enable_error;
+    if (\$36 ) begin
+      \$721  = config_write_data[1];
+    end
+    if (rst) begin
+      \$721  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$722  = ch0_irq_enable_access_done;
+    if (\$37 ) begin
+      \$722  = config_write_data[2];
+    end
+    if (rst) begin
+      \$722  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$723  = \$38 ;
+    if (rst) begin
+      \$723  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$724  = ch0_cfg_ma_ma_half_period;
+    if (\$39 ) begin
+      \$724 [7:0] = config_write_data[7:0];
+    end
+    if (\$40 ) begin
+      \$724 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$724  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$725  = ch0_cfg_ma_delay_limit;
+    if (\$41 ) begin
+      \$725 [7:0] = config_write_data[23:16];
+    end
+    if (\$42 ) begin
+      \$725 [11:8] = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$725  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$726  = \$43 ;
+    if (rst) begin
+      \$726  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$727  = ch0_cfg_period_request_period;
+    if (\$44 ) begin
+      \$727 [7:0] = config_write_data[7:0];
+    end
+    if (\$45 ) begin
+      \$727 [15:8] = config_write_data[15:8];
+    end
+    if (\$46 ) begin
+      \$727 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$727  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$728  = \$47 ;
+    if (rst) begin
+      \$728  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$729  = ch0_cfg_break_break_time;
+    if (\$48 ) begin
+      \$729 [7:0] = config_write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$729 [15:8] = config_write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$729 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$729  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$730  = \$51 ;
+    if (rst) begin
+      \$730  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$731  = ch0_cfg_ack_ack_limit;
+    if (\$52 ) begin
+      \$731 [7:0] = config_write_data[7:0];
+    end
+    if (\$53 ) begin
+      \$731 [15:8] = config_write_data[15:8];
+    end
+    if (\$54 ) begin
+      \$731 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$731  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$732  = \$55 ;
+    if (rst) begin
+      \$732  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$733  = ch0_cfg_timeout_timeout_limit;
+    if (\$56 ) begin
+      \$733 [7:0] = config_write_data[7:0];
+    end
+    if (\$57 ) begin
+      \$733 [15:8] = config_write_data[15:8];
+    end
+    if (\$58 ) begin
+      \$733 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$733  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$734  = \$59 ;
+    if (rst) begin
+      \$734  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$735  = ch0_cfg_words_w0_data_bits;
+    if (\$60 ) begin
+      \$735  = config_write_data[6:0];
+    end
+    if (rst) begin
+      \$735  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$736  = ch0_cfg_words_w0_nenw;
+    if (\$61 ) begin
+      \$736  = config_write_data[7];
+    end
+    if (rst) begin
+      \$736  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$737  = ch0_cfg_words_w0_lc;
+    if (\$62 ) begin
+      \$737  = config_write_data[8];
+    end
+    if (rst) begin
+      \$737  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$738  = ch0_cfg_words_w0_crc;
+    if (\$63 ) begin
+      \$738  = config_write_data[10:9];
+    end
+    if (rst) begin
+      \$738  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$739  = ch0_cfg_words_w0_gray;
+    if (\$64 ) begin
+      \$739  = config_write_data[11];
+    end
+    if (rst) begin
+      \$739  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$740  = ch0_cfg_words_w0_signed;
+    if (\$65 ) begin
+      \$740  = config_write_data[12];
+    end
+    if (rst) begin
+      \$740  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$741  = ch0_cfg_words_w1_data_bits;
+    if (\$66 ) begin
+      \$741  = config_write_data[22:16];
+    end
+    if (rst) begin
+      \$741  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$742  = ch0_cfg_words_w1_nenw;
+    if (\$67 ) begin
+      \$742  = config_write_data[23];
+    end
+    if (rst) begin
+      \$742  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$743  = ch0_cfg_words_w1_lc;
+    if (\$68 ) begin
+      \$743  = config_write_data[24];
+    end
+    if (rst) begin
+      \$743  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$744  = ch0_cfg_words_w1_crc;
+    if (\$69 ) begin
+      \$744  = config_write_data[26:25];
+    end
+    if (rst) begin
+      \$744  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$745  = ch0_cfg_words_w1_gray;
+    if (\$70 ) begin
+      \$745  = config_write_data[27];
+    end
+    if (rst) begin
+      \$745  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$746  = ch0_cfg_words_w1_signed;
+    if (\$71 ) begin
+      \$746  = config_write_data[28];
+    end
+    if (rst) begin
+      \$746  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$747  = ch0_cfg_words_w1_enable;
+    if (\$72 ) begin
+      \$747  = config_write_data[31];
+    end
+    if (rst) begin
+      \$747  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$748  = \$73 ;
+    if (rst) begin
+      \$748  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$749  = ch0_cfg_checks_end_check;
+    if (\$74 ) begin
+      \$749  = config_write_data[0];
+    end
     if (rst) begin
       \$749  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$750  = write_addr;
-    if (bus__w_en) begin
-      \$750  = bus__w_addr;
+    \$750  = ch0_cfg_checks_spw_check;
+    if (\$75 ) begin
+      \$750  = config_write_data[1];
     end
     if (rst) begin
-      \$750  = 11'h000;
+      \$750  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$751  = write_data;
-    if (bus__w_en) begin
-      \$751  = bus__w_data;
+    \$751  = ch0_cfg_checks_spw_tolerance;
+    if (\$76 ) begin
+      \$751  = config_write_data[15:8];
     end
     if (rst) begin
-      \$751  = 32'd0;
+      \$751  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$752  = write_strb;
-    if (bus__w_en) begin
-      \$752  = bus__w_strb;
+    \$752  = ch0_cfg_checks_noise_limit;
+    if (\$77 ) begin
+      \$752  = config_write_data[19:16];
     end
     if (rst) begin
       \$752  = 4'h0;
@@ -5916,19 +6329,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$753  = config_write_data;
-    if (write_en) begin
-      \$753  = write_data;
+    \$753  = ch0_cfg_checks_delay_tolerance;
+    if (\$78 ) begin
+      \$753  = config_write_data[23:20];
     end
     if (rst) begin
-      \$753  = 32'd0;
+      \$753  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$754  = config_write_strb;
-    if (write_en) begin
-      \$754  = write_strb;
+    \$754  = ch0_cfg_checks_confirm_frames;
+    if (\$79 ) begin
+      \$754  = config_write_data[27:24];
     end
     if (rst) begin
       \$754  = 4'h0;
@@ -5936,56 +6349,59 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$755  = \$2 ;
+    \$755  = \$80 ;
     if (rst) begin
       \$755  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$756  = g_read_select_0;
-    if (bus__r_en) begin
-      \$756  = \$3 ;
+    \$756  = ch0_cfg_quiet_quiet_time;
+    if (\$81 ) begin
+      \$756 [7:0] = config_write_data[7:0];
+    end
+    if (\$82 ) begin
+      \$756 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$756  = 1'h0;
+      \$756  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$757  = g_read_select_1;
-    if (bus__r_en) begin
-      \$757  = \$4 ;
-    end
+    \$757  = \$83 ;
     if (rst) begin
       \$757  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$758  = g_read_select_2;
-    if (bus__r_en) begin
-      \$758  = \$5 ;
+    \$758  = ch0_cfg_crc0_w0_crc_poly;
+    if (\$84 ) begin
+      \$758 [7:0] = config_write_data[7:0];
+    end
+    if (\$85 ) begin
+      \$758 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$758  = 1'h0;
+      \$758  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$759  = g_read_select_3;
-    if (bus__r_en) begin
-      \$759  = \$6 ;
+    \$759  = ch0_cfg_crc0_w0_crc_width;
+    if (\$86 ) begin
+      \$759  = config_write_data[20:16];
     end
     if (rst) begin
-      \$759  = 1'h0;
+      \$759  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$760  = g_read_select_4;
-    if (bus__r_en) begin
-      \$760  = \$7 ;
+    \$760  = ch0_cfg_crc0_w0_crc_inverted;
+    if (\$87 ) begin
+      \$760  = config_write_data[24];
     end
     if (rst) begin
       \$760  = 1'h0;
@@ -5993,93 +6409,96 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$761  = g_read_data;
-    if (bus__r_load) begin
-      \$761  = \$17 ;
-    end
+    \$761  = \$88 ;
     if (rst) begin
-      \$761  = 32'd0;
+      \$761  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$762  = ch0_config_wait;
-    if (\$44 ) begin
-      \$762  = 1'h1;
-    end else if (ch0_config_go) begin
-      \$762  = 1'h0;
+    \$762  = ch0_cfg_crc0_start_w0_crc_start;
+    if (\$89 ) begin
+      \$762 [7:0] = config_write_data[7:0];
+    end
+    if (\$90 ) begin
+      \$762 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$762  = 1'h0;
+      \$762  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$763  = \$47 ;
+    \$763  = \$91 ;
     if (rst) begin
       \$763  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$764  = \$49 ;
+    \$764  = ch0_cfg_crc1_w1_crc_poly;
+    if (\$92 ) begin
+      \$764 [7:0] = config_write_data[7:0];
+    end
+    if (\$93 ) begin
+      \$764 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$764  = 1'h0;
+      \$764  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$765  = \$51 ;
+    \$765  = ch0_cfg_crc1_w1_crc_width;
+    if (\$94 ) begin
+      \$765  = config_write_data[20:16];
+    end
     if (rst) begin
-      \$765  = 1'h0;
+      \$765  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$766  = \$53 ;
+    \$766  = ch0_cfg_crc1_w1_crc_inverted;
+    if (\$95 ) begin
+      \$766  = config_write_data[24];
+    end
     if (rst) begin
       \$766  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$767  = ch0_ctrl_periodic;
-    if (\$54 ) begin
-      \$767  = write_data[8];
-    end
+    \$767  = \$96 ;
     if (rst) begin
       \$767  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$768  = ch0_ctrl_trigger_enable;
-    if (\$55 ) begin
-      \$768  = write_data[9];
+    \$768  = ch0_cfg_crc1_start_w1_crc_start;
+    if (\$97 ) begin
+      \$768 [7:0] = config_write_data[7:0];
+    end
+    if (\$98 ) begin
+      \$768 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$768  = 1'h0;
+      \$768  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$769  = ch0_irq_status_done;
-    if (ch0__frame_done) begin
-      \$769  = 1'h1;
-    end else if (\$57 ) begin
-      \$769  = 1'h0;
-    end
+    \$769  = \$99 ;
     if (rst) begin
       \$769  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$770  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$770  = 1'h1;
-    end else if (\$59 ) begin
-      \$770  = 1'h0;
+    \$770  = ch0_cfg_ssi_ssi;
+    if (\$100 ) begin
+      \$770  = config_write_data[0];
     end
     if (rst) begin
       \$770  = 1'h0;
@@ -6087,11 +6506,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$771  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$771  = 1'h1;
-    end else if (\$61 ) begin
-      \$771  = 1'h0;
+    \$771  = ch0_cfg_ssi_ssi_error;
+    if (\$101 ) begin
+      \$771  = config_write_data[1];
     end
     if (rst) begin
       \$771  = 1'h0;
@@ -6099,16 +6516,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$772  = ch0_irq_enable_write;
+    \$772  = ch0_cfg_ssi_ssi_error_low;
+    if (\$102 ) begin
+      \$772  = config_write_data[2];
+    end
     if (rst) begin
       \$772  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$773  = ch0_irq_enable_done;
-    if (\$62 ) begin
-      \$773  = config_write_data[0];
+    \$773  = ch0_cfg_ssi_ssi_double;
+    if (\$103 ) begin
+      \$773  = config_write_data[3];
     end
     if (rst) begin
       \$773  = 1'h0;
@@ -6116,281 +6536,211 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$774  = ch0_irq_enable_error;
-    if (\$63 ) begin
-      \$774  = config_write_data[1];
+    \$774  = ch0_cfg_ssi_ssi_delay;
+    if (\$104 ) begin
+      \$774 [7:0] = config_write_data[23:16];
+    end
+    if (\$105 ) begin
+      \$774 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$774  = 1'h0;
+      \$774  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$775  = ch0_irq_enable_access_done;
-    if (\$64 ) begin
-      \$775  = config_write_data[2];
-    end
+    \$775  = ch0_cfg_w2_write;
     if (rst) begin
       \$775  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$776  = \$65 ;
+    \$776  = ch0_cfg_w2_crc_write;
     if (rst) begin
       \$776  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$777  = ch0_cfg_ma_ma_half_period;
-    if (\$66 ) begin
-      \$777 [7:0] = config_write_data[7:0];
-    end
-    if (\$67 ) begin
-      \$777 [15:8] = config_write_data[15:8];
-    end
+    \$777  = ch0_cfg_w2_crc_start_write;
     if (rst) begin
-      \$777  = 16'h0000;
+      \$777  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$778  = ch0_cfg_ma_delay_limit;
-    if (\$68 ) begin
-      \$778 [7:0] = config_write_data[23:16];
-    end
-    if (\$69 ) begin
-      \$778 [11:8] = config_write_data[27:24];
-    end
+    \$778  = ch0_cfg_w3_write;
     if (rst) begin
-      \$778  = 12'h000;
+      \$778  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$779  = \$70 ;
+    \$779  = ch0_cfg_w3_crc_write;
     if (rst) begin
       \$779  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$780  = ch0_cfg_period_request_period;
-    if (\$71 ) begin
-      \$780 [7:0] = config_write_data[7:0];
-    end
-    if (\$72 ) begin
-      \$780 [15:8] = config_write_data[15:8];
-    end
-    if (\$73 ) begin
-      \$780 [23:16] = config_write_data[23:16];
-    end
+    \$780  = ch0_cfg_w3_crc_start_write;
     if (rst) begin
-      \$780  = 24'h000000;
+      \$780  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$781  = \$74 ;
+    \$781  = ch0_cfg_w4_write;
     if (rst) begin
       \$781  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$782  = ch0_cfg_break_break_time;
-    if (\$75 ) begin
-      \$782 [7:0] = config_write_data[7:0];
-    end
-    if (\$76 ) begin
-      \$782 [15:8] = config_write_data[15:8];
-    end
-    if (\$77 ) begin
-      \$782 [23:16] = config_write_data[23:16];
-    end
+    \$782  = ch0_cfg_w4_crc_write;
     if (rst) begin
-      \$782  = 24'h000000;
+      \$782  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$783  = \$78 ;
+    \$783  = ch0_cfg_w4_crc_start_write;
     if (rst) begin
       \$783  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$784  = ch0_cfg_ack_ack_limit;
-    if (\$79 ) begin
-      \$784 [7:0] = config_write_data[7:0];
-    end
-    if (\$80 ) begin
-      \$784 [15:8] = config_write_data[15:8];
-    end
-    if (\$81 ) begin
-      \$784 [23:16] = config_write_data[23:16];
-    end
+    \$784  = ch0_cfg_w5_write;
     if (rst) begin
-      \$784  = 24'h000000;
+      \$784  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$785  = \$82 ;
+    \$785  = ch0_cfg_w5_crc_write;
     if (rst) begin
       \$785  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$786  = ch0_cfg_timeout_timeout_limit;
-    if (\$83 ) begin
-      \$786 [7:0] = config_write_data[7:0];
-    end
-    if (\$84 ) begin
-      \$786 [15:8] = config_write_data[15:8];
-    end
-    if (\$85 ) begin
-      \$786 [23:16] = config_write_data[23:16];
-    end
+    \$786  = ch0_cfg_w5_crc_start_write;
     if (rst) begin
-      \$786  = 24'h000000;
+      \$786  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$787  = \$86 ;
+    \$787  = ch0_cfg_w6_write;
     if (rst) begin
       \$787  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$788  = ch0_cfg_words_w0_data_bits;
-    if (\$87 ) begin
-      \$788  = config_write_data[6:0];
-    end
+    \$788  = ch0_cfg_w6_crc_write;
     if (rst) begin
-      \$788  = 7'h00;
+      \$788  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$789  = ch0_cfg_words_w0_nenw;
-    if (\$88 ) begin
-      \$789  = config_write_data[7];
-    end
+    \$789  = ch0_cfg_w6_crc_start_write;
     if (rst) begin
       \$789  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$790  = ch0_cfg_words_w0_lc;
-    if (\$89 ) begin
-      \$790  = config_write_data[8];
-    end
+    \$790  = ch0_cfg_w7_write;
     if (rst) begin
       \$790  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$791  = ch0_cfg_words_w0_crc;
-    if (\$90 ) begin
-      \$791  = config_write_data[10:9];
-    end
+    \$791  = ch0_cfg_w7_crc_write;
     if (rst) begin
-      \$791  = 2'h0;
+      \$791  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$792  = ch0_cfg_words_w0_gray;
-    if (\$91 ) begin
-      \$792  = config_write_data[11];
-    end
+    \$792  = ch0_cfg_w7_crc_start_write;
     if (rst) begin
       \$792  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$793  = ch0_cfg_words_w0_signed;
-    if (\$92 ) begin
-      \$793  = config_write_data[12];
-    end
+    \$793  = ch0_ca_request_write;
     if (rst) begin
       \$793  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$794  = ch0_cfg_words_w1_data_bits;
-    if (\$93 ) begin
-      \$794  = config_write_data[22:16];
+    \$794  = ch0_ca_request_slave_id;
+    if (\$106 ) begin
+      \$794  = config_write_data[2:0];
     end
     if (rst) begin
-      \$794  = 7'h00;
+      \$794  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$795  = ch0_cfg_words_w1_nenw;
-    if (\$94 ) begin
-      \$795  = config_write_data[23];
+    \$795  = ch0_ca_request_address;
+    if (\$107 ) begin
+      \$795  = config_write_data[14:8];
     end
     if (rst) begin
-      \$795  = 1'h0;
+      \$795  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$796  = ch0_cfg_words_w1_lc;
-    if (\$95 ) begin
-      \$796  = config_write_data[24];
+    \$796  = ch0_ca_request_count;
+    if (\$108 ) begin
+      \$796  = config_write_data[22:16];
     end
     if (rst) begin
-      \$796  = 1'h0;
+      \$796  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$797  = ch0_cfg_words_w1_crc;
-    if (\$96 ) begin
-      \$797  = config_write_data[26:25];
+    \$797  = \ch0_ca_request_write$152 ;
+    if (\$109 ) begin
+      \$797  = config_write_data[24];
     end
     if (rst) begin
-      \$797  = 2'h0;
+      \$797  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$798  = ch0_cfg_words_w1_gray;
-    if (\$97 ) begin
-      \$798  = config_write_data[27];
-    end
+    \$798  = \$111 ;
     if (rst) begin
       \$798  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$799  = ch0_cfg_words_w1_signed;
-    if (\$98 ) begin
-      \$799  = config_write_data[28];
-    end
+    \$799  = \$113 ;
     if (rst) begin
       \$799  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$800  = ch0_cfg_words_w1_enable;
-    if (\$99 ) begin
-      \$800  = config_write_data[31];
+    \$800  = ch0_config_wait;
+    if (\$114 ) begin
+      \$800  = 1'h1;
+    end else if (ch0_config_go) begin
+      \$800  = 1'h0;
     end
     if (rst) begin
       \$800  = 1'h0;
@@ -6398,126 +6748,126 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$801  = \$100 ;
+    \$801  = config_memory0_write_data;
+    if (write_en) begin
+      \$801  = \$119 ;
+    end
     if (rst) begin
-      \$801  = 1'h0;
+      \$801  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$802  = ch0_cfg_checks_end_check;
-    if (\$101 ) begin
-      \$802  = config_write_data[0];
-    end
+    \$802  = \$120 ;
     if (rst) begin
-      \$802  = 1'h0;
+      \$802  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$803  = ch0_cfg_checks_spw_check;
-    if (\$102 ) begin
-      \$803  = config_write_data[1];
+    \$803  = ch0_config_read_index;
+    if (ch0_config_read) begin
+      \$803  = config_memory0_read_index;
     end
     if (rst) begin
-      \$803  = 1'h0;
+      \$803  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$804  = ch0_cfg_checks_spw_tolerance;
-    if (\$103 ) begin
-      \$804  = config_write_data[15:8];
+    \$804  = ch0_read_select_80;
+    if (bus__r_en) begin
+      \$804  = \$121 ;
     end
     if (rst) begin
-      \$804  = 8'h00;
+      \$804  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$805  = ch0_cfg_checks_noise_limit;
-    if (\$104 ) begin
-      \$805  = config_write_data[19:16];
+    \$805  = ch0_read_select_81;
+    if (bus__r_en) begin
+      \$805  = \$122 ;
     end
     if (rst) begin
-      \$805  = 4'h0;
+      \$805  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$806  = ch0_cfg_checks_delay_tolerance;
-    if (\$105 ) begin
-      \$806  = config_write_data[23:20];
+    \$806  = ch0_read_select_82;
+    if (bus__r_en) begin
+      \$806  = \$123 ;
     end
     if (rst) begin
-      \$806  = 4'h0;
+      \$806  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$807  = ch0_cfg_checks_confirm_frames;
-    if (\$106 ) begin
-      \$807  = config_write_data[27:24];
+    \$807  = ch0_read_select_84;
+    if (bus__r_en) begin
+      \$807  = \$124 ;
     end
     if (rst) begin
-      \$807  = 4'h0;
+      \$807  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$808  = \$107 ;
+    \$808  = ch0_read_select_86;
+    if (bus__r_en) begin
+      \$808  = \$125 ;
+    end
     if (rst) begin
       \$808  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$809  = ch0_cfg_quiet_quiet_time;
-    if (\$108 ) begin
-      \$809 [7:0] = config_write_data[7:0];
-    end
-    if (\$109 ) begin
-      \$809 [11:8] = config_write_data[11:8];
+    \$809  = ch0_read_select_87;
+    if (bus__r_en) begin
+      \$809  = \$126 ;
     end
     if (rst) begin
-      \$809  = 12'h000;
+      \$809  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$810  = \$110 ;
+    \$810  = ch0_read_select_90;
+    if (bus__r_en) begin
+      \$810  = \$127 ;
+    end
     if (rst) begin
       \$810  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$811  = ch0_cfg_crc0_w0_crc_poly;
-    if (\$111 ) begin
-      \$811 [7:0] = config_write_data[7:0];
-    end
-    if (\$112 ) begin
-      \$811 [15:8] = config_write_data[15:8];
+    \$811  = ch0_read_select_91;
+    if (bus__r_en) begin
+      \$811  = \$128 ;
     end
     if (rst) begin
-      \$811  = 16'h0000;
+      \$811  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$812  = ch0_cfg_crc0_w0_crc_width;
-    if (\$113 ) begin
-      \$812  = config_write_data[20:16];
+    \$812  = ch0_read_select_92;
+    if (bus__r_en) begin
+      \$812  = \$129 ;
     end
     if (rst) begin
-      \$812  = 5'h00;
+      \$812  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$813  = ch0_cfg_crc0_w0_crc_inverted;
-    if (\$114 ) begin
-      \$813  = config_write_data[24];
+    \$813  = ch0_read_select_93;
+    if (bus__r_en) begin
+      \$813  = \$130 ;
     end
     if (rst) begin
       \$813  = 1'h0;
@@ -6525,59 +6875,59 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$814  = \$115 ;
+    \$814  = ch0_read_select_94;
+    if (bus__r_en) begin
+      \$814  = \$131 ;
+    end
     if (rst) begin
       \$814  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$815  = ch0_cfg_crc0_start_w0_crc_start;
-    if (\$116 ) begin
-      \$815 [7:0] = config_write_data[7:0];
-    end
-    if (\$117 ) begin
-      \$815 [15:8] = config_write_data[15:8];
+    \$815  = ch0_read_select_95;
+    if (bus__r_en) begin
+      \$815  = \$132 ;
     end
     if (rst) begin
-      \$815  = 16'h0000;
+      \$815  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$816  = \$118 ;
+    \$816  = ch0_read_select_96;
+    if (bus__r_en) begin
+      \$816  = \$133 ;
+    end
     if (rst) begin
       \$816  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$817  = ch0_cfg_crc1_w1_crc_poly;
-    if (\$119 ) begin
-      \$817 [7:0] = config_write_data[7:0];
-    end
-    if (\$120 ) begin
-      \$817 [15:8] = config_write_data[15:8];
+    \$817  = ch0_read_select_97;
+    if (bus__r_en) begin
+      \$817  = \$134 ;
     end
     if (rst) begin
-      \$817  = 16'h0000;
+      \$817  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$818  = ch0_cfg_crc1_w1_crc_width;
-    if (\$121 ) begin
-      \$818  = config_write_data[20:16];
+    \$818  = ch0_read_select_a5;
+    if (bus__r_en) begin
+      \$818  = \$135 ;
     end
     if (rst) begin
-      \$818  = 5'h00;
+      \$818  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$819  = ch0_cfg_crc1_w1_crc_inverted;
-    if (\$122 ) begin
-      \$819  = config_write_data[24];
+    \$819  = ch0_read_select_a6;
+    if (bus__r_en) begin
+      \$819  = \$136 ;
     end
     if (rst) begin
       \$819  = 1'h0;
@@ -6585,36 +6935,39 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$820  = \$123 ;
+    \$820  = ch0_read_select_a7;
+    if (bus__r_en) begin
+      \$820  = \$137 ;
+    end
     if (rst) begin
       \$820  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$821  = ch0_cfg_crc1_start_w1_crc_start;
-    if (\$124 ) begin
-      \$821 [7:0] = config_write_data[7:0];
-    end
-    if (\$125 ) begin
-      \$821 [15:8] = config_write_data[15:8];
+    \$821  = ch0_read_select_a8;
+    if (bus__r_en) begin
+      \$821  = \$138 ;
     end
     if (rst) begin
-      \$821  = 16'h0000;
+      \$821  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$822  = \$126 ;
+    \$822  = ch0_read_select_a9;
+    if (bus__r_en) begin
+      \$822  = \$139 ;
+    end
     if (rst) begin
       \$822  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$823  = ch0_cfg_ssi_ssi;
-    if (\$127 ) begin
-      \$823  = config_write_data[0];
+    \$823  = ch0_read_select_aa;
+    if (bus__r_en) begin
+      \$823  = \$140 ;
     end
     if (rst) begin
       \$823  = 1'h0;
@@ -6622,9 +6975,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$824  = ch0_cfg_ssi_ssi_error;
-    if (\$128 ) begin
-      \$824  = config_write_data[1];
+    \$824  = ch0_read_select_ac;
+    if (bus__r_en) begin
+      \$824  = \$141 ;
     end
     if (rst) begin
       \$824  = 1'h0;
@@ -6632,9 +6985,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$825  = ch0_cfg_ssi_ssi_error_low;
-    if (\$129 ) begin
-      \$825  = config_write_data[2];
+    \$825  = ch0_read_select_ad;
+    if (bus__r_en) begin
+      \$825  = \$142 ;
     end
     if (rst) begin
       \$825  = 1'h0;
@@ -6642,9 +6995,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$826  = ch0_cfg_ssi_ssi_double;
-    if (\$130 ) begin
-      \$826  = config_write_data[3];
+    \$826  = ch0_read_select_ae;
+    if (bus__r_en) begin
+      \$826  = \$143 ;
     end
     if (rst) begin
       \$826  = 1'h0;
@@ -6652,185 +7005,239 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$827  = ch0_cfg_ssi_ssi_delay;
-    if (\$131 ) begin
-      \$827 [7:0] = config_write_data[23:16];
-    end
-    if (\$132 ) begin
-      \$827 [11:8] = config_write_data[27:24];
+    \$827  = ch0_read_select_b0;
+    if (bus__r_en) begin
+      \$827  = \$144 ;
     end
     if (rst) begin
-      \$827  = 12'h000;
+      \$827  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$828  = ch0_cfg_w2_write;
+    \$828  = ch0_read_select_b1;
+    if (bus__r_en) begin
+      \$828  = \$145 ;
+    end
     if (rst) begin
       \$828  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$829  = ch0_cfg_w2_crc_write;
+    \$829  = ch0_read_select_b2;
+    if (bus__r_en) begin
+      \$829  = \$146 ;
+    end
     if (rst) begin
       \$829  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$830  = ch0_cfg_w2_crc_start_write;
+    \$830  = ch0_read_select_b4;
+    if (bus__r_en) begin
+      \$830  = \$147 ;
+    end
     if (rst) begin
       \$830  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$831  = ch0_cfg_w3_write;
+    \$831  = ch0_read_select_b5;
+    if (bus__r_en) begin
+      \$831  = \$148 ;
+    end
     if (rst) begin
       \$831  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$832  = ch0_cfg_w3_crc_write;
+    \$832  = ch0_read_select_b6;
+    if (bus__r_en) begin
+      \$832  = \$149 ;
+    end
     if (rst) begin
       \$832  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$833  = ch0_cfg_w3_crc_start_write;
+    \$833  = ch0_read_select_b8;
+    if (bus__r_en) begin
+      \$833  = \$150 ;
+    end
     if (rst) begin
       \$833  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$834  = ch0_cfg_w4_write;
+    \$834  = ch0_read_select_b9;
+    if (bus__r_en) begin
+      \$834  = \$151 ;
+    end
     if (rst) begin
       \$834  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$835  = ch0_cfg_w4_crc_write;
+    \$835  = ch0_read_select_ba;
+    if (bus__r_en) begin
+      \$835  = \$152 ;
+    end
     if (rst) begin
       \$835  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$836  = ch0_cfg_w4_crc_start_write;
+    \$836  = ch0_read_select_bc;
+    if (bus__r_en) begin
+      \$836  = \$153 ;
+    end
     if (rst) begin
       \$836  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$837  = ch0_cfg_w5_write;
+    \$837  = ch0_read_select_bd;
+    if (bus__r_en) begin
+      \$837  = \$154 ;
+    end
     if (rst) begin
       \$837  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$838  = ch0_cfg_w5_crc_write;
+    \$838  = ch0_read_select_be;
+    if (bus__r_en) begin
+      \$838  = \$155 ;
+    end
     if (rst) begin
       \$838  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$839  = ch0_cfg_w5_crc_start_write;
+    \$839  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$839  = \$156 ;
+    end
     if (rst) begin
       \$839  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$840  = ch0_cfg_w6_write;
+    \$840  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$840  = \$157 ;
+    end
     if (rst) begin
       \$840  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$841  = ch0_cfg_w6_crc_write;
+    \$841  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$841  = \$158 ;
+    end
     if (rst) begin
       \$841  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$842  = ch0_cfg_w6_crc_start_write;
+    \$842  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$842  = \$159 ;
+    end
     if (rst) begin
       \$842  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$843  = ch0_cfg_w7_write;
+    \$843  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$843  = \$160 ;
+    end
     if (rst) begin
       \$843  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$844  = ch0_cfg_w7_crc_write;
+    \$844  = ch0_read_select_fc;
+    if (bus__r_en) begin
+      \$844  = \$161 ;
+    end
     if (rst) begin
       \$844  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$845  = ch0_cfg_w7_crc_start_write;
+    \$845  = ch0_read_select_fd;
+    if (bus__r_en) begin
+      \$845  = \$162 ;
+    end
     if (rst) begin
       \$845  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$846  = ch0_ca_request_write;
+    \$846  = ch0_result_status_status_snapshot;
+    if (\$163 ) begin
+      \$846  = \port$13521$0 [3:0];
+    end
     if (rst) begin
-      \$846  = 1'h0;
+      \$846  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$847  = ch0_ca_request_slave_id;
-    if (\$133 ) begin
-      \$847  = config_write_data[2:0];
+    \$847  = ch0_result_status_cds_snapshot;
+    if (\$163 ) begin
+      \$847  = \port$13521$0 [49];
     end
     if (rst) begin
-      \$847  = 3'h0;
+      \$847  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$848  = ch0_ca_request_address;
-    if (\$134 ) begin
-      \$848  = config_write_data[14:8];
+    \$848  = ch0_result_status_w0_ne_snapshot;
+    if (\$163 ) begin
+      \$848  = \port$13521$0 [131];
     end
     if (rst) begin
-      \$848  = 7'h00;
+      \$848  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$849  = ch0_ca_request_count;
-    if (\$135 ) begin
-      \$849  = config_write_data[22:16];
+    \$849  = ch0_result_status_w0_nw_snapshot;
+    if (\$163 ) begin
+      \$849  = \port$13521$0 [132];
     end
     if (rst) begin
-      \$849  = 7'h00;
+      \$849  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$850  = \ch0_ca_request_write$152 ;
-    if (\$136 ) begin
-      \$850  = config_write_data[24];
+    \$850  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$163 ) begin
+      \$850  = \port$13521$0 [133];
     end
     if (rst) begin
       \$850  = 1'h0;
@@ -6838,50 +7245,59 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$851  = \$138 ;
+    \$851  = ch0_result_status_w1_ne_snapshot;
+    if (\$163 ) begin
+      \$851  = \port$13521$0 [174];
+    end
     if (rst) begin
       \$851  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$852  = \$140 ;
+    \$852  = ch0_result_status_w1_nw_snapshot;
+    if (\$163 ) begin
+      \$852  = \port$13521$0 [175];
+    end
     if (rst) begin
       \$852  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$853  = config_memory0_write_data;
-    if (write_en) begin
-      \$853  = \$145 ;
+    \$853  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$163 ) begin
+      \$853  = \port$13521$0 [176];
     end
     if (rst) begin
-      \$853  = 32'd0;
+      \$853  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$854  = \$146 ;
+    \$854  = ch0_result_status_lc_repeat_snapshot;
+    if (\$163 ) begin
+      \$854  = \port$13521$0 [183];
+    end
     if (rst) begin
-      \$854  = 15'h0000;
+      \$854  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$855  = ch0_config_read_index;
-    if (ch0_config_read) begin
-      \$855  = config_memory0_read_index;
+    \$855  = ch0_result_status_lc_skip_snapshot;
+    if (\$163 ) begin
+      \$855  = \port$13521$0 [184];
     end
     if (rst) begin
-      \$855  = 4'h0;
+      \$855  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$856  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$856  = \$147 ;
+    \$856  = ch0_result_status_lc_zero_snapshot;
+    if (\$163 ) begin
+      \$856  = \port$13521$0 [185];
     end
     if (rst) begin
       \$856  = 1'h0;
@@ -6889,9 +7305,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$857  = ch0_read_select_81;
-    if (bus__r_en) begin
-      \$857  = \$148 ;
+    \$857  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$163 ) begin
+      \$857  = \port$13521$0 [186];
     end
     if (rst) begin
       \$857  = 1'h0;
@@ -6899,99 +7315,99 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$858  = ch0_read_select_82;
-    if (bus__r_en) begin
-      \$858  = \$149 ;
+    \$858  = ch0_result_status_lc_snapshot;
+    if (\$163 ) begin
+      \$858  = \port$13521$0 [182:177];
     end
     if (rst) begin
-      \$858  = 1'h0;
+      \$858  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$859  = ch0_read_select_84;
-    if (bus__r_en) begin
-      \$859  = \$150 ;
+    \$859  = ch0_result_seq_seq_snapshot;
+    if (\$163 ) begin
+      \$859  = ch0__done_count;
     end
     if (rst) begin
-      \$859  = 1'h0;
+      \$859  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$860  = ch0_read_select_86;
-    if (bus__r_en) begin
-      \$860  = \$151 ;
+    \$860  = ch0_result_seq_line_delay_snapshot;
+    if (\$163 ) begin
+      \$860  = \port$13521$0 [48:36];
     end
     if (rst) begin
-      \$860  = 1'h0;
+      \$860  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$861  = ch0_read_select_87;
-    if (bus__r_en) begin
-      \$861  = \$152 ;
+    \$861  = ch0_result_w0_lo_data_snapshot;
+    if (\$163 ) begin
+      \$861  = \port$13521$0 [107:76];
     end
     if (rst) begin
-      \$861  = 1'h0;
+      \$861  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$862  = ch0_read_select_90;
-    if (bus__r_en) begin
-      \$862  = \$153 ;
+    \$862  = ch0_result_w0_hi_data_snapshot;
+    if (\$163 ) begin
+      \$862  = { 9'h000, \port$13521$0 [130:108] };
     end
     if (rst) begin
-      \$862  = 1'h0;
+      \$862  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$863  = ch0_read_select_91;
-    if (bus__r_en) begin
-      \$863  = \$154 ;
+    \$863  = ch0_result_w1_lo_data_snapshot;
+    if (\$163 ) begin
+      \$863  = \port$13521$0 [165:134];
     end
     if (rst) begin
-      \$863  = 1'h0;
+      \$863  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$864  = ch0_read_select_92;
-    if (bus__r_en) begin
-      \$864  = \$155 ;
+    \$864  = ch0_result_w1_hi_data_snapshot;
+    if (\$163 ) begin
+      \$864  = { 24'h000000, \port$13521$0 [173:166] };
     end
     if (rst) begin
-      \$864  = 1'h0;
+      \$864  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$865  = ch0_read_select_93;
-    if (bus__r_en) begin
-      \$865  = \$156 ;
+    \$865  = ch0_result_timestamp_time_snapshot;
+    if (\$163 ) begin
+      \$865  = \port$13521$0 [35:4];
     end
     if (rst) begin
-      \$865  = 1'h0;
+      \$865  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$866  = ch0_read_select_94;
-    if (bus__r_en) begin
-      \$866  = \$157 ;
+    \$866  = ch0_result_line_noise_events_snapshot;
+    if (\$163 ) begin
+      \$866  = \port$13521$0 [53:50];
     end
     if (rst) begin
-      \$866  = 1'h0;
+      \$866  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$867  = ch0_read_select_95;
-    if (bus__r_en) begin
-      \$867  = \$158 ;
+    \$867  = ch0_result_line_delay_settled_snapshot;
+    if (\$163 ) begin
+      \$867  = \port$13521$0 [54];
     end
     if (rst) begin
       \$867  = 1'h0;
@@ -6999,29 +7415,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$868  = ch0_read_select_96;
-    if (bus__r_en) begin
-      \$868  = \$159 ;
+    \$868  = ch0_result_line_delay_spread_snapshot;
+    if (\$163 ) begin
+      \$868  = \port$13521$0 [75:68];
     end
     if (rst) begin
-      \$868  = 1'h0;
+      \$868  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$869  = ch0_read_select_97;
-    if (bus__r_en) begin
-      \$869  = \$160 ;
+    \$869  = ch0_result_line_settled_delay_snapshot;
+    if (\$163 ) begin
+      \$869  = \port$13521$0 [67:55];
     end
     if (rst) begin
-      \$869  = 1'h0;
+      \$869  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$870  = ch0_read_select_a5;
+    \$870  = ch0_window0_read;
     if (bus__r_en) begin
-      \$870  = \$161 ;
+      \$870  = \$165 ;
     end
     if (rst) begin
       \$870  = 1'h0;
@@ -7029,9 +7445,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$871  = ch0_read_select_a6;
+    \$871  = ch0_window1_read;
     if (bus__r_en) begin
-      \$871  = \$162 ;
+      \$871  = \$169 ;
     end
     if (rst) begin
       \$871  = 1'h0;
@@ -7039,9 +7455,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$872  = ch0_read_select_a7;
+    \$872  = ch0_window2_read;
     if (bus__r_en) begin
-      \$872  = \$163 ;
+      \$872  = \$171 ;
     end
     if (rst) begin
       \$872  = 1'h0;
@@ -7049,9 +7465,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$873  = ch0_read_select_a8;
+    \$873  = ch0_window3_read;
     if (bus__r_en) begin
-      \$873  = \$164 ;
+      \$873  = ch0_config_read;
     end
     if (rst) begin
       \$873  = 1'h0;
@@ -7059,59 +7475,47 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$874  = ch0_read_select_a9;
-    if (bus__r_en) begin
-      \$874  = \$165 ;
+    \$874  = ch0_read_data;
+    if (bus__r_load) begin
+      \$874  = \$263 ;
     end
     if (rst) begin
-      \$874  = 1'h0;
+      \$874  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$875  = ch0_read_select_aa;
-    if (bus__r_en) begin
-      \$875  = \$166 ;
-    end
+    \$875  = \$266 ;
     if (rst) begin
       \$875  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$876  = ch0_read_select_ac;
-    if (bus__r_en) begin
-      \$876  = \$167 ;
-    end
+    \$876  = \$268 ;
     if (rst) begin
       \$876  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$877  = ch0_read_select_ad;
-    if (bus__r_en) begin
-      \$877  = \$168 ;
-    end
+    \$877  = \$270 ;
     if (rst) begin
       \$877  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$878  = ch0_read_select_ae;
-    if (bus__r_en) begin
-      \$878  = \$169 ;
-    end
+    \$878  = \$272 ;
     if (rst) begin
       \$878  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$879  = ch0_read_select_b0;
-    if (bus__r_en) begin
-      \$879  = \$170 ;
+    \$879  = ch1_ctrl_periodic;
+    if (\$273 ) begin
+      \$879  = write_data[8];
     end
     if (rst) begin
       \$879  = 1'h0;
@@ -7119,9 +7523,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$880  = ch0_read_select_b1;
-    if (bus__r_en) begin
-      \$880  = \$171 ;
+    \$880  = ch1_ctrl_trigger_enable;
+    if (\$274 ) begin
+      \$880  = write_data[9];
     end
     if (rst) begin
       \$880  = 1'h0;
@@ -7129,9 +7533,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$881  = ch0_read_select_b2;
-    if (bus__r_en) begin
-      \$881  = \$172 ;
+    \$881  = ch1_irq_status_done;
+    if (ch1__frame_done) begin
+      \$881  = 1'h1;
+    end else if (\$276 ) begin
+      \$881  = 1'h0;
     end
     if (rst) begin
       \$881  = 1'h0;
@@ -7139,9 +7545,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$882  = ch0_read_select_b4;
-    if (bus__r_en) begin
-      \$882  = \$173 ;
+    \$882  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$882  = 1'h1;
+    end else if (\$278 ) begin
+      \$882  = 1'h0;
     end
     if (rst) begin
       \$882  = 1'h0;
@@ -7149,9 +7557,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$883  = ch0_read_select_b5;
-    if (bus__r_en) begin
-      \$883  = \$174 ;
+    \$883  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$883  = 1'h1;
+    end else if (\$280 ) begin
+      \$883  = 1'h0;
     end
     if (rst) begin
       \$883  = 1'h0;
@@ -7159,19 +7569,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$884  = ch0_read_select_b6;
-    if (bus__r_en) begin
-      \$884  = \$175 ;
-    end
+    \$884  = ch1_irq_enable_write;
     if (rst) begin
       \$884  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$885  = ch0_read_select_b8;
-    if (bus__r_en) begin
-      \$885  = \$176 ;
+    \$885  = ch1_irq_enable_done;
+    if (\$281 ) begin
+      \$885  = config_write_data[0];
     end
     if (rst) begin
       \$885  = 1'h0;
@@ -7179,9 +7586,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$886  = ch0_read_select_b9;
-    if (bus__r_en) begin
-      \$886  = \$177 ;
+    \$886  = ch1_irq_enable_error;
+    if (\$282 ) begin
+      \$886  = config_write_data[1];
     end
     if (rst) begin
       \$886  = 1'h0;
@@ -7189,9 +7596,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$887  = ch0_read_select_ba;
-    if (bus__r_en) begin
-      \$887  = \$178 ;
+    \$887  = ch1_irq_enable_access_done;
+    if (\$283 ) begin
+      \$887  = config_write_data[2];
     end
     if (rst) begin
       \$887  = 1'h0;
@@ -7199,139 +7606,151 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$888  = ch0_read_select_bc;
-    if (bus__r_en) begin
-      \$888  = \$179 ;
-    end
+    \$888  = \$284 ;
     if (rst) begin
       \$888  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$889  = ch0_read_select_bd;
-    if (bus__r_en) begin
-      \$889  = \$180 ;
+    \$889  = ch1_cfg_ma_ma_half_period;
+    if (\$285 ) begin
+      \$889 [7:0] = config_write_data[7:0];
+    end
+    if (\$286 ) begin
+      \$889 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$889  = 1'h0;
+      \$889  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$890  = ch0_read_select_be;
-    if (bus__r_en) begin
-      \$890  = \$181 ;
+    \$890  = ch1_cfg_ma_delay_limit;
+    if (\$287 ) begin
+      \$890 [7:0] = config_write_data[23:16];
+    end
+    if (\$288 ) begin
+      \$890 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$890  = 1'h0;
+      \$890  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$891  = ch0_read_select_c1;
-    if (bus__r_en) begin
-      \$891  = \$182 ;
-    end
+    \$891  = \$289 ;
     if (rst) begin
       \$891  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$892  = ch0_read_select_c2;
-    if (bus__r_en) begin
-      \$892  = \$183 ;
+    \$892  = ch1_cfg_period_request_period;
+    if (\$290 ) begin
+      \$892 [7:0] = config_write_data[7:0];
+    end
+    if (\$291 ) begin
+      \$892 [15:8] = config_write_data[15:8];
+    end
+    if (\$292 ) begin
+      \$892 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$892  = 1'h0;
+      \$892  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$893  = ch0_read_select_c3;
-    if (bus__r_en) begin
-      \$893  = \$184 ;
-    end
+    \$893  = \$293 ;
     if (rst) begin
       \$893  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$894  = ch0_read_select_c4;
-    if (bus__r_en) begin
-      \$894  = \$185 ;
+    \$894  = ch1_cfg_break_break_time;
+    if (\$294 ) begin
+      \$894 [7:0] = config_write_data[7:0];
+    end
+    if (\$295 ) begin
+      \$894 [15:8] = config_write_data[15:8];
+    end
+    if (\$296 ) begin
+      \$894 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$894  = 1'h0;
+      \$894  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$895  = ch0_read_select_c5;
-    if (bus__r_en) begin
-      \$895  = \$186 ;
-    end
+    \$895  = \$297 ;
     if (rst) begin
       \$895  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$896  = ch0_read_select_fc;
-    if (bus__r_en) begin
-      \$896  = \$187 ;
+    \$896  = ch1_cfg_ack_ack_limit;
+    if (\$298 ) begin
+      \$896 [7:0] = config_write_data[7:0];
+    end
+    if (\$299 ) begin
+      \$896 [15:8] = config_write_data[15:8];
+    end
+    if (\$300 ) begin
+      \$896 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$896  = 1'h0;
+      \$896  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$897  = ch0_read_select_fd;
-    if (bus__r_en) begin
-      \$897  = \$188 ;
-    end
+    \$897  = \$301 ;
     if (rst) begin
       \$897  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$898  = ch0_result_status_status_snapshot;
-    if (\$189 ) begin
-      \$898  = \port$13573$0 [3:0];
+    \$898  = ch1_cfg_timeout_timeout_limit;
+    if (\$302 ) begin
+      \$898 [7:0] = config_write_data[7:0];
+    end
+    if (\$303 ) begin
+      \$898 [15:8] = config_write_data[15:8];
+    end
+    if (\$304 ) begin
+      \$898 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$898  = 4'h0;
+      \$898  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$899  = ch0_result_status_cds_snapshot;
-    if (\$189 ) begin
-      \$899  = \port$13573$0 [49];
-    end
+    \$899  = \$305 ;
     if (rst) begin
       \$899  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$900  = ch0_result_status_w0_ne_snapshot;
-    if (\$189 ) begin
-      \$900  = \port$13573$0 [131];
+    \$900  = ch1_cfg_words_w0_data_bits;
+    if (\$306 ) begin
+      \$900  = config_write_data[6:0];
     end
     if (rst) begin
-      \$900  = 1'h0;
+      \$900  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$901  = ch0_result_status_w0_nw_snapshot;
-    if (\$189 ) begin
-      \$901  = \port$13573$0 [132];
+    \$901  = ch1_cfg_words_w0_nenw;
+    if (\$307 ) begin
+      \$901  = config_write_data[7];
     end
     if (rst) begin
       \$901  = 1'h0;
@@ -7339,9 +7758,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$902  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$189 ) begin
-      \$902  = \port$13573$0 [133];
+    \$902  = ch1_cfg_words_w0_lc;
+    if (\$308 ) begin
+      \$902  = config_write_data[8];
     end
     if (rst) begin
       \$902  = 1'h0;
@@ -7349,19 +7768,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$903  = ch0_result_status_w1_ne_snapshot;
-    if (\$189 ) begin
-      \$903  = \port$13573$0 [174];
+    \$903  = ch1_cfg_words_w0_crc;
+    if (\$309 ) begin
+      \$903  = config_write_data[10:9];
     end
     if (rst) begin
-      \$903  = 1'h0;
+      \$903  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$904  = ch0_result_status_w1_nw_snapshot;
-    if (\$189 ) begin
-      \$904  = \port$13573$0 [175];
+    \$904  = ch1_cfg_words_w0_gray;
+    if (\$310 ) begin
+      \$904  = config_write_data[11];
     end
     if (rst) begin
       \$904  = 1'h0;
@@ -7369,9 +7788,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$905  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$189 ) begin
-      \$905  = \port$13573$0 [176];
+    \$905  = ch1_cfg_words_w0_signed;
+    if (\$311 ) begin
+      \$905  = config_write_data[12];
     end
     if (rst) begin
       \$905  = 1'h0;
@@ -7379,19 +7798,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$906  = ch0_result_status_lc_repeat_snapshot;
-    if (\$189 ) begin
-      \$906  = \port$13573$0 [183];
+    \$906  = ch1_cfg_words_w1_data_bits;
+    if (\$312 ) begin
+      \$906  = config_write_data[22:16];
     end
     if (rst) begin
-      \$906  = 1'h0;
+      \$906  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$907  = ch0_result_status_lc_skip_snapshot;
-    if (\$189 ) begin
-      \$907  = \port$13573$0 [184];
+    \$907  = ch1_cfg_words_w1_nenw;
+    if (\$313 ) begin
+      \$907  = config_write_data[23];
     end
     if (rst) begin
       \$907  = 1'h0;
@@ -7399,9 +7818,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$908  = ch0_result_status_lc_zero_snapshot;
-    if (\$189 ) begin
-      \$908  = \port$13573$0 [185];
+    \$908  = ch1_cfg_words_w1_lc;
+    if (\$314 ) begin
+      \$908  = config_write_data[24];
     end
     if (rst) begin
       \$908  = 1'h0;
@@ -7409,99 +7828,96 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$909  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$189 ) begin
-      \$909  = \port$13573$0 [186];
+    \$909  = ch1_cfg_words_w1_crc;
+    if (\$315 ) begin
+      \$909  = config_write_data[26:25];
     end
     if (rst) begin
-      \$909  = 1'h0;
+      \$909  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$910  = ch0_result_status_lc_snapshot;
-    if (\$189 ) begin
-      \$910  = \port$13573$0 [182:177];
+    \$910  = ch1_cfg_words_w1_gray;
+    if (\$316 ) begin
+      \$910  = config_write_data[27];
     end
     if (rst) begin
-      \$910  = 6'h00;
+      \$910  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$911  = ch0_result_seq_seq_snapshot;
-    if (\$189 ) begin
-      \$911  = ch0__done_count;
+    \$911  = ch1_cfg_words_w1_signed;
+    if (\$317 ) begin
+      \$911  = config_write_data[28];
     end
     if (rst) begin
-      \$911  = 16'h0000;
+      \$911  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$912  = ch0_result_seq_line_delay_snapshot;
-    if (\$189 ) begin
-      \$912  = \port$13573$0 [48:36];
+    \$912  = ch1_cfg_words_w1_enable;
+    if (\$318 ) begin
+      \$912  = config_write_data[31];
     end
     if (rst) begin
-      \$912  = 13'h0000;
+      \$912  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$913  = ch0_result_w0_lo_data_snapshot;
-    if (\$189 ) begin
-      \$913  = \port$13573$0 [107:76];
-    end
+    \$913  = \$319 ;
     if (rst) begin
-      \$913  = 32'd0;
+      \$913  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$914  = ch0_result_w0_hi_data_snapshot;
-    if (\$189 ) begin
-      \$914  = { 9'h000, \port$13573$0 [130:108] };
+    \$914  = ch1_cfg_checks_end_check;
+    if (\$320 ) begin
+      \$914  = config_write_data[0];
     end
     if (rst) begin
-      \$914  = 32'd0;
+      \$914  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$915  = ch0_result_w1_lo_data_snapshot;
-    if (\$189 ) begin
-      \$915  = \port$13573$0 [165:134];
+    \$915  = ch1_cfg_checks_spw_check;
+    if (\$321 ) begin
+      \$915  = config_write_data[1];
     end
     if (rst) begin
-      \$915  = 32'd0;
+      \$915  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$916  = ch0_result_w1_hi_data_snapshot;
-    if (\$189 ) begin
-      \$916  = { 24'h000000, \port$13573$0 [173:166] };
+    \$916  = ch1_cfg_checks_spw_tolerance;
+    if (\$322 ) begin
+      \$916  = config_write_data[15:8];
     end
     if (rst) begin
-      \$916  = 32'd0;
+      \$916  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$917  = ch0_result_timestamp_time_snapshot;
-    if (\$189 ) begin
-      \$917  = \port$13573$0 [35:4];
+    \$917  = ch1_cfg_checks_noise_limit;
+    if (\$323 ) begin
+      \$917  = config_write_data[19:16];
     end
     if (rst) begin
-      \$917  = 32'd0;
+      \$917  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$918  = ch0_result_line_noise_events_snapshot;
-    if (\$189 ) begin
-      \$918  = \port$13573$0 [53:50];
+    \$918  = ch1_cfg_checks_delay_tolerance;
+    if (\$324 ) begin
+      \$918  = config_write_data[23:20];
     end
     if (rst) begin
       \$918  = 4'h0;
@@ -7509,69 +7925,69 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$919  = ch0_result_line_delay_settled_snapshot;
-    if (\$189 ) begin
-      \$919  = \port$13573$0 [54];
+    \$919  = ch1_cfg_checks_confirm_frames;
+    if (\$325 ) begin
+      \$919  = config_write_data[27:24];
     end
     if (rst) begin
-      \$919  = 1'h0;
+      \$919  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$920  = ch0_result_line_delay_spread_snapshot;
-    if (\$189 ) begin
-      \$920  = \port$13573$0 [75:68];
-    end
+    \$920  = \$326 ;
     if (rst) begin
-      \$920  = 8'h00;
+      \$920  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$921  = ch0_result_line_settled_delay_snapshot;
-    if (\$189 ) begin
-      \$921  = \port$13573$0 [67:55];
+    \$921  = ch1_cfg_quiet_quiet_time;
+    if (\$327 ) begin
+      \$921 [7:0] = config_write_data[7:0];
+    end
+    if (\$328 ) begin
+      \$921 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$921  = 13'h0000;
+      \$921  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$922  = ch0_window0_read;
-    if (bus__r_en) begin
-      \$922  = \$191 ;
-    end
+    \$922  = \$329 ;
     if (rst) begin
       \$922  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$923  = ch0_window1_read;
-    if (bus__r_en) begin
-      \$923  = \$195 ;
+    \$923  = ch1_cfg_crc0_w0_crc_poly;
+    if (\$330 ) begin
+      \$923 [7:0] = config_write_data[7:0];
+    end
+    if (\$331 ) begin
+      \$923 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$923  = 1'h0;
+      \$923  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$924  = ch0_window2_read;
-    if (bus__r_en) begin
-      \$924  = \$197 ;
+    \$924  = ch1_cfg_crc0_w0_crc_width;
+    if (\$332 ) begin
+      \$924  = config_write_data[20:16];
     end
     if (rst) begin
-      \$924  = 1'h0;
+      \$924  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$925  = ch0_window3_read;
-    if (bus__r_en) begin
-      \$925  = ch0_config_read;
+    \$925  = ch1_cfg_crc0_w0_crc_inverted;
+    if (\$333 ) begin
+      \$925  = config_write_data[24];
     end
     if (rst) begin
       \$925  = 1'h0;
@@ -7579,93 +7995,96 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$926  = ch0_read_data;
-    if (bus__r_load) begin
-      \$926  = \$289 ;
-    end
+    \$926  = \$334 ;
     if (rst) begin
-      \$926  = 32'd0;
+      \$926  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$927  = ch1_config_wait;
-    if (\$316 ) begin
-      \$927  = 1'h1;
-    end else if (ch1_config_go) begin
-      \$927  = 1'h0;
+    \$927  = ch1_cfg_crc0_start_w0_crc_start;
+    if (\$335 ) begin
+      \$927 [7:0] = config_write_data[7:0];
+    end
+    if (\$336 ) begin
+      \$927 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$927  = 1'h0;
+      \$927  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$928  = \$319 ;
+    \$928  = \$337 ;
     if (rst) begin
       \$928  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$929  = \$321 ;
+    \$929  = ch1_cfg_crc1_w1_crc_poly;
+    if (\$338 ) begin
+      \$929 [7:0] = config_write_data[7:0];
+    end
+    if (\$339 ) begin
+      \$929 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$929  = 1'h0;
+      \$929  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$930  = \$323 ;
+    \$930  = ch1_cfg_crc1_w1_crc_width;
+    if (\$340 ) begin
+      \$930  = config_write_data[20:16];
+    end
     if (rst) begin
-      \$930  = 1'h0;
+      \$930  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$931  = \$325 ;
+    \$931  = ch1_cfg_crc1_w1_crc_inverted;
+    if (\$341 ) begin
+      \$931  = config_write_data[24];
+    end
     if (rst) begin
       \$931  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$932  = ch1_ctrl_periodic;
-    if (\$326 ) begin
-      \$932  = write_data[8];
-    end
+    \$932  = \$342 ;
     if (rst) begin
       \$932  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$933  = ch1_ctrl_trigger_enable;
-    if (\$327 ) begin
-      \$933  = write_data[9];
+    \$933  = ch1_cfg_crc1_start_w1_crc_start;
+    if (\$343 ) begin
+      \$933 [7:0] = config_write_data[7:0];
+    end
+    if (\$344 ) begin
+      \$933 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$933  = 1'h0;
+      \$933  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$934  = ch1_irq_status_done;
-    if (ch1__frame_done) begin
-      \$934  = 1'h1;
-    end else if (\$329 ) begin
-      \$934  = 1'h0;
-    end
+    \$934  = \$345 ;
     if (rst) begin
       \$934  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$935  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$935  = 1'h1;
-    end else if (\$331 ) begin
-      \$935  = 1'h0;
+    \$935  = ch1_cfg_ssi_ssi;
+    if (\$346 ) begin
+      \$935  = config_write_data[0];
     end
     if (rst) begin
       \$935  = 1'h0;
@@ -7673,11 +8092,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$936  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$936  = 1'h1;
-    end else if (\$333 ) begin
-      \$936  = 1'h0;
+    \$936  = ch1_cfg_ssi_ssi_error;
+    if (\$347 ) begin
+      \$936  = config_write_data[1];
     end
     if (rst) begin
       \$936  = 1'h0;
@@ -7685,16 +8102,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$937  = ch1_irq_enable_write;
+    \$937  = ch1_cfg_ssi_ssi_error_low;
+    if (\$348 ) begin
+      \$937  = config_write_data[2];
+    end
     if (rst) begin
       \$937  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$938  = ch1_irq_enable_done;
-    if (\$334 ) begin
-      \$938  = config_write_data[0];
+    \$938  = ch1_cfg_ssi_ssi_double;
+    if (\$349 ) begin
+      \$938  = config_write_data[3];
     end
     if (rst) begin
       \$938  = 1'h0;
@@ -7702,281 +8122,211 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$939  = ch1_irq_enable_error;
-    if (\$335 ) begin
-      \$939  = config_write_data[1];
+    \$939  = ch1_cfg_ssi_ssi_delay;
+    if (\$350 ) begin
+      \$939 [7:0] = config_write_data[23:16];
+    end
+    if (\$351 ) begin
+      \$939 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$939  = 1'h0;
+      \$939  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$940  = ch1_irq_enable_access_done;
-    if (\$336 ) begin
-      \$940  = config_write_data[2];
-    end
+    \$940  = ch1_cfg_w2_write;
     if (rst) begin
       \$940  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$941  = \$337 ;
+    \$941  = ch1_cfg_w2_crc_write;
     if (rst) begin
       \$941  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$942  = ch1_cfg_ma_ma_half_period;
-    if (\$338 ) begin
-      \$942 [7:0] = config_write_data[7:0];
-    end
-    if (\$339 ) begin
-      \$942 [15:8] = config_write_data[15:8];
-    end
+    \$942  = ch1_cfg_w2_crc_start_write;
     if (rst) begin
-      \$942  = 16'h0000;
+      \$942  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$943  = ch1_cfg_ma_delay_limit;
-    if (\$340 ) begin
-      \$943 [7:0] = config_write_data[23:16];
-    end
-    if (\$341 ) begin
-      \$943 [11:8] = config_write_data[27:24];
-    end
+    \$943  = ch1_cfg_w3_write;
     if (rst) begin
-      \$943  = 12'h000;
+      \$943  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$944  = \$342 ;
+    \$944  = ch1_cfg_w3_crc_write;
     if (rst) begin
       \$944  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$945  = ch1_cfg_period_request_period;
-    if (\$343 ) begin
-      \$945 [7:0] = config_write_data[7:0];
-    end
-    if (\$344 ) begin
-      \$945 [15:8] = config_write_data[15:8];
-    end
-    if (\$345 ) begin
-      \$945 [23:16] = config_write_data[23:16];
-    end
+    \$945  = ch1_cfg_w3_crc_start_write;
     if (rst) begin
-      \$945  = 24'h000000;
+      \$945  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$946  = \$346 ;
+    \$946  = ch1_cfg_w4_write;
     if (rst) begin
       \$946  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$947  = ch1_cfg_break_break_time;
-    if (\$347 ) begin
-      \$947 [7:0] = config_write_data[7:0];
-    end
-    if (\$348 ) begin
-      \$947 [15:8] = config_write_data[15:8];
-    end
-    if (\$349 ) begin
-      \$947 [23:16] = config_write_data[23:16];
-    end
+    \$947  = ch1_cfg_w4_crc_write;
     if (rst) begin
-      \$947  = 24'h000000;
+      \$947  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$948  = \$350 ;
+    \$948  = ch1_cfg_w4_crc_start_write;
     if (rst) begin
       \$948  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$949  = ch1_cfg_ack_ack_limit;
-    if (\$351 ) begin
-      \$949 [7:0] = config_write_data[7:0];
-    end
-    if (\$352 ) begin
-      \$949 [15:8] = config_write_data[15:8];
-    end
-    if (\$353 ) begin
-      \$949 [23:16] = config_write_data[23:16];
-    end
+    \$949  = ch1_cfg_w5_write;
     if (rst) begin
-      \$949  = 24'h000000;
+      \$949  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$950  = \$354 ;
+    \$950  = ch1_cfg_w5_crc_write;
     if (rst) begin
       \$950  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$951  = ch1_cfg_timeout_timeout_limit;
-    if (\$355 ) begin
-      \$951 [7:0] = config_write_data[7:0];
-    end
-    if (\$356 ) begin
-      \$951 [15:8] = config_write_data[15:8];
-    end
-    if (\$357 ) begin
-      \$951 [23:16] = config_write_data[23:16];
-    end
+    \$951  = ch1_cfg_w5_crc_start_write;
     if (rst) begin
-      \$951  = 24'h000000;
+      \$951  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$952  = \$358 ;
+    \$952  = ch1_cfg_w6_write;
     if (rst) begin
       \$952  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$953  = ch1_cfg_words_w0_data_bits;
-    if (\$359 ) begin
-      \$953  = config_write_data[6:0];
-    end
+    \$953  = ch1_cfg_w6_crc_write;
     if (rst) begin
-      \$953  = 7'h00;
+      \$953  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$954  = ch1_cfg_words_w0_nenw;
-    if (\$360 ) begin
-      \$954  = config_write_data[7];
-    end
+    \$954  = ch1_cfg_w6_crc_start_write;
     if (rst) begin
       \$954  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$955  = ch1_cfg_words_w0_lc;
-    if (\$361 ) begin
-      \$955  = config_write_data[8];
-    end
+    \$955  = ch1_cfg_w7_write;
     if (rst) begin
       \$955  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$956  = ch1_cfg_words_w0_crc;
-    if (\$362 ) begin
-      \$956  = config_write_data[10:9];
-    end
+    \$956  = ch1_cfg_w7_crc_write;
     if (rst) begin
-      \$956  = 2'h0;
+      \$956  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$957  = ch1_cfg_words_w0_gray;
-    if (\$363 ) begin
-      \$957  = config_write_data[11];
-    end
+    \$957  = ch1_cfg_w7_crc_start_write;
     if (rst) begin
       \$957  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$958  = ch1_cfg_words_w0_signed;
-    if (\$364 ) begin
-      \$958  = config_write_data[12];
-    end
+    \$958  = ch1_ca_request_write;
     if (rst) begin
       \$958  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$959  = ch1_cfg_words_w1_data_bits;
-    if (\$365 ) begin
-      \$959  = config_write_data[22:16];
+    \$959  = ch1_ca_request_slave_id;
+    if (\$352 ) begin
+      \$959  = config_write_data[2:0];
     end
     if (rst) begin
-      \$959  = 7'h00;
+      \$959  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$960  = ch1_cfg_words_w1_nenw;
-    if (\$366 ) begin
-      \$960  = config_write_data[23];
+    \$960  = ch1_ca_request_address;
+    if (\$353 ) begin
+      \$960  = config_write_data[14:8];
     end
     if (rst) begin
-      \$960  = 1'h0;
+      \$960  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$961  = ch1_cfg_words_w1_lc;
-    if (\$367 ) begin
-      \$961  = config_write_data[24];
+    \$961  = ch1_ca_request_count;
+    if (\$354 ) begin
+      \$961  = config_write_data[22:16];
     end
     if (rst) begin
-      \$961  = 1'h0;
+      \$961  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$962  = ch1_cfg_words_w1_crc;
-    if (\$368 ) begin
-      \$962  = config_write_data[26:25];
+    \$962  = \ch1_ca_request_write$448 ;
+    if (\$355 ) begin
+      \$962  = config_write_data[24];
     end
     if (rst) begin
-      \$962  = 2'h0;
+      \$962  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$963  = ch1_cfg_words_w1_gray;
-    if (\$369 ) begin
-      \$963  = config_write_data[27];
-    end
+    \$963  = \$357 ;
     if (rst) begin
       \$963  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$964  = ch1_cfg_words_w1_signed;
-    if (\$370 ) begin
-      \$964  = config_write_data[28];
-    end
+    \$964  = \$359 ;
     if (rst) begin
       \$964  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$965  = ch1_cfg_words_w1_enable;
-    if (\$371 ) begin
-      \$965  = config_write_data[31];
+    \$965  = ch1_config_wait;
+    if (\$360 ) begin
+      \$965  = 1'h1;
+    end else if (ch1_config_go) begin
+      \$965  = 1'h0;
     end
     if (rst) begin
       \$965  = 1'h0;
@@ -7984,26 +8334,26 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$966  = \$372 ;
+    \$966  = \$361 ;
     if (rst) begin
-      \$966  = 1'h0;
+      \$966  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$967  = ch1_cfg_checks_end_check;
-    if (\$373 ) begin
-      \$967  = config_write_data[0];
+    \$967  = ch1_config_read_index;
+    if (ch1_config_read) begin
+      \$967  = config_memory0_read_index;
     end
     if (rst) begin
-      \$967  = 1'h0;
+      \$967  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$968  = ch1_cfg_checks_spw_check;
-    if (\$374 ) begin
-      \$968  = config_write_data[1];
+    \$968  = ch1_read_select_100;
+    if (bus__r_en) begin
+      \$968  = \$362 ;
     end
     if (rst) begin
       \$968  = 1'h0;
@@ -8011,99 +8361,99 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$969  = ch1_cfg_checks_spw_tolerance;
-    if (\$375 ) begin
-      \$969  = config_write_data[15:8];
+    \$969  = ch1_read_select_101;
+    if (bus__r_en) begin
+      \$969  = \$363 ;
     end
     if (rst) begin
-      \$969  = 8'h00;
+      \$969  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$970  = ch1_cfg_checks_noise_limit;
-    if (\$376 ) begin
-      \$970  = config_write_data[19:16];
+    \$970  = ch1_read_select_102;
+    if (bus__r_en) begin
+      \$970  = \$364 ;
     end
     if (rst) begin
-      \$970  = 4'h0;
+      \$970  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$971  = ch1_cfg_checks_delay_tolerance;
-    if (\$377 ) begin
-      \$971  = config_write_data[23:20];
+    \$971  = ch1_read_select_104;
+    if (bus__r_en) begin
+      \$971  = \$365 ;
     end
     if (rst) begin
-      \$971  = 4'h0;
+      \$971  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$972  = ch1_cfg_checks_confirm_frames;
-    if (\$378 ) begin
-      \$972  = config_write_data[27:24];
+    \$972  = ch1_read_select_106;
+    if (bus__r_en) begin
+      \$972  = \$366 ;
     end
     if (rst) begin
-      \$972  = 4'h0;
+      \$972  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$973  = \$379 ;
+    \$973  = ch1_read_select_107;
+    if (bus__r_en) begin
+      \$973  = \$367 ;
+    end
     if (rst) begin
       \$973  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$974  = ch1_cfg_quiet_quiet_time;
-    if (\$380 ) begin
-      \$974 [7:0] = config_write_data[7:0];
-    end
-    if (\$381 ) begin
-      \$974 [11:8] = config_write_data[11:8];
+    \$974  = ch1_read_select_110;
+    if (bus__r_en) begin
+      \$974  = \$368 ;
     end
     if (rst) begin
-      \$974  = 12'h000;
+      \$974  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$975  = \$382 ;
+    \$975  = ch1_read_select_111;
+    if (bus__r_en) begin
+      \$975  = \$369 ;
+    end
     if (rst) begin
       \$975  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$976  = ch1_cfg_crc0_w0_crc_poly;
-    if (\$383 ) begin
-      \$976 [7:0] = config_write_data[7:0];
-    end
-    if (\$384 ) begin
-      \$976 [15:8] = config_write_data[15:8];
+    \$976  = ch1_read_select_112;
+    if (bus__r_en) begin
+      \$976  = \$370 ;
     end
     if (rst) begin
-      \$976  = 16'h0000;
+      \$976  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$977  = ch1_cfg_crc0_w0_crc_width;
-    if (\$385 ) begin
-      \$977  = config_write_data[20:16];
+    \$977  = ch1_read_select_113;
+    if (bus__r_en) begin
+      \$977  = \$371 ;
     end
     if (rst) begin
-      \$977  = 5'h00;
+      \$977  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$978  = ch1_cfg_crc0_w0_crc_inverted;
-    if (\$386 ) begin
-      \$978  = config_write_data[24];
+    \$978  = ch1_read_select_114;
+    if (bus__r_en) begin
+      \$978  = \$372 ;
     end
     if (rst) begin
       \$978  = 1'h0;
@@ -8111,59 +8461,59 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$979  = \$387 ;
+    \$979  = ch1_read_select_115;
+    if (bus__r_en) begin
+      \$979  = \$373 ;
+    end
     if (rst) begin
       \$979  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$980  = ch1_cfg_crc0_start_w0_crc_start;
-    if (\$388 ) begin
-      \$980 [7:0] = config_write_data[7:0];
-    end
-    if (\$389 ) begin
-      \$980 [15:8] = config_write_data[15:8];
+    \$980  = ch1_read_select_116;
+    if (bus__r_en) begin
+      \$980  = \$374 ;
     end
     if (rst) begin
-      \$980  = 16'h0000;
+      \$980  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$981  = \$390 ;
+    \$981  = ch1_read_select_117;
+    if (bus__r_en) begin
+      \$981  = \$375 ;
+    end
     if (rst) begin
       \$981  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$982  = ch1_cfg_crc1_w1_crc_poly;
-    if (\$391 ) begin
-      \$982 [7:0] = config_write_data[7:0];
-    end
-    if (\$392 ) begin
-      \$982 [15:8] = config_write_data[15:8];
+    \$982  = ch1_read_select_125;
+    if (bus__r_en) begin
+      \$982  = \$376 ;
     end
     if (rst) begin
-      \$982  = 16'h0000;
+      \$982  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$983  = ch1_cfg_crc1_w1_crc_width;
-    if (\$393 ) begin
-      \$983  = config_write_data[20:16];
+    \$983  = ch1_read_select_126;
+    if (bus__r_en) begin
+      \$983  = \$377 ;
     end
     if (rst) begin
-      \$983  = 5'h00;
+      \$983  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$984  = ch1_cfg_crc1_w1_crc_inverted;
-    if (\$394 ) begin
-      \$984  = config_write_data[24];
+    \$984  = ch1_read_select_127;
+    if (bus__r_en) begin
+      \$984  = \$378 ;
     end
     if (rst) begin
       \$984  = 1'h0;
@@ -8171,36 +8521,39 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$985  = \$395 ;
+    \$985  = ch1_read_select_128;
+    if (bus__r_en) begin
+      \$985  = \$379 ;
+    end
     if (rst) begin
       \$985  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$986  = ch1_cfg_crc1_start_w1_crc_start;
-    if (\$396 ) begin
-      \$986 [7:0] = config_write_data[7:0];
-    end
-    if (\$397 ) begin
-      \$986 [15:8] = config_write_data[15:8];
+    \$986  = ch1_read_select_129;
+    if (bus__r_en) begin
+      \$986  = \$380 ;
     end
     if (rst) begin
-      \$986  = 16'h0000;
+      \$986  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$987  = \$398 ;
+    \$987  = ch1_read_select_12a;
+    if (bus__r_en) begin
+      \$987  = \$381 ;
+    end
     if (rst) begin
       \$987  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$988  = ch1_cfg_ssi_ssi;
-    if (\$399 ) begin
-      \$988  = config_write_data[0];
+    \$988  = ch1_read_select_12c;
+    if (bus__r_en) begin
+      \$988  = \$382 ;
     end
     if (rst) begin
       \$988  = 1'h0;
@@ -8208,9 +8561,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$989  = ch1_cfg_ssi_ssi_error;
-    if (\$400 ) begin
-      \$989  = config_write_data[1];
+    \$989  = ch1_read_select_12d;
+    if (bus__r_en) begin
+      \$989  = \$383 ;
     end
     if (rst) begin
       \$989  = 1'h0;
@@ -8218,9 +8571,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$990  = ch1_cfg_ssi_ssi_error_low;
-    if (\$401 ) begin
-      \$990  = config_write_data[2];
+    \$990  = ch1_read_select_12e;
+    if (bus__r_en) begin
+      \$990  = \$384 ;
     end
     if (rst) begin
       \$990  = 1'h0;
@@ -8228,9 +8581,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$991  = ch1_cfg_ssi_ssi_double;
-    if (\$402 ) begin
-      \$991  = config_write_data[3];
+    \$991  = ch1_read_select_130;
+    if (bus__r_en) begin
+      \$991  = \$385 ;
     end
     if (rst) begin
       \$991  = 1'h0;
@@ -8238,185 +8591,239 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$992  = ch1_cfg_ssi_ssi_delay;
-    if (\$403 ) begin
-      \$992 [7:0] = config_write_data[23:16];
-    end
-    if (\$404 ) begin
-      \$992 [11:8] = config_write_data[27:24];
+    \$992  = ch1_read_select_131;
+    if (bus__r_en) begin
+      \$992  = \$386 ;
     end
     if (rst) begin
-      \$992  = 12'h000;
+      \$992  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$993  = ch1_cfg_w2_write;
+    \$993  = ch1_read_select_132;
+    if (bus__r_en) begin
+      \$993  = \$387 ;
+    end
     if (rst) begin
       \$993  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$994  = ch1_cfg_w2_crc_write;
+    \$994  = ch1_read_select_134;
+    if (bus__r_en) begin
+      \$994  = \$388 ;
+    end
     if (rst) begin
       \$994  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$995  = ch1_cfg_w2_crc_start_write;
+    \$995  = ch1_read_select_135;
+    if (bus__r_en) begin
+      \$995  = \$389 ;
+    end
     if (rst) begin
       \$995  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$996  = ch1_cfg_w3_write;
+    \$996  = ch1_read_select_136;
+    if (bus__r_en) begin
+      \$996  = \$390 ;
+    end
     if (rst) begin
       \$996  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$997  = ch1_cfg_w3_crc_write;
+    \$997  = ch1_read_select_138;
+    if (bus__r_en) begin
+      \$997  = \$391 ;
+    end
     if (rst) begin
       \$997  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$998  = ch1_cfg_w3_crc_start_write;
+    \$998  = ch1_read_select_139;
+    if (bus__r_en) begin
+      \$998  = \$392 ;
+    end
     if (rst) begin
       \$998  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$999  = ch1_cfg_w4_write;
+    \$999  = ch1_read_select_13a;
+    if (bus__r_en) begin
+      \$999  = \$393 ;
+    end
     if (rst) begin
       \$999  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1000  = ch1_cfg_w4_crc_write;
+    \$1000  = ch1_read_select_13c;
+    if (bus__r_en) begin
+      \$1000  = \$394 ;
+    end
     if (rst) begin
       \$1000  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1001  = ch1_cfg_w4_crc_start_write;
+    \$1001  = ch1_read_select_13d;
+    if (bus__r_en) begin
+      \$1001  = \$395 ;
+    end
     if (rst) begin
       \$1001  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1002  = ch1_cfg_w5_write;
+    \$1002  = ch1_read_select_13e;
+    if (bus__r_en) begin
+      \$1002  = \$396 ;
+    end
     if (rst) begin
       \$1002  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1003  = ch1_cfg_w5_crc_write;
+    \$1003  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$1003  = \$397 ;
+    end
     if (rst) begin
       \$1003  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1004  = ch1_cfg_w5_crc_start_write;
+    \$1004  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$1004  = \$398 ;
+    end
     if (rst) begin
       \$1004  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1005  = ch1_cfg_w6_write;
+    \$1005  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$1005  = \$399 ;
+    end
     if (rst) begin
       \$1005  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1006  = ch1_cfg_w6_crc_write;
+    \$1006  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$1006  = \$400 ;
+    end
     if (rst) begin
       \$1006  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1007  = ch1_cfg_w6_crc_start_write;
+    \$1007  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$1007  = \$401 ;
+    end
     if (rst) begin
       \$1007  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1008  = ch1_cfg_w7_write;
+    \$1008  = ch1_read_select_17c;
+    if (bus__r_en) begin
+      \$1008  = \$402 ;
+    end
     if (rst) begin
       \$1008  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1009  = ch1_cfg_w7_crc_write;
+    \$1009  = ch1_read_select_17d;
+    if (bus__r_en) begin
+      \$1009  = \$403 ;
+    end
     if (rst) begin
       \$1009  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1010  = ch1_cfg_w7_crc_start_write;
+    \$1010  = ch1_result_status_status_snapshot;
+    if (\$404 ) begin
+      \$1010  = \port$14072$0 [3:0];
+    end
     if (rst) begin
-      \$1010  = 1'h0;
+      \$1010  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1011  = ch1_ca_request_write;
+    \$1011  = ch1_result_status_cds_snapshot;
+    if (\$404 ) begin
+      \$1011  = \port$14072$0 [49];
+    end
     if (rst) begin
       \$1011  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1012  = ch1_ca_request_slave_id;
-    if (\$405 ) begin
-      \$1012  = config_write_data[2:0];
+    \$1012  = ch1_result_status_w0_ne_snapshot;
+    if (\$404 ) begin
+      \$1012  = \port$14072$0 [131];
     end
     if (rst) begin
-      \$1012  = 3'h0;
+      \$1012  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1013  = ch1_ca_request_address;
-    if (\$406 ) begin
-      \$1013  = config_write_data[14:8];
+    \$1013  = ch1_result_status_w0_nw_snapshot;
+    if (\$404 ) begin
+      \$1013  = \port$14072$0 [132];
     end
     if (rst) begin
-      \$1013  = 7'h00;
+      \$1013  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1014  = ch1_ca_request_count;
-    if (\$407 ) begin
-      \$1014  = config_write_data[22:16];
+    \$1014  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$404 ) begin
+      \$1014  = \port$14072$0 [133];
     end
     if (rst) begin
-      \$1014  = 7'h00;
+      \$1014  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1015  = \ch1_ca_request_write$435 ;
-    if (\$408 ) begin
-      \$1015  = config_write_data[24];
+    \$1015  = ch1_result_status_w1_ne_snapshot;
+    if (\$404 ) begin
+      \$1015  = \port$14072$0 [174];
     end
     if (rst) begin
       \$1015  = 1'h0;
@@ -8424,40 +8831,49 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1016  = \$410 ;
+    \$1016  = ch1_result_status_w1_nw_snapshot;
+    if (\$404 ) begin
+      \$1016  = \port$14072$0 [175];
+    end
     if (rst) begin
       \$1016  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1017  = \$412 ;
+    \$1017  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$404 ) begin
+      \$1017  = \port$14072$0 [176];
+    end
     if (rst) begin
       \$1017  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1018  = \$413 ;
+    \$1018  = ch1_result_status_lc_repeat_snapshot;
+    if (\$404 ) begin
+      \$1018  = \port$14072$0 [183];
+    end
     if (rst) begin
-      \$1018  = 15'h0000;
+      \$1018  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1019  = ch1_config_read_index;
-    if (ch1_config_read) begin
-      \$1019  = config_memory0_read_index;
+    \$1019  = ch1_result_status_lc_skip_snapshot;
+    if (\$404 ) begin
+      \$1019  = \port$14072$0 [184];
     end
     if (rst) begin
-      \$1019  = 4'h0;
+      \$1019  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1020  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$1020  = \$414 ;
+    \$1020  = ch1_result_status_lc_zero_snapshot;
+    if (\$404 ) begin
+      \$1020  = \port$14072$0 [185];
     end
     if (rst) begin
       \$1020  = 1'h0;
@@ -8465,9 +8881,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1021  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$1021  = \$415 ;
+    \$1021  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$404 ) begin
+      \$1021  = \port$14072$0 [186];
     end
     if (rst) begin
       \$1021  = 1'h0;
@@ -8475,99 +8891,99 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1022  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$1022  = \$416 ;
+    \$1022  = ch1_result_status_lc_snapshot;
+    if (\$404 ) begin
+      \$1022  = \port$14072$0 [182:177];
     end
     if (rst) begin
-      \$1022  = 1'h0;
+      \$1022  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1023  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$1023  = \$417 ;
+    \$1023  = ch1_result_seq_seq_snapshot;
+    if (\$404 ) begin
+      \$1023  = ch1__done_count;
     end
     if (rst) begin
-      \$1023  = 1'h0;
+      \$1023  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1024  = ch1_read_select_106;
-    if (bus__r_en) begin
-      \$1024  = \$418 ;
+    \$1024  = ch1_result_seq_line_delay_snapshot;
+    if (\$404 ) begin
+      \$1024  = \port$14072$0 [48:36];
     end
     if (rst) begin
-      \$1024  = 1'h0;
+      \$1024  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1025  = ch1_read_select_107;
-    if (bus__r_en) begin
-      \$1025  = \$419 ;
+    \$1025  = ch1_result_w0_lo_data_snapshot;
+    if (\$404 ) begin
+      \$1025  = \port$14072$0 [107:76];
     end
     if (rst) begin
-      \$1025  = 1'h0;
+      \$1025  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1026  = ch1_read_select_110;
-    if (bus__r_en) begin
-      \$1026  = \$420 ;
+    \$1026  = ch1_result_w0_hi_data_snapshot;
+    if (\$404 ) begin
+      \$1026  = { 9'h000, \port$14072$0 [130:108] };
     end
     if (rst) begin
-      \$1026  = 1'h0;
+      \$1026  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1027  = ch1_read_select_111;
-    if (bus__r_en) begin
-      \$1027  = \$421 ;
+    \$1027  = ch1_result_w1_lo_data_snapshot;
+    if (\$404 ) begin
+      \$1027  = \port$14072$0 [165:134];
     end
     if (rst) begin
-      \$1027  = 1'h0;
+      \$1027  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1028  = ch1_read_select_112;
-    if (bus__r_en) begin
-      \$1028  = \$422 ;
+    \$1028  = ch1_result_w1_hi_data_snapshot;
+    if (\$404 ) begin
+      \$1028  = { 24'h000000, \port$14072$0 [173:166] };
     end
     if (rst) begin
-      \$1028  = 1'h0;
+      \$1028  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1029  = ch1_read_select_113;
-    if (bus__r_en) begin
-      \$1029  = \$423 ;
+    \$1029  = ch1_result_timestamp_time_snapshot;
+    if (\$404 ) begin
+      \$1029  = \port$14072$0 [35:4];
     end
     if (rst) begin
-      \$1029  = 1'h0;
+      \$1029  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1030  = ch1_read_select_114;
-    if (bus__r_en) begin
-      \$1030  = \$424 ;
+    \$1030  = ch1_result_line_noise_events_snapshot;
+    if (\$404 ) begin
+      \$1030  = \port$14072$0 [53:50];
     end
     if (rst) begin
-      \$1030  = 1'h0;
+      \$1030  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1031  = ch1_read_select_115;
-    if (bus__r_en) begin
-      \$1031  = \$425 ;
+    \$1031  = ch1_result_line_delay_settled_snapshot;
+    if (\$404 ) begin
+      \$1031  = \port$14072$0 [54];
     end
     if (rst) begin
       \$1031  = 1'h0;
@@ -8575,29 +8991,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1032  = ch1_read_select_116;
-    if (bus__r_en) begin
-      \$1032  = \$426 ;
+    \$1032  = ch1_result_line_delay_spread_snapshot;
+    if (\$404 ) begin
+      \$1032  = \port$14072$0 [75:68];
     end
     if (rst) begin
-      \$1032  = 1'h0;
+      \$1032  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1033  = ch1_read_select_117;
-    if (bus__r_en) begin
-      \$1033  = \$427 ;
+    \$1033  = ch1_result_line_settled_delay_snapshot;
+    if (\$404 ) begin
+      \$1033  = \port$14072$0 [67:55];
     end
     if (rst) begin
-      \$1033  = 1'h0;
+      \$1033  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1034  = ch1_read_select_125;
+    \$1034  = ch1_window0_read;
     if (bus__r_en) begin
-      \$1034  = \$428 ;
+      \$1034  = \$406 ;
     end
     if (rst) begin
       \$1034  = 1'h0;
@@ -8605,9 +9021,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1035  = ch1_read_select_126;
+    \$1035  = ch1_window1_read;
     if (bus__r_en) begin
-      \$1035  = \$429 ;
+      \$1035  = \$410 ;
     end
     if (rst) begin
       \$1035  = 1'h0;
@@ -8615,9 +9031,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1036  = ch1_read_select_127;
+    \$1036  = ch1_window2_read;
     if (bus__r_en) begin
-      \$1036  = \$430 ;
+      \$1036  = \$412 ;
     end
     if (rst) begin
       \$1036  = 1'h0;
@@ -8625,9 +9041,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1037  = ch1_read_select_128;
+    \$1037  = ch1_window3_read;
     if (bus__r_en) begin
-      \$1037  = \$431 ;
+      \$1037  = ch1_config_read;
     end
     if (rst) begin
       \$1037  = 1'h0;
@@ -8635,532 +9051,12 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1038  = ch1_read_select_129;
-    if (bus__r_en) begin
-      \$1038  = \$432 ;
-    end
-    if (rst) begin
-      \$1038  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1039  = ch1_read_select_12a;
-    if (bus__r_en) begin
-      \$1039  = \$433 ;
-    end
-    if (rst) begin
-      \$1039  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1040  = ch1_read_select_12c;
-    if (bus__r_en) begin
-      \$1040  = \$434 ;
-    end
-    if (rst) begin
-      \$1040  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1041  = ch1_read_select_12d;
-    if (bus__r_en) begin
-      \$1041  = \$435 ;
-    end
-    if (rst) begin
-      \$1041  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1042  = ch1_read_select_12e;
-    if (bus__r_en) begin
-      \$1042  = \$436 ;
-    end
-    if (rst) begin
-      \$1042  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1043  = ch1_read_select_130;
-    if (bus__r_en) begin
-      \$1043  = \$437 ;
-    end
-    if (rst) begin
-      \$1043  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1044  = ch1_read_select_131;
-    if (bus__r_en) begin
-      \$1044  = \$438 ;
-    end
-    if (rst) begin
-      \$1044  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1045  = ch1_read_select_132;
-    if (bus__r_en) begin
-      \$1045  = \$439 ;
-    end
-    if (rst) begin
-      \$1045  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1046  = ch1_read_select_134;
-    if (bus__r_en) begin
-      \$1046  = \$440 ;
-    end
-    if (rst) begin
-      \$1046  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1047  = ch1_read_select_135;
-    if (bus__r_en) begin
-      \$1047  = \$441 ;
-    end
-    if (rst) begin
-      \$1047  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1048  = ch1_read_select_136;
-    if (bus__r_en) begin
-      \$1048  = \$442 ;
-    end
-    if (rst) begin
-      \$1048  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1049  = ch1_read_select_138;
-    if (bus__r_en) begin
-      \$1049  = \$443 ;
-    end
-    if (rst) begin
-      \$1049  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1050  = ch1_read_select_139;
-    if (bus__r_en) begin
-      \$1050  = \$444 ;
-    end
-    if (rst) begin
-      \$1050  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1051  = ch1_read_select_13a;
-    if (bus__r_en) begin
-      \$1051  = \$445 ;
-    end
-    if (rst) begin
-      \$1051  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1052  = ch1_read_select_13c;
-    if (bus__r_en) begin
-      \$1052  = \$446 ;
-    end
-    if (rst) begin
-      \$1052  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1053  = ch1_read_select_13d;
-    if (bus__r_en) begin
-      \$1053  = \$447 ;
-    end
-    if (rst) begin
-      \$1053  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1054  = ch1_read_select_13e;
-    if (bus__r_en) begin
-      \$1054  = \$448 ;
-    end
-    if (rst) begin
-      \$1054  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1055  = ch1_read_select_141;
-    if (bus__r_en) begin
-      \$1055  = \$449 ;
-    end
-    if (rst) begin
-      \$1055  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1056  = ch1_read_select_142;
-    if (bus__r_en) begin
-      \$1056  = \$450 ;
-    end
-    if (rst) begin
-      \$1056  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1057  = ch1_read_select_143;
-    if (bus__r_en) begin
-      \$1057  = \$451 ;
-    end
-    if (rst) begin
-      \$1057  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1058  = ch1_read_select_144;
-    if (bus__r_en) begin
-      \$1058  = \$452 ;
-    end
-    if (rst) begin
-      \$1058  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1059  = ch1_read_select_145;
-    if (bus__r_en) begin
-      \$1059  = \$453 ;
-    end
-    if (rst) begin
-      \$1059  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1060  = ch1_read_select_17c;
-    if (bus__r_en) begin
-      \$1060  = \$454 ;
-    end
-    if (rst) begin
-      \$1060  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1061  = ch1_read_select_17d;
-    if (bus__r_en) begin
-      \$1061  = \$455 ;
-    end
-    if (rst) begin
-      \$1061  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1062  = ch1_result_status_status_snapshot;
-    if (\$456 ) begin
-      \$1062  = \port$14124$0 [3:0];
-    end
-    if (rst) begin
-      \$1062  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1063  = ch1_result_status_cds_snapshot;
-    if (\$456 ) begin
-      \$1063  = \port$14124$0 [49];
-    end
-    if (rst) begin
-      \$1063  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1064  = ch1_result_status_w0_ne_snapshot;
-    if (\$456 ) begin
-      \$1064  = \port$14124$0 [131];
-    end
-    if (rst) begin
-      \$1064  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1065  = ch1_result_status_w0_nw_snapshot;
-    if (\$456 ) begin
-      \$1065  = \port$14124$0 [132];
-    end
-    if (rst) begin
-      \$1065  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1066  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$456 ) begin
-      \$1066  = \port$14124$0 [133];
-    end
-    if (rst) begin
-      \$1066  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1067  = ch1_result_status_w1_ne_snapshot;
-    if (\$456 ) begin
-      \$1067  = \port$14124$0 [174];
-    end
-    if (rst) begin
-      \$1067  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1068  = ch1_result_status_w1_nw_snapshot;
-    if (\$456 ) begin
-      \$1068  = \port$14124$0 [175];
-    end
-    if (rst) begin
-      \$1068  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1069  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$456 ) begin
-      \$1069  = \port$14124$0 [176];
-    end
-    if (rst) begin
-      \$1069  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1070  = ch1_result_status_lc_repeat_snapshot;
-    if (\$456 ) begin
-      \$1070  = \port$14124$0 [183];
-    end
-    if (rst) begin
-      \$1070  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1071  = ch1_result_status_lc_skip_snapshot;
-    if (\$456 ) begin
-      \$1071  = \port$14124$0 [184];
-    end
-    if (rst) begin
-      \$1071  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1072  = ch1_result_status_lc_zero_snapshot;
-    if (\$456 ) begin
-      \$1072  = \port$14124$0 [185];
-    end
-    if (rst) begin
-      \$1072  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1073  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$456 ) begin
-      \$1073  = \port$14124$0 [186];
-    end
-    if (rst) begin
-      \$1073  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1074  = ch1_result_status_lc_snapshot;
-    if (\$456 ) begin
-      \$1074  = \port$14124$0 [182:177];
-    end
-    if (rst) begin
-      \$1074  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1075  = ch1_result_seq_seq_snapshot;
-    if (\$456 ) begin
-      \$1075  = ch1__done_count;
-    end
-    if (rst) begin
-      \$1075  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1076  = ch1_result_seq_line_delay_snapshot;
-    if (\$456 ) begin
-      \$1076  = \port$14124$0 [48:36];
-    end
-    if (rst) begin
-      \$1076  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1077  = ch1_result_w0_lo_data_snapshot;
-    if (\$456 ) begin
-      \$1077  = \port$14124$0 [107:76];
-    end
-    if (rst) begin
-      \$1077  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1078  = ch1_result_w0_hi_data_snapshot;
-    if (\$456 ) begin
-      \$1078  = { 9'h000, \port$14124$0 [130:108] };
-    end
-    if (rst) begin
-      \$1078  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1079  = ch1_result_w1_lo_data_snapshot;
-    if (\$456 ) begin
-      \$1079  = \port$14124$0 [165:134];
-    end
-    if (rst) begin
-      \$1079  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1080  = ch1_result_w1_hi_data_snapshot;
-    if (\$456 ) begin
-      \$1080  = { 24'h000000, \port$14124$0 [173:166] };
-    end
-    if (rst) begin
-      \$1080  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1081  = ch1_result_timestamp_time_snapshot;
-    if (\$456 ) begin
-      \$1081  = \port$14124$0 [35:4];
-    end
-    if (rst) begin
-      \$1081  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1082  = ch1_result_line_noise_events_snapshot;
-    if (\$456 ) begin
-      \$1082  = \port$14124$0 [53:50];
-    end
-    if (rst) begin
-      \$1082  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1083  = ch1_result_line_delay_settled_snapshot;
-    if (\$456 ) begin
-      \$1083  = \port$14124$0 [54];
-    end
-    if (rst) begin
-      \$1083  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1084  = ch1_result_line_delay_spread_snapshot;
-    if (\$456 ) begin
-      \$1084  = \port$14124$0 [75:68];
-    end
-    if (rst) begin
-      \$1084  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1085  = ch1_result_line_settled_delay_snapshot;
-    if (\$456 ) begin
-      \$1085  = \port$14124$0 [67:55];
-    end
-    if (rst) begin
-      \$1085  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1086  = ch1_window0_read;
-    if (bus__r_en) begin
-      \$1086  = \$458 ;
-    end
-    if (rst) begin
-      \$1086  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1087  = ch1_window1_read;
-    if (bus__r_en) begin
-      \$1087  = \$462 ;
-    end
-    if (rst) begin
-      \$1087  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1088  = ch1_window2_read;
-    if (bus__r_en) begin
-      \$1088  = \$464 ;
-    end
-    if (rst) begin
-      \$1088  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1089  = ch1_window3_read;
-    if (bus__r_en) begin
-      \$1089  = ch1_config_read;
-    end
-    if (rst) begin
-      \$1089  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1090  = ch1_read_data;
+    \$1038  = ch1_read_data;
     if (bus__r_load) begin
-      \$1090  = \$556 ;
+      \$1038  = \$504 ;
     end
     if (rst) begin
-      \$1090  = 32'd0;
+      \$1038  = 32'd0;
     end
   end
   always @* begin
@@ -9309,27 +9205,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$13573$0 [3:0];
-  assign ch0__cds = \port$13573$0 [49];
-  assign ch0__word0_ne = \port$13573$0 [131];
-  assign ch0__word0_nw = \port$13573$0 [132];
-  assign ch0__word0_crc_ok = \port$13573$0 [133];
-  assign ch0__word1_ne = \port$13573$0 [174];
-  assign ch0__word1_nw = \port$13573$0 [175];
-  assign ch0__word1_crc_ok = \port$13573$0 [176];
-  assign ch0__lc_repeat = \port$13573$0 [183];
-  assign ch0__lc_skip = \port$13573$0 [184];
-  assign ch0__lc_zero = \port$13573$0 [185];
-  assign ch0__spw_mismatch = \port$13573$0 [186];
-  assign ch0__lc = \port$13573$0 [182:177];
-  assign ch0__line_delay = \port$13573$0 [48:36];
-  assign ch0__word0_position = { 9'h000, \port$13573$0 [130:76] };
-  assign ch0__word1_position = { 24'h000000, \port$13573$0 [173:134] };
-  assign ch0__timestamp = \port$13573$0 [35:4];
-  assign ch0__noise_events = \port$13573$0 [53:50];
-  assign ch0__delay_settled = \port$13573$0 [54];
-  assign ch0__delay_spread = \port$13573$0 [75:68];
-  assign ch0__settled_delay = \port$13573$0 [67:55];
+  assign ch0__status = \port$13521$0 [3:0];
+  assign ch0__cds = \port$13521$0 [49];
+  assign ch0__word0_ne = \port$13521$0 [131];
+  assign ch0__word0_nw = \port$13521$0 [132];
+  assign ch0__word0_crc_ok = \port$13521$0 [133];
+  assign ch0__word1_ne = \port$13521$0 [174];
+  assign ch0__word1_nw = \port$13521$0 [175];
+  assign ch0__word1_crc_ok = \port$13521$0 [176];
+  assign ch0__lc_repeat = \port$13521$0 [183];
+  assign ch0__lc_skip = \port$13521$0 [184];
+  assign ch0__lc_zero = \port$13521$0 [185];
+  assign ch0__spw_mismatch = \port$13521$0 [186];
+  assign ch0__lc = \port$13521$0 [182:177];
+  assign ch0__line_delay = \port$13521$0 [48:36];
+  assign ch0__word0_position = { 9'h000, \port$13521$0 [130:76] };
+  assign ch0__word1_position = { 24'h000000, \port$13521$0 [173:134] };
+  assign ch0__timestamp = \port$13521$0 [35:4];
+  assign ch0__noise_events = \port$13521$0 [53:50];
+  assign ch0__delay_settled = \port$13521$0 [54];
+  assign ch0__delay_spread = \port$13521$0 [75:68];
+  assign ch0__settled_delay = \port$13521$0 [67:55];
   assign ch0__cap_data_bits_w0 = 7'h37;
   assign ch0__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9350,13 +9246,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$13661$0 [2:0];
-  assign ch0__ca_bytes_done = \port$13661$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$13584$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$13584$0 [31:16];
-  assign ch0__count_ca_refused = \port$13584$0 [47:32];
-  assign ch0__count_ca_aborted = \port$13584$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$13584$0 [79:64];
+  assign ch0__ca_status = \port$13609$0 [2:0];
+  assign ch0__ca_bytes_done = \port$13609$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$13532$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$13532$0 [31:16];
+  assign ch0__count_ca_refused = \port$13532$0 [47:32];
+  assign ch0__count_ca_aborted = \port$13532$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$13532$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9376,27 +9272,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$14124$0 [3:0];
-  assign ch1__cds = \port$14124$0 [49];
-  assign ch1__word0_ne = \port$14124$0 [131];
-  assign ch1__word0_nw = \port$14124$0 [132];
-  assign ch1__word0_crc_ok = \port$14124$0 [133];
-  assign ch1__word1_ne = \port$14124$0 [174];
-  assign ch1__word1_nw = \port$14124$0 [175];
-  assign ch1__word1_crc_ok = \port$14124$0 [176];
-  assign ch1__lc_repeat = \port$14124$0 [183];
-  assign ch1__lc_skip = \port$14124$0 [184];
-  assign ch1__lc_zero = \port$14124$0 [185];
-  assign ch1__spw_mismatch = \port$14124$0 [186];
-  assign ch1__lc = \port$14124$0 [182:177];
-  assign ch1__line_delay = \port$14124$0 [48:36];
-  assign ch1__word0_position = { 9'h000, \port$14124$0 [130:76] };
-  assign ch1__word1_position = { 24'h000000, \port$14124$0 [173:134] };
-  assign ch1__timestamp = \port$14124$0 [35:4];
-  assign ch1__noise_events = \port$14124$0 [53:50];
-  assign ch1__delay_settled = \port$14124$0 [54];
-  assign ch1__delay_spread = \port$14124$0 [75:68];
-  assign ch1__settled_delay = \port$14124$0 [67:55];
+  assign ch1__status = \port$14072$0 [3:0];
+  assign ch1__cds = \port$14072$0 [49];
+  assign ch1__word0_ne = \port$14072$0 [131];
+  assign ch1__word0_nw = \port$14072$0 [132];
+  assign ch1__word0_crc_ok = \port$14072$0 [133];
+  assign ch1__word1_ne = \port$14072$0 [174];
+  assign ch1__word1_nw = \port$14072$0 [175];
+  assign ch1__word1_crc_ok = \port$14072$0 [176];
+  assign ch1__lc_repeat = \port$14072$0 [183];
+  assign ch1__lc_skip = \port$14072$0 [184];
+  assign ch1__lc_zero = \port$14072$0 [185];
+  assign ch1__spw_mismatch = \port$14072$0 [186];
+  assign ch1__lc = \port$14072$0 [182:177];
+  assign ch1__line_delay = \port$14072$0 [48:36];
+  assign ch1__word0_position = { 9'h000, \port$14072$0 [130:76] };
+  assign ch1__word1_position = { 24'h000000, \port$14072$0 [173:134] };
+  assign ch1__timestamp = \port$14072$0 [35:4];
+  assign ch1__noise_events = \port$14072$0 [53:50];
+  assign ch1__delay_settled = \port$14072$0 [54];
+  assign ch1__delay_spread = \port$14072$0 [75:68];
+  assign ch1__settled_delay = \port$14072$0 [67:55];
   assign ch1__cap_data_bits_w0 = 7'h37;
   assign ch1__cap_data_bits_w1 = 7'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9417,13 +9313,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$14212$0 [2:0];
-  assign ch1__ca_bytes_done = \port$14212$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$14135$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$14135$0 [31:16];
-  assign ch1__count_ca_refused = \port$14135$0 [47:32];
-  assign ch1__count_ca_aborted = \port$14135$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$14135$0 [79:64];
+  assign ch1__ca_status = \port$14160$0 [2:0];
+  assign ch1__ca_bytes_done = \port$14160$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$14083$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$14083$0 [31:16];
+  assign ch1__count_ca_refused = \port$14083$0 [47:32];
+  assign ch1__count_ca_aborted = \port$14083$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$14083$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9564,7 +9460,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
   assign ch0__ca_rbuf_addr = bus__r_addr[3:0];
-  assign wr__addr = { \$629 , \$628 , \$627 , \$626  };
+  assign wr__addr = { \$577 , \$576 , \$575 , \$574  };
   assign wr__data = config_memory0_write_data;
   assign rd__addr = ch0_config_read_index;
   assign ch1__count_addr = bus__r_addr[2:0];
@@ -9682,13 +9578,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$435 ;
+  assign ch1__ca_write = \ch1_ca_request_write$448 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
   assign ch1__ca_wbuf_data = write_data;
   assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
-  assign \wr__addr$920  = { \$721 , \$720 , \$719 , \$718  };
+  assign \wr__addr$920  = { \$669 , \$668 , \$667 , \$666  };
   assign \wr__data$921  = config_memory0_write_data;
   assign \rd__addr$923  = ch1_config_read_index;
   assign irq = { ch1_irq, ch0_irq };
@@ -9698,122 +9594,122 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$649  = \$648 ;
-  assign \$651  = \$650 ;
-  assign \$653  = \$652 ;
-  assign \$741  = \$740 ;
-  assign \$743  = \$742 ;
-  assign \$745  = \$744 ;
-  assign \$199  = \$198 ;
+  assign \$597  = \$596 ;
+  assign \$599  = \$598 ;
+  assign \$601  = \$600 ;
+  assign \$689  = \$688 ;
+  assign \$691  = \$690 ;
+  assign \$693  = \$692 ;
+  assign \$173  = \$172 ;
+  assign \$180  = 32'd0;
+  assign \$181  = \$179 ;
+  assign \$182  = 32'd0;
+  assign \$183  = \$179 ;
+  assign \$200  = 32'd0;
+  assign \$201  = \$199 ;
+  assign \$202  = 32'd0;
+  assign \$203  = \$199 ;
+  assign \$204  = 32'd0;
+  assign \$205  = \$199 ;
   assign \$206  = 32'd0;
-  assign \$207  = \$205 ;
+  assign \$207  = \$199 ;
   assign \$208  = 32'd0;
-  assign \$209  = \$205 ;
+  assign \$209  = \$199 ;
+  assign \$210  = 32'd0;
+  assign \$211  = \$199 ;
+  assign \$212  = 32'd0;
+  assign \$213  = \$199 ;
+  assign \$214  = 32'd0;
+  assign \$215  = \$199 ;
+  assign \$216  = 32'd0;
+  assign \$217  = \$199 ;
+  assign \$218  = 32'd0;
+  assign \$219  = \$199 ;
+  assign \$220  = 32'd0;
+  assign \$221  = \$199 ;
+  assign \$222  = 32'd0;
+  assign \$223  = \$199 ;
+  assign \$224  = 32'd0;
+  assign \$225  = \$199 ;
   assign \$226  = 32'd0;
-  assign \$227  = \$225 ;
+  assign \$227  = \$199 ;
   assign \$228  = 32'd0;
-  assign \$229  = \$225 ;
+  assign \$229  = \$199 ;
   assign \$230  = 32'd0;
-  assign \$231  = \$225 ;
+  assign \$231  = \$199 ;
   assign \$232  = 32'd0;
-  assign \$233  = \$225 ;
+  assign \$233  = \$199 ;
   assign \$234  = 32'd0;
-  assign \$235  = \$225 ;
+  assign \$235  = \$199 ;
   assign \$236  = 32'd0;
-  assign \$237  = \$225 ;
+  assign \$237  = \$199 ;
   assign \$238  = 32'd0;
-  assign \$239  = \$225 ;
+  assign \$239  = \$199 ;
   assign \$240  = 32'd0;
-  assign \$241  = \$225 ;
+  assign \$241  = \$199 ;
   assign \$242  = 32'd0;
-  assign \$243  = \$225 ;
-  assign \$244  = 32'd0;
-  assign \$245  = \$225 ;
-  assign \$246  = 32'd0;
-  assign \$247  = \$225 ;
-  assign \$248  = 32'd0;
-  assign \$249  = \$225 ;
-  assign \$250  = 32'd0;
-  assign \$251  = \$225 ;
+  assign \$243  = \$199 ;
   assign \$252  = 32'd0;
-  assign \$253  = \$225 ;
-  assign \$254  = 32'd0;
-  assign \$255  = \$225 ;
-  assign \$256  = 32'd0;
-  assign \$257  = \$225 ;
+  assign \$253  = \$251 ;
   assign \$258  = 32'd0;
-  assign \$259  = \$225 ;
-  assign \$260  = 32'd0;
-  assign \$261  = \$225 ;
-  assign \$262  = 32'd0;
-  assign \$263  = \$225 ;
-  assign \$264  = 32'd0;
-  assign \$265  = \$225 ;
-  assign \$266  = 32'd0;
-  assign \$267  = \$225 ;
-  assign \$268  = 32'd0;
-  assign \$269  = \$225 ;
-  assign \$278  = 32'd0;
-  assign \$279  = \$277 ;
-  assign \$284  = 32'd0;
-  assign \$285  = \$283 ;
-  assign ch0_config_read_data = \$647 ;
-  assign \$466  = \$465 ;
+  assign \$259  = \$257 ;
+  assign ch0_config_read_data = \$595 ;
+  assign \$414  = \$413 ;
+  assign \$421  = 32'd0;
+  assign \$422  = \$420 ;
+  assign \$423  = 32'd0;
+  assign \$424  = \$420 ;
+  assign \$441  = 32'd0;
+  assign \$442  = \$440 ;
+  assign \$443  = 32'd0;
+  assign \$444  = \$440 ;
+  assign \$445  = 32'd0;
+  assign \$446  = \$440 ;
+  assign \$447  = 32'd0;
+  assign \$448  = \$440 ;
+  assign \$449  = 32'd0;
+  assign \$450  = \$440 ;
+  assign \$451  = 32'd0;
+  assign \$452  = \$440 ;
+  assign \$453  = 32'd0;
+  assign \$454  = \$440 ;
+  assign \$455  = 32'd0;
+  assign \$456  = \$440 ;
+  assign \$457  = 32'd0;
+  assign \$458  = \$440 ;
+  assign \$459  = 32'd0;
+  assign \$460  = \$440 ;
+  assign \$461  = 32'd0;
+  assign \$462  = \$440 ;
+  assign \$463  = 32'd0;
+  assign \$464  = \$440 ;
+  assign \$465  = 32'd0;
+  assign \$466  = \$440 ;
+  assign \$467  = 32'd0;
+  assign \$468  = \$440 ;
+  assign \$469  = 32'd0;
+  assign \$470  = \$440 ;
+  assign \$471  = 32'd0;
+  assign \$472  = \$440 ;
   assign \$473  = 32'd0;
-  assign \$474  = \$472 ;
+  assign \$474  = \$440 ;
   assign \$475  = 32'd0;
-  assign \$476  = \$472 ;
+  assign \$476  = \$440 ;
+  assign \$477  = 32'd0;
+  assign \$478  = \$440 ;
+  assign \$479  = 32'd0;
+  assign \$480  = \$440 ;
+  assign \$481  = 32'd0;
+  assign \$482  = \$440 ;
+  assign \$483  = 32'd0;
+  assign \$484  = \$440 ;
   assign \$493  = 32'd0;
   assign \$494  = \$492 ;
-  assign \$495  = 32'd0;
-  assign \$496  = \$492 ;
-  assign \$497  = 32'd0;
-  assign \$498  = \$492 ;
   assign \$499  = 32'd0;
-  assign \$500  = \$492 ;
-  assign \$501  = 32'd0;
-  assign \$502  = \$492 ;
-  assign \$503  = 32'd0;
-  assign \$504  = \$492 ;
-  assign \$505  = 32'd0;
-  assign \$506  = \$492 ;
-  assign \$507  = 32'd0;
-  assign \$508  = \$492 ;
-  assign \$509  = 32'd0;
-  assign \$510  = \$492 ;
-  assign \$511  = 32'd0;
-  assign \$512  = \$492 ;
-  assign \$513  = 32'd0;
-  assign \$514  = \$492 ;
-  assign \$515  = 32'd0;
-  assign \$516  = \$492 ;
-  assign \$517  = 32'd0;
-  assign \$518  = \$492 ;
-  assign \$519  = 32'd0;
-  assign \$520  = \$492 ;
-  assign \$521  = 32'd0;
-  assign \$522  = \$492 ;
-  assign \$523  = 32'd0;
-  assign \$524  = \$492 ;
-  assign \$525  = 32'd0;
-  assign \$526  = \$492 ;
-  assign \$527  = 32'd0;
-  assign \$528  = \$492 ;
-  assign \$529  = 32'd0;
-  assign \$530  = \$492 ;
-  assign \$531  = 32'd0;
-  assign \$532  = \$492 ;
-  assign \$533  = 32'd0;
-  assign \$534  = \$492 ;
-  assign \$535  = 32'd0;
-  assign \$536  = \$492 ;
-  assign \$545  = 32'd0;
-  assign \$546  = \$544 ;
-  assign \$551  = 32'd0;
-  assign \$552  = \$550 ;
-  assign ch1_config_read_data = \$739 ;
+  assign \$500  = \$498 ;
+  assign ch1_config_read_data = \$687 ;
   assign g_irq = 1'h0;
-  assign \$747  = g_read_data;
+  assign \$695  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -10095,7 +9991,7 @@ endmodule
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic
 , regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check
 , cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address
-, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13573$0 , \port$13584$0 , regs__ca_done, \port$13661$0 , ca_rbuf_addr);
+, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13521$0 , \port$13532$0 , regs__ca_done, \port$13609$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10286,12 +10182,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$13573$0 ;
-  wire [186:0] \port$13573$0 ;
-  output [79:0] \port$13584$0 ;
-  wire [79:0] \port$13584$0 ;
-  output [9:0] \port$13661$0 ;
-  wire [9:0] \port$13661$0 ;
+  output [186:0] \port$13521$0 ;
+  wire [186:0] \port$13521$0 ;
+  output [79:0] \port$13532$0 ;
+  wire [79:0] \port$13532$0 ;
+  output [9:0] \port$13609$0 ;
+  wire [9:0] \port$13609$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10787,9 +10683,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   assign \ma$207  = ma;
   assign \slo$209  = slo;
   assign \cfg_hold$211  = cfg_hold;
-  assign \port$13573$0  = \$24 ;
-  assign \port$13584$0  = \$25 ;
-  assign \port$13661$0  = \$26 ;
+  assign \port$13521$0  = \$24 ;
+  assign \port$13532$0  = \$25 ;
+  assign \port$13609$0  = \$26 ;
   assign \$6  = regs__cfg_w0_data_bits[6];
   assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
@@ -11858,7 +11754,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13185$272 (live[274:272]),
+    .\port$13133$272 (live[274:272]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(sample),
@@ -11918,7 +11814,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13185$199 (live[199]),
+    .\port$13133$199 (live[199]),
     .rises(rises),
     .rst(rst),
     .ssi(live[259]),
@@ -11969,7 +11865,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$64 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13185$259 (live[271:259]),
+    .\port$13133$259 (live[271:259]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(\sample$349 ),
@@ -11994,7 +11890,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13199$0 (\bit ),
+    .\port$13147$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -12062,7 +11958,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$6075$0 (\$28 ),
+    .\port$6023$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -16203,7 +16099,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13185$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13133$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -16918,8 +16814,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13185$272 ;
-  wire [2:0] \port$13185$272 ;
+  input [2:0] \port$13133$272 ;
+  wire [2:0] \port$13133$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -17228,7 +17124,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13185$272 [0];
+  assign error_bit = ssi & \port$13133$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -17259,19 +17155,19 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13185$272 [0];
+  assign \$24  = ssi & \port$13133$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13185$272 [0];
+  assign \$28  = ssi & \port$13133$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13185$272 [0];
+  assign \$35  = ssi & \port$13133$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13185$272 [0];
+  assign \$39  = ssi & \port$13133$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -17292,7 +17188,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$13185$272 [2];
+  assign \$61  = ssi & \port$13133$272 [2];
   assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -17578,15 +17474,15 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13185$272 [0];
+  assign \$347  = ssi & \port$13133$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13185$272 [0];
-  assign \$355  = ~ \port$13185$272 [1];
+  assign \$354  = ssi & \port$13133$272 [0];
+  assign \$355  = ~ \port$13133$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -18321,7 +18217,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13185$272 [0];
+  assign ssi_error = \port$13133$272 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -18331,8 +18227,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$43  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13185$272 [2];
-  assign ssi_error_low = \port$13185$272 [1];
+  assign ssi_double = \port$13133$272 [2];
+  assign ssi_error_low = \port$13133$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -20646,7 +20542,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.ma_stop (rst, \port$13185$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_axil.ch0.core.ma_stop (rst, \port$13133$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20735,8 +20631,8 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13185$199 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13185$199 ;
-  wire \port$13185$199 ;
+  input \port$13133$199 ;
+  wire \port$13133$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20856,7 +20752,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13185$199 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13185$199  : 1'h0;
+  assign \$13  = \$12  ? \port$13133$199  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -21024,7 +20920,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13185$199 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13185$199 , 1'h1 };
+  assign enables = { \port$13133$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -23164,7 +23060,7 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13185$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13133$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -23747,8 +23643,8 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13185$259 ;
-  wire [12:0] \port$13185$259 ;
+  input [12:0] \port$13133$259 ;
+  wire [12:0] \port$13133$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -23771,7 +23667,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13185$259 [12:1] + 1'h1;
+  assign \$460  = \port$13133$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -24347,7 +24243,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13185$259 [0]),
+    .clear_high(\port$13133$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -24490,7 +24386,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13185$259 [0]) begin
+            if (\port$13133$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -24575,7 +24471,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13185$259 [0]) begin
+            if (\port$13133$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -24614,7 +24510,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13185$259 [12:1] };
+            \$534  = { 1'h0, \port$13133$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -24999,11 +24895,11 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13185$259 [12:1] };
-  assign fixed = \port$13185$259 [0];
+  assign fixed_delay = { 1'h0, \port$13133$259 [12:1] };
+  assign fixed = \port$13133$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13185$259 [0];
+  assign clear_high = \port$13133$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -27580,7 +27476,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13199$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13147$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -27622,8 +27518,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13199$0 ;
-  wire \port$13199$0 ;
+  input \port$13147$0 ;
+  wire \port$13147$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -27637,9 +27533,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13199$0  };
-  assign \$2  = { lc[4:0], \port$13199$0  } == last;
-  assign \$3  = { lc[4:0], \port$13199$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13147$0  };
+  assign \$2  = { lc[4:0], \port$13147$0  } == last;
+  assign \$3  = { lc[4:0], \port$13147$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -27749,7 +27645,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13199$0  };
+  assign lc_next = { lc[4:0], \port$13147$0  };
   assign zero = is_zero;
 endmodule
 
@@ -30546,7 +30442,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$6075$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$6023$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -30724,8 +30620,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$6075$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$6075$0 ;
-  wire \port$6075$0 ;
+  output \port$6023$0 ;
+  wire \port$6023$0 ;
   output report;
   wire report;
   input report_frame;
@@ -30843,7 +30739,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$6075$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$6075$0  = \$2 ;
+  assign \port$6023$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -30900,7 +30796,7 @@ endmodule
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic
 , regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check
 , cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address
-, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14124$0 , \port$14135$0 , regs__ca_done, \port$14212$0 , ca_rbuf_addr);
+, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14072$0 , \port$14083$0 , regs__ca_done, \port$14160$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -31091,12 +30987,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$14124$0 ;
-  wire [186:0] \port$14124$0 ;
-  output [79:0] \port$14135$0 ;
-  wire [79:0] \port$14135$0 ;
-  output [9:0] \port$14212$0 ;
-  wire [9:0] \port$14212$0 ;
+  output [186:0] \port$14072$0 ;
+  wire [186:0] \port$14072$0 ;
+  output [79:0] \port$14083$0 ;
+  wire [79:0] \port$14083$0 ;
+  output [9:0] \port$14160$0 ;
+  wire [9:0] \port$14160$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -31592,9 +31488,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en
   assign \ma$207  = ma;
   assign \slo$209  = slo;
   assign \cfg_hold$211  = cfg_hold;
-  assign \port$14124$0  = \$24 ;
-  assign \port$14135$0  = \$25 ;
-  assign \port$14212$0  = \$26 ;
+  assign \port$14072$0  = \$24 ;
+  assign \port$14083$0  = \$25 ;
+  assign \port$14160$0  = \$26 ;
   assign \$6  = regs__cfg_w0_data_bits[6];
   assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
@@ -32663,7 +32559,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13736$272 (live[274:272]),
+    .\port$13684$272 (live[274:272]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(sample),
@@ -32723,7 +32619,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13736$199 (live[199]),
+    .\port$13684$199 (live[199]),
     .rises(rises),
     .rst(rst),
     .ssi(live[259]),
@@ -32774,7 +32670,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$64 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13736$259 (live[271:259]),
+    .\port$13684$259 (live[271:259]),
     .receiver_clear(\clear$139 ),
     .rst(rst),
     .sample(\sample$349 ),
@@ -32799,7 +32695,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13750$0 (\bit ),
+    .\port$13698$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -32867,7 +32763,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$11646$0 (\$28 ),
+    .\port$11594$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -37008,7 +36904,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13736$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13684$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -37723,8 +37619,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13736$272 ;
-  wire [2:0] \port$13736$272 ;
+  input [2:0] \port$13684$272 ;
+  wire [2:0] \port$13684$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -38033,7 +37929,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13736$272 [0];
+  assign error_bit = ssi & \port$13684$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -38064,19 +37960,19 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13736$272 [0];
+  assign \$24  = ssi & \port$13684$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13736$272 [0];
+  assign \$28  = ssi & \port$13684$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13736$272 [0];
+  assign \$35  = ssi & \port$13684$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13736$272 [0];
+  assign \$39  = ssi & \port$13684$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -38097,7 +37993,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$13736$272 [2];
+  assign \$61  = ssi & \port$13684$272 [2];
   assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -38383,15 +38279,15 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13736$272 [0];
+  assign \$347  = ssi & \port$13684$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13736$272 [0];
-  assign \$355  = ~ \port$13736$272 [1];
+  assign \$354  = ssi & \port$13684$272 [0];
+  assign \$355  = ~ \port$13684$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -39126,7 +39022,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13736$272 [0];
+  assign ssi_error = \port$13684$272 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -39136,8 +39032,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$43  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13736$272 [2];
-  assign ssi_error_low = \port$13736$272 [1];
+  assign ssi_double = \port$13684$272 [2];
+  assign ssi_error_low = \port$13684$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -41451,7 +41347,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.ma_stop (rst, \port$13736$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_axil.ch1.core.ma_stop (rst, \port$13684$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -41540,8 +41436,8 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13736$199 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13736$199 ;
-  wire \port$13736$199 ;
+  input \port$13684$199 ;
+  wire \port$13684$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -41661,7 +41557,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13736$199 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13736$199  : 1'h0;
+  assign \$13  = \$12  ? \port$13684$199  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -41829,7 +41725,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13736$199 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13736$199 , 1'h1 };
+  assign enables = { \port$13684$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -43969,7 +43865,7 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13736$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13684$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -44552,8 +44448,8 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13736$259 ;
-  wire [12:0] \port$13736$259 ;
+  input [12:0] \port$13684$259 ;
+  wire [12:0] \port$13684$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -44576,7 +44472,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13736$259 [12:1] + 1'h1;
+  assign \$460  = \port$13684$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -45152,7 +45048,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13736$259 [0]),
+    .clear_high(\port$13684$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -45295,7 +45191,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13736$259 [0]) begin
+            if (\port$13684$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -45380,7 +45276,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13736$259 [0]) begin
+            if (\port$13684$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -45419,7 +45315,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13736$259 [12:1] };
+            \$534  = { 1'h0, \port$13684$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -45804,11 +45700,11 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13736$259 [12:1] };
-  assign fixed = \port$13736$259 [0];
+  assign fixed_delay = { 1'h0, \port$13684$259 [12:1] };
+  assign fixed = \port$13684$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13736$259 [0];
+  assign clear_high = \port$13684$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -48385,7 +48281,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13750$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13698$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -48427,8 +48323,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13750$0 ;
-  wire \port$13750$0 ;
+  input \port$13698$0 ;
+  wire \port$13698$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -48442,9 +48338,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13750$0  };
-  assign \$2  = { lc[4:0], \port$13750$0  } == last;
-  assign \$3  = { lc[4:0], \port$13750$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13698$0  };
+  assign \$2  = { lc[4:0], \port$13698$0  } == last;
+  assign \$3  = { lc[4:0], \port$13698$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -48554,7 +48450,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13750$0  };
+  assign lc_next = { lc[4:0], \port$13698$0  };
   assign zero = is_zero;
 endmodule
 
@@ -51351,7 +51247,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11646$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11594$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -51529,8 +51425,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11646$0 , 
   wire noisy;
   output passed;
   wire passed;
-  output \port$11646$0 ;
-  wire \port$11646$0 ;
+  output \port$11594$0 ;
+  wire \port$11594$0 ;
   output report;
   wire report;
   input report_frame;
@@ -51648,7 +51544,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11646$0 , 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$11646$0  = \$2 ;
+  assign \port$11594$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

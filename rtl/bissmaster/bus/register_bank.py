@@ -245,17 +245,12 @@ class RegisterBank(wiring.Component):
             # hold the write meanwhile (``w_busy``).
             wait = Signal(name=f"{prefix}_config_wait")
             go = Signal(name=f"{prefix}_config_go")
-            hit = Cat(self._w_en & (self._w_addr == (base + reg.offset) // 4)
-                      for reg in held_regs).any()
-            with m.If(hit):
-                m.d.sync += wait.eq(1)
-            with m.Elif(go):
-                m.d.sync += wait.eq(0)
             m.d.sync += go.eq(wait & ~go & self.cfg_free[channel])
             m.d.comb += self.cfg_hold[channel].eq(wait)
             waiting.append(wait)
         bus = self.bus
         w_en, w_addr, w_data, w_strb = self._w_en, self._w_addr, self._w_data, self._w_strb
+        held_writes = []               # the first-stage writes of the held registers
         storage = {}                   # "register.field" -> the Signal that holds it
         irq_terms = []
         # Registers of configuration only (read back from a memory, ``_shadow``).
@@ -285,6 +280,7 @@ class RegisterBank(wiring.Component):
                 # written when the core is idle.
                 addressed = Signal(name=f"{reg_name}_config_addressed")
                 m.d.sync += addressed.eq(w_addr == word)
+                held_writes.append(write)
                 config_write = Signal(name=f"{reg_name}_config_write")
                 m.d.comb += config_write.eq(addressed & go)
             elif staged and any(f.kind == Kind.CONFIG for f in reg.fields):
@@ -352,6 +348,12 @@ class RegisterBank(wiring.Component):
             read_words[word] = self._word(parts)
         for group, copies in groups.items():
             snapshots[take[group]] = copies
+        if held_regs:
+            # A write of a held register starts the wait; ``go`` ends it.
+            with m.If(Cat(held_writes).any()):
+                m.d.sync += wait.eq(1)
+            with m.Elif(go):
+                m.d.sync += wait.eq(0)
         if shadowed:
             self._shadow(m, base, registers, shadowed, shadow_writes, absent, prefix, windows)
         # A cause requests an interrupt while set and enabled.

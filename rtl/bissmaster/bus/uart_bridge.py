@@ -114,7 +114,8 @@ class BridgeEngine(wiring.Component):
     Accessing: an OK WRITE is ``w_en`` in the checking clock (address ``addr[2:]``, every byte
     strobe); its answer waits for the bank's ``w_busy`` to be low in a clock after the
     checking clock (two clocks more than another answer at the least; longer for a channel's
-    configuration while its core is in a cycle): the write has then acted. A READ or READ_BURST reads each word just before its bytes are sent: ``r_en``,
+    configuration while its core is in a cycle): the write has then acted. A READ or
+    READ_BURST reads each word just before its bytes are sent: ``r_en``,
     ``r_load`` in the next clock, the data taken from ``r_data`` in the clock after; the words
     of a burst in address order.
 

@@ -105,9 +105,9 @@ class FieldEnds(wiring.Component):
     register, so that no decode of the decoder's state sits in front of the word multiplexer
     (it was the multi-word builds' critical path, docs/performance.md); it is word 1 from
     reset, so every frame's ``begin`` must come after a reset (the master holds the decoder,
-    and this block in it, in reset between cycles) and at most once. The configuration must be stable from
-    ``begin`` to the frame's end (the master's is latched for the cycle); ``following`` is
-    meaningless in the last word.
+    and this block in it, in reset between cycles) and at most once. The configuration must
+    be stable from ``begin`` to the frame's end (the master latches it, or its bank holds it,
+    for the cycle); ``following`` is meaningless in the last word.
 
     Parameters
     ----------

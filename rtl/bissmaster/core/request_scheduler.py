@@ -98,12 +98,22 @@ class RequestScheduler(wiring.Component):
                          wrap.eq(count_p2 >= self.period)]
 
         takeable = self.idle & ~self.abort
-        if not self._hold:
-            m.d.comb += [
-                self.request.eq(start | tick | as_fast_as_possible),
-                self.overrun.eq((start | tick) & ~takeable),
-            ]
-            return m
+        hold, deferred = C(0, 1), C(0, 1)
+        if self._hold:
+            # A request the hold keeps from an idle controller waits here (one: the bank
+            # holds the core for two idle clocks per configuration write; a second request
+            # while one waits is an overrun, as a request during a cycle is).
+            hold, deferred = self.hold, Signal()
+            with m.If(self.abort | (self.idle & ~hold)):
+                m.d.sync += deferred.eq(0)
+            with m.Elif(takeable & (start | tick)):
+                m.d.sync += deferred.eq(1)
+        m.d.comb += [
+            self.request.eq((start | tick | as_fast_as_possible | deferred) & ~hold),
+            self.overrun.eq(((start | tick) & (~takeable | (deferred & hold)))
+                            | (deferred & self.abort)),
+        ]
+        return m
         # A request the hold keeps from an idle controller waits here (one: the bank holds
         # the core for two idle clocks per configuration write; a second request while one
         # waits is an overrun, as a request during a cycle is).
