@@ -10,8 +10,8 @@ from amaranth.hdl import C
 from amaranth.lib import data
 
 from . import protocol
-from .params import (CHAIN_FIRST_WORD, CRC_SETTINGS, DELAY_SPREAD_WIDTH, FAULTS, LINE_CHECK_WIDTH,
-                     QUIET_WIDTH, AccessStatus, Status, word_config,
+from .params import (CHAIN_FIRST_WORD, CRC_SETTINGS, CRC_WIDTH_ONLY, DELAY_SPREAD_WIDTH, FAULTS,
+                     LINE_CHECK_WIDTH, QUIET_WIDTH, AccessStatus, Status, word_config,
                      counter_settle, counter_words)
 
 
@@ -38,15 +38,16 @@ def config_layout(params):
         "w0": word,
     }
     # A custom CRC per word (``cfg_w0_crc`` = 3): ``cfg_w0_crc_width``, ``_poly``, ``_start``,
-    # ``_inverted``.
+    # ``_inverted`` (with ``crc_table``: the width alone; the rest is in the CRC table).
+    custom = CRC_WIDTH_ONLY if params.crc_table_built else CRC_SETTINGS
     if params.custom_crc:
-        members["w0_crc"] = CRC_SETTINGS
+        members["w0_crc"] = custom
     # Words 1 .. N - 1 (a Safety encoder's SPW, a chain's further slaves), each with its
     # enable: ``cfg_wN_enable``, ``cfg_wN_*``, ``cfg_wN_crc_*``.
     for w in range(1, params.words):
         members.update({f"w{w}_enable": 1, f"w{w}": word})
         if params.custom_crc:
-            members[f"w{w}_crc"] = CRC_SETTINGS
+            members[f"w{w}_crc"] = custom
     if params.words >= 2:
         members.update({"spw_check": 1, "spw_tolerance": 8})
     # SSI mode (docs/ports.md, "SSI mode"): ``cfg_ssi``, the round trip ``cfg_ssi_delay``, one
@@ -80,7 +81,8 @@ def config_enables(cfg, params):
 
 def config_custom_crcs(cfg, params):
     """The per-word custom CRC settings of a :func:`config_layout` view, word 0 first (an
-    empty list in builds without ``custom_crc``)."""
+    empty list in builds without ``custom_crc``; with ``crc_table``, views of the width
+    alone)."""
     if not params.custom_crc:
         return []
     return [cfg[f"w{w}_crc"] for w in range(params.words)]

@@ -24,7 +24,7 @@ from .core.line_noise import LineNoise
 from .core.ma_clock import MaClock
 from .core.ma_stop import MaStop
 from . import protocol
-from .params import (CHAIN_FIRST_WORD, CHAIN_MEMORY_WORD_BITS, DELAY_SPREAD_WIDTH,
+from .params import (CHAIN_FIRST_WORD, CHAIN_MEMORY_WORD_BITS, CRC_TABLE, DELAY_SPREAD_WIDTH,
                      LINE_CHECK_WIDTH, AccessStatus, MasterParams, Status,
                      word_config)
 from .control.register_access import RegisterAccess
@@ -43,7 +43,8 @@ class BissMaster(wiring.Component):
     Runtime settings (``cfg_*``) are checked when a request arrives and latched for the
     cycle: changing them mid-cycle never mixes two configurations in one frame. (A
     ``config_hold`` build latches none: its ``cfg_*`` change only while ``cfg_hold`` keeps it
-    idle, :class:`~bissmaster.params.MasterParams`.)
+    idle, :class:`~bissmaster.params.MasterParams`; a ``crc_table`` build reads its custom
+    CRCs' polynomials, start values and inversions from a table outside it.)
 
     The ports are flat (Verilog users wire them one by one); inside, the configuration, the
     result and the counters are the structures of :mod:`~bissmaster.layouts`, and the port
@@ -117,6 +118,10 @@ class BissMaster(wiring.Component):
             # Runtime configuration
             **{name: In(shape) for name, _, shape in config_ports(p)},
             **({"cfg_hold": In(1)} if p.config_hold else {}),
+            # The custom CRCs' table (``crc_table``): word ``crc_table_addr``'s entry, read
+            # combinationally.
+            **({"crc_table_addr": Out(range(p.words)), "crc_table_data": In(CRC_TABLE)}
+               if p.crc_table_built else {}),
             # State
             "busy": Out(1),
             "config_error": Out(1),
@@ -353,6 +358,9 @@ class BissMaster(wiring.Component):
                      b.ma_stop.crc_widths.eq(b.config.crc_widths)]
         if p.words == 1:
             m.d.comb += b.decoder.word0_crc.eq(b.config.crc)
+        elif p.crc_table_built:
+            m.d.comb += [self.crc_table_addr.eq(b.decoder.crc_table_addr),
+                         b.decoder.crc_table_data.eq(self.crc_table_data)]
         else:
             for w, custom in enumerate(config_custom_crcs(b.cycle, p)):
                 m.d.comb += b.decoder.customs[w].eq(custom)

@@ -38,6 +38,16 @@ CRC_SETTINGS = data.StructLayout({
     "start": CRC_MAX_WIDTH,
     "inverted": 1,
 })
+#: The part of a word's custom CRC that only the CRC engine reads, one word at a time: what a
+#: ``crc_table`` build keeps in a memory (the bank's) instead of flip-flops per word. The width
+#: stays a flip-flop setting per word: the configuration check reads every word's at once.
+CRC_TABLE = data.StructLayout({
+    "poly": CRC_MAX_WIDTH,
+    "start": CRC_MAX_WIDTH,
+    "inverted": 1,
+})
+#: A word's custom CRC as a ``crc_table`` build's ``cfg_wN_crc_*`` ports give it: the width.
+CRC_WIDTH_ONLY = data.StructLayout({"width": range(CRC_MAX_WIDTH + 1)})
 
 
 class Status(enum.IntEnum, shape=4):
@@ -234,6 +244,14 @@ class MasterParams:
         keeps the controller waiting is taken when it is released, not dropped
         (docs/ports.md, "Configuration"). The register bank holds a channel's configuration
         write until then (docs/bus.md).
+    crc_table : bool
+        The custom CRCs' polynomials, start values and inversions (:data:`CRC_TABLE`) are not
+        ``cfg_wN_crc_*`` ports but entries of a memory outside the core, one per word, read
+        through ``crc_table_addr`` (word N) and ``crc_table_data`` (its entry, combinational:
+        an asynchronous read; issue 27: one table read instead of a multiplexer over every
+        word's flip-flops). Needs ``config_hold`` (the table changes only while the core lets
+        it, as the ``cfg_*`` inputs). Nothing changes in a build of one word or without
+        ``custom_crc``. The bus tops build their cores this way.
     timestamp_width : int
         Width of the free-running time base behind the ``timestamp`` output; 0 builds neither.
     time_input : bool
@@ -271,6 +289,7 @@ class MasterParams:
     counter_ram: bool = False
     chain_memory: bool = False
     config_hold: bool = False
+    crc_table: bool = False
     timestamp_width: int = 32
     time_input: bool = False
     custom_crc: bool = True
@@ -316,6 +335,11 @@ class MasterParams:
             raise ValueError(f"counter_ram must be a bool, not {self.counter_ram!r}")
         if not isinstance(self.config_hold, bool):
             raise ValueError(f"config_hold must be a bool, not {self.config_hold!r}")
+        if not isinstance(self.crc_table, bool):
+            raise ValueError(f"crc_table must be a bool, not {self.crc_table!r}")
+        if self.crc_table and not self.config_hold:
+            raise ValueError("crc_table needs config_hold (the table may change only while the "
+                             "core is held idle)")
         if not isinstance(self.chain_memory, bool):
             raise ValueError(f"chain_memory must be a bool, not {self.chain_memory!r}")
         if self.counter_ram and not 1 <= self.counter_width <= COUNTER_HALF_BITS:
@@ -360,6 +384,12 @@ class MasterParams:
         """Words 2..7 of this build are kept in the chain memory (``chain_memory`` in a build
         of more than two words)."""
         return self.chain_memory and self.words > CHAIN_FIRST_WORD
+
+    @property
+    def crc_table_built(self):
+        """The custom CRCs' polynomials, start values and inversions are read from the table
+        (``crc_table`` in a build of two words or more with ``custom_crc``)."""
+        return self.crc_table and self.custom_crc and self.words >= 2
 
     @property
     def cycle_timer_width(self):

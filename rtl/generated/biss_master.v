@@ -1954,16 +1954,16 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \$13 ;
   wire \$130 ;
   wire \$131 ;
-  wire [37:0] \$132 ;
-  wire [37:0] \$133 ;
-  wire [37:0] \$134 ;
+  wire [4:0] \$132 ;
+  wire [4:0] \$133 ;
+  wire [4:0] \$134 ;
   wire \$135 ;
   wire \$136 ;
   wire \$137 ;
-  wire [37:0] \$138 ;
-  wire [37:0] \$139 ;
+  wire [4:0] \$138 ;
+  wire [4:0] \$139 ;
   wire \$14 ;
-  wire [37:0] \$140 ;
+  wire [4:0] \$140 ;
   wire [1:0] \$141 ;
   wire [2:0] \$142 ;
   reg \$143 ;
@@ -2333,15 +2333,15 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$129  = cycle[158:157] == 2'h3;
   assign \$130  = cycle[158:157] == 2'h2;
   assign \$131  = cycle[158:157] == 1'h1;
-  assign \$132  = \$131  ? 38'h2000000066 : 38'h0000000000;
-  assign \$133  = \$130  ? 38'h2000121b30 : \$132 ;
-  assign \$134  = \$129  ? cycle[198:161] : \$133 ;
+  assign \$132  = \$131  ? 5'h06 : 5'h00;
+  assign \$133  = \$130  ? 5'h10 : \$132 ;
+  assign \$134  = \$129  ? cycle[165:161] : \$133 ;
   assign \$135  = cycle[209:208] == 2'h3;
   assign \$136  = cycle[209:208] == 2'h2;
   assign \$137  = cycle[209:208] == 1'h1;
-  assign \$138  = \$137  ? 38'h2000000066 : 38'h0000000000;
-  assign \$139  = \$136  ? 38'h2000121b30 : \$138 ;
-  assign \$140  = \$135  ? cycle[249:212] : \$139 ;
+  assign \$138  = \$137  ? 5'h06 : 5'h00;
+  assign \$139  = \$136  ? 5'h10 : \$138 ;
+  assign \$140  = \$135  ? cycle[216:212] : \$139 ;
   assign \$142  = 2'h1 + cycle[199];
   always @(posedge clk)
     ok <= \$143 ;
@@ -2522,8 +2522,8 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \cycle.ssi_double  = cycle[274];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign crc_widths[9:5] = \$140 [4:0];
-  assign crc_widths[4:0] = \$134 [4:0];
+  assign crc_widths[9:5] = \$140 ;
+  assign crc_widths[4:0] = \$134 ;
   assign \$98  = live[156];
   assign \$141  = 2'h1;
 endmodule

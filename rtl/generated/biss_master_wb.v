@@ -47,10 +47,10 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire [3:0] bus__w_strb;
   wire [1:0] cfg_free;
   wire \cfg_free$457 ;
-  wire \cfg_free$867 ;
+  wire \cfg_free$871 ;
   wire cfg_hold;
   wire [1:0] \cfg_hold$455 ;
-  wire \cfg_hold$866 ;
+  wire \cfg_hold$870 ;
   wire ch0__abort_cycle;
   wire ch0__busy;
   wire ch0__ca_abort;
@@ -253,6 +253,8 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch0__word7_crc_ok;
   wire ch0__word7_ne;
   wire ch0__word7_nw;
+  wire ch0_crc_table_addr;
+  wire [32:0] ch0_crc_table_data;
   output ch0_ma;
   wire ch0_ma;
   input ch0_slo;
@@ -459,447 +461,459 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch1__word7_crc_ok;
   wire ch1__word7_ne;
   wire ch1__word7_nw;
+  wire ch1_crc_table_addr;
+  wire [32:0] ch1_crc_table_data;
   output ch1_ma;
   wire ch1_ma;
   input ch1_slo;
   wire ch1_slo;
   input clk;
   wire clk;
+  wire crc_table_addr;
+  wire \crc_table_addr$875 ;
+  wire [32:0] crc_table_data;
+  wire [32:0] \crc_table_data$876 ;
+  wire \crc_table_data$876.inverted ;
+  wire [15:0] \crc_table_data$876.poly ;
+  wire [15:0] \crc_table_data$876.start ;
+  wire \crc_table_data.inverted ;
+  wire [15:0] \crc_table_data.poly ;
+  wire [15:0] \crc_table_data.start ;
   wire [3:0] glob__channels;
   wire [7:0] glob__irq_pending;
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$872 ;
+  wire [1:0] \irq$880 ;
   wire ma;
-  wire \ma$868 ;
+  wire \ma$872 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$461 ;
+  wire \regs__abort_cycle$465 ;
   wire regs__busy;
-  wire \regs__busy$464 ;
+  wire \regs__busy$468 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$465 ;
+  wire \regs__ca_abort$469 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$467 ;
+  wire [6:0] \regs__ca_address$471 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$470 ;
+  wire \regs__ca_busy$474 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$472 ;
+  wire [6:0] \regs__ca_bytes_done$476 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$473 ;
+  wire [6:0] \regs__ca_count$477 ;
   wire regs__ca_done;
-  wire \regs__ca_done$476 ;
+  wire \regs__ca_done$480 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$477 ;
+  wire [3:0] \regs__ca_rbuf_addr$481 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$480 ;
+  wire [31:0] \regs__ca_rbuf_data$484 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$481 ;
+  wire \regs__ca_rbuf_en$485 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$483 ;
+  wire [2:0] \regs__ca_slave_id$487 ;
   wire regs__ca_start;
-  wire \regs__ca_start$485 ;
+  wire \regs__ca_start$489 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$488 ;
+  wire [2:0] \regs__ca_status$492 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$489 ;
+  wire [3:0] \regs__ca_wbuf_addr$493 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$491 ;
+  wire [31:0] \regs__ca_wbuf_data$495 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$493 ;
+  wire [3:0] \regs__ca_wbuf_en$497 ;
   wire regs__ca_write;
-  wire \regs__ca_write$495 ;
+  wire \regs__ca_write$499 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$498 ;
+  wire \regs__cap_counters$502 ;
   wire [6:0] regs__cap_data_bits_w0;
-  wire [6:0] \regs__cap_data_bits_w0$500 ;
+  wire [6:0] \regs__cap_data_bits_w0$504 ;
   wire [6:0] regs__cap_data_bits_w1;
-  wire [6:0] \regs__cap_data_bits_w1$502 ;
+  wire [6:0] \regs__cap_data_bits_w1$506 ;
   wire [6:0] regs__cap_data_bits_w2;
-  wire [6:0] \regs__cap_data_bits_w2$504 ;
+  wire [6:0] \regs__cap_data_bits_w2$508 ;
   wire [6:0] regs__cap_data_bits_w3;
-  wire [6:0] \regs__cap_data_bits_w3$506 ;
+  wire [6:0] \regs__cap_data_bits_w3$510 ;
   wire [6:0] regs__cap_data_bits_w4;
-  wire [6:0] \regs__cap_data_bits_w4$508 ;
+  wire [6:0] \regs__cap_data_bits_w4$512 ;
   wire [6:0] regs__cap_data_bits_w5;
-  wire [6:0] \regs__cap_data_bits_w5$510 ;
+  wire [6:0] \regs__cap_data_bits_w5$514 ;
   wire [6:0] regs__cap_data_bits_w6;
-  wire [6:0] \regs__cap_data_bits_w6$512 ;
+  wire [6:0] \regs__cap_data_bits_w6$516 ;
   wire [6:0] regs__cap_data_bits_w7;
-  wire [6:0] \regs__cap_data_bits_w7$514 ;
+  wire [6:0] \regs__cap_data_bits_w7$518 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$516 ;
+  wire \regs__cap_register_access$520 ;
   wire regs__cap_ssi;
-  wire \regs__cap_ssi$518 ;
+  wire \regs__cap_ssi$522 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$520 ;
+  wire [5:0] \regs__cap_timer_width$524 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$522 ;
+  wire \regs__cap_timestamp$526 ;
   wire [3:0] regs__cap_words;
-  wire [3:0] \regs__cap_words$524 ;
+  wire [3:0] \regs__cap_words$528 ;
   wire regs__cds;
-  wire \regs__cds$526 ;
+  wire \regs__cds$530 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$527 ;
+  wire [23:0] \regs__cfg_ack_limit$531 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$529 ;
+  wire [23:0] \regs__cfg_break_time$533 ;
   wire [3:0] regs__cfg_confirm_frames;
-  wire [3:0] \regs__cfg_confirm_frames$531 ;
+  wire [3:0] \regs__cfg_confirm_frames$535 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$533 ;
+  wire [11:0] \regs__cfg_delay_limit$537 ;
   wire [3:0] regs__cfg_delay_tolerance;
-  wire [3:0] \regs__cfg_delay_tolerance$535 ;
+  wire [3:0] \regs__cfg_delay_tolerance$539 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$537 ;
+  wire \regs__cfg_end_check$541 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$539 ;
+  wire [15:0] \regs__cfg_ma_half_period$543 ;
   wire [3:0] regs__cfg_noise_limit;
-  wire [3:0] \regs__cfg_noise_limit$541 ;
+  wire [3:0] \regs__cfg_noise_limit$545 ;
   wire [11:0] regs__cfg_quiet_time;
-  wire [11:0] \regs__cfg_quiet_time$543 ;
+  wire [11:0] \regs__cfg_quiet_time$547 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$545 ;
+  wire [23:0] \regs__cfg_request_period$549 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$547 ;
+  wire \regs__cfg_spw_check$551 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$549 ;
+  wire [7:0] \regs__cfg_spw_tolerance$553 ;
   wire regs__cfg_ssi;
-  wire \regs__cfg_ssi$551 ;
+  wire \regs__cfg_ssi$555 ;
   wire [11:0] regs__cfg_ssi_delay;
-  wire [11:0] \regs__cfg_ssi_delay$553 ;
+  wire [11:0] \regs__cfg_ssi_delay$557 ;
   wire regs__cfg_ssi_double;
-  wire \regs__cfg_ssi_double$555 ;
+  wire \regs__cfg_ssi_double$559 ;
   wire regs__cfg_ssi_error;
-  wire \regs__cfg_ssi_error$557 ;
+  wire \regs__cfg_ssi_error$561 ;
   wire regs__cfg_ssi_error_low;
-  wire \regs__cfg_ssi_error_low$559 ;
+  wire \regs__cfg_ssi_error_low$563 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$561 ;
+  wire [23:0] \regs__cfg_timeout_limit$565 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$563 ;
+  wire [1:0] \regs__cfg_w0_crc$567 ;
   wire regs__cfg_w0_crc_inverted;
-  wire \regs__cfg_w0_crc_inverted$565 ;
+  wire \regs__cfg_w0_crc_inverted$569 ;
   wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] \regs__cfg_w0_crc_poly$567 ;
+  wire [15:0] \regs__cfg_w0_crc_poly$571 ;
   wire [15:0] regs__cfg_w0_crc_start;
-  wire [15:0] \regs__cfg_w0_crc_start$569 ;
+  wire [15:0] \regs__cfg_w0_crc_start$573 ;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [4:0] \regs__cfg_w0_crc_width$571 ;
+  wire [4:0] \regs__cfg_w0_crc_width$575 ;
   wire [6:0] regs__cfg_w0_data_bits;
-  wire [6:0] \regs__cfg_w0_data_bits$573 ;
+  wire [6:0] \regs__cfg_w0_data_bits$577 ;
   wire regs__cfg_w0_gray;
-  wire \regs__cfg_w0_gray$575 ;
+  wire \regs__cfg_w0_gray$579 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$577 ;
+  wire \regs__cfg_w0_lc$581 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$579 ;
+  wire \regs__cfg_w0_nenw$583 ;
   wire regs__cfg_w0_signed;
-  wire \regs__cfg_w0_signed$581 ;
+  wire \regs__cfg_w0_signed$585 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$583 ;
+  wire [1:0] \regs__cfg_w1_crc$587 ;
   wire regs__cfg_w1_crc_inverted;
-  wire \regs__cfg_w1_crc_inverted$585 ;
+  wire \regs__cfg_w1_crc_inverted$589 ;
   wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] \regs__cfg_w1_crc_poly$587 ;
+  wire [15:0] \regs__cfg_w1_crc_poly$591 ;
   wire [15:0] regs__cfg_w1_crc_start;
-  wire [15:0] \regs__cfg_w1_crc_start$589 ;
+  wire [15:0] \regs__cfg_w1_crc_start$593 ;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [4:0] \regs__cfg_w1_crc_width$591 ;
+  wire [4:0] \regs__cfg_w1_crc_width$595 ;
   wire [6:0] regs__cfg_w1_data_bits;
-  wire [6:0] \regs__cfg_w1_data_bits$593 ;
+  wire [6:0] \regs__cfg_w1_data_bits$597 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$595 ;
+  wire \regs__cfg_w1_enable$599 ;
   wire regs__cfg_w1_gray;
-  wire \regs__cfg_w1_gray$597 ;
+  wire \regs__cfg_w1_gray$601 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$599 ;
+  wire \regs__cfg_w1_lc$603 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$601 ;
+  wire \regs__cfg_w1_nenw$605 ;
   wire regs__cfg_w1_signed;
-  wire \regs__cfg_w1_signed$603 ;
+  wire \regs__cfg_w1_signed$607 ;
   wire [1:0] regs__cfg_w2_crc;
-  wire [1:0] \regs__cfg_w2_crc$605 ;
+  wire [1:0] \regs__cfg_w2_crc$609 ;
   wire regs__cfg_w2_crc_inverted;
-  wire \regs__cfg_w2_crc_inverted$607 ;
+  wire \regs__cfg_w2_crc_inverted$611 ;
   wire [15:0] regs__cfg_w2_crc_poly;
-  wire [15:0] \regs__cfg_w2_crc_poly$609 ;
+  wire [15:0] \regs__cfg_w2_crc_poly$613 ;
   wire [15:0] regs__cfg_w2_crc_start;
-  wire [15:0] \regs__cfg_w2_crc_start$611 ;
+  wire [15:0] \regs__cfg_w2_crc_start$615 ;
   wire [4:0] regs__cfg_w2_crc_width;
-  wire [4:0] \regs__cfg_w2_crc_width$613 ;
+  wire [4:0] \regs__cfg_w2_crc_width$617 ;
   wire [6:0] regs__cfg_w2_data_bits;
-  wire [6:0] \regs__cfg_w2_data_bits$615 ;
+  wire [6:0] \regs__cfg_w2_data_bits$619 ;
   wire regs__cfg_w2_enable;
-  wire \regs__cfg_w2_enable$617 ;
+  wire \regs__cfg_w2_enable$621 ;
   wire regs__cfg_w2_gray;
-  wire \regs__cfg_w2_gray$619 ;
+  wire \regs__cfg_w2_gray$623 ;
   wire regs__cfg_w2_lc;
-  wire \regs__cfg_w2_lc$621 ;
+  wire \regs__cfg_w2_lc$625 ;
   wire regs__cfg_w2_nenw;
-  wire \regs__cfg_w2_nenw$623 ;
+  wire \regs__cfg_w2_nenw$627 ;
   wire regs__cfg_w2_signed;
-  wire \regs__cfg_w2_signed$625 ;
+  wire \regs__cfg_w2_signed$629 ;
   wire [1:0] regs__cfg_w3_crc;
-  wire [1:0] \regs__cfg_w3_crc$627 ;
+  wire [1:0] \regs__cfg_w3_crc$631 ;
   wire regs__cfg_w3_crc_inverted;
-  wire \regs__cfg_w3_crc_inverted$629 ;
+  wire \regs__cfg_w3_crc_inverted$633 ;
   wire [15:0] regs__cfg_w3_crc_poly;
-  wire [15:0] \regs__cfg_w3_crc_poly$631 ;
+  wire [15:0] \regs__cfg_w3_crc_poly$635 ;
   wire [15:0] regs__cfg_w3_crc_start;
-  wire [15:0] \regs__cfg_w3_crc_start$633 ;
+  wire [15:0] \regs__cfg_w3_crc_start$637 ;
   wire [4:0] regs__cfg_w3_crc_width;
-  wire [4:0] \regs__cfg_w3_crc_width$635 ;
+  wire [4:0] \regs__cfg_w3_crc_width$639 ;
   wire [6:0] regs__cfg_w3_data_bits;
-  wire [6:0] \regs__cfg_w3_data_bits$637 ;
+  wire [6:0] \regs__cfg_w3_data_bits$641 ;
   wire regs__cfg_w3_enable;
-  wire \regs__cfg_w3_enable$639 ;
+  wire \regs__cfg_w3_enable$643 ;
   wire regs__cfg_w3_gray;
-  wire \regs__cfg_w3_gray$641 ;
+  wire \regs__cfg_w3_gray$645 ;
   wire regs__cfg_w3_lc;
-  wire \regs__cfg_w3_lc$643 ;
+  wire \regs__cfg_w3_lc$647 ;
   wire regs__cfg_w3_nenw;
-  wire \regs__cfg_w3_nenw$645 ;
+  wire \regs__cfg_w3_nenw$649 ;
   wire regs__cfg_w3_signed;
-  wire \regs__cfg_w3_signed$647 ;
+  wire \regs__cfg_w3_signed$651 ;
   wire [1:0] regs__cfg_w4_crc;
-  wire [1:0] \regs__cfg_w4_crc$649 ;
+  wire [1:0] \regs__cfg_w4_crc$653 ;
   wire regs__cfg_w4_crc_inverted;
-  wire \regs__cfg_w4_crc_inverted$651 ;
+  wire \regs__cfg_w4_crc_inverted$655 ;
   wire [15:0] regs__cfg_w4_crc_poly;
-  wire [15:0] \regs__cfg_w4_crc_poly$653 ;
+  wire [15:0] \regs__cfg_w4_crc_poly$657 ;
   wire [15:0] regs__cfg_w4_crc_start;
-  wire [15:0] \regs__cfg_w4_crc_start$655 ;
+  wire [15:0] \regs__cfg_w4_crc_start$659 ;
   wire [4:0] regs__cfg_w4_crc_width;
-  wire [4:0] \regs__cfg_w4_crc_width$657 ;
+  wire [4:0] \regs__cfg_w4_crc_width$661 ;
   wire [6:0] regs__cfg_w4_data_bits;
-  wire [6:0] \regs__cfg_w4_data_bits$659 ;
+  wire [6:0] \regs__cfg_w4_data_bits$663 ;
   wire regs__cfg_w4_enable;
-  wire \regs__cfg_w4_enable$661 ;
+  wire \regs__cfg_w4_enable$665 ;
   wire regs__cfg_w4_gray;
-  wire \regs__cfg_w4_gray$663 ;
+  wire \regs__cfg_w4_gray$667 ;
   wire regs__cfg_w4_lc;
-  wire \regs__cfg_w4_lc$665 ;
+  wire \regs__cfg_w4_lc$669 ;
   wire regs__cfg_w4_nenw;
-  wire \regs__cfg_w4_nenw$667 ;
+  wire \regs__cfg_w4_nenw$671 ;
   wire regs__cfg_w4_signed;
-  wire \regs__cfg_w4_signed$669 ;
+  wire \regs__cfg_w4_signed$673 ;
   wire [1:0] regs__cfg_w5_crc;
-  wire [1:0] \regs__cfg_w5_crc$671 ;
+  wire [1:0] \regs__cfg_w5_crc$675 ;
   wire regs__cfg_w5_crc_inverted;
-  wire \regs__cfg_w5_crc_inverted$673 ;
+  wire \regs__cfg_w5_crc_inverted$677 ;
   wire [15:0] regs__cfg_w5_crc_poly;
-  wire [15:0] \regs__cfg_w5_crc_poly$675 ;
+  wire [15:0] \regs__cfg_w5_crc_poly$679 ;
   wire [15:0] regs__cfg_w5_crc_start;
-  wire [15:0] \regs__cfg_w5_crc_start$677 ;
+  wire [15:0] \regs__cfg_w5_crc_start$681 ;
   wire [4:0] regs__cfg_w5_crc_width;
-  wire [4:0] \regs__cfg_w5_crc_width$679 ;
+  wire [4:0] \regs__cfg_w5_crc_width$683 ;
   wire [6:0] regs__cfg_w5_data_bits;
-  wire [6:0] \regs__cfg_w5_data_bits$681 ;
+  wire [6:0] \regs__cfg_w5_data_bits$685 ;
   wire regs__cfg_w5_enable;
-  wire \regs__cfg_w5_enable$683 ;
+  wire \regs__cfg_w5_enable$687 ;
   wire regs__cfg_w5_gray;
-  wire \regs__cfg_w5_gray$685 ;
+  wire \regs__cfg_w5_gray$689 ;
   wire regs__cfg_w5_lc;
-  wire \regs__cfg_w5_lc$687 ;
+  wire \regs__cfg_w5_lc$691 ;
   wire regs__cfg_w5_nenw;
-  wire \regs__cfg_w5_nenw$689 ;
+  wire \regs__cfg_w5_nenw$693 ;
   wire regs__cfg_w5_signed;
-  wire \regs__cfg_w5_signed$691 ;
+  wire \regs__cfg_w5_signed$695 ;
   wire [1:0] regs__cfg_w6_crc;
-  wire [1:0] \regs__cfg_w6_crc$693 ;
+  wire [1:0] \regs__cfg_w6_crc$697 ;
   wire regs__cfg_w6_crc_inverted;
-  wire \regs__cfg_w6_crc_inverted$695 ;
+  wire \regs__cfg_w6_crc_inverted$699 ;
   wire [15:0] regs__cfg_w6_crc_poly;
-  wire [15:0] \regs__cfg_w6_crc_poly$697 ;
+  wire [15:0] \regs__cfg_w6_crc_poly$701 ;
   wire [15:0] regs__cfg_w6_crc_start;
-  wire [15:0] \regs__cfg_w6_crc_start$699 ;
+  wire [15:0] \regs__cfg_w6_crc_start$703 ;
   wire [4:0] regs__cfg_w6_crc_width;
-  wire [4:0] \regs__cfg_w6_crc_width$701 ;
+  wire [4:0] \regs__cfg_w6_crc_width$705 ;
   wire [6:0] regs__cfg_w6_data_bits;
-  wire [6:0] \regs__cfg_w6_data_bits$703 ;
+  wire [6:0] \regs__cfg_w6_data_bits$707 ;
   wire regs__cfg_w6_enable;
-  wire \regs__cfg_w6_enable$705 ;
+  wire \regs__cfg_w6_enable$709 ;
   wire regs__cfg_w6_gray;
-  wire \regs__cfg_w6_gray$707 ;
+  wire \regs__cfg_w6_gray$711 ;
   wire regs__cfg_w6_lc;
-  wire \regs__cfg_w6_lc$709 ;
+  wire \regs__cfg_w6_lc$713 ;
   wire regs__cfg_w6_nenw;
-  wire \regs__cfg_w6_nenw$711 ;
+  wire \regs__cfg_w6_nenw$715 ;
   wire regs__cfg_w6_signed;
-  wire \regs__cfg_w6_signed$713 ;
+  wire \regs__cfg_w6_signed$717 ;
   wire [1:0] regs__cfg_w7_crc;
-  wire [1:0] \regs__cfg_w7_crc$715 ;
+  wire [1:0] \regs__cfg_w7_crc$719 ;
   wire regs__cfg_w7_crc_inverted;
-  wire \regs__cfg_w7_crc_inverted$717 ;
+  wire \regs__cfg_w7_crc_inverted$721 ;
   wire [15:0] regs__cfg_w7_crc_poly;
-  wire [15:0] \regs__cfg_w7_crc_poly$719 ;
+  wire [15:0] \regs__cfg_w7_crc_poly$723 ;
   wire [15:0] regs__cfg_w7_crc_start;
-  wire [15:0] \regs__cfg_w7_crc_start$721 ;
+  wire [15:0] \regs__cfg_w7_crc_start$725 ;
   wire [4:0] regs__cfg_w7_crc_width;
-  wire [4:0] \regs__cfg_w7_crc_width$723 ;
+  wire [4:0] \regs__cfg_w7_crc_width$727 ;
   wire [6:0] regs__cfg_w7_data_bits;
-  wire [6:0] \regs__cfg_w7_data_bits$725 ;
+  wire [6:0] \regs__cfg_w7_data_bits$729 ;
   wire regs__cfg_w7_enable;
-  wire \regs__cfg_w7_enable$727 ;
+  wire \regs__cfg_w7_enable$731 ;
   wire regs__cfg_w7_gray;
-  wire \regs__cfg_w7_gray$729 ;
+  wire \regs__cfg_w7_gray$733 ;
   wire regs__cfg_w7_lc;
-  wire \regs__cfg_w7_lc$731 ;
+  wire \regs__cfg_w7_lc$735 ;
   wire regs__cfg_w7_nenw;
-  wire \regs__cfg_w7_nenw$733 ;
+  wire \regs__cfg_w7_nenw$737 ;
   wire regs__cfg_w7_signed;
-  wire \regs__cfg_w7_signed$735 ;
+  wire \regs__cfg_w7_signed$739 ;
   wire [3:0] regs__chain_addr;
-  wire [3:0] \regs__chain_addr$737 ;
+  wire [3:0] \regs__chain_addr$741 ;
   wire [31:0] regs__chain_data;
-  wire [31:0] \regs__chain_data$740 ;
+  wire [31:0] \regs__chain_data$744 ;
   wire regs__chain_en;
-  wire \regs__chain_en$741 ;
+  wire \regs__chain_en$745 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$743 ;
+  wire \regs__clear_counters$747 ;
   wire regs__config_error;
-  wire \regs__config_error$746 ;
+  wire \regs__config_error$750 ;
   wire [2:0] regs__count_addr;
-  wire [2:0] \regs__count_addr$747 ;
+  wire [2:0] \regs__count_addr$751 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$750 ;
+  wire [15:0] \regs__count_ca_aborted$754 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$752 ;
+  wire [15:0] \regs__count_ca_crc4_error$756 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$754 ;
+  wire [15:0] \regs__count_ca_data_fault$758 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$756 ;
+  wire [15:0] \regs__count_ca_no_answer$760 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$758 ;
+  wire [15:0] \regs__count_ca_refused$762 ;
   wire [15:0] regs__count_crc_word2;
-  wire [15:0] \regs__count_crc_word2$760 ;
+  wire [15:0] \regs__count_crc_word2$764 ;
   wire [15:0] regs__count_crc_word3;
-  wire [15:0] \regs__count_crc_word3$762 ;
+  wire [15:0] \regs__count_crc_word3$766 ;
   wire [15:0] regs__count_crc_word4;
-  wire [15:0] \regs__count_crc_word4$764 ;
+  wire [15:0] \regs__count_crc_word4$768 ;
   wire [15:0] regs__count_crc_word5;
-  wire [15:0] \regs__count_crc_word5$766 ;
+  wire [15:0] \regs__count_crc_word5$770 ;
   wire [15:0] regs__count_crc_word6;
-  wire [15:0] \regs__count_crc_word6$768 ;
+  wire [15:0] \regs__count_crc_word6$772 ;
   wire [15:0] regs__count_crc_word7;
-  wire [15:0] \regs__count_crc_word7$770 ;
+  wire [15:0] \regs__count_crc_word7$774 ;
   wire [31:0] regs__count_data;
-  wire [31:0] \regs__count_data$772 ;
+  wire [31:0] \regs__count_data$776 ;
   wire regs__count_en;
-  wire \regs__count_en$773 ;
+  wire \regs__count_en$777 ;
   wire regs__delay_settled;
-  wire \regs__delay_settled$776 ;
+  wire \regs__delay_settled$780 ;
   wire [7:0] regs__delay_spread;
-  wire [7:0] \regs__delay_spread$778 ;
+  wire [7:0] \regs__delay_spread$782 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$780 ;
+  wire [15:0] \regs__done_count$784 ;
   wire regs__frame_done;
-  wire \regs__frame_done$782 ;
+  wire \regs__frame_done$786 ;
   wire regs__frame_error;
-  wire \regs__frame_error$784 ;
+  wire \regs__frame_error$788 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$786 ;
+  wire [5:0] \regs__lc$790 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$788 ;
+  wire \regs__lc_repeat$792 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$790 ;
+  wire \regs__lc_skip$794 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$792 ;
+  wire \regs__lc_zero$796 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$794 ;
+  wire [12:0] \regs__line_delay$798 ;
   wire [3:0] regs__noise_events;
-  wire [3:0] \regs__noise_events$796 ;
+  wire [3:0] \regs__noise_events$800 ;
   wire regs__periodic;
-  wire \regs__periodic$797 ;
+  wire \regs__periodic$801 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__r_load;
   wire [15:0] regs__result_updates;
-  wire [15:0] \regs__result_updates$800 ;
+  wire [15:0] \regs__result_updates$804 ;
   wire [12:0] regs__settled_delay;
-  wire [12:0] \regs__settled_delay$802 ;
+  wire [12:0] \regs__settled_delay$806 ;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$804 ;
+  wire \regs__spw_mismatch$808 ;
   wire regs__start;
-  wire \regs__start$805 ;
+  wire \regs__start$809 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$808 ;
+  wire [3:0] \regs__status$812 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$810 ;
+  wire [31:0] \regs__timestamp$814 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$811 ;
+  wire \regs__trigger_enable$815 ;
   wire [10:0] regs__w_addr;
   wire regs__w_busy;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$814 ;
+  wire \regs__word0_crc_ok$818 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$816 ;
+  wire \regs__word0_ne$820 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$818 ;
+  wire \regs__word0_nw$822 ;
   wire [63:0] regs__word0_position;
-  wire [63:0] \regs__word0_position$820 ;
+  wire [63:0] \regs__word0_position$824 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$822 ;
+  wire \regs__word1_crc_ok$826 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$824 ;
+  wire \regs__word1_ne$828 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$826 ;
+  wire \regs__word1_nw$830 ;
   wire [63:0] regs__word1_position;
-  wire [63:0] \regs__word1_position$828 ;
+  wire [63:0] \regs__word1_position$832 ;
   wire regs__word2_crc_ok;
-  wire \regs__word2_crc_ok$830 ;
+  wire \regs__word2_crc_ok$834 ;
   wire regs__word2_ne;
-  wire \regs__word2_ne$832 ;
+  wire \regs__word2_ne$836 ;
   wire regs__word2_nw;
-  wire \regs__word2_nw$834 ;
+  wire \regs__word2_nw$838 ;
   wire regs__word3_crc_ok;
-  wire \regs__word3_crc_ok$836 ;
+  wire \regs__word3_crc_ok$840 ;
   wire regs__word3_ne;
-  wire \regs__word3_ne$838 ;
+  wire \regs__word3_ne$842 ;
   wire regs__word3_nw;
-  wire \regs__word3_nw$840 ;
+  wire \regs__word3_nw$844 ;
   wire regs__word4_crc_ok;
-  wire \regs__word4_crc_ok$842 ;
+  wire \regs__word4_crc_ok$846 ;
   wire regs__word4_ne;
-  wire \regs__word4_ne$844 ;
+  wire \regs__word4_ne$848 ;
   wire regs__word4_nw;
-  wire \regs__word4_nw$846 ;
+  wire \regs__word4_nw$850 ;
   wire regs__word5_crc_ok;
-  wire \regs__word5_crc_ok$848 ;
+  wire \regs__word5_crc_ok$852 ;
   wire regs__word5_ne;
-  wire \regs__word5_ne$850 ;
+  wire \regs__word5_ne$854 ;
   wire regs__word5_nw;
-  wire \regs__word5_nw$852 ;
+  wire \regs__word5_nw$856 ;
   wire regs__word6_crc_ok;
-  wire \regs__word6_crc_ok$854 ;
+  wire \regs__word6_crc_ok$858 ;
   wire regs__word6_ne;
-  wire \regs__word6_ne$856 ;
+  wire \regs__word6_ne$860 ;
   wire regs__word6_nw;
-  wire \regs__word6_nw$858 ;
+  wire \regs__word6_nw$862 ;
   wire regs__word7_crc_ok;
-  wire \regs__word7_crc_ok$860 ;
+  wire \regs__word7_crc_ok$864 ;
   wire regs__word7_ne;
-  wire \regs__word7_ne$862 ;
+  wire \regs__word7_ne$866 ;
   wire regs__word7_nw;
-  wire \regs__word7_nw$864 ;
+  wire \regs__word7_nw$868 ;
   input rst;
   wire rst;
   wire slo;
-  wire \slo$869 ;
+  wire \slo$873 ;
   reg [31:0] time_now = 32'd0;
   (* init = 32'd0 *)
-  wire [31:0] \time_now$460 ;
+  wire [31:0] \time_now$464 ;
   (* init = 32'd0 *)
   wire [31:0] \time_now$48 ;
   input trigger;
   wire trigger;
   wire \trigger$44 ;
   wire \trigger$453 ;
-  wire \trigger$865 ;
+  wire \trigger$869 ;
   reg trigger_in = 1'h0;
   wire wb__ack;
   wire [10:0] wb__adr;
@@ -970,7 +984,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch0_ca_request_address(regs__ca_address),
     .ch0_ca_request_count(regs__ca_count),
     .ch0_ca_request_slave_id(regs__ca_slave_id),
-    .\ch0_ca_request_write$152 (regs__ca_write),
+    .\ch0_ca_request_write$145 (regs__ca_write),
     .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
     .ch0_cfg_break_break_time(regs__cfg_break_time),
     .ch0_cfg_checks_confirm_frames(regs__cfg_confirm_frames),
@@ -979,13 +993,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch0_cfg_checks_noise_limit(regs__cfg_noise_limit),
     .ch0_cfg_checks_spw_check(regs__cfg_spw_check),
     .ch0_cfg_checks_spw_tolerance(regs__cfg_spw_tolerance),
-    .ch0_cfg_crc0_start_w0_crc_start(regs__cfg_w0_crc_start),
-    .ch0_cfg_crc0_w0_crc_inverted(regs__cfg_w0_crc_inverted),
-    .ch0_cfg_crc0_w0_crc_poly(regs__cfg_w0_crc_poly),
     .ch0_cfg_crc0_w0_crc_width(regs__cfg_w0_crc_width),
-    .ch0_cfg_crc1_start_w1_crc_start(regs__cfg_w1_crc_start),
-    .ch0_cfg_crc1_w1_crc_inverted(regs__cfg_w1_crc_inverted),
-    .ch0_cfg_crc1_w1_crc_poly(regs__cfg_w1_crc_poly),
     .ch0_cfg_crc1_w1_crc_width(regs__cfg_w1_crc_width),
     .ch0_cfg_ma_delay_limit(regs__cfg_delay_limit),
     .ch0_cfg_ma_ma_half_period(regs__cfg_ma_half_period),
@@ -1010,6 +1018,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch0_cfg_words_w1_lc(regs__cfg_w1_lc),
     .ch0_cfg_words_w1_nenw(regs__cfg_w1_nenw),
     .ch0_cfg_words_w1_signed(regs__cfg_w1_signed),
+    .ch0_crc_table_data(crc_table_data),
     .ch0_ctrl_abort(regs__abort_cycle),
     .ch0_ctrl_clear_counters(regs__clear_counters),
     .ch0_ctrl_periodic(regs__periodic),
@@ -1020,75 +1029,72 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$481 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$493 ),
-    .ch1__chain_en(\regs__chain_en$741 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$485 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$497 ),
+    .ch1__chain_en(\regs__chain_en$745 ),
     .ch1__config_error(ch1__config_error),
     .ch1__count_data(ch1__count_data),
-    .ch1__count_en(\regs__count_en$773 ),
+    .ch1__count_en(\regs__count_en$777 ),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_done(ch1__frame_done),
     .ch1__frame_error(ch1__frame_error),
     .ch1__result_updates(ch1__result_updates),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$465 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$485 ),
-    .ch1_ca_request_address(\regs__ca_address$467 ),
-    .ch1_ca_request_count(\regs__ca_count$473 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$483 ),
-    .\ch1_ca_request_write$448 (\regs__ca_write$495 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$527 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$529 ),
-    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$531 ),
-    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$535 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$537 ),
-    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$541 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$547 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$549 ),
-    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$569 ),
-    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$565 ),
-    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$567 ),
-    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$571 ),
-    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$589 ),
-    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$585 ),
-    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$587 ),
-    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$591 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$533 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$539 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$545 ),
-    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$543 ),
-    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$551 ),
-    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$553 ),
-    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$555 ),
-    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$557 ),
-    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$559 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$561 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$563 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$573 ),
-    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$575 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$577 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$579 ),
-    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$581 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$583 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$593 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$595 ),
-    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$597 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$599 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$601 ),
-    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$603 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$461 ),
-    .ch1_ctrl_clear_counters(\regs__clear_counters$743 ),
-    .ch1_ctrl_periodic(\regs__periodic$797 ),
-    .ch1_ctrl_start(\regs__start$805 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$811 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$469 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$489 ),
+    .ch1_ca_request_address(\regs__ca_address$471 ),
+    .ch1_ca_request_count(\regs__ca_count$477 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$487 ),
+    .\ch1_ca_request_write$437 (\regs__ca_write$499 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$531 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$533 ),
+    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$535 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$539 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$541 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$545 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$551 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$553 ),
+    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$575 ),
+    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$595 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$537 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$543 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$549 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$547 ),
+    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$555 ),
+    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$557 ),
+    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$559 ),
+    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$561 ),
+    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$563 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$565 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$567 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$577 ),
+    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$579 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$581 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$583 ),
+    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$585 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$587 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$597 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$599 ),
+    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$601 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$603 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$605 ),
+    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$607 ),
+    .ch1_crc_table_data(\crc_table_data$876 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$465 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$747 ),
+    .ch1_ctrl_periodic(\regs__periodic$801 ),
+    .ch1_ctrl_start(\regs__start$809 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$815 ),
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$13493$0 (\$10 ),
-    .\port$13504$0 (\$11 ),
-    .\port$13581$0 (\$12 ),
-    .\port$14044$0 (\$13 ),
-    .\port$14055$0 (\$14 ),
-    .\port$14132$0 (\$15 ),
+    .\port$13487$0 (\$10 ),
+    .\port$13498$0 (\$11 ),
+    .\port$13575$0 (\$12 ),
+    .\port$14038$0 (\$13 ),
+    .\port$14049$0 (\$14 ),
+    .\port$14126$0 (\$15 ),
+    .\rd__addr$763 (ch0_crc_table_addr),
+    .\rd__addr$929 (ch1_crc_table_addr),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1142,18 +1148,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .cfg_ssi_error_low(regs__cfg_ssi_error_low),
     .cfg_timeout_limit(regs__cfg_timeout_limit),
     .cfg_w0_crc(regs__cfg_w0_crc),
-    .cfg_w0_crc_inverted(regs__cfg_w0_crc_inverted),
-    .cfg_w0_crc_poly(regs__cfg_w0_crc_poly),
-    .cfg_w0_crc_start(regs__cfg_w0_crc_start),
     .cfg_w0_crc_width(regs__cfg_w0_crc_width),
     .cfg_w0_gray(regs__cfg_w0_gray),
     .cfg_w0_lc(regs__cfg_w0_lc),
     .cfg_w0_nenw(regs__cfg_w0_nenw),
     .cfg_w0_signed(regs__cfg_w0_signed),
     .cfg_w1_crc(regs__cfg_w1_crc),
-    .cfg_w1_crc_inverted(regs__cfg_w1_crc_inverted),
-    .cfg_w1_crc_poly(regs__cfg_w1_crc_poly),
-    .cfg_w1_crc_start(regs__cfg_w1_crc_start),
     .cfg_w1_crc_width(regs__cfg_w1_crc_width),
     .cfg_w1_enable(regs__cfg_w1_enable),
     .cfg_w1_gray(regs__cfg_w1_gray),
@@ -1163,11 +1163,13 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clear_counters(regs__clear_counters),
     .clk(clk),
     .count_en(regs__count_en),
+    .crc_table_addr(ch0_crc_table_addr),
+    .crc_table_data(crc_table_data),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$13493$0 (\$10 ),
-    .\port$13504$0 (\$11 ),
-    .\port$13581$0 (\$12 ),
+    .\port$13487$0 (\$10 ),
+    .\port$13498$0 (\$11 ),
+    .\port$13575$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1186,86 +1188,82 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .slo(ch0_slo),
     .start(regs__start),
     .time_now(time_now),
-    .\trigger$204 (\trigger$44 )
+    .\trigger$192 (\trigger$44 )
   );
   \biss_master_wb.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$465 ),
-    .ca_address(\regs__ca_address$467 ),
-    .ca_count(\regs__ca_count$473 ),
+    .ca_abort(\regs__ca_abort$469 ),
+    .ca_address(\regs__ca_address$471 ),
+    .ca_count(\regs__ca_count$477 ),
     .ca_rbuf_addr(wb_adr[3:0]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$481 ),
-    .ca_slave_id(\regs__ca_slave_id$483 ),
-    .ca_start(\regs__ca_start$485 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$485 ),
+    .ca_slave_id(\regs__ca_slave_id$487 ),
+    .ca_start(\regs__ca_start$489 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$493 ),
-    .ca_write(\regs__ca_write$495 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$527 ),
-    .cfg_break_time(\regs__cfg_break_time$529 ),
-    .cfg_confirm_frames(\regs__cfg_confirm_frames$531 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$533 ),
-    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$535 ),
-    .cfg_end_check(\regs__cfg_end_check$537 ),
-    .cfg_free(\cfg_free$867 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$497 ),
+    .ca_write(\regs__ca_write$499 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$531 ),
+    .cfg_break_time(\regs__cfg_break_time$533 ),
+    .cfg_confirm_frames(\regs__cfg_confirm_frames$535 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$537 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$539 ),
+    .cfg_end_check(\regs__cfg_end_check$541 ),
+    .cfg_free(\cfg_free$871 ),
     .cfg_hold(\cfg_hold$455 [1]),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$539 ),
-    .cfg_noise_limit(\regs__cfg_noise_limit$541 ),
-    .cfg_quiet_time(\regs__cfg_quiet_time$543 ),
-    .cfg_request_period(\regs__cfg_request_period$545 ),
-    .cfg_spw_check(\regs__cfg_spw_check$547 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$549 ),
-    .cfg_ssi(\regs__cfg_ssi$551 ),
-    .cfg_ssi_delay(\regs__cfg_ssi_delay$553 ),
-    .cfg_ssi_double(\regs__cfg_ssi_double$555 ),
-    .cfg_ssi_error(\regs__cfg_ssi_error$557 ),
-    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$559 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$561 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$563 ),
-    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$565 ),
-    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$567 ),
-    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$569 ),
-    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$571 ),
-    .cfg_w0_gray(\regs__cfg_w0_gray$575 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$577 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$579 ),
-    .cfg_w0_signed(\regs__cfg_w0_signed$581 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$583 ),
-    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$585 ),
-    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$587 ),
-    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$589 ),
-    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$591 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$595 ),
-    .cfg_w1_gray(\regs__cfg_w1_gray$597 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$599 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$601 ),
-    .cfg_w1_signed(\regs__cfg_w1_signed$603 ),
-    .clear_counters(\regs__clear_counters$743 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$543 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$545 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$547 ),
+    .cfg_request_period(\regs__cfg_request_period$549 ),
+    .cfg_spw_check(\regs__cfg_spw_check$551 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$553 ),
+    .cfg_ssi(\regs__cfg_ssi$555 ),
+    .cfg_ssi_delay(\regs__cfg_ssi_delay$557 ),
+    .cfg_ssi_double(\regs__cfg_ssi_double$559 ),
+    .cfg_ssi_error(\regs__cfg_ssi_error$561 ),
+    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$563 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$565 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$567 ),
+    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$575 ),
+    .cfg_w0_gray(\regs__cfg_w0_gray$579 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$581 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$583 ),
+    .cfg_w0_signed(\regs__cfg_w0_signed$585 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$587 ),
+    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$595 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$599 ),
+    .cfg_w1_gray(\regs__cfg_w1_gray$601 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$603 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$605 ),
+    .cfg_w1_signed(\regs__cfg_w1_signed$607 ),
+    .clear_counters(\regs__clear_counters$747 ),
     .clk(clk),
-    .count_en(\regs__count_en$773 ),
+    .count_en(\regs__count_en$777 ),
+    .crc_table_addr(ch1_crc_table_addr),
+    .crc_table_data(\crc_table_data$876 ),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$797 ),
-    .\port$14044$0 (\$13 ),
-    .\port$14055$0 (\$14 ),
-    .\port$14132$0 (\$15 ),
-    .regs__abort_cycle(\regs__abort_cycle$461 ),
+    .periodic(\regs__periodic$801 ),
+    .\port$14038$0 (\$13 ),
+    .\port$14049$0 (\$14 ),
+    .\port$14126$0 (\$15 ),
+    .regs__abort_cycle(\regs__abort_cycle$465 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
     .regs__ca_rbuf_data(ch1__ca_rbuf_data),
-    .regs__cfg_w0_data_bits(\regs__cfg_w0_data_bits$573 ),
-    .regs__cfg_w1_data_bits(\regs__cfg_w1_data_bits$593 ),
+    .regs__cfg_w0_data_bits(\regs__cfg_w0_data_bits$577 ),
+    .regs__cfg_w1_data_bits(\regs__cfg_w1_data_bits$597 ),
     .regs__config_error(ch1__config_error),
     .regs__count_data(ch1__count_data),
     .regs__done_count(ch1__done_count),
     .regs__frame_done(ch1__frame_done),
     .regs__frame_error(ch1__frame_error),
     .regs__result_updates(ch1__result_updates),
-    .regs__trigger_enable(\regs__trigger_enable$811 ),
+    .regs__trigger_enable(\regs__trigger_enable$815 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$805 ),
+    .start(\regs__start$809 ),
     .time_now(time_now),
-    .\trigger$204 (\trigger$44 )
+    .\trigger$192 (\trigger$44 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
@@ -1382,9 +1380,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign ch0__cfg_ssi_error_low = regs__cfg_ssi_error_low;
   assign ch0__cfg_timeout_limit = regs__cfg_timeout_limit;
   assign ch0__cfg_w0_crc = regs__cfg_w0_crc;
-  assign ch0__cfg_w0_crc_inverted = regs__cfg_w0_crc_inverted;
-  assign ch0__cfg_w0_crc_poly = regs__cfg_w0_crc_poly;
-  assign ch0__cfg_w0_crc_start = regs__cfg_w0_crc_start;
+  assign regs__cfg_w0_crc_inverted = 1'h0;
+  assign ch0__cfg_w0_crc_inverted = 1'h0;
+  assign regs__cfg_w0_crc_poly = 16'h0000;
+  assign ch0__cfg_w0_crc_poly = 16'h0000;
+  assign regs__cfg_w0_crc_start = 16'h0000;
+  assign ch0__cfg_w0_crc_start = 16'h0000;
   assign ch0__cfg_w0_crc_width = regs__cfg_w0_crc_width;
   assign ch0__cfg_w0_data_bits = regs__cfg_w0_data_bits;
   assign ch0__cfg_w0_gray = regs__cfg_w0_gray;
@@ -1392,9 +1393,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign ch0__cfg_w0_nenw = regs__cfg_w0_nenw;
   assign ch0__cfg_w0_signed = regs__cfg_w0_signed;
   assign ch0__cfg_w1_crc = regs__cfg_w1_crc;
-  assign ch0__cfg_w1_crc_inverted = regs__cfg_w1_crc_inverted;
-  assign ch0__cfg_w1_crc_poly = regs__cfg_w1_crc_poly;
-  assign ch0__cfg_w1_crc_start = regs__cfg_w1_crc_start;
+  assign regs__cfg_w1_crc_inverted = 1'h0;
+  assign ch0__cfg_w1_crc_inverted = 1'h0;
+  assign regs__cfg_w1_crc_poly = 16'h0000;
+  assign ch0__cfg_w1_crc_poly = 16'h0000;
+  assign regs__cfg_w1_crc_start = 16'h0000;
+  assign ch0__cfg_w1_crc_start = 16'h0000;
   assign ch0__cfg_w1_crc_width = regs__cfg_w1_crc_width;
   assign ch0__cfg_w1_data_bits = regs__cfg_w1_data_bits;
   assign ch0__cfg_w1_enable = regs__cfg_w1_enable;
@@ -1654,367 +1658,382 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign cfg_hold = \cfg_hold$455 [0];
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign \time_now$460  = time_now;
-  assign ch1__abort_cycle = \regs__abort_cycle$461 ;
-  assign \regs__busy$464  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$465 ;
-  assign ch1__ca_address = \regs__ca_address$467 ;
-  assign \regs__ca_busy$470  = ch1__ca_busy;
+  assign crc_table_addr = ch0_crc_table_addr;
+  assign ch0_crc_table_data = crc_table_data;
+  assign \time_now$464  = time_now;
+  assign ch1__abort_cycle = \regs__abort_cycle$465 ;
+  assign \regs__busy$468  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$469 ;
+  assign ch1__ca_address = \regs__ca_address$471 ;
+  assign \regs__ca_busy$474  = ch1__ca_busy;
   assign ch1__ca_bytes_done = \$15 [9:3];
-  assign \regs__ca_bytes_done$472  = \$15 [9:3];
-  assign ch1__ca_count = \regs__ca_count$473 ;
-  assign \regs__ca_done$476  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$477  = wb_adr[3:0];
+  assign \regs__ca_bytes_done$476  = \$15 [9:3];
+  assign ch1__ca_count = \regs__ca_count$477 ;
+  assign \regs__ca_done$480  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$481  = wb_adr[3:0];
   assign ch1__ca_rbuf_addr = wb_adr[3:0];
-  assign \regs__ca_rbuf_data$480  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$481 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$483 ;
-  assign ch1__ca_start = \regs__ca_start$485 ;
+  assign \regs__ca_rbuf_data$484  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$485 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$487 ;
+  assign ch1__ca_start = \regs__ca_start$489 ;
   assign ch1__ca_status = \$15 [2:0];
-  assign \regs__ca_status$488  = \$15 [2:0];
-  assign \regs__ca_wbuf_addr$489  = regs__ca_wbuf_addr;
+  assign \regs__ca_status$492  = \$15 [2:0];
+  assign \regs__ca_wbuf_addr$493  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$491  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$495  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$493 ;
-  assign ch1__ca_write = \regs__ca_write$495 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$497 ;
+  assign ch1__ca_write = \regs__ca_write$499 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$498  = 1'h1;
+  assign \regs__cap_counters$502  = 1'h1;
   assign ch1__cap_data_bits_w0 = 7'h37;
-  assign \regs__cap_data_bits_w0$500  = 7'h37;
+  assign \regs__cap_data_bits_w0$504  = 7'h37;
   assign ch1__cap_data_bits_w1 = 7'h28;
-  assign \regs__cap_data_bits_w1$502  = 7'h28;
+  assign \regs__cap_data_bits_w1$506  = 7'h28;
   assign ch1__cap_data_bits_w2 = 7'h00;
-  assign \regs__cap_data_bits_w2$504  = 7'h00;
+  assign \regs__cap_data_bits_w2$508  = 7'h00;
   assign ch1__cap_data_bits_w3 = 7'h00;
-  assign \regs__cap_data_bits_w3$506  = 7'h00;
+  assign \regs__cap_data_bits_w3$510  = 7'h00;
   assign ch1__cap_data_bits_w4 = 7'h00;
-  assign \regs__cap_data_bits_w4$508  = 7'h00;
+  assign \regs__cap_data_bits_w4$512  = 7'h00;
   assign ch1__cap_data_bits_w5 = 7'h00;
-  assign \regs__cap_data_bits_w5$510  = 7'h00;
+  assign \regs__cap_data_bits_w5$514  = 7'h00;
   assign ch1__cap_data_bits_w6 = 7'h00;
-  assign \regs__cap_data_bits_w6$512  = 7'h00;
+  assign \regs__cap_data_bits_w6$516  = 7'h00;
   assign ch1__cap_data_bits_w7 = 7'h00;
-  assign \regs__cap_data_bits_w7$514  = 7'h00;
+  assign \regs__cap_data_bits_w7$518  = 7'h00;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$516  = 1'h1;
+  assign \regs__cap_register_access$520  = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign \regs__cap_ssi$518  = 1'h1;
+  assign \regs__cap_ssi$522  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$520  = 6'h18;
+  assign \regs__cap_timer_width$524  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$522  = 1'h1;
+  assign \regs__cap_timestamp$526  = 1'h1;
   assign ch1__cap_words = 4'h2;
-  assign \regs__cap_words$524  = 4'h2;
+  assign \regs__cap_words$528  = 4'h2;
   assign ch1__cds = \$13 [49];
-  assign \regs__cds$526  = \$13 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$527 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$529 ;
-  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$531 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$533 ;
-  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$535 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$537 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$539 ;
-  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$541 ;
-  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$543 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$545 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$547 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$549 ;
-  assign ch1__cfg_ssi = \regs__cfg_ssi$551 ;
-  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$553 ;
-  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$555 ;
-  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$557 ;
-  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$559 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$561 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$563 ;
-  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$565 ;
-  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$567 ;
-  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$569 ;
-  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$571 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$573 ;
-  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$575 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$577 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$579 ;
-  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$581 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$583 ;
-  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$585 ;
-  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$587 ;
-  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$589 ;
-  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$591 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$593 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$595 ;
-  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$597 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$599 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$601 ;
-  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$603 ;
-  assign \regs__cfg_w2_crc$605  = 2'h0;
+  assign \regs__cds$530  = \$13 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$531 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$533 ;
+  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$535 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$537 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$539 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$541 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$543 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$545 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$547 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$549 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$551 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$553 ;
+  assign ch1__cfg_ssi = \regs__cfg_ssi$555 ;
+  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$557 ;
+  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$559 ;
+  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$561 ;
+  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$563 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$565 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$567 ;
+  assign \regs__cfg_w0_crc_inverted$569  = 1'h0;
+  assign ch1__cfg_w0_crc_inverted = 1'h0;
+  assign \regs__cfg_w0_crc_poly$571  = 16'h0000;
+  assign ch1__cfg_w0_crc_poly = 16'h0000;
+  assign \regs__cfg_w0_crc_start$573  = 16'h0000;
+  assign ch1__cfg_w0_crc_start = 16'h0000;
+  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$575 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$577 ;
+  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$579 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$581 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$583 ;
+  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$585 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$587 ;
+  assign \regs__cfg_w1_crc_inverted$589  = 1'h0;
+  assign ch1__cfg_w1_crc_inverted = 1'h0;
+  assign \regs__cfg_w1_crc_poly$591  = 16'h0000;
+  assign ch1__cfg_w1_crc_poly = 16'h0000;
+  assign \regs__cfg_w1_crc_start$593  = 16'h0000;
+  assign ch1__cfg_w1_crc_start = 16'h0000;
+  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$595 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$597 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$599 ;
+  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$601 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$603 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$605 ;
+  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$607 ;
+  assign \regs__cfg_w2_crc$609  = 2'h0;
   assign ch1__cfg_w2_crc = 2'h0;
-  assign \regs__cfg_w2_crc_inverted$607  = 1'h0;
+  assign \regs__cfg_w2_crc_inverted$611  = 1'h0;
   assign ch1__cfg_w2_crc_inverted = 1'h0;
-  assign \regs__cfg_w2_crc_poly$609  = 16'h0000;
+  assign \regs__cfg_w2_crc_poly$613  = 16'h0000;
   assign ch1__cfg_w2_crc_poly = 16'h0000;
-  assign \regs__cfg_w2_crc_start$611  = 16'h0000;
+  assign \regs__cfg_w2_crc_start$615  = 16'h0000;
   assign ch1__cfg_w2_crc_start = 16'h0000;
-  assign \regs__cfg_w2_crc_width$613  = 5'h00;
+  assign \regs__cfg_w2_crc_width$617  = 5'h00;
   assign ch1__cfg_w2_crc_width = 5'h00;
-  assign \regs__cfg_w2_data_bits$615  = 7'h00;
+  assign \regs__cfg_w2_data_bits$619  = 7'h00;
   assign ch1__cfg_w2_data_bits = 7'h00;
-  assign \regs__cfg_w2_enable$617  = 1'h0;
+  assign \regs__cfg_w2_enable$621  = 1'h0;
   assign ch1__cfg_w2_enable = 1'h0;
-  assign \regs__cfg_w2_gray$619  = 1'h0;
+  assign \regs__cfg_w2_gray$623  = 1'h0;
   assign ch1__cfg_w2_gray = 1'h0;
-  assign \regs__cfg_w2_lc$621  = 1'h0;
+  assign \regs__cfg_w2_lc$625  = 1'h0;
   assign ch1__cfg_w2_lc = 1'h0;
-  assign \regs__cfg_w2_nenw$623  = 1'h0;
+  assign \regs__cfg_w2_nenw$627  = 1'h0;
   assign ch1__cfg_w2_nenw = 1'h0;
-  assign \regs__cfg_w2_signed$625  = 1'h0;
+  assign \regs__cfg_w2_signed$629  = 1'h0;
   assign ch1__cfg_w2_signed = 1'h0;
-  assign \regs__cfg_w3_crc$627  = 2'h0;
+  assign \regs__cfg_w3_crc$631  = 2'h0;
   assign ch1__cfg_w3_crc = 2'h0;
-  assign \regs__cfg_w3_crc_inverted$629  = 1'h0;
+  assign \regs__cfg_w3_crc_inverted$633  = 1'h0;
   assign ch1__cfg_w3_crc_inverted = 1'h0;
-  assign \regs__cfg_w3_crc_poly$631  = 16'h0000;
+  assign \regs__cfg_w3_crc_poly$635  = 16'h0000;
   assign ch1__cfg_w3_crc_poly = 16'h0000;
-  assign \regs__cfg_w3_crc_start$633  = 16'h0000;
+  assign \regs__cfg_w3_crc_start$637  = 16'h0000;
   assign ch1__cfg_w3_crc_start = 16'h0000;
-  assign \regs__cfg_w3_crc_width$635  = 5'h00;
+  assign \regs__cfg_w3_crc_width$639  = 5'h00;
   assign ch1__cfg_w3_crc_width = 5'h00;
-  assign \regs__cfg_w3_data_bits$637  = 7'h00;
+  assign \regs__cfg_w3_data_bits$641  = 7'h00;
   assign ch1__cfg_w3_data_bits = 7'h00;
-  assign \regs__cfg_w3_enable$639  = 1'h0;
+  assign \regs__cfg_w3_enable$643  = 1'h0;
   assign ch1__cfg_w3_enable = 1'h0;
-  assign \regs__cfg_w3_gray$641  = 1'h0;
+  assign \regs__cfg_w3_gray$645  = 1'h0;
   assign ch1__cfg_w3_gray = 1'h0;
-  assign \regs__cfg_w3_lc$643  = 1'h0;
+  assign \regs__cfg_w3_lc$647  = 1'h0;
   assign ch1__cfg_w3_lc = 1'h0;
-  assign \regs__cfg_w3_nenw$645  = 1'h0;
+  assign \regs__cfg_w3_nenw$649  = 1'h0;
   assign ch1__cfg_w3_nenw = 1'h0;
-  assign \regs__cfg_w3_signed$647  = 1'h0;
+  assign \regs__cfg_w3_signed$651  = 1'h0;
   assign ch1__cfg_w3_signed = 1'h0;
-  assign \regs__cfg_w4_crc$649  = 2'h0;
+  assign \regs__cfg_w4_crc$653  = 2'h0;
   assign ch1__cfg_w4_crc = 2'h0;
-  assign \regs__cfg_w4_crc_inverted$651  = 1'h0;
+  assign \regs__cfg_w4_crc_inverted$655  = 1'h0;
   assign ch1__cfg_w4_crc_inverted = 1'h0;
-  assign \regs__cfg_w4_crc_poly$653  = 16'h0000;
+  assign \regs__cfg_w4_crc_poly$657  = 16'h0000;
   assign ch1__cfg_w4_crc_poly = 16'h0000;
-  assign \regs__cfg_w4_crc_start$655  = 16'h0000;
+  assign \regs__cfg_w4_crc_start$659  = 16'h0000;
   assign ch1__cfg_w4_crc_start = 16'h0000;
-  assign \regs__cfg_w4_crc_width$657  = 5'h00;
+  assign \regs__cfg_w4_crc_width$661  = 5'h00;
   assign ch1__cfg_w4_crc_width = 5'h00;
-  assign \regs__cfg_w4_data_bits$659  = 7'h00;
+  assign \regs__cfg_w4_data_bits$663  = 7'h00;
   assign ch1__cfg_w4_data_bits = 7'h00;
-  assign \regs__cfg_w4_enable$661  = 1'h0;
+  assign \regs__cfg_w4_enable$665  = 1'h0;
   assign ch1__cfg_w4_enable = 1'h0;
-  assign \regs__cfg_w4_gray$663  = 1'h0;
+  assign \regs__cfg_w4_gray$667  = 1'h0;
   assign ch1__cfg_w4_gray = 1'h0;
-  assign \regs__cfg_w4_lc$665  = 1'h0;
+  assign \regs__cfg_w4_lc$669  = 1'h0;
   assign ch1__cfg_w4_lc = 1'h0;
-  assign \regs__cfg_w4_nenw$667  = 1'h0;
+  assign \regs__cfg_w4_nenw$671  = 1'h0;
   assign ch1__cfg_w4_nenw = 1'h0;
-  assign \regs__cfg_w4_signed$669  = 1'h0;
+  assign \regs__cfg_w4_signed$673  = 1'h0;
   assign ch1__cfg_w4_signed = 1'h0;
-  assign \regs__cfg_w5_crc$671  = 2'h0;
+  assign \regs__cfg_w5_crc$675  = 2'h0;
   assign ch1__cfg_w5_crc = 2'h0;
-  assign \regs__cfg_w5_crc_inverted$673  = 1'h0;
+  assign \regs__cfg_w5_crc_inverted$677  = 1'h0;
   assign ch1__cfg_w5_crc_inverted = 1'h0;
-  assign \regs__cfg_w5_crc_poly$675  = 16'h0000;
+  assign \regs__cfg_w5_crc_poly$679  = 16'h0000;
   assign ch1__cfg_w5_crc_poly = 16'h0000;
-  assign \regs__cfg_w5_crc_start$677  = 16'h0000;
+  assign \regs__cfg_w5_crc_start$681  = 16'h0000;
   assign ch1__cfg_w5_crc_start = 16'h0000;
-  assign \regs__cfg_w5_crc_width$679  = 5'h00;
+  assign \regs__cfg_w5_crc_width$683  = 5'h00;
   assign ch1__cfg_w5_crc_width = 5'h00;
-  assign \regs__cfg_w5_data_bits$681  = 7'h00;
+  assign \regs__cfg_w5_data_bits$685  = 7'h00;
   assign ch1__cfg_w5_data_bits = 7'h00;
-  assign \regs__cfg_w5_enable$683  = 1'h0;
+  assign \regs__cfg_w5_enable$687  = 1'h0;
   assign ch1__cfg_w5_enable = 1'h0;
-  assign \regs__cfg_w5_gray$685  = 1'h0;
+  assign \regs__cfg_w5_gray$689  = 1'h0;
   assign ch1__cfg_w5_gray = 1'h0;
-  assign \regs__cfg_w5_lc$687  = 1'h0;
+  assign \regs__cfg_w5_lc$691  = 1'h0;
   assign ch1__cfg_w5_lc = 1'h0;
-  assign \regs__cfg_w5_nenw$689  = 1'h0;
+  assign \regs__cfg_w5_nenw$693  = 1'h0;
   assign ch1__cfg_w5_nenw = 1'h0;
-  assign \regs__cfg_w5_signed$691  = 1'h0;
+  assign \regs__cfg_w5_signed$695  = 1'h0;
   assign ch1__cfg_w5_signed = 1'h0;
-  assign \regs__cfg_w6_crc$693  = 2'h0;
+  assign \regs__cfg_w6_crc$697  = 2'h0;
   assign ch1__cfg_w6_crc = 2'h0;
-  assign \regs__cfg_w6_crc_inverted$695  = 1'h0;
+  assign \regs__cfg_w6_crc_inverted$699  = 1'h0;
   assign ch1__cfg_w6_crc_inverted = 1'h0;
-  assign \regs__cfg_w6_crc_poly$697  = 16'h0000;
+  assign \regs__cfg_w6_crc_poly$701  = 16'h0000;
   assign ch1__cfg_w6_crc_poly = 16'h0000;
-  assign \regs__cfg_w6_crc_start$699  = 16'h0000;
+  assign \regs__cfg_w6_crc_start$703  = 16'h0000;
   assign ch1__cfg_w6_crc_start = 16'h0000;
-  assign \regs__cfg_w6_crc_width$701  = 5'h00;
+  assign \regs__cfg_w6_crc_width$705  = 5'h00;
   assign ch1__cfg_w6_crc_width = 5'h00;
-  assign \regs__cfg_w6_data_bits$703  = 7'h00;
+  assign \regs__cfg_w6_data_bits$707  = 7'h00;
   assign ch1__cfg_w6_data_bits = 7'h00;
-  assign \regs__cfg_w6_enable$705  = 1'h0;
+  assign \regs__cfg_w6_enable$709  = 1'h0;
   assign ch1__cfg_w6_enable = 1'h0;
-  assign \regs__cfg_w6_gray$707  = 1'h0;
+  assign \regs__cfg_w6_gray$711  = 1'h0;
   assign ch1__cfg_w6_gray = 1'h0;
-  assign \regs__cfg_w6_lc$709  = 1'h0;
+  assign \regs__cfg_w6_lc$713  = 1'h0;
   assign ch1__cfg_w6_lc = 1'h0;
-  assign \regs__cfg_w6_nenw$711  = 1'h0;
+  assign \regs__cfg_w6_nenw$715  = 1'h0;
   assign ch1__cfg_w6_nenw = 1'h0;
-  assign \regs__cfg_w6_signed$713  = 1'h0;
+  assign \regs__cfg_w6_signed$717  = 1'h0;
   assign ch1__cfg_w6_signed = 1'h0;
-  assign \regs__cfg_w7_crc$715  = 2'h0;
+  assign \regs__cfg_w7_crc$719  = 2'h0;
   assign ch1__cfg_w7_crc = 2'h0;
-  assign \regs__cfg_w7_crc_inverted$717  = 1'h0;
+  assign \regs__cfg_w7_crc_inverted$721  = 1'h0;
   assign ch1__cfg_w7_crc_inverted = 1'h0;
-  assign \regs__cfg_w7_crc_poly$719  = 16'h0000;
+  assign \regs__cfg_w7_crc_poly$723  = 16'h0000;
   assign ch1__cfg_w7_crc_poly = 16'h0000;
-  assign \regs__cfg_w7_crc_start$721  = 16'h0000;
+  assign \regs__cfg_w7_crc_start$725  = 16'h0000;
   assign ch1__cfg_w7_crc_start = 16'h0000;
-  assign \regs__cfg_w7_crc_width$723  = 5'h00;
+  assign \regs__cfg_w7_crc_width$727  = 5'h00;
   assign ch1__cfg_w7_crc_width = 5'h00;
-  assign \regs__cfg_w7_data_bits$725  = 7'h00;
+  assign \regs__cfg_w7_data_bits$729  = 7'h00;
   assign ch1__cfg_w7_data_bits = 7'h00;
-  assign \regs__cfg_w7_enable$727  = 1'h0;
+  assign \regs__cfg_w7_enable$731  = 1'h0;
   assign ch1__cfg_w7_enable = 1'h0;
-  assign \regs__cfg_w7_gray$729  = 1'h0;
+  assign \regs__cfg_w7_gray$733  = 1'h0;
   assign ch1__cfg_w7_gray = 1'h0;
-  assign \regs__cfg_w7_lc$731  = 1'h0;
+  assign \regs__cfg_w7_lc$735  = 1'h0;
   assign ch1__cfg_w7_lc = 1'h0;
-  assign \regs__cfg_w7_nenw$733  = 1'h0;
+  assign \regs__cfg_w7_nenw$737  = 1'h0;
   assign ch1__cfg_w7_nenw = 1'h0;
-  assign \regs__cfg_w7_signed$735  = 1'h0;
+  assign \regs__cfg_w7_signed$739  = 1'h0;
   assign ch1__cfg_w7_signed = 1'h0;
-  assign \regs__chain_addr$737  = wb_adr[3:0];
+  assign \regs__chain_addr$741  = wb_adr[3:0];
   assign ch1__chain_addr = wb_adr[3:0];
   assign ch1__chain_data = 32'd0;
-  assign \regs__chain_data$740  = 32'd0;
-  assign ch1__chain_en = \regs__chain_en$741 ;
-  assign ch1__clear_counters = \regs__clear_counters$743 ;
-  assign \regs__config_error$746  = ch1__config_error;
-  assign \regs__count_addr$747  = wb_adr[2:0];
+  assign \regs__chain_data$744  = 32'd0;
+  assign ch1__chain_en = \regs__chain_en$745 ;
+  assign ch1__clear_counters = \regs__clear_counters$747 ;
+  assign \regs__config_error$750  = ch1__config_error;
+  assign \regs__count_addr$751  = wb_adr[2:0];
   assign ch1__count_addr = wb_adr[2:0];
   assign ch1__count_ca_aborted = \$14 [63:48];
-  assign \regs__count_ca_aborted$750  = \$14 [63:48];
+  assign \regs__count_ca_aborted$754  = \$14 [63:48];
   assign ch1__count_ca_crc4_error = \$14 [15:0];
-  assign \regs__count_ca_crc4_error$752  = \$14 [15:0];
+  assign \regs__count_ca_crc4_error$756  = \$14 [15:0];
   assign ch1__count_ca_data_fault = \$14 [79:64];
-  assign \regs__count_ca_data_fault$754  = \$14 [79:64];
+  assign \regs__count_ca_data_fault$758  = \$14 [79:64];
   assign ch1__count_ca_no_answer = \$14 [31:16];
-  assign \regs__count_ca_no_answer$756  = \$14 [31:16];
+  assign \regs__count_ca_no_answer$760  = \$14 [31:16];
   assign ch1__count_ca_refused = \$14 [47:32];
-  assign \regs__count_ca_refused$758  = \$14 [47:32];
+  assign \regs__count_ca_refused$762  = \$14 [47:32];
   assign ch1__count_crc_word2 = 16'h0000;
-  assign \regs__count_crc_word2$760  = 16'h0000;
+  assign \regs__count_crc_word2$764  = 16'h0000;
   assign ch1__count_crc_word3 = 16'h0000;
-  assign \regs__count_crc_word3$762  = 16'h0000;
+  assign \regs__count_crc_word3$766  = 16'h0000;
   assign ch1__count_crc_word4 = 16'h0000;
-  assign \regs__count_crc_word4$764  = 16'h0000;
+  assign \regs__count_crc_word4$768  = 16'h0000;
   assign ch1__count_crc_word5 = 16'h0000;
-  assign \regs__count_crc_word5$766  = 16'h0000;
+  assign \regs__count_crc_word5$770  = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
-  assign \regs__count_crc_word6$768  = 16'h0000;
+  assign \regs__count_crc_word6$772  = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign \regs__count_crc_word7$770  = 16'h0000;
-  assign \regs__count_data$772  = ch1__count_data;
-  assign ch1__count_en = \regs__count_en$773 ;
+  assign \regs__count_crc_word7$774  = 16'h0000;
+  assign \regs__count_data$776  = ch1__count_data;
+  assign ch1__count_en = \regs__count_en$777 ;
   assign ch1__delay_settled = \$13 [54];
-  assign \regs__delay_settled$776  = \$13 [54];
+  assign \regs__delay_settled$780  = \$13 [54];
   assign ch1__delay_spread = \$13 [75:68];
-  assign \regs__delay_spread$778  = \$13 [75:68];
-  assign \regs__done_count$780  = ch1__done_count;
-  assign \regs__frame_done$782  = ch1__frame_done;
-  assign \regs__frame_error$784  = ch1__frame_error;
+  assign \regs__delay_spread$782  = \$13 [75:68];
+  assign \regs__done_count$784  = ch1__done_count;
+  assign \regs__frame_done$786  = ch1__frame_done;
+  assign \regs__frame_error$788  = ch1__frame_error;
   assign ch1__lc = \$13 [182:177];
-  assign \regs__lc$786  = \$13 [182:177];
+  assign \regs__lc$790  = \$13 [182:177];
   assign ch1__lc_repeat = \$13 [183];
-  assign \regs__lc_repeat$788  = \$13 [183];
+  assign \regs__lc_repeat$792  = \$13 [183];
   assign ch1__lc_skip = \$13 [184];
-  assign \regs__lc_skip$790  = \$13 [184];
+  assign \regs__lc_skip$794  = \$13 [184];
   assign ch1__lc_zero = \$13 [185];
-  assign \regs__lc_zero$792  = \$13 [185];
+  assign \regs__lc_zero$796  = \$13 [185];
   assign ch1__line_delay = \$13 [48:36];
-  assign \regs__line_delay$794  = \$13 [48:36];
+  assign \regs__line_delay$798  = \$13 [48:36];
   assign ch1__noise_events = \$13 [53:50];
-  assign \regs__noise_events$796  = \$13 [53:50];
-  assign ch1__periodic = \regs__periodic$797 ;
-  assign \regs__result_updates$800  = ch1__result_updates;
+  assign \regs__noise_events$800  = \$13 [53:50];
+  assign ch1__periodic = \regs__periodic$801 ;
+  assign \regs__result_updates$804  = ch1__result_updates;
   assign ch1__settled_delay = \$13 [67:55];
-  assign \regs__settled_delay$802  = \$13 [67:55];
+  assign \regs__settled_delay$806  = \$13 [67:55];
   assign ch1__spw_mismatch = \$13 [186];
-  assign \regs__spw_mismatch$804  = \$13 [186];
-  assign ch1__start = \regs__start$805 ;
+  assign \regs__spw_mismatch$808  = \$13 [186];
+  assign ch1__start = \regs__start$809 ;
   assign ch1__status = \$13 [3:0];
-  assign \regs__status$808  = \$13 [3:0];
+  assign \regs__status$812  = \$13 [3:0];
   assign ch1__timestamp = \$13 [35:4];
-  assign \regs__timestamp$810  = \$13 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$811 ;
+  assign \regs__timestamp$814  = \$13 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$815 ;
   assign ch1__word0_crc_ok = \$13 [133];
-  assign \regs__word0_crc_ok$814  = \$13 [133];
+  assign \regs__word0_crc_ok$818  = \$13 [133];
   assign ch1__word0_ne = \$13 [131];
-  assign \regs__word0_ne$816  = \$13 [131];
+  assign \regs__word0_ne$820  = \$13 [131];
   assign ch1__word0_nw = \$13 [132];
-  assign \regs__word0_nw$818  = \$13 [132];
+  assign \regs__word0_nw$822  = \$13 [132];
   assign ch1__word0_position = { 9'h000, \$13 [130:76] };
-  assign \regs__word0_position$820  = { 9'h000, \$13 [130:76] };
+  assign \regs__word0_position$824  = { 9'h000, \$13 [130:76] };
   assign ch1__word1_crc_ok = \$13 [176];
-  assign \regs__word1_crc_ok$822  = \$13 [176];
+  assign \regs__word1_crc_ok$826  = \$13 [176];
   assign ch1__word1_ne = \$13 [174];
-  assign \regs__word1_ne$824  = \$13 [174];
+  assign \regs__word1_ne$828  = \$13 [174];
   assign ch1__word1_nw = \$13 [175];
-  assign \regs__word1_nw$826  = \$13 [175];
+  assign \regs__word1_nw$830  = \$13 [175];
   assign ch1__word1_position = { 24'h000000, \$13 [173:134] };
-  assign \regs__word1_position$828  = { 24'h000000, \$13 [173:134] };
+  assign \regs__word1_position$832  = { 24'h000000, \$13 [173:134] };
   assign ch1__word2_crc_ok = 1'h0;
-  assign \regs__word2_crc_ok$830  = 1'h0;
+  assign \regs__word2_crc_ok$834  = 1'h0;
   assign ch1__word2_ne = 1'h0;
-  assign \regs__word2_ne$832  = 1'h0;
+  assign \regs__word2_ne$836  = 1'h0;
   assign ch1__word2_nw = 1'h0;
-  assign \regs__word2_nw$834  = 1'h0;
+  assign \regs__word2_nw$838  = 1'h0;
   assign ch1__word3_crc_ok = 1'h0;
-  assign \regs__word3_crc_ok$836  = 1'h0;
+  assign \regs__word3_crc_ok$840  = 1'h0;
   assign ch1__word3_ne = 1'h0;
-  assign \regs__word3_ne$838  = 1'h0;
+  assign \regs__word3_ne$842  = 1'h0;
   assign ch1__word3_nw = 1'h0;
-  assign \regs__word3_nw$840  = 1'h0;
+  assign \regs__word3_nw$844  = 1'h0;
   assign ch1__word4_crc_ok = 1'h0;
-  assign \regs__word4_crc_ok$842  = 1'h0;
+  assign \regs__word4_crc_ok$846  = 1'h0;
   assign ch1__word4_ne = 1'h0;
-  assign \regs__word4_ne$844  = 1'h0;
+  assign \regs__word4_ne$848  = 1'h0;
   assign ch1__word4_nw = 1'h0;
-  assign \regs__word4_nw$846  = 1'h0;
+  assign \regs__word4_nw$850  = 1'h0;
   assign ch1__word5_crc_ok = 1'h0;
-  assign \regs__word5_crc_ok$848  = 1'h0;
+  assign \regs__word5_crc_ok$852  = 1'h0;
   assign ch1__word5_ne = 1'h0;
-  assign \regs__word5_ne$850  = 1'h0;
+  assign \regs__word5_ne$854  = 1'h0;
   assign ch1__word5_nw = 1'h0;
-  assign \regs__word5_nw$852  = 1'h0;
+  assign \regs__word5_nw$856  = 1'h0;
   assign ch1__word6_crc_ok = 1'h0;
-  assign \regs__word6_crc_ok$854  = 1'h0;
+  assign \regs__word6_crc_ok$858  = 1'h0;
   assign ch1__word6_ne = 1'h0;
-  assign \regs__word6_ne$856  = 1'h0;
+  assign \regs__word6_ne$860  = 1'h0;
   assign ch1__word6_nw = 1'h0;
-  assign \regs__word6_nw$858  = 1'h0;
+  assign \regs__word6_nw$862  = 1'h0;
   assign ch1__word7_crc_ok = 1'h0;
-  assign \regs__word7_crc_ok$860  = 1'h0;
+  assign \regs__word7_crc_ok$864  = 1'h0;
   assign ch1__word7_ne = 1'h0;
-  assign \regs__word7_ne$862  = 1'h0;
+  assign \regs__word7_ne$866  = 1'h0;
   assign ch1__word7_nw = 1'h0;
-  assign \regs__word7_nw$864  = 1'h0;
-  assign \trigger$865  = \trigger$44 ;
-  assign \cfg_hold$866  = \cfg_hold$455 [1];
-  assign \ma$868  = ch1_ma;
-  assign \slo$869  = ch1_slo;
+  assign \regs__word7_nw$868  = 1'h0;
+  assign \trigger$869  = \trigger$44 ;
+  assign \cfg_hold$870  = \cfg_hold$455 [1];
+  assign \ma$872  = ch1_ma;
+  assign \slo$873  = ch1_slo;
+  assign \crc_table_addr$875  = ch1_crc_table_addr;
+  assign ch1_crc_table_data = \crc_table_data$876 ;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$9 , \$8  };
-  assign \irq$872  = { \$9 , \$8  };
-  assign cfg_free[1] = \cfg_free$867 ;
+  assign \irq$880  = { \$9 , \$8  };
+  assign \crc_table_data.poly  = crc_table_data[15:0];
+  assign \crc_table_data.start  = crc_table_data[31:16];
+  assign \crc_table_data.inverted  = crc_table_data[32];
+  assign \crc_table_data$876.poly  = \crc_table_data$876 [15:0];
+  assign \crc_table_data$876.start  = \crc_table_data$876 [31:16];
+  assign \crc_table_data$876.inverted  = \crc_table_data$876 [32];
+  assign cfg_free[1] = \cfg_free$871 ;
   assign cfg_free[0] = \cfg_free$457 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus__w_en, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__count_en, ch1__chain_en, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__w_busy, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error
-, ch0__count_data, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__count_data, ch1__ca_busy, ch1__ca_rbuf_data, cfg_free, bus__r_load, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit
-, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit
-, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$152 , ch0_ca_ctrl_start
-, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc
-, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error
-, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$448 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13493$0 , \port$13504$0 , ch0__ca_done, \port$13581$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$14044$0 
-, \port$14055$0 , ch1__ca_done, \port$14132$0 , bus__w_addr);
+module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus__w_en, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_crc_table_data, ch0_irq, ch1__count_en, ch1__chain_en, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_crc_table_data, ch1_irq, bus__w_busy, bus__r_data, ch0__frame_error
+, ch0__busy, ch0__config_error, \rd__addr$763 , ch0__count_data, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, \rd__addr$929 , ch1__count_data, ch1__ca_busy, ch1__ca_rbuf_data, cfg_free, bus__r_load, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters
+, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable
+, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc1_w1_crc_width, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$145 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start
+, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray
+, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc1_w1_crc_width, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$437 , ch1_ca_ctrl_start
+, ch1_ca_ctrl_abort, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13487$0 , \port$13498$0 , ch0__ca_done, \port$13575$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$14038$0 , \port$14049$0 , ch1__ca_done, \port$14126$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2030,56 +2049,62 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$1008 ;
   reg \$1009 ;
   wire \$101 ;
-  reg [3:0] \$1010 ;
+  reg \$1010 ;
   reg \$1011 ;
   reg \$1012 ;
   reg \$1013 ;
   reg \$1014 ;
   reg \$1015 ;
-  reg \$1016 ;
+  reg [3:0] \$1016 ;
   reg \$1017 ;
   reg \$1018 ;
   reg \$1019 ;
   wire \$102 ;
   reg \$1020 ;
   reg \$1021 ;
-  reg [5:0] \$1022 ;
-  reg [15:0] \$1023 ;
-  reg [12:0] \$1024 ;
-  reg [31:0] \$1025 ;
-  reg [31:0] \$1026 ;
-  reg [31:0] \$1027 ;
-  reg [31:0] \$1028 ;
-  reg [31:0] \$1029 ;
+  reg \$1022 ;
+  reg \$1023 ;
+  reg \$1024 ;
+  reg \$1025 ;
+  reg \$1026 ;
+  reg \$1027 ;
+  reg [5:0] \$1028 ;
+  reg [15:0] \$1029 ;
   wire \$103 ;
-  reg [3:0] \$1030 ;
-  reg \$1031 ;
-  reg [7:0] \$1032 ;
-  reg [12:0] \$1033 ;
-  reg \$1034 ;
-  reg \$1035 ;
-  reg \$1036 ;
+  reg [12:0] \$1030 ;
+  reg [31:0] \$1031 ;
+  reg [31:0] \$1032 ;
+  reg [31:0] \$1033 ;
+  reg [31:0] \$1034 ;
+  reg [31:0] \$1035 ;
+  reg [3:0] \$1036 ;
   reg \$1037 ;
-  reg [31:0] \$1038 ;
+  reg [7:0] \$1038 ;
+  reg [12:0] \$1039 ;
   wire \$104 ;
+  reg \$1040 ;
+  reg \$1041 ;
+  reg \$1042 ;
+  reg \$1043 ;
+  reg [31:0] \$1044 ;
   wire \$105 ;
   wire \$106 ;
-  wire \$107 ;
-  wire \$108 ;
-  wire \$109 ;
+  wire [31:0] \$107 ;
+  wire [31:0] \$108 ;
+  wire [31:0] \$109 ;
   wire [31:0] \$11 ;
-  wire \$110 ;
-  wire \$111 ;
-  wire \$112 ;
-  wire \$113 ;
+  wire [31:0] \$110 ;
+  wire [31:0] \$111 ;
+  wire [14:0] \$112 ;
+  wire [1:0] \$113 ;
   wire \$114 ;
-  wire [31:0] \$115 ;
-  wire [31:0] \$116 ;
-  wire [31:0] \$117 ;
-  wire [31:0] \$118 ;
-  wire [31:0] \$119 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire [31:0] \$12 ;
-  wire [14:0] \$120 ;
+  wire \$120 ;
   wire \$121 ;
   wire \$122 ;
   wire \$123 ;
@@ -2129,13 +2154,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$163 ;
   wire \$164 ;
   wire \$165 ;
-  wire \$166 ;
-  wire \$167 ;
-  wire \$168 ;
-  wire \$169 ;
+  wire [31:0] \$166 ;
+  wire [31:0] \$167 ;
+  wire [31:0] \$168 ;
+  wire [31:0] \$169 ;
   wire [31:0] \$17 ;
-  wire \$170 ;
-  wire \$171 ;
+  wire [31:0] \$170 ;
+  wire [31:0] \$171 ;
   wire [31:0] \$172 ;
   wire [31:0] \$173 ;
   wire [31:0] \$174 ;
@@ -2231,13 +2256,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [31:0] \$255 ;
   wire [31:0] \$256 ;
   wire [31:0] \$257 ;
-  wire [31:0] \$258 ;
-  wire [31:0] \$259 ;
+  wire \$258 ;
+  wire \$259 ;
   wire \$26 ;
-  wire [31:0] \$260 ;
-  wire [31:0] \$261 ;
-  wire [31:0] \$262 ;
-  wire [31:0] \$263 ;
+  wire \$260 ;
+  wire \$261 ;
+  wire \$262 ;
+  wire \$263 ;
   wire \$264 ;
   wire \$265 ;
   wire \$266 ;
@@ -2330,8 +2355,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$344 ;
   wire \$345 ;
   wire \$346 ;
-  wire \$347 ;
-  wire \$348 ;
+  wire [14:0] \$347 ;
+  wire [1:0] \$348 ;
   wire \$349 ;
   wire \$35 ;
   wire \$350 ;
@@ -2346,7 +2371,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$359 ;
   wire \$36 ;
   wire \$360 ;
-  wire [14:0] \$361 ;
+  wire \$361 ;
   wire \$362 ;
   wire \$363 ;
   wire \$364 ;
@@ -2391,19 +2416,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$4 ;
   wire \$40 ;
   wire \$400 ;
-  wire \$401 ;
-  wire \$402 ;
-  wire \$403 ;
-  wire \$404 ;
-  wire \$405 ;
-  wire \$406 ;
-  wire \$407 ;
-  wire \$408 ;
-  wire \$409 ;
+  wire [31:0] \$401 ;
+  wire [31:0] \$402 ;
+  wire [31:0] \$403 ;
+  wire [31:0] \$404 ;
+  wire [31:0] \$405 ;
+  wire [31:0] \$406 ;
+  wire [31:0] \$407 ;
+  wire [31:0] \$408 ;
+  wire [31:0] \$409 ;
   wire \$41 ;
-  wire \$410 ;
-  wire \$411 ;
-  wire \$412 ;
+  wire [31:0] \$410 ;
+  wire [31:0] \$411 ;
+  wire [31:0] \$412 ;
   wire [31:0] \$413 ;
   wire [31:0] \$414 ;
   wire [31:0] \$415 ;
@@ -2492,20 +2517,20 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [31:0] \$490 ;
   wire [31:0] \$491 ;
   wire [31:0] \$492 ;
-  wire [31:0] \$493 ;
-  wire [31:0] \$494 ;
-  wire [31:0] \$495 ;
-  wire [31:0] \$496 ;
-  wire [31:0] \$497 ;
-  wire [31:0] \$498 ;
-  wire [31:0] \$499 ;
+  wire \$493 ;
+  wire \$494 ;
+  wire \$495 ;
+  wire \$496 ;
+  wire \$497 ;
+  wire \$498 ;
+  wire \$499 ;
   wire \$5 ;
   wire \$50 ;
-  wire [31:0] \$500 ;
-  wire [31:0] \$501 ;
-  wire [31:0] \$502 ;
-  wire [31:0] \$503 ;
-  wire [31:0] \$504 ;
+  wire \$500 ;
+  wire \$501 ;
+  wire \$502 ;
+  wire \$503 ;
+  wire \$504 ;
   wire \$505 ;
   wire \$506 ;
   wire \$507 ;
@@ -2575,38 +2600,38 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$565 ;
   wire \$566 ;
   wire \$567 ;
-  wire \$568 ;
-  wire \$569 ;
+  wire [14:0] \$568 ;
+  wire [14:0] \$569 ;
   wire \$57 ;
   wire \$570 ;
-  wire \$571 ;
-  wire \$572 ;
+  wire [14:0] \$571 ;
+  wire [14:0] \$572 ;
   wire \$573 ;
-  wire \$574 ;
-  wire \$575 ;
+  wire [14:0] \$574 ;
+  wire [14:0] \$575 ;
   wire \$576 ;
-  wire \$577 ;
-  wire \$578 ;
-  wire [14:0] \$579 ;
+  wire [14:0] \$577 ;
+  wire [14:0] \$578 ;
+  wire \$579 ;
   wire \$58 ;
-  wire [14:0] \$580 ;
+  wire [3:0] \$580 ;
   wire \$581 ;
-  wire [14:0] \$582 ;
-  wire [14:0] \$583 ;
-  wire \$584 ;
-  wire [14:0] \$585 ;
-  wire [14:0] \$586 ;
+  wire \$582 ;
+  wire \$583 ;
+  wire [31:0] \$584 ;
+  wire \$585 ;
+  wire [1:0] \$586 ;
   wire \$587 ;
-  wire [14:0] \$588 ;
-  wire [14:0] \$589 ;
+  wire [1:0] \$588 ;
+  wire \$589 ;
   wire \$59 ;
   wire \$590 ;
-  wire [3:0] \$591 ;
-  wire \$592 ;
-  wire \$593 ;
-  wire \$594 ;
-  wire [31:0] \$595 ;
-  wire \$596 ;
+  wire [16:0] \$591 ;
+  wire [32:0] \$592 ;
+  wire [46:0] \$593 ;
+  wire [46:0] \$594 ;
+  wire [63:0] \$595 ;
+  wire [63:0] \$596 ;
   wire \$597 ;
   wire \$598 ;
   wire \$599 ;
@@ -2690,57 +2715,57 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$669 ;
   wire \$67 ;
   wire \$670 ;
-  wire [14:0] \$671 ;
-  wire [14:0] \$672 ;
-  wire \$673 ;
+  wire \$671 ;
+  wire \$672 ;
+  wire [14:0] \$673 ;
   wire [14:0] \$674 ;
-  wire [14:0] \$675 ;
-  wire \$676 ;
+  wire \$675 ;
+  wire [14:0] \$676 ;
   wire [14:0] \$677 ;
-  wire [14:0] \$678 ;
-  wire \$679 ;
+  wire \$678 ;
+  wire [14:0] \$679 ;
   wire \$68 ;
   wire [14:0] \$680 ;
-  wire [14:0] \$681 ;
-  wire \$682 ;
-  wire [3:0] \$683 ;
+  wire \$681 ;
+  wire [14:0] \$682 ;
+  wire [14:0] \$683 ;
   wire \$684 ;
-  wire \$685 ;
+  wire [3:0] \$685 ;
   wire \$686 ;
-  wire [31:0] \$687 ;
+  wire \$687 ;
   wire \$688 ;
-  wire \$689 ;
+  wire [31:0] \$689 ;
   wire \$69 ;
   wire \$690 ;
-  wire \$691 ;
+  wire [1:0] \$691 ;
   wire \$692 ;
-  wire \$693 ;
+  wire [1:0] \$693 ;
   wire \$694 ;
-  wire [31:0] \$695 ;
-  wire [31:0] \$696 ;
-  reg \$697 ;
-  reg [10:0] \$698 ;
-  reg [31:0] \$699 ;
+  wire \$695 ;
+  wire [16:0] \$696 ;
+  wire [32:0] \$697 ;
+  wire [46:0] \$698 ;
+  wire [46:0] \$699 ;
   wire \$7 ;
   wire \$70 ;
-  reg [3:0] \$700 ;
-  reg [31:0] \$701 ;
-  reg [3:0] \$702 ;
-  reg \$703 ;
-  reg \$704 ;
-  reg \$705 ;
-  reg \$706 ;
-  reg \$707 ;
-  reg \$708 ;
-  reg [31:0] \$709 ;
+  wire [63:0] \$700 ;
+  wire [63:0] \$701 ;
+  wire \$702 ;
+  wire \$703 ;
+  wire \$704 ;
+  wire \$705 ;
+  wire \$706 ;
+  wire \$707 ;
+  wire \$708 ;
+  wire [31:0] \$709 ;
   wire \$71 ;
-  reg \$710 ;
+  wire [31:0] \$710 ;
   reg \$711 ;
-  reg \$712 ;
-  reg \$713 ;
-  reg \$714 ;
-  reg \$715 ;
-  reg \$716 ;
+  reg [10:0] \$712 ;
+  reg [31:0] \$713 ;
+  reg [3:0] \$714 ;
+  reg [31:0] \$715 ;
+  reg [3:0] \$716 ;
   reg \$717 ;
   reg \$718 ;
   reg \$719 ;
@@ -2748,64 +2773,64 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$720 ;
   reg \$721 ;
   reg \$722 ;
-  reg \$723 ;
-  reg [15:0] \$724 ;
-  reg [11:0] \$725 ;
+  reg [31:0] \$723 ;
+  reg \$724 ;
+  reg \$725 ;
   reg \$726 ;
-  reg [23:0] \$727 ;
+  reg \$727 ;
   reg \$728 ;
-  reg [23:0] \$729 ;
+  reg \$729 ;
   wire \$73 ;
   reg \$730 ;
-  reg [23:0] \$731 ;
+  reg \$731 ;
   reg \$732 ;
-  reg [23:0] \$733 ;
+  reg \$733 ;
   reg \$734 ;
-  reg [6:0] \$735 ;
+  reg \$735 ;
   reg \$736 ;
   reg \$737 ;
-  reg [1:0] \$738 ;
-  reg \$739 ;
+  reg [15:0] \$738 ;
+  reg [11:0] \$739 ;
   wire \$74 ;
   reg \$740 ;
-  reg [6:0] \$741 ;
+  reg [23:0] \$741 ;
   reg \$742 ;
-  reg \$743 ;
-  reg [1:0] \$744 ;
-  reg \$745 ;
+  reg [23:0] \$743 ;
+  reg \$744 ;
+  reg [23:0] \$745 ;
   reg \$746 ;
-  reg \$747 ;
+  reg [23:0] \$747 ;
   reg \$748 ;
-  reg \$749 ;
+  reg [6:0] \$749 ;
   wire \$75 ;
   reg \$750 ;
-  reg [7:0] \$751 ;
-  reg [3:0] \$752 ;
-  reg [3:0] \$753 ;
-  reg [3:0] \$754 ;
-  reg \$755 ;
-  reg [11:0] \$756 ;
+  reg \$751 ;
+  reg [1:0] \$752 ;
+  reg \$753 ;
+  reg \$754 ;
+  reg [6:0] \$755 ;
+  reg \$756 ;
   reg \$757 ;
-  reg [15:0] \$758 ;
-  reg [4:0] \$759 ;
+  reg [1:0] \$758 ;
+  reg \$759 ;
   wire \$76 ;
   reg \$760 ;
   reg \$761 ;
-  reg [15:0] \$762 ;
+  reg \$762 ;
   reg \$763 ;
-  reg [15:0] \$764 ;
-  reg [4:0] \$765 ;
-  reg \$766 ;
-  reg \$767 ;
-  reg [15:0] \$768 ;
+  reg \$764 ;
+  reg [7:0] \$765 ;
+  reg [3:0] \$766 ;
+  reg [3:0] \$767 ;
+  reg [3:0] \$768 ;
   reg \$769 ;
   wire \$77 ;
-  reg \$770 ;
+  reg [11:0] \$770 ;
   reg \$771 ;
-  reg \$772 ;
+  reg [4:0] \$772 ;
   reg \$773 ;
-  reg [11:0] \$774 ;
-  reg \$775 ;
+  reg \$774 ;
+  reg [4:0] \$775 ;
   reg \$776 ;
   reg \$777 ;
   reg \$778 ;
@@ -2813,7 +2838,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$78 ;
   reg \$780 ;
   reg \$781 ;
-  reg \$782 ;
+  reg [11:0] \$782 ;
   reg \$783 ;
   reg \$784 ;
   reg \$785 ;
@@ -2826,27 +2851,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$791 ;
   reg \$792 ;
   reg \$793 ;
-  reg [2:0] \$794 ;
-  reg [6:0] \$795 ;
-  reg [6:0] \$796 ;
+  reg \$794 ;
+  reg \$795 ;
+  reg \$796 ;
   reg \$797 ;
   reg \$798 ;
   reg \$799 ;
   wire [31:0] \$8 ;
   wire \$80 ;
   reg \$800 ;
-  reg [31:0] \$801 ;
-  reg [14:0] \$802 ;
-  reg [3:0] \$803 ;
-  reg \$804 ;
+  reg \$801 ;
+  reg [2:0] \$802 ;
+  reg [6:0] \$803 ;
+  reg [6:0] \$804 ;
   reg \$805 ;
   reg \$806 ;
   reg \$807 ;
   reg \$808 ;
-  reg \$809 ;
+  reg [31:0] \$809 ;
   wire \$81 ;
-  reg \$810 ;
-  reg \$811 ;
+  reg [14:0] \$810 ;
+  reg [3:0] \$811 ;
   reg \$812 ;
   reg \$813 ;
   reg \$814 ;
@@ -2884,7 +2909,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$843 ;
   reg \$844 ;
   reg \$845 ;
-  reg [3:0] \$846 ;
+  reg \$846 ;
   reg \$847 ;
   reg \$848 ;
   reg \$849 ;
@@ -2895,104 +2920,104 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$853 ;
   reg \$854 ;
   reg \$855 ;
-  reg \$856 ;
+  reg [3:0] \$856 ;
   reg \$857 ;
-  reg [5:0] \$858 ;
-  reg [15:0] \$859 ;
+  reg \$858 ;
+  reg \$859 ;
   wire \$86 ;
-  reg [12:0] \$860 ;
-  reg [31:0] \$861 ;
-  reg [31:0] \$862 ;
-  reg [31:0] \$863 ;
-  reg [31:0] \$864 ;
-  reg [31:0] \$865 ;
-  reg [3:0] \$866 ;
+  reg \$860 ;
+  reg \$861 ;
+  reg \$862 ;
+  reg \$863 ;
+  reg \$864 ;
+  reg \$865 ;
+  reg \$866 ;
   reg \$867 ;
-  reg [7:0] \$868 ;
-  reg [12:0] \$869 ;
+  reg [5:0] \$868 ;
+  reg [15:0] \$869 ;
   wire \$87 ;
-  reg \$870 ;
-  reg \$871 ;
-  reg \$872 ;
-  reg \$873 ;
+  reg [12:0] \$870 ;
+  reg [31:0] \$871 ;
+  reg [31:0] \$872 ;
+  reg [31:0] \$873 ;
   reg [31:0] \$874 ;
-  reg \$875 ;
-  reg \$876 ;
+  reg [31:0] \$875 ;
+  reg [3:0] \$876 ;
   reg \$877 ;
-  reg \$878 ;
-  reg \$879 ;
+  reg [7:0] \$878 ;
+  reg [12:0] \$879 ;
   wire \$88 ;
   reg \$880 ;
   reg \$881 ;
   reg \$882 ;
   reg \$883 ;
-  reg \$884 ;
+  reg [31:0] \$884 ;
   reg \$885 ;
   reg \$886 ;
   reg \$887 ;
   reg \$888 ;
-  reg [15:0] \$889 ;
+  reg \$889 ;
   wire \$89 ;
-  reg [11:0] \$890 ;
+  reg \$890 ;
   reg \$891 ;
-  reg [23:0] \$892 ;
+  reg \$892 ;
   reg \$893 ;
-  reg [23:0] \$894 ;
+  reg \$894 ;
   reg \$895 ;
-  reg [23:0] \$896 ;
+  reg \$896 ;
   reg \$897 ;
-  reg [23:0] \$898 ;
-  reg \$899 ;
+  reg \$898 ;
+  reg [15:0] \$899 ;
   wire [31:0] \$9 ;
   wire \$90 ;
-  reg [6:0] \$900 ;
+  reg [11:0] \$900 ;
   reg \$901 ;
-  reg \$902 ;
-  reg [1:0] \$903 ;
-  reg \$904 ;
+  reg [23:0] \$902 ;
+  reg \$903 ;
+  reg [23:0] \$904 ;
   reg \$905 ;
-  reg [6:0] \$906 ;
+  reg [23:0] \$906 ;
   reg \$907 ;
-  reg \$908 ;
-  reg [1:0] \$909 ;
+  reg [23:0] \$908 ;
+  reg \$909 ;
   wire \$91 ;
-  reg \$910 ;
+  reg [6:0] \$910 ;
   reg \$911 ;
   reg \$912 ;
-  reg \$913 ;
+  reg [1:0] \$913 ;
   reg \$914 ;
   reg \$915 ;
-  reg [7:0] \$916 ;
-  reg [3:0] \$917 ;
-  reg [3:0] \$918 ;
-  reg [3:0] \$919 ;
+  reg [6:0] \$916 ;
+  reg \$917 ;
+  reg \$918 ;
+  reg [1:0] \$919 ;
   wire \$92 ;
   reg \$920 ;
-  reg [11:0] \$921 ;
+  reg \$921 ;
   reg \$922 ;
-  reg [15:0] \$923 ;
-  reg [4:0] \$924 ;
+  reg \$923 ;
+  reg \$924 ;
   reg \$925 ;
-  reg \$926 ;
-  reg [15:0] \$927 ;
-  reg \$928 ;
-  reg [15:0] \$929 ;
+  reg [7:0] \$926 ;
+  reg [3:0] \$927 ;
+  reg [3:0] \$928 ;
+  reg [3:0] \$929 ;
   wire \$93 ;
-  reg [4:0] \$930 ;
-  reg \$931 ;
+  reg \$930 ;
+  reg [11:0] \$931 ;
   reg \$932 ;
-  reg [15:0] \$933 ;
+  reg [4:0] \$933 ;
   reg \$934 ;
   reg \$935 ;
-  reg \$936 ;
+  reg [4:0] \$936 ;
   reg \$937 ;
   reg \$938 ;
-  reg [11:0] \$939 ;
+  reg \$939 ;
   wire \$94 ;
   reg \$940 ;
   reg \$941 ;
   reg \$942 ;
-  reg \$943 ;
+  reg [11:0] \$943 ;
   reg \$944 ;
   reg \$945 ;
   reg \$946 ;
@@ -3009,21 +3034,21 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$956 ;
   reg \$957 ;
   reg \$958 ;
-  reg [2:0] \$959 ;
+  reg \$959 ;
   wire \$96 ;
-  reg [6:0] \$960 ;
-  reg [6:0] \$961 ;
+  reg \$960 ;
+  reg \$961 ;
   reg \$962 ;
-  reg \$963 ;
-  reg \$964 ;
-  reg \$965 ;
-  reg [14:0] \$966 ;
-  reg [3:0] \$967 ;
+  reg [2:0] \$963 ;
+  reg [6:0] \$964 ;
+  reg [6:0] \$965 ;
+  reg \$966 ;
+  reg \$967 ;
   reg \$968 ;
   reg \$969 ;
   wire \$97 ;
-  reg \$970 ;
-  reg \$971 ;
+  reg [14:0] \$970 ;
+  reg [3:0] \$971 ;
   reg \$972 ;
   reg \$973 ;
   reg \$974 ;
@@ -3161,12 +3186,6 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [23:0] ch0__cfg_timeout_limit;
   (* init = 2'h0 *)
   wire [1:0] ch0__cfg_w0_crc;
-  (* init = 1'h0 *)
-  wire ch0__cfg_w0_crc_inverted;
-  (* init = 16'h0000 *)
-  wire [15:0] ch0__cfg_w0_crc_poly;
-  (* init = 16'h0000 *)
-  wire [15:0] ch0__cfg_w0_crc_start;
   (* init = 5'h00 *)
   wire [4:0] ch0__cfg_w0_crc_width;
   (* init = 7'h00 *)
@@ -3181,12 +3200,6 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0__cfg_w0_signed;
   (* init = 2'h0 *)
   wire [1:0] ch0__cfg_w1_crc;
-  (* init = 1'h0 *)
-  wire ch0__cfg_w1_crc_inverted;
-  (* init = 16'h0000 *)
-  wire [15:0] ch0__cfg_w1_crc_poly;
-  (* init = 16'h0000 *)
-  wire [15:0] ch0__cfg_w1_crc_start;
   (* init = 5'h00 *)
   wire [4:0] ch0__cfg_w1_crc_width;
   (* init = 7'h00 *)
@@ -3359,8 +3372,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [2:0] ch0_ca_request_slave_id;
   reg [2:0] ch0_ca_request_slave_id = 3'h0;
   wire ch0_ca_request_write;
-  output \ch0_ca_request_write$152 ;
-  reg \ch0_ca_request_write$152  = 1'h0;
+  output \ch0_ca_request_write$145 ;
+  reg \ch0_ca_request_write$145  = 1'h0;
   wire ch0_ca_state_write;
   wire ch0_caps_chain2_write;
   wire ch0_caps_chain_write;
@@ -3394,13 +3407,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0_cfg_crc0_config_write;
   reg ch0_cfg_crc0_start_config_addressed = 1'h0;
   wire ch0_cfg_crc0_start_config_write;
-  output [15:0] ch0_cfg_crc0_start_w0_crc_start;
-  reg [15:0] ch0_cfg_crc0_start_w0_crc_start = 16'h0000;
   wire ch0_cfg_crc0_start_write;
-  output ch0_cfg_crc0_w0_crc_inverted;
-  reg ch0_cfg_crc0_w0_crc_inverted = 1'h0;
-  output [15:0] ch0_cfg_crc0_w0_crc_poly;
-  reg [15:0] ch0_cfg_crc0_w0_crc_poly = 16'h0000;
   output [4:0] ch0_cfg_crc0_w0_crc_width;
   reg [4:0] ch0_cfg_crc0_w0_crc_width = 5'h00;
   wire ch0_cfg_crc0_write;
@@ -3408,13 +3415,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0_cfg_crc1_config_write;
   reg ch0_cfg_crc1_start_config_addressed = 1'h0;
   wire ch0_cfg_crc1_start_config_write;
-  output [15:0] ch0_cfg_crc1_start_w1_crc_start;
-  reg [15:0] ch0_cfg_crc1_start_w1_crc_start = 16'h0000;
   wire ch0_cfg_crc1_start_write;
-  output ch0_cfg_crc1_w1_crc_inverted;
-  reg ch0_cfg_crc1_w1_crc_inverted = 1'h0;
-  output [15:0] ch0_cfg_crc1_w1_crc_poly;
-  reg [15:0] ch0_cfg_crc1_w1_crc_poly = 16'h0000;
   output [4:0] ch0_cfg_crc1_w1_crc_width;
   reg [4:0] ch0_cfg_crc1_w1_crc_width = 5'h00;
   wire ch0_cfg_crc1_write;
@@ -3529,6 +3530,12 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0_count_chain2_write;
   wire ch0_count_chain3_write;
   wire ch0_count_chain_write;
+  reg ch0_crc_table_0_table_write_entry;
+  reg ch0_crc_table_16_table_write_entry;
+  reg ch0_crc_table_32_table_write_entry;
+  wire ch0_crc_table_addr;
+  output [32:0] ch0_crc_table_data;
+  wire [32:0] ch0_crc_table_data;
   output ch0_ctrl_abort;
   reg ch0_ctrl_abort = 1'h0;
   output ch0_ctrl_clear_counters;
@@ -3627,6 +3634,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg [31:0] ch0_result_w1_lo_data_snapshot = 32'd0;
   wire ch0_result_w1_lo_write;
   wire ch0_state_write;
+  reg ch0_table_clearing = 1'h1;
+  reg ch0_table_sweep = 1'h0;
   reg ch0_window0_read = 1'h0;
   reg ch0_window1_read = 1'h0;
   reg ch0_window2_read = 1'h0;
@@ -3716,12 +3725,6 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [23:0] ch1__cfg_timeout_limit;
   (* init = 2'h0 *)
   wire [1:0] ch1__cfg_w0_crc;
-  (* init = 1'h0 *)
-  wire ch1__cfg_w0_crc_inverted;
-  (* init = 16'h0000 *)
-  wire [15:0] ch1__cfg_w0_crc_poly;
-  (* init = 16'h0000 *)
-  wire [15:0] ch1__cfg_w0_crc_start;
   (* init = 5'h00 *)
   wire [4:0] ch1__cfg_w0_crc_width;
   (* init = 7'h00 *)
@@ -3736,12 +3739,6 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1__cfg_w0_signed;
   (* init = 2'h0 *)
   wire [1:0] ch1__cfg_w1_crc;
-  (* init = 1'h0 *)
-  wire ch1__cfg_w1_crc_inverted;
-  (* init = 16'h0000 *)
-  wire [15:0] ch1__cfg_w1_crc_poly;
-  (* init = 16'h0000 *)
-  wire [15:0] ch1__cfg_w1_crc_start;
   (* init = 5'h00 *)
   wire [4:0] ch1__cfg_w1_crc_width;
   (* init = 7'h00 *)
@@ -3914,8 +3911,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$448 ;
-  reg \ch1_ca_request_write$448  = 1'h0;
+  output \ch1_ca_request_write$437 ;
+  reg \ch1_ca_request_write$437  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_chain2_write;
   wire ch1_caps_chain_write;
@@ -3949,13 +3946,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1_cfg_crc0_config_write;
   reg ch1_cfg_crc0_start_config_addressed = 1'h0;
   wire ch1_cfg_crc0_start_config_write;
-  output [15:0] ch1_cfg_crc0_start_w0_crc_start;
-  reg [15:0] ch1_cfg_crc0_start_w0_crc_start = 16'h0000;
   wire ch1_cfg_crc0_start_write;
-  output ch1_cfg_crc0_w0_crc_inverted;
-  reg ch1_cfg_crc0_w0_crc_inverted = 1'h0;
-  output [15:0] ch1_cfg_crc0_w0_crc_poly;
-  reg [15:0] ch1_cfg_crc0_w0_crc_poly = 16'h0000;
   output [4:0] ch1_cfg_crc0_w0_crc_width;
   reg [4:0] ch1_cfg_crc0_w0_crc_width = 5'h00;
   wire ch1_cfg_crc0_write;
@@ -3963,13 +3954,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1_cfg_crc1_config_write;
   reg ch1_cfg_crc1_start_config_addressed = 1'h0;
   wire ch1_cfg_crc1_start_config_write;
-  output [15:0] ch1_cfg_crc1_start_w1_crc_start;
-  reg [15:0] ch1_cfg_crc1_start_w1_crc_start = 16'h0000;
   wire ch1_cfg_crc1_start_write;
-  output ch1_cfg_crc1_w1_crc_inverted;
-  reg ch1_cfg_crc1_w1_crc_inverted = 1'h0;
-  output [15:0] ch1_cfg_crc1_w1_crc_poly;
-  reg [15:0] ch1_cfg_crc1_w1_crc_poly = 16'h0000;
   output [4:0] ch1_cfg_crc1_w1_crc_width;
   reg [4:0] ch1_cfg_crc1_w1_crc_width = 5'h00;
   wire ch1_cfg_crc1_write;
@@ -4084,6 +4069,12 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1_count_chain2_write;
   wire ch1_count_chain3_write;
   wire ch1_count_chain_write;
+  reg ch1_crc_table_0_table_write_entry;
+  reg ch1_crc_table_16_table_write_entry;
+  reg ch1_crc_table_32_table_write_entry;
+  wire ch1_crc_table_addr;
+  output [32:0] ch1_crc_table_data;
+  wire [32:0] ch1_crc_table_data;
   output ch1_ctrl_abort;
   reg ch1_ctrl_abort = 1'h0;
   output ch1_ctrl_clear_counters;
@@ -4182,6 +4173,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg [31:0] ch1_result_w1_lo_data_snapshot = 32'd0;
   wire ch1_result_w1_lo_write;
   wire ch1_state_write;
+  reg ch1_table_clearing = 1'h1;
+  reg ch1_table_sweep = 1'h0;
   reg ch1_window0_read = 1'h0;
   reg ch1_window1_read = 1'h0;
   reg ch1_window2_read = 1'h0;
@@ -4214,34 +4207,66 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$13493$0 ;
-  wire [186:0] \port$13493$0 ;
-  input [79:0] \port$13504$0 ;
-  wire [79:0] \port$13504$0 ;
-  input [9:0] \port$13581$0 ;
-  wire [9:0] \port$13581$0 ;
-  input [186:0] \port$14044$0 ;
-  wire [186:0] \port$14044$0 ;
-  input [79:0] \port$14055$0 ;
-  wire [79:0] \port$14055$0 ;
-  input [9:0] \port$14132$0 ;
-  wire [9:0] \port$14132$0 ;
+  input [186:0] \port$13487$0 ;
+  wire [186:0] \port$13487$0 ;
+  input [79:0] \port$13498$0 ;
+  wire [79:0] \port$13498$0 ;
+  input [9:0] \port$13575$0 ;
+  wire [9:0] \port$13575$0 ;
+  input [186:0] \port$14038$0 ;
+  wire [186:0] \port$14038$0 ;
+  input [79:0] \port$14049$0 ;
+  wire [79:0] \port$14049$0 ;
+  input [9:0] \port$14126$0 ;
+  wire [9:0] \port$14126$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
+  input \rd__addr$763 ;
+  wire \rd__addr$763 ;
+  wire \rd__addr$769 ;
+  wire \rd__addr$774 ;
   (* init = 4'h0 *)
   wire [3:0] \rd__addr$923 ;
+  input \rd__addr$929 ;
+  wire \rd__addr$929 ;
+  wire \rd__addr$935 ;
+  wire \rd__addr$940 ;
   wire [31:0] rd__data;
+  wire [15:0] \rd__data$776 ;
+  wire [15:0] \rd__data$777 ;
+  wire \rd__data$778 ;
   wire [31:0] \rd__data$924 ;
+  wire [15:0] \rd__data$942 ;
+  wire [15:0] \rd__data$943 ;
+  wire \rd__data$944 ;
   input rst;
   wire rst;
   wire [3:0] wr__addr;
+  wire \wr__addr$760 ;
+  wire \wr__addr$766 ;
+  wire \wr__addr$771 ;
   wire [3:0] \wr__addr$920 ;
+  wire \wr__addr$926 ;
+  wire \wr__addr$932 ;
+  wire \wr__addr$937 ;
   (* init = 32'd0 *)
   wire [31:0] wr__data;
+  wire [15:0] \wr__data$761 ;
+  wire [15:0] \wr__data$767 ;
+  wire \wr__data$772 ;
   (* init = 32'd0 *)
   wire [31:0] \wr__data$921 ;
+  wire [15:0] \wr__data$927 ;
+  wire [15:0] \wr__data$933 ;
+  wire \wr__data$938 ;
   wire [3:0] wr__en;
+  wire [1:0] \wr__en$762 ;
+  wire [1:0] \wr__en$768 ;
+  wire \wr__en$773 ;
   wire [3:0] \wr__en$922 ;
+  wire [1:0] \wr__en$928 ;
+  wire [1:0] \wr__en$934 ;
+  wire \wr__en$939 ;
   reg [10:0] write_addr = 11'h000;
   output [31:0] write_data;
   reg [31:0] write_data = 32'd0;
@@ -4267,15 +4292,49 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @(posedge clk) begin
     if (wr__en[0])
-      ch0_config_memory[{ \$577 , \$576 , \$575 , \$574  }][7:0] <= config_memory0_write_data[7:0];
+      ch0_config_memory[{ \$566 , \$565 , \$564 , \$563  }][7:0] <= config_memory0_write_data[7:0];
     if (wr__en[1])
-      ch0_config_memory[{ \$577 , \$576 , \$575 , \$574  }][15:8] <= config_memory0_write_data[15:8];
+      ch0_config_memory[{ \$566 , \$565 , \$564 , \$563  }][15:8] <= config_memory0_write_data[15:8];
     if (wr__en[2])
-      ch0_config_memory[{ \$577 , \$576 , \$575 , \$574  }][23:16] <= config_memory0_write_data[23:16];
+      ch0_config_memory[{ \$566 , \$565 , \$564 , \$563  }][23:16] <= config_memory0_write_data[23:16];
     if (wr__en[3])
-      ch0_config_memory[{ \$577 , \$576 , \$575 , \$574  }][31:24] <= config_memory0_write_data[31:24];
+      ch0_config_memory[{ \$566 , \$565 , \$564 , \$563  }][31:24] <= config_memory0_write_data[31:24];
   end
   assign rd__data = ch0_config_memory[ch0_config_read_index];
+  reg [15:0] ch0_crc_table_0_table [1:0];
+  initial begin
+    ch0_crc_table_0_table[0] = 16'h0000;
+    ch0_crc_table_0_table[1] = 16'h0000;
+  end
+  always @(posedge clk) begin
+    if (\wr__en$762 [0])
+      ch0_crc_table_0_table[\wr__addr$760 ][7:0] <= \wr__data$761 [7:0];
+    if (\wr__en$762 [1])
+      ch0_crc_table_0_table[\wr__addr$760 ][15:8] <= \wr__data$761 [15:8];
+  end
+  assign \rd__data$776  = ch0_crc_table_0_table[\rd__addr$763 ];
+  reg [15:0] ch0_crc_table_16_table [1:0];
+  initial begin
+    ch0_crc_table_16_table[0] = 16'h0000;
+    ch0_crc_table_16_table[1] = 16'h0000;
+  end
+  always @(posedge clk) begin
+    if (\wr__en$768 [0])
+      ch0_crc_table_16_table[\wr__addr$766 ][7:0] <= \wr__data$767 [7:0];
+    if (\wr__en$768 [1])
+      ch0_crc_table_16_table[\wr__addr$766 ][15:8] <= \wr__data$767 [15:8];
+  end
+  assign \rd__data$777  = ch0_crc_table_16_table[\rd__addr$763 ];
+  reg [0:0] ch0_crc_table_32_table [1:0];
+  initial begin
+    ch0_crc_table_32_table[0] = 1'h0;
+    ch0_crc_table_32_table[1] = 1'h0;
+  end
+  always @(posedge clk) begin
+    if (\wr__en$773 )
+      ch0_crc_table_32_table[\wr__addr$771 ] <= \wr__data$772 ;
+  end
+  assign \rd__data$778  = ch0_crc_table_32_table[\rd__addr$763 ];
   reg [31:0] ch1_config_memory [14:0];
   initial begin
     ch1_config_memory[0] = 32'd0;
@@ -4296,15 +4355,49 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @(posedge clk) begin
     if (\wr__en$922 [0])
-      ch1_config_memory[{ \$669 , \$668 , \$667 , \$666  }][7:0] <= config_memory0_write_data[7:0];
+      ch1_config_memory[{ \$671 , \$670 , \$669 , \$668  }][7:0] <= config_memory0_write_data[7:0];
     if (\wr__en$922 [1])
-      ch1_config_memory[{ \$669 , \$668 , \$667 , \$666  }][15:8] <= config_memory0_write_data[15:8];
+      ch1_config_memory[{ \$671 , \$670 , \$669 , \$668  }][15:8] <= config_memory0_write_data[15:8];
     if (\wr__en$922 [2])
-      ch1_config_memory[{ \$669 , \$668 , \$667 , \$666  }][23:16] <= config_memory0_write_data[23:16];
+      ch1_config_memory[{ \$671 , \$670 , \$669 , \$668  }][23:16] <= config_memory0_write_data[23:16];
     if (\wr__en$922 [3])
-      ch1_config_memory[{ \$669 , \$668 , \$667 , \$666  }][31:24] <= config_memory0_write_data[31:24];
+      ch1_config_memory[{ \$671 , \$670 , \$669 , \$668  }][31:24] <= config_memory0_write_data[31:24];
   end
   assign \rd__data$924  = ch1_config_memory[ch1_config_read_index];
+  reg [15:0] ch1_crc_table_0_table [1:0];
+  initial begin
+    ch1_crc_table_0_table[0] = 16'h0000;
+    ch1_crc_table_0_table[1] = 16'h0000;
+  end
+  always @(posedge clk) begin
+    if (\wr__en$928 [0])
+      ch1_crc_table_0_table[\wr__addr$926 ][7:0] <= \wr__data$927 [7:0];
+    if (\wr__en$928 [1])
+      ch1_crc_table_0_table[\wr__addr$926 ][15:8] <= \wr__data$927 [15:8];
+  end
+  assign \rd__data$942  = ch1_crc_table_0_table[\rd__addr$929 ];
+  reg [15:0] ch1_crc_table_16_table [1:0];
+  initial begin
+    ch1_crc_table_16_table[0] = 16'h0000;
+    ch1_crc_table_16_table[1] = 16'h0000;
+  end
+  always @(posedge clk) begin
+    if (\wr__en$934 [0])
+      ch1_crc_table_16_table[\wr__addr$932 ][7:0] <= \wr__data$933 [7:0];
+    if (\wr__en$934 [1])
+      ch1_crc_table_16_table[\wr__addr$932 ][15:8] <= \wr__data$933 [15:8];
+  end
+  assign \rd__data$943  = ch1_crc_table_16_table[\rd__addr$929 ];
+  reg [0:0] ch1_crc_table_32_table [1:0];
+  initial begin
+    ch1_crc_table_32_table[0] = 1'h0;
+    ch1_crc_table_32_table[1] = 1'h0;
+  end
+  always @(posedge clk) begin
+    if (\wr__en$939 )
+      ch1_crc_table_32_table[\wr__addr$937 ] <= \wr__data$938 ;
+  end
+  assign \rd__data$944  = ch1_crc_table_32_table[\rd__addr$929 ];
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__w_addr;
@@ -4322,1617 +4415,1489 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$18  = ~ ch0_config_go;
   assign \$19  = ch0_config_wait & \$18 ;
   assign \$20  = \$19  & cfg_free[0];
-  assign \$21  = write_data[0] & write_strb[0];
-  assign \$22  = ch0_ctrl_write ? \$21  : 1'h0;
-  assign \$23  = write_data[1] & write_strb[0];
+  assign \$21  = ~ ch0_table_clearing;
+  assign \$22  = \$20  & \$21 ;
+  assign \$23  = write_data[0] & write_strb[0];
   assign \$24  = ch0_ctrl_write ? \$23  : 1'h0;
-  assign \$25  = write_data[2] & write_strb[0];
+  assign \$25  = write_data[1] & write_strb[0];
   assign \$26  = ch0_ctrl_write ? \$25  : 1'h0;
-  assign \$27  = ch0_ctrl_write & write_strb[1];
-  assign \$28  = ch0_ctrl_write & write_strb[1];
-  assign \$29  = write_data[0] & write_strb[0];
-  assign \$30  = ch0_irq_status_write ? \$29  : 1'h0;
-  assign \$31  = write_data[1] & write_strb[0];
+  assign \$27  = write_data[2] & write_strb[0];
+  assign \$28  = ch0_ctrl_write ? \$27  : 1'h0;
+  assign \$29  = ch0_ctrl_write & write_strb[1];
+  assign \$30  = ch0_ctrl_write & write_strb[1];
+  assign \$31  = write_data[0] & write_strb[0];
   assign \$32  = ch0_irq_status_write ? \$31  : 1'h0;
-  assign \$33  = write_data[2] & write_strb[0];
+  assign \$33  = write_data[1] & write_strb[0];
   assign \$34  = ch0_irq_status_write ? \$33  : 1'h0;
-  assign \$35  = ch0_irq_enable_config_write & config_write_strb[0];
-  assign \$36  = ch0_irq_enable_config_write & config_write_strb[0];
+  assign \$35  = write_data[2] & write_strb[0];
+  assign \$36  = ch0_irq_status_write ? \$35  : 1'h0;
   assign \$37  = ch0_irq_enable_config_write & config_write_strb[0];
-  assign \$38  = write_addr == 8'h88;
-  assign \$39  = ch0_cfg_ma_config_write & config_write_strb[0];
-  assign \$40  = ch0_cfg_ma_config_write & config_write_strb[1];
-  assign \$41  = ch0_cfg_ma_config_write & config_write_strb[2];
-  assign \$42  = ch0_cfg_ma_config_write & config_write_strb[3];
-  assign \$43  = write_addr == 8'h89;
-  assign \$44  = ch0_cfg_period_config_write & config_write_strb[0];
-  assign \$45  = ch0_cfg_period_config_write & config_write_strb[1];
-  assign \$46  = ch0_cfg_period_config_write & config_write_strb[2];
-  assign \$47  = write_addr == 8'h8a;
-  assign \$48  = ch0_cfg_break_config_write & config_write_strb[0];
-  assign \$49  = ch0_cfg_break_config_write & config_write_strb[1];
-  assign \$50  = ch0_cfg_break_config_write & config_write_strb[2];
-  assign \$51  = write_addr == 8'h8b;
-  assign \$52  = ch0_cfg_ack_config_write & config_write_strb[0];
-  assign \$53  = ch0_cfg_ack_config_write & config_write_strb[1];
-  assign \$54  = ch0_cfg_ack_config_write & config_write_strb[2];
-  assign \$55  = write_addr == 8'h8c;
-  assign \$56  = ch0_cfg_timeout_config_write & config_write_strb[0];
-  assign \$57  = ch0_cfg_timeout_config_write & config_write_strb[1];
-  assign \$58  = ch0_cfg_timeout_config_write & config_write_strb[2];
-  assign \$59  = write_addr == 8'h8d;
-  assign \$60  = ch0_cfg_words_config_write & config_write_strb[0];
-  assign \$61  = ch0_cfg_words_config_write & config_write_strb[0];
-  assign \$62  = ch0_cfg_words_config_write & config_write_strb[1];
-  assign \$63  = ch0_cfg_words_config_write & config_write_strb[1];
+  assign \$38  = ch0_irq_enable_config_write & config_write_strb[0];
+  assign \$39  = ch0_irq_enable_config_write & config_write_strb[0];
+  assign \$40  = write_addr == 8'h88;
+  assign \$41  = ch0_cfg_ma_config_write & config_write_strb[0];
+  assign \$42  = ch0_cfg_ma_config_write & config_write_strb[1];
+  assign \$43  = ch0_cfg_ma_config_write & config_write_strb[2];
+  assign \$44  = ch0_cfg_ma_config_write & config_write_strb[3];
+  assign \$45  = write_addr == 8'h89;
+  assign \$46  = ch0_cfg_period_config_write & config_write_strb[0];
+  assign \$47  = ch0_cfg_period_config_write & config_write_strb[1];
+  assign \$48  = ch0_cfg_period_config_write & config_write_strb[2];
+  assign \$49  = write_addr == 8'h8a;
+  assign \$50  = ch0_cfg_break_config_write & config_write_strb[0];
+  assign \$51  = ch0_cfg_break_config_write & config_write_strb[1];
+  assign \$52  = ch0_cfg_break_config_write & config_write_strb[2];
+  assign \$53  = write_addr == 8'h8b;
+  assign \$54  = ch0_cfg_ack_config_write & config_write_strb[0];
+  assign \$55  = ch0_cfg_ack_config_write & config_write_strb[1];
+  assign \$56  = ch0_cfg_ack_config_write & config_write_strb[2];
+  assign \$57  = write_addr == 8'h8c;
+  assign \$58  = ch0_cfg_timeout_config_write & config_write_strb[0];
+  assign \$59  = ch0_cfg_timeout_config_write & config_write_strb[1];
+  assign \$60  = ch0_cfg_timeout_config_write & config_write_strb[2];
+  assign \$61  = write_addr == 8'h8d;
+  assign \$62  = ch0_cfg_words_config_write & config_write_strb[0];
+  assign \$63  = ch0_cfg_words_config_write & config_write_strb[0];
   assign \$64  = ch0_cfg_words_config_write & config_write_strb[1];
   assign \$65  = ch0_cfg_words_config_write & config_write_strb[1];
-  assign \$66  = ch0_cfg_words_config_write & config_write_strb[2];
-  assign \$67  = ch0_cfg_words_config_write & config_write_strb[2];
-  assign \$68  = ch0_cfg_words_config_write & config_write_strb[3];
-  assign \$69  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$66  = ch0_cfg_words_config_write & config_write_strb[1];
+  assign \$67  = ch0_cfg_words_config_write & config_write_strb[1];
+  assign \$68  = ch0_cfg_words_config_write & config_write_strb[2];
+  assign \$69  = ch0_cfg_words_config_write & config_write_strb[2];
   assign \$70  = ch0_cfg_words_config_write & config_write_strb[3];
   assign \$71  = ch0_cfg_words_config_write & config_write_strb[3];
   assign \$72  = ch0_cfg_words_config_write & config_write_strb[3];
-  assign \$73  = write_addr == 8'h8e;
-  assign \$74  = ch0_cfg_checks_config_write & config_write_strb[0];
-  assign \$75  = ch0_cfg_checks_config_write & config_write_strb[0];
-  assign \$76  = ch0_cfg_checks_config_write & config_write_strb[1];
-  assign \$77  = ch0_cfg_checks_config_write & config_write_strb[2];
-  assign \$78  = ch0_cfg_checks_config_write & config_write_strb[2];
-  assign \$79  = ch0_cfg_checks_config_write & config_write_strb[3];
-  assign \$80  = write_addr == 8'h8f;
-  assign \$81  = ch0_cfg_quiet_config_write & config_write_strb[0];
-  assign \$82  = ch0_cfg_quiet_config_write & config_write_strb[1];
-  assign \$83  = write_addr == 8'ha0;
-  assign \$84  = ch0_cfg_crc0_config_write & config_write_strb[0];
-  assign \$85  = ch0_cfg_crc0_config_write & config_write_strb[1];
+  assign \$73  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$74  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$75  = write_addr == 8'h8e;
+  assign \$76  = ch0_cfg_checks_config_write & config_write_strb[0];
+  assign \$77  = ch0_cfg_checks_config_write & config_write_strb[0];
+  assign \$78  = ch0_cfg_checks_config_write & config_write_strb[1];
+  assign \$79  = ch0_cfg_checks_config_write & config_write_strb[2];
+  assign \$80  = ch0_cfg_checks_config_write & config_write_strb[2];
+  assign \$81  = ch0_cfg_checks_config_write & config_write_strb[3];
+  assign \$82  = write_addr == 8'h8f;
+  assign \$83  = ch0_cfg_quiet_config_write & config_write_strb[0];
+  assign \$84  = ch0_cfg_quiet_config_write & config_write_strb[1];
+  assign \$85  = write_addr == 8'ha0;
   assign \$86  = ch0_cfg_crc0_config_write & config_write_strb[2];
-  assign \$87  = ch0_cfg_crc0_config_write & config_write_strb[3];
-  assign \$88  = write_addr == 8'ha1;
-  assign \$89  = ch0_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$90  = ch0_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$91  = write_addr == 8'ha2;
-  assign \$92  = ch0_cfg_crc1_config_write & config_write_strb[0];
-  assign \$93  = ch0_cfg_crc1_config_write & config_write_strb[1];
-  assign \$94  = ch0_cfg_crc1_config_write & config_write_strb[2];
-  assign \$95  = ch0_cfg_crc1_config_write & config_write_strb[3];
-  assign \$96  = write_addr == 8'ha3;
-  assign \$97  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$98  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$99  = write_addr == 8'ha4;
-  assign \$100  = ch0_cfg_ssi_config_write & config_write_strb[0];
-  assign \$101  = ch0_cfg_ssi_config_write & config_write_strb[0];
-  assign \$102  = ch0_cfg_ssi_config_write & config_write_strb[0];
-  assign \$103  = ch0_cfg_ssi_config_write & config_write_strb[0];
-  assign \$104  = ch0_cfg_ssi_config_write & config_write_strb[2];
-  assign \$105  = ch0_cfg_ssi_config_write & config_write_strb[3];
-  assign \$106  = ch0_ca_request_config_write & config_write_strb[0];
-  assign \$107  = ch0_ca_request_config_write & config_write_strb[1];
-  assign \$108  = ch0_ca_request_config_write & config_write_strb[2];
-  assign \$109  = ch0_ca_request_config_write & config_write_strb[3];
-  assign \$110  = write_data[0] & write_strb[0];
-  assign \$111  = ch0_ca_ctrl_write ? \$110  : 1'h0;
-  assign \$112  = write_data[1] & write_strb[0];
-  assign \$113  = ch0_ca_ctrl_write ? \$112  : 1'h0;
-  assign \$114  = | { ch0_cfg_ssi_write, ch0_cfg_crc1_start_write, ch0_cfg_crc1_write, ch0_cfg_crc0_start_write, ch0_cfg_crc0_write, ch0_cfg_quiet_write, ch0_cfg_checks_write, ch0_cfg_words_write, ch0_cfg_timeout_write, ch0_cfg_ack_write, ch0_cfg_break_write, ch0_cfg_period_write, ch0_cfg_ma_write };
-  assign \$115  = write_data & config_memory0_write_mask;
-  assign \$116  = \$115  & { write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3:2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2:1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1:0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0] };
-  assign \$117  = ~ { write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3:2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2:1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1:0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0] };
-  assign \$118  = config_memory0_write_fill & \$117 ;
-  assign \$119  = \$116  | \$118 ;
-  assign \$120  = ch0_config_written | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
-  assign \$121  = bus__w_addr == 8'h80;
-  assign \$122  = bus__w_addr == 8'h81;
-  assign \$123  = bus__w_addr == 8'h82;
-  assign \$124  = bus__w_addr == 8'h84;
-  assign \$125  = bus__w_addr == 8'h86;
-  assign \$126  = bus__w_addr == 8'h87;
-  assign \$127  = bus__w_addr == 8'h90;
-  assign \$128  = bus__w_addr == 8'h91;
-  assign \$129  = bus__w_addr == 8'h92;
-  assign \$130  = bus__w_addr == 8'h93;
-  assign \$131  = bus__w_addr == 8'h94;
-  assign \$132  = bus__w_addr == 8'h95;
-  assign \$133  = bus__w_addr == 8'h96;
-  assign \$134  = bus__w_addr == 8'h97;
-  assign \$135  = bus__w_addr == 8'ha5;
-  assign \$136  = bus__w_addr == 8'ha6;
-  assign \$137  = bus__w_addr == 8'ha7;
-  assign \$138  = bus__w_addr == 8'ha8;
-  assign \$139  = bus__w_addr == 8'ha9;
-  assign \$140  = bus__w_addr == 8'haa;
-  assign \$141  = bus__w_addr == 8'hac;
-  assign \$142  = bus__w_addr == 8'had;
-  assign \$143  = bus__w_addr == 8'hae;
-  assign \$144  = bus__w_addr == 8'hb0;
-  assign \$145  = bus__w_addr == 8'hb1;
-  assign \$146  = bus__w_addr == 8'hb2;
-  assign \$147  = bus__w_addr == 8'hb4;
-  assign \$148  = bus__w_addr == 8'hb5;
-  assign \$149  = bus__w_addr == 8'hb6;
-  assign \$150  = bus__w_addr == 8'hb8;
-  assign \$151  = bus__w_addr == 8'hb9;
-  assign \$152  = bus__w_addr == 8'hba;
-  assign \$153  = bus__w_addr == 8'hbc;
-  assign \$154  = bus__w_addr == 8'hbd;
-  assign \$155  = bus__w_addr == 8'hbe;
-  assign \$156  = bus__w_addr == 8'hc1;
-  assign \$157  = bus__w_addr == 8'hc2;
-  assign \$158  = bus__w_addr == 8'hc3;
-  assign \$159  = bus__w_addr == 8'hc4;
-  assign \$160  = bus__w_addr == 8'hc5;
-  assign \$161  = bus__w_addr == 8'hfc;
-  assign \$162  = bus__w_addr == 8'hfd;
-  assign \$163  = ch0_read_select_90 & bus__r_load;
-  assign \$164  = bus__w_addr[10:3] == 5'h13;
+  assign \$87  = write_addr == 8'ha1;
+  assign \$88  = write_addr == 8'ha2;
+  assign \$89  = ch0_cfg_crc1_config_write & config_write_strb[2];
+  assign \$90  = write_addr == 8'ha3;
+  assign \$91  = write_addr == 8'ha4;
+  assign \$92  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$93  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$94  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$95  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$96  = ch0_cfg_ssi_config_write & config_write_strb[2];
+  assign \$97  = ch0_cfg_ssi_config_write & config_write_strb[3];
+  assign \$98  = ch0_ca_request_config_write & config_write_strb[0];
+  assign \$99  = ch0_ca_request_config_write & config_write_strb[1];
+  assign \$100  = ch0_ca_request_config_write & config_write_strb[2];
+  assign \$101  = ch0_ca_request_config_write & config_write_strb[3];
+  assign \$102  = write_data[0] & write_strb[0];
+  assign \$103  = ch0_ca_ctrl_write ? \$102  : 1'h0;
+  assign \$104  = write_data[1] & write_strb[0];
+  assign \$105  = ch0_ca_ctrl_write ? \$104  : 1'h0;
+  assign \$106  = | { ch0_cfg_ssi_write, ch0_cfg_crc1_start_write, ch0_cfg_crc1_write, ch0_cfg_crc0_start_write, ch0_cfg_crc0_write, ch0_cfg_quiet_write, ch0_cfg_checks_write, ch0_cfg_words_write, ch0_cfg_timeout_write, ch0_cfg_ack_write, ch0_cfg_break_write, ch0_cfg_period_write, ch0_cfg_ma_write };
+  assign \$107  = write_data & config_memory0_write_mask;
+  assign \$108  = \$107  & { write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3:2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2:1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1:0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0] };
+  assign \$109  = ~ { write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3:2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2:1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1:0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0] };
+  assign \$110  = config_memory0_write_fill & \$109 ;
+  assign \$111  = \$108  | \$110 ;
+  assign \$112  = ch0_config_written | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
+  assign \$113  = ch0_table_sweep + 1'h1;
+  assign \$115  = bus__w_addr == 8'h80;
+  assign \$116  = bus__w_addr == 8'h81;
+  assign \$117  = bus__w_addr == 8'h82;
+  assign \$118  = bus__w_addr == 8'h84;
+  assign \$119  = bus__w_addr == 8'h86;
+  assign \$120  = bus__w_addr == 8'h87;
+  assign \$121  = bus__w_addr == 8'h90;
+  assign \$122  = bus__w_addr == 8'h91;
+  assign \$123  = bus__w_addr == 8'h92;
+  assign \$124  = bus__w_addr == 8'h93;
+  assign \$125  = bus__w_addr == 8'h94;
+  assign \$126  = bus__w_addr == 8'h95;
+  assign \$127  = bus__w_addr == 8'h96;
+  assign \$128  = bus__w_addr == 8'h97;
+  assign \$129  = bus__w_addr == 8'ha5;
+  assign \$130  = bus__w_addr == 8'ha6;
+  assign \$131  = bus__w_addr == 8'ha7;
+  assign \$132  = bus__w_addr == 8'ha8;
+  assign \$133  = bus__w_addr == 8'ha9;
+  assign \$134  = bus__w_addr == 8'haa;
+  assign \$135  = bus__w_addr == 8'hac;
+  assign \$136  = bus__w_addr == 8'had;
+  assign \$137  = bus__w_addr == 8'hae;
+  assign \$138  = bus__w_addr == 8'hb0;
+  assign \$139  = bus__w_addr == 8'hb1;
+  assign \$140  = bus__w_addr == 8'hb2;
+  assign \$141  = bus__w_addr == 8'hb4;
+  assign \$142  = bus__w_addr == 8'hb5;
+  assign \$143  = bus__w_addr == 8'hb6;
+  assign \$144  = bus__w_addr == 8'hb8;
+  assign \$145  = bus__w_addr == 8'hb9;
+  assign \$146  = bus__w_addr == 8'hba;
+  assign \$147  = bus__w_addr == 8'hbc;
+  assign \$148  = bus__w_addr == 8'hbd;
+  assign \$149  = bus__w_addr == 8'hbe;
+  assign \$150  = bus__w_addr == 8'hc1;
+  assign \$151  = bus__w_addr == 8'hc2;
+  assign \$152  = bus__w_addr == 8'hc3;
+  assign \$153  = bus__w_addr == 8'hc4;
+  assign \$154  = bus__w_addr == 8'hc5;
+  assign \$155  = bus__w_addr == 8'hfc;
+  assign \$156  = bus__w_addr == 8'hfd;
+  assign \$157  = ch0_read_select_90 & bus__r_load;
+  assign \$158  = bus__w_addr[10:3] == 5'h13;
+  assign \$159  = bus__r_en & \$158 ;
+  assign \$160  = bus__w_addr[10:4] == 4'hf;
+  assign \$161  = bus__r_en & \$160 ;
+  assign \$162  = bus__w_addr[3:0] < 4'hc;
+  assign \$163  = \$161  & \$162 ;
+  assign \$164  = bus__w_addr[10:4] == 4'he;
   assign \$165  = bus__r_en & \$164 ;
-  assign \$166  = bus__w_addr[10:4] == 4'hf;
-  assign \$167  = bus__r_en & \$166 ;
-  assign \$168  = bus__w_addr[3:0] < 4'hc;
-  assign \$169  = \$167  & \$168 ;
-  assign \$170  = bus__w_addr[10:4] == 4'he;
-  assign \$171  = bus__r_en & \$170 ;
-  assign \$172  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$174  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$175  = \$173  | \$174 ;
-  assign \$176  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
-  assign \$177  = \$175  | \$176 ;
-  assign \$178  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$166  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$168  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$169  = \$167  | \$168 ;
+  assign \$170  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
+  assign \$171  = \$169  | \$170 ;
+  assign \$172  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$173  = \$171  | \$172 ;
+  assign \$178  = ch0_read_select_90 ? { 2'h0, \port$13487$0 [182:177], 4'h0, \port$13487$0 [186:183], 1'h0, \port$13487$0 [176:174], 1'h0, \port$13487$0 [133:131], 3'h0, \port$13487$0 [49], \port$13487$0 [3:0] } : 32'd0;
   assign \$179  = \$177  | \$178 ;
-  assign \$184  = ch0_read_select_90 ? { 2'h0, \port$13493$0 [182:177], 4'h0, \port$13493$0 [186:183], 1'h0, \port$13493$0 [176:174], 1'h0, \port$13493$0 [133:131], 3'h0, \port$13493$0 [49], \port$13493$0 [3:0] } : 32'd0;
+  assign \$180  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$181  = \$179  | \$180 ;
+  assign \$182  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$183  = \$181  | \$182 ;
+  assign \$184  = ch0_read_select_93 ? ch0_result_w0_hi_data_snapshot : 32'd0;
   assign \$185  = \$183  | \$184 ;
-  assign \$186  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$186  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
   assign \$187  = \$185  | \$186 ;
-  assign \$188  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$188  = ch0_read_select_95 ? ch0_result_w1_hi_data_snapshot : 32'd0;
   assign \$189  = \$187  | \$188 ;
-  assign \$190  = ch0_read_select_93 ? ch0_result_w0_hi_data_snapshot : 32'd0;
+  assign \$190  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
   assign \$191  = \$189  | \$190 ;
-  assign \$192  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$192  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$193  = \$191  | \$192 ;
-  assign \$194  = ch0_read_select_95 ? ch0_result_w1_hi_data_snapshot : 32'd0;
-  assign \$195  = \$193  | \$194 ;
-  assign \$196  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
-  assign \$197  = \$195  | \$196 ;
-  assign \$198  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
-  assign \$199  = \$197  | \$198 ;
-  assign \$244  = ch0_read_select_c2 ? { 17'h00000, \port$13581$0 [9:3], 1'h0, \port$13581$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$238  = ch0_read_select_c2 ? { 17'h00000, \port$13575$0 [9:3], 1'h0, \port$13575$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$239  = \$237  | \$238 ;
+  assign \$240  = ch0_read_select_c3 ? \port$13498$0 [31:0] : 32'd0;
+  assign \$241  = \$239  | \$240 ;
+  assign \$242  = ch0_read_select_c4 ? \port$13498$0 [63:32] : 32'd0;
+  assign \$243  = \$241  | \$242 ;
+  assign \$244  = ch0_read_select_c5 ? { 16'h0000, \port$13498$0 [79:64] } : 32'd0;
   assign \$245  = \$243  | \$244 ;
-  assign \$246  = ch0_read_select_c3 ? \port$13504$0 [31:0] : 32'd0;
-  assign \$247  = \$245  | \$246 ;
-  assign \$248  = ch0_read_select_c4 ? \port$13504$0 [63:32] : 32'd0;
+  assign \$248  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$249  = \$247  | \$248 ;
-  assign \$250  = ch0_read_select_c5 ? { 16'h0000, \port$13504$0 [79:64] } : 32'd0;
+  assign \$250  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$251  = \$249  | \$250 ;
-  assign \$254  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
+  assign \$254  = ch0_window2_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$255  = \$253  | \$254 ;
-  assign \$256  = ch0_window0_read ? ch0__count_data : 32'd0;
+  assign \$256  = ch0_window3_read ? ch0_config_read_data : 32'd0;
   assign \$257  = \$255  | \$256 ;
-  assign \$260  = ch0_window2_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$261  = \$259  | \$260 ;
-  assign \$262  = ch0_window3_read ? ch0_config_read_data : 32'd0;
-  assign \$263  = \$261  | \$262 ;
-  assign \$264  = ~ ch1_config_go;
-  assign \$265  = ch1_config_wait & \$264 ;
-  assign \$266  = \$265  & cfg_free[1];
-  assign \$267  = write_data[0] & write_strb[0];
+  assign \$258  = ~ ch1_config_go;
+  assign \$259  = ch1_config_wait & \$258 ;
+  assign \$260  = \$259  & cfg_free[1];
+  assign \$261  = ~ ch1_table_clearing;
+  assign \$262  = \$260  & \$261 ;
+  assign \$263  = write_data[0] & write_strb[0];
+  assign \$264  = ch1_ctrl_write ? \$263  : 1'h0;
+  assign \$265  = write_data[1] & write_strb[0];
+  assign \$266  = ch1_ctrl_write ? \$265  : 1'h0;
+  assign \$267  = write_data[2] & write_strb[0];
   assign \$268  = ch1_ctrl_write ? \$267  : 1'h0;
-  assign \$269  = write_data[1] & write_strb[0];
-  assign \$270  = ch1_ctrl_write ? \$269  : 1'h0;
-  assign \$271  = write_data[2] & write_strb[0];
-  assign \$272  = ch1_ctrl_write ? \$271  : 1'h0;
-  assign \$273  = ch1_ctrl_write & write_strb[1];
-  assign \$274  = ch1_ctrl_write & write_strb[1];
-  assign \$275  = write_data[0] & write_strb[0];
+  assign \$269  = ch1_ctrl_write & write_strb[1];
+  assign \$270  = ch1_ctrl_write & write_strb[1];
+  assign \$271  = write_data[0] & write_strb[0];
+  assign \$272  = ch1_irq_status_write ? \$271  : 1'h0;
+  assign \$273  = write_data[1] & write_strb[0];
+  assign \$274  = ch1_irq_status_write ? \$273  : 1'h0;
+  assign \$275  = write_data[2] & write_strb[0];
   assign \$276  = ch1_irq_status_write ? \$275  : 1'h0;
-  assign \$277  = write_data[1] & write_strb[0];
-  assign \$278  = ch1_irq_status_write ? \$277  : 1'h0;
-  assign \$279  = write_data[2] & write_strb[0];
-  assign \$280  = ch1_irq_status_write ? \$279  : 1'h0;
-  assign \$281  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$282  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$283  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$284  = write_addr == 9'h108;
-  assign \$285  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$286  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$287  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$288  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$289  = write_addr == 9'h109;
-  assign \$290  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$291  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$292  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$293  = write_addr == 9'h10a;
-  assign \$294  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$295  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$296  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$297  = write_addr == 9'h10b;
-  assign \$298  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$299  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$300  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$301  = write_addr == 9'h10c;
-  assign \$302  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$303  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$304  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$305  = write_addr == 9'h10d;
-  assign \$306  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$307  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$308  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$309  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$310  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$311  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$312  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$313  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$277  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$278  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$279  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$280  = write_addr == 9'h108;
+  assign \$281  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$282  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$283  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$284  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$285  = write_addr == 9'h109;
+  assign \$286  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$287  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$288  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$289  = write_addr == 9'h10a;
+  assign \$290  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$291  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$292  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$293  = write_addr == 9'h10b;
+  assign \$294  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$295  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$296  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$297  = write_addr == 9'h10c;
+  assign \$298  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$299  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$300  = ch1_cfg_timeout_config_write & config_write_strb[2];
+  assign \$301  = write_addr == 9'h10d;
+  assign \$302  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$303  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$304  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$305  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$306  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$307  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$308  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$309  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$310  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$311  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$312  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$313  = ch1_cfg_words_config_write & config_write_strb[3];
   assign \$314  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$315  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$316  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$317  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$318  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$319  = write_addr == 9'h10e;
-  assign \$320  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$321  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$322  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$323  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$324  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$325  = ch1_cfg_checks_config_write & config_write_strb[3];
-  assign \$326  = write_addr == 9'h10f;
-  assign \$327  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$328  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$329  = write_addr == 9'h120;
-  assign \$330  = ch1_cfg_crc0_config_write & config_write_strb[0];
-  assign \$331  = ch1_cfg_crc0_config_write & config_write_strb[1];
-  assign \$332  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$333  = ch1_cfg_crc0_config_write & config_write_strb[3];
-  assign \$334  = write_addr == 9'h121;
-  assign \$335  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$336  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$337  = write_addr == 9'h122;
-  assign \$338  = ch1_cfg_crc1_config_write & config_write_strb[0];
-  assign \$339  = ch1_cfg_crc1_config_write & config_write_strb[1];
-  assign \$340  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$341  = ch1_cfg_crc1_config_write & config_write_strb[3];
-  assign \$342  = write_addr == 9'h123;
-  assign \$343  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$344  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$345  = write_addr == 9'h124;
-  assign \$346  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$347  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$348  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$349  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$350  = ch1_cfg_ssi_config_write & config_write_strb[2];
-  assign \$351  = ch1_cfg_ssi_config_write & config_write_strb[3];
-  assign \$352  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$353  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$354  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$355  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$356  = write_data[0] & write_strb[0];
-  assign \$357  = ch1_ca_ctrl_write ? \$356  : 1'h0;
-  assign \$358  = write_data[1] & write_strb[0];
-  assign \$359  = ch1_ca_ctrl_write ? \$358  : 1'h0;
-  assign \$360  = | { ch1_cfg_ssi_write, ch1_cfg_crc1_start_write, ch1_cfg_crc1_write, ch1_cfg_crc0_start_write, ch1_cfg_crc0_write, ch1_cfg_quiet_write, ch1_cfg_checks_write, ch1_cfg_words_write, ch1_cfg_timeout_write, ch1_cfg_ack_write, ch1_cfg_break_write, ch1_cfg_period_write, ch1_cfg_ma_write };
-  assign \$361  = ch1_config_written | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
-  assign \$362  = bus__w_addr == 9'h100;
-  assign \$363  = bus__w_addr == 9'h101;
-  assign \$364  = bus__w_addr == 9'h102;
-  assign \$365  = bus__w_addr == 9'h104;
-  assign \$366  = bus__w_addr == 9'h106;
-  assign \$367  = bus__w_addr == 9'h107;
-  assign \$368  = bus__w_addr == 9'h110;
-  assign \$369  = bus__w_addr == 9'h111;
-  assign \$370  = bus__w_addr == 9'h112;
-  assign \$371  = bus__w_addr == 9'h113;
-  assign \$372  = bus__w_addr == 9'h114;
-  assign \$373  = bus__w_addr == 9'h115;
-  assign \$374  = bus__w_addr == 9'h116;
-  assign \$375  = bus__w_addr == 9'h117;
-  assign \$376  = bus__w_addr == 9'h125;
-  assign \$377  = bus__w_addr == 9'h126;
-  assign \$378  = bus__w_addr == 9'h127;
-  assign \$379  = bus__w_addr == 9'h128;
-  assign \$380  = bus__w_addr == 9'h129;
-  assign \$381  = bus__w_addr == 9'h12a;
-  assign \$382  = bus__w_addr == 9'h12c;
-  assign \$383  = bus__w_addr == 9'h12d;
-  assign \$384  = bus__w_addr == 9'h12e;
-  assign \$385  = bus__w_addr == 9'h130;
-  assign \$386  = bus__w_addr == 9'h131;
-  assign \$387  = bus__w_addr == 9'h132;
-  assign \$388  = bus__w_addr == 9'h134;
-  assign \$389  = bus__w_addr == 9'h135;
-  assign \$390  = bus__w_addr == 9'h136;
-  assign \$391  = bus__w_addr == 9'h138;
-  assign \$392  = bus__w_addr == 9'h139;
-  assign \$393  = bus__w_addr == 9'h13a;
-  assign \$394  = bus__w_addr == 9'h13c;
-  assign \$395  = bus__w_addr == 9'h13d;
-  assign \$396  = bus__w_addr == 9'h13e;
-  assign \$397  = bus__w_addr == 9'h141;
-  assign \$398  = bus__w_addr == 9'h142;
-  assign \$399  = bus__w_addr == 9'h143;
-  assign \$400  = bus__w_addr == 9'h144;
-  assign \$401  = bus__w_addr == 9'h145;
-  assign \$402  = bus__w_addr == 9'h17c;
-  assign \$403  = bus__w_addr == 9'h17d;
-  assign \$404  = ch1_read_select_110 & bus__r_load;
-  assign \$405  = bus__w_addr[10:3] == 6'h23;
-  assign \$406  = bus__r_en & \$405 ;
-  assign \$407  = bus__w_addr[10:4] == 5'h17;
-  assign \$408  = bus__r_en & \$407 ;
-  assign \$409  = bus__w_addr[3:0] < 4'hc;
-  assign \$410  = \$408  & \$409 ;
-  assign \$411  = bus__w_addr[10:4] == 5'h16;
-  assign \$412  = bus__r_en & \$411 ;
-  assign \$413  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$415  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
+  assign \$315  = write_addr == 9'h10e;
+  assign \$316  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$317  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$318  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$319  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$320  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$321  = ch1_cfg_checks_config_write & config_write_strb[3];
+  assign \$322  = write_addr == 9'h10f;
+  assign \$323  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$324  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$325  = write_addr == 9'h120;
+  assign \$326  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$327  = write_addr == 9'h121;
+  assign \$328  = write_addr == 9'h122;
+  assign \$329  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$330  = write_addr == 9'h123;
+  assign \$331  = write_addr == 9'h124;
+  assign \$332  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$333  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$334  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$335  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$336  = ch1_cfg_ssi_config_write & config_write_strb[2];
+  assign \$337  = ch1_cfg_ssi_config_write & config_write_strb[3];
+  assign \$338  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$339  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$340  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$341  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$342  = write_data[0] & write_strb[0];
+  assign \$343  = ch1_ca_ctrl_write ? \$342  : 1'h0;
+  assign \$344  = write_data[1] & write_strb[0];
+  assign \$345  = ch1_ca_ctrl_write ? \$344  : 1'h0;
+  assign \$346  = | { ch1_cfg_ssi_write, ch1_cfg_crc1_start_write, ch1_cfg_crc1_write, ch1_cfg_crc0_start_write, ch1_cfg_crc0_write, ch1_cfg_quiet_write, ch1_cfg_checks_write, ch1_cfg_words_write, ch1_cfg_timeout_write, ch1_cfg_ack_write, ch1_cfg_break_write, ch1_cfg_period_write, ch1_cfg_ma_write };
+  assign \$347  = ch1_config_written | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$348  = ch1_table_sweep + 1'h1;
+  assign \$350  = bus__w_addr == 9'h100;
+  assign \$351  = bus__w_addr == 9'h101;
+  assign \$352  = bus__w_addr == 9'h102;
+  assign \$353  = bus__w_addr == 9'h104;
+  assign \$354  = bus__w_addr == 9'h106;
+  assign \$355  = bus__w_addr == 9'h107;
+  assign \$356  = bus__w_addr == 9'h110;
+  assign \$357  = bus__w_addr == 9'h111;
+  assign \$358  = bus__w_addr == 9'h112;
+  assign \$359  = bus__w_addr == 9'h113;
+  assign \$360  = bus__w_addr == 9'h114;
+  assign \$361  = bus__w_addr == 9'h115;
+  assign \$362  = bus__w_addr == 9'h116;
+  assign \$363  = bus__w_addr == 9'h117;
+  assign \$364  = bus__w_addr == 9'h125;
+  assign \$365  = bus__w_addr == 9'h126;
+  assign \$366  = bus__w_addr == 9'h127;
+  assign \$367  = bus__w_addr == 9'h128;
+  assign \$368  = bus__w_addr == 9'h129;
+  assign \$369  = bus__w_addr == 9'h12a;
+  assign \$370  = bus__w_addr == 9'h12c;
+  assign \$371  = bus__w_addr == 9'h12d;
+  assign \$372  = bus__w_addr == 9'h12e;
+  assign \$373  = bus__w_addr == 9'h130;
+  assign \$374  = bus__w_addr == 9'h131;
+  assign \$375  = bus__w_addr == 9'h132;
+  assign \$376  = bus__w_addr == 9'h134;
+  assign \$377  = bus__w_addr == 9'h135;
+  assign \$378  = bus__w_addr == 9'h136;
+  assign \$379  = bus__w_addr == 9'h138;
+  assign \$380  = bus__w_addr == 9'h139;
+  assign \$381  = bus__w_addr == 9'h13a;
+  assign \$382  = bus__w_addr == 9'h13c;
+  assign \$383  = bus__w_addr == 9'h13d;
+  assign \$384  = bus__w_addr == 9'h13e;
+  assign \$385  = bus__w_addr == 9'h141;
+  assign \$386  = bus__w_addr == 9'h142;
+  assign \$387  = bus__w_addr == 9'h143;
+  assign \$388  = bus__w_addr == 9'h144;
+  assign \$389  = bus__w_addr == 9'h145;
+  assign \$390  = bus__w_addr == 9'h17c;
+  assign \$391  = bus__w_addr == 9'h17d;
+  assign \$392  = ch1_read_select_110 & bus__r_load;
+  assign \$393  = bus__w_addr[10:3] == 6'h23;
+  assign \$394  = bus__r_en & \$393 ;
+  assign \$395  = bus__w_addr[10:4] == 5'h17;
+  assign \$396  = bus__r_en & \$395 ;
+  assign \$397  = bus__w_addr[3:0] < 4'hc;
+  assign \$398  = \$396  & \$397 ;
+  assign \$399  = bus__w_addr[10:4] == 5'h16;
+  assign \$400  = bus__r_en & \$399 ;
+  assign \$401  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$403  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
+  assign \$404  = \$402  | \$403 ;
+  assign \$405  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
+  assign \$406  = \$404  | \$405 ;
+  assign \$407  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$408  = \$406  | \$407 ;
+  assign \$413  = ch1_read_select_110 ? { 2'h0, \port$14038$0 [182:177], 4'h0, \port$14038$0 [186:183], 1'h0, \port$14038$0 [176:174], 1'h0, \port$14038$0 [133:131], 3'h0, \port$14038$0 [49], \port$14038$0 [3:0] } : 32'd0;
+  assign \$414  = \$412  | \$413 ;
+  assign \$415  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$416  = \$414  | \$415 ;
-  assign \$417  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
+  assign \$417  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
   assign \$418  = \$416  | \$417 ;
-  assign \$419  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$419  = ch1_read_select_113 ? ch1_result_w0_hi_data_snapshot : 32'd0;
   assign \$420  = \$418  | \$419 ;
-  assign \$425  = ch1_read_select_110 ? { 2'h0, \port$14044$0 [182:177], 4'h0, \port$14044$0 [186:183], 1'h0, \port$14044$0 [176:174], 1'h0, \port$14044$0 [133:131], 3'h0, \port$14044$0 [49], \port$14044$0 [3:0] } : 32'd0;
+  assign \$421  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$422  = \$420  | \$421 ;
+  assign \$423  = ch1_read_select_115 ? ch1_result_w1_hi_data_snapshot : 32'd0;
+  assign \$424  = \$422  | \$423 ;
+  assign \$425  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$426  = \$424  | \$425 ;
-  assign \$427  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$427  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$428  = \$426  | \$427 ;
-  assign \$429  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
-  assign \$430  = \$428  | \$429 ;
-  assign \$431  = ch1_read_select_113 ? ch1_result_w0_hi_data_snapshot : 32'd0;
-  assign \$432  = \$430  | \$431 ;
-  assign \$433  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
-  assign \$434  = \$432  | \$433 ;
-  assign \$435  = ch1_read_select_115 ? ch1_result_w1_hi_data_snapshot : 32'd0;
-  assign \$436  = \$434  | \$435 ;
-  assign \$437  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
-  assign \$438  = \$436  | \$437 ;
-  assign \$439  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
-  assign \$440  = \$438  | \$439 ;
-  assign \$485  = ch1_read_select_142 ? { 17'h00000, \port$14132$0 [9:3], 1'h0, \port$14132$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$473  = ch1_read_select_142 ? { 17'h00000, \port$14126$0 [9:3], 1'h0, \port$14126$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$474  = \$472  | \$473 ;
+  assign \$475  = ch1_read_select_143 ? \port$14049$0 [31:0] : 32'd0;
+  assign \$476  = \$474  | \$475 ;
+  assign \$477  = ch1_read_select_144 ? \port$14049$0 [63:32] : 32'd0;
+  assign \$478  = \$476  | \$477 ;
+  assign \$479  = ch1_read_select_145 ? { 16'h0000, \port$14049$0 [79:64] } : 32'd0;
+  assign \$480  = \$478  | \$479 ;
+  assign \$483  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
+  assign \$484  = \$482  | \$483 ;
+  assign \$485  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$486  = \$484  | \$485 ;
-  assign \$487  = ch1_read_select_143 ? \port$14055$0 [31:0] : 32'd0;
-  assign \$488  = \$486  | \$487 ;
-  assign \$489  = ch1_read_select_144 ? \port$14055$0 [63:32] : 32'd0;
+  assign \$489  = ch1_window2_read ? ch1__ca_rbuf_data : 32'd0;
   assign \$490  = \$488  | \$489 ;
-  assign \$491  = ch1_read_select_145 ? { 16'h0000, \port$14055$0 [79:64] } : 32'd0;
+  assign \$491  = ch1_window3_read ? ch1_config_read_data : 32'd0;
   assign \$492  = \$490  | \$491 ;
-  assign \$495  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
-  assign \$496  = \$494  | \$495 ;
-  assign \$497  = ch1_window0_read ? ch1__count_data : 32'd0;
-  assign \$498  = \$496  | \$497 ;
-  assign \$501  = ch1_window2_read ? ch1__ca_rbuf_data : 32'd0;
-  assign \$502  = \$500  | \$501 ;
-  assign \$503  = ch1_window3_read ? ch1_config_read_data : 32'd0;
-  assign \$504  = \$502  | \$503 ;
-  assign \$505  = ! write_addr;
-  assign g_id_write = write_en & \$505 ;
-  assign \$506  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$506 ;
-  assign \$507  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$507 ;
-  assign \$508  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$508 ;
-  assign \$509  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$509 ;
-  assign \$510  = bus__w_addr[10:3] == 5'h13;
-  assign ch0__count_en = bus__r_en & \$510 ;
-  assign \$511  = bus__w_addr[10:4] == 4'hf;
-  assign \$512  = bus__r_en & \$511 ;
-  assign \$513  = bus__w_addr[3:0] < 4'hc;
-  assign ch0__chain_en = \$512  & \$513 ;
-  assign \$514  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$514 ;
-  assign \$515  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$515 ;
-  assign \$516  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$516 ;
-  assign \$517  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$517 ;
-  assign \$518  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$518 ;
-  assign \$519  = write_addr == 8'h86;
-  assign ch0_caps_chain_write = write_en & \$519 ;
-  assign \$520  = write_addr == 8'h87;
-  assign ch0_caps_chain2_write = write_en & \$520 ;
-  assign \$521  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$521 ;
+  assign \$493  = ! write_addr;
+  assign g_id_write = write_en & \$493 ;
+  assign \$494  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$494 ;
+  assign \$495  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$495 ;
+  assign \$496  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$496 ;
+  assign \$497  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$497 ;
+  assign \$498  = ch0_config_wait | ch0_table_clearing;
+  assign \$499  = bus__w_addr[10:3] == 5'h13;
+  assign ch0__count_en = bus__r_en & \$499 ;
+  assign \$500  = bus__w_addr[10:4] == 4'hf;
+  assign \$501  = bus__r_en & \$500 ;
+  assign \$502  = bus__w_addr[3:0] < 4'hc;
+  assign ch0__chain_en = \$501  & \$502 ;
+  assign \$503  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$503 ;
+  assign \$504  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$504 ;
+  assign \$505  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$505 ;
+  assign \$506  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$506 ;
+  assign \$507  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$507 ;
+  assign \$508  = write_addr == 8'h86;
+  assign ch0_caps_chain_write = write_en & \$508 ;
+  assign \$509  = write_addr == 8'h87;
+  assign ch0_caps_chain2_write = write_en & \$509 ;
+  assign \$510  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$510 ;
   assign ch0_cfg_ma_config_write = ch0_cfg_ma_config_addressed & ch0_config_go;
-  assign \$522  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$522 ;
+  assign \$511  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$511 ;
   assign ch0_cfg_period_config_write = ch0_cfg_period_config_addressed & ch0_config_go;
-  assign \$523  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$523 ;
+  assign \$512  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$512 ;
   assign ch0_cfg_break_config_write = ch0_cfg_break_config_addressed & ch0_config_go;
-  assign \$524  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$524 ;
+  assign \$513  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$513 ;
   assign ch0_cfg_ack_config_write = ch0_cfg_ack_config_addressed & ch0_config_go;
-  assign \$525  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$525 ;
+  assign \$514  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$514 ;
   assign ch0_cfg_timeout_config_write = ch0_cfg_timeout_config_addressed & ch0_config_go;
-  assign \$526  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$526 ;
+  assign \$515  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$515 ;
   assign ch0_cfg_words_config_write = ch0_cfg_words_config_addressed & ch0_config_go;
-  assign \$527  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$527 ;
+  assign \$516  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$516 ;
   assign ch0_cfg_checks_config_write = ch0_cfg_checks_config_addressed & ch0_config_go;
-  assign \$528  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$528 ;
+  assign \$517  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$517 ;
   assign ch0_cfg_quiet_config_write = ch0_cfg_quiet_config_addressed & ch0_config_go;
-  assign \$529  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$529 ;
-  assign \$530  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$530 ;
-  assign \$531  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$531 ;
-  assign \$532  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$532 ;
-  assign \$533  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$533 ;
-  assign \$534  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$534 ;
-  assign \$535  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$535 ;
-  assign \$536  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$536 ;
-  assign \$537  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$537 ;
+  assign \$518  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$518 ;
+  assign \$519  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$519 ;
+  assign \$520  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$520 ;
+  assign \$521  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$521 ;
+  assign \$522  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$522 ;
+  assign \$523  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$523 ;
+  assign \$524  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$524 ;
+  assign \$525  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$525 ;
+  assign \$526  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$526 ;
   assign ch0_cfg_crc0_config_write = ch0_cfg_crc0_config_addressed & ch0_config_go;
-  assign \$538  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$538 ;
+  assign \$527  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$527 ;
   assign ch0_cfg_crc0_start_config_write = ch0_cfg_crc0_start_config_addressed & ch0_config_go;
-  assign \$539  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$539 ;
+  assign \$528  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$528 ;
   assign ch0_cfg_crc1_config_write = ch0_cfg_crc1_config_addressed & ch0_config_go;
-  assign \$540  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$540 ;
+  assign \$529  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$529 ;
   assign ch0_cfg_crc1_start_config_write = ch0_cfg_crc1_start_config_addressed & ch0_config_go;
-  assign \$541  = write_addr == 8'ha4;
-  assign ch0_cfg_ssi_write = write_en & \$541 ;
+  assign \$530  = write_addr == 8'ha4;
+  assign ch0_cfg_ssi_write = write_en & \$530 ;
   assign ch0_cfg_ssi_config_write = ch0_cfg_ssi_config_addressed & ch0_config_go;
-  assign \$542  = write_addr == 8'ha5;
-  assign ch0_count_chain_write = write_en & \$542 ;
-  assign \$543  = write_addr == 8'ha6;
-  assign ch0_count_chain2_write = write_en & \$543 ;
-  assign \$544  = write_addr == 8'ha7;
-  assign ch0_count_chain3_write = write_en & \$544 ;
-  assign \$545  = write_addr == 8'ha8;
-  assign ch0_cfg_w2_write = write_en & \$545 ;
-  assign \$546  = write_addr == 8'ha9;
-  assign ch0_cfg_w2_crc_write = write_en & \$546 ;
-  assign \$547  = write_addr == 8'haa;
-  assign ch0_cfg_w2_crc_start_write = write_en & \$547 ;
-  assign \$548  = write_addr == 8'hac;
-  assign ch0_cfg_w3_write = write_en & \$548 ;
-  assign \$549  = write_addr == 8'had;
-  assign ch0_cfg_w3_crc_write = write_en & \$549 ;
-  assign \$550  = write_addr == 8'hae;
-  assign ch0_cfg_w3_crc_start_write = write_en & \$550 ;
-  assign \$551  = write_addr == 8'hb0;
-  assign ch0_cfg_w4_write = write_en & \$551 ;
-  assign \$552  = write_addr == 8'hb1;
-  assign ch0_cfg_w4_crc_write = write_en & \$552 ;
-  assign \$553  = write_addr == 8'hb2;
-  assign ch0_cfg_w4_crc_start_write = write_en & \$553 ;
-  assign \$554  = write_addr == 8'hb4;
-  assign ch0_cfg_w5_write = write_en & \$554 ;
-  assign \$555  = write_addr == 8'hb5;
-  assign ch0_cfg_w5_crc_write = write_en & \$555 ;
-  assign \$556  = write_addr == 8'hb6;
-  assign ch0_cfg_w5_crc_start_write = write_en & \$556 ;
-  assign \$557  = write_addr == 8'hb8;
-  assign ch0_cfg_w6_write = write_en & \$557 ;
-  assign \$558  = write_addr == 8'hb9;
-  assign ch0_cfg_w6_crc_write = write_en & \$558 ;
-  assign \$559  = write_addr == 8'hba;
-  assign ch0_cfg_w6_crc_start_write = write_en & \$559 ;
-  assign \$560  = write_addr == 8'hbc;
-  assign ch0_cfg_w7_write = write_en & \$560 ;
-  assign \$561  = write_addr == 8'hbd;
-  assign ch0_cfg_w7_crc_write = write_en & \$561 ;
-  assign \$562  = write_addr == 8'hbe;
-  assign ch0_cfg_w7_crc_start_write = write_en & \$562 ;
-  assign \$563  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$563 ;
-  assign \$564  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$564 ;
-  assign \$565  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$565 ;
-  assign \$566  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$566 ;
-  assign \$567  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$567 ;
-  assign \$568  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$568 ;
-  assign \$569  = write_addr[10:4] == 4'hd;
-  assign \$570  = write_en & \$569 ;
-  assign ch0__ca_wbuf_en = \$570  ? write_strb : 4'h0;
-  assign \$571  = bus__w_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$571 ;
-  assign \$572  = write_addr == 8'hfc;
-  assign ch0_chain_flags_write = write_en & \$572 ;
-  assign \$573  = write_addr == 8'hfd;
-  assign ch0_chain_updates_write = write_en & \$573 ;
-  assign \$574  = | { ch0_cfg_ssi_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write, ch0_cfg_checks_config_write, ch0_cfg_timeout_config_write, ch0_cfg_break_config_write, ch0_cfg_ma_config_write };
-  assign \$575  = | { ch0_ca_request_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write };
-  assign \$576  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write };
-  assign \$577  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write };
-  assign \$578  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
-  assign \$579  = ~ ch0_config_written;
-  assign \$580  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$579 ;
-  assign \$581  = | \$580 ;
-  assign \$582  = ~ ch0_config_written;
-  assign \$583  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$582 ;
-  assign \$584  = | \$583 ;
-  assign \$585  = ~ ch0_config_written;
-  assign \$586  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$585 ;
-  assign \$587  = | \$586 ;
-  assign \$588  = ~ ch0_config_written;
-  assign \$589  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$588 ;
-  assign \$590  = | \$589 ;
-  assign \$591  = config_write_strb | { \$590 , \$587 , \$584 , \$581  };
-  assign wr__en = \$578  ? \$591  : 4'h0;
-  assign \$592  = bus__w_addr[10:7] == 1'h1;
-  assign \$593  = bus__r_en & \$592 ;
-  assign ch0_config_read = \$593  & config_memory0_read_hit;
-  assign \$594  = ch0_config_written >> ch0_config_read_index;
-  assign \$595  = \$594  ? rd__data : 32'd0;
-  assign \$596  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$598  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$600  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$601 , \$599 , \$597  };
-  assign \$602  = bus__w_addr[10:3] == 6'h23;
-  assign ch1__count_en = bus__r_en & \$602 ;
-  assign \$603  = bus__w_addr[10:4] == 5'h17;
-  assign \$604  = bus__r_en & \$603 ;
-  assign \$605  = bus__w_addr[3:0] < 4'hc;
-  assign ch1__chain_en = \$604  & \$605 ;
-  assign \$606  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$606 ;
-  assign \$607  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$607 ;
-  assign \$608  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$608 ;
-  assign \$609  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$609 ;
-  assign \$610  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$610 ;
-  assign \$611  = write_addr == 9'h106;
-  assign ch1_caps_chain_write = write_en & \$611 ;
-  assign \$612  = write_addr == 9'h107;
-  assign ch1_caps_chain2_write = write_en & \$612 ;
-  assign \$613  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$613 ;
+  assign \$531  = write_addr == 8'ha5;
+  assign ch0_count_chain_write = write_en & \$531 ;
+  assign \$532  = write_addr == 8'ha6;
+  assign ch0_count_chain2_write = write_en & \$532 ;
+  assign \$533  = write_addr == 8'ha7;
+  assign ch0_count_chain3_write = write_en & \$533 ;
+  assign \$534  = write_addr == 8'ha8;
+  assign ch0_cfg_w2_write = write_en & \$534 ;
+  assign \$535  = write_addr == 8'ha9;
+  assign ch0_cfg_w2_crc_write = write_en & \$535 ;
+  assign \$536  = write_addr == 8'haa;
+  assign ch0_cfg_w2_crc_start_write = write_en & \$536 ;
+  assign \$537  = write_addr == 8'hac;
+  assign ch0_cfg_w3_write = write_en & \$537 ;
+  assign \$538  = write_addr == 8'had;
+  assign ch0_cfg_w3_crc_write = write_en & \$538 ;
+  assign \$539  = write_addr == 8'hae;
+  assign ch0_cfg_w3_crc_start_write = write_en & \$539 ;
+  assign \$540  = write_addr == 8'hb0;
+  assign ch0_cfg_w4_write = write_en & \$540 ;
+  assign \$541  = write_addr == 8'hb1;
+  assign ch0_cfg_w4_crc_write = write_en & \$541 ;
+  assign \$542  = write_addr == 8'hb2;
+  assign ch0_cfg_w4_crc_start_write = write_en & \$542 ;
+  assign \$543  = write_addr == 8'hb4;
+  assign ch0_cfg_w5_write = write_en & \$543 ;
+  assign \$544  = write_addr == 8'hb5;
+  assign ch0_cfg_w5_crc_write = write_en & \$544 ;
+  assign \$545  = write_addr == 8'hb6;
+  assign ch0_cfg_w5_crc_start_write = write_en & \$545 ;
+  assign \$546  = write_addr == 8'hb8;
+  assign ch0_cfg_w6_write = write_en & \$546 ;
+  assign \$547  = write_addr == 8'hb9;
+  assign ch0_cfg_w6_crc_write = write_en & \$547 ;
+  assign \$548  = write_addr == 8'hba;
+  assign ch0_cfg_w6_crc_start_write = write_en & \$548 ;
+  assign \$549  = write_addr == 8'hbc;
+  assign ch0_cfg_w7_write = write_en & \$549 ;
+  assign \$550  = write_addr == 8'hbd;
+  assign ch0_cfg_w7_crc_write = write_en & \$550 ;
+  assign \$551  = write_addr == 8'hbe;
+  assign ch0_cfg_w7_crc_start_write = write_en & \$551 ;
+  assign \$552  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$552 ;
+  assign \$553  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$553 ;
+  assign \$554  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$554 ;
+  assign \$555  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$555 ;
+  assign \$556  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$556 ;
+  assign \$557  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$557 ;
+  assign \$558  = write_addr[10:4] == 4'hd;
+  assign \$559  = write_en & \$558 ;
+  assign ch0__ca_wbuf_en = \$559  ? write_strb : 4'h0;
+  assign \$560  = bus__w_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$560 ;
+  assign \$561  = write_addr == 8'hfc;
+  assign ch0_chain_flags_write = write_en & \$561 ;
+  assign \$562  = write_addr == 8'hfd;
+  assign ch0_chain_updates_write = write_en & \$562 ;
+  assign \$563  = | { ch0_cfg_ssi_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write, ch0_cfg_checks_config_write, ch0_cfg_timeout_config_write, ch0_cfg_break_config_write, ch0_cfg_ma_config_write };
+  assign \$564  = | { ch0_ca_request_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write };
+  assign \$565  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write };
+  assign \$566  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write };
+  assign \$567  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
+  assign \$568  = ~ ch0_config_written;
+  assign \$569  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$568 ;
+  assign \$570  = | \$569 ;
+  assign \$571  = ~ ch0_config_written;
+  assign \$572  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$571 ;
+  assign \$573  = | \$572 ;
+  assign \$574  = ~ ch0_config_written;
+  assign \$575  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$574 ;
+  assign \$576  = | \$575 ;
+  assign \$577  = ~ ch0_config_written;
+  assign \$578  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$577 ;
+  assign \$579  = | \$578 ;
+  assign \$580  = config_write_strb | { \$579 , \$576 , \$573 , \$570  };
+  assign wr__en = \$567  ? \$580  : 4'h0;
+  assign \$581  = bus__w_addr[10:7] == 1'h1;
+  assign \$582  = bus__r_en & \$581 ;
+  assign ch0_config_read = \$582  & config_memory0_read_hit;
+  assign \$583  = ch0_config_written >> ch0_config_read_index;
+  assign \$584  = \$583  ? rd__data : 32'd0;
+  assign \wr__addr$760  = ch0_table_clearing ? ch0_table_sweep : ch0_crc_table_0_table_write_entry;
+  assign \wr__data$761  = ch0_table_clearing ? 16'h0000 : config_write_data[15:0];
+  assign \$585  = | { ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write };
+  assign \$586  = \$585  ? config_write_strb[1:0] : 2'h0;
+  assign \wr__en$762  = ch0_table_clearing ? 2'h3 : \$586 ;
+  assign \wr__addr$766  = ch0_table_clearing ? ch0_table_sweep : ch0_crc_table_16_table_write_entry;
+  assign \wr__data$767  = ch0_table_clearing ? 16'h0000 : config_write_data[15:0];
+  assign \$587  = | { ch0_cfg_crc1_start_config_write, ch0_cfg_crc0_start_config_write };
+  assign \$588  = \$587  ? config_write_strb[1:0] : 2'h0;
+  assign \wr__en$768  = ch0_table_clearing ? 2'h3 : \$588 ;
+  assign \wr__addr$771  = ch0_table_clearing ? ch0_table_sweep : ch0_crc_table_32_table_write_entry;
+  assign \wr__data$772  = ch0_table_clearing ? 1'h0 : config_write_data[24];
+  assign \$589  = | { ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write };
+  assign \$590  = \$589  ? config_write_strb[3] : 1'h0;
+  assign \wr__en$773  = ch0_table_clearing ? 1'h1 : \$590 ;
+  assign \$594  = { 14'h0000, \$592  } | \$593 ;
+  assign \$596  = { 17'h00000, \$594  } | \$595 ;
+  assign \$597  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$599  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$601  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$602 , \$600 , \$598  };
+  assign \$603  = ch1_config_wait | ch1_table_clearing;
+  assign \$604  = bus__w_addr[10:3] == 6'h23;
+  assign ch1__count_en = bus__r_en & \$604 ;
+  assign \$605  = bus__w_addr[10:4] == 5'h17;
+  assign \$606  = bus__r_en & \$605 ;
+  assign \$607  = bus__w_addr[3:0] < 4'hc;
+  assign ch1__chain_en = \$606  & \$607 ;
+  assign \$608  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$608 ;
+  assign \$609  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$609 ;
+  assign \$610  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$610 ;
+  assign \$611  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$611 ;
+  assign \$612  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$612 ;
+  assign \$613  = write_addr == 9'h106;
+  assign ch1_caps_chain_write = write_en & \$613 ;
+  assign \$614  = write_addr == 9'h107;
+  assign ch1_caps_chain2_write = write_en & \$614 ;
+  assign \$615  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$615 ;
   assign ch1_cfg_ma_config_write = ch1_cfg_ma_config_addressed & ch1_config_go;
-  assign \$614  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$614 ;
+  assign \$616  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$616 ;
   assign ch1_cfg_period_config_write = ch1_cfg_period_config_addressed & ch1_config_go;
-  assign \$615  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$615 ;
+  assign \$617  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$617 ;
   assign ch1_cfg_break_config_write = ch1_cfg_break_config_addressed & ch1_config_go;
-  assign \$616  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$616 ;
+  assign \$618  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$618 ;
   assign ch1_cfg_ack_config_write = ch1_cfg_ack_config_addressed & ch1_config_go;
-  assign \$617  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$617 ;
+  assign \$619  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$619 ;
   assign ch1_cfg_timeout_config_write = ch1_cfg_timeout_config_addressed & ch1_config_go;
-  assign \$618  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$618 ;
+  assign \$620  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$620 ;
   assign ch1_cfg_words_config_write = ch1_cfg_words_config_addressed & ch1_config_go;
-  assign \$619  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$619 ;
+  assign \$621  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$621 ;
   assign ch1_cfg_checks_config_write = ch1_cfg_checks_config_addressed & ch1_config_go;
-  assign \$620  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$620 ;
+  assign \$622  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$622 ;
   assign ch1_cfg_quiet_config_write = ch1_cfg_quiet_config_addressed & ch1_config_go;
-  assign \$621  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$621 ;
-  assign \$622  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$622 ;
-  assign \$623  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$623 ;
-  assign \$624  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$624 ;
-  assign \$625  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$625 ;
-  assign \$626  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$626 ;
-  assign \$627  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$627 ;
-  assign \$628  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$628 ;
-  assign \$629  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$629 ;
+  assign \$623  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$623 ;
+  assign \$624  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$624 ;
+  assign \$625  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$625 ;
+  assign \$626  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$626 ;
+  assign \$627  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$627 ;
+  assign \$628  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$628 ;
+  assign \$629  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$629 ;
+  assign \$630  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$630 ;
+  assign \$631  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$631 ;
   assign ch1_cfg_crc0_config_write = ch1_cfg_crc0_config_addressed & ch1_config_go;
-  assign \$630  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$630 ;
+  assign \$632  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$632 ;
   assign ch1_cfg_crc0_start_config_write = ch1_cfg_crc0_start_config_addressed & ch1_config_go;
-  assign \$631  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$631 ;
+  assign \$633  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$633 ;
   assign ch1_cfg_crc1_config_write = ch1_cfg_crc1_config_addressed & ch1_config_go;
-  assign \$632  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$632 ;
+  assign \$634  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$634 ;
   assign ch1_cfg_crc1_start_config_write = ch1_cfg_crc1_start_config_addressed & ch1_config_go;
-  assign \$633  = write_addr == 9'h124;
-  assign ch1_cfg_ssi_write = write_en & \$633 ;
+  assign \$635  = write_addr == 9'h124;
+  assign ch1_cfg_ssi_write = write_en & \$635 ;
   assign ch1_cfg_ssi_config_write = ch1_cfg_ssi_config_addressed & ch1_config_go;
-  assign \$634  = write_addr == 9'h125;
-  assign ch1_count_chain_write = write_en & \$634 ;
-  assign \$635  = write_addr == 9'h126;
-  assign ch1_count_chain2_write = write_en & \$635 ;
-  assign \$636  = write_addr == 9'h127;
-  assign ch1_count_chain3_write = write_en & \$636 ;
-  assign \$637  = write_addr == 9'h128;
-  assign ch1_cfg_w2_write = write_en & \$637 ;
-  assign \$638  = write_addr == 9'h129;
-  assign ch1_cfg_w2_crc_write = write_en & \$638 ;
-  assign \$639  = write_addr == 9'h12a;
-  assign ch1_cfg_w2_crc_start_write = write_en & \$639 ;
-  assign \$640  = write_addr == 9'h12c;
-  assign ch1_cfg_w3_write = write_en & \$640 ;
-  assign \$641  = write_addr == 9'h12d;
-  assign ch1_cfg_w3_crc_write = write_en & \$641 ;
-  assign \$642  = write_addr == 9'h12e;
-  assign ch1_cfg_w3_crc_start_write = write_en & \$642 ;
-  assign \$643  = write_addr == 9'h130;
-  assign ch1_cfg_w4_write = write_en & \$643 ;
-  assign \$644  = write_addr == 9'h131;
-  assign ch1_cfg_w4_crc_write = write_en & \$644 ;
-  assign \$645  = write_addr == 9'h132;
-  assign ch1_cfg_w4_crc_start_write = write_en & \$645 ;
-  assign \$646  = write_addr == 9'h134;
-  assign ch1_cfg_w5_write = write_en & \$646 ;
-  assign \$647  = write_addr == 9'h135;
-  assign ch1_cfg_w5_crc_write = write_en & \$647 ;
-  assign \$648  = write_addr == 9'h136;
-  assign ch1_cfg_w5_crc_start_write = write_en & \$648 ;
-  assign \$649  = write_addr == 9'h138;
-  assign ch1_cfg_w6_write = write_en & \$649 ;
-  assign \$650  = write_addr == 9'h139;
-  assign ch1_cfg_w6_crc_write = write_en & \$650 ;
-  assign \$651  = write_addr == 9'h13a;
-  assign ch1_cfg_w6_crc_start_write = write_en & \$651 ;
-  assign \$652  = write_addr == 9'h13c;
-  assign ch1_cfg_w7_write = write_en & \$652 ;
-  assign \$653  = write_addr == 9'h13d;
-  assign ch1_cfg_w7_crc_write = write_en & \$653 ;
-  assign \$654  = write_addr == 9'h13e;
-  assign ch1_cfg_w7_crc_start_write = write_en & \$654 ;
-  assign \$655  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$655 ;
-  assign \$656  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$656 ;
-  assign \$657  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$657 ;
-  assign \$658  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$658 ;
-  assign \$659  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$659 ;
-  assign \$660  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$660 ;
-  assign \$661  = write_addr[10:4] == 5'h15;
-  assign \$662  = write_en & \$661 ;
-  assign ch1__ca_wbuf_en = \$662  ? write_strb : 4'h0;
-  assign \$663  = bus__w_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$663 ;
-  assign \$664  = write_addr == 9'h17c;
-  assign ch1_chain_flags_write = write_en & \$664 ;
-  assign \$665  = write_addr == 9'h17d;
-  assign ch1_chain_updates_write = write_en & \$665 ;
-  assign \$666  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
-  assign \$667  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
-  assign \$668  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
-  assign \$669  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
-  assign \$670  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
-  assign \$671  = ~ ch1_config_written;
-  assign \$672  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$671 ;
-  assign \$673  = | \$672 ;
-  assign \$674  = ~ ch1_config_written;
-  assign \$675  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$674 ;
-  assign \$676  = | \$675 ;
-  assign \$677  = ~ ch1_config_written;
-  assign \$678  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$677 ;
-  assign \$679  = | \$678 ;
-  assign \$680  = ~ ch1_config_written;
-  assign \$681  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$680 ;
-  assign \$682  = | \$681 ;
-  assign \$683  = config_write_strb | { \$682 , \$679 , \$676 , \$673  };
-  assign \wr__en$922  = \$670  ? \$683  : 4'h0;
-  assign \$684  = bus__w_addr[10:7] == 2'h2;
-  assign \$685  = bus__r_en & \$684 ;
-  assign ch1_config_read = \$685  & config_memory0_read_hit;
-  assign \$686  = ch1_config_written >> ch1_config_read_index;
-  assign \$687  = \$686  ? \rd__data$924  : 32'd0;
-  assign \$688  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$690  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$692  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$693 , \$691 , \$689  };
-  assign \$694  = | { ch1_config_wait, ch0_config_wait };
-  assign bus__w_busy = write_en | \$694 ;
-  assign \$696  = \$695  | ch0_read_data;
-  assign bus__r_data = \$696  | ch1_read_data;
+  assign \$636  = write_addr == 9'h125;
+  assign ch1_count_chain_write = write_en & \$636 ;
+  assign \$637  = write_addr == 9'h126;
+  assign ch1_count_chain2_write = write_en & \$637 ;
+  assign \$638  = write_addr == 9'h127;
+  assign ch1_count_chain3_write = write_en & \$638 ;
+  assign \$639  = write_addr == 9'h128;
+  assign ch1_cfg_w2_write = write_en & \$639 ;
+  assign \$640  = write_addr == 9'h129;
+  assign ch1_cfg_w2_crc_write = write_en & \$640 ;
+  assign \$641  = write_addr == 9'h12a;
+  assign ch1_cfg_w2_crc_start_write = write_en & \$641 ;
+  assign \$642  = write_addr == 9'h12c;
+  assign ch1_cfg_w3_write = write_en & \$642 ;
+  assign \$643  = write_addr == 9'h12d;
+  assign ch1_cfg_w3_crc_write = write_en & \$643 ;
+  assign \$644  = write_addr == 9'h12e;
+  assign ch1_cfg_w3_crc_start_write = write_en & \$644 ;
+  assign \$645  = write_addr == 9'h130;
+  assign ch1_cfg_w4_write = write_en & \$645 ;
+  assign \$646  = write_addr == 9'h131;
+  assign ch1_cfg_w4_crc_write = write_en & \$646 ;
+  assign \$647  = write_addr == 9'h132;
+  assign ch1_cfg_w4_crc_start_write = write_en & \$647 ;
+  assign \$648  = write_addr == 9'h134;
+  assign ch1_cfg_w5_write = write_en & \$648 ;
+  assign \$649  = write_addr == 9'h135;
+  assign ch1_cfg_w5_crc_write = write_en & \$649 ;
+  assign \$650  = write_addr == 9'h136;
+  assign ch1_cfg_w5_crc_start_write = write_en & \$650 ;
+  assign \$651  = write_addr == 9'h138;
+  assign ch1_cfg_w6_write = write_en & \$651 ;
+  assign \$652  = write_addr == 9'h139;
+  assign ch1_cfg_w6_crc_write = write_en & \$652 ;
+  assign \$653  = write_addr == 9'h13a;
+  assign ch1_cfg_w6_crc_start_write = write_en & \$653 ;
+  assign \$654  = write_addr == 9'h13c;
+  assign ch1_cfg_w7_write = write_en & \$654 ;
+  assign \$655  = write_addr == 9'h13d;
+  assign ch1_cfg_w7_crc_write = write_en & \$655 ;
+  assign \$656  = write_addr == 9'h13e;
+  assign ch1_cfg_w7_crc_start_write = write_en & \$656 ;
+  assign \$657  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$657 ;
+  assign \$658  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$658 ;
+  assign \$659  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$659 ;
+  assign \$660  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$660 ;
+  assign \$661  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$661 ;
+  assign \$662  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$662 ;
+  assign \$663  = write_addr[10:4] == 5'h15;
+  assign \$664  = write_en & \$663 ;
+  assign ch1__ca_wbuf_en = \$664  ? write_strb : 4'h0;
+  assign \$665  = bus__w_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$665 ;
+  assign \$666  = write_addr == 9'h17c;
+  assign ch1_chain_flags_write = write_en & \$666 ;
+  assign \$667  = write_addr == 9'h17d;
+  assign ch1_chain_updates_write = write_en & \$667 ;
+  assign \$668  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
+  assign \$669  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
+  assign \$670  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
+  assign \$671  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
+  assign \$672  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$673  = ~ ch1_config_written;
+  assign \$674  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$673 ;
+  assign \$675  = | \$674 ;
+  assign \$676  = ~ ch1_config_written;
+  assign \$677  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$676 ;
+  assign \$678  = | \$677 ;
+  assign \$679  = ~ ch1_config_written;
+  assign \$680  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$679 ;
+  assign \$681  = | \$680 ;
+  assign \$682  = ~ ch1_config_written;
+  assign \$683  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$682 ;
+  assign \$684  = | \$683 ;
+  assign \$685  = config_write_strb | { \$684 , \$681 , \$678 , \$675  };
+  assign \wr__en$922  = \$672  ? \$685  : 4'h0;
+  assign \$686  = bus__w_addr[10:7] == 2'h2;
+  assign \$687  = bus__r_en & \$686 ;
+  assign ch1_config_read = \$687  & config_memory0_read_hit;
+  assign \$688  = ch1_config_written >> ch1_config_read_index;
+  assign \$689  = \$688  ? \rd__data$924  : 32'd0;
+  assign \wr__addr$926  = ch1_table_clearing ? ch1_table_sweep : ch1_crc_table_0_table_write_entry;
+  assign \wr__data$927  = ch1_table_clearing ? 16'h0000 : config_write_data[15:0];
+  assign \$690  = | { ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write };
+  assign \$691  = \$690  ? config_write_strb[1:0] : 2'h0;
+  assign \wr__en$928  = ch1_table_clearing ? 2'h3 : \$691 ;
+  assign \wr__addr$932  = ch1_table_clearing ? ch1_table_sweep : ch1_crc_table_16_table_write_entry;
+  assign \wr__data$933  = ch1_table_clearing ? 16'h0000 : config_write_data[15:0];
+  assign \$692  = | { ch1_cfg_crc1_start_config_write, ch1_cfg_crc0_start_config_write };
+  assign \$693  = \$692  ? config_write_strb[1:0] : 2'h0;
+  assign \wr__en$934  = ch1_table_clearing ? 2'h3 : \$693 ;
+  assign \wr__addr$937  = ch1_table_clearing ? ch1_table_sweep : ch1_crc_table_32_table_write_entry;
+  assign \wr__data$938  = ch1_table_clearing ? 1'h0 : config_write_data[24];
+  assign \$694  = | { ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write };
+  assign \$695  = \$694  ? config_write_strb[3] : 1'h0;
+  assign \wr__en$939  = ch1_table_clearing ? 1'h1 : \$695 ;
+  assign \$699  = { 14'h0000, \$697  } | \$698 ;
+  assign \$701  = { 17'h00000, \$699  } | \$700 ;
+  assign \$702  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$704  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$706  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$707 , \$705 , \$703  };
+  assign \$708  = | { ch1_config_wait, ch0_config_wait };
+  assign bus__w_busy = write_en | \$708 ;
+  assign \$710  = \$709  | ch0_read_data;
+  assign bus__r_data = \$710  | ch1_read_data;
   always @(posedge clk)
-    write_en <= \$697 ;
+    write_en <= \$711 ;
   always @(posedge clk)
-    write_addr <= \$698 ;
+    write_addr <= \$712 ;
   always @(posedge clk)
-    write_data <= \$699 ;
+    write_data <= \$713 ;
   always @(posedge clk)
-    write_strb <= \$700 ;
+    write_strb <= \$714 ;
   always @(posedge clk)
-    config_write_data <= \$701 ;
+    config_write_data <= \$715 ;
   always @(posedge clk)
-    config_write_strb <= \$702 ;
+    config_write_strb <= \$716 ;
   always @(posedge clk)
-    g_trigger_start <= \$703 ;
+    g_trigger_start <= \$717 ;
   always @(posedge clk)
-    g_read_select_0 <= \$704 ;
+    g_read_select_0 <= \$718 ;
   always @(posedge clk)
-    g_read_select_1 <= \$705 ;
+    g_read_select_1 <= \$719 ;
   always @(posedge clk)
-    g_read_select_2 <= \$706 ;
+    g_read_select_2 <= \$720 ;
   always @(posedge clk)
-    g_read_select_3 <= \$707 ;
+    g_read_select_3 <= \$721 ;
   always @(posedge clk)
-    g_read_select_4 <= \$708 ;
+    g_read_select_4 <= \$722 ;
   always @(posedge clk)
-    g_read_data <= \$709 ;
+    g_read_data <= \$723 ;
   always @(posedge clk)
-    ch0_config_go <= \$710 ;
+    ch0_config_go <= \$724 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$711 ;
+    ch0_ctrl_start <= \$725 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$712 ;
+    ch0_ctrl_abort <= \$726 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$713 ;
+    ch0_ctrl_clear_counters <= \$727 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$714 ;
+    ch0_ctrl_periodic <= \$728 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$715 ;
+    ch0_ctrl_trigger_enable <= \$729 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$716 ;
+    ch0_irq_status_done <= \$730 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$717 ;
+    ch0_irq_status_error <= \$731 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$718 ;
+    ch0_irq_status_access_done <= \$732 ;
   always @(posedge clk)
-    ch0_irq_enable_config_write <= \$719 ;
+    ch0_irq_enable_config_write <= \$733 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$720 ;
+    ch0_irq_enable_done <= \$734 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$721 ;
+    ch0_irq_enable_error <= \$735 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$722 ;
+    ch0_irq_enable_access_done <= \$736 ;
   always @(posedge clk)
-    ch0_cfg_ma_config_addressed <= \$723 ;
+    ch0_cfg_ma_config_addressed <= \$737 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$724 ;
+    ch0_cfg_ma_ma_half_period <= \$738 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$725 ;
+    ch0_cfg_ma_delay_limit <= \$739 ;
   always @(posedge clk)
-    ch0_cfg_period_config_addressed <= \$726 ;
+    ch0_cfg_period_config_addressed <= \$740 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$727 ;
+    ch0_cfg_period_request_period <= \$741 ;
   always @(posedge clk)
-    ch0_cfg_break_config_addressed <= \$728 ;
+    ch0_cfg_break_config_addressed <= \$742 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$729 ;
+    ch0_cfg_break_break_time <= \$743 ;
   always @(posedge clk)
-    ch0_cfg_ack_config_addressed <= \$730 ;
+    ch0_cfg_ack_config_addressed <= \$744 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$731 ;
+    ch0_cfg_ack_ack_limit <= \$745 ;
   always @(posedge clk)
-    ch0_cfg_timeout_config_addressed <= \$732 ;
+    ch0_cfg_timeout_config_addressed <= \$746 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$733 ;
+    ch0_cfg_timeout_timeout_limit <= \$747 ;
   always @(posedge clk)
-    ch0_cfg_words_config_addressed <= \$734 ;
+    ch0_cfg_words_config_addressed <= \$748 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$735 ;
+    ch0_cfg_words_w0_data_bits <= \$749 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$736 ;
+    ch0_cfg_words_w0_nenw <= \$750 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$737 ;
+    ch0_cfg_words_w0_lc <= \$751 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$738 ;
+    ch0_cfg_words_w0_crc <= \$752 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$739 ;
+    ch0_cfg_words_w0_gray <= \$753 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_signed <= \$740 ;
+    ch0_cfg_words_w0_signed <= \$754 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$741 ;
+    ch0_cfg_words_w1_data_bits <= \$755 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$742 ;
+    ch0_cfg_words_w1_nenw <= \$756 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$743 ;
+    ch0_cfg_words_w1_lc <= \$757 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$744 ;
+    ch0_cfg_words_w1_crc <= \$758 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$745 ;
+    ch0_cfg_words_w1_gray <= \$759 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_signed <= \$746 ;
+    ch0_cfg_words_w1_signed <= \$760 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$747 ;
+    ch0_cfg_words_w1_enable <= \$761 ;
   always @(posedge clk)
-    ch0_cfg_checks_config_addressed <= \$748 ;
+    ch0_cfg_checks_config_addressed <= \$762 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$749 ;
+    ch0_cfg_checks_end_check <= \$763 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$750 ;
+    ch0_cfg_checks_spw_check <= \$764 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$751 ;
+    ch0_cfg_checks_spw_tolerance <= \$765 ;
   always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$752 ;
+    ch0_cfg_checks_noise_limit <= \$766 ;
   always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$753 ;
+    ch0_cfg_checks_delay_tolerance <= \$767 ;
   always @(posedge clk)
-    ch0_cfg_checks_confirm_frames <= \$754 ;
+    ch0_cfg_checks_confirm_frames <= \$768 ;
   always @(posedge clk)
-    ch0_cfg_quiet_config_addressed <= \$755 ;
+    ch0_cfg_quiet_config_addressed <= \$769 ;
   always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$756 ;
+    ch0_cfg_quiet_quiet_time <= \$770 ;
   always @(posedge clk)
-    ch0_cfg_crc0_config_addressed <= \$757 ;
+    ch0_cfg_crc0_config_addressed <= \$771 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_poly <= \$758 ;
+    ch0_cfg_crc0_w0_crc_width <= \$772 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$759 ;
+    ch0_cfg_crc0_start_config_addressed <= \$773 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_inverted <= \$760 ;
+    ch0_cfg_crc1_config_addressed <= \$774 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_config_addressed <= \$761 ;
+    ch0_cfg_crc1_w1_crc_width <= \$775 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_w0_crc_start <= \$762 ;
+    ch0_cfg_crc1_start_config_addressed <= \$776 ;
   always @(posedge clk)
-    ch0_cfg_crc1_config_addressed <= \$763 ;
+    ch0_cfg_ssi_config_addressed <= \$777 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_poly <= \$764 ;
+    ch0_cfg_ssi_ssi <= \$778 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$765 ;
+    ch0_cfg_ssi_ssi_error <= \$779 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_inverted <= \$766 ;
+    ch0_cfg_ssi_ssi_error_low <= \$780 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_config_addressed <= \$767 ;
+    ch0_cfg_ssi_ssi_double <= \$781 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_w1_crc_start <= \$768 ;
+    ch0_cfg_ssi_ssi_delay <= \$782 ;
   always @(posedge clk)
-    ch0_cfg_ssi_config_addressed <= \$769 ;
+    ch0_cfg_w2_config_write <= \$783 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi <= \$770 ;
+    ch0_cfg_w2_crc_config_write <= \$784 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_error <= \$771 ;
+    ch0_cfg_w2_crc_start_config_write <= \$785 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_error_low <= \$772 ;
+    ch0_cfg_w3_config_write <= \$786 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_double <= \$773 ;
+    ch0_cfg_w3_crc_config_write <= \$787 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_delay <= \$774 ;
+    ch0_cfg_w3_crc_start_config_write <= \$788 ;
   always @(posedge clk)
-    ch0_cfg_w2_config_write <= \$775 ;
+    ch0_cfg_w4_config_write <= \$789 ;
   always @(posedge clk)
-    ch0_cfg_w2_crc_config_write <= \$776 ;
+    ch0_cfg_w4_crc_config_write <= \$790 ;
   always @(posedge clk)
-    ch0_cfg_w2_crc_start_config_write <= \$777 ;
+    ch0_cfg_w4_crc_start_config_write <= \$791 ;
   always @(posedge clk)
-    ch0_cfg_w3_config_write <= \$778 ;
+    ch0_cfg_w5_config_write <= \$792 ;
   always @(posedge clk)
-    ch0_cfg_w3_crc_config_write <= \$779 ;
+    ch0_cfg_w5_crc_config_write <= \$793 ;
   always @(posedge clk)
-    ch0_cfg_w3_crc_start_config_write <= \$780 ;
+    ch0_cfg_w5_crc_start_config_write <= \$794 ;
   always @(posedge clk)
-    ch0_cfg_w4_config_write <= \$781 ;
+    ch0_cfg_w6_config_write <= \$795 ;
   always @(posedge clk)
-    ch0_cfg_w4_crc_config_write <= \$782 ;
+    ch0_cfg_w6_crc_config_write <= \$796 ;
   always @(posedge clk)
-    ch0_cfg_w4_crc_start_config_write <= \$783 ;
+    ch0_cfg_w6_crc_start_config_write <= \$797 ;
   always @(posedge clk)
-    ch0_cfg_w5_config_write <= \$784 ;
+    ch0_cfg_w7_config_write <= \$798 ;
   always @(posedge clk)
-    ch0_cfg_w5_crc_config_write <= \$785 ;
+    ch0_cfg_w7_crc_config_write <= \$799 ;
   always @(posedge clk)
-    ch0_cfg_w5_crc_start_config_write <= \$786 ;
+    ch0_cfg_w7_crc_start_config_write <= \$800 ;
   always @(posedge clk)
-    ch0_cfg_w6_config_write <= \$787 ;
+    ch0_ca_request_config_write <= \$801 ;
   always @(posedge clk)
-    ch0_cfg_w6_crc_config_write <= \$788 ;
+    ch0_ca_request_slave_id <= \$802 ;
   always @(posedge clk)
-    ch0_cfg_w6_crc_start_config_write <= \$789 ;
+    ch0_ca_request_address <= \$803 ;
   always @(posedge clk)
-    ch0_cfg_w7_config_write <= \$790 ;
+    ch0_ca_request_count <= \$804 ;
   always @(posedge clk)
-    ch0_cfg_w7_crc_config_write <= \$791 ;
+    \ch0_ca_request_write$145  <= \$805 ;
   always @(posedge clk)
-    ch0_cfg_w7_crc_start_config_write <= \$792 ;
+    ch0_ca_ctrl_start <= \$806 ;
   always @(posedge clk)
-    ch0_ca_request_config_write <= \$793 ;
+    ch0_ca_ctrl_abort <= \$807 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$794 ;
+    ch0_config_wait <= \$808 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$795 ;
+    config_memory0_write_data <= \$809 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$796 ;
+    ch0_config_written <= \$810 ;
   always @(posedge clk)
-    \ch0_ca_request_write$152  <= \$797 ;
+    ch0_config_read_index <= \$811 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$798 ;
+    ch0_table_sweep <= \$812 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$799 ;
+    ch0_table_clearing <= \$813 ;
   always @(posedge clk)
-    ch0_config_wait <= \$800 ;
+    ch0_read_select_80 <= \$814 ;
   always @(posedge clk)
-    config_memory0_write_data <= \$801 ;
+    ch0_read_select_81 <= \$815 ;
   always @(posedge clk)
-    ch0_config_written <= \$802 ;
+    ch0_read_select_82 <= \$816 ;
   always @(posedge clk)
-    ch0_config_read_index <= \$803 ;
+    ch0_read_select_84 <= \$817 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$804 ;
+    ch0_read_select_86 <= \$818 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$805 ;
+    ch0_read_select_87 <= \$819 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$806 ;
+    ch0_read_select_90 <= \$820 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$807 ;
+    ch0_read_select_91 <= \$821 ;
   always @(posedge clk)
-    ch0_read_select_86 <= \$808 ;
+    ch0_read_select_92 <= \$822 ;
   always @(posedge clk)
-    ch0_read_select_87 <= \$809 ;
+    ch0_read_select_93 <= \$823 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$810 ;
+    ch0_read_select_94 <= \$824 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$811 ;
+    ch0_read_select_95 <= \$825 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$812 ;
+    ch0_read_select_96 <= \$826 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$813 ;
+    ch0_read_select_97 <= \$827 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$814 ;
+    ch0_read_select_a5 <= \$828 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$815 ;
+    ch0_read_select_a6 <= \$829 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$816 ;
+    ch0_read_select_a7 <= \$830 ;
   always @(posedge clk)
-    ch0_read_select_97 <= \$817 ;
+    ch0_read_select_a8 <= \$831 ;
   always @(posedge clk)
-    ch0_read_select_a5 <= \$818 ;
+    ch0_read_select_a9 <= \$832 ;
   always @(posedge clk)
-    ch0_read_select_a6 <= \$819 ;
+    ch0_read_select_aa <= \$833 ;
   always @(posedge clk)
-    ch0_read_select_a7 <= \$820 ;
+    ch0_read_select_ac <= \$834 ;
   always @(posedge clk)
-    ch0_read_select_a8 <= \$821 ;
+    ch0_read_select_ad <= \$835 ;
   always @(posedge clk)
-    ch0_read_select_a9 <= \$822 ;
+    ch0_read_select_ae <= \$836 ;
   always @(posedge clk)
-    ch0_read_select_aa <= \$823 ;
+    ch0_read_select_b0 <= \$837 ;
   always @(posedge clk)
-    ch0_read_select_ac <= \$824 ;
+    ch0_read_select_b1 <= \$838 ;
   always @(posedge clk)
-    ch0_read_select_ad <= \$825 ;
+    ch0_read_select_b2 <= \$839 ;
   always @(posedge clk)
-    ch0_read_select_ae <= \$826 ;
+    ch0_read_select_b4 <= \$840 ;
   always @(posedge clk)
-    ch0_read_select_b0 <= \$827 ;
+    ch0_read_select_b5 <= \$841 ;
   always @(posedge clk)
-    ch0_read_select_b1 <= \$828 ;
+    ch0_read_select_b6 <= \$842 ;
   always @(posedge clk)
-    ch0_read_select_b2 <= \$829 ;
+    ch0_read_select_b8 <= \$843 ;
   always @(posedge clk)
-    ch0_read_select_b4 <= \$830 ;
+    ch0_read_select_b9 <= \$844 ;
   always @(posedge clk)
-    ch0_read_select_b5 <= \$831 ;
+    ch0_read_select_ba <= \$845 ;
   always @(posedge clk)
-    ch0_read_select_b6 <= \$832 ;
+    ch0_read_select_bc <= \$846 ;
   always @(posedge clk)
-    ch0_read_select_b8 <= \$833 ;
+    ch0_read_select_bd <= \$847 ;
   always @(posedge clk)
-    ch0_read_select_b9 <= \$834 ;
+    ch0_read_select_be <= \$848 ;
   always @(posedge clk)
-    ch0_read_select_ba <= \$835 ;
+    ch0_read_select_c1 <= \$849 ;
   always @(posedge clk)
-    ch0_read_select_bc <= \$836 ;
+    ch0_read_select_c2 <= \$850 ;
   always @(posedge clk)
-    ch0_read_select_bd <= \$837 ;
+    ch0_read_select_c3 <= \$851 ;
   always @(posedge clk)
-    ch0_read_select_be <= \$838 ;
+    ch0_read_select_c4 <= \$852 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$839 ;
+    ch0_read_select_c5 <= \$853 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$840 ;
+    ch0_read_select_fc <= \$854 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$841 ;
+    ch0_read_select_fd <= \$855 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$842 ;
+    ch0_result_status_status_snapshot <= \$856 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$843 ;
+    ch0_result_status_cds_snapshot <= \$857 ;
   always @(posedge clk)
-    ch0_read_select_fc <= \$844 ;
+    ch0_result_status_w0_ne_snapshot <= \$858 ;
   always @(posedge clk)
-    ch0_read_select_fd <= \$845 ;
+    ch0_result_status_w0_nw_snapshot <= \$859 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$846 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$860 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$847 ;
+    ch0_result_status_w1_ne_snapshot <= \$861 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$848 ;
+    ch0_result_status_w1_nw_snapshot <= \$862 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$849 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$863 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$850 ;
+    ch0_result_status_lc_repeat_snapshot <= \$864 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$851 ;
+    ch0_result_status_lc_skip_snapshot <= \$865 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$852 ;
+    ch0_result_status_lc_zero_snapshot <= \$866 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$853 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$867 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$854 ;
+    ch0_result_status_lc_snapshot <= \$868 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$855 ;
+    ch0_result_seq_seq_snapshot <= \$869 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$856 ;
+    ch0_result_seq_line_delay_snapshot <= \$870 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$857 ;
+    ch0_result_w0_lo_data_snapshot <= \$871 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$858 ;
+    ch0_result_w0_hi_data_snapshot <= \$872 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$859 ;
+    ch0_result_w1_lo_data_snapshot <= \$873 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$860 ;
+    ch0_result_w1_hi_data_snapshot <= \$874 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$861 ;
+    ch0_result_timestamp_time_snapshot <= \$875 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$862 ;
+    ch0_result_line_noise_events_snapshot <= \$876 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$863 ;
+    ch0_result_line_delay_settled_snapshot <= \$877 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$864 ;
+    ch0_result_line_delay_spread_snapshot <= \$878 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$865 ;
+    ch0_result_line_settled_delay_snapshot <= \$879 ;
   always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$866 ;
+    ch0_window0_read <= \$880 ;
   always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$867 ;
+    ch0_window1_read <= \$881 ;
   always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$868 ;
+    ch0_window2_read <= \$882 ;
   always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$869 ;
+    ch0_window3_read <= \$883 ;
   always @(posedge clk)
-    ch0_window0_read <= \$870 ;
+    ch0_read_data <= \$884 ;
   always @(posedge clk)
-    ch0_window1_read <= \$871 ;
+    ch1_config_go <= \$885 ;
   always @(posedge clk)
-    ch0_window2_read <= \$872 ;
+    ch1_ctrl_start <= \$886 ;
   always @(posedge clk)
-    ch0_window3_read <= \$873 ;
+    ch1_ctrl_abort <= \$887 ;
   always @(posedge clk)
-    ch0_read_data <= \$874 ;
+    ch1_ctrl_clear_counters <= \$888 ;
   always @(posedge clk)
-    ch1_config_go <= \$875 ;
+    ch1_ctrl_periodic <= \$889 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$876 ;
+    ch1_ctrl_trigger_enable <= \$890 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$877 ;
+    ch1_irq_status_done <= \$891 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$878 ;
+    ch1_irq_status_error <= \$892 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$879 ;
+    ch1_irq_status_access_done <= \$893 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$880 ;
+    ch1_irq_enable_config_write <= \$894 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$881 ;
+    ch1_irq_enable_done <= \$895 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$882 ;
+    ch1_irq_enable_error <= \$896 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$883 ;
+    ch1_irq_enable_access_done <= \$897 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$884 ;
+    ch1_cfg_ma_config_addressed <= \$898 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$885 ;
+    ch1_cfg_ma_ma_half_period <= \$899 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$886 ;
+    ch1_cfg_ma_delay_limit <= \$900 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$887 ;
+    ch1_cfg_period_config_addressed <= \$901 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_addressed <= \$888 ;
+    ch1_cfg_period_request_period <= \$902 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$889 ;
+    ch1_cfg_break_config_addressed <= \$903 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$890 ;
+    ch1_cfg_break_break_time <= \$904 ;
   always @(posedge clk)
-    ch1_cfg_period_config_addressed <= \$891 ;
+    ch1_cfg_ack_config_addressed <= \$905 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$892 ;
+    ch1_cfg_ack_ack_limit <= \$906 ;
   always @(posedge clk)
-    ch1_cfg_break_config_addressed <= \$893 ;
+    ch1_cfg_timeout_config_addressed <= \$907 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$894 ;
+    ch1_cfg_timeout_timeout_limit <= \$908 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_addressed <= \$895 ;
+    ch1_cfg_words_config_addressed <= \$909 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$896 ;
+    ch1_cfg_words_w0_data_bits <= \$910 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_addressed <= \$897 ;
+    ch1_cfg_words_w0_nenw <= \$911 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$898 ;
+    ch1_cfg_words_w0_lc <= \$912 ;
   always @(posedge clk)
-    ch1_cfg_words_config_addressed <= \$899 ;
+    ch1_cfg_words_w0_crc <= \$913 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$900 ;
+    ch1_cfg_words_w0_gray <= \$914 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$901 ;
+    ch1_cfg_words_w0_signed <= \$915 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$902 ;
+    ch1_cfg_words_w1_data_bits <= \$916 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$903 ;
+    ch1_cfg_words_w1_nenw <= \$917 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$904 ;
+    ch1_cfg_words_w1_lc <= \$918 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_signed <= \$905 ;
+    ch1_cfg_words_w1_crc <= \$919 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$906 ;
+    ch1_cfg_words_w1_gray <= \$920 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$907 ;
+    ch1_cfg_words_w1_signed <= \$921 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$908 ;
+    ch1_cfg_words_w1_enable <= \$922 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$909 ;
+    ch1_cfg_checks_config_addressed <= \$923 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$910 ;
+    ch1_cfg_checks_end_check <= \$924 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_signed <= \$911 ;
+    ch1_cfg_checks_spw_check <= \$925 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$912 ;
+    ch1_cfg_checks_spw_tolerance <= \$926 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_addressed <= \$913 ;
+    ch1_cfg_checks_noise_limit <= \$927 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$914 ;
+    ch1_cfg_checks_delay_tolerance <= \$928 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$915 ;
+    ch1_cfg_checks_confirm_frames <= \$929 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$916 ;
+    ch1_cfg_quiet_config_addressed <= \$930 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$917 ;
+    ch1_cfg_quiet_quiet_time <= \$931 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$918 ;
+    ch1_cfg_crc0_config_addressed <= \$932 ;
   always @(posedge clk)
-    ch1_cfg_checks_confirm_frames <= \$919 ;
+    ch1_cfg_crc0_w0_crc_width <= \$933 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_addressed <= \$920 ;
+    ch1_cfg_crc0_start_config_addressed <= \$934 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$921 ;
+    ch1_cfg_crc1_config_addressed <= \$935 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_addressed <= \$922 ;
+    ch1_cfg_crc1_w1_crc_width <= \$936 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_poly <= \$923 ;
+    ch1_cfg_crc1_start_config_addressed <= \$937 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$924 ;
+    ch1_cfg_ssi_config_addressed <= \$938 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_inverted <= \$925 ;
+    ch1_cfg_ssi_ssi <= \$939 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_addressed <= \$926 ;
+    ch1_cfg_ssi_ssi_error <= \$940 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_w0_crc_start <= \$927 ;
+    ch1_cfg_ssi_ssi_error_low <= \$941 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_addressed <= \$928 ;
+    ch1_cfg_ssi_ssi_double <= \$942 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_poly <= \$929 ;
+    ch1_cfg_ssi_ssi_delay <= \$943 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$930 ;
+    ch1_cfg_w2_config_write <= \$944 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_inverted <= \$931 ;
+    ch1_cfg_w2_crc_config_write <= \$945 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_addressed <= \$932 ;
+    ch1_cfg_w2_crc_start_config_write <= \$946 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_w1_crc_start <= \$933 ;
+    ch1_cfg_w3_config_write <= \$947 ;
   always @(posedge clk)
-    ch1_cfg_ssi_config_addressed <= \$934 ;
+    ch1_cfg_w3_crc_config_write <= \$948 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi <= \$935 ;
+    ch1_cfg_w3_crc_start_config_write <= \$949 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error <= \$936 ;
+    ch1_cfg_w4_config_write <= \$950 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error_low <= \$937 ;
+    ch1_cfg_w4_crc_config_write <= \$951 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_double <= \$938 ;
+    ch1_cfg_w4_crc_start_config_write <= \$952 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_delay <= \$939 ;
+    ch1_cfg_w5_config_write <= \$953 ;
   always @(posedge clk)
-    ch1_cfg_w2_config_write <= \$940 ;
+    ch1_cfg_w5_crc_config_write <= \$954 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_config_write <= \$941 ;
+    ch1_cfg_w5_crc_start_config_write <= \$955 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_start_config_write <= \$942 ;
+    ch1_cfg_w6_config_write <= \$956 ;
   always @(posedge clk)
-    ch1_cfg_w3_config_write <= \$943 ;
+    ch1_cfg_w6_crc_config_write <= \$957 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_config_write <= \$944 ;
+    ch1_cfg_w6_crc_start_config_write <= \$958 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_start_config_write <= \$945 ;
+    ch1_cfg_w7_config_write <= \$959 ;
   always @(posedge clk)
-    ch1_cfg_w4_config_write <= \$946 ;
+    ch1_cfg_w7_crc_config_write <= \$960 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_config_write <= \$947 ;
+    ch1_cfg_w7_crc_start_config_write <= \$961 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_start_config_write <= \$948 ;
+    ch1_ca_request_config_write <= \$962 ;
   always @(posedge clk)
-    ch1_cfg_w5_config_write <= \$949 ;
+    ch1_ca_request_slave_id <= \$963 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_config_write <= \$950 ;
+    ch1_ca_request_address <= \$964 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_start_config_write <= \$951 ;
+    ch1_ca_request_count <= \$965 ;
   always @(posedge clk)
-    ch1_cfg_w6_config_write <= \$952 ;
+    \ch1_ca_request_write$437  <= \$966 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_config_write <= \$953 ;
+    ch1_ca_ctrl_start <= \$967 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_start_config_write <= \$954 ;
+    ch1_ca_ctrl_abort <= \$968 ;
   always @(posedge clk)
-    ch1_cfg_w7_config_write <= \$955 ;
+    ch1_config_wait <= \$969 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_config_write <= \$956 ;
+    ch1_config_written <= \$970 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_start_config_write <= \$957 ;
+    ch1_config_read_index <= \$971 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$958 ;
+    ch1_table_sweep <= \$972 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$959 ;
+    ch1_table_clearing <= \$973 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$960 ;
+    ch1_read_select_100 <= \$974 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$961 ;
+    ch1_read_select_101 <= \$975 ;
   always @(posedge clk)
-    \ch1_ca_request_write$448  <= \$962 ;
+    ch1_read_select_102 <= \$976 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$963 ;
+    ch1_read_select_104 <= \$977 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$964 ;
+    ch1_read_select_106 <= \$978 ;
   always @(posedge clk)
-    ch1_config_wait <= \$965 ;
+    ch1_read_select_107 <= \$979 ;
   always @(posedge clk)
-    ch1_config_written <= \$966 ;
+    ch1_read_select_110 <= \$980 ;
   always @(posedge clk)
-    ch1_config_read_index <= \$967 ;
+    ch1_read_select_111 <= \$981 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$968 ;
+    ch1_read_select_112 <= \$982 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$969 ;
+    ch1_read_select_113 <= \$983 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$970 ;
+    ch1_read_select_114 <= \$984 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$971 ;
+    ch1_read_select_115 <= \$985 ;
   always @(posedge clk)
-    ch1_read_select_106 <= \$972 ;
+    ch1_read_select_116 <= \$986 ;
   always @(posedge clk)
-    ch1_read_select_107 <= \$973 ;
+    ch1_read_select_117 <= \$987 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$974 ;
+    ch1_read_select_125 <= \$988 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$975 ;
+    ch1_read_select_126 <= \$989 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$976 ;
+    ch1_read_select_127 <= \$990 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$977 ;
+    ch1_read_select_128 <= \$991 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$978 ;
+    ch1_read_select_129 <= \$992 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$979 ;
+    ch1_read_select_12a <= \$993 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$980 ;
+    ch1_read_select_12c <= \$994 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$981 ;
+    ch1_read_select_12d <= \$995 ;
   always @(posedge clk)
-    ch1_read_select_125 <= \$982 ;
+    ch1_read_select_12e <= \$996 ;
   always @(posedge clk)
-    ch1_read_select_126 <= \$983 ;
+    ch1_read_select_130 <= \$997 ;
   always @(posedge clk)
-    ch1_read_select_127 <= \$984 ;
+    ch1_read_select_131 <= \$998 ;
   always @(posedge clk)
-    ch1_read_select_128 <= \$985 ;
+    ch1_read_select_132 <= \$999 ;
   always @(posedge clk)
-    ch1_read_select_129 <= \$986 ;
+    ch1_read_select_134 <= \$1000 ;
   always @(posedge clk)
-    ch1_read_select_12a <= \$987 ;
+    ch1_read_select_135 <= \$1001 ;
   always @(posedge clk)
-    ch1_read_select_12c <= \$988 ;
+    ch1_read_select_136 <= \$1002 ;
   always @(posedge clk)
-    ch1_read_select_12d <= \$989 ;
+    ch1_read_select_138 <= \$1003 ;
   always @(posedge clk)
-    ch1_read_select_12e <= \$990 ;
+    ch1_read_select_139 <= \$1004 ;
   always @(posedge clk)
-    ch1_read_select_130 <= \$991 ;
+    ch1_read_select_13a <= \$1005 ;
   always @(posedge clk)
-    ch1_read_select_131 <= \$992 ;
+    ch1_read_select_13c <= \$1006 ;
   always @(posedge clk)
-    ch1_read_select_132 <= \$993 ;
+    ch1_read_select_13d <= \$1007 ;
   always @(posedge clk)
-    ch1_read_select_134 <= \$994 ;
+    ch1_read_select_13e <= \$1008 ;
   always @(posedge clk)
-    ch1_read_select_135 <= \$995 ;
+    ch1_read_select_141 <= \$1009 ;
   always @(posedge clk)
-    ch1_read_select_136 <= \$996 ;
+    ch1_read_select_142 <= \$1010 ;
   always @(posedge clk)
-    ch1_read_select_138 <= \$997 ;
+    ch1_read_select_143 <= \$1011 ;
   always @(posedge clk)
-    ch1_read_select_139 <= \$998 ;
+    ch1_read_select_144 <= \$1012 ;
   always @(posedge clk)
-    ch1_read_select_13a <= \$999 ;
+    ch1_read_select_145 <= \$1013 ;
   always @(posedge clk)
-    ch1_read_select_13c <= \$1000 ;
+    ch1_read_select_17c <= \$1014 ;
   always @(posedge clk)
-    ch1_read_select_13d <= \$1001 ;
+    ch1_read_select_17d <= \$1015 ;
   always @(posedge clk)
-    ch1_read_select_13e <= \$1002 ;
+    ch1_result_status_status_snapshot <= \$1016 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$1003 ;
+    ch1_result_status_cds_snapshot <= \$1017 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$1004 ;
+    ch1_result_status_w0_ne_snapshot <= \$1018 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$1005 ;
+    ch1_result_status_w0_nw_snapshot <= \$1019 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$1006 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$1020 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$1007 ;
+    ch1_result_status_w1_ne_snapshot <= \$1021 ;
   always @(posedge clk)
-    ch1_read_select_17c <= \$1008 ;
+    ch1_result_status_w1_nw_snapshot <= \$1022 ;
   always @(posedge clk)
-    ch1_read_select_17d <= \$1009 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$1023 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$1010 ;
+    ch1_result_status_lc_repeat_snapshot <= \$1024 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$1011 ;
+    ch1_result_status_lc_skip_snapshot <= \$1025 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$1012 ;
+    ch1_result_status_lc_zero_snapshot <= \$1026 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$1013 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$1027 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$1014 ;
+    ch1_result_status_lc_snapshot <= \$1028 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$1015 ;
+    ch1_result_seq_seq_snapshot <= \$1029 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$1016 ;
+    ch1_result_seq_line_delay_snapshot <= \$1030 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$1017 ;
+    ch1_result_w0_lo_data_snapshot <= \$1031 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$1018 ;
+    ch1_result_w0_hi_data_snapshot <= \$1032 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$1019 ;
+    ch1_result_w1_lo_data_snapshot <= \$1033 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$1020 ;
+    ch1_result_w1_hi_data_snapshot <= \$1034 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$1021 ;
+    ch1_result_timestamp_time_snapshot <= \$1035 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$1022 ;
+    ch1_result_line_noise_events_snapshot <= \$1036 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$1023 ;
+    ch1_result_line_delay_settled_snapshot <= \$1037 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$1024 ;
+    ch1_result_line_delay_spread_snapshot <= \$1038 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$1025 ;
+    ch1_result_line_settled_delay_snapshot <= \$1039 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$1026 ;
+    ch1_window0_read <= \$1040 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$1027 ;
+    ch1_window1_read <= \$1041 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$1028 ;
+    ch1_window2_read <= \$1042 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$1029 ;
+    ch1_window3_read <= \$1043 ;
   always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$1030 ;
-  always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$1031 ;
-  always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$1032 ;
-  always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$1033 ;
-  always @(posedge clk)
-    ch1_window0_read <= \$1034 ;
-  always @(posedge clk)
-    ch1_window1_read <= \$1035 ;
-  always @(posedge clk)
-    ch1_window2_read <= \$1036 ;
-  always @(posedge clk)
-    ch1_window3_read <= \$1037 ;
-  always @(posedge clk)
-    ch1_read_data <= \$1038 ;
+    ch1_read_data <= \$1044 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$697  = bus__w_en;
-    if (rst) begin
-      \$697  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$698  = write_addr;
-    if (bus__w_en) begin
-      \$698  = bus__w_addr;
-    end
-    if (rst) begin
-      \$698  = 11'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$699  = write_data;
-    if (bus__w_en) begin
-      \$699  = bus__w_data;
-    end
-    if (rst) begin
-      \$699  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$700  = write_strb;
-    if (bus__w_en) begin
-      \$700  = bus__w_strb;
-    end
-    if (rst) begin
-      \$700  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$701  = config_write_data;
-    if (write_en) begin
-      \$701  = write_data;
-    end
-    if (rst) begin
-      \$701  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$702  = config_write_strb;
-    if (write_en) begin
-      \$702  = write_strb;
-    end
-    if (rst) begin
-      \$702  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$703  = \$2 ;
-    if (rst) begin
-      \$703  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$704  = g_read_select_0;
-    if (bus__r_en) begin
-      \$704  = \$3 ;
-    end
-    if (rst) begin
-      \$704  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$705  = g_read_select_1;
-    if (bus__r_en) begin
-      \$705  = \$4 ;
-    end
-    if (rst) begin
-      \$705  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$706  = g_read_select_2;
-    if (bus__r_en) begin
-      \$706  = \$5 ;
-    end
-    if (rst) begin
-      \$706  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$707  = g_read_select_3;
-    if (bus__r_en) begin
-      \$707  = \$6 ;
-    end
-    if (rst) begin
-      \$707  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$708  = g_read_select_4;
-    if (bus__r_en) begin
-      \$708  = \$7 ;
-    end
-    if (rst) begin
-      \$708  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$709  = g_read_data;
-    if (bus__r_load) begin
-      \$709  = \$17 ;
-    end
-    if (rst) begin
-      \$709  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$710  = \$20 ;
-    if (rst) begin
-      \$710  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$711  = \$22 ;
+    \$711  = bus__w_en;
     if (rst) begin
       \$711  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$712  = \$24 ;
+    \$712  = write_addr;
+    if (bus__w_en) begin
+      \$712  = bus__w_addr;
+    end
     if (rst) begin
-      \$712  = 1'h0;
+      \$712  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$713  = \$26 ;
+    \$713  = write_data;
+    if (bus__w_en) begin
+      \$713  = bus__w_data;
+    end
     if (rst) begin
-      \$713  = 1'h0;
+      \$713  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$714  = ch0_ctrl_periodic;
-    if (\$27 ) begin
-      \$714  = write_data[8];
+    \$714  = write_strb;
+    if (bus__w_en) begin
+      \$714  = bus__w_strb;
     end
     if (rst) begin
-      \$714  = 1'h0;
+      \$714  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$715  = ch0_ctrl_trigger_enable;
-    if (\$28 ) begin
-      \$715  = write_data[9];
+    \$715  = config_write_data;
+    if (write_en) begin
+      \$715  = write_data;
     end
     if (rst) begin
-      \$715  = 1'h0;
+      \$715  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$716  = ch0_irq_status_done;
-    if (ch0__frame_done) begin
-      \$716  = 1'h1;
-    end else if (\$30 ) begin
-      \$716  = 1'h0;
+    \$716  = config_write_strb;
+    if (write_en) begin
+      \$716  = write_strb;
     end
     if (rst) begin
-      \$716  = 1'h0;
+      \$716  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$717  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$717  = 1'h1;
-    end else if (\$32 ) begin
+    \$717  = \$2 ;
+    if (rst) begin
       \$717  = 1'h0;
     end
-    if (rst) begin
-      \$717  = 1'h0;
-    end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$718  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$718  = 1'h1;
-    end else if (\$34 ) begin
-      \$718  = 1'h0;
+    \$718  = g_read_select_0;
+    if (bus__r_en) begin
+      \$718  = \$3 ;
     end
     if (rst) begin
       \$718  = 1'h0;
@@ -5940,16 +5905,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$719  = ch0_irq_enable_write;
+    \$719  = g_read_select_1;
+    if (bus__r_en) begin
+      \$719  = \$4 ;
+    end
     if (rst) begin
       \$719  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$720  = ch0_irq_enable_done;
-    if (\$35 ) begin
-      \$720  = config_write_data[0];
+    \$720  = g_read_select_2;
+    if (bus__r_en) begin
+      \$720  = \$5 ;
     end
     if (rst) begin
       \$720  = 1'h0;
@@ -5957,9 +5925,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$721  = ch0_irq_enable_error;
-    if (\$36 ) begin
-      \$721  = config_write_data[1];
+    \$721  = g_read_select_3;
+    if (bus__r_en) begin
+      \$721  = \$6 ;
     end
     if (rst) begin
       \$721  = 1'h0;
@@ -5967,9 +5935,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$722  = ch0_irq_enable_access_done;
-    if (\$37 ) begin
-      \$722  = config_write_data[2];
+    \$722  = g_read_select_4;
+    if (bus__r_en) begin
+      \$722  = \$7 ;
     end
     if (rst) begin
       \$722  = 1'h0;
@@ -5977,151 +5945,130 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$723  = \$38 ;
+    \$723  = g_read_data;
+    if (bus__r_load) begin
+      \$723  = \$17 ;
+    end
     if (rst) begin
-      \$723  = 1'h0;
+      \$723  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$724  = ch0_cfg_ma_ma_half_period;
-    if (\$39 ) begin
-      \$724 [7:0] = config_write_data[7:0];
-    end
-    if (\$40 ) begin
-      \$724 [15:8] = config_write_data[15:8];
-    end
+    \$724  = \$22 ;
     if (rst) begin
-      \$724  = 16'h0000;
+      \$724  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$725  = ch0_cfg_ma_delay_limit;
-    if (\$41 ) begin
-      \$725 [7:0] = config_write_data[23:16];
-    end
-    if (\$42 ) begin
-      \$725 [11:8] = config_write_data[27:24];
-    end
+    \$725  = \$24 ;
     if (rst) begin
-      \$725  = 12'h000;
+      \$725  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$726  = \$43 ;
+    \$726  = \$26 ;
     if (rst) begin
       \$726  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$727  = ch0_cfg_period_request_period;
-    if (\$44 ) begin
-      \$727 [7:0] = config_write_data[7:0];
-    end
-    if (\$45 ) begin
-      \$727 [15:8] = config_write_data[15:8];
-    end
-    if (\$46 ) begin
-      \$727 [23:16] = config_write_data[23:16];
-    end
+    \$727  = \$28 ;
     if (rst) begin
-      \$727  = 24'h000000;
+      \$727  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$728  = \$47 ;
+    \$728  = ch0_ctrl_periodic;
+    if (\$29 ) begin
+      \$728  = write_data[8];
+    end
     if (rst) begin
       \$728  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$729  = ch0_cfg_break_break_time;
-    if (\$48 ) begin
-      \$729 [7:0] = config_write_data[7:0];
-    end
-    if (\$49 ) begin
-      \$729 [15:8] = config_write_data[15:8];
-    end
-    if (\$50 ) begin
-      \$729 [23:16] = config_write_data[23:16];
+    \$729  = ch0_ctrl_trigger_enable;
+    if (\$30 ) begin
+      \$729  = write_data[9];
     end
     if (rst) begin
-      \$729  = 24'h000000;
+      \$729  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$730  = \$51 ;
+    \$730  = ch0_irq_status_done;
+    if (ch0__frame_done) begin
+      \$730  = 1'h1;
+    end else if (\$32 ) begin
+      \$730  = 1'h0;
+    end
     if (rst) begin
       \$730  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$731  = ch0_cfg_ack_ack_limit;
-    if (\$52 ) begin
-      \$731 [7:0] = config_write_data[7:0];
-    end
-    if (\$53 ) begin
-      \$731 [15:8] = config_write_data[15:8];
-    end
-    if (\$54 ) begin
-      \$731 [23:16] = config_write_data[23:16];
+    \$731  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$731  = 1'h1;
+    end else if (\$34 ) begin
+      \$731  = 1'h0;
     end
     if (rst) begin
-      \$731  = 24'h000000;
+      \$731  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$732  = \$55 ;
+    \$732  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$732  = 1'h1;
+    end else if (\$36 ) begin
+      \$732  = 1'h0;
+    end
     if (rst) begin
       \$732  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$733  = ch0_cfg_timeout_timeout_limit;
-    if (\$56 ) begin
-      \$733 [7:0] = config_write_data[7:0];
-    end
-    if (\$57 ) begin
-      \$733 [15:8] = config_write_data[15:8];
-    end
-    if (\$58 ) begin
-      \$733 [23:16] = config_write_data[23:16];
-    end
+    \$733  = ch0_irq_enable_write;
     if (rst) begin
-      \$733  = 24'h000000;
+      \$733  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$734  = \$59 ;
+    \$734  = ch0_irq_enable_done;
+    if (\$37 ) begin
+      \$734  = config_write_data[0];
+    end
     if (rst) begin
       \$734  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$735  = ch0_cfg_words_w0_data_bits;
-    if (\$60 ) begin
-      \$735  = config_write_data[6:0];
+    \$735  = ch0_irq_enable_error;
+    if (\$38 ) begin
+      \$735  = config_write_data[1];
     end
     if (rst) begin
-      \$735  = 7'h00;
+      \$735  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$736  = ch0_cfg_words_w0_nenw;
-    if (\$61 ) begin
-      \$736  = config_write_data[7];
+    \$736  = ch0_irq_enable_access_done;
+    if (\$39 ) begin
+      \$736  = config_write_data[2];
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6129,136 +6076,151 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$737  = ch0_cfg_words_w0_lc;
-    if (\$62 ) begin
-      \$737  = config_write_data[8];
-    end
+    \$737  = \$40 ;
     if (rst) begin
       \$737  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$738  = ch0_cfg_words_w0_crc;
-    if (\$63 ) begin
-      \$738  = config_write_data[10:9];
+    \$738  = ch0_cfg_ma_ma_half_period;
+    if (\$41 ) begin
+      \$738 [7:0] = config_write_data[7:0];
+    end
+    if (\$42 ) begin
+      \$738 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$738  = 2'h0;
+      \$738  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$739  = ch0_cfg_words_w0_gray;
-    if (\$64 ) begin
-      \$739  = config_write_data[11];
+    \$739  = ch0_cfg_ma_delay_limit;
+    if (\$43 ) begin
+      \$739 [7:0] = config_write_data[23:16];
+    end
+    if (\$44 ) begin
+      \$739 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$739  = 1'h0;
+      \$739  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$740  = ch0_cfg_words_w0_signed;
-    if (\$65 ) begin
-      \$740  = config_write_data[12];
-    end
+    \$740  = \$45 ;
     if (rst) begin
       \$740  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$741  = ch0_cfg_words_w1_data_bits;
-    if (\$66 ) begin
-      \$741  = config_write_data[22:16];
+    \$741  = ch0_cfg_period_request_period;
+    if (\$46 ) begin
+      \$741 [7:0] = config_write_data[7:0];
+    end
+    if (\$47 ) begin
+      \$741 [15:8] = config_write_data[15:8];
+    end
+    if (\$48 ) begin
+      \$741 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$741  = 7'h00;
+      \$741  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$742  = ch0_cfg_words_w1_nenw;
-    if (\$67 ) begin
-      \$742  = config_write_data[23];
-    end
+    \$742  = \$49 ;
     if (rst) begin
       \$742  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$743  = ch0_cfg_words_w1_lc;
-    if (\$68 ) begin
-      \$743  = config_write_data[24];
+    \$743  = ch0_cfg_break_break_time;
+    if (\$50 ) begin
+      \$743 [7:0] = config_write_data[7:0];
+    end
+    if (\$51 ) begin
+      \$743 [15:8] = config_write_data[15:8];
+    end
+    if (\$52 ) begin
+      \$743 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$743  = 1'h0;
+      \$743  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$744  = ch0_cfg_words_w1_crc;
-    if (\$69 ) begin
-      \$744  = config_write_data[26:25];
-    end
+    \$744  = \$53 ;
     if (rst) begin
-      \$744  = 2'h0;
+      \$744  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$745  = ch0_cfg_words_w1_gray;
-    if (\$70 ) begin
-      \$745  = config_write_data[27];
+    \$745  = ch0_cfg_ack_ack_limit;
+    if (\$54 ) begin
+      \$745 [7:0] = config_write_data[7:0];
+    end
+    if (\$55 ) begin
+      \$745 [15:8] = config_write_data[15:8];
+    end
+    if (\$56 ) begin
+      \$745 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$745  = 1'h0;
+      \$745  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$746  = ch0_cfg_words_w1_signed;
-    if (\$71 ) begin
-      \$746  = config_write_data[28];
-    end
+    \$746  = \$57 ;
     if (rst) begin
       \$746  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$747  = ch0_cfg_words_w1_enable;
-    if (\$72 ) begin
-      \$747  = config_write_data[31];
+    \$747  = ch0_cfg_timeout_timeout_limit;
+    if (\$58 ) begin
+      \$747 [7:0] = config_write_data[7:0];
+    end
+    if (\$59 ) begin
+      \$747 [15:8] = config_write_data[15:8];
+    end
+    if (\$60 ) begin
+      \$747 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$747  = 1'h0;
+      \$747  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$748  = \$73 ;
+    \$748  = \$61 ;
     if (rst) begin
       \$748  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$749  = ch0_cfg_checks_end_check;
-    if (\$74 ) begin
-      \$749  = config_write_data[0];
+    \$749  = ch0_cfg_words_w0_data_bits;
+    if (\$62 ) begin
+      \$749  = config_write_data[6:0];
     end
     if (rst) begin
-      \$749  = 1'h0;
+      \$749  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$750  = ch0_cfg_checks_spw_check;
-    if (\$75 ) begin
-      \$750  = config_write_data[1];
+    \$750  = ch0_cfg_words_w0_nenw;
+    if (\$63 ) begin
+      \$750  = config_write_data[7];
     end
     if (rst) begin
       \$750  = 1'h0;
@@ -6266,99 +6228,99 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$751  = ch0_cfg_checks_spw_tolerance;
-    if (\$76 ) begin
-      \$751  = config_write_data[15:8];
+    \$751  = ch0_cfg_words_w0_lc;
+    if (\$64 ) begin
+      \$751  = config_write_data[8];
     end
     if (rst) begin
-      \$751  = 8'h00;
+      \$751  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$752  = ch0_cfg_checks_noise_limit;
-    if (\$77 ) begin
-      \$752  = config_write_data[19:16];
+    \$752  = ch0_cfg_words_w0_crc;
+    if (\$65 ) begin
+      \$752  = config_write_data[10:9];
     end
     if (rst) begin
-      \$752  = 4'h0;
+      \$752  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$753  = ch0_cfg_checks_delay_tolerance;
-    if (\$78 ) begin
-      \$753  = config_write_data[23:20];
+    \$753  = ch0_cfg_words_w0_gray;
+    if (\$66 ) begin
+      \$753  = config_write_data[11];
     end
     if (rst) begin
-      \$753  = 4'h0;
+      \$753  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$754  = ch0_cfg_checks_confirm_frames;
-    if (\$79 ) begin
-      \$754  = config_write_data[27:24];
+    \$754  = ch0_cfg_words_w0_signed;
+    if (\$67 ) begin
+      \$754  = config_write_data[12];
     end
     if (rst) begin
-      \$754  = 4'h0;
+      \$754  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$755  = \$80 ;
+    \$755  = ch0_cfg_words_w1_data_bits;
+    if (\$68 ) begin
+      \$755  = config_write_data[22:16];
+    end
     if (rst) begin
-      \$755  = 1'h0;
+      \$755  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$756  = ch0_cfg_quiet_quiet_time;
-    if (\$81 ) begin
-      \$756 [7:0] = config_write_data[7:0];
-    end
-    if (\$82 ) begin
-      \$756 [11:8] = config_write_data[11:8];
+    \$756  = ch0_cfg_words_w1_nenw;
+    if (\$69 ) begin
+      \$756  = config_write_data[23];
     end
     if (rst) begin
-      \$756  = 12'h000;
+      \$756  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$757  = \$83 ;
+    \$757  = ch0_cfg_words_w1_lc;
+    if (\$70 ) begin
+      \$757  = config_write_data[24];
+    end
     if (rst) begin
       \$757  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$758  = ch0_cfg_crc0_w0_crc_poly;
-    if (\$84 ) begin
-      \$758 [7:0] = config_write_data[7:0];
-    end
-    if (\$85 ) begin
-      \$758 [15:8] = config_write_data[15:8];
+    \$758  = ch0_cfg_words_w1_crc;
+    if (\$71 ) begin
+      \$758  = config_write_data[26:25];
     end
     if (rst) begin
-      \$758  = 16'h0000;
+      \$758  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$759  = ch0_cfg_crc0_w0_crc_width;
-    if (\$86 ) begin
-      \$759  = config_write_data[20:16];
+    \$759  = ch0_cfg_words_w1_gray;
+    if (\$72 ) begin
+      \$759  = config_write_data[27];
     end
     if (rst) begin
-      \$759  = 5'h00;
+      \$759  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$760  = ch0_cfg_crc0_w0_crc_inverted;
-    if (\$87 ) begin
-      \$760  = config_write_data[24];
+    \$760  = ch0_cfg_words_w1_signed;
+    if (\$73 ) begin
+      \$760  = config_write_data[28];
     end
     if (rst) begin
       \$760  = 1'h0;
@@ -6366,385 +6328,377 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$761  = \$88 ;
+    \$761  = ch0_cfg_words_w1_enable;
+    if (\$74 ) begin
+      \$761  = config_write_data[31];
+    end
     if (rst) begin
       \$761  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$762  = ch0_cfg_crc0_start_w0_crc_start;
-    if (\$89 ) begin
-      \$762 [7:0] = config_write_data[7:0];
-    end
-    if (\$90 ) begin
-      \$762 [15:8] = config_write_data[15:8];
-    end
+    \$762  = \$75 ;
     if (rst) begin
-      \$762  = 16'h0000;
+      \$762  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$763  = \$91 ;
+    \$763  = ch0_cfg_checks_end_check;
+    if (\$76 ) begin
+      \$763  = config_write_data[0];
+    end
     if (rst) begin
       \$763  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$764  = ch0_cfg_crc1_w1_crc_poly;
-    if (\$92 ) begin
-      \$764 [7:0] = config_write_data[7:0];
-    end
-    if (\$93 ) begin
-      \$764 [15:8] = config_write_data[15:8];
+    \$764  = ch0_cfg_checks_spw_check;
+    if (\$77 ) begin
+      \$764  = config_write_data[1];
     end
     if (rst) begin
-      \$764  = 16'h0000;
+      \$764  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$765  = ch0_cfg_crc1_w1_crc_width;
-    if (\$94 ) begin
-      \$765  = config_write_data[20:16];
+    \$765  = ch0_cfg_checks_spw_tolerance;
+    if (\$78 ) begin
+      \$765  = config_write_data[15:8];
     end
     if (rst) begin
-      \$765  = 5'h00;
+      \$765  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$766  = ch0_cfg_crc1_w1_crc_inverted;
-    if (\$95 ) begin
-      \$766  = config_write_data[24];
+    \$766  = ch0_cfg_checks_noise_limit;
+    if (\$79 ) begin
+      \$766  = config_write_data[19:16];
     end
     if (rst) begin
-      \$766  = 1'h0;
+      \$766  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$767  = \$96 ;
+    \$767  = ch0_cfg_checks_delay_tolerance;
+    if (\$80 ) begin
+      \$767  = config_write_data[23:20];
+    end
     if (rst) begin
-      \$767  = 1'h0;
+      \$767  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$768  = ch0_cfg_crc1_start_w1_crc_start;
-    if (\$97 ) begin
-      \$768 [7:0] = config_write_data[7:0];
-    end
-    if (\$98 ) begin
-      \$768 [15:8] = config_write_data[15:8];
+    \$768  = ch0_cfg_checks_confirm_frames;
+    if (\$81 ) begin
+      \$768  = config_write_data[27:24];
     end
     if (rst) begin
-      \$768  = 16'h0000;
+      \$768  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$769  = \$99 ;
+    \$769  = \$82 ;
     if (rst) begin
       \$769  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$770  = ch0_cfg_ssi_ssi;
-    if (\$100 ) begin
-      \$770  = config_write_data[0];
+    \$770  = ch0_cfg_quiet_quiet_time;
+    if (\$83 ) begin
+      \$770 [7:0] = config_write_data[7:0];
+    end
+    if (\$84 ) begin
+      \$770 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$770  = 1'h0;
+      \$770  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$771  = ch0_cfg_ssi_ssi_error;
-    if (\$101 ) begin
-      \$771  = config_write_data[1];
-    end
+    \$771  = \$85 ;
     if (rst) begin
       \$771  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$772  = ch0_cfg_ssi_ssi_error_low;
-    if (\$102 ) begin
-      \$772  = config_write_data[2];
+    \$772  = ch0_cfg_crc0_w0_crc_width;
+    if (\$86 ) begin
+      \$772  = config_write_data[20:16];
     end
     if (rst) begin
-      \$772  = 1'h0;
+      \$772  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$773  = ch0_cfg_ssi_ssi_double;
-    if (\$103 ) begin
-      \$773  = config_write_data[3];
-    end
+    \$773  = \$87 ;
     if (rst) begin
       \$773  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$774  = ch0_cfg_ssi_ssi_delay;
-    if (\$104 ) begin
-      \$774 [7:0] = config_write_data[23:16];
-    end
-    if (\$105 ) begin
-      \$774 [11:8] = config_write_data[27:24];
-    end
+    \$774  = \$88 ;
     if (rst) begin
-      \$774  = 12'h000;
+      \$774  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$775  = ch0_cfg_w2_write;
+    \$775  = ch0_cfg_crc1_w1_crc_width;
+    if (\$89 ) begin
+      \$775  = config_write_data[20:16];
+    end
     if (rst) begin
-      \$775  = 1'h0;
+      \$775  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$776  = ch0_cfg_w2_crc_write;
+    \$776  = \$90 ;
     if (rst) begin
       \$776  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$777  = ch0_cfg_w2_crc_start_write;
+    \$777  = \$91 ;
     if (rst) begin
       \$777  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$778  = ch0_cfg_w3_write;
+    \$778  = ch0_cfg_ssi_ssi;
+    if (\$92 ) begin
+      \$778  = config_write_data[0];
+    end
     if (rst) begin
       \$778  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$779  = ch0_cfg_w3_crc_write;
+    \$779  = ch0_cfg_ssi_ssi_error;
+    if (\$93 ) begin
+      \$779  = config_write_data[1];
+    end
     if (rst) begin
       \$779  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$780  = ch0_cfg_w3_crc_start_write;
+    \$780  = ch0_cfg_ssi_ssi_error_low;
+    if (\$94 ) begin
+      \$780  = config_write_data[2];
+    end
     if (rst) begin
       \$780  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$781  = ch0_cfg_w4_write;
+    \$781  = ch0_cfg_ssi_ssi_double;
+    if (\$95 ) begin
+      \$781  = config_write_data[3];
+    end
     if (rst) begin
       \$781  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$782  = ch0_cfg_w4_crc_write;
+    \$782  = ch0_cfg_ssi_ssi_delay;
+    if (\$96 ) begin
+      \$782 [7:0] = config_write_data[23:16];
+    end
+    if (\$97 ) begin
+      \$782 [11:8] = config_write_data[27:24];
+    end
     if (rst) begin
-      \$782  = 1'h0;
+      \$782  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$783  = ch0_cfg_w4_crc_start_write;
+    \$783  = ch0_cfg_w2_write;
     if (rst) begin
       \$783  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$784  = ch0_cfg_w5_write;
+    \$784  = ch0_cfg_w2_crc_write;
     if (rst) begin
       \$784  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$785  = ch0_cfg_w5_crc_write;
+    \$785  = ch0_cfg_w2_crc_start_write;
     if (rst) begin
       \$785  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$786  = ch0_cfg_w5_crc_start_write;
+    \$786  = ch0_cfg_w3_write;
     if (rst) begin
       \$786  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$787  = ch0_cfg_w6_write;
+    \$787  = ch0_cfg_w3_crc_write;
     if (rst) begin
       \$787  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$788  = ch0_cfg_w6_crc_write;
+    \$788  = ch0_cfg_w3_crc_start_write;
     if (rst) begin
       \$788  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$789  = ch0_cfg_w6_crc_start_write;
+    \$789  = ch0_cfg_w4_write;
     if (rst) begin
       \$789  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$790  = ch0_cfg_w7_write;
+    \$790  = ch0_cfg_w4_crc_write;
     if (rst) begin
       \$790  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$791  = ch0_cfg_w7_crc_write;
+    \$791  = ch0_cfg_w4_crc_start_write;
     if (rst) begin
       \$791  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$792  = ch0_cfg_w7_crc_start_write;
+    \$792  = ch0_cfg_w5_write;
     if (rst) begin
       \$792  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$793  = ch0_ca_request_write;
+    \$793  = ch0_cfg_w5_crc_write;
     if (rst) begin
       \$793  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$794  = ch0_ca_request_slave_id;
-    if (\$106 ) begin
-      \$794  = config_write_data[2:0];
-    end
+    \$794  = ch0_cfg_w5_crc_start_write;
     if (rst) begin
-      \$794  = 3'h0;
+      \$794  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$795  = ch0_ca_request_address;
-    if (\$107 ) begin
-      \$795  = config_write_data[14:8];
-    end
+    \$795  = ch0_cfg_w6_write;
     if (rst) begin
-      \$795  = 7'h00;
+      \$795  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$796  = ch0_ca_request_count;
-    if (\$108 ) begin
-      \$796  = config_write_data[22:16];
-    end
+    \$796  = ch0_cfg_w6_crc_write;
     if (rst) begin
-      \$796  = 7'h00;
+      \$796  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$797  = \ch0_ca_request_write$152 ;
-    if (\$109 ) begin
-      \$797  = config_write_data[24];
-    end
+    \$797  = ch0_cfg_w6_crc_start_write;
     if (rst) begin
       \$797  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$798  = \$111 ;
+    \$798  = ch0_cfg_w7_write;
     if (rst) begin
       \$798  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$799  = \$113 ;
+    \$799  = ch0_cfg_w7_crc_write;
     if (rst) begin
       \$799  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$800  = ch0_config_wait;
-    if (\$114 ) begin
-      \$800  = 1'h1;
-    end else if (ch0_config_go) begin
-      \$800  = 1'h0;
-    end
+    \$800  = ch0_cfg_w7_crc_start_write;
     if (rst) begin
       \$800  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$801  = config_memory0_write_data;
-    if (write_en) begin
-      \$801  = \$119 ;
-    end
+    \$801  = ch0_ca_request_write;
     if (rst) begin
-      \$801  = 32'd0;
+      \$801  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$802  = \$120 ;
+    \$802  = ch0_ca_request_slave_id;
+    if (\$98 ) begin
+      \$802  = config_write_data[2:0];
+    end
     if (rst) begin
-      \$802  = 15'h0000;
+      \$802  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$803  = ch0_config_read_index;
-    if (ch0_config_read) begin
-      \$803  = config_memory0_read_index;
+    \$803  = ch0_ca_request_address;
+    if (\$99 ) begin
+      \$803  = config_write_data[14:8];
     end
     if (rst) begin
-      \$803  = 4'h0;
+      \$803  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$804  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$804  = \$121 ;
+    \$804  = ch0_ca_request_count;
+    if (\$100 ) begin
+      \$804  = config_write_data[22:16];
     end
     if (rst) begin
-      \$804  = 1'h0;
+      \$804  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$805  = ch0_read_select_81;
-    if (bus__r_en) begin
-      \$805  = \$122 ;
+    \$805  = \ch0_ca_request_write$145 ;
+    if (\$101 ) begin
+      \$805  = config_write_data[24];
     end
     if (rst) begin
       \$805  = 1'h0;
@@ -6752,29 +6706,25 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$806  = ch0_read_select_82;
-    if (bus__r_en) begin
-      \$806  = \$123 ;
-    end
+    \$806  = \$103 ;
     if (rst) begin
       \$806  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$807  = ch0_read_select_84;
-    if (bus__r_en) begin
-      \$807  = \$124 ;
-    end
+    \$807  = \$105 ;
     if (rst) begin
       \$807  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$808  = ch0_read_select_86;
-    if (bus__r_en) begin
-      \$808  = \$125 ;
+    \$808  = ch0_config_wait;
+    if (\$106 ) begin
+      \$808  = 1'h1;
+    end else if (ch0_config_go) begin
+      \$808  = 1'h0;
     end
     if (rst) begin
       \$808  = 1'h0;
@@ -6782,39 +6732,36 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$809  = ch0_read_select_87;
-    if (bus__r_en) begin
-      \$809  = \$126 ;
+    \$809  = config_memory0_write_data;
+    if (write_en) begin
+      \$809  = \$111 ;
     end
     if (rst) begin
-      \$809  = 1'h0;
+      \$809  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$810  = ch0_read_select_90;
-    if (bus__r_en) begin
-      \$810  = \$127 ;
-    end
+    \$810  = \$112 ;
     if (rst) begin
-      \$810  = 1'h0;
+      \$810  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$811  = ch0_read_select_91;
-    if (bus__r_en) begin
-      \$811  = \$128 ;
+    \$811  = ch0_config_read_index;
+    if (ch0_config_read) begin
+      \$811  = config_memory0_read_index;
     end
     if (rst) begin
-      \$811  = 1'h0;
+      \$811  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$812  = ch0_read_select_92;
-    if (bus__r_en) begin
-      \$812  = \$129 ;
+    \$812  = ch0_table_sweep;
+    if (ch0_table_clearing) begin
+      \$812  = \$113 [0];
     end
     if (rst) begin
       \$812  = 1'h0;
@@ -6822,19 +6769,21 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$813  = ch0_read_select_93;
-    if (bus__r_en) begin
-      \$813  = \$130 ;
+    \$813  = ch0_table_clearing;
+    if (ch0_table_clearing) begin
+      if (\$114 ) begin
+        \$813  = 1'h0;
+      end
     end
     if (rst) begin
-      \$813  = 1'h0;
+      \$813  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$814  = ch0_read_select_94;
+    \$814  = ch0_read_select_80;
     if (bus__r_en) begin
-      \$814  = \$131 ;
+      \$814  = \$115 ;
     end
     if (rst) begin
       \$814  = 1'h0;
@@ -6842,9 +6791,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$815  = ch0_read_select_95;
+    \$815  = ch0_read_select_81;
     if (bus__r_en) begin
-      \$815  = \$132 ;
+      \$815  = \$116 ;
     end
     if (rst) begin
       \$815  = 1'h0;
@@ -6852,9 +6801,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$816  = ch0_read_select_96;
+    \$816  = ch0_read_select_82;
     if (bus__r_en) begin
-      \$816  = \$133 ;
+      \$816  = \$117 ;
     end
     if (rst) begin
       \$816  = 1'h0;
@@ -6862,9 +6811,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$817  = ch0_read_select_97;
+    \$817  = ch0_read_select_84;
     if (bus__r_en) begin
-      \$817  = \$134 ;
+      \$817  = \$118 ;
     end
     if (rst) begin
       \$817  = 1'h0;
@@ -6872,9 +6821,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$818  = ch0_read_select_a5;
+    \$818  = ch0_read_select_86;
     if (bus__r_en) begin
-      \$818  = \$135 ;
+      \$818  = \$119 ;
     end
     if (rst) begin
       \$818  = 1'h0;
@@ -6882,9 +6831,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$819  = ch0_read_select_a6;
+    \$819  = ch0_read_select_87;
     if (bus__r_en) begin
-      \$819  = \$136 ;
+      \$819  = \$120 ;
     end
     if (rst) begin
       \$819  = 1'h0;
@@ -6892,9 +6841,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$820  = ch0_read_select_a7;
+    \$820  = ch0_read_select_90;
     if (bus__r_en) begin
-      \$820  = \$137 ;
+      \$820  = \$121 ;
     end
     if (rst) begin
       \$820  = 1'h0;
@@ -6902,9 +6851,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$821  = ch0_read_select_a8;
+    \$821  = ch0_read_select_91;
     if (bus__r_en) begin
-      \$821  = \$138 ;
+      \$821  = \$122 ;
     end
     if (rst) begin
       \$821  = 1'h0;
@@ -6912,9 +6861,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$822  = ch0_read_select_a9;
+    \$822  = ch0_read_select_92;
     if (bus__r_en) begin
-      \$822  = \$139 ;
+      \$822  = \$123 ;
     end
     if (rst) begin
       \$822  = 1'h0;
@@ -6922,9 +6871,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$823  = ch0_read_select_aa;
+    \$823  = ch0_read_select_93;
     if (bus__r_en) begin
-      \$823  = \$140 ;
+      \$823  = \$124 ;
     end
     if (rst) begin
       \$823  = 1'h0;
@@ -6932,9 +6881,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$824  = ch0_read_select_ac;
+    \$824  = ch0_read_select_94;
     if (bus__r_en) begin
-      \$824  = \$141 ;
+      \$824  = \$125 ;
     end
     if (rst) begin
       \$824  = 1'h0;
@@ -6942,9 +6891,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$825  = ch0_read_select_ad;
+    \$825  = ch0_read_select_95;
     if (bus__r_en) begin
-      \$825  = \$142 ;
+      \$825  = \$126 ;
     end
     if (rst) begin
       \$825  = 1'h0;
@@ -6952,9 +6901,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$826  = ch0_read_select_ae;
+    \$826  = ch0_read_select_96;
     if (bus__r_en) begin
-      \$826  = \$143 ;
+      \$826  = \$127 ;
     end
     if (rst) begin
       \$826  = 1'h0;
@@ -6962,9 +6911,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$827  = ch0_read_select_b0;
+    \$827  = ch0_read_select_97;
     if (bus__r_en) begin
-      \$827  = \$144 ;
+      \$827  = \$128 ;
     end
     if (rst) begin
       \$827  = 1'h0;
@@ -6972,9 +6921,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$828  = ch0_read_select_b1;
+    \$828  = ch0_read_select_a5;
     if (bus__r_en) begin
-      \$828  = \$145 ;
+      \$828  = \$129 ;
     end
     if (rst) begin
       \$828  = 1'h0;
@@ -6982,9 +6931,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$829  = ch0_read_select_b2;
+    \$829  = ch0_read_select_a6;
     if (bus__r_en) begin
-      \$829  = \$146 ;
+      \$829  = \$130 ;
     end
     if (rst) begin
       \$829  = 1'h0;
@@ -6992,9 +6941,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$830  = ch0_read_select_b4;
+    \$830  = ch0_read_select_a7;
     if (bus__r_en) begin
-      \$830  = \$147 ;
+      \$830  = \$131 ;
     end
     if (rst) begin
       \$830  = 1'h0;
@@ -7002,9 +6951,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$831  = ch0_read_select_b5;
+    \$831  = ch0_read_select_a8;
     if (bus__r_en) begin
-      \$831  = \$148 ;
+      \$831  = \$132 ;
     end
     if (rst) begin
       \$831  = 1'h0;
@@ -7012,9 +6961,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$832  = ch0_read_select_b6;
+    \$832  = ch0_read_select_a9;
     if (bus__r_en) begin
-      \$832  = \$149 ;
+      \$832  = \$133 ;
     end
     if (rst) begin
       \$832  = 1'h0;
@@ -7022,9 +6971,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$833  = ch0_read_select_b8;
+    \$833  = ch0_read_select_aa;
     if (bus__r_en) begin
-      \$833  = \$150 ;
+      \$833  = \$134 ;
     end
     if (rst) begin
       \$833  = 1'h0;
@@ -7032,9 +6981,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$834  = ch0_read_select_b9;
+    \$834  = ch0_read_select_ac;
     if (bus__r_en) begin
-      \$834  = \$151 ;
+      \$834  = \$135 ;
     end
     if (rst) begin
       \$834  = 1'h0;
@@ -7042,9 +6991,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$835  = ch0_read_select_ba;
+    \$835  = ch0_read_select_ad;
     if (bus__r_en) begin
-      \$835  = \$152 ;
+      \$835  = \$136 ;
     end
     if (rst) begin
       \$835  = 1'h0;
@@ -7052,9 +7001,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$836  = ch0_read_select_bc;
+    \$836  = ch0_read_select_ae;
     if (bus__r_en) begin
-      \$836  = \$153 ;
+      \$836  = \$137 ;
     end
     if (rst) begin
       \$836  = 1'h0;
@@ -7062,9 +7011,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$837  = ch0_read_select_bd;
+    \$837  = ch0_read_select_b0;
     if (bus__r_en) begin
-      \$837  = \$154 ;
+      \$837  = \$138 ;
     end
     if (rst) begin
       \$837  = 1'h0;
@@ -7072,9 +7021,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$838  = ch0_read_select_be;
+    \$838  = ch0_read_select_b1;
     if (bus__r_en) begin
-      \$838  = \$155 ;
+      \$838  = \$139 ;
     end
     if (rst) begin
       \$838  = 1'h0;
@@ -7082,9 +7031,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$839  = ch0_read_select_c1;
+    \$839  = ch0_read_select_b2;
     if (bus__r_en) begin
-      \$839  = \$156 ;
+      \$839  = \$140 ;
     end
     if (rst) begin
       \$839  = 1'h0;
@@ -7092,9 +7041,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$840  = ch0_read_select_c2;
+    \$840  = ch0_read_select_b4;
     if (bus__r_en) begin
-      \$840  = \$157 ;
+      \$840  = \$141 ;
     end
     if (rst) begin
       \$840  = 1'h0;
@@ -7102,9 +7051,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$841  = ch0_read_select_c3;
+    \$841  = ch0_read_select_b5;
     if (bus__r_en) begin
-      \$841  = \$158 ;
+      \$841  = \$142 ;
     end
     if (rst) begin
       \$841  = 1'h0;
@@ -7112,9 +7061,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$842  = ch0_read_select_c4;
+    \$842  = ch0_read_select_b6;
     if (bus__r_en) begin
-      \$842  = \$159 ;
+      \$842  = \$143 ;
     end
     if (rst) begin
       \$842  = 1'h0;
@@ -7122,9 +7071,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$843  = ch0_read_select_c5;
+    \$843  = ch0_read_select_b8;
     if (bus__r_en) begin
-      \$843  = \$160 ;
+      \$843  = \$144 ;
     end
     if (rst) begin
       \$843  = 1'h0;
@@ -7132,9 +7081,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$844  = ch0_read_select_fc;
+    \$844  = ch0_read_select_b9;
     if (bus__r_en) begin
-      \$844  = \$161 ;
+      \$844  = \$145 ;
     end
     if (rst) begin
       \$844  = 1'h0;
@@ -7142,9 +7091,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$845  = ch0_read_select_fd;
+    \$845  = ch0_read_select_ba;
     if (bus__r_en) begin
-      \$845  = \$162 ;
+      \$845  = \$146 ;
     end
     if (rst) begin
       \$845  = 1'h0;
@@ -7152,19 +7101,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$846  = ch0_result_status_status_snapshot;
-    if (\$163 ) begin
-      \$846  = \port$13493$0 [3:0];
+    \$846  = ch0_read_select_bc;
+    if (bus__r_en) begin
+      \$846  = \$147 ;
     end
     if (rst) begin
-      \$846  = 4'h0;
+      \$846  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$847  = ch0_result_status_cds_snapshot;
-    if (\$163 ) begin
-      \$847  = \port$13493$0 [49];
+    \$847  = ch0_read_select_bd;
+    if (bus__r_en) begin
+      \$847  = \$148 ;
     end
     if (rst) begin
       \$847  = 1'h0;
@@ -7172,9 +7121,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$848  = ch0_result_status_w0_ne_snapshot;
-    if (\$163 ) begin
-      \$848  = \port$13493$0 [131];
+    \$848  = ch0_read_select_be;
+    if (bus__r_en) begin
+      \$848  = \$149 ;
     end
     if (rst) begin
       \$848  = 1'h0;
@@ -7182,9 +7131,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$849  = ch0_result_status_w0_nw_snapshot;
-    if (\$163 ) begin
-      \$849  = \port$13493$0 [132];
+    \$849  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$849  = \$150 ;
     end
     if (rst) begin
       \$849  = 1'h0;
@@ -7192,9 +7141,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$850  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$163 ) begin
-      \$850  = \port$13493$0 [133];
+    \$850  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$850  = \$151 ;
     end
     if (rst) begin
       \$850  = 1'h0;
@@ -7202,9 +7151,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$851  = ch0_result_status_w1_ne_snapshot;
-    if (\$163 ) begin
-      \$851  = \port$13493$0 [174];
+    \$851  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$851  = \$152 ;
     end
     if (rst) begin
       \$851  = 1'h0;
@@ -7212,9 +7161,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$852  = ch0_result_status_w1_nw_snapshot;
-    if (\$163 ) begin
-      \$852  = \port$13493$0 [175];
+    \$852  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$852  = \$153 ;
     end
     if (rst) begin
       \$852  = 1'h0;
@@ -7222,9 +7171,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$853  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$163 ) begin
-      \$853  = \port$13493$0 [176];
+    \$853  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$853  = \$154 ;
     end
     if (rst) begin
       \$853  = 1'h0;
@@ -7232,9 +7181,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$854  = ch0_result_status_lc_repeat_snapshot;
-    if (\$163 ) begin
-      \$854  = \port$13493$0 [183];
+    \$854  = ch0_read_select_fc;
+    if (bus__r_en) begin
+      \$854  = \$155 ;
     end
     if (rst) begin
       \$854  = 1'h0;
@@ -7242,9 +7191,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$855  = ch0_result_status_lc_skip_snapshot;
-    if (\$163 ) begin
-      \$855  = \port$13493$0 [184];
+    \$855  = ch0_read_select_fd;
+    if (bus__r_en) begin
+      \$855  = \$156 ;
     end
     if (rst) begin
       \$855  = 1'h0;
@@ -7252,19 +7201,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$856  = ch0_result_status_lc_zero_snapshot;
-    if (\$163 ) begin
-      \$856  = \port$13493$0 [185];
+    \$856  = ch0_result_status_status_snapshot;
+    if (\$157 ) begin
+      \$856  = \port$13487$0 [3:0];
     end
     if (rst) begin
-      \$856  = 1'h0;
+      \$856  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$857  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$163 ) begin
-      \$857  = \port$13493$0 [186];
+    \$857  = ch0_result_status_cds_snapshot;
+    if (\$157 ) begin
+      \$857  = \port$13487$0 [49];
     end
     if (rst) begin
       \$857  = 1'h0;
@@ -7272,99 +7221,99 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$858  = ch0_result_status_lc_snapshot;
-    if (\$163 ) begin
-      \$858  = \port$13493$0 [182:177];
+    \$858  = ch0_result_status_w0_ne_snapshot;
+    if (\$157 ) begin
+      \$858  = \port$13487$0 [131];
     end
     if (rst) begin
-      \$858  = 6'h00;
+      \$858  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$859  = ch0_result_seq_seq_snapshot;
-    if (\$163 ) begin
-      \$859  = ch0__done_count;
+    \$859  = ch0_result_status_w0_nw_snapshot;
+    if (\$157 ) begin
+      \$859  = \port$13487$0 [132];
     end
     if (rst) begin
-      \$859  = 16'h0000;
+      \$859  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$860  = ch0_result_seq_line_delay_snapshot;
-    if (\$163 ) begin
-      \$860  = \port$13493$0 [48:36];
+    \$860  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$157 ) begin
+      \$860  = \port$13487$0 [133];
     end
     if (rst) begin
-      \$860  = 13'h0000;
+      \$860  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$861  = ch0_result_w0_lo_data_snapshot;
-    if (\$163 ) begin
-      \$861  = \port$13493$0 [107:76];
+    \$861  = ch0_result_status_w1_ne_snapshot;
+    if (\$157 ) begin
+      \$861  = \port$13487$0 [174];
     end
     if (rst) begin
-      \$861  = 32'd0;
+      \$861  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$862  = ch0_result_w0_hi_data_snapshot;
-    if (\$163 ) begin
-      \$862  = { 9'h000, \port$13493$0 [130:108] };
+    \$862  = ch0_result_status_w1_nw_snapshot;
+    if (\$157 ) begin
+      \$862  = \port$13487$0 [175];
     end
     if (rst) begin
-      \$862  = 32'd0;
+      \$862  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$863  = ch0_result_w1_lo_data_snapshot;
-    if (\$163 ) begin
-      \$863  = \port$13493$0 [165:134];
+    \$863  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$157 ) begin
+      \$863  = \port$13487$0 [176];
     end
     if (rst) begin
-      \$863  = 32'd0;
+      \$863  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$864  = ch0_result_w1_hi_data_snapshot;
-    if (\$163 ) begin
-      \$864  = { 24'h000000, \port$13493$0 [173:166] };
+    \$864  = ch0_result_status_lc_repeat_snapshot;
+    if (\$157 ) begin
+      \$864  = \port$13487$0 [183];
     end
     if (rst) begin
-      \$864  = 32'd0;
+      \$864  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$865  = ch0_result_timestamp_time_snapshot;
-    if (\$163 ) begin
-      \$865  = \port$13493$0 [35:4];
+    \$865  = ch0_result_status_lc_skip_snapshot;
+    if (\$157 ) begin
+      \$865  = \port$13487$0 [184];
     end
     if (rst) begin
-      \$865  = 32'd0;
+      \$865  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$866  = ch0_result_line_noise_events_snapshot;
-    if (\$163 ) begin
-      \$866  = \port$13493$0 [53:50];
+    \$866  = ch0_result_status_lc_zero_snapshot;
+    if (\$157 ) begin
+      \$866  = \port$13487$0 [185];
     end
     if (rst) begin
-      \$866  = 4'h0;
+      \$866  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$867  = ch0_result_line_delay_settled_snapshot;
-    if (\$163 ) begin
-      \$867  = \port$13493$0 [54];
+    \$867  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$157 ) begin
+      \$867  = \port$13487$0 [186];
     end
     if (rst) begin
       \$867  = 1'h0;
@@ -7372,69 +7321,69 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$868  = ch0_result_line_delay_spread_snapshot;
-    if (\$163 ) begin
-      \$868  = \port$13493$0 [75:68];
+    \$868  = ch0_result_status_lc_snapshot;
+    if (\$157 ) begin
+      \$868  = \port$13487$0 [182:177];
     end
     if (rst) begin
-      \$868  = 8'h00;
+      \$868  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$869  = ch0_result_line_settled_delay_snapshot;
-    if (\$163 ) begin
-      \$869  = \port$13493$0 [67:55];
+    \$869  = ch0_result_seq_seq_snapshot;
+    if (\$157 ) begin
+      \$869  = ch0__done_count;
     end
     if (rst) begin
-      \$869  = 13'h0000;
+      \$869  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$870  = ch0_window0_read;
-    if (bus__r_en) begin
-      \$870  = \$165 ;
+    \$870  = ch0_result_seq_line_delay_snapshot;
+    if (\$157 ) begin
+      \$870  = \port$13487$0 [48:36];
     end
     if (rst) begin
-      \$870  = 1'h0;
+      \$870  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$871  = ch0_window1_read;
-    if (bus__r_en) begin
-      \$871  = \$169 ;
+    \$871  = ch0_result_w0_lo_data_snapshot;
+    if (\$157 ) begin
+      \$871  = \port$13487$0 [107:76];
     end
     if (rst) begin
-      \$871  = 1'h0;
+      \$871  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$872  = ch0_window2_read;
-    if (bus__r_en) begin
-      \$872  = \$171 ;
+    \$872  = ch0_result_w0_hi_data_snapshot;
+    if (\$157 ) begin
+      \$872  = { 9'h000, \port$13487$0 [130:108] };
     end
     if (rst) begin
-      \$872  = 1'h0;
+      \$872  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$873  = ch0_window3_read;
-    if (bus__r_en) begin
-      \$873  = ch0_config_read;
+    \$873  = ch0_result_w1_lo_data_snapshot;
+    if (\$157 ) begin
+      \$873  = \port$13487$0 [165:134];
     end
     if (rst) begin
-      \$873  = 1'h0;
+      \$873  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$874  = ch0_read_data;
-    if (bus__r_load) begin
-      \$874  = \$263 ;
+    \$874  = ch0_result_w1_hi_data_snapshot;
+    if (\$157 ) begin
+      \$874  = { 24'h000000, \port$13487$0 [173:166] };
     end
     if (rst) begin
       \$874  = 32'd0;
@@ -7442,47 +7391,59 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$875  = \$266 ;
+    \$875  = ch0_result_timestamp_time_snapshot;
+    if (\$157 ) begin
+      \$875  = \port$13487$0 [35:4];
+    end
     if (rst) begin
-      \$875  = 1'h0;
+      \$875  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$876  = \$268 ;
+    \$876  = ch0_result_line_noise_events_snapshot;
+    if (\$157 ) begin
+      \$876  = \port$13487$0 [53:50];
+    end
     if (rst) begin
-      \$876  = 1'h0;
+      \$876  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$877  = \$270 ;
+    \$877  = ch0_result_line_delay_settled_snapshot;
+    if (\$157 ) begin
+      \$877  = \port$13487$0 [54];
+    end
     if (rst) begin
       \$877  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$878  = \$272 ;
+    \$878  = ch0_result_line_delay_spread_snapshot;
+    if (\$157 ) begin
+      \$878  = \port$13487$0 [75:68];
+    end
     if (rst) begin
-      \$878  = 1'h0;
+      \$878  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$879  = ch1_ctrl_periodic;
-    if (\$273 ) begin
-      \$879  = write_data[8];
+    \$879  = ch0_result_line_settled_delay_snapshot;
+    if (\$157 ) begin
+      \$879  = \port$13487$0 [67:55];
     end
     if (rst) begin
-      \$879  = 1'h0;
+      \$879  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$880  = ch1_ctrl_trigger_enable;
-    if (\$274 ) begin
-      \$880  = write_data[9];
+    \$880  = ch0_window0_read;
+    if (bus__r_en) begin
+      \$880  = \$159 ;
     end
     if (rst) begin
       \$880  = 1'h0;
@@ -7490,11 +7451,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$881  = ch1_irq_status_done;
-    if (ch1__frame_done) begin
-      \$881  = 1'h1;
-    end else if (\$276 ) begin
-      \$881  = 1'h0;
+    \$881  = ch0_window1_read;
+    if (bus__r_en) begin
+      \$881  = \$163 ;
     end
     if (rst) begin
       \$881  = 1'h0;
@@ -7502,11 +7461,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$882  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$882  = 1'h1;
-    end else if (\$278 ) begin
-      \$882  = 1'h0;
+    \$882  = ch0_window2_read;
+    if (bus__r_en) begin
+      \$882  = \$165 ;
     end
     if (rst) begin
       \$882  = 1'h0;
@@ -7514,11 +7471,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$883  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$883  = 1'h1;
-    end else if (\$280 ) begin
-      \$883  = 1'h0;
+    \$883  = ch0_window3_read;
+    if (bus__r_en) begin
+      \$883  = ch0_config_read;
     end
     if (rst) begin
       \$883  = 1'h0;
@@ -7526,288 +7481,282 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$884  = ch1_irq_enable_write;
+    \$884  = ch0_read_data;
+    if (bus__r_load) begin
+      \$884  = \$257 ;
+    end
     if (rst) begin
-      \$884  = 1'h0;
+      \$884  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$885  = ch1_irq_enable_done;
-    if (\$281 ) begin
-      \$885  = config_write_data[0];
-    end
+    \$885  = \$262 ;
     if (rst) begin
       \$885  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$886  = ch1_irq_enable_error;
-    if (\$282 ) begin
-      \$886  = config_write_data[1];
-    end
+    \$886  = \$264 ;
     if (rst) begin
       \$886  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$887  = ch1_irq_enable_access_done;
-    if (\$283 ) begin
-      \$887  = config_write_data[2];
-    end
+    \$887  = \$266 ;
     if (rst) begin
       \$887  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$888  = \$284 ;
+    \$888  = \$268 ;
     if (rst) begin
       \$888  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$889  = ch1_cfg_ma_ma_half_period;
-    if (\$285 ) begin
-      \$889 [7:0] = config_write_data[7:0];
-    end
-    if (\$286 ) begin
-      \$889 [15:8] = config_write_data[15:8];
+    \$889  = ch1_ctrl_periodic;
+    if (\$269 ) begin
+      \$889  = write_data[8];
     end
     if (rst) begin
-      \$889  = 16'h0000;
+      \$889  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$890  = ch1_cfg_ma_delay_limit;
-    if (\$287 ) begin
-      \$890 [7:0] = config_write_data[23:16];
-    end
-    if (\$288 ) begin
-      \$890 [11:8] = config_write_data[27:24];
+    \$890  = ch1_ctrl_trigger_enable;
+    if (\$270 ) begin
+      \$890  = write_data[9];
     end
     if (rst) begin
-      \$890  = 12'h000;
+      \$890  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$891  = \$289 ;
+    \$891  = ch1_irq_status_done;
+    if (ch1__frame_done) begin
+      \$891  = 1'h1;
+    end else if (\$272 ) begin
+      \$891  = 1'h0;
+    end
     if (rst) begin
       \$891  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$892  = ch1_cfg_period_request_period;
-    if (\$290 ) begin
-      \$892 [7:0] = config_write_data[7:0];
-    end
-    if (\$291 ) begin
-      \$892 [15:8] = config_write_data[15:8];
-    end
-    if (\$292 ) begin
-      \$892 [23:16] = config_write_data[23:16];
+    \$892  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$892  = 1'h1;
+    end else if (\$274 ) begin
+      \$892  = 1'h0;
     end
     if (rst) begin
-      \$892  = 24'h000000;
+      \$892  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$893  = \$293 ;
+    \$893  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$893  = 1'h1;
+    end else if (\$276 ) begin
+      \$893  = 1'h0;
+    end
     if (rst) begin
       \$893  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$894  = ch1_cfg_break_break_time;
-    if (\$294 ) begin
-      \$894 [7:0] = config_write_data[7:0];
-    end
-    if (\$295 ) begin
-      \$894 [15:8] = config_write_data[15:8];
-    end
-    if (\$296 ) begin
-      \$894 [23:16] = config_write_data[23:16];
-    end
+    \$894  = ch1_irq_enable_write;
     if (rst) begin
-      \$894  = 24'h000000;
+      \$894  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$895  = \$297 ;
+    \$895  = ch1_irq_enable_done;
+    if (\$277 ) begin
+      \$895  = config_write_data[0];
+    end
     if (rst) begin
       \$895  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$896  = ch1_cfg_ack_ack_limit;
-    if (\$298 ) begin
-      \$896 [7:0] = config_write_data[7:0];
-    end
-    if (\$299 ) begin
-      \$896 [15:8] = config_write_data[15:8];
-    end
-    if (\$300 ) begin
-      \$896 [23:16] = config_write_data[23:16];
+    \$896  = ch1_irq_enable_error;
+    if (\$278 ) begin
+      \$896  = config_write_data[1];
     end
     if (rst) begin
-      \$896  = 24'h000000;
+      \$896  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$897  = \$301 ;
+    \$897  = ch1_irq_enable_access_done;
+    if (\$279 ) begin
+      \$897  = config_write_data[2];
+    end
     if (rst) begin
       \$897  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$898  = ch1_cfg_timeout_timeout_limit;
-    if (\$302 ) begin
-      \$898 [7:0] = config_write_data[7:0];
-    end
-    if (\$303 ) begin
-      \$898 [15:8] = config_write_data[15:8];
-    end
-    if (\$304 ) begin
-      \$898 [23:16] = config_write_data[23:16];
-    end
+    \$898  = \$280 ;
     if (rst) begin
-      \$898  = 24'h000000;
+      \$898  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$899  = \$305 ;
+    \$899  = ch1_cfg_ma_ma_half_period;
+    if (\$281 ) begin
+      \$899 [7:0] = config_write_data[7:0];
+    end
+    if (\$282 ) begin
+      \$899 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$899  = 1'h0;
+      \$899  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$900  = ch1_cfg_words_w0_data_bits;
-    if (\$306 ) begin
-      \$900  = config_write_data[6:0];
+    \$900  = ch1_cfg_ma_delay_limit;
+    if (\$283 ) begin
+      \$900 [7:0] = config_write_data[23:16];
+    end
+    if (\$284 ) begin
+      \$900 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$900  = 7'h00;
+      \$900  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$901  = ch1_cfg_words_w0_nenw;
-    if (\$307 ) begin
-      \$901  = config_write_data[7];
-    end
+    \$901  = \$285 ;
     if (rst) begin
       \$901  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$902  = ch1_cfg_words_w0_lc;
-    if (\$308 ) begin
-      \$902  = config_write_data[8];
+    \$902  = ch1_cfg_period_request_period;
+    if (\$286 ) begin
+      \$902 [7:0] = config_write_data[7:0];
+    end
+    if (\$287 ) begin
+      \$902 [15:8] = config_write_data[15:8];
+    end
+    if (\$288 ) begin
+      \$902 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$902  = 1'h0;
+      \$902  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$903  = ch1_cfg_words_w0_crc;
-    if (\$309 ) begin
-      \$903  = config_write_data[10:9];
-    end
+    \$903  = \$289 ;
     if (rst) begin
-      \$903  = 2'h0;
+      \$903  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$904  = ch1_cfg_words_w0_gray;
-    if (\$310 ) begin
-      \$904  = config_write_data[11];
+    \$904  = ch1_cfg_break_break_time;
+    if (\$290 ) begin
+      \$904 [7:0] = config_write_data[7:0];
+    end
+    if (\$291 ) begin
+      \$904 [15:8] = config_write_data[15:8];
+    end
+    if (\$292 ) begin
+      \$904 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$904  = 1'h0;
+      \$904  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$905  = ch1_cfg_words_w0_signed;
-    if (\$311 ) begin
-      \$905  = config_write_data[12];
-    end
+    \$905  = \$293 ;
     if (rst) begin
       \$905  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$906  = ch1_cfg_words_w1_data_bits;
-    if (\$312 ) begin
-      \$906  = config_write_data[22:16];
+    \$906  = ch1_cfg_ack_ack_limit;
+    if (\$294 ) begin
+      \$906 [7:0] = config_write_data[7:0];
+    end
+    if (\$295 ) begin
+      \$906 [15:8] = config_write_data[15:8];
+    end
+    if (\$296 ) begin
+      \$906 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$906  = 7'h00;
+      \$906  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$907  = ch1_cfg_words_w1_nenw;
-    if (\$313 ) begin
-      \$907  = config_write_data[23];
-    end
+    \$907  = \$297 ;
     if (rst) begin
       \$907  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$908  = ch1_cfg_words_w1_lc;
-    if (\$314 ) begin
-      \$908  = config_write_data[24];
+    \$908  = ch1_cfg_timeout_timeout_limit;
+    if (\$298 ) begin
+      \$908 [7:0] = config_write_data[7:0];
+    end
+    if (\$299 ) begin
+      \$908 [15:8] = config_write_data[15:8];
+    end
+    if (\$300 ) begin
+      \$908 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$908  = 1'h0;
+      \$908  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$909  = ch1_cfg_words_w1_crc;
-    if (\$315 ) begin
-      \$909  = config_write_data[26:25];
-    end
+    \$909  = \$301 ;
     if (rst) begin
-      \$909  = 2'h0;
+      \$909  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$910  = ch1_cfg_words_w1_gray;
-    if (\$316 ) begin
-      \$910  = config_write_data[27];
+    \$910  = ch1_cfg_words_w0_data_bits;
+    if (\$302 ) begin
+      \$910  = config_write_data[6:0];
     end
     if (rst) begin
-      \$910  = 1'h0;
+      \$910  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$911  = ch1_cfg_words_w1_signed;
-    if (\$317 ) begin
-      \$911  = config_write_data[28];
+    \$911  = ch1_cfg_words_w0_nenw;
+    if (\$303 ) begin
+      \$911  = config_write_data[7];
     end
     if (rst) begin
       \$911  = 1'h0;
@@ -7815,9 +7764,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$912  = ch1_cfg_words_w1_enable;
-    if (\$318 ) begin
-      \$912  = config_write_data[31];
+    \$912  = ch1_cfg_words_w0_lc;
+    if (\$304 ) begin
+      \$912  = config_write_data[8];
     end
     if (rst) begin
       \$912  = 1'h0;
@@ -7825,16 +7774,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$913  = \$319 ;
+    \$913  = ch1_cfg_words_w0_crc;
+    if (\$305 ) begin
+      \$913  = config_write_data[10:9];
+    end
     if (rst) begin
-      \$913  = 1'h0;
+      \$913  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$914  = ch1_cfg_checks_end_check;
-    if (\$320 ) begin
-      \$914  = config_write_data[0];
+    \$914  = ch1_cfg_words_w0_gray;
+    if (\$306 ) begin
+      \$914  = config_write_data[11];
     end
     if (rst) begin
       \$914  = 1'h0;
@@ -7842,9 +7794,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$915  = ch1_cfg_checks_spw_check;
-    if (\$321 ) begin
-      \$915  = config_write_data[1];
+    \$915  = ch1_cfg_words_w0_signed;
+    if (\$307 ) begin
+      \$915  = config_write_data[12];
     end
     if (rst) begin
       \$915  = 1'h0;
@@ -7852,99 +7804,96 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$916  = ch1_cfg_checks_spw_tolerance;
-    if (\$322 ) begin
-      \$916  = config_write_data[15:8];
+    \$916  = ch1_cfg_words_w1_data_bits;
+    if (\$308 ) begin
+      \$916  = config_write_data[22:16];
     end
     if (rst) begin
-      \$916  = 8'h00;
+      \$916  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$917  = ch1_cfg_checks_noise_limit;
-    if (\$323 ) begin
-      \$917  = config_write_data[19:16];
+    \$917  = ch1_cfg_words_w1_nenw;
+    if (\$309 ) begin
+      \$917  = config_write_data[23];
     end
     if (rst) begin
-      \$917  = 4'h0;
+      \$917  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$918  = ch1_cfg_checks_delay_tolerance;
-    if (\$324 ) begin
-      \$918  = config_write_data[23:20];
+    \$918  = ch1_cfg_words_w1_lc;
+    if (\$310 ) begin
+      \$918  = config_write_data[24];
     end
     if (rst) begin
-      \$918  = 4'h0;
+      \$918  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$919  = ch1_cfg_checks_confirm_frames;
-    if (\$325 ) begin
-      \$919  = config_write_data[27:24];
+    \$919  = ch1_cfg_words_w1_crc;
+    if (\$311 ) begin
+      \$919  = config_write_data[26:25];
     end
     if (rst) begin
-      \$919  = 4'h0;
+      \$919  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$920  = \$326 ;
+    \$920  = ch1_cfg_words_w1_gray;
+    if (\$312 ) begin
+      \$920  = config_write_data[27];
+    end
     if (rst) begin
       \$920  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$921  = ch1_cfg_quiet_quiet_time;
-    if (\$327 ) begin
-      \$921 [7:0] = config_write_data[7:0];
-    end
-    if (\$328 ) begin
-      \$921 [11:8] = config_write_data[11:8];
+    \$921  = ch1_cfg_words_w1_signed;
+    if (\$313 ) begin
+      \$921  = config_write_data[28];
     end
     if (rst) begin
-      \$921  = 12'h000;
+      \$921  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$922  = \$329 ;
+    \$922  = ch1_cfg_words_w1_enable;
+    if (\$314 ) begin
+      \$922  = config_write_data[31];
+    end
     if (rst) begin
       \$922  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$923  = ch1_cfg_crc0_w0_crc_poly;
-    if (\$330 ) begin
-      \$923 [7:0] = config_write_data[7:0];
-    end
-    if (\$331 ) begin
-      \$923 [15:8] = config_write_data[15:8];
-    end
+    \$923  = \$315 ;
     if (rst) begin
-      \$923  = 16'h0000;
+      \$923  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$924  = ch1_cfg_crc0_w0_crc_width;
-    if (\$332 ) begin
-      \$924  = config_write_data[20:16];
+    \$924  = ch1_cfg_checks_end_check;
+    if (\$316 ) begin
+      \$924  = config_write_data[0];
     end
     if (rst) begin
-      \$924  = 5'h00;
+      \$924  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$925  = ch1_cfg_crc0_w0_crc_inverted;
-    if (\$333 ) begin
-      \$925  = config_write_data[24];
+    \$925  = ch1_cfg_checks_spw_check;
+    if (\$317 ) begin
+      \$925  = config_write_data[1];
     end
     if (rst) begin
       \$925  = 1'h0;
@@ -7952,375 +7901,366 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$926  = \$334 ;
+    \$926  = ch1_cfg_checks_spw_tolerance;
+    if (\$318 ) begin
+      \$926  = config_write_data[15:8];
+    end
     if (rst) begin
-      \$926  = 1'h0;
+      \$926  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$927  = ch1_cfg_crc0_start_w0_crc_start;
-    if (\$335 ) begin
-      \$927 [7:0] = config_write_data[7:0];
-    end
-    if (\$336 ) begin
-      \$927 [15:8] = config_write_data[15:8];
+    \$927  = ch1_cfg_checks_noise_limit;
+    if (\$319 ) begin
+      \$927  = config_write_data[19:16];
     end
     if (rst) begin
-      \$927  = 16'h0000;
+      \$927  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$928  = \$337 ;
+    \$928  = ch1_cfg_checks_delay_tolerance;
+    if (\$320 ) begin
+      \$928  = config_write_data[23:20];
+    end
     if (rst) begin
-      \$928  = 1'h0;
+      \$928  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$929  = ch1_cfg_crc1_w1_crc_poly;
-    if (\$338 ) begin
-      \$929 [7:0] = config_write_data[7:0];
-    end
-    if (\$339 ) begin
-      \$929 [15:8] = config_write_data[15:8];
+    \$929  = ch1_cfg_checks_confirm_frames;
+    if (\$321 ) begin
+      \$929  = config_write_data[27:24];
     end
     if (rst) begin
-      \$929  = 16'h0000;
+      \$929  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$930  = ch1_cfg_crc1_w1_crc_width;
-    if (\$340 ) begin
-      \$930  = config_write_data[20:16];
-    end
+    \$930  = \$322 ;
     if (rst) begin
-      \$930  = 5'h00;
+      \$930  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$931  = ch1_cfg_crc1_w1_crc_inverted;
-    if (\$341 ) begin
-      \$931  = config_write_data[24];
+    \$931  = ch1_cfg_quiet_quiet_time;
+    if (\$323 ) begin
+      \$931 [7:0] = config_write_data[7:0];
+    end
+    if (\$324 ) begin
+      \$931 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$931  = 1'h0;
+      \$931  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$932  = \$342 ;
+    \$932  = \$325 ;
     if (rst) begin
       \$932  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$933  = ch1_cfg_crc1_start_w1_crc_start;
-    if (\$343 ) begin
-      \$933 [7:0] = config_write_data[7:0];
-    end
-    if (\$344 ) begin
-      \$933 [15:8] = config_write_data[15:8];
+    \$933  = ch1_cfg_crc0_w0_crc_width;
+    if (\$326 ) begin
+      \$933  = config_write_data[20:16];
     end
     if (rst) begin
-      \$933  = 16'h0000;
+      \$933  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$934  = \$345 ;
+    \$934  = \$327 ;
     if (rst) begin
       \$934  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$935  = ch1_cfg_ssi_ssi;
-    if (\$346 ) begin
-      \$935  = config_write_data[0];
-    end
+    \$935  = \$328 ;
     if (rst) begin
       \$935  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$936  = ch1_cfg_ssi_ssi_error;
-    if (\$347 ) begin
-      \$936  = config_write_data[1];
+    \$936  = ch1_cfg_crc1_w1_crc_width;
+    if (\$329 ) begin
+      \$936  = config_write_data[20:16];
     end
     if (rst) begin
-      \$936  = 1'h0;
+      \$936  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$937  = ch1_cfg_ssi_ssi_error_low;
-    if (\$348 ) begin
-      \$937  = config_write_data[2];
-    end
+    \$937  = \$330 ;
     if (rst) begin
       \$937  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$938  = ch1_cfg_ssi_ssi_double;
-    if (\$349 ) begin
-      \$938  = config_write_data[3];
-    end
+    \$938  = \$331 ;
     if (rst) begin
       \$938  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$939  = ch1_cfg_ssi_ssi_delay;
-    if (\$350 ) begin
-      \$939 [7:0] = config_write_data[23:16];
-    end
-    if (\$351 ) begin
-      \$939 [11:8] = config_write_data[27:24];
+    \$939  = ch1_cfg_ssi_ssi;
+    if (\$332 ) begin
+      \$939  = config_write_data[0];
     end
     if (rst) begin
-      \$939  = 12'h000;
+      \$939  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$940  = ch1_cfg_w2_write;
+    \$940  = ch1_cfg_ssi_ssi_error;
+    if (\$333 ) begin
+      \$940  = config_write_data[1];
+    end
     if (rst) begin
       \$940  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$941  = ch1_cfg_w2_crc_write;
+    \$941  = ch1_cfg_ssi_ssi_error_low;
+    if (\$334 ) begin
+      \$941  = config_write_data[2];
+    end
     if (rst) begin
       \$941  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$942  = ch1_cfg_w2_crc_start_write;
+    \$942  = ch1_cfg_ssi_ssi_double;
+    if (\$335 ) begin
+      \$942  = config_write_data[3];
+    end
     if (rst) begin
       \$942  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$943  = ch1_cfg_w3_write;
+    \$943  = ch1_cfg_ssi_ssi_delay;
+    if (\$336 ) begin
+      \$943 [7:0] = config_write_data[23:16];
+    end
+    if (\$337 ) begin
+      \$943 [11:8] = config_write_data[27:24];
+    end
     if (rst) begin
-      \$943  = 1'h0;
+      \$943  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$944  = ch1_cfg_w3_crc_write;
+    \$944  = ch1_cfg_w2_write;
     if (rst) begin
       \$944  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$945  = ch1_cfg_w3_crc_start_write;
+    \$945  = ch1_cfg_w2_crc_write;
     if (rst) begin
       \$945  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$946  = ch1_cfg_w4_write;
+    \$946  = ch1_cfg_w2_crc_start_write;
     if (rst) begin
       \$946  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$947  = ch1_cfg_w4_crc_write;
+    \$947  = ch1_cfg_w3_write;
     if (rst) begin
       \$947  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$948  = ch1_cfg_w4_crc_start_write;
+    \$948  = ch1_cfg_w3_crc_write;
     if (rst) begin
       \$948  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$949  = ch1_cfg_w5_write;
+    \$949  = ch1_cfg_w3_crc_start_write;
     if (rst) begin
       \$949  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$950  = ch1_cfg_w5_crc_write;
+    \$950  = ch1_cfg_w4_write;
     if (rst) begin
       \$950  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$951  = ch1_cfg_w5_crc_start_write;
+    \$951  = ch1_cfg_w4_crc_write;
     if (rst) begin
       \$951  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$952  = ch1_cfg_w6_write;
+    \$952  = ch1_cfg_w4_crc_start_write;
     if (rst) begin
       \$952  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$953  = ch1_cfg_w6_crc_write;
+    \$953  = ch1_cfg_w5_write;
     if (rst) begin
       \$953  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$954  = ch1_cfg_w6_crc_start_write;
+    \$954  = ch1_cfg_w5_crc_write;
     if (rst) begin
       \$954  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$955  = ch1_cfg_w7_write;
+    \$955  = ch1_cfg_w5_crc_start_write;
     if (rst) begin
       \$955  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$956  = ch1_cfg_w7_crc_write;
+    \$956  = ch1_cfg_w6_write;
     if (rst) begin
       \$956  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$957  = ch1_cfg_w7_crc_start_write;
+    \$957  = ch1_cfg_w6_crc_write;
     if (rst) begin
       \$957  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$958  = ch1_ca_request_write;
+    \$958  = ch1_cfg_w6_crc_start_write;
     if (rst) begin
       \$958  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$959  = ch1_ca_request_slave_id;
-    if (\$352 ) begin
-      \$959  = config_write_data[2:0];
-    end
+    \$959  = ch1_cfg_w7_write;
     if (rst) begin
-      \$959  = 3'h0;
+      \$959  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$960  = ch1_ca_request_address;
-    if (\$353 ) begin
-      \$960  = config_write_data[14:8];
-    end
+    \$960  = ch1_cfg_w7_crc_write;
     if (rst) begin
-      \$960  = 7'h00;
+      \$960  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$961  = ch1_ca_request_count;
-    if (\$354 ) begin
-      \$961  = config_write_data[22:16];
-    end
+    \$961  = ch1_cfg_w7_crc_start_write;
     if (rst) begin
-      \$961  = 7'h00;
+      \$961  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$962  = \ch1_ca_request_write$448 ;
-    if (\$355 ) begin
-      \$962  = config_write_data[24];
-    end
+    \$962  = ch1_ca_request_write;
     if (rst) begin
       \$962  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$963  = \$357 ;
+    \$963  = ch1_ca_request_slave_id;
+    if (\$338 ) begin
+      \$963  = config_write_data[2:0];
+    end
     if (rst) begin
-      \$963  = 1'h0;
+      \$963  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$964  = \$359 ;
+    \$964  = ch1_ca_request_address;
+    if (\$339 ) begin
+      \$964  = config_write_data[14:8];
+    end
     if (rst) begin
-      \$964  = 1'h0;
+      \$964  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$965  = ch1_config_wait;
-    if (\$360 ) begin
-      \$965  = 1'h1;
-    end else if (ch1_config_go) begin
-      \$965  = 1'h0;
+    \$965  = ch1_ca_request_count;
+    if (\$340 ) begin
+      \$965  = config_write_data[22:16];
     end
     if (rst) begin
-      \$965  = 1'h0;
+      \$965  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$966  = \$361 ;
+    \$966  = \ch1_ca_request_write$437 ;
+    if (\$341 ) begin
+      \$966  = config_write_data[24];
+    end
     if (rst) begin
-      \$966  = 15'h0000;
+      \$966  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$967  = ch1_config_read_index;
-    if (ch1_config_read) begin
-      \$967  = config_memory0_read_index;
-    end
+    \$967  = \$343 ;
     if (rst) begin
-      \$967  = 4'h0;
+      \$967  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$968  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$968  = \$362 ;
-    end
+    \$968  = \$345 ;
     if (rst) begin
       \$968  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$969  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$969  = \$363 ;
+    \$969  = ch1_config_wait;
+    if (\$346 ) begin
+      \$969  = 1'h1;
+    end else if (ch1_config_go) begin
+      \$969  = 1'h0;
     end
     if (rst) begin
       \$969  = 1'h0;
@@ -8328,29 +8268,26 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$970  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$970  = \$364 ;
-    end
+    \$970  = \$347 ;
     if (rst) begin
-      \$970  = 1'h0;
+      \$970  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$971  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$971  = \$365 ;
+    \$971  = ch1_config_read_index;
+    if (ch1_config_read) begin
+      \$971  = config_memory0_read_index;
     end
     if (rst) begin
-      \$971  = 1'h0;
+      \$971  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$972  = ch1_read_select_106;
-    if (bus__r_en) begin
-      \$972  = \$366 ;
+    \$972  = ch1_table_sweep;
+    if (ch1_table_clearing) begin
+      \$972  = \$348 [0];
     end
     if (rst) begin
       \$972  = 1'h0;
@@ -8358,19 +8295,21 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$973  = ch1_read_select_107;
-    if (bus__r_en) begin
-      \$973  = \$367 ;
+    \$973  = ch1_table_clearing;
+    if (ch1_table_clearing) begin
+      if (\$349 ) begin
+        \$973  = 1'h0;
+      end
     end
     if (rst) begin
-      \$973  = 1'h0;
+      \$973  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$974  = ch1_read_select_110;
+    \$974  = ch1_read_select_100;
     if (bus__r_en) begin
-      \$974  = \$368 ;
+      \$974  = \$350 ;
     end
     if (rst) begin
       \$974  = 1'h0;
@@ -8378,9 +8317,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$975  = ch1_read_select_111;
+    \$975  = ch1_read_select_101;
     if (bus__r_en) begin
-      \$975  = \$369 ;
+      \$975  = \$351 ;
     end
     if (rst) begin
       \$975  = 1'h0;
@@ -8388,9 +8327,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$976  = ch1_read_select_112;
+    \$976  = ch1_read_select_102;
     if (bus__r_en) begin
-      \$976  = \$370 ;
+      \$976  = \$352 ;
     end
     if (rst) begin
       \$976  = 1'h0;
@@ -8398,9 +8337,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$977  = ch1_read_select_113;
+    \$977  = ch1_read_select_104;
     if (bus__r_en) begin
-      \$977  = \$371 ;
+      \$977  = \$353 ;
     end
     if (rst) begin
       \$977  = 1'h0;
@@ -8408,9 +8347,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$978  = ch1_read_select_114;
+    \$978  = ch1_read_select_106;
     if (bus__r_en) begin
-      \$978  = \$372 ;
+      \$978  = \$354 ;
     end
     if (rst) begin
       \$978  = 1'h0;
@@ -8418,9 +8357,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$979  = ch1_read_select_115;
+    \$979  = ch1_read_select_107;
     if (bus__r_en) begin
-      \$979  = \$373 ;
+      \$979  = \$355 ;
     end
     if (rst) begin
       \$979  = 1'h0;
@@ -8428,9 +8367,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$980  = ch1_read_select_116;
+    \$980  = ch1_read_select_110;
     if (bus__r_en) begin
-      \$980  = \$374 ;
+      \$980  = \$356 ;
     end
     if (rst) begin
       \$980  = 1'h0;
@@ -8438,9 +8377,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$981  = ch1_read_select_117;
+    \$981  = ch1_read_select_111;
     if (bus__r_en) begin
-      \$981  = \$375 ;
+      \$981  = \$357 ;
     end
     if (rst) begin
       \$981  = 1'h0;
@@ -8448,9 +8387,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$982  = ch1_read_select_125;
+    \$982  = ch1_read_select_112;
     if (bus__r_en) begin
-      \$982  = \$376 ;
+      \$982  = \$358 ;
     end
     if (rst) begin
       \$982  = 1'h0;
@@ -8458,9 +8397,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$983  = ch1_read_select_126;
+    \$983  = ch1_read_select_113;
     if (bus__r_en) begin
-      \$983  = \$377 ;
+      \$983  = \$359 ;
     end
     if (rst) begin
       \$983  = 1'h0;
@@ -8468,9 +8407,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$984  = ch1_read_select_127;
+    \$984  = ch1_read_select_114;
     if (bus__r_en) begin
-      \$984  = \$378 ;
+      \$984  = \$360 ;
     end
     if (rst) begin
       \$984  = 1'h0;
@@ -8478,9 +8417,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$985  = ch1_read_select_128;
+    \$985  = ch1_read_select_115;
     if (bus__r_en) begin
-      \$985  = \$379 ;
+      \$985  = \$361 ;
     end
     if (rst) begin
       \$985  = 1'h0;
@@ -8488,9 +8427,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$986  = ch1_read_select_129;
+    \$986  = ch1_read_select_116;
     if (bus__r_en) begin
-      \$986  = \$380 ;
+      \$986  = \$362 ;
     end
     if (rst) begin
       \$986  = 1'h0;
@@ -8498,9 +8437,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$987  = ch1_read_select_12a;
+    \$987  = ch1_read_select_117;
     if (bus__r_en) begin
-      \$987  = \$381 ;
+      \$987  = \$363 ;
     end
     if (rst) begin
       \$987  = 1'h0;
@@ -8508,9 +8447,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$988  = ch1_read_select_12c;
+    \$988  = ch1_read_select_125;
     if (bus__r_en) begin
-      \$988  = \$382 ;
+      \$988  = \$364 ;
     end
     if (rst) begin
       \$988  = 1'h0;
@@ -8518,9 +8457,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$989  = ch1_read_select_12d;
+    \$989  = ch1_read_select_126;
     if (bus__r_en) begin
-      \$989  = \$383 ;
+      \$989  = \$365 ;
     end
     if (rst) begin
       \$989  = 1'h0;
@@ -8528,9 +8467,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$990  = ch1_read_select_12e;
+    \$990  = ch1_read_select_127;
     if (bus__r_en) begin
-      \$990  = \$384 ;
+      \$990  = \$366 ;
     end
     if (rst) begin
       \$990  = 1'h0;
@@ -8538,9 +8477,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$991  = ch1_read_select_130;
+    \$991  = ch1_read_select_128;
     if (bus__r_en) begin
-      \$991  = \$385 ;
+      \$991  = \$367 ;
     end
     if (rst) begin
       \$991  = 1'h0;
@@ -8548,9 +8487,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$992  = ch1_read_select_131;
+    \$992  = ch1_read_select_129;
     if (bus__r_en) begin
-      \$992  = \$386 ;
+      \$992  = \$368 ;
     end
     if (rst) begin
       \$992  = 1'h0;
@@ -8558,9 +8497,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$993  = ch1_read_select_132;
+    \$993  = ch1_read_select_12a;
     if (bus__r_en) begin
-      \$993  = \$387 ;
+      \$993  = \$369 ;
     end
     if (rst) begin
       \$993  = 1'h0;
@@ -8568,9 +8507,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$994  = ch1_read_select_134;
+    \$994  = ch1_read_select_12c;
     if (bus__r_en) begin
-      \$994  = \$388 ;
+      \$994  = \$370 ;
     end
     if (rst) begin
       \$994  = 1'h0;
@@ -8578,9 +8517,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$995  = ch1_read_select_135;
+    \$995  = ch1_read_select_12d;
     if (bus__r_en) begin
-      \$995  = \$389 ;
+      \$995  = \$371 ;
     end
     if (rst) begin
       \$995  = 1'h0;
@@ -8588,9 +8527,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$996  = ch1_read_select_136;
+    \$996  = ch1_read_select_12e;
     if (bus__r_en) begin
-      \$996  = \$390 ;
+      \$996  = \$372 ;
     end
     if (rst) begin
       \$996  = 1'h0;
@@ -8598,9 +8537,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$997  = ch1_read_select_138;
+    \$997  = ch1_read_select_130;
     if (bus__r_en) begin
-      \$997  = \$391 ;
+      \$997  = \$373 ;
     end
     if (rst) begin
       \$997  = 1'h0;
@@ -8608,9 +8547,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$998  = ch1_read_select_139;
+    \$998  = ch1_read_select_131;
     if (bus__r_en) begin
-      \$998  = \$392 ;
+      \$998  = \$374 ;
     end
     if (rst) begin
       \$998  = 1'h0;
@@ -8618,9 +8557,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$999  = ch1_read_select_13a;
+    \$999  = ch1_read_select_132;
     if (bus__r_en) begin
-      \$999  = \$393 ;
+      \$999  = \$375 ;
     end
     if (rst) begin
       \$999  = 1'h0;
@@ -8628,9 +8567,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1000  = ch1_read_select_13c;
+    \$1000  = ch1_read_select_134;
     if (bus__r_en) begin
-      \$1000  = \$394 ;
+      \$1000  = \$376 ;
     end
     if (rst) begin
       \$1000  = 1'h0;
@@ -8638,9 +8577,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1001  = ch1_read_select_13d;
+    \$1001  = ch1_read_select_135;
     if (bus__r_en) begin
-      \$1001  = \$395 ;
+      \$1001  = \$377 ;
     end
     if (rst) begin
       \$1001  = 1'h0;
@@ -8648,9 +8587,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1002  = ch1_read_select_13e;
+    \$1002  = ch1_read_select_136;
     if (bus__r_en) begin
-      \$1002  = \$396 ;
+      \$1002  = \$378 ;
     end
     if (rst) begin
       \$1002  = 1'h0;
@@ -8658,9 +8597,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1003  = ch1_read_select_141;
+    \$1003  = ch1_read_select_138;
     if (bus__r_en) begin
-      \$1003  = \$397 ;
+      \$1003  = \$379 ;
     end
     if (rst) begin
       \$1003  = 1'h0;
@@ -8668,9 +8607,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1004  = ch1_read_select_142;
+    \$1004  = ch1_read_select_139;
     if (bus__r_en) begin
-      \$1004  = \$398 ;
+      \$1004  = \$380 ;
     end
     if (rst) begin
       \$1004  = 1'h0;
@@ -8678,9 +8617,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1005  = ch1_read_select_143;
+    \$1005  = ch1_read_select_13a;
     if (bus__r_en) begin
-      \$1005  = \$399 ;
+      \$1005  = \$381 ;
     end
     if (rst) begin
       \$1005  = 1'h0;
@@ -8688,9 +8627,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1006  = ch1_read_select_144;
+    \$1006  = ch1_read_select_13c;
     if (bus__r_en) begin
-      \$1006  = \$400 ;
+      \$1006  = \$382 ;
     end
     if (rst) begin
       \$1006  = 1'h0;
@@ -8698,9 +8637,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1007  = ch1_read_select_145;
+    \$1007  = ch1_read_select_13d;
     if (bus__r_en) begin
-      \$1007  = \$401 ;
+      \$1007  = \$383 ;
     end
     if (rst) begin
       \$1007  = 1'h0;
@@ -8708,9 +8647,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1008  = ch1_read_select_17c;
+    \$1008  = ch1_read_select_13e;
     if (bus__r_en) begin
-      \$1008  = \$402 ;
+      \$1008  = \$384 ;
     end
     if (rst) begin
       \$1008  = 1'h0;
@@ -8718,9 +8657,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1009  = ch1_read_select_17d;
+    \$1009  = ch1_read_select_141;
     if (bus__r_en) begin
-      \$1009  = \$403 ;
+      \$1009  = \$385 ;
     end
     if (rst) begin
       \$1009  = 1'h0;
@@ -8728,19 +8667,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1010  = ch1_result_status_status_snapshot;
-    if (\$404 ) begin
-      \$1010  = \port$14044$0 [3:0];
+    \$1010  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$1010  = \$386 ;
     end
     if (rst) begin
-      \$1010  = 4'h0;
+      \$1010  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1011  = ch1_result_status_cds_snapshot;
-    if (\$404 ) begin
-      \$1011  = \port$14044$0 [49];
+    \$1011  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$1011  = \$387 ;
     end
     if (rst) begin
       \$1011  = 1'h0;
@@ -8748,9 +8687,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1012  = ch1_result_status_w0_ne_snapshot;
-    if (\$404 ) begin
-      \$1012  = \port$14044$0 [131];
+    \$1012  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$1012  = \$388 ;
     end
     if (rst) begin
       \$1012  = 1'h0;
@@ -8758,9 +8697,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1013  = ch1_result_status_w0_nw_snapshot;
-    if (\$404 ) begin
-      \$1013  = \port$14044$0 [132];
+    \$1013  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$1013  = \$389 ;
     end
     if (rst) begin
       \$1013  = 1'h0;
@@ -8768,9 +8707,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1014  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$404 ) begin
-      \$1014  = \port$14044$0 [133];
+    \$1014  = ch1_read_select_17c;
+    if (bus__r_en) begin
+      \$1014  = \$390 ;
     end
     if (rst) begin
       \$1014  = 1'h0;
@@ -8778,9 +8717,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1015  = ch1_result_status_w1_ne_snapshot;
-    if (\$404 ) begin
-      \$1015  = \port$14044$0 [174];
+    \$1015  = ch1_read_select_17d;
+    if (bus__r_en) begin
+      \$1015  = \$391 ;
     end
     if (rst) begin
       \$1015  = 1'h0;
@@ -8788,19 +8727,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1016  = ch1_result_status_w1_nw_snapshot;
-    if (\$404 ) begin
-      \$1016  = \port$14044$0 [175];
+    \$1016  = ch1_result_status_status_snapshot;
+    if (\$392 ) begin
+      \$1016  = \port$14038$0 [3:0];
     end
     if (rst) begin
-      \$1016  = 1'h0;
+      \$1016  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1017  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$404 ) begin
-      \$1017  = \port$14044$0 [176];
+    \$1017  = ch1_result_status_cds_snapshot;
+    if (\$392 ) begin
+      \$1017  = \port$14038$0 [49];
     end
     if (rst) begin
       \$1017  = 1'h0;
@@ -8808,9 +8747,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1018  = ch1_result_status_lc_repeat_snapshot;
-    if (\$404 ) begin
-      \$1018  = \port$14044$0 [183];
+    \$1018  = ch1_result_status_w0_ne_snapshot;
+    if (\$392 ) begin
+      \$1018  = \port$14038$0 [131];
     end
     if (rst) begin
       \$1018  = 1'h0;
@@ -8818,9 +8757,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1019  = ch1_result_status_lc_skip_snapshot;
-    if (\$404 ) begin
-      \$1019  = \port$14044$0 [184];
+    \$1019  = ch1_result_status_w0_nw_snapshot;
+    if (\$392 ) begin
+      \$1019  = \port$14038$0 [132];
     end
     if (rst) begin
       \$1019  = 1'h0;
@@ -8828,9 +8767,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1020  = ch1_result_status_lc_zero_snapshot;
-    if (\$404 ) begin
-      \$1020  = \port$14044$0 [185];
+    \$1020  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$392 ) begin
+      \$1020  = \port$14038$0 [133];
     end
     if (rst) begin
       \$1020  = 1'h0;
@@ -8838,9 +8777,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1021  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$404 ) begin
-      \$1021  = \port$14044$0 [186];
+    \$1021  = ch1_result_status_w1_ne_snapshot;
+    if (\$392 ) begin
+      \$1021  = \port$14038$0 [174];
     end
     if (rst) begin
       \$1021  = 1'h0;
@@ -8848,159 +8787,159 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1022  = ch1_result_status_lc_snapshot;
-    if (\$404 ) begin
-      \$1022  = \port$14044$0 [182:177];
+    \$1022  = ch1_result_status_w1_nw_snapshot;
+    if (\$392 ) begin
+      \$1022  = \port$14038$0 [175];
     end
     if (rst) begin
-      \$1022  = 6'h00;
+      \$1022  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1023  = ch1_result_seq_seq_snapshot;
-    if (\$404 ) begin
-      \$1023  = ch1__done_count;
+    \$1023  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$392 ) begin
+      \$1023  = \port$14038$0 [176];
     end
     if (rst) begin
-      \$1023  = 16'h0000;
+      \$1023  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1024  = ch1_result_seq_line_delay_snapshot;
-    if (\$404 ) begin
-      \$1024  = \port$14044$0 [48:36];
+    \$1024  = ch1_result_status_lc_repeat_snapshot;
+    if (\$392 ) begin
+      \$1024  = \port$14038$0 [183];
     end
     if (rst) begin
-      \$1024  = 13'h0000;
+      \$1024  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1025  = ch1_result_w0_lo_data_snapshot;
-    if (\$404 ) begin
-      \$1025  = \port$14044$0 [107:76];
+    \$1025  = ch1_result_status_lc_skip_snapshot;
+    if (\$392 ) begin
+      \$1025  = \port$14038$0 [184];
     end
     if (rst) begin
-      \$1025  = 32'd0;
+      \$1025  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1026  = ch1_result_w0_hi_data_snapshot;
-    if (\$404 ) begin
-      \$1026  = { 9'h000, \port$14044$0 [130:108] };
+    \$1026  = ch1_result_status_lc_zero_snapshot;
+    if (\$392 ) begin
+      \$1026  = \port$14038$0 [185];
     end
     if (rst) begin
-      \$1026  = 32'd0;
+      \$1026  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1027  = ch1_result_w1_lo_data_snapshot;
-    if (\$404 ) begin
-      \$1027  = \port$14044$0 [165:134];
+    \$1027  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$392 ) begin
+      \$1027  = \port$14038$0 [186];
     end
     if (rst) begin
-      \$1027  = 32'd0;
+      \$1027  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1028  = ch1_result_w1_hi_data_snapshot;
-    if (\$404 ) begin
-      \$1028  = { 24'h000000, \port$14044$0 [173:166] };
+    \$1028  = ch1_result_status_lc_snapshot;
+    if (\$392 ) begin
+      \$1028  = \port$14038$0 [182:177];
     end
     if (rst) begin
-      \$1028  = 32'd0;
+      \$1028  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1029  = ch1_result_timestamp_time_snapshot;
-    if (\$404 ) begin
-      \$1029  = \port$14044$0 [35:4];
+    \$1029  = ch1_result_seq_seq_snapshot;
+    if (\$392 ) begin
+      \$1029  = ch1__done_count;
     end
     if (rst) begin
-      \$1029  = 32'd0;
+      \$1029  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1030  = ch1_result_line_noise_events_snapshot;
-    if (\$404 ) begin
-      \$1030  = \port$14044$0 [53:50];
+    \$1030  = ch1_result_seq_line_delay_snapshot;
+    if (\$392 ) begin
+      \$1030  = \port$14038$0 [48:36];
     end
     if (rst) begin
-      \$1030  = 4'h0;
+      \$1030  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1031  = ch1_result_line_delay_settled_snapshot;
-    if (\$404 ) begin
-      \$1031  = \port$14044$0 [54];
+    \$1031  = ch1_result_w0_lo_data_snapshot;
+    if (\$392 ) begin
+      \$1031  = \port$14038$0 [107:76];
     end
     if (rst) begin
-      \$1031  = 1'h0;
+      \$1031  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1032  = ch1_result_line_delay_spread_snapshot;
-    if (\$404 ) begin
-      \$1032  = \port$14044$0 [75:68];
+    \$1032  = ch1_result_w0_hi_data_snapshot;
+    if (\$392 ) begin
+      \$1032  = { 9'h000, \port$14038$0 [130:108] };
     end
     if (rst) begin
-      \$1032  = 8'h00;
+      \$1032  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1033  = ch1_result_line_settled_delay_snapshot;
-    if (\$404 ) begin
-      \$1033  = \port$14044$0 [67:55];
+    \$1033  = ch1_result_w1_lo_data_snapshot;
+    if (\$392 ) begin
+      \$1033  = \port$14038$0 [165:134];
     end
     if (rst) begin
-      \$1033  = 13'h0000;
+      \$1033  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1034  = ch1_window0_read;
-    if (bus__r_en) begin
-      \$1034  = \$406 ;
+    \$1034  = ch1_result_w1_hi_data_snapshot;
+    if (\$392 ) begin
+      \$1034  = { 24'h000000, \port$14038$0 [173:166] };
     end
     if (rst) begin
-      \$1034  = 1'h0;
+      \$1034  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1035  = ch1_window1_read;
-    if (bus__r_en) begin
-      \$1035  = \$410 ;
+    \$1035  = ch1_result_timestamp_time_snapshot;
+    if (\$392 ) begin
+      \$1035  = \port$14038$0 [35:4];
     end
     if (rst) begin
-      \$1035  = 1'h0;
+      \$1035  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1036  = ch1_window2_read;
-    if (bus__r_en) begin
-      \$1036  = \$412 ;
+    \$1036  = ch1_result_line_noise_events_snapshot;
+    if (\$392 ) begin
+      \$1036  = \port$14038$0 [53:50];
     end
     if (rst) begin
-      \$1036  = 1'h0;
+      \$1036  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1037  = ch1_window3_read;
-    if (bus__r_en) begin
-      \$1037  = ch1_config_read;
+    \$1037  = ch1_result_line_delay_settled_snapshot;
+    if (\$392 ) begin
+      \$1037  = \port$14038$0 [54];
     end
     if (rst) begin
       \$1037  = 1'h0;
@@ -9008,12 +8947,72 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1038  = ch1_read_data;
-    if (bus__r_load) begin
-      \$1038  = \$504 ;
+    \$1038  = ch1_result_line_delay_spread_snapshot;
+    if (\$392 ) begin
+      \$1038  = \port$14038$0 [75:68];
     end
     if (rst) begin
-      \$1038  = 32'd0;
+      \$1038  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1039  = ch1_result_line_settled_delay_snapshot;
+    if (\$392 ) begin
+      \$1039  = \port$14038$0 [67:55];
+    end
+    if (rst) begin
+      \$1039  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1040  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$1040  = \$394 ;
+    end
+    if (rst) begin
+      \$1040  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1041  = ch1_window1_read;
+    if (bus__r_en) begin
+      \$1041  = \$398 ;
+    end
+    if (rst) begin
+      \$1041  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1042  = ch1_window2_read;
+    if (bus__r_en) begin
+      \$1042  = \$400 ;
+    end
+    if (rst) begin
+      \$1042  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1043  = ch1_window3_read;
+    if (bus__r_en) begin
+      \$1043  = ch1_config_read;
+    end
+    if (rst) begin
+      \$1043  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1044  = ch1_read_data;
+    if (bus__r_load) begin
+      \$1044  = \$492 ;
+    end
+    if (rst) begin
+      \$1044  = 32'd0;
     end
   end
   always @* begin
@@ -9160,30 +9159,90 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
           config_memory0_read_hit = 1'h1;
     endcase
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    ch0_crc_table_0_table_write_entry = 1'h0;
+    if (ch0_cfg_crc0_config_write) begin
+      ch0_crc_table_0_table_write_entry = 1'h0;
+    end
+    if (ch0_cfg_crc1_config_write) begin
+      ch0_crc_table_0_table_write_entry = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    ch0_crc_table_16_table_write_entry = 1'h0;
+    if (ch0_cfg_crc0_start_config_write) begin
+      ch0_crc_table_16_table_write_entry = 1'h0;
+    end
+    if (ch0_cfg_crc1_start_config_write) begin
+      ch0_crc_table_16_table_write_entry = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    ch0_crc_table_32_table_write_entry = 1'h0;
+    if (ch0_cfg_crc0_config_write) begin
+      ch0_crc_table_32_table_write_entry = 1'h0;
+    end
+    if (ch0_cfg_crc1_config_write) begin
+      ch0_crc_table_32_table_write_entry = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    ch1_crc_table_0_table_write_entry = 1'h0;
+    if (ch1_cfg_crc0_config_write) begin
+      ch1_crc_table_0_table_write_entry = 1'h0;
+    end
+    if (ch1_cfg_crc1_config_write) begin
+      ch1_crc_table_0_table_write_entry = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    ch1_crc_table_16_table_write_entry = 1'h0;
+    if (ch1_cfg_crc0_start_config_write) begin
+      ch1_crc_table_16_table_write_entry = 1'h0;
+    end
+    if (ch1_cfg_crc1_start_config_write) begin
+      ch1_crc_table_16_table_write_entry = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    ch1_crc_table_32_table_write_entry = 1'h0;
+    if (ch1_cfg_crc0_config_write) begin
+      ch1_crc_table_32_table_write_entry = 1'h0;
+    end
+    if (ch1_cfg_crc1_config_write) begin
+      ch1_crc_table_32_table_write_entry = 1'h1;
+    end
+  end
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$13493$0 [3:0];
-  assign ch0__cds = \port$13493$0 [49];
-  assign ch0__word0_ne = \port$13493$0 [131];
-  assign ch0__word0_nw = \port$13493$0 [132];
-  assign ch0__word0_crc_ok = \port$13493$0 [133];
-  assign ch0__word1_ne = \port$13493$0 [174];
-  assign ch0__word1_nw = \port$13493$0 [175];
-  assign ch0__word1_crc_ok = \port$13493$0 [176];
-  assign ch0__lc_repeat = \port$13493$0 [183];
-  assign ch0__lc_skip = \port$13493$0 [184];
-  assign ch0__lc_zero = \port$13493$0 [185];
-  assign ch0__spw_mismatch = \port$13493$0 [186];
-  assign ch0__lc = \port$13493$0 [182:177];
-  assign ch0__line_delay = \port$13493$0 [48:36];
-  assign ch0__word0_position = { 9'h000, \port$13493$0 [130:76] };
-  assign ch0__word1_position = { 24'h000000, \port$13493$0 [173:134] };
-  assign ch0__timestamp = \port$13493$0 [35:4];
-  assign ch0__noise_events = \port$13493$0 [53:50];
-  assign ch0__delay_settled = \port$13493$0 [54];
-  assign ch0__delay_spread = \port$13493$0 [75:68];
-  assign ch0__settled_delay = \port$13493$0 [67:55];
+  assign ch0__status = \port$13487$0 [3:0];
+  assign ch0__cds = \port$13487$0 [49];
+  assign ch0__word0_ne = \port$13487$0 [131];
+  assign ch0__word0_nw = \port$13487$0 [132];
+  assign ch0__word0_crc_ok = \port$13487$0 [133];
+  assign ch0__word1_ne = \port$13487$0 [174];
+  assign ch0__word1_nw = \port$13487$0 [175];
+  assign ch0__word1_crc_ok = \port$13487$0 [176];
+  assign ch0__lc_repeat = \port$13487$0 [183];
+  assign ch0__lc_skip = \port$13487$0 [184];
+  assign ch0__lc_zero = \port$13487$0 [185];
+  assign ch0__spw_mismatch = \port$13487$0 [186];
+  assign ch0__lc = \port$13487$0 [182:177];
+  assign ch0__line_delay = \port$13487$0 [48:36];
+  assign ch0__word0_position = { 9'h000, \port$13487$0 [130:76] };
+  assign ch0__word1_position = { 24'h000000, \port$13487$0 [173:134] };
+  assign ch0__timestamp = \port$13487$0 [35:4];
+  assign ch0__noise_events = \port$13487$0 [53:50];
+  assign ch0__delay_settled = \port$13487$0 [54];
+  assign ch0__delay_spread = \port$13487$0 [75:68];
+  assign ch0__settled_delay = \port$13487$0 [67:55];
   assign ch0__cap_data_bits_w0 = 7'h37;
   assign ch0__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9204,13 +9263,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$13581$0 [2:0];
-  assign ch0__ca_bytes_done = \port$13581$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$13504$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$13504$0 [31:16];
-  assign ch0__count_ca_refused = \port$13504$0 [47:32];
-  assign ch0__count_ca_aborted = \port$13504$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$13504$0 [79:64];
+  assign ch0__ca_status = \port$13575$0 [2:0];
+  assign ch0__ca_bytes_done = \port$13575$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$13498$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$13498$0 [31:16];
+  assign ch0__count_ca_refused = \port$13498$0 [47:32];
+  assign ch0__count_ca_aborted = \port$13498$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$13498$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9230,27 +9289,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$14044$0 [3:0];
-  assign ch1__cds = \port$14044$0 [49];
-  assign ch1__word0_ne = \port$14044$0 [131];
-  assign ch1__word0_nw = \port$14044$0 [132];
-  assign ch1__word0_crc_ok = \port$14044$0 [133];
-  assign ch1__word1_ne = \port$14044$0 [174];
-  assign ch1__word1_nw = \port$14044$0 [175];
-  assign ch1__word1_crc_ok = \port$14044$0 [176];
-  assign ch1__lc_repeat = \port$14044$0 [183];
-  assign ch1__lc_skip = \port$14044$0 [184];
-  assign ch1__lc_zero = \port$14044$0 [185];
-  assign ch1__spw_mismatch = \port$14044$0 [186];
-  assign ch1__lc = \port$14044$0 [182:177];
-  assign ch1__line_delay = \port$14044$0 [48:36];
-  assign ch1__word0_position = { 9'h000, \port$14044$0 [130:76] };
-  assign ch1__word1_position = { 24'h000000, \port$14044$0 [173:134] };
-  assign ch1__timestamp = \port$14044$0 [35:4];
-  assign ch1__noise_events = \port$14044$0 [53:50];
-  assign ch1__delay_settled = \port$14044$0 [54];
-  assign ch1__delay_spread = \port$14044$0 [75:68];
-  assign ch1__settled_delay = \port$14044$0 [67:55];
+  assign ch1__status = \port$14038$0 [3:0];
+  assign ch1__cds = \port$14038$0 [49];
+  assign ch1__word0_ne = \port$14038$0 [131];
+  assign ch1__word0_nw = \port$14038$0 [132];
+  assign ch1__word0_crc_ok = \port$14038$0 [133];
+  assign ch1__word1_ne = \port$14038$0 [174];
+  assign ch1__word1_nw = \port$14038$0 [175];
+  assign ch1__word1_crc_ok = \port$14038$0 [176];
+  assign ch1__lc_repeat = \port$14038$0 [183];
+  assign ch1__lc_skip = \port$14038$0 [184];
+  assign ch1__lc_zero = \port$14038$0 [185];
+  assign ch1__spw_mismatch = \port$14038$0 [186];
+  assign ch1__lc = \port$14038$0 [182:177];
+  assign ch1__line_delay = \port$14038$0 [48:36];
+  assign ch1__word0_position = { 9'h000, \port$14038$0 [130:76] };
+  assign ch1__word1_position = { 24'h000000, \port$14038$0 [173:134] };
+  assign ch1__timestamp = \port$14038$0 [35:4];
+  assign ch1__noise_events = \port$14038$0 [53:50];
+  assign ch1__delay_settled = \port$14038$0 [54];
+  assign ch1__delay_spread = \port$14038$0 [75:68];
+  assign ch1__settled_delay = \port$14038$0 [67:55];
   assign ch1__cap_data_bits_w0 = 7'h37;
   assign ch1__cap_data_bits_w1 = 7'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9271,13 +9330,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$14132$0 [2:0];
-  assign ch1__ca_bytes_done = \port$14132$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$14055$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$14055$0 [31:16];
-  assign ch1__count_ca_refused = \port$14055$0 [47:32];
-  assign ch1__count_ca_aborted = \port$14055$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$14055$0 [79:64];
+  assign ch1__ca_status = \port$14126$0 [2:0];
+  assign ch1__ca_bytes_done = \port$14126$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$14049$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$14049$0 [31:16];
+  assign ch1__count_ca_refused = \port$14049$0 [47:32];
+  assign ch1__count_ca_aborted = \port$14049$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$14049$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9331,14 +9390,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__cfg_delay_tolerance = ch0_cfg_checks_delay_tolerance;
   assign ch0__cfg_confirm_frames = ch0_cfg_checks_confirm_frames;
   assign ch0__cfg_quiet_time = ch0_cfg_quiet_quiet_time;
-  assign ch0__cfg_w0_crc_poly = ch0_cfg_crc0_w0_crc_poly;
   assign ch0__cfg_w0_crc_width = ch0_cfg_crc0_w0_crc_width;
-  assign ch0__cfg_w0_crc_inverted = ch0_cfg_crc0_w0_crc_inverted;
-  assign ch0__cfg_w0_crc_start = ch0_cfg_crc0_start_w0_crc_start;
-  assign ch0__cfg_w1_crc_poly = ch0_cfg_crc1_w1_crc_poly;
   assign ch0__cfg_w1_crc_width = ch0_cfg_crc1_w1_crc_width;
-  assign ch0__cfg_w1_crc_inverted = ch0_cfg_crc1_w1_crc_inverted;
-  assign ch0__cfg_w1_crc_start = ch0_cfg_crc1_start_w1_crc_start;
   assign ch0__cfg_ssi = ch0_cfg_ssi_ssi;
   assign ch0__cfg_ssi_error = ch0_cfg_ssi_ssi_error;
   assign ch0__cfg_ssi_error_low = ch0_cfg_ssi_ssi_error_low;
@@ -9413,14 +9466,17 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__ca_slave_id = ch0_ca_request_slave_id;
   assign ch0__ca_address = ch0_ca_request_address;
   assign ch0__ca_count = ch0_ca_request_count;
-  assign ch0__ca_write = \ch0_ca_request_write$152 ;
+  assign ch0__ca_write = \ch0_ca_request_write$145 ;
   assign ch0__ca_start = ch0_ca_ctrl_start;
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
   assign ch0__ca_rbuf_addr = bus__w_addr[3:0];
-  assign wr__addr = { \$577 , \$576 , \$575 , \$574  };
+  assign wr__addr = { \$566 , \$565 , \$564 , \$563  };
   assign wr__data = config_memory0_write_data;
   assign rd__addr = ch0_config_read_index;
+  assign ch0_crc_table_addr = \rd__addr$763 ;
+  assign \rd__addr$769  = \rd__addr$763 ;
+  assign \rd__addr$774  = \rd__addr$763 ;
   assign ch1__count_addr = bus__w_addr[2:0];
   assign ch1__chain_addr = bus__w_addr[3:0];
   assign ch1__start = ch1_ctrl_start;
@@ -9454,14 +9510,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__cfg_delay_tolerance = ch1_cfg_checks_delay_tolerance;
   assign ch1__cfg_confirm_frames = ch1_cfg_checks_confirm_frames;
   assign ch1__cfg_quiet_time = ch1_cfg_quiet_quiet_time;
-  assign ch1__cfg_w0_crc_poly = ch1_cfg_crc0_w0_crc_poly;
   assign ch1__cfg_w0_crc_width = ch1_cfg_crc0_w0_crc_width;
-  assign ch1__cfg_w0_crc_inverted = ch1_cfg_crc0_w0_crc_inverted;
-  assign ch1__cfg_w0_crc_start = ch1_cfg_crc0_start_w0_crc_start;
-  assign ch1__cfg_w1_crc_poly = ch1_cfg_crc1_w1_crc_poly;
   assign ch1__cfg_w1_crc_width = ch1_cfg_crc1_w1_crc_width;
-  assign ch1__cfg_w1_crc_inverted = ch1_cfg_crc1_w1_crc_inverted;
-  assign ch1__cfg_w1_crc_start = ch1_cfg_crc1_start_w1_crc_start;
   assign ch1__cfg_ssi = ch1_cfg_ssi_ssi;
   assign ch1__cfg_ssi_error = ch1_cfg_ssi_ssi_error;
   assign ch1__cfg_ssi_error_low = ch1_cfg_ssi_ssi_error_low;
@@ -9536,138 +9586,153 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$448 ;
+  assign ch1__ca_write = \ch1_ca_request_write$437 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
   assign ch1__ca_wbuf_data = write_data;
   assign ch1__ca_rbuf_addr = bus__w_addr[3:0];
-  assign \wr__addr$920  = { \$669 , \$668 , \$667 , \$666  };
+  assign \wr__addr$920  = { \$671 , \$670 , \$669 , \$668  };
   assign \wr__data$921  = config_memory0_write_data;
   assign \rd__addr$923  = ch1_config_read_index;
+  assign ch1_crc_table_addr = \rd__addr$929 ;
+  assign \rd__addr$935  = \rd__addr$929 ;
+  assign \rd__addr$940  = \rd__addr$929 ;
   assign irq = { ch1_irq, ch0_irq };
+  assign ch0_crc_table_data = \$596 [32:0];
+  assign ch1_crc_table_data = \$701 [32:0];
   assign ch0__ca_wbuf_addr = write_addr[3:0];
-  assign cfg_hold[1] = ch1_config_wait;
-  assign cfg_hold[0] = ch0_config_wait;
+  assign cfg_hold[1] = \$603 ;
+  assign cfg_hold[0] = \$498 ;
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$597  = \$596 ;
-  assign \$599  = \$598 ;
-  assign \$601  = \$600 ;
-  assign \$689  = \$688 ;
-  assign \$691  = \$690 ;
-  assign \$693  = \$692 ;
-  assign \$173  = \$172 ;
-  assign \$180  = 32'd0;
-  assign \$181  = \$179 ;
-  assign \$182  = 32'd0;
-  assign \$183  = \$179 ;
+  assign \$598  = \$597 ;
+  assign \$600  = \$599 ;
+  assign \$602  = \$601 ;
+  assign \$703  = \$702 ;
+  assign \$705  = \$704 ;
+  assign \$707  = \$706 ;
+  assign \$114  = ch0_table_sweep;
+  assign \$167  = \$166 ;
+  assign \$174  = 32'd0;
+  assign \$175  = \$173 ;
+  assign \$176  = 32'd0;
+  assign \$177  = \$173 ;
+  assign \$194  = 32'd0;
+  assign \$195  = \$193 ;
+  assign \$196  = 32'd0;
+  assign \$197  = \$193 ;
+  assign \$198  = 32'd0;
+  assign \$199  = \$193 ;
   assign \$200  = 32'd0;
-  assign \$201  = \$199 ;
+  assign \$201  = \$193 ;
   assign \$202  = 32'd0;
-  assign \$203  = \$199 ;
+  assign \$203  = \$193 ;
   assign \$204  = 32'd0;
-  assign \$205  = \$199 ;
+  assign \$205  = \$193 ;
   assign \$206  = 32'd0;
-  assign \$207  = \$199 ;
+  assign \$207  = \$193 ;
   assign \$208  = 32'd0;
-  assign \$209  = \$199 ;
+  assign \$209  = \$193 ;
   assign \$210  = 32'd0;
-  assign \$211  = \$199 ;
+  assign \$211  = \$193 ;
   assign \$212  = 32'd0;
-  assign \$213  = \$199 ;
+  assign \$213  = \$193 ;
   assign \$214  = 32'd0;
-  assign \$215  = \$199 ;
+  assign \$215  = \$193 ;
   assign \$216  = 32'd0;
-  assign \$217  = \$199 ;
+  assign \$217  = \$193 ;
   assign \$218  = 32'd0;
-  assign \$219  = \$199 ;
+  assign \$219  = \$193 ;
   assign \$220  = 32'd0;
-  assign \$221  = \$199 ;
+  assign \$221  = \$193 ;
   assign \$222  = 32'd0;
-  assign \$223  = \$199 ;
+  assign \$223  = \$193 ;
   assign \$224  = 32'd0;
-  assign \$225  = \$199 ;
+  assign \$225  = \$193 ;
   assign \$226  = 32'd0;
-  assign \$227  = \$199 ;
+  assign \$227  = \$193 ;
   assign \$228  = 32'd0;
-  assign \$229  = \$199 ;
+  assign \$229  = \$193 ;
   assign \$230  = 32'd0;
-  assign \$231  = \$199 ;
+  assign \$231  = \$193 ;
   assign \$232  = 32'd0;
-  assign \$233  = \$199 ;
+  assign \$233  = \$193 ;
   assign \$234  = 32'd0;
-  assign \$235  = \$199 ;
+  assign \$235  = \$193 ;
   assign \$236  = 32'd0;
-  assign \$237  = \$199 ;
-  assign \$238  = 32'd0;
-  assign \$239  = \$199 ;
-  assign \$240  = 32'd0;
-  assign \$241  = \$199 ;
-  assign \$242  = 32'd0;
-  assign \$243  = \$199 ;
+  assign \$237  = \$193 ;
+  assign \$246  = 32'd0;
+  assign \$247  = \$245 ;
   assign \$252  = 32'd0;
   assign \$253  = \$251 ;
-  assign \$258  = 32'd0;
-  assign \$259  = \$257 ;
-  assign ch0_config_read_data = \$595 ;
-  assign \$414  = \$413 ;
-  assign \$421  = 32'd0;
-  assign \$422  = \$420 ;
-  assign \$423  = 32'd0;
-  assign \$424  = \$420 ;
+  assign ch0_config_read_data = \$584 ;
+  assign \$349  = ch1_table_sweep;
+  assign \$402  = \$401 ;
+  assign \$409  = 32'd0;
+  assign \$410  = \$408 ;
+  assign \$411  = 32'd0;
+  assign \$412  = \$408 ;
+  assign \$429  = 32'd0;
+  assign \$430  = \$428 ;
+  assign \$431  = 32'd0;
+  assign \$432  = \$428 ;
+  assign \$433  = 32'd0;
+  assign \$434  = \$428 ;
+  assign \$435  = 32'd0;
+  assign \$436  = \$428 ;
+  assign \$437  = 32'd0;
+  assign \$438  = \$428 ;
+  assign \$439  = 32'd0;
+  assign \$440  = \$428 ;
   assign \$441  = 32'd0;
-  assign \$442  = \$440 ;
+  assign \$442  = \$428 ;
   assign \$443  = 32'd0;
-  assign \$444  = \$440 ;
+  assign \$444  = \$428 ;
   assign \$445  = 32'd0;
-  assign \$446  = \$440 ;
+  assign \$446  = \$428 ;
   assign \$447  = 32'd0;
-  assign \$448  = \$440 ;
+  assign \$448  = \$428 ;
   assign \$449  = 32'd0;
-  assign \$450  = \$440 ;
+  assign \$450  = \$428 ;
   assign \$451  = 32'd0;
-  assign \$452  = \$440 ;
+  assign \$452  = \$428 ;
   assign \$453  = 32'd0;
-  assign \$454  = \$440 ;
+  assign \$454  = \$428 ;
   assign \$455  = 32'd0;
-  assign \$456  = \$440 ;
+  assign \$456  = \$428 ;
   assign \$457  = 32'd0;
-  assign \$458  = \$440 ;
+  assign \$458  = \$428 ;
   assign \$459  = 32'd0;
-  assign \$460  = \$440 ;
+  assign \$460  = \$428 ;
   assign \$461  = 32'd0;
-  assign \$462  = \$440 ;
+  assign \$462  = \$428 ;
   assign \$463  = 32'd0;
-  assign \$464  = \$440 ;
+  assign \$464  = \$428 ;
   assign \$465  = 32'd0;
-  assign \$466  = \$440 ;
+  assign \$466  = \$428 ;
   assign \$467  = 32'd0;
-  assign \$468  = \$440 ;
+  assign \$468  = \$428 ;
   assign \$469  = 32'd0;
-  assign \$470  = \$440 ;
+  assign \$470  = \$428 ;
   assign \$471  = 32'd0;
-  assign \$472  = \$440 ;
-  assign \$473  = 32'd0;
-  assign \$474  = \$440 ;
-  assign \$475  = 32'd0;
-  assign \$476  = \$440 ;
-  assign \$477  = 32'd0;
-  assign \$478  = \$440 ;
-  assign \$479  = 32'd0;
-  assign \$480  = \$440 ;
+  assign \$472  = \$428 ;
   assign \$481  = 32'd0;
-  assign \$482  = \$440 ;
-  assign \$483  = 32'd0;
-  assign \$484  = \$440 ;
-  assign \$493  = 32'd0;
-  assign \$494  = \$492 ;
-  assign \$499  = 32'd0;
-  assign \$500  = \$498 ;
-  assign ch1_config_read_data = \$687 ;
+  assign \$482  = \$480 ;
+  assign \$487  = 32'd0;
+  assign \$488  = \$486 ;
+  assign ch1_config_read_data = \$689 ;
   assign g_irq = 1'h0;
-  assign \$695  = g_read_data;
+  assign \$591  = { 1'h0, \rd__data$776  };
+  assign \$592  = { 16'h0000, \$591  };
+  assign \$593  = { 15'h0000, \rd__data$777 , 16'h0000 };
+  assign \$595  = { 31'h00000000, \rd__data$778 , 32'h00000000 };
+  assign \$696  = { 1'h0, \rd__data$942  };
+  assign \$697  = { 16'h0000, \$696  };
+  assign \$698  = { 15'h0000, \rd__data$943 , 16'h0000 };
+  assign \$700  = { 31'h00000000, \rd__data$944 , 32'h00000000 };
+  assign \$709  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -9816,10 +9881,10 @@ module \biss_master_wb.bus (wb__stb, wb__we, regs__r_addr, regs__w_data, regs__w
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic
-, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check
-, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address
-, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13493$0 , \port$13504$0 , regs__ca_done, \port$13581$0 , ca_rbuf_addr);
+module \biss_master_wb.ch0 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_rbuf_en, crc_table_data, regs__frame_error, cfg_free, regs__busy, regs__config_error, crc_table_addr, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle
+, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed
+, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
+, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13487$0 , \port$13498$0 , regs__ca_done, \port$13575$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -9902,7 +9967,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire cfg_free;
   input cfg_hold;
   wire cfg_hold;
-  wire \cfg_hold$211 ;
+  wire \cfg_hold$199 ;
   input [15:0] cfg_ma_half_period;
   wire [15:0] cfg_ma_half_period;
   input [3:0] cfg_noise_limit;
@@ -9934,12 +9999,6 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w0_crc;
   wire [1:0] cfg_w0_crc;
-  input cfg_w0_crc_inverted;
-  wire cfg_w0_crc_inverted;
-  input [15:0] cfg_w0_crc_poly;
-  wire [15:0] cfg_w0_crc_poly;
-  input [15:0] cfg_w0_crc_start;
-  wire [15:0] cfg_w0_crc_start;
   input [4:0] cfg_w0_crc_width;
   wire [4:0] cfg_w0_crc_width;
   wire [5:0] cfg_w0_data_bits;
@@ -9958,12 +10017,6 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w1_crc;
   wire [1:0] cfg_w1_crc;
-  input cfg_w1_crc_inverted;
-  wire cfg_w1_crc_inverted;
-  input [15:0] cfg_w1_crc_poly;
-  wire [15:0] cfg_w1_crc_poly;
-  input [15:0] cfg_w1_crc_start;
-  wire [15:0] cfg_w1_crc_start;
   input [4:0] cfg_w1_crc_width;
   wire [4:0] cfg_w1_crc_width;
   wire [5:0] cfg_w1_data_bits;
@@ -9992,6 +10045,18 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [31:0] count_data;
   input count_en;
   wire count_en;
+  output crc_table_addr;
+  wire crc_table_addr;
+  wire \crc_table_addr$202 ;
+  input [32:0] crc_table_data;
+  wire [32:0] crc_table_data;
+  wire [32:0] \crc_table_data$204 ;
+  wire \crc_table_data$204.inverted ;
+  wire [15:0] \crc_table_data$204.poly ;
+  wire [15:0] \crc_table_data$204.start ;
+  wire \crc_table_data.inverted ;
+  wire [15:0] \crc_table_data.poly ;
+  wire [15:0] \crc_table_data.start ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire done;
@@ -10005,17 +10070,17 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$207 ;
+  wire \ma$195 ;
   wire [3:0] noise_events;
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$13493$0 ;
-  wire [186:0] \port$13493$0 ;
-  output [79:0] \port$13504$0 ;
-  wire [79:0] \port$13504$0 ;
-  output [9:0] \port$13581$0 ;
-  wire [9:0] \port$13581$0 ;
+  output [186:0] \port$13487$0 ;
+  wire [186:0] \port$13487$0 ;
+  output [79:0] \port$13498$0 ;
+  wire [79:0] \port$13498$0 ;
+  output [9:0] \port$13575$0 ;
+  wire [9:0] \port$13575$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10078,9 +10143,6 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] regs__cfg_w0_crc;
-  wire regs__cfg_w0_crc_inverted;
-  wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] regs__cfg_w0_crc_start;
   wire [4:0] regs__cfg_w0_crc_width;
   input [6:0] regs__cfg_w0_data_bits;
   wire [6:0] regs__cfg_w0_data_bits;
@@ -10094,9 +10156,6 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] regs__cfg_w1_crc;
-  wire regs__cfg_w1_crc_inverted;
-  wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] regs__cfg_w1_crc_start;
   wire [4:0] regs__cfg_w1_crc_width;
   input [6:0] regs__cfg_w1_data_bits;
   wire [6:0] regs__cfg_w1_data_bits;
@@ -10155,7 +10214,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$209 ;
+  wire \slo$197 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -10179,11 +10238,11 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [3:0] status;
   input [31:0] time_now;
   wire [31:0] time_now;
-  wire [31:0] \time_now$202 ;
+  wire [31:0] \time_now$190 ;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$204 ;
-  wire \trigger$204 ;
+  input \trigger$192 ;
+  wire \trigger$192 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -10203,7 +10262,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign regs__frame_error = regs__frame_done & \$5 ;
   assign \$7  = \$6  ? 7'h00 : regs__cfg_w0_data_bits;
   assign \$9  = \$8  ? 7'h00 : regs__cfg_w1_data_bits;
-  assign trigger = \trigger$204  & regs__trigger_enable;
+  assign trigger = \trigger$192  & regs__trigger_enable;
   assign cfg_free = ~ regs__busy;
   assign \$10  = ~ report;
   assign \$11  = \$signal  & \$10 ;
@@ -10229,8 +10288,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     regs__result_updates <= \$23 ;
   \biss_master_wb.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$269 (ca_abort),
-    .\busy$318 (regs__busy),
+    .\abort$266 (ca_abort),
+    .\busy$315 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -10259,9 +10318,6 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .cfg_ssi_error_low(cfg_ssi_error_low),
     .cfg_timeout_limit(cfg_timeout_limit),
     .cfg_w0_crc(cfg_w0_crc),
-    .cfg_w0_crc_inverted(cfg_w0_crc_inverted),
-    .cfg_w0_crc_poly(cfg_w0_crc_poly),
-    .cfg_w0_crc_start(cfg_w0_crc_start),
     .cfg_w0_crc_width(cfg_w0_crc_width),
     .cfg_w0_data_bits(\$7 [5:0]),
     .cfg_w0_gray(cfg_w0_gray),
@@ -10269,9 +10325,6 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .cfg_w0_nenw(cfg_w0_nenw),
     .cfg_w0_signed(cfg_w0_signed),
     .cfg_w1_crc(cfg_w1_crc),
-    .cfg_w1_crc_inverted(cfg_w1_crc_inverted),
-    .cfg_w1_crc_poly(cfg_w1_crc_poly),
-    .cfg_w1_crc_start(cfg_w1_crc_start),
     .cfg_w1_crc_width(cfg_w1_crc_width),
     .cfg_w1_data_bits(\$9 [5:0]),
     .cfg_w1_enable(cfg_w1_enable),
@@ -10279,29 +10332,31 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$294 (clear_counters),
+    .\clear$291 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$25 ),
-    .\done$321 (done),
+    .crc_table_addr(crc_table_addr),
+    .crc_table_data(crc_table_data),
+    .\done$318 (done),
     .frames(regs__ca_busy),
     .hold(cfg_hold),
     .ma(ma),
     .now(time_now),
-    .\periodic$45 (periodic),
+    .\periodic$39 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$26 ),
-    .\result$326 (\$24 ),
+    .\result$323 (\$24 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$267 (ca_start),
+    .\start$264 (ca_start),
     .trigger(trigger),
-    .\valid$323 (valid)
+    .\valid$320 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
@@ -10467,14 +10522,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign delay_spread = \$24 [75:68];
   assign regs__settled_delay = \$24 [67:55];
   assign settled_delay = \$24 [67:55];
-  assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
   assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
-  assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
-  assign regs__cfg_w0_crc_start = cfg_w0_crc_start;
-  assign regs__cfg_w1_crc_poly = cfg_w1_crc_poly;
   assign regs__cfg_w1_crc_width = cfg_w1_crc_width;
-  assign regs__cfg_w1_crc_inverted = cfg_w1_crc_inverted;
-  assign regs__cfg_w1_crc_start = cfg_w1_crc_start;
   assign regs__cfg_ssi = cfg_ssi;
   assign regs__cfg_ssi_error = cfg_ssi_error;
   assign regs__cfg_ssi_error_low = cfg_ssi_error_low;
@@ -10507,22 +10556,30 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \time_now$202  = time_now;
-  assign \ma$207  = ma;
-  assign \slo$209  = slo;
-  assign \cfg_hold$211  = cfg_hold;
-  assign \port$13493$0  = \$24 ;
-  assign \port$13504$0  = \$25 ;
-  assign \port$13581$0  = \$26 ;
+  assign \time_now$190  = time_now;
+  assign \ma$195  = ma;
+  assign \slo$197  = slo;
+  assign \cfg_hold$199  = cfg_hold;
+  assign \crc_table_addr$202  = crc_table_addr;
+  assign \crc_table_data$204  = crc_table_data;
+  assign \port$13487$0  = \$24 ;
+  assign \port$13498$0  = \$25 ;
+  assign \port$13575$0  = \$26 ;
+  assign \crc_table_data.poly  = crc_table_data[15:0];
+  assign \crc_table_data.start  = crc_table_data[31:16];
+  assign \crc_table_data.inverted  = crc_table_data[32];
+  assign \crc_table_data$204.poly  = crc_table_data[15:0];
+  assign \crc_table_data$204.start  = crc_table_data[31:16];
+  assign \crc_table_data$204.inverted  = crc_table_data[32];
   assign \$6  = regs__cfg_w0_data_bits[6];
   assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$318 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$294 , \periodic$45 
-, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
-, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$267 
-, \abort$269 , hold, abort, ma, \done$321 , \valid$323 , \result$326 , counts, ca_done, result, rbuf_addr);
+module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_table_data, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$315 , config_error, crc_table_addr, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start
+, \clear$291 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
+, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$264 , \abort$266 , hold, abort, ma
+, \done$318 , \valid$320 , \result$323 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10556,26 +10613,26 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$269 ;
-  wire \abort$269 ;
-  wire \abort$59 ;
+  input \abort$266 ;
+  wire \abort$266 ;
+  wire \abort$53 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$94 ;
+  wire \ack_expired$88 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$115 ;
+  wire [23:0] \ack_limit$109 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$350 ;
+  wire \bit$347 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$92 ;
+  wire \break_over$86 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$278 ;
+  wire \busy$275 ;
+  wire \busy$312 ;
+  output \busy$315 ;
   wire \busy$315 ;
-  output \busy$318 ;
-  wire \busy$318 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -10610,11 +10667,11 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$282 ;
+  wire \cdm$279 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$329 ;
-  wire [274:0] cfg;
+  wire \cds$326 ;
+  wire [208:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [3:0] \cfg.confirm_frames ;
@@ -10645,10 +10702,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
   wire \cfg.w0.signed ;
-  wire [37:0] \cfg.w0_crc ;
-  wire \cfg.w0_crc.inverted ;
-  wire [15:0] \cfg.w0_crc.poly ;
-  wire [15:0] \cfg.w0_crc.start ;
+  wire [4:0] \cfg.w0_crc ;
   wire [4:0] \cfg.w0_crc.width ;
   wire [11:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
@@ -10662,10 +10716,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
   wire \cfg.w1.signed ;
-  wire [37:0] \cfg.w1_crc ;
-  wire \cfg.w1_crc.inverted ;
-  wire [15:0] \cfg.w1_crc.poly ;
-  wire [15:0] \cfg.w1_crc.start ;
+  wire [4:0] \cfg.w1_crc ;
   wire [4:0] \cfg.w1_crc.width ;
   wire \cfg.w1_enable ;
   input [23:0] cfg_ack_limit;
@@ -10712,12 +10763,6 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w0_crc;
   wire [1:0] cfg_w0_crc;
-  input cfg_w0_crc_inverted;
-  wire cfg_w0_crc_inverted;
-  input [15:0] cfg_w0_crc_poly;
-  wire [15:0] cfg_w0_crc_poly;
-  input [15:0] cfg_w0_crc_start;
-  wire [15:0] cfg_w0_crc_start;
   input [4:0] cfg_w0_crc_width;
   wire [4:0] cfg_w0_crc_width;
   input [5:0] cfg_w0_data_bits;
@@ -10737,12 +10782,6 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w1_crc;
   wire [1:0] cfg_w1_crc;
-  input cfg_w1_crc_inverted;
-  wire cfg_w1_crc_inverted;
-  input [15:0] cfg_w1_crc_poly;
-  wire [15:0] cfg_w1_crc_poly;
-  input [15:0] cfg_w1_crc_start;
-  wire [15:0] cfg_w1_crc_start;
   input [4:0] cfg_w1_crc_width;
   wire [4:0] cfg_w1_crc_width;
   input [5:0] cfg_w1_data_bits;
@@ -10758,16 +10797,16 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$174 ;
+  wire \check$168 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$179 ;
-  wire \clean$351 ;
+  wire \clean$173 ;
+  wire \clean$348 ;
   wire clear;
-  wire \clear$139 ;
-  input \clear$294 ;
-  wire \clear$294 ;
-  wire \clear$307 ;
+  wire \clear$133 ;
+  input \clear$291 ;
+  wire \clear$291 ;
+  wire \clear$304 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -10796,31 +10835,32 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$192 ;
+  wire [39:0] \cpw_top$189 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$217 ;
+  wire [1:0] \crc_ok$214 ;
+  output crc_table_addr;
+  wire crc_table_addr;
+  wire \crc_table_addr$184 ;
+  input [32:0] crc_table_data;
+  wire [32:0] crc_table_data;
+  wire [32:0] \crc_table_data$186 ;
+  wire \crc_table_data$186.inverted ;
+  wire [15:0] \crc_table_data$186.poly ;
+  wire [15:0] \crc_table_data$186.start ;
+  wire \crc_table_data.inverted ;
+  wire [15:0] \crc_table_data.poly ;
+  wire [15:0] \crc_table_data.start ;
   wire [9:0] crc_widths;
-  wire [9:0] \crc_widths$187 ;
-  wire [4:0] \crc_widths$187[0] ;
-  wire [4:0] \crc_widths$187[1] ;
-  wire [9:0] \crc_widths$188 ;
-  wire [4:0] \crc_widths$188[0] ;
-  wire [4:0] \crc_widths$188[1] ;
+  wire [9:0] \crc_widths$181 ;
+  wire [4:0] \crc_widths$181[0] ;
+  wire [4:0] \crc_widths$181[1] ;
+  wire [9:0] \crc_widths$182 ;
+  wire [4:0] \crc_widths$182[0] ;
+  wire [4:0] \crc_widths$182[1] ;
   wire [4:0] \crc_widths[0] ;
   wire [4:0] \crc_widths[1] ;
-  wire [75:0] customs;
-  wire [37:0] \customs[0] ;
-  wire \customs[0].inverted ;
-  wire [15:0] \customs[0].poly ;
-  wire [15:0] \customs[0].start ;
-  wire [4:0] \customs[0].width ;
-  wire [37:0] \customs[1] ;
-  wire \customs[1].inverted ;
-  wire [15:0] \customs[1].poly ;
-  wire [15:0] \customs[1].start ;
-  wire [4:0] \customs[1].width ;
-  wire [274:0] cycle;
+  wire [208:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [3:0] \cycle.confirm_frames ;
@@ -10851,10 +10891,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
   wire \cycle.w0.signed ;
-  wire [37:0] \cycle.w0_crc ;
-  wire \cycle.w0_crc.inverted ;
-  wire [15:0] \cycle.w0_crc.poly ;
-  wire [15:0] \cycle.w0_crc.start ;
+  wire [4:0] \cycle.w0_crc ;
   wire [4:0] \cycle.w0_crc.width ;
   wire [11:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
@@ -10868,10 +10905,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
   wire \cycle.w1.signed ;
-  wire [37:0] \cycle.w1_crc ;
-  wire \cycle.w1_crc.inverted ;
-  wire [15:0] \cycle.w1_crc.poly ;
-  wire [15:0] \cycle.w1_crc.start ;
+  wire [4:0] \cycle.w1_crc ;
   wire [4:0] \cycle.w1_crc.width ;
   wire \cycle.w1_enable ;
   wire [54:0] data0;
@@ -10881,54 +10915,54 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$121 ;
-  wire [12:0] \delay$173 ;
+  wire [12:0] \delay$115 ;
+  wire [12:0] \delay$167 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$123 ;
+  wire [11:0] \delay_limit$117 ;
   wire delay_over;
-  wire \delay_over$102 ;
+  wire \delay_over$96 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  output \done$321 ;
-  wire \done$321 ;
-  wire \done$322 ;
+  output \done$318 ;
+  wire \done$318 ;
+  wire \done$319 ;
   wire doubtful;
   wire early;
-  wire \early$75 ;
+  wire \early$69 ;
   wire enable;
   wire [1:0] enables;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$293 ;
-  wire \events$293.ca_aborted ;
-  wire \events$293.ca_crc4_error ;
-  wire \events$293.ca_data_fault ;
-  wire \events$293.ca_no_answer ;
-  wire \events$293.ca_refused ;
-  wire [15:0] \events$302 ;
-  wire \events$302.aborted ;
-  wire \events$302.crc_word0 ;
-  wire \events$302.crc_word1 ;
-  wire \events$302.delay_jump ;
-  wire \events$302.delay_range ;
-  wire \events$302.lc_repeat ;
-  wire \events$302.lc_skip ;
-  wire \events$302.lc_zero ;
-  wire \events$302.no_ack ;
-  wire \events$302.no_start ;
-  wire \events$302.no_stop ;
-  wire \events$302.noise_event ;
-  wire \events$302.noisy_line ;
-  wire \events$302.overrun ;
-  wire \events$302.slo_stuck_low ;
-  wire \events$302.spw_mismatch ;
+  wire [4:0] \events$290 ;
+  wire \events$290.ca_aborted ;
+  wire \events$290.ca_crc4_error ;
+  wire \events$290.ca_data_fault ;
+  wire \events$290.ca_no_answer ;
+  wire \events$290.ca_refused ;
+  wire [15:0] \events$299 ;
+  wire \events$299.aborted ;
+  wire \events$299.crc_word0 ;
+  wire \events$299.crc_word1 ;
+  wire \events$299.delay_jump ;
+  wire \events$299.delay_range ;
+  wire \events$299.lc_repeat ;
+  wire \events$299.lc_skip ;
+  wire \events$299.lc_zero ;
+  wire \events$299.no_ack ;
+  wire \events$299.no_start ;
+  wire \events$299.no_stop ;
+  wire \events$299.noise_event ;
+  wire \events$299.noisy_line ;
+  wire \events$299.overrun ;
+  wire \events$299.slo_stuck_low ;
+  wire \events$299.spw_mismatch ;
   wire fault;
-  wire \fault$213 ;
+  wire \fault$210 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -10964,7 +10998,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$215 ;
+  wire [3:0] \fault_status$212 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -10974,7 +11008,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$251 ;
+  wire \first_rise$248 ;
   wire [31:0] first_rise_time;
   wire fixed;
   wire [12:0] fixed_delay;
@@ -11024,44 +11058,44 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
-  wire \frame_end$287 ;
+  wire \frame_end$284 ;
   wire frame_ok;
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$145 ;
+  wire [15:0] \half_period$139 ;
   wire held;
   input hold;
   wire hold;
-  wire \hold$285 ;
+  wire \hold$282 ;
   wire idle;
-  wire \idle$41 ;
-  wire \idle$50 ;
+  wire \idle$35 ;
+  wire \idle$44 ;
   wire in_clock;
-  wire \in_clock$109 ;
+  wire \in_clock$103 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$151 ;
-  wire [5:0] \lc$342 ;
+  wire [5:0] \lc$145 ;
+  wire [5:0] \lc$339 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$153 ;
+  wire [5:0] \lc_next$147 ;
   wire lc_repeat;
-  wire \lc_repeat$343 ;
+  wire \lc_repeat$340 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$344 ;
+  wire \lc_skip$341 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$345 ;
+  wire \lc_zero$342 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$162 ;
+  wire \level$156 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [274:0] live;
+  wire [208:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [3:0] \live.confirm_frames ;
@@ -11092,10 +11126,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
   wire \live.w0.signed ;
-  wire [37:0] \live.w0_crc ;
-  wire \live.w0_crc.inverted ;
-  wire [15:0] \live.w0_crc.poly ;
-  wire [15:0] \live.w0_crc.start ;
+  wire [4:0] \live.w0_crc ;
   wire [4:0] \live.w0_crc.width ;
   wire [11:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
@@ -11109,21 +11140,18 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
   wire \live.w1.signed ;
-  wire [37:0] \live.w1_crc ;
-  wire \live.w1_crc.inverted ;
-  wire [15:0] \live.w1_crc.poly ;
-  wire [15:0] \live.w1_crc.start ;
+  wire [4:0] \live.w1_crc ;
   wire [4:0] \live.w1_crc.width ;
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$73 ;
+  wire \locked$67 ;
   output ma;
   wire ma;
-  wire \ma$317 ;
+  wire \ma$314 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$104 ;
+  wire \ma_busy$98 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -11132,30 +11160,30 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire mismatch;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$96 ;
+  wire \no_start_expired$90 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$119 ;
+  wire [24:0] \no_start_limit$113 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$181 ;
+  wire \noisy$175 ;
   input [31:0] now;
   wire [31:0] now;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$320 ;
+  wire \overrun$317 ;
   wire passed;
   wire pending;
   wire [23:0] period;
   wire periodic;
-  input \periodic$45 ;
-  wire \periodic$45 ;
+  input \periodic$39 ;
+  wire \periodic$39 ;
   wire quiet;
-  wire \quiet$128 ;
+  wire \quiet$122 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$130 ;
+  wire \quiet_live$124 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -11171,38 +11199,38 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$227 ;
-  wire \report$231 ;
+  wire \report$224 ;
+  wire \report$228 ;
   wire report_delay;
-  wire \report_delay$234 ;
+  wire \report_delay$231 ;
   wire report_frame;
-  wire \report_frame$212 ;
-  wire \report_frame$232 ;
+  wire \report_frame$209 ;
+  wire \report_frame$229 ;
   wire request;
-  wire [17:0] \request$255 ;
-  wire [6:0] \request$255.address ;
-  wire [6:0] \request$255.count ;
-  wire [2:0] \request$255.slave_id ;
-  wire \request$255.write ;
-  wire \request$58 ;
+  wire [17:0] \request$252 ;
+  wire [6:0] \request$252.address ;
+  wire [6:0] \request$252.count ;
+  wire [2:0] \request$252.slave_id ;
+  wire \request$252.write ;
+  wire \request$52 ;
   wire restart;
-  wire \restart$166 ;
+  wire \restart$160 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$326 ;
-  wire [186:0] \result$326 ;
-  wire \result$326.cds ;
-  wire \result$326.delay_settled ;
-  wire [7:0] \result$326.delay_spread ;
-  wire [5:0] \result$326.lc ;
-  wire \result$326.lc_repeat ;
-  wire \result$326.lc_skip ;
-  wire \result$326.lc_zero ;
-  wire [12:0] \result$326.line_delay ;
-  wire [3:0] \result$326.noise_events ;
-  wire [12:0] \result$326.settled_delay ;
-  wire \result$326.spw_mismatch ;
+  output [186:0] \result$323 ;
+  wire [186:0] \result$323 ;
+  wire \result$323.cds ;
+  wire \result$323.delay_settled ;
+  wire [7:0] \result$323.delay_spread ;
+  wire [5:0] \result$323.lc ;
+  wire \result$323.lc_repeat ;
+  wire \result$323.lc_skip ;
+  wire \result$323.lc_zero ;
+  wire [12:0] \result$323.line_delay ;
+  wire [3:0] \result$323.noise_events ;
+  wire [12:0] \result$323.settled_delay ;
+  wire \result$323.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -11220,18 +11248,18 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$326.status ;
-  wire [31:0] \result$326.timestamp ;
-  wire [57:0] \result$326.word0 ;
-  wire \result$326.word0.crc_ok ;
-  wire \result$326.word0.ne ;
-  wire \result$326.word0.nw ;
-  wire [54:0] \result$326.word0.position ;
-  wire [42:0] \result$326.word1 ;
-  wire \result$326.word1.crc_ok ;
-  wire \result$326.word1.ne ;
-  wire \result$326.word1.nw ;
-  wire [39:0] \result$326.word1.position ;
+  wire [3:0] \result$323.status ;
+  wire [31:0] \result$323.timestamp ;
+  wire [57:0] \result$323.word0 ;
+  wire \result$323.word0.crc_ok ;
+  wire \result$323.word0.ne ;
+  wire \result$323.word0.nw ;
+  wire [54:0] \result$323.word0.position ;
+  wire [42:0] \result$323.word1 ;
+  wire \result$323.word1.crc_ok ;
+  wire \result$323.word1.ne ;
+  wire \result$323.word1.nw ;
+  wire [39:0] \result$323.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -11243,55 +11271,55 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$159 ;
+  wire \resync$153 ;
   wire [15:0] rises;
-  wire [15:0] \rises$138 ;
+  wire [15:0] \rises$132 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$349 ;
+  wire \sample$346 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$332 ;
+  wire [12:0] \settled_delay$329 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$103 ;
-  wire \slo$52 ;
-  wire \slo$64 ;
+  wire \slo$46 ;
+  wire \slo$58 ;
+  wire \slo$97 ;
   wire slo_stuck;
-  wire \slo_stuck$98 ;
+  wire \slo_stuck$92 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$100 ;
+  wire \slo_stuck_live$94 ;
   wire slots_full;
-  wire \slots_full$84 ;
+  wire \slots_full$78 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$346 ;
+  wire \spw_mismatch$343 ;
   wire ssi;
-  wire \ssi$201 ;
-  wire \ssi$205 ;
+  wire \ssi$198 ;
+  wire \ssi$202 ;
   wire ssi_double;
-  wire \ssi_double$206 ;
+  wire \ssi_double$203 ;
   wire ssi_error;
-  wire \ssi_error$207 ;
+  wire \ssi_error$204 ;
   wire ssi_error_low;
   input start;
   wire start;
-  input \start$267 ;
-  wire \start$267 ;
-  wire \start$43 ;
+  input \start$264 ;
+  wire \start$264 ;
+  wire \start$37 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$136 ;
+  wire [15:0] \start_slot$130 ;
   wire started;
-  wire \started$134 ;
-  wire \started$82 ;
+  wire \started$128 ;
+  wire \started$76 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -11328,7 +11356,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$229 ;
+  wire [3:0] \status$226 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -11346,29 +11374,29 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$325 ;
+  wire [3:0] \status$322 ;
   wire stop_bit;
-  wire \stop_bit$88 ;
+  wire \stop_bit$82 ;
   wire stopped;
-  wire \stopped$86 ;
+  wire \stopped$80 ;
   wire [31:0] time_now;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$117 ;
+  wire [23:0] \timeout_limit$111 ;
   wire [23:0] timeout_live;
   wire timeout_over;
-  wire \timeout_over$80 ;
+  wire \timeout_over$74 ;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$196 ;
+  wire [7:0] \tolerance$193 ;
   input trigger;
   wire trigger;
-  wire \trigger$54 ;
+  wire \trigger$48 ;
   wire unconfirmed;
   wire valid;
-  wire \valid$236 ;
-  output \valid$323 ;
-  wire \valid$323 ;
+  wire \valid$233 ;
+  output \valid$320 ;
+  wire \valid$320 ;
   wire valid_out;
   wire waiting;
   wire watch;
@@ -11385,34 +11413,34 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$149 ;
+  wire [1:0] \word_count$143 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$185 ;
-  wire [11:0] \words$185[0] ;
+  wire [23:0] \words$179 ;
+  wire [11:0] \words$179[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$185[0].crc ;
-  wire [5:0] \words$185[0].data_bits ;
-  wire \words$185[0].gray ;
-  wire \words$185[0].lc ;
-  wire \words$185[0].nenw ;
-  wire \words$185[0].signed ;
-  wire [11:0] \words$185[1] ;
+  wire [1:0] \words$179[0].crc ;
+  wire [5:0] \words$179[0].data_bits ;
+  wire \words$179[0].gray ;
+  wire \words$179[0].lc ;
+  wire \words$179[0].nenw ;
+  wire \words$179[0].signed ;
+  wire [11:0] \words$179[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$185[1].crc ;
-  wire [5:0] \words$185[1].data_bits ;
-  wire \words$185[1].gray ;
-  wire \words$185[1].lc ;
-  wire \words$185[1].nenw ;
-  wire \words$185[1].signed ;
+  wire [1:0] \words$179[1].crc ;
+  wire [5:0] \words$179[1].data_bits ;
+  wire \words$179[1].gray ;
+  wire \words$179[1].lc ;
+  wire \words$179[1].nenw ;
+  wire \words$179[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -11438,17 +11466,17 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \words[1].nenw ;
   wire \words[1].signed ;
   wire zero;
-  assign periodic = \periodic$45  | frames;
-  assign arm = live[259] ? first_rise : ma_arm;
+  assign periodic = \periodic$39  | frames;
+  assign arm = live[193] ? first_rise : ma_arm;
   assign \$1  = live[144:141] != 4'hf;
-  assign \$2  = ~ live[259];
+  assign \$2  = ~ live[193];
   assign enable = \$1  & \$2 ;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$3  = ~ started_before;
-  assign \check$174  = started & \$3 ;
-  assign \$4  = ~ live[259];
-  assign cdm = \cdm$282  & \$4 ;
-  assign \$5  = ~ live[259];
+  assign \check$168  = started & \$3 ;
+  assign \$4  = ~ live[193];
+  assign cdm = \cdm$279  & \$4 ;
+  assign \$5  = ~ live[193];
   assign frame_ok = passed & \$5 ;
   assign \$6  = result[2:0] == 1'h1;
   assign \$7  = ca_done & \$6 ;
@@ -11465,10 +11493,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \$18  = report_frame & \$17 ;
   assign \$19  = status == 4'he;
   assign \$20  = report_frame & \$19 ;
-  assign \busy$318  = ~ idle;
+  assign \busy$315  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$21  = ~ \clear$139 ;
-  assign \$22  = \sample$349  & \$21 ;
+  assign \$21  = ~ \clear$133 ;
+  assign \$22  = \sample$346  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -11513,7 +11541,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .delay_over(delay_over),
     .early(early),
     .end_check(live[124]),
-    .fault(\restart$166 ),
+    .fault(\restart$160 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -11525,23 +11553,23 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .ma_busy(ma_busy),
     .ma_enough(ma_enough),
     .ma_held(ma_held),
-    .ma_hold(\hold$285 ),
+    .ma_hold(\hold$282 ),
     .ma_run(run),
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$139 ),
+    .receiver_clear(\clear$133 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$64 ),
+    .slo(\slo$58 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
-    .ssi(live[259]),
+    .ssi(live[193]),
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
@@ -11551,19 +11579,19 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   );
   \biss_master_wb.ch0.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$294 ),
+    .clear(\clear$291 ),
     .clk(clk),
-    .events(\events$302 ),
+    .events(\events$299 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_wb.ch0.core.counters  counters (
-    .clear(\clear$294 ),
+    .clear(\clear$291 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$293 ),
+    .events(\events$290 ),
     .rst(rst)
   );
   \biss_master_wb.ch0.core.decoder  decoder (
@@ -11572,8 +11600,8 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
+    .crc_table_addr(crc_table_addr),
     .crc_widths(crc_widths),
-    .customs(customs),
     .data0(data0),
     .data1(spw),
     .frame_end(frame_done),
@@ -11582,21 +11610,22 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13105$272 (live[274:272]),
-    .receiver_clear(\clear$139 ),
+    .\port$13099$206 (live[208:206]),
+    .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
-    .ssi(live[259]),
+    .ssi(live[193]),
     .start_slot(start_slot),
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
+    .\table (crc_table_data),
     .word_count(word_count),
     .words(words)
   );
   \biss_master_wb.ch0.core.delay_check  delay_check (
-    .check(\check$174 ),
+    .check(\check$168 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -11615,10 +11644,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$64 ),
+    .level(\slo$58 ),
     .limit(live[140:137]),
     .noisy(noisy),
-    .restart(\restart$166 ),
+    .restart(\restart$160 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -11626,11 +11655,11 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   \biss_master_wb.ch0.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$104 ),
+    .\clocking (\ma_busy$98 ),
     .first_rise(first_rise),
     .half_period(live[15:0]),
     .held(ma_held),
-    .hold(\hold$285 ),
+    .hold(\hold$282 ),
     .ma(ma),
     .rises(rises),
     .rst(rst),
@@ -11638,24 +11667,24 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .second_rise(ma_arm)
   );
   \biss_master_wb.ch0.core.ma_stop  ma_stop (
-    .clear(\clear$139 ),
+    .clear(\clear$133 ),
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13105$199 (live[199]),
+    .\port$13099$166 (live[166]),
     .rises(rises),
     .rst(rst),
-    .ssi(live[259]),
-    .ssi_double(live[274]),
-    .ssi_error(live[272]),
+    .ssi(live[193]),
+    .ssi_double(live[208]),
+    .ssi_error(live[206]),
     .start_slot(start_slot),
     .\started$23 (started),
-    .words(\words$185 )
+    .words(\words$179 )
   );
   \biss_master_wb.ch0.core.register_access  register_access (
-    .abort(\abort$269 ),
+    .abort(\abort$266 ),
     .busy(frames),
-    .cdm(\cdm$282 ),
+    .cdm(\cdm$279 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -11665,38 +11694,38 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$255 ),
+    .request(\request$252 ),
     .result(result),
     .rst(rst),
-    .start(\start$267 ),
+    .start(\start$264 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch0.core.results  results (
     .clk(clk),
-    .done(\done$321 ),
+    .done(\done$318 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$326 ),
+    .result(\result$323 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$323 )
+    .valid_out(\valid$320 )
   );
   \biss_master_wb.ch0.core.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$350 ),
+    .\bit (\bit$347 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(live[15:0]),
-    .level(\slo$64 ),
+    .level(\slo$58 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13105$259 (live[271:259]),
-    .receiver_clear(\clear$139 ),
+    .\port$13099$193 (live[205:193]),
+    .receiver_clear(\clear$133 ),
     .rst(rst),
-    .sample(\sample$349 ),
+    .sample(\sample$346 ),
     .slo(slo)
   );
   \biss_master_wb.ch0.core.scheduler  scheduler (
@@ -11718,20 +11747,20 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13119$0 (\bit ),
+    .\port$13112$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_wb.ch0.core.spw_check  spw_check (
-    .bits(live[205:200]),
+    .bits(live[172:167]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .tolerance(live[258:251])
+    .tolerance(live[192:185])
   );
   \biss_master_wb.ch0.core.time_base  time_base (
     .clk(clk),
@@ -11751,7 +11780,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$104 ),
+    .ma_busy(\ma_busy$98 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -11760,7 +11789,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$64 ),
+    .slo(\slo$58 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -11769,13 +11798,13 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   );
   \biss_master_wb.ch0.core.verdict  verdict (
     .cfg(live),
-    .clean(\clean$351 ),
+    .clean(\clean$348 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$166 ),
+    .fault(\restart$160 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -11786,7 +11815,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$6007$0 (\$28 ),
+    .\port$6026$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -11804,7 +11833,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$24  = \bit$350 ;
+    \$24  = \bit$347 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -11825,177 +11854,179 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$27  = \clean$351 ;
+    \$27  = \clean$348 ;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
-  assign \idle$41  = idle;
-  assign \start$43  = start;
+  assign \idle$35  = idle;
+  assign \start$37  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$50  = idle;
-  assign \slo$52  = slo;
-  assign \trigger$54  = trigger;
+  assign \idle$44  = idle;
+  assign \slo$46  = slo;
+  assign \trigger$48  = trigger;
   assign cfg_hold = hold;
-  assign \request$58  = request;
-  assign \abort$59  = abort;
+  assign \request$52  = request;
+  assign \abort$53  = abort;
   assign ok = config_ok;
   assign end_check = live[124];
   assign cycle = live;
-  assign level = \slo$64 ;
+  assign level = \slo$58 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$73  = locked;
-  assign \early$75  = early;
+  assign \locked$67  = locked;
+  assign \early$69  = early;
   assign frame_end = frame_done;
-  assign ssi = live[259];
-  assign \timeout_over$80  = timeout_over;
-  assign \started$82  = started;
-  assign \slots_full$84  = slots_full;
-  assign \stopped$86  = stopped;
-  assign \stop_bit$88  = stop_bit;
+  assign ssi = live[193];
+  assign \timeout_over$74  = timeout_over;
+  assign \started$76  = started;
+  assign \slots_full$78  = slots_full;
+  assign \stopped$80  = stopped;
+  assign \stop_bit$82  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$92  = break_over;
-  assign \ack_expired$94  = ack_expired;
-  assign \no_start_expired$96  = no_start_expired;
-  assign \slo_stuck$98  = slo_stuck;
-  assign \slo_stuck_live$100  = slo_stuck_live;
-  assign \delay_over$102  = delay_over;
-  assign \slo$103  = \slo$64 ;
-  assign \clocking  = \ma_busy$104 ;
+  assign \break_over$86  = break_over;
+  assign \ack_expired$88  = ack_expired;
+  assign \no_start_expired$90  = no_start_expired;
+  assign \slo_stuck$92  = slo_stuck;
+  assign \slo_stuck_live$94  = slo_stuck_live;
+  assign \delay_over$96  = delay_over;
+  assign \slo$97  = \slo$58 ;
+  assign \clocking  = \ma_busy$98 ;
   assign timer_clear = clear;
-  assign \in_clock$109  = in_clock;
+  assign \in_clock$103  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$115  = ack_limit;
-  assign \timeout_limit$117  = timeout_limit;
-  assign \no_start_limit$119  = no_start_limit;
-  assign \delay$121  = delay;
-  assign \delay_limit$123  = delay_limit;
+  assign \ack_limit$109  = ack_limit;
+  assign \timeout_limit$111  = timeout_limit;
+  assign \no_start_limit$113  = no_start_limit;
+  assign \delay$115  = delay;
+  assign \delay_limit$117  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$128  = quiet;
-  assign \quiet_live$130  = quiet_live;
+  assign \quiet$122  = quiet;
+  assign \quiet_live$124  = quiet_live;
   assign ma_run = run;
   assign half_period = live[15:0];
-  assign \started$134  = started;
-  assign \start_slot$136  = start_slot;
-  assign \rises$138  = rises;
-  assign receiver_clear = \clear$139 ;
+  assign \started$128  = started;
+  assign \start_slot$130  = start_slot;
+  assign \rises$132  = rises;
+  assign receiver_clear = \clear$133 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$145  = live[15:0];
-  assign \word_count$149  = word_count;
-  assign \lc$151  = lc;
+  assign \half_period$139  = live[15:0];
+  assign \word_count$143  = word_count;
+  assign \lc$145  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$153  = { lc[4:0], \bit  };
+  assign \lc_next$147  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$159  = resync;
+  assign \resync$153  = resync;
   assign waiting = watch;
-  assign \level$162  = \slo$64 ;
+  assign \level$156  = \slo$58 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$166 ;
+  assign fault = \restart$160 ;
   assign limit = live[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$173  = delay;
+  assign \delay$167  = delay;
   assign \$signal  = learn;
-  assign \clean$179  = clean;
-  assign \noisy$181  = noisy;
+  assign \clean$173  = clean;
+  assign \noisy$175  = noisy;
   assign jump = delay_jump;
-  assign \crc_widths$187  = crc_widths;
-  assign \crc_widths$188  = crc_widths;
-  assign enables = { live[199], 1'h1 };
-  assign \cpw_top$192  = cpw_top;
+  assign \crc_widths$181  = crc_widths;
+  assign \crc_widths$182  = crc_widths;
+  assign \crc_table_addr$184  = crc_table_addr;
+  assign \crc_table_data$186  = crc_table_data;
+  assign enables = { live[166], 1'h1 };
+  assign \cpw_top$189  = cpw_top;
   assign data1 = spw;
-  assign bits = live[205:200];
-  assign \tolerance$196  = live[258:251];
+  assign bits = live[172:167];
+  assign \tolerance$193  = live[192:185];
   assign match = spw_match;
-  assign fixed = live[259];
-  assign fixed_delay = { 1'h0, live[271:260] };
-  assign \ssi$201  = live[259];
-  assign ssi_error = live[272];
-  assign ssi_error_low = live[273];
-  assign ssi_double = live[274];
-  assign \ssi$205  = live[259];
-  assign \ssi_double$206  = live[274];
-  assign \ssi_error$207  = live[272];
+  assign fixed = live[193];
+  assign fixed_delay = { 1'h0, live[205:194] };
+  assign \ssi$198  = live[193];
+  assign ssi_error = live[206];
+  assign ssi_error_low = live[207];
+  assign ssi_double = live[208];
+  assign \ssi$202  = live[193];
+  assign \ssi_double$203  = live[208];
+  assign \ssi_error$204  = live[206];
   assign mismatch = copy_mismatch;
   assign cfg = live;
-  assign \report_frame$212  = report_frame;
-  assign \fault$213  = \restart$166 ;
-  assign \fault_status$215  = fault_status;
-  assign \crc_ok$217  = crc_ok;
+  assign \report_frame$209  = report_frame;
+  assign \fault$210  = \restart$160 ;
+  assign \fault_status$212  = fault_status;
+  assign \crc_ok$214  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$227  = report;
-  assign \status$229  = status;
+  assign \report$224  = report;
+  assign \status$226  = status;
   assign setting = live[148:145];
-  assign \report$231  = report;
-  assign \report_frame$232  = report_frame;
-  assign \report_delay$234  = report_delay;
-  assign \valid$236  = valid;
+  assign \report$228  = report;
+  assign \report_frame$229  = report_frame;
+  assign \report_delay$231  = report_delay;
+  assign \valid$233  = valid;
   assign word_crc_ok = { \$28 , crc_ok[0] };
-  assign \first_rise$251  = first_rise;
+  assign \first_rise$248  = first_rise;
   assign time_now = now;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$267 ;
-  assign ca_abort = \abort$269 ;
+  assign ca_start = \start$264 ;
+  assign ca_abort = \abort$266 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$278  = frames;
+  assign \busy$275  = frames;
   assign done = ca_done;
   assign held = ma_held;
-  assign ma_hold = \hold$285 ;
-  assign \frame_end$287  = report;
+  assign ma_hold = \hold$282 ;
+  assign \frame_end$284  = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$294 ;
+  assign clear_counters = \clear$291 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$307  = \clear$294 ;
+  assign \clear$304  = \clear$291 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$315  = count_busy;
-  assign \ma$317  = ma;
-  assign \overrun$320  = overrun;
-  assign \done$322  = \done$321 ;
-  assign valid_out = \valid$323 ;
-  assign \status$325  = \result$326 [3:0];
-  assign timestamp = \result$326 [35:4];
-  assign line_delay = \result$326 [48:36];
-  assign \cds$329  = \result$326 [49];
-  assign noise_events = \result$326 [53:50];
-  assign delay_settled = \result$326 [54];
-  assign \settled_delay$332  = \result$326 [67:55];
-  assign delay_spread = \result$326 [75:68];
-  assign word0_position = \result$326 [130:76];
-  assign word0_ne = \result$326 [131];
-  assign word0_nw = \result$326 [132];
-  assign word0_crc_ok = \result$326 [133];
-  assign word1_position = \result$326 [173:134];
-  assign word1_ne = \result$326 [174];
-  assign word1_nw = \result$326 [175];
-  assign word1_crc_ok = \result$326 [176];
-  assign \lc$342  = \result$326 [182:177];
-  assign \lc_repeat$343  = \result$326 [183];
-  assign \lc_skip$344  = \result$326 [184];
-  assign \lc_zero$345  = \result$326 [185];
-  assign \spw_mismatch$346  = \result$326 [186];
+  assign \busy$312  = count_busy;
+  assign \ma$314  = ma;
+  assign \overrun$317  = overrun;
+  assign \done$319  = \done$318 ;
+  assign valid_out = \valid$320 ;
+  assign \status$322  = \result$323 [3:0];
+  assign timestamp = \result$323 [35:4];
+  assign line_delay = \result$323 [48:36];
+  assign \cds$326  = \result$323 [49];
+  assign noise_events = \result$323 [53:50];
+  assign delay_settled = \result$323 [54];
+  assign \settled_delay$329  = \result$323 [67:55];
+  assign delay_spread = \result$323 [75:68];
+  assign word0_position = \result$323 [130:76];
+  assign word0_ne = \result$323 [131];
+  assign word0_nw = \result$323 [132];
+  assign word0_crc_ok = \result$323 [133];
+  assign word1_position = \result$323 [173:134];
+  assign word1_ne = \result$323 [174];
+  assign word1_nw = \result$323 [175];
+  assign word1_crc_ok = \result$323 [176];
+  assign \lc$339  = \result$323 [182:177];
+  assign \lc_repeat$340  = \result$323 [183];
+  assign \lc_skip$341  = \result$323 [184];
+  assign \lc_zero$342  = \result$323 [185];
+  assign \spw_mismatch$343  = \result$323 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -12014,31 +12045,25 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \live.w0.crc  = live[158:157];
   assign \live.w0.gray  = live[159];
   assign \live.w0.signed  = live[160];
-  assign \live.w0_crc  = live[198:161];
+  assign \live.w0_crc  = live[165:161];
   assign \live.w0_crc.width  = live[165:161];
-  assign \live.w0_crc.poly  = live[181:166];
-  assign \live.w0_crc.start  = live[197:182];
-  assign \live.w0_crc.inverted  = live[198];
-  assign \live.w1_enable  = live[199];
-  assign \live.w1  = live[211:200];
-  assign \live.w1.data_bits  = live[205:200];
-  assign \live.w1.nenw  = live[206];
-  assign \live.w1.lc  = live[207];
-  assign \live.w1.crc  = live[209:208];
-  assign \live.w1.gray  = live[210];
-  assign \live.w1.signed  = live[211];
-  assign \live.w1_crc  = live[249:212];
-  assign \live.w1_crc.width  = live[216:212];
-  assign \live.w1_crc.poly  = live[232:217];
-  assign \live.w1_crc.start  = live[248:233];
-  assign \live.w1_crc.inverted  = live[249];
-  assign \live.spw_check  = live[250];
-  assign \live.spw_tolerance  = live[258:251];
-  assign \live.ssi  = live[259];
-  assign \live.ssi_delay  = live[271:260];
-  assign \live.ssi_error  = live[272];
-  assign \live.ssi_error_low  = live[273];
-  assign \live.ssi_double  = live[274];
+  assign \live.w1_enable  = live[166];
+  assign \live.w1  = live[178:167];
+  assign \live.w1.data_bits  = live[172:167];
+  assign \live.w1.nenw  = live[173];
+  assign \live.w1.lc  = live[174];
+  assign \live.w1.crc  = live[176:175];
+  assign \live.w1.gray  = live[177];
+  assign \live.w1.signed  = live[178];
+  assign \live.w1_crc  = live[183:179];
+  assign \live.w1_crc.width  = live[183:179];
+  assign \live.spw_check  = live[184];
+  assign \live.spw_tolerance  = live[192:185];
+  assign \live.ssi  = live[193];
+  assign \live.ssi_delay  = live[205:194];
+  assign \live.ssi_error  = live[206];
+  assign \live.ssi_error_low  = live[207];
+  assign \live.ssi_double  = live[208];
   assign \cycle.ma_half_period  = live[15:0];
   assign \cycle.request_period  = live[39:16];
   assign \cycle.break_time  = live[63:40];
@@ -12057,31 +12082,25 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \cycle.w0.crc  = live[158:157];
   assign \cycle.w0.gray  = live[159];
   assign \cycle.w0.signed  = live[160];
-  assign \cycle.w0_crc  = live[198:161];
+  assign \cycle.w0_crc  = live[165:161];
   assign \cycle.w0_crc.width  = live[165:161];
-  assign \cycle.w0_crc.poly  = live[181:166];
-  assign \cycle.w0_crc.start  = live[197:182];
-  assign \cycle.w0_crc.inverted  = live[198];
-  assign \cycle.w1_enable  = live[199];
-  assign \cycle.w1  = live[211:200];
-  assign \cycle.w1.data_bits  = live[205:200];
-  assign \cycle.w1.nenw  = live[206];
-  assign \cycle.w1.lc  = live[207];
-  assign \cycle.w1.crc  = live[209:208];
-  assign \cycle.w1.gray  = live[210];
-  assign \cycle.w1.signed  = live[211];
-  assign \cycle.w1_crc  = live[249:212];
-  assign \cycle.w1_crc.width  = live[216:212];
-  assign \cycle.w1_crc.poly  = live[232:217];
-  assign \cycle.w1_crc.start  = live[248:233];
-  assign \cycle.w1_crc.inverted  = live[249];
-  assign \cycle.spw_check  = live[250];
-  assign \cycle.spw_tolerance  = live[258:251];
-  assign \cycle.ssi  = live[259];
-  assign \cycle.ssi_delay  = live[271:260];
-  assign \cycle.ssi_error  = live[272];
-  assign \cycle.ssi_error_low  = live[273];
-  assign \cycle.ssi_double  = live[274];
+  assign \cycle.w1_enable  = live[166];
+  assign \cycle.w1  = live[178:167];
+  assign \cycle.w1.data_bits  = live[172:167];
+  assign \cycle.w1.nenw  = live[173];
+  assign \cycle.w1.lc  = live[174];
+  assign \cycle.w1.crc  = live[176:175];
+  assign \cycle.w1.gray  = live[177];
+  assign \cycle.w1.signed  = live[178];
+  assign \cycle.w1_crc  = live[183:179];
+  assign \cycle.w1_crc.width  = live[183:179];
+  assign \cycle.spw_check  = live[184];
+  assign \cycle.spw_tolerance  = live[192:185];
+  assign \cycle.ssi  = live[193];
+  assign \cycle.ssi_delay  = live[205:194];
+  assign \cycle.ssi_error  = live[206];
+  assign \cycle.ssi_error_low  = live[207];
+  assign \cycle.ssi_double  = live[208];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -12096,36 +12115,32 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$185[0]  = \words$185 [11:0];
-  assign \words$185[0].data_bits  = \words$185 [5:0];
-  assign \words$185[0].nenw  = \words$185 [6];
-  assign \words$185[0].lc  = \words$185 [7];
-  assign \words$185[0].crc  = \words$185 [9:8];
-  assign \words$185[0].gray  = \words$185 [10];
-  assign \words$185[0].signed  = \words$185 [11];
-  assign \words$185[1]  = \words$185 [23:12];
-  assign \words$185[1].data_bits  = \words$185 [17:12];
-  assign \words$185[1].nenw  = \words$185 [18];
-  assign \words$185[1].lc  = \words$185 [19];
-  assign \words$185[1].crc  = \words$185 [21:20];
-  assign \words$185[1].gray  = \words$185 [22];
-  assign \words$185[1].signed  = \words$185 [23];
+  assign \words$179[0]  = \words$179 [11:0];
+  assign \words$179[0].data_bits  = \words$179 [5:0];
+  assign \words$179[0].nenw  = \words$179 [6];
+  assign \words$179[0].lc  = \words$179 [7];
+  assign \words$179[0].crc  = \words$179 [9:8];
+  assign \words$179[0].gray  = \words$179 [10];
+  assign \words$179[0].signed  = \words$179 [11];
+  assign \words$179[1]  = \words$179 [23:12];
+  assign \words$179[1].data_bits  = \words$179 [17:12];
+  assign \words$179[1].nenw  = \words$179 [18];
+  assign \words$179[1].lc  = \words$179 [19];
+  assign \words$179[1].crc  = \words$179 [21:20];
+  assign \words$179[1].gray  = \words$179 [22];
+  assign \words$179[1].signed  = \words$179 [23];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign \crc_widths$187[0]  = crc_widths[4:0];
-  assign \crc_widths$187[1]  = crc_widths[9:5];
-  assign \crc_widths$188[0]  = crc_widths[4:0];
-  assign \crc_widths$188[1]  = crc_widths[9:5];
-  assign \customs[0]  = customs[37:0];
-  assign \customs[0].width  = customs[4:0];
-  assign \customs[0].poly  = customs[20:5];
-  assign \customs[0].start  = customs[36:21];
-  assign \customs[0].inverted  = customs[37];
-  assign \customs[1]  = customs[75:38];
-  assign \customs[1].width  = customs[42:38];
-  assign \customs[1].poly  = customs[58:43];
-  assign \customs[1].start  = customs[74:59];
-  assign \customs[1].inverted  = customs[75];
+  assign \crc_widths$181[0]  = crc_widths[4:0];
+  assign \crc_widths$181[1]  = crc_widths[9:5];
+  assign \crc_widths$182[0]  = crc_widths[4:0];
+  assign \crc_widths$182[1]  = crc_widths[9:5];
+  assign \crc_table_data.poly  = crc_table_data[15:0];
+  assign \crc_table_data.start  = crc_table_data[31:16];
+  assign \crc_table_data.inverted  = crc_table_data[32];
+  assign \crc_table_data$186.poly  = crc_table_data[15:0];
+  assign \crc_table_data$186.start  = crc_table_data[31:16];
+  assign \crc_table_data$186.inverted  = crc_table_data[32];
   assign \cfg.ma_half_period  = live[15:0];
   assign \cfg.request_period  = live[39:16];
   assign \cfg.break_time  = live[63:40];
@@ -12144,31 +12159,25 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \cfg.w0.crc  = live[158:157];
   assign \cfg.w0.gray  = live[159];
   assign \cfg.w0.signed  = live[160];
-  assign \cfg.w0_crc  = live[198:161];
+  assign \cfg.w0_crc  = live[165:161];
   assign \cfg.w0_crc.width  = live[165:161];
-  assign \cfg.w0_crc.poly  = live[181:166];
-  assign \cfg.w0_crc.start  = live[197:182];
-  assign \cfg.w0_crc.inverted  = live[198];
-  assign \cfg.w1_enable  = live[199];
-  assign \cfg.w1  = live[211:200];
-  assign \cfg.w1.data_bits  = live[205:200];
-  assign \cfg.w1.nenw  = live[206];
-  assign \cfg.w1.lc  = live[207];
-  assign \cfg.w1.crc  = live[209:208];
-  assign \cfg.w1.gray  = live[210];
-  assign \cfg.w1.signed  = live[211];
-  assign \cfg.w1_crc  = live[249:212];
-  assign \cfg.w1_crc.width  = live[216:212];
-  assign \cfg.w1_crc.poly  = live[232:217];
-  assign \cfg.w1_crc.start  = live[248:233];
-  assign \cfg.w1_crc.inverted  = live[249];
-  assign \cfg.spw_check  = live[250];
-  assign \cfg.spw_tolerance  = live[258:251];
-  assign \cfg.ssi  = live[259];
-  assign \cfg.ssi_delay  = live[271:260];
-  assign \cfg.ssi_error  = live[272];
-  assign \cfg.ssi_error_low  = live[273];
-  assign \cfg.ssi_double  = live[274];
+  assign \cfg.w1_enable  = live[166];
+  assign \cfg.w1  = live[178:167];
+  assign \cfg.w1.data_bits  = live[172:167];
+  assign \cfg.w1.nenw  = live[173];
+  assign \cfg.w1.lc  = live[174];
+  assign \cfg.w1.crc  = live[176:175];
+  assign \cfg.w1.gray  = live[177];
+  assign \cfg.w1.signed  = live[178];
+  assign \cfg.w1_crc  = live[183:179];
+  assign \cfg.w1_crc.width  = live[183:179];
+  assign \cfg.spw_check  = live[184];
+  assign \cfg.spw_tolerance  = live[192:185];
+  assign \cfg.ssi  = live[193];
+  assign \cfg.ssi_delay  = live[205:194];
+  assign \cfg.ssi_error  = live[206];
+  assign \cfg.ssi_error_low  = live[207];
+  assign \cfg.ssi_double  = live[208];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -12192,41 +12201,41 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$255.slave_id  = \request$255 [2:0];
-  assign \request$255.address  = \request$255 [9:3];
-  assign \request$255.count  = \request$255 [16:10];
-  assign \request$255.write  = \request$255 [17];
+  assign \request$252.slave_id  = \request$252 [2:0];
+  assign \request$252.address  = \request$252 [9:3];
+  assign \request$252.count  = \request$252 [16:10];
+  assign \request$252.write  = \request$252 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$293.ca_crc4_error  = \events$293 [0];
-  assign \events$293.ca_no_answer  = \events$293 [1];
-  assign \events$293.ca_refused  = \events$293 [2];
-  assign \events$293.ca_aborted  = \events$293 [3];
-  assign \events$293.ca_data_fault  = \events$293 [4];
+  assign \events$290.ca_crc4_error  = \events$290 [0];
+  assign \events$290.ca_no_answer  = \events$290 [1];
+  assign \events$290.ca_refused  = \events$290 [2];
+  assign \events$290.ca_aborted  = \events$290 [3];
+  assign \events$290.ca_data_fault  = \events$290 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$302.crc_word0  = \events$302 [0];
-  assign \events$302.crc_word1  = \events$302 [1];
-  assign \events$302.no_ack  = \events$302 [2];
-  assign \events$302.no_start  = \events$302 [3];
-  assign \events$302.delay_range  = \events$302 [4];
-  assign \events$302.slo_stuck_low  = \events$302 [5];
-  assign \events$302.lc_repeat  = \events$302 [6];
-  assign \events$302.lc_skip  = \events$302 [7];
-  assign \events$302.lc_zero  = \events$302 [8];
-  assign \events$302.spw_mismatch  = \events$302 [9];
-  assign \events$302.overrun  = \events$302 [10];
-  assign \events$302.aborted  = \events$302 [11];
-  assign \events$302.no_stop  = \events$302 [12];
-  assign \events$302.noisy_line  = \events$302 [13];
-  assign \events$302.delay_jump  = \events$302 [14];
-  assign \events$302.noise_event  = \events$302 [15];
+  assign \events$299.crc_word0  = \events$299 [0];
+  assign \events$299.crc_word1  = \events$299 [1];
+  assign \events$299.no_ack  = \events$299 [2];
+  assign \events$299.no_start  = \events$299 [3];
+  assign \events$299.delay_range  = \events$299 [4];
+  assign \events$299.slo_stuck_low  = \events$299 [5];
+  assign \events$299.lc_repeat  = \events$299 [6];
+  assign \events$299.lc_skip  = \events$299 [7];
+  assign \events$299.lc_zero  = \events$299 [8];
+  assign \events$299.spw_mismatch  = \events$299 [9];
+  assign \events$299.overrun  = \events$299 [10];
+  assign \events$299.aborted  = \events$299 [11];
+  assign \events$299.no_stop  = \events$299 [12];
+  assign \events$299.noisy_line  = \events$299 [13];
+  assign \events$299.delay_jump  = \events$299 [14];
+  assign \events$299.noise_event  = \events$299 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -12234,57 +12243,57 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$326.status  = \result$326 [3:0];
-  assign \result$326.timestamp  = \result$326 [35:4];
-  assign \result$326.line_delay  = \result$326 [48:36];
-  assign \result$326.cds  = \result$326 [49];
-  assign \result$326.noise_events  = \result$326 [53:50];
-  assign \result$326.delay_settled  = \result$326 [54];
-  assign \result$326.settled_delay  = \result$326 [67:55];
-  assign \result$326.delay_spread  = \result$326 [75:68];
-  assign \result$326.word0  = \result$326 [133:76];
-  assign \result$326.word0.position  = \result$326 [130:76];
-  assign \result$326.word0.ne  = \result$326 [131];
-  assign \result$326.word0.nw  = \result$326 [132];
-  assign \result$326.word0.crc_ok  = \result$326 [133];
-  assign \result$326.word1  = \result$326 [176:134];
-  assign \result$326.word1.position  = \result$326 [173:134];
-  assign \result$326.word1.ne  = \result$326 [174];
-  assign \result$326.word1.nw  = \result$326 [175];
-  assign \result$326.word1.crc_ok  = \result$326 [176];
-  assign \result$326.lc  = \result$326 [182:177];
-  assign \result$326.lc_repeat  = \result$326 [183];
-  assign \result$326.lc_skip  = \result$326 [184];
-  assign \result$326.lc_zero  = \result$326 [185];
-  assign \result$326.spw_mismatch  = \result$326 [186];
-  assign \events$302 [15] = \event ;
-  assign \events$302 [14] = \$20 ;
-  assign \events$302 [13] = \$18 ;
-  assign \events$302 [12] = faults[6];
-  assign \events$302 [11] = faults[4];
-  assign \events$302 [10] = overrun;
-  assign \events$302 [9] = \$16 ;
-  assign \events$302 [8] = lc_zero;
-  assign \events$302 [7] = lc_skip;
-  assign \events$302 [6] = lc_repeat;
-  assign \events$302 [5] = faults[3];
-  assign \events$302 [4] = faults[2];
-  assign \events$302 [3] = faults[1];
-  assign \events$302 [2] = faults[0];
-  assign \events$302 [1] = crc_error[1];
-  assign \events$302 [0] = crc_error[0];
-  assign \events$293 [4] = \$15 ;
-  assign \events$293 [3] = \$13 ;
-  assign \events$293 [2] = \$11 ;
-  assign \events$293 [1] = \$9 ;
-  assign \events$293 [0] = \$7 ;
+  assign \result$323.status  = \result$323 [3:0];
+  assign \result$323.timestamp  = \result$323 [35:4];
+  assign \result$323.line_delay  = \result$323 [48:36];
+  assign \result$323.cds  = \result$323 [49];
+  assign \result$323.noise_events  = \result$323 [53:50];
+  assign \result$323.delay_settled  = \result$323 [54];
+  assign \result$323.settled_delay  = \result$323 [67:55];
+  assign \result$323.delay_spread  = \result$323 [75:68];
+  assign \result$323.word0  = \result$323 [133:76];
+  assign \result$323.word0.position  = \result$323 [130:76];
+  assign \result$323.word0.ne  = \result$323 [131];
+  assign \result$323.word0.nw  = \result$323 [132];
+  assign \result$323.word0.crc_ok  = \result$323 [133];
+  assign \result$323.word1  = \result$323 [176:134];
+  assign \result$323.word1.position  = \result$323 [173:134];
+  assign \result$323.word1.ne  = \result$323 [174];
+  assign \result$323.word1.nw  = \result$323 [175];
+  assign \result$323.word1.crc_ok  = \result$323 [176];
+  assign \result$323.lc  = \result$323 [182:177];
+  assign \result$323.lc_repeat  = \result$323 [183];
+  assign \result$323.lc_skip  = \result$323 [184];
+  assign \result$323.lc_zero  = \result$323 [185];
+  assign \result$323.spw_mismatch  = \result$323 [186];
+  assign \events$299 [15] = \event ;
+  assign \events$299 [14] = \$20 ;
+  assign \events$299 [13] = \$18 ;
+  assign \events$299 [12] = faults[6];
+  assign \events$299 [11] = faults[4];
+  assign \events$299 [10] = overrun;
+  assign \events$299 [9] = \$16 ;
+  assign \events$299 [8] = lc_zero;
+  assign \events$299 [7] = lc_skip;
+  assign \events$299 [6] = lc_repeat;
+  assign \events$299 [5] = faults[3];
+  assign \events$299 [4] = faults[2];
+  assign \events$299 [3] = faults[1];
+  assign \events$299 [2] = faults[0];
+  assign \events$299 [1] = crc_error[1];
+  assign \events$299 [0] = crc_error[0];
+  assign \events$290 [4] = \$15 ;
+  assign \events$290 [3] = \$13 ;
+  assign \events$290 [2] = \$11 ;
+  assign \events$290 [1] = \$9 ;
+  assign \events$290 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$255 [17] = ca_write;
-  assign \request$255 [16:10] = ca_count;
-  assign \request$255 [9:3] = ca_address;
-  assign \request$255 [2:0] = ca_slave_id;
+  assign \request$252 [17] = ca_write;
+  assign \request$252 [16:10] = ca_count;
+  assign \request$252 [9:3] = ca_address;
+  assign \request$252 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$28 ;
@@ -12306,33 +12315,25 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign customs[75:38] = live[249:212];
-  assign customs[37:0] = live[198:161];
-  assign \words$185 [23:12] = live[211:200];
-  assign \words$185 [11:0] = live[160:149];
-  assign words[23:12] = live[211:200];
+  assign \words$179 [23:12] = live[178:167];
+  assign \words$179 [11:0] = live[160:149];
+  assign words[23:12] = live[178:167];
   assign words[11:0] = live[160:149];
-  assign live[274] = cfg_ssi_double;
-  assign live[273] = cfg_ssi_error_low;
-  assign live[272] = cfg_ssi_error;
-  assign live[271:260] = cfg_ssi_delay;
-  assign live[259] = cfg_ssi;
-  assign live[258:251] = cfg_spw_tolerance;
-  assign live[250] = cfg_spw_check;
-  assign live[249] = cfg_w1_crc_inverted;
-  assign live[248:233] = cfg_w1_crc_start;
-  assign live[232:217] = cfg_w1_crc_poly;
-  assign live[216:212] = cfg_w1_crc_width;
-  assign live[211] = cfg_w1_signed;
-  assign live[210] = cfg_w1_gray;
-  assign live[209:208] = cfg_w1_crc;
-  assign live[207] = cfg_w1_lc;
-  assign live[206] = cfg_w1_nenw;
-  assign live[205:200] = cfg_w1_data_bits;
-  assign live[199] = cfg_w1_enable;
-  assign live[198] = cfg_w0_crc_inverted;
-  assign live[197:182] = cfg_w0_crc_start;
-  assign live[181:166] = cfg_w0_crc_poly;
+  assign live[208] = cfg_ssi_double;
+  assign live[207] = cfg_ssi_error_low;
+  assign live[206] = cfg_ssi_error;
+  assign live[205:194] = cfg_ssi_delay;
+  assign live[193] = cfg_ssi;
+  assign live[192:185] = cfg_spw_tolerance;
+  assign live[184] = cfg_spw_check;
+  assign live[183:179] = cfg_w1_crc_width;
+  assign live[178] = cfg_w1_signed;
+  assign live[177] = cfg_w1_gray;
+  assign live[176:175] = cfg_w1_crc;
+  assign live[174] = cfg_w1_lc;
+  assign live[173] = cfg_w1_nenw;
+  assign live[172:167] = cfg_w1_data_bits;
+  assign live[166] = cfg_w1_enable;
   assign live[165:161] = cfg_w0_crc_width;
   assign live[160] = cfg_w0_signed;
   assign live[159] = cfg_w0_gray;
@@ -12393,16 +12394,16 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, ack_limit, ti
   wire \$13 ;
   wire \$130 ;
   wire \$131 ;
-  wire [37:0] \$132 ;
-  wire [37:0] \$133 ;
-  wire [37:0] \$134 ;
+  wire [4:0] \$132 ;
+  wire [4:0] \$133 ;
+  wire [4:0] \$134 ;
   wire \$135 ;
   wire \$136 ;
   wire \$137 ;
-  wire [37:0] \$138 ;
-  wire [37:0] \$139 ;
+  wire [4:0] \$138 ;
+  wire [4:0] \$139 ;
   wire \$14 ;
-  wire [37:0] \$140 ;
+  wire [4:0] \$140 ;
   wire [1:0] \$141 ;
   wire [2:0] \$142 ;
   reg \$143 ;
@@ -12513,7 +12514,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, ack_limit, ti
   wire [9:0] crc_widths;
   wire [4:0] \crc_widths[0] ;
   wire [4:0] \crc_widths[1] ;
-  wire [274:0] cycle;
+  wire [208:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [3:0] \cycle.confirm_frames ;
@@ -12544,10 +12545,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, ack_limit, ti
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
   wire \cycle.w0.signed ;
-  wire [37:0] \cycle.w0_crc ;
-  wire \cycle.w0_crc.inverted ;
-  wire [15:0] \cycle.w0_crc.poly ;
-  wire [15:0] \cycle.w0_crc.start ;
+  wire [4:0] \cycle.w0_crc ;
   wire [4:0] \cycle.w0_crc.width ;
   wire [11:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
@@ -12561,10 +12559,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, ack_limit, ti
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
   wire \cycle.w1.signed ;
-  wire [37:0] \cycle.w1_crc ;
-  wire \cycle.w1_crc.inverted ;
-  wire [15:0] \cycle.w1_crc.poly ;
-  wire [15:0] \cycle.w1_crc.start ;
+  wire [4:0] \cycle.w1_crc ;
   wire [4:0] \cycle.w1_crc.width ;
   wire \cycle.w1_enable ;
   output [11:0] delay_limit;
@@ -12573,8 +12568,8 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, ack_limit, ti
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [274:0] live;
-  wire [274:0] live;
+  input [208:0] live;
+  wire [208:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [3:0] \live.confirm_frames ;
@@ -12605,10 +12600,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, ack_limit, ti
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
   wire \live.w0.signed ;
-  wire [37:0] \live.w0_crc ;
-  wire \live.w0_crc.inverted ;
-  wire [15:0] \live.w0_crc.poly ;
-  wire [15:0] \live.w0_crc.start ;
+  wire [4:0] \live.w0_crc ;
   wire [4:0] \live.w0_crc.width ;
   wire [11:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
@@ -12622,10 +12614,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, ack_limit, ti
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
   wire \live.w1.signed ;
-  wire [37:0] \live.w1_crc ;
-  wire \live.w1_crc.inverted ;
-  wire [15:0] \live.w1_crc.poly ;
-  wire [15:0] \live.w1_crc.start ;
+  wire [4:0] \live.w1_crc ;
   wire [4:0] \live.w1_crc.width ;
   wire \live.w1_enable ;
   output [24:0] no_start_limit;
@@ -12678,58 +12667,58 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, ack_limit, ti
   assign \$36  = \$11  | \$35 ;
   assign \$37  = \$6  & \$36 ;
   assign \$38  = \$1  & \$37 ;
-  assign \$39  = ~ live[199];
-  assign \$40  = | live[205:200];
-  assign \$41  = ~ live[201];
-  assign \$42  = live[200] & \$41 ;
-  assign \$43  = ~ live[202];
+  assign \$39  = ~ live[166];
+  assign \$40  = | live[172:167];
+  assign \$41  = ~ live[168];
+  assign \$42  = live[167] & \$41 ;
+  assign \$43  = ~ live[169];
   assign \$44  = \$42  & \$43 ;
-  assign \$45  = \$44  & live[203];
-  assign \$46  = ~ live[204];
+  assign \$45  = \$44  & live[170];
+  assign \$46  = ~ live[171];
   assign \$47  = \$45  & \$46 ;
-  assign \$48  = \$47  & live[205];
-  assign \$49  = ~ live[202];
-  assign \$50  = live[201] & \$49 ;
-  assign \$51  = \$50  & live[203];
-  assign \$52  = ~ live[204];
+  assign \$48  = \$47  & live[172];
+  assign \$49  = ~ live[169];
+  assign \$50  = live[168] & \$49 ;
+  assign \$51  = \$50  & live[170];
+  assign \$52  = ~ live[171];
   assign \$53  = \$51  & \$52 ;
-  assign \$54  = \$53  & live[205];
+  assign \$54  = \$53  & live[172];
   assign \$55  = \$48  | \$54 ;
-  assign \$56  = live[202] & live[203];
-  assign \$57  = ~ live[204];
+  assign \$56  = live[169] & live[170];
+  assign \$57  = ~ live[171];
   assign \$58  = \$56  & \$57 ;
-  assign \$59  = \$58  & live[205];
+  assign \$59  = \$58  & live[172];
   assign \$60  = \$55  | \$59 ;
-  assign \$61  = live[204] & live[205];
+  assign \$61  = live[171] & live[172];
   assign \$62  = \$60  | \$61 ;
   assign \$63  = ~ \$62 ;
   assign \$64  = \$40  & \$63 ;
-  assign \$65  = ! live[209:208];
-  assign \$66  = live[209:208] == 1'h1;
+  assign \$65  = ! live[176:175];
+  assign \$66  = live[176:175] == 1'h1;
   assign \$67  = \$65  | \$66 ;
-  assign \$68  = live[209:208] == 2'h2;
+  assign \$68  = live[176:175] == 2'h2;
   assign \$69  = \$67  | \$68 ;
-  assign \$70  = live[209:208] == 2'h3;
-  assign \$71  = | live[216:212];
+  assign \$70  = live[176:175] == 2'h3;
+  assign \$71  = | live[183:179];
   assign \$72  = \$70  & \$71 ;
-  assign \$73  = ~ live[213];
-  assign \$74  = live[212] & \$73 ;
-  assign \$75  = ~ live[214];
+  assign \$73  = ~ live[180];
+  assign \$74  = live[179] & \$73 ;
+  assign \$75  = ~ live[181];
   assign \$76  = \$74  & \$75 ;
-  assign \$77  = ~ live[215];
+  assign \$77  = ~ live[182];
   assign \$78  = \$76  & \$77 ;
-  assign \$79  = \$78  & live[216];
-  assign \$80  = ~ live[214];
-  assign \$81  = live[213] & \$80 ;
-  assign \$82  = ~ live[215];
+  assign \$79  = \$78  & live[183];
+  assign \$80  = ~ live[181];
+  assign \$81  = live[180] & \$80 ;
+  assign \$82  = ~ live[182];
   assign \$83  = \$81  & \$82 ;
-  assign \$84  = \$83  & live[216];
+  assign \$84  = \$83  & live[183];
   assign \$85  = \$79  | \$84 ;
-  assign \$86  = ~ live[215];
-  assign \$87  = live[214] & \$86 ;
-  assign \$88  = \$87  & live[216];
+  assign \$86  = ~ live[182];
+  assign \$87  = live[181] & \$86 ;
+  assign \$88  = \$87  & live[183];
   assign \$89  = \$85  | \$88 ;
-  assign \$90  = live[215] & live[216];
+  assign \$90  = live[182] & live[183];
   assign \$91  = \$89  | \$90 ;
   assign \$92  = ~ \$91 ;
   assign \$93  = \$72  & \$92 ;
@@ -12737,22 +12726,22 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, ack_limit, ti
   assign \$95  = \$64  & \$94 ;
   assign \$96  = \$39  | \$95 ;
   assign \$97  = \$38  & \$96 ;
-  assign \$99  = live[199] & live[207];
+  assign \$99  = live[166] & live[174];
   assign \$100  = \$98  & \$99 ;
   assign \$101  = ~ \$100 ;
   assign \$102  = \$97  & \$101 ;
-  assign \$103  = ~ live[250];
-  assign \$104  = live[205:200] <= live[154:149];
-  assign \$105  = live[199] & \$104 ;
-  assign \$106  = | live[209:208];
+  assign \$103  = ~ live[184];
+  assign \$104  = live[172:167] <= live[154:149];
+  assign \$105  = live[166] & \$104 ;
+  assign \$106  = | live[176:175];
   assign \$107  = \$105  & \$106 ;
   assign \$108  = \$103  | \$107 ;
   assign \$109  = \$102  & \$108 ;
-  assign \$110  = live[272] & live[155];
+  assign \$110  = live[206] & live[155];
   assign \$111  = live[156] | \$110 ;
-  assign \$112  = \$111  | live[250];
-  assign \$113  = \$112  | live[199];
-  assign \$114  = live[259] & \$113 ;
+  assign \$112  = \$111  | live[184];
+  assign \$113  = \$112  | live[166];
+  assign \$114  = live[193] & \$113 ;
   assign \$115  = ~ \$114 ;
   assign \$116  = \$109  & \$115 ;
   assign \$117  = ! live[87:64];
@@ -12770,16 +12759,16 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, ack_limit, ti
   assign \$129  = live[158:157] == 2'h3;
   assign \$130  = live[158:157] == 2'h2;
   assign \$131  = live[158:157] == 1'h1;
-  assign \$132  = \$131  ? 38'h2000000066 : 38'h0000000000;
-  assign \$133  = \$130  ? 38'h2000121b30 : \$132 ;
-  assign \$134  = \$129  ? live[198:161] : \$133 ;
-  assign \$135  = live[209:208] == 2'h3;
-  assign \$136  = live[209:208] == 2'h2;
-  assign \$137  = live[209:208] == 1'h1;
-  assign \$138  = \$137  ? 38'h2000000066 : 38'h0000000000;
-  assign \$139  = \$136  ? 38'h2000121b30 : \$138 ;
-  assign \$140  = \$135  ? live[249:212] : \$139 ;
-  assign \$142  = 2'h1 + live[199];
+  assign \$132  = \$131  ? 5'h06 : 5'h00;
+  assign \$133  = \$130  ? 5'h10 : \$132 ;
+  assign \$134  = \$129  ? live[165:161] : \$133 ;
+  assign \$135  = live[176:175] == 2'h3;
+  assign \$136  = live[176:175] == 2'h2;
+  assign \$137  = live[176:175] == 1'h1;
+  assign \$138  = \$137  ? 5'h06 : 5'h00;
+  assign \$139  = \$136  ? 5'h10 : \$138 ;
+  assign \$140  = \$135  ? live[183:179] : \$139 ;
+  assign \$142  = 2'h1 + live[166];
   always @(posedge clk)
     ok <= \$143 ;
   always @(posedge clk)
@@ -12878,31 +12867,25 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, ack_limit, ti
   assign \live.w0.crc  = live[158:157];
   assign \live.w0.gray  = live[159];
   assign \live.w0.signed  = live[160];
-  assign \live.w0_crc  = live[198:161];
+  assign \live.w0_crc  = live[165:161];
   assign \live.w0_crc.width  = live[165:161];
-  assign \live.w0_crc.poly  = live[181:166];
-  assign \live.w0_crc.start  = live[197:182];
-  assign \live.w0_crc.inverted  = live[198];
-  assign \live.w1_enable  = live[199];
-  assign \live.w1  = live[211:200];
-  assign \live.w1.data_bits  = live[205:200];
-  assign \live.w1.nenw  = live[206];
-  assign \live.w1.lc  = live[207];
-  assign \live.w1.crc  = live[209:208];
-  assign \live.w1.gray  = live[210];
-  assign \live.w1.signed  = live[211];
-  assign \live.w1_crc  = live[249:212];
-  assign \live.w1_crc.width  = live[216:212];
-  assign \live.w1_crc.poly  = live[232:217];
-  assign \live.w1_crc.start  = live[248:233];
-  assign \live.w1_crc.inverted  = live[249];
-  assign \live.spw_check  = live[250];
-  assign \live.spw_tolerance  = live[258:251];
-  assign \live.ssi  = live[259];
-  assign \live.ssi_delay  = live[271:260];
-  assign \live.ssi_error  = live[272];
-  assign \live.ssi_error_low  = live[273];
-  assign \live.ssi_double  = live[274];
+  assign \live.w1_enable  = live[166];
+  assign \live.w1  = live[178:167];
+  assign \live.w1.data_bits  = live[172:167];
+  assign \live.w1.nenw  = live[173];
+  assign \live.w1.lc  = live[174];
+  assign \live.w1.crc  = live[176:175];
+  assign \live.w1.gray  = live[177];
+  assign \live.w1.signed  = live[178];
+  assign \live.w1_crc  = live[183:179];
+  assign \live.w1_crc.width  = live[183:179];
+  assign \live.spw_check  = live[184];
+  assign \live.spw_tolerance  = live[192:185];
+  assign \live.ssi  = live[193];
+  assign \live.ssi_delay  = live[205:194];
+  assign \live.ssi_error  = live[206];
+  assign \live.ssi_error_low  = live[207];
+  assign \live.ssi_double  = live[208];
   assign \cycle.ma_half_period  = live[15:0];
   assign \cycle.request_period  = live[39:16];
   assign \cycle.break_time  = live[63:40];
@@ -12921,35 +12904,29 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, ack_limit, ti
   assign \cycle.w0.crc  = live[158:157];
   assign \cycle.w0.gray  = live[159];
   assign \cycle.w0.signed  = live[160];
-  assign \cycle.w0_crc  = live[198:161];
+  assign \cycle.w0_crc  = live[165:161];
   assign \cycle.w0_crc.width  = live[165:161];
-  assign \cycle.w0_crc.poly  = live[181:166];
-  assign \cycle.w0_crc.start  = live[197:182];
-  assign \cycle.w0_crc.inverted  = live[198];
-  assign \cycle.w1_enable  = live[199];
-  assign \cycle.w1  = live[211:200];
-  assign \cycle.w1.data_bits  = live[205:200];
-  assign \cycle.w1.nenw  = live[206];
-  assign \cycle.w1.lc  = live[207];
-  assign \cycle.w1.crc  = live[209:208];
-  assign \cycle.w1.gray  = live[210];
-  assign \cycle.w1.signed  = live[211];
-  assign \cycle.w1_crc  = live[249:212];
-  assign \cycle.w1_crc.width  = live[216:212];
-  assign \cycle.w1_crc.poly  = live[232:217];
-  assign \cycle.w1_crc.start  = live[248:233];
-  assign \cycle.w1_crc.inverted  = live[249];
-  assign \cycle.spw_check  = live[250];
-  assign \cycle.spw_tolerance  = live[258:251];
-  assign \cycle.ssi  = live[259];
-  assign \cycle.ssi_delay  = live[271:260];
-  assign \cycle.ssi_error  = live[272];
-  assign \cycle.ssi_error_low  = live[273];
-  assign \cycle.ssi_double  = live[274];
+  assign \cycle.w1_enable  = live[166];
+  assign \cycle.w1  = live[178:167];
+  assign \cycle.w1.data_bits  = live[172:167];
+  assign \cycle.w1.nenw  = live[173];
+  assign \cycle.w1.lc  = live[174];
+  assign \cycle.w1.crc  = live[176:175];
+  assign \cycle.w1.gray  = live[177];
+  assign \cycle.w1.signed  = live[178];
+  assign \cycle.w1_crc  = live[183:179];
+  assign \cycle.w1_crc.width  = live[183:179];
+  assign \cycle.spw_check  = live[184];
+  assign \cycle.spw_tolerance  = live[192:185];
+  assign \cycle.ssi  = live[193];
+  assign \cycle.ssi_delay  = live[205:194];
+  assign \cycle.ssi_error  = live[206];
+  assign \cycle.ssi_error_low  = live[207];
+  assign \cycle.ssi_double  = live[208];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign crc_widths[9:5] = \$140 [4:0];
-  assign crc_widths[4:0] = \$134 [4:0];
+  assign crc_widths[9:5] = \$140 ;
+  assign crc_widths[4:0] = \$134 ;
   assign \$98  = live[156];
   assign \$141  = 2'h1;
 endmodule
@@ -15927,8 +15904,8 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13105$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
-, data1, lc, cpw_top, mismatch, crc_ok, clk);
+module \biss_master_wb.ch0.core.decoder (rst, \table , word_count, frame_end, lc_load, crc_table_addr, ssi, \port$13099$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne
+, nw, data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire [1:0] \$10 ;
@@ -16537,7 +16514,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   input \bit ;
   wire \bit ;
   wire \bit$11 ;
-  wire \bit$40 ;
+  wire \bit$43 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -16561,6 +16538,12 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   reg [39:0] cpw_top = 40'h0000000000;
   output [1:0] crc_ok;
   wire [1:0] crc_ok;
+  output crc_table_addr;
+  wire crc_table_addr;
+  wire [32:0] crc_table_data;
+  wire \crc_table_data.inverted ;
+  wire [15:0] \crc_table_data.poly ;
+  wire [15:0] \crc_table_data.start ;
   input [9:0] crc_widths;
   wire [9:0] crc_widths;
   wire [9:0] \crc_widths$3 ;
@@ -16576,29 +16559,6 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   wire [6:0] \current.lc_end_m1 ;
   wire [6:0] \current.nenw_end_m1 ;
   wire [6:0] \current.word_end_m1 ;
-  input [75:0] customs;
-  wire [75:0] customs;
-  wire [75:0] \customs$34 ;
-  wire [37:0] \customs$34[0] ;
-  wire \customs$34[0].inverted ;
-  wire [15:0] \customs$34[0].poly ;
-  wire [15:0] \customs$34[0].start ;
-  wire [4:0] \customs$34[0].width ;
-  wire [37:0] \customs$34[1] ;
-  wire \customs$34[1].inverted ;
-  wire [15:0] \customs$34[1].poly ;
-  wire [15:0] \customs$34[1].start ;
-  wire [4:0] \customs$34[1].width ;
-  wire [37:0] \customs[0] ;
-  wire \customs[0].inverted ;
-  wire [15:0] \customs[0].poly ;
-  wire [15:0] \customs[0].start ;
-  wire [4:0] \customs[0].width ;
-  wire [37:0] \customs[1] ;
-  wire \customs[1].inverted ;
-  wire [15:0] \customs[1].poly ;
-  wire [15:0] \customs[1].start ;
-  wire [4:0] \customs[1].width ;
   output [54:0] data0;
   reg [54:0] data0 = 55'h00000000000000;
   output [39:0] data1;
@@ -16625,7 +16585,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   reg in_word;
   wire [6:0] index;
   (* init = 1'h0 *)
-  wire \index$43 ;
+  wire \index$46 ;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -16642,8 +16602,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13105$272 ;
-  wire [2:0] \port$13105$272 ;
+  input [2:0] \port$13099$206 ;
+  wire [2:0] \port$13099$206 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -16668,6 +16628,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   reg stop_bit = 1'h0;
   output stopped;
   reg stopped = 1'h0;
+  input [32:0] \table ;
+  wire [32:0] \table ;
+  wire \table.inverted ;
+  wire [15:0] \table.poly ;
+  wire [15:0] \table.start ;
+  wire table_index;
+  wire [9:0] widths;
+  wire [4:0] \widths[0] ;
+  wire [4:0] \widths[1] ;
   reg word = 1'h0;
   input [1:0] word_count;
   wire [1:0] word_count;
@@ -16952,7 +16921,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13105$272 [0];
+  assign error_bit = ssi & \port$13099$206 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -16983,19 +16952,19 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13105$272 [0];
+  assign \$24  = ssi & \port$13099$206 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13105$272 [0];
+  assign \$28  = ssi & \port$13099$206 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13105$272 [0];
+  assign \$35  = ssi & \port$13099$206 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13105$272 [0];
+  assign \$39  = ssi & \port$13099$206 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -17016,7 +16985,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$13105$272 [2];
+  assign \$61  = ssi & \port$13099$206 [2];
   assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -17302,15 +17271,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13105$272 [0];
+  assign \$347  = ssi & \port$13099$206 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13105$272 [0];
-  assign \$355  = ~ \port$13105$272 [1];
+  assign \$354  = ssi & \port$13099$206 [0];
+  assign \$355  = ~ \port$13099$206 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -17362,14 +17331,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
     .clk(clk),
     .codes(codes),
     .\cover (\cover ),
-    .customs(customs),
     .index(word),
     .last(last),
     .load(load),
-    .load_index(\$10 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
-    .rst(rst)
+    .rst(rst),
+    .\table (\table ),
+    .table_index(\$10 [0]),
+    .widths(crc_widths)
   );
   \biss_master_wb.ch0.core.decoder.field_ends  field_ends (
     .advance(advance),
@@ -18045,18 +18015,21 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13105$272 [0];
+  assign ssi_error = \port$13099$206 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
-  assign \customs$34  = customs;
-  assign \bit$40  = \bit ;
+  assign widths = crc_widths;
+  assign table_index = \$10 [0];
+  assign crc_table_data = \table ;
+  assign \bit$43  = \bit ;
   assign ok = crc_ok;
-  assign \index$43  = word;
+  assign \index$46  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13105$272 [2];
-  assign ssi_error_low = \port$13105$272 [1];
+  assign ssi_double = \port$13099$206 [2];
+  assign ssi_error_low = \port$13099$206 [1];
+  assign crc_table_addr = \$10 [0];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -18098,26 +18071,14 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign \current.lc_at0  = current[36];
   assign \codes[0]  = codes[1:0];
   assign \codes[1]  = codes[3:2];
-  assign \customs[0]  = customs[37:0];
-  assign \customs[0].width  = customs[4:0];
-  assign \customs[0].poly  = customs[20:5];
-  assign \customs[0].start  = customs[36:21];
-  assign \customs[0].inverted  = customs[37];
-  assign \customs[1]  = customs[75:38];
-  assign \customs[1].width  = customs[42:38];
-  assign \customs[1].poly  = customs[58:43];
-  assign \customs[1].start  = customs[74:59];
-  assign \customs[1].inverted  = customs[75];
-  assign \customs$34[0]  = customs[37:0];
-  assign \customs$34[0].width  = customs[4:0];
-  assign \customs$34[0].poly  = customs[20:5];
-  assign \customs$34[0].start  = customs[36:21];
-  assign \customs$34[0].inverted  = customs[37];
-  assign \customs$34[1]  = customs[75:38];
-  assign \customs$34[1].width  = customs[42:38];
-  assign \customs$34[1].poly  = customs[58:43];
-  assign \customs$34[1].start  = customs[74:59];
-  assign \customs$34[1].inverted  = customs[75];
+  assign \widths[0]  = crc_widths[4:0];
+  assign \widths[1]  = crc_widths[9:5];
+  assign \table.poly  = \table [15:0];
+  assign \table.start  = \table [31:16];
+  assign \table.inverted  = \table [32];
+  assign \crc_table_data.poly  = \table [15:0];
+  assign \crc_table_data.start  = \table [31:16];
+  assign \crc_table_data.inverted  = \table [32];
   assign \following.data_end_p1  = following[6:0];
   assign \following.data_end_m1  = following[13:7];
   assign \following.nenw_end_m1  = following[20:14];
@@ -18200,52 +18161,37 @@ module \biss_master_wb.ch0.core.decoder.copy (rst, first, \bit , receiver_clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, load_index, customs, \bit , receiver_clear, codes, index, ok, clk);
+module \biss_master_wb.ch0.core.decoder.crc (rst, \table , load, \cover , check, last, table_index, \bit , widths, receiver_clear, codes, index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
-  wire [37:0] \$10 ;
-  wire [1:0] \$100 ;
+  wire [1:0] \$10 ;
+  wire \$100 ;
   wire \$101 ;
-  wire [37:0] \$102 ;
-  wire [37:0] \$103 ;
-  wire [37:0] \$104 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
   wire \$105 ;
   wire \$106 ;
-  wire [15:0] \$107 ;
-  wire [15:0] \$108 ;
+  wire \$107 ;
+  wire \$108 ;
   wire \$109 ;
-  wire [37:0] \$11 ;
+  wire \$11 ;
   wire \$110 ;
   wire \$111 ;
   wire \$112 ;
-  wire \$113 ;
-  wire \$114 ;
-  wire \$115 ;
-  wire \$116 ;
-  wire \$117 ;
-  wire \$118 ;
-  wire \$119 ;
+  reg [15:0] \$113 ;
+  reg \$114 ;
+  reg [37:0] \$115 ;
+  reg [1:0] \$116 ;
   wire \$12 ;
-  wire \$120 ;
-  wire \$121 ;
-  wire \$122 ;
-  wire \$123 ;
-  wire \$124 ;
-  wire \$125 ;
-  wire \$126 ;
-  wire \$127 ;
-  reg [15:0] \$128 ;
-  reg \$129 ;
   wire [1:0] \$13 ;
-  reg [37:0] \$130 ;
-  reg [1:0] \$131 ;
   wire \$14 ;
   wire [1:0] \$15 ;
   wire [1:0] \$16 ;
   wire \$17 ;
   wire \$18 ;
   wire [1:0] \$19 ;
-  wire [1:0] \$2 ;
+  wire [4:0] \$2 ;
   wire \$20 ;
   wire [1:0] \$21 ;
   wire [1:0] \$22 ;
@@ -18261,78 +18207,78 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   wire [1:0] \$31 ;
   wire \$32 ;
   wire \$33 ;
-  wire [37:0] \$34 ;
+  wire [1:0] \$34 ;
   wire \$35 ;
-  wire [37:0] \$36 ;
-  wire [37:0] \$37 ;
+  wire [1:0] \$36 ;
+  wire [1:0] \$37 ;
   wire \$38 ;
-  wire [1:0] \$39 ;
-  wire [1:0] \$4 ;
-  wire \$40 ;
-  wire [1:0] \$41 ;
+  wire \$39 ;
+  wire [4:0] \$4 ;
+  wire [1:0] \$40 ;
+  wire \$41 ;
   wire [1:0] \$42 ;
-  wire \$43 ;
+  wire [1:0] \$43 ;
   wire \$44 ;
-  wire [1:0] \$45 ;
-  wire \$46 ;
-  wire [1:0] \$47 ;
-  wire [1:0] \$48 ;
-  wire \$49 ;
-  wire [1:0] \$5 ;
-  wire [37:0] \$50 ;
-  wire [37:0] \$51 ;
-  wire [37:0] \$52 ;
+  wire [37:0] \$45 ;
+  wire [37:0] \$46 ;
+  wire [37:0] \$47 ;
+  wire \$48 ;
+  wire [1:0] \$49 ;
+  wire [4:0] \$5 ;
+  wire \$50 ;
+  wire [1:0] \$51 ;
+  wire [1:0] \$52 ;
   wire \$53 ;
-  wire [1:0] \$54 ;
-  wire \$55 ;
-  wire [1:0] \$56 ;
+  wire \$54 ;
+  wire [1:0] \$55 ;
+  wire \$56 ;
   wire [1:0] \$57 ;
-  wire \$58 ;
+  wire [1:0] \$58 ;
   wire \$59 ;
   wire \$6 ;
-  wire [37:0] \$60 ;
-  wire \$61 ;
-  wire [37:0] \$62 ;
-  wire [37:0] \$63 ;
-  wire \$64 ;
-  wire [1:0] \$65 ;
-  wire \$66 ;
-  wire [1:0] \$67 ;
-  wire [1:0] \$68 ;
+  wire \$60 ;
+  wire [1:0] \$61 ;
+  wire \$62 ;
+  wire [1:0] \$63 ;
+  wire [1:0] \$64 ;
+  wire \$65 ;
+  wire [37:0] \$66 ;
+  wire [37:0] \$67 ;
+  wire [37:0] \$68 ;
   wire \$69 ;
-  wire \$7 ;
-  wire \$70 ;
-  wire [1:0] \$71 ;
-  wire \$72 ;
+  wire [1:0] \$7 ;
+  wire [1:0] \$70 ;
+  wire \$71 ;
+  wire [1:0] \$72 ;
   wire [1:0] \$73 ;
-  wire [1:0] \$74 ;
+  wire \$74 ;
   wire \$75 ;
-  wire [37:0] \$76 ;
-  wire [37:0] \$77 ;
-  wire [37:0] \$78 ;
-  wire \$79 ;
-  wire [37:0] \$8 ;
-  wire [1:0] \$80 ;
+  wire [1:0] \$76 ;
+  wire \$77 ;
+  wire [1:0] \$78 ;
+  wire [1:0] \$79 ;
+  wire \$8 ;
+  wire \$80 ;
   wire \$81 ;
   wire [1:0] \$82 ;
-  wire [1:0] \$83 ;
-  wire \$84 ;
-  wire \$85 ;
-  wire [37:0] \$86 ;
-  wire \$87 ;
+  wire \$83 ;
+  wire [1:0] \$84 ;
+  wire [1:0] \$85 ;
+  wire \$86 ;
+  wire [37:0] \$87 ;
   wire [37:0] \$88 ;
   wire [37:0] \$89 ;
-  wire \$9 ;
+  wire [1:0] \$9 ;
   wire \$90 ;
-  wire [1:0] \$91 ;
-  wire \$92 ;
-  wire [1:0] \$93 ;
-  wire [1:0] \$94 ;
+  wire \$91 ;
+  wire [15:0] \$92 ;
+  wire [15:0] \$93 ;
+  wire \$94 ;
   wire \$95 ;
   wire \$96 ;
-  wire [1:0] \$97 ;
+  wire \$97 ;
   wire \$98 ;
-  wire [1:0] \$99 ;
+  wire \$99 ;
   input \bit ;
   wire \bit ;
   input check;
@@ -18355,25 +18301,12 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   wire [1:0] \codes[1] ;
   input \cover ;
   wire \cover ;
-  input [75:0] customs;
-  wire [75:0] customs;
-  wire [37:0] \customs[0] ;
-  wire \customs[0].inverted ;
-  wire [15:0] \customs[0].poly ;
-  wire [15:0] \customs[0].start ;
-  wire [4:0] \customs[0].width ;
-  wire [37:0] \customs[1] ;
-  wire \customs[1].inverted ;
-  wire [15:0] \customs[1].poly ;
-  wire [15:0] \customs[1].start ;
-  wire [4:0] \customs[1].width ;
   input index;
   wire index;
   input last;
   wire last;
   input load;
   wire load;
-  input load_index;
   wire load_index;
   reg mismatch = 1'h0;
   output [1:0] ok;
@@ -18388,224 +18321,229 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   wire [15:0] \settings.poly ;
   wire [15:0] \settings.start ;
   wire [4:0] \settings.width ;
-  assign \$1  = ! load_index;
-  assign \$2  = load_index ? 2'h0 : codes[1:0];
-  assign \$4  = \$3  ? codes[3:2] : 2'h0;
+  input [32:0] \table ;
+  wire [32:0] \table ;
+  wire \table.inverted ;
+  wire [15:0] \table.poly ;
+  wire [15:0] \table.start ;
+  wire [37:0] table_crc;
+  wire \table_crc.inverted ;
+  wire [15:0] \table_crc.poly ;
+  wire [15:0] \table_crc.start ;
+  wire [4:0] \table_crc.width ;
+  input table_index;
+  wire table_index;
+  input [9:0] widths;
+  wire [9:0] widths;
+  wire [4:0] \widths[0] ;
+  wire [4:0] \widths[1] ;
+  assign \$1  = ! table_index;
+  assign \$2  = table_index ? 5'h00 : widths[4:0];
+  assign \$4  = \$3  ? widths[9:5] : 5'h00;
   assign \$5  = \$2  | \$4 ;
-  assign \$6  = \$5  == 2'h3;
-  assign \$7  = ! load_index;
-  assign \$8  = load_index ? 38'h0000000000 : customs[37:0];
-  assign \$10  = \$9  ? customs[75:38] : 38'h0000000000;
-  assign \$11  = \$8  | \$10 ;
-  assign \$12  = ! load_index;
-  assign \$13  = load_index ? 2'h0 : codes[1:0];
+  assign \$6  = ! table_index;
+  assign \$7  = table_index ? 2'h0 : codes[1:0];
+  assign \$9  = \$8  ? codes[3:2] : 2'h0;
+  assign \$10  = \$7  | \$9 ;
+  assign \$11  = \$10  == 2'h3;
+  assign \$12  = ! table_index;
+  assign \$13  = table_index ? 2'h0 : codes[1:0];
   assign \$15  = \$14  ? codes[3:2] : 2'h0;
   assign \$16  = \$13  | \$15 ;
   assign \$17  = \$16  == 2'h2;
-  assign \$18  = ! load_index;
-  assign \$19  = load_index ? 2'h0 : codes[1:0];
+  assign \$18  = ! table_index;
+  assign \$19  = table_index ? 2'h0 : codes[1:0];
   assign \$21  = \$20  ? codes[3:2] : 2'h0;
   assign \$22  = \$19  | \$21 ;
   assign \$23  = \$22  == 1'h1;
   assign \$24  = \$23  ? 38'h2000000066 : 38'h0000000000;
   assign \$25  = \$17  ? 38'h2000121b30 : \$24 ;
-  assign \$26  = \$6  ? \$11  : \$25 ;
-  assign \$27  = ! load_index;
-  assign \$28  = load_index ? 2'h0 : codes[1:0];
+  assign \$26  = \$11  ? table_crc : \$25 ;
+  assign \$27  = ! table_index;
+  assign \$28  = table_index ? 2'h0 : codes[1:0];
   assign \$30  = \$29  ? codes[3:2] : 2'h0;
   assign \$31  = \$28  | \$30 ;
   assign \$32  = \$31  == 2'h3;
-  assign \$33  = ! load_index;
-  assign \$34  = load_index ? 38'h0000000000 : customs[37:0];
-  assign \$36  = \$35  ? customs[75:38] : 38'h0000000000;
+  assign \$33  = ! table_index;
+  assign \$34  = table_index ? 2'h0 : codes[1:0];
+  assign \$36  = \$35  ? codes[3:2] : 2'h0;
   assign \$37  = \$34  | \$36 ;
-  assign \$38  = ! load_index;
-  assign \$39  = load_index ? 2'h0 : codes[1:0];
-  assign \$41  = \$40  ? codes[3:2] : 2'h0;
-  assign \$42  = \$39  | \$41 ;
-  assign \$43  = \$42  == 2'h2;
-  assign \$44  = ! load_index;
-  assign \$45  = load_index ? 2'h0 : codes[1:0];
-  assign \$47  = \$46  ? codes[3:2] : 2'h0;
-  assign \$48  = \$45  | \$47 ;
-  assign \$49  = \$48  == 1'h1;
-  assign \$50  = \$49  ? 38'h2000000066 : 38'h0000000000;
-  assign \$51  = \$43  ? 38'h2000121b30 : \$50 ;
-  assign \$52  = \$32  ? \$37  : \$51 ;
-  assign \$53  = ! load_index;
-  assign \$54  = load_index ? 2'h0 : codes[1:0];
-  assign \$56  = \$55  ? codes[3:2] : 2'h0;
-  assign \$57  = \$54  | \$56 ;
-  assign \$58  = \$57  == 2'h3;
-  assign \$59  = ! load_index;
-  assign \$60  = load_index ? 38'h0000000000 : customs[37:0];
-  assign \$62  = \$61  ? customs[75:38] : 38'h0000000000;
-  assign \$63  = \$60  | \$62 ;
-  assign \$64  = ! load_index;
-  assign \$65  = load_index ? 2'h0 : codes[1:0];
-  assign \$67  = \$66  ? codes[3:2] : 2'h0;
-  assign \$68  = \$65  | \$67 ;
-  assign \$69  = \$68  == 2'h2;
-  assign \$70  = ! load_index;
-  assign \$71  = load_index ? 2'h0 : codes[1:0];
-  assign \$73  = \$72  ? codes[3:2] : 2'h0;
-  assign \$74  = \$71  | \$73 ;
-  assign \$75  = \$74  == 1'h1;
-  assign \$76  = \$75  ? 38'h2000000066 : 38'h0000000000;
-  assign \$77  = \$69  ? 38'h2000121b30 : \$76 ;
-  assign \$78  = \$58  ? \$63  : \$77 ;
-  assign \$79  = ! load_index;
-  assign \$80  = load_index ? 2'h0 : codes[1:0];
-  assign \$82  = \$81  ? codes[3:2] : 2'h0;
-  assign \$83  = \$80  | \$82 ;
-  assign \$84  = \$83  == 2'h3;
-  assign \$85  = ! load_index;
-  assign \$86  = load_index ? 38'h0000000000 : customs[37:0];
-  assign \$88  = \$87  ? customs[75:38] : 38'h0000000000;
-  assign \$89  = \$86  | \$88 ;
-  assign \$90  = ! load_index;
-  assign \$91  = load_index ? 2'h0 : codes[1:0];
-  assign \$93  = \$92  ? codes[3:2] : 2'h0;
-  assign \$94  = \$91  | \$93 ;
-  assign \$95  = \$94  == 2'h2;
-  assign \$96  = ! load_index;
-  assign \$97  = load_index ? 2'h0 : codes[1:0];
-  assign \$99  = \$98  ? codes[3:2] : 2'h0;
-  assign \$100  = \$97  | \$99 ;
-  assign \$101  = \$100  == 1'h1;
-  assign \$102  = \$101  ? 38'h2000000066 : 38'h0000000000;
-  assign \$103  = \$95  ? 38'h2000121b30 : \$102 ;
-  assign \$104  = \$84  ? \$89  : \$103 ;
-  assign \$105  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$106  = \$105  ^ \bit ;
-  assign \$107  = \$106  ? settings[20:5] : 16'h0000;
-  assign \$108  = { \reg [14:0], 1'h0 } ^ \$107 ;
-  assign \$109  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$110  = \bit  ^ \$109 ;
-  assign \$111  = \$110  ^ settings[37];
-  assign \$112  = check & \$111 ;
-  assign \$113  = mismatch | \$112 ;
-  assign \$114  = ! index;
-  assign \$115  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$116  = \bit  ^ \$115 ;
-  assign \$117  = \$116  ^ settings[37];
-  assign \$118  = check & \$117 ;
-  assign \$119  = mismatch | \$118 ;
-  assign \$120  = ~ \$119 ;
-  assign \$122  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$123  = \bit  ^ \$122 ;
-  assign \$124  = \$123  ^ settings[37];
-  assign \$125  = check & \$124 ;
-  assign \$126  = mismatch | \$125 ;
-  assign \$127  = ~ \$126 ;
+  assign \$38  = \$37  == 2'h2;
+  assign \$39  = ! table_index;
+  assign \$40  = table_index ? 2'h0 : codes[1:0];
+  assign \$42  = \$41  ? codes[3:2] : 2'h0;
+  assign \$43  = \$40  | \$42 ;
+  assign \$44  = \$43  == 1'h1;
+  assign \$45  = \$44  ? 38'h2000000066 : 38'h0000000000;
+  assign \$46  = \$38  ? 38'h2000121b30 : \$45 ;
+  assign \$47  = \$32  ? table_crc : \$46 ;
+  assign \$48  = ! table_index;
+  assign \$49  = table_index ? 2'h0 : codes[1:0];
+  assign \$51  = \$50  ? codes[3:2] : 2'h0;
+  assign \$52  = \$49  | \$51 ;
+  assign \$53  = \$52  == 2'h3;
+  assign \$54  = ! table_index;
+  assign \$55  = table_index ? 2'h0 : codes[1:0];
+  assign \$57  = \$56  ? codes[3:2] : 2'h0;
+  assign \$58  = \$55  | \$57 ;
+  assign \$59  = \$58  == 2'h2;
+  assign \$60  = ! table_index;
+  assign \$61  = table_index ? 2'h0 : codes[1:0];
+  assign \$63  = \$62  ? codes[3:2] : 2'h0;
+  assign \$64  = \$61  | \$63 ;
+  assign \$65  = \$64  == 1'h1;
+  assign \$66  = \$65  ? 38'h2000000066 : 38'h0000000000;
+  assign \$67  = \$59  ? 38'h2000121b30 : \$66 ;
+  assign \$68  = \$53  ? table_crc : \$67 ;
+  assign \$69  = ! table_index;
+  assign \$70  = table_index ? 2'h0 : codes[1:0];
+  assign \$72  = \$71  ? codes[3:2] : 2'h0;
+  assign \$73  = \$70  | \$72 ;
+  assign \$74  = \$73  == 2'h3;
+  assign \$75  = ! table_index;
+  assign \$76  = table_index ? 2'h0 : codes[1:0];
+  assign \$78  = \$77  ? codes[3:2] : 2'h0;
+  assign \$79  = \$76  | \$78 ;
+  assign \$80  = \$79  == 2'h2;
+  assign \$81  = ! table_index;
+  assign \$82  = table_index ? 2'h0 : codes[1:0];
+  assign \$84  = \$83  ? codes[3:2] : 2'h0;
+  assign \$85  = \$82  | \$84 ;
+  assign \$86  = \$85  == 1'h1;
+  assign \$87  = \$86  ? 38'h2000000066 : 38'h0000000000;
+  assign \$88  = \$80  ? 38'h2000121b30 : \$87 ;
+  assign \$89  = \$74  ? table_crc : \$88 ;
+  assign \$90  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$91  = \$90  ^ \bit ;
+  assign \$92  = \$91  ? settings[20:5] : 16'h0000;
+  assign \$93  = { \reg [14:0], 1'h0 } ^ \$92 ;
+  assign \$94  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$95  = \bit  ^ \$94 ;
+  assign \$96  = \$95  ^ settings[37];
+  assign \$97  = check & \$96 ;
+  assign \$98  = mismatch | \$97 ;
+  assign \$99  = ! index;
+  assign \$100  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$101  = \bit  ^ \$100 ;
+  assign \$102  = \$101  ^ settings[37];
+  assign \$103  = check & \$102 ;
+  assign \$104  = mismatch | \$103 ;
+  assign \$105  = ~ \$104 ;
+  assign \$107  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$108  = \bit  ^ \$107 ;
+  assign \$109  = \$108  ^ settings[37];
+  assign \$110  = check & \$109 ;
+  assign \$111  = mismatch | \$110 ;
+  assign \$112  = ~ \$111 ;
   always @(posedge clk)
-    \reg  <= \$128 ;
+    \reg  <= \$113 ;
   always @(posedge clk)
-    mismatch <= \$129 ;
+    mismatch <= \$114 ;
   always @(posedge clk)
-    settings <= \$130 ;
+    settings <= \$115 ;
   always @(posedge clk)
-    ok <= \$131 ;
+    ok <= \$116 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$128  = \reg ;
+    \$113  = \reg ;
     if (load) begin
-      \$128  = \$26 [36:21];
+      \$113  = \$26 [36:21];
     end else if (\cover ) begin
-      \$128  = \$108 ;
+      \$113  = \$93 ;
     end else if (check) begin
-      \$128  = { \reg [14:0], 1'h0 };
+      \$113  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$128  = 16'h0000;
+      \$113  = 16'h0000;
     end
     if (rst) begin
-      \$128  = 16'h0000;
+      \$113  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$129  = mismatch;
+    \$114  = mismatch;
     if (load) begin
-      \$129  = 1'h0;
+      \$114  = 1'h0;
     end else if (\cover ) begin
     end else if (check) begin
-      \$129  = \$113 ;
+      \$114  = \$98 ;
     end
     if (receiver_clear) begin
-      \$129  = 1'h0;
+      \$114  = 1'h0;
     end
     if (rst) begin
-      \$129  = 1'h0;
+      \$114  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$130  = settings;
+    \$115  = settings;
     if (load) begin
-      \$130 [4:0] = \$52 [4:0];
-      \$130 [20:5] = \$78 [20:5];
-      \$130 [37] = \$104 [37];
+      \$115 [4:0] = \$47 [4:0];
+      \$115 [20:5] = \$68 [20:5];
+      \$115 [37] = \$89 [37];
     end
     if (receiver_clear) begin
-      \$130 [20:0] = 21'h000000;
-      \$130 [37] = 1'h0;
+      \$115 [20:0] = 21'h000000;
+      \$115 [37] = 1'h0;
     end
     if (rst) begin
-      \$130  = 38'h0000000000;
+      \$115  = 38'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$131  = ok;
+    \$116  = ok;
     if (last) begin
-      if (\$114 ) begin
-        \$131 [0] = \$120 ;
+      if (\$99 ) begin
+        \$116 [0] = \$105 ;
       end
-      if (\$121 ) begin
-        \$131 [1] = \$127 ;
+      if (\$106 ) begin
+        \$116 [1] = \$112 ;
       end
     end
     if (receiver_clear) begin
-      \$131  = 2'h3;
+      \$116  = 2'h3;
     end
     if (rst) begin
-      \$131  = 2'h3;
+      \$116  = 2'h3;
     end
   end
+  assign load_index = table_index;
+  assign \table_crc.width  = table_crc[4:0];
+  assign \table_crc.poly  = table_crc[20:5];
+  assign \table_crc.start  = table_crc[36:21];
+  assign \table_crc.inverted  = table_crc[37];
+  assign \widths[0]  = widths[4:0];
+  assign \widths[1]  = widths[9:5];
+  assign \table.poly  = \table [15:0];
+  assign \table.start  = \table [31:16];
+  assign \table.inverted  = \table [32];
   assign \codes[0]  = codes[1:0];
   assign \codes[1]  = codes[3:2];
-  assign \customs[0]  = customs[37:0];
-  assign \customs[0].width  = customs[4:0];
-  assign \customs[0].poly  = customs[20:5];
-  assign \customs[0].start  = customs[36:21];
-  assign \customs[0].inverted  = customs[37];
-  assign \customs[1]  = customs[75:38];
-  assign \customs[1].width  = customs[42:38];
-  assign \customs[1].poly  = customs[58:43];
-  assign \customs[1].start  = customs[74:59];
-  assign \customs[1].inverted  = customs[75];
   assign \settings.width  = settings[4:0];
   assign \settings.poly  = settings[20:5];
   assign \settings.start  = settings[36:21];
   assign \settings.inverted  = settings[37];
-  assign \$3  = load_index;
-  assign \$9  = load_index;
-  assign \$14  = load_index;
-  assign \$20  = load_index;
-  assign \$29  = load_index;
-  assign \$35  = load_index;
-  assign \$40  = load_index;
-  assign \$46  = load_index;
-  assign \$55  = load_index;
-  assign \$61  = load_index;
-  assign \$66  = load_index;
-  assign \$72  = load_index;
-  assign \$81  = load_index;
-  assign \$87  = load_index;
-  assign \$92  = load_index;
-  assign \$98  = load_index;
-  assign \$121  = index;
+  assign table_crc[37] = \table [32];
+  assign table_crc[36:21] = \table [31:16];
+  assign table_crc[20:5] = \table [15:0];
+  assign table_crc[4:0] = \$5 ;
+  assign \$3  = table_index;
+  assign \$8  = table_index;
+  assign \$14  = table_index;
+  assign \$20  = table_index;
+  assign \$29  = table_index;
+  assign \$35  = table_index;
+  assign \$41  = table_index;
+  assign \$50  = table_index;
+  assign \$56  = table_index;
+  assign \$62  = table_index;
+  assign \$71  = table_index;
+  assign \$77  = table_index;
+  assign \$83  = table_index;
+  assign \$106  = index;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -20370,7 +20308,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.ma_stop (rst, \port$13105$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch0.core.ma_stop (rst, \port$13099$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20459,8 +20397,8 @@ module \biss_master_wb.ch0.core.ma_stop (rst, \port$13105$199 , ssi, ssi_error, 
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13105$199 ;
-  wire \port$13105$199 ;
+  input \port$13099$166 ;
+  wire \port$13099$166 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20580,7 +20518,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, \port$13105$199 , ssi, ssi_error, 
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13105$199  : 1'h0;
+  assign \$13  = \$12  ? \port$13099$166  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -20748,7 +20686,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, \port$13105$199 , ssi, ssi_error, 
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13105$199 , 1'h1 };
+  assign enables = { \port$13099$166 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22888,7 +22826,7 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13105$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13099$193 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -23471,8 +23409,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13105$259 ;
-  wire [12:0] \port$13105$259 ;
+  input [12:0] \port$13099$193 ;
+  wire [12:0] \port$13099$193 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -23495,7 +23433,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13105$259 [12:1] + 1'h1;
+  assign \$460  = \port$13099$193 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -24071,7 +24009,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13105$259 [0]),
+    .clear_high(\port$13099$193 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -24214,7 +24152,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13105$259 [0]) begin
+            if (\port$13099$193 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -24299,7 +24237,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13105$259 [0]) begin
+            if (\port$13099$193 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -24338,7 +24276,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13105$259 [12:1] };
+            \$534  = { 1'h0, \port$13099$193 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -24723,11 +24661,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13105$259 [12:1] };
-  assign fixed = \port$13105$259 [0];
+  assign fixed_delay = { 1'h0, \port$13099$193 [12:1] };
+  assign fixed = \port$13099$193 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13105$259 [0];
+  assign clear_high = \port$13099$193 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -27304,7 +27242,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13119$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13112$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -27346,8 +27284,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13119$0 ;
-  wire \port$13119$0 ;
+  input \port$13112$0 ;
+  wire \port$13112$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -27361,9 +27299,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13119$0  };
-  assign \$2  = { lc[4:0], \port$13119$0  } == last;
-  assign \$3  = { lc[4:0], \port$13119$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13112$0  };
+  assign \$2  = { lc[4:0], \port$13112$0  } == last;
+  assign \$3  = { lc[4:0], \port$13112$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -27473,7 +27411,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13119$0  };
+  assign lc_next = { lc[4:0], \port$13112$0  };
   assign zero = is_zero;
 endmodule
 
@@ -30270,7 +30208,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6007$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6026$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -30324,8 +30262,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6007$0 , lc_
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [274:0] cfg;
-  wire [274:0] cfg;
+  input [208:0] cfg;
+  wire [208:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [3:0] \cfg.confirm_frames ;
@@ -30356,10 +30294,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6007$0 , lc_
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
   wire \cfg.w0.signed ;
-  wire [37:0] \cfg.w0_crc ;
-  wire \cfg.w0_crc.inverted ;
-  wire [15:0] \cfg.w0_crc.poly ;
-  wire [15:0] \cfg.w0_crc.start ;
+  wire [4:0] \cfg.w0_crc ;
   wire [4:0] \cfg.w0_crc.width ;
   wire [11:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
@@ -30373,10 +30308,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6007$0 , lc_
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
   wire \cfg.w1.signed ;
-  wire [37:0] \cfg.w1_crc ;
-  wire \cfg.w1_crc.inverted ;
-  wire [15:0] \cfg.w1_crc.poly ;
-  wire [15:0] \cfg.w1_crc.start ;
+  wire [4:0] \cfg.w1_crc ;
   wire [4:0] \cfg.w1_crc.width ;
   wire \cfg.w1_enable ;
   output clean;
@@ -30448,8 +30380,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6007$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$6007$0 ;
-  wire \port$6007$0 ;
+  output \port$6026$0 ;
+  wire \port$6026$0 ;
   output report;
   wire report;
   input report_frame;
@@ -30497,9 +30429,9 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6007$0 , lc_
   assign clean = \$47  & \$50 ;
   assign \$51  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$51  : 2'h0;
-  assign \$1  = ~ cfg[199];
+  assign \$1  = ~ cfg[166];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$4  = cfg[199] & cfg[207];
+  assign \$4  = cfg[166] & cfg[174];
   assign \$5  = | { \$4 , \$3  };
   assign \$6  = report_frame & \$5 ;
   assign \$8  = \$7  ? crc_ok[0] : \$2 ;
@@ -30508,10 +30440,10 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6007$0 , lc_
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
   assign \$9  = & { \$2 , crc_ok[0] };
-  assign \$10  = cfg[250] & cfg[199];
+  assign \$10  = cfg[184] & cfg[166];
   assign \$11  = ~ spw_match;
   assign \$12  = \$10  & \$11 ;
-  assign \$14  = cfg[259] & copy_mismatch;
+  assign \$14  = cfg[193] & copy_mismatch;
   assign \$15  = \$13  | \$14 ;
   assign spw_mismatch = \$9  & \$15 ;
   assign \$16  = lc_repeat | lc_skip;
@@ -30532,7 +30464,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6007$0 , lc_
   assign \$29  = & { \$2 , crc_ok[0] };
   assign \$30  = ~ \$29 ;
   assign \$31  = \$30  | spw_mismatch;
-  assign \$33  = cfg[199] & cfg[207];
+  assign \$33  = cfg[166] & cfg[174];
   assign \$34  = | { \$33 , \$32  };
   assign \$36  = \$35  ? crc_ok[0] : \$2 ;
   assign \$37  = \$34  & \$36 ;
@@ -30567,7 +30499,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6007$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$6007$0  = \$2 ;
+  assign \port$6026$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -30586,31 +30518,25 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6007$0 , lc_
   assign \cfg.w0.crc  = cfg[158:157];
   assign \cfg.w0.gray  = cfg[159];
   assign \cfg.w0.signed  = cfg[160];
-  assign \cfg.w0_crc  = cfg[198:161];
+  assign \cfg.w0_crc  = cfg[165:161];
   assign \cfg.w0_crc.width  = cfg[165:161];
-  assign \cfg.w0_crc.poly  = cfg[181:166];
-  assign \cfg.w0_crc.start  = cfg[197:182];
-  assign \cfg.w0_crc.inverted  = cfg[198];
-  assign \cfg.w1_enable  = cfg[199];
-  assign \cfg.w1  = cfg[211:200];
-  assign \cfg.w1.data_bits  = cfg[205:200];
-  assign \cfg.w1.nenw  = cfg[206];
-  assign \cfg.w1.lc  = cfg[207];
-  assign \cfg.w1.crc  = cfg[209:208];
-  assign \cfg.w1.gray  = cfg[210];
-  assign \cfg.w1.signed  = cfg[211];
-  assign \cfg.w1_crc  = cfg[249:212];
-  assign \cfg.w1_crc.width  = cfg[216:212];
-  assign \cfg.w1_crc.poly  = cfg[232:217];
-  assign \cfg.w1_crc.start  = cfg[248:233];
-  assign \cfg.w1_crc.inverted  = cfg[249];
-  assign \cfg.spw_check  = cfg[250];
-  assign \cfg.spw_tolerance  = cfg[258:251];
-  assign \cfg.ssi  = cfg[259];
-  assign \cfg.ssi_delay  = cfg[271:260];
-  assign \cfg.ssi_error  = cfg[272];
-  assign \cfg.ssi_error_low  = cfg[273];
-  assign \cfg.ssi_double  = cfg[274];
+  assign \cfg.w1_enable  = cfg[166];
+  assign \cfg.w1  = cfg[178:167];
+  assign \cfg.w1.data_bits  = cfg[172:167];
+  assign \cfg.w1.nenw  = cfg[173];
+  assign \cfg.w1.lc  = cfg[174];
+  assign \cfg.w1.crc  = cfg[176:175];
+  assign \cfg.w1.gray  = cfg[177];
+  assign \cfg.w1.signed  = cfg[178];
+  assign \cfg.w1_crc  = cfg[183:179];
+  assign \cfg.w1_crc.width  = cfg[183:179];
+  assign \cfg.spw_check  = cfg[184];
+  assign \cfg.spw_tolerance  = cfg[192:185];
+  assign \cfg.ssi  = cfg[193];
+  assign \cfg.ssi_delay  = cfg[205:194];
+  assign \cfg.ssi_error  = cfg[206];
+  assign \cfg.ssi_error_low  = cfg[207];
+  assign \cfg.ssi_double  = cfg[208];
   assign \$3  = cfg[156];
   assign \$7  = cfg[156];
   assign \$13  = \$12 ;
@@ -30621,10 +30547,10 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$6007$0 , lc_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic
-, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check
-, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address
-, ca_count, ca_write, ca_start, ca_abort, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14044$0 , \port$14055$0 , regs__ca_done, \port$14132$0 , ca_rbuf_addr);
+module \biss_master_wb.ch1 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_rbuf_en, crc_table_data, regs__frame_error, cfg_free, regs__busy, regs__config_error, crc_table_addr, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle
+, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed
+, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
+, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14038$0 , \port$14049$0 , regs__ca_done, \port$14126$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -30707,7 +30633,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire cfg_free;
   input cfg_hold;
   wire cfg_hold;
-  wire \cfg_hold$211 ;
+  wire \cfg_hold$199 ;
   input [15:0] cfg_ma_half_period;
   wire [15:0] cfg_ma_half_period;
   input [3:0] cfg_noise_limit;
@@ -30739,12 +30665,6 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w0_crc;
   wire [1:0] cfg_w0_crc;
-  input cfg_w0_crc_inverted;
-  wire cfg_w0_crc_inverted;
-  input [15:0] cfg_w0_crc_poly;
-  wire [15:0] cfg_w0_crc_poly;
-  input [15:0] cfg_w0_crc_start;
-  wire [15:0] cfg_w0_crc_start;
   input [4:0] cfg_w0_crc_width;
   wire [4:0] cfg_w0_crc_width;
   wire [5:0] cfg_w0_data_bits;
@@ -30763,12 +30683,6 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w1_crc;
   wire [1:0] cfg_w1_crc;
-  input cfg_w1_crc_inverted;
-  wire cfg_w1_crc_inverted;
-  input [15:0] cfg_w1_crc_poly;
-  wire [15:0] cfg_w1_crc_poly;
-  input [15:0] cfg_w1_crc_start;
-  wire [15:0] cfg_w1_crc_start;
   input [4:0] cfg_w1_crc_width;
   wire [4:0] cfg_w1_crc_width;
   wire [5:0] cfg_w1_data_bits;
@@ -30797,6 +30711,18 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [31:0] count_data;
   input count_en;
   wire count_en;
+  output crc_table_addr;
+  wire crc_table_addr;
+  wire \crc_table_addr$202 ;
+  input [32:0] crc_table_data;
+  wire [32:0] crc_table_data;
+  wire [32:0] \crc_table_data$204 ;
+  wire \crc_table_data$204.inverted ;
+  wire [15:0] \crc_table_data$204.poly ;
+  wire [15:0] \crc_table_data$204.start ;
+  wire \crc_table_data.inverted ;
+  wire [15:0] \crc_table_data.poly ;
+  wire [15:0] \crc_table_data.start ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire done;
@@ -30810,17 +30736,17 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$207 ;
+  wire \ma$195 ;
   wire [3:0] noise_events;
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$14044$0 ;
-  wire [186:0] \port$14044$0 ;
-  output [79:0] \port$14055$0 ;
-  wire [79:0] \port$14055$0 ;
-  output [9:0] \port$14132$0 ;
-  wire [9:0] \port$14132$0 ;
+  output [186:0] \port$14038$0 ;
+  wire [186:0] \port$14038$0 ;
+  output [79:0] \port$14049$0 ;
+  wire [79:0] \port$14049$0 ;
+  output [9:0] \port$14126$0 ;
+  wire [9:0] \port$14126$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -30883,9 +30809,6 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] regs__cfg_w0_crc;
-  wire regs__cfg_w0_crc_inverted;
-  wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] regs__cfg_w0_crc_start;
   wire [4:0] regs__cfg_w0_crc_width;
   input [6:0] regs__cfg_w0_data_bits;
   wire [6:0] regs__cfg_w0_data_bits;
@@ -30899,9 +30822,6 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] regs__cfg_w1_crc;
-  wire regs__cfg_w1_crc_inverted;
-  wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] regs__cfg_w1_crc_start;
   wire [4:0] regs__cfg_w1_crc_width;
   input [6:0] regs__cfg_w1_data_bits;
   wire [6:0] regs__cfg_w1_data_bits;
@@ -30960,7 +30880,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$209 ;
+  wire \slo$197 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -30984,11 +30904,11 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   wire [3:0] status;
   input [31:0] time_now;
   wire [31:0] time_now;
-  wire [31:0] \time_now$202 ;
+  wire [31:0] \time_now$190 ;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$204 ;
-  wire \trigger$204 ;
+  input \trigger$192 ;
+  wire \trigger$192 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -31008,7 +30928,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign regs__frame_error = regs__frame_done & \$5 ;
   assign \$7  = \$6  ? 7'h00 : regs__cfg_w0_data_bits;
   assign \$9  = \$8  ? 7'h00 : regs__cfg_w1_data_bits;
-  assign trigger = \trigger$204  & regs__trigger_enable;
+  assign trigger = \trigger$192  & regs__trigger_enable;
   assign cfg_free = ~ regs__busy;
   assign \$10  = ~ report;
   assign \$11  = \$signal  & \$10 ;
@@ -31034,8 +30954,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     regs__result_updates <= \$23 ;
   \biss_master_wb.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$269 (ca_abort),
-    .\busy$318 (regs__busy),
+    .\abort$266 (ca_abort),
+    .\busy$315 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -31064,9 +30984,6 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .cfg_ssi_error_low(cfg_ssi_error_low),
     .cfg_timeout_limit(cfg_timeout_limit),
     .cfg_w0_crc(cfg_w0_crc),
-    .cfg_w0_crc_inverted(cfg_w0_crc_inverted),
-    .cfg_w0_crc_poly(cfg_w0_crc_poly),
-    .cfg_w0_crc_start(cfg_w0_crc_start),
     .cfg_w0_crc_width(cfg_w0_crc_width),
     .cfg_w0_data_bits(\$7 [5:0]),
     .cfg_w0_gray(cfg_w0_gray),
@@ -31074,9 +30991,6 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .cfg_w0_nenw(cfg_w0_nenw),
     .cfg_w0_signed(cfg_w0_signed),
     .cfg_w1_crc(cfg_w1_crc),
-    .cfg_w1_crc_inverted(cfg_w1_crc_inverted),
-    .cfg_w1_crc_poly(cfg_w1_crc_poly),
-    .cfg_w1_crc_start(cfg_w1_crc_start),
     .cfg_w1_crc_width(cfg_w1_crc_width),
     .cfg_w1_data_bits(\$9 [5:0]),
     .cfg_w1_enable(cfg_w1_enable),
@@ -31084,29 +30998,31 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$294 (clear_counters),
+    .\clear$291 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$25 ),
-    .\done$321 (done),
+    .crc_table_addr(crc_table_addr),
+    .crc_table_data(crc_table_data),
+    .\done$318 (done),
     .frames(regs__ca_busy),
     .hold(cfg_hold),
     .ma(ma),
     .now(time_now),
-    .\periodic$45 (periodic),
+    .\periodic$39 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$26 ),
-    .\result$326 (\$24 ),
+    .\result$323 (\$24 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$267 (ca_start),
+    .\start$264 (ca_start),
     .trigger(trigger),
-    .\valid$323 (valid)
+    .\valid$320 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
@@ -31272,14 +31188,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign delay_spread = \$24 [75:68];
   assign regs__settled_delay = \$24 [67:55];
   assign settled_delay = \$24 [67:55];
-  assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
   assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
-  assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
-  assign regs__cfg_w0_crc_start = cfg_w0_crc_start;
-  assign regs__cfg_w1_crc_poly = cfg_w1_crc_poly;
   assign regs__cfg_w1_crc_width = cfg_w1_crc_width;
-  assign regs__cfg_w1_crc_inverted = cfg_w1_crc_inverted;
-  assign regs__cfg_w1_crc_start = cfg_w1_crc_start;
   assign regs__cfg_ssi = cfg_ssi;
   assign regs__cfg_ssi_error = cfg_ssi_error;
   assign regs__cfg_ssi_error_low = cfg_ssi_error_low;
@@ -31312,22 +31222,30 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \time_now$202  = time_now;
-  assign \ma$207  = ma;
-  assign \slo$209  = slo;
-  assign \cfg_hold$211  = cfg_hold;
-  assign \port$14044$0  = \$24 ;
-  assign \port$14055$0  = \$25 ;
-  assign \port$14132$0  = \$26 ;
+  assign \time_now$190  = time_now;
+  assign \ma$195  = ma;
+  assign \slo$197  = slo;
+  assign \cfg_hold$199  = cfg_hold;
+  assign \crc_table_addr$202  = crc_table_addr;
+  assign \crc_table_data$204  = crc_table_data;
+  assign \port$14038$0  = \$24 ;
+  assign \port$14049$0  = \$25 ;
+  assign \port$14126$0  = \$26 ;
+  assign \crc_table_data.poly  = crc_table_data[15:0];
+  assign \crc_table_data.start  = crc_table_data[31:16];
+  assign \crc_table_data.inverted  = crc_table_data[32];
+  assign \crc_table_data$204.poly  = crc_table_data[15:0];
+  assign \crc_table_data$204.start  = crc_table_data[31:16];
+  assign \crc_table_data$204.inverted  = crc_table_data[32];
   assign \$6  = regs__cfg_w0_data_bits[6];
   assign \$8  = regs__cfg_w1_data_bits[6];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$318 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$294 , \periodic$45 
-, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
-, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$267 
-, \abort$269 , hold, abort, ma, \done$321 , \valid$323 , \result$326 , counts, ca_done, result, rbuf_addr);
+module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_table_data, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$315 , config_error, crc_table_addr, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start
+, \clear$291 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
+, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$264 , \abort$266 , hold, abort, ma
+, \done$318 , \valid$320 , \result$323 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -31361,26 +31279,26 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$269 ;
-  wire \abort$269 ;
-  wire \abort$59 ;
+  input \abort$266 ;
+  wire \abort$266 ;
+  wire \abort$53 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$94 ;
+  wire \ack_expired$88 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$115 ;
+  wire [23:0] \ack_limit$109 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$350 ;
+  wire \bit$347 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$92 ;
+  wire \break_over$86 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$278 ;
+  wire \busy$275 ;
+  wire \busy$312 ;
+  output \busy$315 ;
   wire \busy$315 ;
-  output \busy$318 ;
-  wire \busy$318 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -31415,11 +31333,11 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$282 ;
+  wire \cdm$279 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$329 ;
-  wire [274:0] cfg;
+  wire \cds$326 ;
+  wire [208:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [3:0] \cfg.confirm_frames ;
@@ -31450,10 +31368,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
   wire \cfg.w0.signed ;
-  wire [37:0] \cfg.w0_crc ;
-  wire \cfg.w0_crc.inverted ;
-  wire [15:0] \cfg.w0_crc.poly ;
-  wire [15:0] \cfg.w0_crc.start ;
+  wire [4:0] \cfg.w0_crc ;
   wire [4:0] \cfg.w0_crc.width ;
   wire [11:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
@@ -31467,10 +31382,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
   wire \cfg.w1.signed ;
-  wire [37:0] \cfg.w1_crc ;
-  wire \cfg.w1_crc.inverted ;
-  wire [15:0] \cfg.w1_crc.poly ;
-  wire [15:0] \cfg.w1_crc.start ;
+  wire [4:0] \cfg.w1_crc ;
   wire [4:0] \cfg.w1_crc.width ;
   wire \cfg.w1_enable ;
   input [23:0] cfg_ack_limit;
@@ -31517,12 +31429,6 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w0_crc;
   wire [1:0] cfg_w0_crc;
-  input cfg_w0_crc_inverted;
-  wire cfg_w0_crc_inverted;
-  input [15:0] cfg_w0_crc_poly;
-  wire [15:0] cfg_w0_crc_poly;
-  input [15:0] cfg_w0_crc_start;
-  wire [15:0] cfg_w0_crc_start;
   input [4:0] cfg_w0_crc_width;
   wire [4:0] cfg_w0_crc_width;
   input [5:0] cfg_w0_data_bits;
@@ -31542,12 +31448,6 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_11 = "CUSTOM" *)
   input [1:0] cfg_w1_crc;
   wire [1:0] cfg_w1_crc;
-  input cfg_w1_crc_inverted;
-  wire cfg_w1_crc_inverted;
-  input [15:0] cfg_w1_crc_poly;
-  wire [15:0] cfg_w1_crc_poly;
-  input [15:0] cfg_w1_crc_start;
-  wire [15:0] cfg_w1_crc_start;
   input [4:0] cfg_w1_crc_width;
   wire [4:0] cfg_w1_crc_width;
   input [5:0] cfg_w1_data_bits;
@@ -31563,16 +31463,16 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$174 ;
+  wire \check$168 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$179 ;
-  wire \clean$351 ;
+  wire \clean$173 ;
+  wire \clean$348 ;
   wire clear;
-  wire \clear$139 ;
-  input \clear$294 ;
-  wire \clear$294 ;
-  wire \clear$307 ;
+  wire \clear$133 ;
+  input \clear$291 ;
+  wire \clear$291 ;
+  wire \clear$304 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -31601,31 +31501,32 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$192 ;
+  wire [39:0] \cpw_top$189 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$217 ;
+  wire [1:0] \crc_ok$214 ;
+  output crc_table_addr;
+  wire crc_table_addr;
+  wire \crc_table_addr$184 ;
+  input [32:0] crc_table_data;
+  wire [32:0] crc_table_data;
+  wire [32:0] \crc_table_data$186 ;
+  wire \crc_table_data$186.inverted ;
+  wire [15:0] \crc_table_data$186.poly ;
+  wire [15:0] \crc_table_data$186.start ;
+  wire \crc_table_data.inverted ;
+  wire [15:0] \crc_table_data.poly ;
+  wire [15:0] \crc_table_data.start ;
   wire [9:0] crc_widths;
-  wire [9:0] \crc_widths$187 ;
-  wire [4:0] \crc_widths$187[0] ;
-  wire [4:0] \crc_widths$187[1] ;
-  wire [9:0] \crc_widths$188 ;
-  wire [4:0] \crc_widths$188[0] ;
-  wire [4:0] \crc_widths$188[1] ;
+  wire [9:0] \crc_widths$181 ;
+  wire [4:0] \crc_widths$181[0] ;
+  wire [4:0] \crc_widths$181[1] ;
+  wire [9:0] \crc_widths$182 ;
+  wire [4:0] \crc_widths$182[0] ;
+  wire [4:0] \crc_widths$182[1] ;
   wire [4:0] \crc_widths[0] ;
   wire [4:0] \crc_widths[1] ;
-  wire [75:0] customs;
-  wire [37:0] \customs[0] ;
-  wire \customs[0].inverted ;
-  wire [15:0] \customs[0].poly ;
-  wire [15:0] \customs[0].start ;
-  wire [4:0] \customs[0].width ;
-  wire [37:0] \customs[1] ;
-  wire \customs[1].inverted ;
-  wire [15:0] \customs[1].poly ;
-  wire [15:0] \customs[1].start ;
-  wire [4:0] \customs[1].width ;
-  wire [274:0] cycle;
+  wire [208:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [3:0] \cycle.confirm_frames ;
@@ -31656,10 +31557,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
   wire \cycle.w0.signed ;
-  wire [37:0] \cycle.w0_crc ;
-  wire \cycle.w0_crc.inverted ;
-  wire [15:0] \cycle.w0_crc.poly ;
-  wire [15:0] \cycle.w0_crc.start ;
+  wire [4:0] \cycle.w0_crc ;
   wire [4:0] \cycle.w0_crc.width ;
   wire [11:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
@@ -31673,10 +31571,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
   wire \cycle.w1.signed ;
-  wire [37:0] \cycle.w1_crc ;
-  wire \cycle.w1_crc.inverted ;
-  wire [15:0] \cycle.w1_crc.poly ;
-  wire [15:0] \cycle.w1_crc.start ;
+  wire [4:0] \cycle.w1_crc ;
   wire [4:0] \cycle.w1_crc.width ;
   wire \cycle.w1_enable ;
   wire [54:0] data0;
@@ -31686,54 +31581,54 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$121 ;
-  wire [12:0] \delay$173 ;
+  wire [12:0] \delay$115 ;
+  wire [12:0] \delay$167 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$123 ;
+  wire [11:0] \delay_limit$117 ;
   wire delay_over;
-  wire \delay_over$102 ;
+  wire \delay_over$96 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  output \done$321 ;
-  wire \done$321 ;
-  wire \done$322 ;
+  output \done$318 ;
+  wire \done$318 ;
+  wire \done$319 ;
   wire doubtful;
   wire early;
-  wire \early$75 ;
+  wire \early$69 ;
   wire enable;
   wire [1:0] enables;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$293 ;
-  wire \events$293.ca_aborted ;
-  wire \events$293.ca_crc4_error ;
-  wire \events$293.ca_data_fault ;
-  wire \events$293.ca_no_answer ;
-  wire \events$293.ca_refused ;
-  wire [15:0] \events$302 ;
-  wire \events$302.aborted ;
-  wire \events$302.crc_word0 ;
-  wire \events$302.crc_word1 ;
-  wire \events$302.delay_jump ;
-  wire \events$302.delay_range ;
-  wire \events$302.lc_repeat ;
-  wire \events$302.lc_skip ;
-  wire \events$302.lc_zero ;
-  wire \events$302.no_ack ;
-  wire \events$302.no_start ;
-  wire \events$302.no_stop ;
-  wire \events$302.noise_event ;
-  wire \events$302.noisy_line ;
-  wire \events$302.overrun ;
-  wire \events$302.slo_stuck_low ;
-  wire \events$302.spw_mismatch ;
+  wire [4:0] \events$290 ;
+  wire \events$290.ca_aborted ;
+  wire \events$290.ca_crc4_error ;
+  wire \events$290.ca_data_fault ;
+  wire \events$290.ca_no_answer ;
+  wire \events$290.ca_refused ;
+  wire [15:0] \events$299 ;
+  wire \events$299.aborted ;
+  wire \events$299.crc_word0 ;
+  wire \events$299.crc_word1 ;
+  wire \events$299.delay_jump ;
+  wire \events$299.delay_range ;
+  wire \events$299.lc_repeat ;
+  wire \events$299.lc_skip ;
+  wire \events$299.lc_zero ;
+  wire \events$299.no_ack ;
+  wire \events$299.no_start ;
+  wire \events$299.no_stop ;
+  wire \events$299.noise_event ;
+  wire \events$299.noisy_line ;
+  wire \events$299.overrun ;
+  wire \events$299.slo_stuck_low ;
+  wire \events$299.spw_mismatch ;
   wire fault;
-  wire \fault$213 ;
+  wire \fault$210 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -31769,7 +31664,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$215 ;
+  wire [3:0] \fault_status$212 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -31779,7 +31674,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$251 ;
+  wire \first_rise$248 ;
   wire [31:0] first_rise_time;
   wire fixed;
   wire [12:0] fixed_delay;
@@ -31829,44 +31724,44 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
-  wire \frame_end$287 ;
+  wire \frame_end$284 ;
   wire frame_ok;
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$145 ;
+  wire [15:0] \half_period$139 ;
   wire held;
   input hold;
   wire hold;
-  wire \hold$285 ;
+  wire \hold$282 ;
   wire idle;
-  wire \idle$41 ;
-  wire \idle$50 ;
+  wire \idle$35 ;
+  wire \idle$44 ;
   wire in_clock;
-  wire \in_clock$109 ;
+  wire \in_clock$103 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$151 ;
-  wire [5:0] \lc$342 ;
+  wire [5:0] \lc$145 ;
+  wire [5:0] \lc$339 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$153 ;
+  wire [5:0] \lc_next$147 ;
   wire lc_repeat;
-  wire \lc_repeat$343 ;
+  wire \lc_repeat$340 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$344 ;
+  wire \lc_skip$341 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$345 ;
+  wire \lc_zero$342 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$162 ;
+  wire \level$156 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [274:0] live;
+  wire [208:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [3:0] \live.confirm_frames ;
@@ -31897,10 +31792,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
   wire \live.w0.signed ;
-  wire [37:0] \live.w0_crc ;
-  wire \live.w0_crc.inverted ;
-  wire [15:0] \live.w0_crc.poly ;
-  wire [15:0] \live.w0_crc.start ;
+  wire [4:0] \live.w0_crc ;
   wire [4:0] \live.w0_crc.width ;
   wire [11:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
@@ -31914,21 +31806,18 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
   wire \live.w1.signed ;
-  wire [37:0] \live.w1_crc ;
-  wire \live.w1_crc.inverted ;
-  wire [15:0] \live.w1_crc.poly ;
-  wire [15:0] \live.w1_crc.start ;
+  wire [4:0] \live.w1_crc ;
   wire [4:0] \live.w1_crc.width ;
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$73 ;
+  wire \locked$67 ;
   output ma;
   wire ma;
-  wire \ma$317 ;
+  wire \ma$314 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$104 ;
+  wire \ma_busy$98 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -31937,30 +31826,30 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire mismatch;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$96 ;
+  wire \no_start_expired$90 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$119 ;
+  wire [24:0] \no_start_limit$113 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$181 ;
+  wire \noisy$175 ;
   input [31:0] now;
   wire [31:0] now;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$320 ;
+  wire \overrun$317 ;
   wire passed;
   wire pending;
   wire [23:0] period;
   wire periodic;
-  input \periodic$45 ;
-  wire \periodic$45 ;
+  input \periodic$39 ;
+  wire \periodic$39 ;
   wire quiet;
-  wire \quiet$128 ;
+  wire \quiet$122 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$130 ;
+  wire \quiet_live$124 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -31976,38 +31865,38 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$227 ;
-  wire \report$231 ;
+  wire \report$224 ;
+  wire \report$228 ;
   wire report_delay;
-  wire \report_delay$234 ;
+  wire \report_delay$231 ;
   wire report_frame;
-  wire \report_frame$212 ;
-  wire \report_frame$232 ;
+  wire \report_frame$209 ;
+  wire \report_frame$229 ;
   wire request;
-  wire [17:0] \request$255 ;
-  wire [6:0] \request$255.address ;
-  wire [6:0] \request$255.count ;
-  wire [2:0] \request$255.slave_id ;
-  wire \request$255.write ;
-  wire \request$58 ;
+  wire [17:0] \request$252 ;
+  wire [6:0] \request$252.address ;
+  wire [6:0] \request$252.count ;
+  wire [2:0] \request$252.slave_id ;
+  wire \request$252.write ;
+  wire \request$52 ;
   wire restart;
-  wire \restart$166 ;
+  wire \restart$160 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$326 ;
-  wire [186:0] \result$326 ;
-  wire \result$326.cds ;
-  wire \result$326.delay_settled ;
-  wire [7:0] \result$326.delay_spread ;
-  wire [5:0] \result$326.lc ;
-  wire \result$326.lc_repeat ;
-  wire \result$326.lc_skip ;
-  wire \result$326.lc_zero ;
-  wire [12:0] \result$326.line_delay ;
-  wire [3:0] \result$326.noise_events ;
-  wire [12:0] \result$326.settled_delay ;
-  wire \result$326.spw_mismatch ;
+  output [186:0] \result$323 ;
+  wire [186:0] \result$323 ;
+  wire \result$323.cds ;
+  wire \result$323.delay_settled ;
+  wire [7:0] \result$323.delay_spread ;
+  wire [5:0] \result$323.lc ;
+  wire \result$323.lc_repeat ;
+  wire \result$323.lc_skip ;
+  wire \result$323.lc_zero ;
+  wire [12:0] \result$323.line_delay ;
+  wire [3:0] \result$323.noise_events ;
+  wire [12:0] \result$323.settled_delay ;
+  wire \result$323.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -32025,18 +31914,18 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$326.status ;
-  wire [31:0] \result$326.timestamp ;
-  wire [57:0] \result$326.word0 ;
-  wire \result$326.word0.crc_ok ;
-  wire \result$326.word0.ne ;
-  wire \result$326.word0.nw ;
-  wire [54:0] \result$326.word0.position ;
-  wire [42:0] \result$326.word1 ;
-  wire \result$326.word1.crc_ok ;
-  wire \result$326.word1.ne ;
-  wire \result$326.word1.nw ;
-  wire [39:0] \result$326.word1.position ;
+  wire [3:0] \result$323.status ;
+  wire [31:0] \result$323.timestamp ;
+  wire [57:0] \result$323.word0 ;
+  wire \result$323.word0.crc_ok ;
+  wire \result$323.word0.ne ;
+  wire \result$323.word0.nw ;
+  wire [54:0] \result$323.word0.position ;
+  wire [42:0] \result$323.word1 ;
+  wire \result$323.word1.crc_ok ;
+  wire \result$323.word1.ne ;
+  wire \result$323.word1.nw ;
+  wire [39:0] \result$323.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -32048,55 +31937,55 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$159 ;
+  wire \resync$153 ;
   wire [15:0] rises;
-  wire [15:0] \rises$138 ;
+  wire [15:0] \rises$132 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$349 ;
+  wire \sample$346 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$332 ;
+  wire [12:0] \settled_delay$329 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$103 ;
-  wire \slo$52 ;
-  wire \slo$64 ;
+  wire \slo$46 ;
+  wire \slo$58 ;
+  wire \slo$97 ;
   wire slo_stuck;
-  wire \slo_stuck$98 ;
+  wire \slo_stuck$92 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$100 ;
+  wire \slo_stuck_live$94 ;
   wire slots_full;
-  wire \slots_full$84 ;
+  wire \slots_full$78 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$346 ;
+  wire \spw_mismatch$343 ;
   wire ssi;
-  wire \ssi$201 ;
-  wire \ssi$205 ;
+  wire \ssi$198 ;
+  wire \ssi$202 ;
   wire ssi_double;
-  wire \ssi_double$206 ;
+  wire \ssi_double$203 ;
   wire ssi_error;
-  wire \ssi_error$207 ;
+  wire \ssi_error$204 ;
   wire ssi_error_low;
   input start;
   wire start;
-  input \start$267 ;
-  wire \start$267 ;
-  wire \start$43 ;
+  input \start$264 ;
+  wire \start$264 ;
+  wire \start$37 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$136 ;
+  wire [15:0] \start_slot$130 ;
   wire started;
-  wire \started$134 ;
-  wire \started$82 ;
+  wire \started$128 ;
+  wire \started$76 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -32133,7 +32022,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$229 ;
+  wire [3:0] \status$226 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -32151,29 +32040,29 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$325 ;
+  wire [3:0] \status$322 ;
   wire stop_bit;
-  wire \stop_bit$88 ;
+  wire \stop_bit$82 ;
   wire stopped;
-  wire \stopped$86 ;
+  wire \stopped$80 ;
   wire [31:0] time_now;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$117 ;
+  wire [23:0] \timeout_limit$111 ;
   wire [23:0] timeout_live;
   wire timeout_over;
-  wire \timeout_over$80 ;
+  wire \timeout_over$74 ;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$196 ;
+  wire [7:0] \tolerance$193 ;
   input trigger;
   wire trigger;
-  wire \trigger$54 ;
+  wire \trigger$48 ;
   wire unconfirmed;
   wire valid;
-  wire \valid$236 ;
-  output \valid$323 ;
-  wire \valid$323 ;
+  wire \valid$233 ;
+  output \valid$320 ;
+  wire \valid$320 ;
   wire valid_out;
   wire waiting;
   wire watch;
@@ -32190,34 +32079,34 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$149 ;
+  wire [1:0] \word_count$143 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$185 ;
-  wire [11:0] \words$185[0] ;
+  wire [23:0] \words$179 ;
+  wire [11:0] \words$179[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$185[0].crc ;
-  wire [5:0] \words$185[0].data_bits ;
-  wire \words$185[0].gray ;
-  wire \words$185[0].lc ;
-  wire \words$185[0].nenw ;
-  wire \words$185[0].signed ;
-  wire [11:0] \words$185[1] ;
+  wire [1:0] \words$179[0].crc ;
+  wire [5:0] \words$179[0].data_bits ;
+  wire \words$179[0].gray ;
+  wire \words$179[0].lc ;
+  wire \words$179[0].nenw ;
+  wire \words$179[0].signed ;
+  wire [11:0] \words$179[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$185[1].crc ;
-  wire [5:0] \words$185[1].data_bits ;
-  wire \words$185[1].gray ;
-  wire \words$185[1].lc ;
-  wire \words$185[1].nenw ;
-  wire \words$185[1].signed ;
+  wire [1:0] \words$179[1].crc ;
+  wire [5:0] \words$179[1].data_bits ;
+  wire \words$179[1].gray ;
+  wire \words$179[1].lc ;
+  wire \words$179[1].nenw ;
+  wire \words$179[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -32243,17 +32132,17 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   wire \words[1].nenw ;
   wire \words[1].signed ;
   wire zero;
-  assign periodic = \periodic$45  | frames;
-  assign arm = live[259] ? first_rise : ma_arm;
+  assign periodic = \periodic$39  | frames;
+  assign arm = live[193] ? first_rise : ma_arm;
   assign \$1  = live[144:141] != 4'hf;
-  assign \$2  = ~ live[259];
+  assign \$2  = ~ live[193];
   assign enable = \$1  & \$2 ;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$3  = ~ started_before;
-  assign \check$174  = started & \$3 ;
-  assign \$4  = ~ live[259];
-  assign cdm = \cdm$282  & \$4 ;
-  assign \$5  = ~ live[259];
+  assign \check$168  = started & \$3 ;
+  assign \$4  = ~ live[193];
+  assign cdm = \cdm$279  & \$4 ;
+  assign \$5  = ~ live[193];
   assign frame_ok = passed & \$5 ;
   assign \$6  = result[2:0] == 1'h1;
   assign \$7  = ca_done & \$6 ;
@@ -32270,10 +32159,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \$18  = report_frame & \$17 ;
   assign \$19  = status == 4'he;
   assign \$20  = report_frame & \$19 ;
-  assign \busy$318  = ~ idle;
+  assign \busy$315  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$21  = ~ \clear$139 ;
-  assign \$22  = \sample$349  & \$21 ;
+  assign \$21  = ~ \clear$133 ;
+  assign \$22  = \sample$346  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -32318,7 +32207,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .delay_over(delay_over),
     .early(early),
     .end_check(live[124]),
-    .fault(\restart$166 ),
+    .fault(\restart$160 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -32330,23 +32219,23 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .ma_busy(ma_busy),
     .ma_enough(ma_enough),
     .ma_held(ma_held),
-    .ma_hold(\hold$285 ),
+    .ma_hold(\hold$282 ),
     .ma_run(run),
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$139 ),
+    .receiver_clear(\clear$133 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$64 ),
+    .slo(\slo$58 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
-    .ssi(live[259]),
+    .ssi(live[193]),
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
@@ -32356,19 +32245,19 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   );
   \biss_master_wb.ch1.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$294 ),
+    .clear(\clear$291 ),
     .clk(clk),
-    .events(\events$302 ),
+    .events(\events$299 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_wb.ch1.core.counters  counters (
-    .clear(\clear$294 ),
+    .clear(\clear$291 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$293 ),
+    .events(\events$290 ),
     .rst(rst)
   );
   \biss_master_wb.ch1.core.decoder  decoder (
@@ -32377,8 +32266,8 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
+    .crc_table_addr(crc_table_addr),
     .crc_widths(crc_widths),
-    .customs(customs),
     .data0(data0),
     .data1(spw),
     .frame_end(frame_done),
@@ -32387,21 +32276,22 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13656$272 (live[274:272]),
-    .receiver_clear(\clear$139 ),
+    .\port$13650$206 (live[208:206]),
+    .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
-    .ssi(live[259]),
+    .ssi(live[193]),
     .start_slot(start_slot),
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
+    .\table (crc_table_data),
     .word_count(word_count),
     .words(words)
   );
   \biss_master_wb.ch1.core.delay_check  delay_check (
-    .check(\check$174 ),
+    .check(\check$168 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -32420,10 +32310,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$64 ),
+    .level(\slo$58 ),
     .limit(live[140:137]),
     .noisy(noisy),
-    .restart(\restart$166 ),
+    .restart(\restart$160 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -32431,11 +32321,11 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   \biss_master_wb.ch1.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$104 ),
+    .\clocking (\ma_busy$98 ),
     .first_rise(first_rise),
     .half_period(live[15:0]),
     .held(ma_held),
-    .hold(\hold$285 ),
+    .hold(\hold$282 ),
     .ma(ma),
     .rises(rises),
     .rst(rst),
@@ -32443,24 +32333,24 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .second_rise(ma_arm)
   );
   \biss_master_wb.ch1.core.ma_stop  ma_stop (
-    .clear(\clear$139 ),
+    .clear(\clear$133 ),
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13656$199 (live[199]),
+    .\port$13650$166 (live[166]),
     .rises(rises),
     .rst(rst),
-    .ssi(live[259]),
-    .ssi_double(live[274]),
-    .ssi_error(live[272]),
+    .ssi(live[193]),
+    .ssi_double(live[208]),
+    .ssi_error(live[206]),
     .start_slot(start_slot),
     .\started$23 (started),
-    .words(\words$185 )
+    .words(\words$179 )
   );
   \biss_master_wb.ch1.core.register_access  register_access (
-    .abort(\abort$269 ),
+    .abort(\abort$266 ),
     .busy(frames),
-    .cdm(\cdm$282 ),
+    .cdm(\cdm$279 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -32470,38 +32360,38 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$255 ),
+    .request(\request$252 ),
     .result(result),
     .rst(rst),
-    .start(\start$267 ),
+    .start(\start$264 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch1.core.results  results (
     .clk(clk),
-    .done(\done$321 ),
+    .done(\done$318 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$326 ),
+    .result(\result$323 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$323 )
+    .valid_out(\valid$320 )
   );
   \biss_master_wb.ch1.core.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$350 ),
+    .\bit (\bit$347 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(live[15:0]),
-    .level(\slo$64 ),
+    .level(\slo$58 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13656$259 (live[271:259]),
-    .receiver_clear(\clear$139 ),
+    .\port$13650$193 (live[205:193]),
+    .receiver_clear(\clear$133 ),
     .rst(rst),
-    .sample(\sample$349 ),
+    .sample(\sample$346 ),
     .slo(slo)
   );
   \biss_master_wb.ch1.core.scheduler  scheduler (
@@ -32523,20 +32413,20 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13670$0 (\bit ),
+    .\port$13663$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_wb.ch1.core.spw_check  spw_check (
-    .bits(live[205:200]),
+    .bits(live[172:167]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .tolerance(live[258:251])
+    .tolerance(live[192:185])
   );
   \biss_master_wb.ch1.core.time_base  time_base (
     .clk(clk),
@@ -32556,7 +32446,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$104 ),
+    .ma_busy(\ma_busy$98 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -32565,7 +32455,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$64 ),
+    .slo(\slo$58 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -32574,13 +32464,13 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   );
   \biss_master_wb.ch1.core.verdict  verdict (
     .cfg(live),
-    .clean(\clean$351 ),
+    .clean(\clean$348 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$166 ),
+    .fault(\restart$160 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -32591,7 +32481,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$11578$0 (\$28 ),
+    .\port$11582$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -32609,7 +32499,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$24  = \bit$350 ;
+    \$24  = \bit$347 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -32630,177 +32520,179 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$27  = \clean$351 ;
+    \$27  = \clean$348 ;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
-  assign \idle$41  = idle;
-  assign \start$43  = start;
+  assign \idle$35  = idle;
+  assign \start$37  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$50  = idle;
-  assign \slo$52  = slo;
-  assign \trigger$54  = trigger;
+  assign \idle$44  = idle;
+  assign \slo$46  = slo;
+  assign \trigger$48  = trigger;
   assign cfg_hold = hold;
-  assign \request$58  = request;
-  assign \abort$59  = abort;
+  assign \request$52  = request;
+  assign \abort$53  = abort;
   assign ok = config_ok;
   assign end_check = live[124];
   assign cycle = live;
-  assign level = \slo$64 ;
+  assign level = \slo$58 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$73  = locked;
-  assign \early$75  = early;
+  assign \locked$67  = locked;
+  assign \early$69  = early;
   assign frame_end = frame_done;
-  assign ssi = live[259];
-  assign \timeout_over$80  = timeout_over;
-  assign \started$82  = started;
-  assign \slots_full$84  = slots_full;
-  assign \stopped$86  = stopped;
-  assign \stop_bit$88  = stop_bit;
+  assign ssi = live[193];
+  assign \timeout_over$74  = timeout_over;
+  assign \started$76  = started;
+  assign \slots_full$78  = slots_full;
+  assign \stopped$80  = stopped;
+  assign \stop_bit$82  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$92  = break_over;
-  assign \ack_expired$94  = ack_expired;
-  assign \no_start_expired$96  = no_start_expired;
-  assign \slo_stuck$98  = slo_stuck;
-  assign \slo_stuck_live$100  = slo_stuck_live;
-  assign \delay_over$102  = delay_over;
-  assign \slo$103  = \slo$64 ;
-  assign \clocking  = \ma_busy$104 ;
+  assign \break_over$86  = break_over;
+  assign \ack_expired$88  = ack_expired;
+  assign \no_start_expired$90  = no_start_expired;
+  assign \slo_stuck$92  = slo_stuck;
+  assign \slo_stuck_live$94  = slo_stuck_live;
+  assign \delay_over$96  = delay_over;
+  assign \slo$97  = \slo$58 ;
+  assign \clocking  = \ma_busy$98 ;
   assign timer_clear = clear;
-  assign \in_clock$109  = in_clock;
+  assign \in_clock$103  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$115  = ack_limit;
-  assign \timeout_limit$117  = timeout_limit;
-  assign \no_start_limit$119  = no_start_limit;
-  assign \delay$121  = delay;
-  assign \delay_limit$123  = delay_limit;
+  assign \ack_limit$109  = ack_limit;
+  assign \timeout_limit$111  = timeout_limit;
+  assign \no_start_limit$113  = no_start_limit;
+  assign \delay$115  = delay;
+  assign \delay_limit$117  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$128  = quiet;
-  assign \quiet_live$130  = quiet_live;
+  assign \quiet$122  = quiet;
+  assign \quiet_live$124  = quiet_live;
   assign ma_run = run;
   assign half_period = live[15:0];
-  assign \started$134  = started;
-  assign \start_slot$136  = start_slot;
-  assign \rises$138  = rises;
-  assign receiver_clear = \clear$139 ;
+  assign \started$128  = started;
+  assign \start_slot$130  = start_slot;
+  assign \rises$132  = rises;
+  assign receiver_clear = \clear$133 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$145  = live[15:0];
-  assign \word_count$149  = word_count;
-  assign \lc$151  = lc;
+  assign \half_period$139  = live[15:0];
+  assign \word_count$143  = word_count;
+  assign \lc$145  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$153  = { lc[4:0], \bit  };
+  assign \lc_next$147  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$159  = resync;
+  assign \resync$153  = resync;
   assign waiting = watch;
-  assign \level$162  = \slo$64 ;
+  assign \level$156  = \slo$58 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$166 ;
+  assign fault = \restart$160 ;
   assign limit = live[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$173  = delay;
+  assign \delay$167  = delay;
   assign \$signal  = learn;
-  assign \clean$179  = clean;
-  assign \noisy$181  = noisy;
+  assign \clean$173  = clean;
+  assign \noisy$175  = noisy;
   assign jump = delay_jump;
-  assign \crc_widths$187  = crc_widths;
-  assign \crc_widths$188  = crc_widths;
-  assign enables = { live[199], 1'h1 };
-  assign \cpw_top$192  = cpw_top;
+  assign \crc_widths$181  = crc_widths;
+  assign \crc_widths$182  = crc_widths;
+  assign \crc_table_addr$184  = crc_table_addr;
+  assign \crc_table_data$186  = crc_table_data;
+  assign enables = { live[166], 1'h1 };
+  assign \cpw_top$189  = cpw_top;
   assign data1 = spw;
-  assign bits = live[205:200];
-  assign \tolerance$196  = live[258:251];
+  assign bits = live[172:167];
+  assign \tolerance$193  = live[192:185];
   assign match = spw_match;
-  assign fixed = live[259];
-  assign fixed_delay = { 1'h0, live[271:260] };
-  assign \ssi$201  = live[259];
-  assign ssi_error = live[272];
-  assign ssi_error_low = live[273];
-  assign ssi_double = live[274];
-  assign \ssi$205  = live[259];
-  assign \ssi_double$206  = live[274];
-  assign \ssi_error$207  = live[272];
+  assign fixed = live[193];
+  assign fixed_delay = { 1'h0, live[205:194] };
+  assign \ssi$198  = live[193];
+  assign ssi_error = live[206];
+  assign ssi_error_low = live[207];
+  assign ssi_double = live[208];
+  assign \ssi$202  = live[193];
+  assign \ssi_double$203  = live[208];
+  assign \ssi_error$204  = live[206];
   assign mismatch = copy_mismatch;
   assign cfg = live;
-  assign \report_frame$212  = report_frame;
-  assign \fault$213  = \restart$166 ;
-  assign \fault_status$215  = fault_status;
-  assign \crc_ok$217  = crc_ok;
+  assign \report_frame$209  = report_frame;
+  assign \fault$210  = \restart$160 ;
+  assign \fault_status$212  = fault_status;
+  assign \crc_ok$214  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$227  = report;
-  assign \status$229  = status;
+  assign \report$224  = report;
+  assign \status$226  = status;
   assign setting = live[148:145];
-  assign \report$231  = report;
-  assign \report_frame$232  = report_frame;
-  assign \report_delay$234  = report_delay;
-  assign \valid$236  = valid;
+  assign \report$228  = report;
+  assign \report_frame$229  = report_frame;
+  assign \report_delay$231  = report_delay;
+  assign \valid$233  = valid;
   assign word_crc_ok = { \$28 , crc_ok[0] };
-  assign \first_rise$251  = first_rise;
+  assign \first_rise$248  = first_rise;
   assign time_now = now;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$267 ;
-  assign ca_abort = \abort$269 ;
+  assign ca_start = \start$264 ;
+  assign ca_abort = \abort$266 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$278  = frames;
+  assign \busy$275  = frames;
   assign done = ca_done;
   assign held = ma_held;
-  assign ma_hold = \hold$285 ;
-  assign \frame_end$287  = report;
+  assign ma_hold = \hold$282 ;
+  assign \frame_end$284  = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$294 ;
+  assign clear_counters = \clear$291 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$307  = \clear$294 ;
+  assign \clear$304  = \clear$291 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$315  = count_busy;
-  assign \ma$317  = ma;
-  assign \overrun$320  = overrun;
-  assign \done$322  = \done$321 ;
-  assign valid_out = \valid$323 ;
-  assign \status$325  = \result$326 [3:0];
-  assign timestamp = \result$326 [35:4];
-  assign line_delay = \result$326 [48:36];
-  assign \cds$329  = \result$326 [49];
-  assign noise_events = \result$326 [53:50];
-  assign delay_settled = \result$326 [54];
-  assign \settled_delay$332  = \result$326 [67:55];
-  assign delay_spread = \result$326 [75:68];
-  assign word0_position = \result$326 [130:76];
-  assign word0_ne = \result$326 [131];
-  assign word0_nw = \result$326 [132];
-  assign word0_crc_ok = \result$326 [133];
-  assign word1_position = \result$326 [173:134];
-  assign word1_ne = \result$326 [174];
-  assign word1_nw = \result$326 [175];
-  assign word1_crc_ok = \result$326 [176];
-  assign \lc$342  = \result$326 [182:177];
-  assign \lc_repeat$343  = \result$326 [183];
-  assign \lc_skip$344  = \result$326 [184];
-  assign \lc_zero$345  = \result$326 [185];
-  assign \spw_mismatch$346  = \result$326 [186];
+  assign \busy$312  = count_busy;
+  assign \ma$314  = ma;
+  assign \overrun$317  = overrun;
+  assign \done$319  = \done$318 ;
+  assign valid_out = \valid$320 ;
+  assign \status$322  = \result$323 [3:0];
+  assign timestamp = \result$323 [35:4];
+  assign line_delay = \result$323 [48:36];
+  assign \cds$326  = \result$323 [49];
+  assign noise_events = \result$323 [53:50];
+  assign delay_settled = \result$323 [54];
+  assign \settled_delay$329  = \result$323 [67:55];
+  assign delay_spread = \result$323 [75:68];
+  assign word0_position = \result$323 [130:76];
+  assign word0_ne = \result$323 [131];
+  assign word0_nw = \result$323 [132];
+  assign word0_crc_ok = \result$323 [133];
+  assign word1_position = \result$323 [173:134];
+  assign word1_ne = \result$323 [174];
+  assign word1_nw = \result$323 [175];
+  assign word1_crc_ok = \result$323 [176];
+  assign \lc$339  = \result$323 [182:177];
+  assign \lc_repeat$340  = \result$323 [183];
+  assign \lc_skip$341  = \result$323 [184];
+  assign \lc_zero$342  = \result$323 [185];
+  assign \spw_mismatch$343  = \result$323 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -32819,31 +32711,25 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \live.w0.crc  = live[158:157];
   assign \live.w0.gray  = live[159];
   assign \live.w0.signed  = live[160];
-  assign \live.w0_crc  = live[198:161];
+  assign \live.w0_crc  = live[165:161];
   assign \live.w0_crc.width  = live[165:161];
-  assign \live.w0_crc.poly  = live[181:166];
-  assign \live.w0_crc.start  = live[197:182];
-  assign \live.w0_crc.inverted  = live[198];
-  assign \live.w1_enable  = live[199];
-  assign \live.w1  = live[211:200];
-  assign \live.w1.data_bits  = live[205:200];
-  assign \live.w1.nenw  = live[206];
-  assign \live.w1.lc  = live[207];
-  assign \live.w1.crc  = live[209:208];
-  assign \live.w1.gray  = live[210];
-  assign \live.w1.signed  = live[211];
-  assign \live.w1_crc  = live[249:212];
-  assign \live.w1_crc.width  = live[216:212];
-  assign \live.w1_crc.poly  = live[232:217];
-  assign \live.w1_crc.start  = live[248:233];
-  assign \live.w1_crc.inverted  = live[249];
-  assign \live.spw_check  = live[250];
-  assign \live.spw_tolerance  = live[258:251];
-  assign \live.ssi  = live[259];
-  assign \live.ssi_delay  = live[271:260];
-  assign \live.ssi_error  = live[272];
-  assign \live.ssi_error_low  = live[273];
-  assign \live.ssi_double  = live[274];
+  assign \live.w1_enable  = live[166];
+  assign \live.w1  = live[178:167];
+  assign \live.w1.data_bits  = live[172:167];
+  assign \live.w1.nenw  = live[173];
+  assign \live.w1.lc  = live[174];
+  assign \live.w1.crc  = live[176:175];
+  assign \live.w1.gray  = live[177];
+  assign \live.w1.signed  = live[178];
+  assign \live.w1_crc  = live[183:179];
+  assign \live.w1_crc.width  = live[183:179];
+  assign \live.spw_check  = live[184];
+  assign \live.spw_tolerance  = live[192:185];
+  assign \live.ssi  = live[193];
+  assign \live.ssi_delay  = live[205:194];
+  assign \live.ssi_error  = live[206];
+  assign \live.ssi_error_low  = live[207];
+  assign \live.ssi_double  = live[208];
   assign \cycle.ma_half_period  = live[15:0];
   assign \cycle.request_period  = live[39:16];
   assign \cycle.break_time  = live[63:40];
@@ -32862,31 +32748,25 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \cycle.w0.crc  = live[158:157];
   assign \cycle.w0.gray  = live[159];
   assign \cycle.w0.signed  = live[160];
-  assign \cycle.w0_crc  = live[198:161];
+  assign \cycle.w0_crc  = live[165:161];
   assign \cycle.w0_crc.width  = live[165:161];
-  assign \cycle.w0_crc.poly  = live[181:166];
-  assign \cycle.w0_crc.start  = live[197:182];
-  assign \cycle.w0_crc.inverted  = live[198];
-  assign \cycle.w1_enable  = live[199];
-  assign \cycle.w1  = live[211:200];
-  assign \cycle.w1.data_bits  = live[205:200];
-  assign \cycle.w1.nenw  = live[206];
-  assign \cycle.w1.lc  = live[207];
-  assign \cycle.w1.crc  = live[209:208];
-  assign \cycle.w1.gray  = live[210];
-  assign \cycle.w1.signed  = live[211];
-  assign \cycle.w1_crc  = live[249:212];
-  assign \cycle.w1_crc.width  = live[216:212];
-  assign \cycle.w1_crc.poly  = live[232:217];
-  assign \cycle.w1_crc.start  = live[248:233];
-  assign \cycle.w1_crc.inverted  = live[249];
-  assign \cycle.spw_check  = live[250];
-  assign \cycle.spw_tolerance  = live[258:251];
-  assign \cycle.ssi  = live[259];
-  assign \cycle.ssi_delay  = live[271:260];
-  assign \cycle.ssi_error  = live[272];
-  assign \cycle.ssi_error_low  = live[273];
-  assign \cycle.ssi_double  = live[274];
+  assign \cycle.w1_enable  = live[166];
+  assign \cycle.w1  = live[178:167];
+  assign \cycle.w1.data_bits  = live[172:167];
+  assign \cycle.w1.nenw  = live[173];
+  assign \cycle.w1.lc  = live[174];
+  assign \cycle.w1.crc  = live[176:175];
+  assign \cycle.w1.gray  = live[177];
+  assign \cycle.w1.signed  = live[178];
+  assign \cycle.w1_crc  = live[183:179];
+  assign \cycle.w1_crc.width  = live[183:179];
+  assign \cycle.spw_check  = live[184];
+  assign \cycle.spw_tolerance  = live[192:185];
+  assign \cycle.ssi  = live[193];
+  assign \cycle.ssi_delay  = live[205:194];
+  assign \cycle.ssi_error  = live[206];
+  assign \cycle.ssi_error_low  = live[207];
+  assign \cycle.ssi_double  = live[208];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -32901,36 +32781,32 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$185[0]  = \words$185 [11:0];
-  assign \words$185[0].data_bits  = \words$185 [5:0];
-  assign \words$185[0].nenw  = \words$185 [6];
-  assign \words$185[0].lc  = \words$185 [7];
-  assign \words$185[0].crc  = \words$185 [9:8];
-  assign \words$185[0].gray  = \words$185 [10];
-  assign \words$185[0].signed  = \words$185 [11];
-  assign \words$185[1]  = \words$185 [23:12];
-  assign \words$185[1].data_bits  = \words$185 [17:12];
-  assign \words$185[1].nenw  = \words$185 [18];
-  assign \words$185[1].lc  = \words$185 [19];
-  assign \words$185[1].crc  = \words$185 [21:20];
-  assign \words$185[1].gray  = \words$185 [22];
-  assign \words$185[1].signed  = \words$185 [23];
+  assign \words$179[0]  = \words$179 [11:0];
+  assign \words$179[0].data_bits  = \words$179 [5:0];
+  assign \words$179[0].nenw  = \words$179 [6];
+  assign \words$179[0].lc  = \words$179 [7];
+  assign \words$179[0].crc  = \words$179 [9:8];
+  assign \words$179[0].gray  = \words$179 [10];
+  assign \words$179[0].signed  = \words$179 [11];
+  assign \words$179[1]  = \words$179 [23:12];
+  assign \words$179[1].data_bits  = \words$179 [17:12];
+  assign \words$179[1].nenw  = \words$179 [18];
+  assign \words$179[1].lc  = \words$179 [19];
+  assign \words$179[1].crc  = \words$179 [21:20];
+  assign \words$179[1].gray  = \words$179 [22];
+  assign \words$179[1].signed  = \words$179 [23];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign \crc_widths$187[0]  = crc_widths[4:0];
-  assign \crc_widths$187[1]  = crc_widths[9:5];
-  assign \crc_widths$188[0]  = crc_widths[4:0];
-  assign \crc_widths$188[1]  = crc_widths[9:5];
-  assign \customs[0]  = customs[37:0];
-  assign \customs[0].width  = customs[4:0];
-  assign \customs[0].poly  = customs[20:5];
-  assign \customs[0].start  = customs[36:21];
-  assign \customs[0].inverted  = customs[37];
-  assign \customs[1]  = customs[75:38];
-  assign \customs[1].width  = customs[42:38];
-  assign \customs[1].poly  = customs[58:43];
-  assign \customs[1].start  = customs[74:59];
-  assign \customs[1].inverted  = customs[75];
+  assign \crc_widths$181[0]  = crc_widths[4:0];
+  assign \crc_widths$181[1]  = crc_widths[9:5];
+  assign \crc_widths$182[0]  = crc_widths[4:0];
+  assign \crc_widths$182[1]  = crc_widths[9:5];
+  assign \crc_table_data.poly  = crc_table_data[15:0];
+  assign \crc_table_data.start  = crc_table_data[31:16];
+  assign \crc_table_data.inverted  = crc_table_data[32];
+  assign \crc_table_data$186.poly  = crc_table_data[15:0];
+  assign \crc_table_data$186.start  = crc_table_data[31:16];
+  assign \crc_table_data$186.inverted  = crc_table_data[32];
   assign \cfg.ma_half_period  = live[15:0];
   assign \cfg.request_period  = live[39:16];
   assign \cfg.break_time  = live[63:40];
@@ -32949,31 +32825,25 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \cfg.w0.crc  = live[158:157];
   assign \cfg.w0.gray  = live[159];
   assign \cfg.w0.signed  = live[160];
-  assign \cfg.w0_crc  = live[198:161];
+  assign \cfg.w0_crc  = live[165:161];
   assign \cfg.w0_crc.width  = live[165:161];
-  assign \cfg.w0_crc.poly  = live[181:166];
-  assign \cfg.w0_crc.start  = live[197:182];
-  assign \cfg.w0_crc.inverted  = live[198];
-  assign \cfg.w1_enable  = live[199];
-  assign \cfg.w1  = live[211:200];
-  assign \cfg.w1.data_bits  = live[205:200];
-  assign \cfg.w1.nenw  = live[206];
-  assign \cfg.w1.lc  = live[207];
-  assign \cfg.w1.crc  = live[209:208];
-  assign \cfg.w1.gray  = live[210];
-  assign \cfg.w1.signed  = live[211];
-  assign \cfg.w1_crc  = live[249:212];
-  assign \cfg.w1_crc.width  = live[216:212];
-  assign \cfg.w1_crc.poly  = live[232:217];
-  assign \cfg.w1_crc.start  = live[248:233];
-  assign \cfg.w1_crc.inverted  = live[249];
-  assign \cfg.spw_check  = live[250];
-  assign \cfg.spw_tolerance  = live[258:251];
-  assign \cfg.ssi  = live[259];
-  assign \cfg.ssi_delay  = live[271:260];
-  assign \cfg.ssi_error  = live[272];
-  assign \cfg.ssi_error_low  = live[273];
-  assign \cfg.ssi_double  = live[274];
+  assign \cfg.w1_enable  = live[166];
+  assign \cfg.w1  = live[178:167];
+  assign \cfg.w1.data_bits  = live[172:167];
+  assign \cfg.w1.nenw  = live[173];
+  assign \cfg.w1.lc  = live[174];
+  assign \cfg.w1.crc  = live[176:175];
+  assign \cfg.w1.gray  = live[177];
+  assign \cfg.w1.signed  = live[178];
+  assign \cfg.w1_crc  = live[183:179];
+  assign \cfg.w1_crc.width  = live[183:179];
+  assign \cfg.spw_check  = live[184];
+  assign \cfg.spw_tolerance  = live[192:185];
+  assign \cfg.ssi  = live[193];
+  assign \cfg.ssi_delay  = live[205:194];
+  assign \cfg.ssi_error  = live[206];
+  assign \cfg.ssi_error_low  = live[207];
+  assign \cfg.ssi_double  = live[208];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -32997,41 +32867,41 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$255.slave_id  = \request$255 [2:0];
-  assign \request$255.address  = \request$255 [9:3];
-  assign \request$255.count  = \request$255 [16:10];
-  assign \request$255.write  = \request$255 [17];
+  assign \request$252.slave_id  = \request$252 [2:0];
+  assign \request$252.address  = \request$252 [9:3];
+  assign \request$252.count  = \request$252 [16:10];
+  assign \request$252.write  = \request$252 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$293.ca_crc4_error  = \events$293 [0];
-  assign \events$293.ca_no_answer  = \events$293 [1];
-  assign \events$293.ca_refused  = \events$293 [2];
-  assign \events$293.ca_aborted  = \events$293 [3];
-  assign \events$293.ca_data_fault  = \events$293 [4];
+  assign \events$290.ca_crc4_error  = \events$290 [0];
+  assign \events$290.ca_no_answer  = \events$290 [1];
+  assign \events$290.ca_refused  = \events$290 [2];
+  assign \events$290.ca_aborted  = \events$290 [3];
+  assign \events$290.ca_data_fault  = \events$290 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$302.crc_word0  = \events$302 [0];
-  assign \events$302.crc_word1  = \events$302 [1];
-  assign \events$302.no_ack  = \events$302 [2];
-  assign \events$302.no_start  = \events$302 [3];
-  assign \events$302.delay_range  = \events$302 [4];
-  assign \events$302.slo_stuck_low  = \events$302 [5];
-  assign \events$302.lc_repeat  = \events$302 [6];
-  assign \events$302.lc_skip  = \events$302 [7];
-  assign \events$302.lc_zero  = \events$302 [8];
-  assign \events$302.spw_mismatch  = \events$302 [9];
-  assign \events$302.overrun  = \events$302 [10];
-  assign \events$302.aborted  = \events$302 [11];
-  assign \events$302.no_stop  = \events$302 [12];
-  assign \events$302.noisy_line  = \events$302 [13];
-  assign \events$302.delay_jump  = \events$302 [14];
-  assign \events$302.noise_event  = \events$302 [15];
+  assign \events$299.crc_word0  = \events$299 [0];
+  assign \events$299.crc_word1  = \events$299 [1];
+  assign \events$299.no_ack  = \events$299 [2];
+  assign \events$299.no_start  = \events$299 [3];
+  assign \events$299.delay_range  = \events$299 [4];
+  assign \events$299.slo_stuck_low  = \events$299 [5];
+  assign \events$299.lc_repeat  = \events$299 [6];
+  assign \events$299.lc_skip  = \events$299 [7];
+  assign \events$299.lc_zero  = \events$299 [8];
+  assign \events$299.spw_mismatch  = \events$299 [9];
+  assign \events$299.overrun  = \events$299 [10];
+  assign \events$299.aborted  = \events$299 [11];
+  assign \events$299.no_stop  = \events$299 [12];
+  assign \events$299.noisy_line  = \events$299 [13];
+  assign \events$299.delay_jump  = \events$299 [14];
+  assign \events$299.noise_event  = \events$299 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -33039,57 +32909,57 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$326.status  = \result$326 [3:0];
-  assign \result$326.timestamp  = \result$326 [35:4];
-  assign \result$326.line_delay  = \result$326 [48:36];
-  assign \result$326.cds  = \result$326 [49];
-  assign \result$326.noise_events  = \result$326 [53:50];
-  assign \result$326.delay_settled  = \result$326 [54];
-  assign \result$326.settled_delay  = \result$326 [67:55];
-  assign \result$326.delay_spread  = \result$326 [75:68];
-  assign \result$326.word0  = \result$326 [133:76];
-  assign \result$326.word0.position  = \result$326 [130:76];
-  assign \result$326.word0.ne  = \result$326 [131];
-  assign \result$326.word0.nw  = \result$326 [132];
-  assign \result$326.word0.crc_ok  = \result$326 [133];
-  assign \result$326.word1  = \result$326 [176:134];
-  assign \result$326.word1.position  = \result$326 [173:134];
-  assign \result$326.word1.ne  = \result$326 [174];
-  assign \result$326.word1.nw  = \result$326 [175];
-  assign \result$326.word1.crc_ok  = \result$326 [176];
-  assign \result$326.lc  = \result$326 [182:177];
-  assign \result$326.lc_repeat  = \result$326 [183];
-  assign \result$326.lc_skip  = \result$326 [184];
-  assign \result$326.lc_zero  = \result$326 [185];
-  assign \result$326.spw_mismatch  = \result$326 [186];
-  assign \events$302 [15] = \event ;
-  assign \events$302 [14] = \$20 ;
-  assign \events$302 [13] = \$18 ;
-  assign \events$302 [12] = faults[6];
-  assign \events$302 [11] = faults[4];
-  assign \events$302 [10] = overrun;
-  assign \events$302 [9] = \$16 ;
-  assign \events$302 [8] = lc_zero;
-  assign \events$302 [7] = lc_skip;
-  assign \events$302 [6] = lc_repeat;
-  assign \events$302 [5] = faults[3];
-  assign \events$302 [4] = faults[2];
-  assign \events$302 [3] = faults[1];
-  assign \events$302 [2] = faults[0];
-  assign \events$302 [1] = crc_error[1];
-  assign \events$302 [0] = crc_error[0];
-  assign \events$293 [4] = \$15 ;
-  assign \events$293 [3] = \$13 ;
-  assign \events$293 [2] = \$11 ;
-  assign \events$293 [1] = \$9 ;
-  assign \events$293 [0] = \$7 ;
+  assign \result$323.status  = \result$323 [3:0];
+  assign \result$323.timestamp  = \result$323 [35:4];
+  assign \result$323.line_delay  = \result$323 [48:36];
+  assign \result$323.cds  = \result$323 [49];
+  assign \result$323.noise_events  = \result$323 [53:50];
+  assign \result$323.delay_settled  = \result$323 [54];
+  assign \result$323.settled_delay  = \result$323 [67:55];
+  assign \result$323.delay_spread  = \result$323 [75:68];
+  assign \result$323.word0  = \result$323 [133:76];
+  assign \result$323.word0.position  = \result$323 [130:76];
+  assign \result$323.word0.ne  = \result$323 [131];
+  assign \result$323.word0.nw  = \result$323 [132];
+  assign \result$323.word0.crc_ok  = \result$323 [133];
+  assign \result$323.word1  = \result$323 [176:134];
+  assign \result$323.word1.position  = \result$323 [173:134];
+  assign \result$323.word1.ne  = \result$323 [174];
+  assign \result$323.word1.nw  = \result$323 [175];
+  assign \result$323.word1.crc_ok  = \result$323 [176];
+  assign \result$323.lc  = \result$323 [182:177];
+  assign \result$323.lc_repeat  = \result$323 [183];
+  assign \result$323.lc_skip  = \result$323 [184];
+  assign \result$323.lc_zero  = \result$323 [185];
+  assign \result$323.spw_mismatch  = \result$323 [186];
+  assign \events$299 [15] = \event ;
+  assign \events$299 [14] = \$20 ;
+  assign \events$299 [13] = \$18 ;
+  assign \events$299 [12] = faults[6];
+  assign \events$299 [11] = faults[4];
+  assign \events$299 [10] = overrun;
+  assign \events$299 [9] = \$16 ;
+  assign \events$299 [8] = lc_zero;
+  assign \events$299 [7] = lc_skip;
+  assign \events$299 [6] = lc_repeat;
+  assign \events$299 [5] = faults[3];
+  assign \events$299 [4] = faults[2];
+  assign \events$299 [3] = faults[1];
+  assign \events$299 [2] = faults[0];
+  assign \events$299 [1] = crc_error[1];
+  assign \events$299 [0] = crc_error[0];
+  assign \events$290 [4] = \$15 ;
+  assign \events$290 [3] = \$13 ;
+  assign \events$290 [2] = \$11 ;
+  assign \events$290 [1] = \$9 ;
+  assign \events$290 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$255 [17] = ca_write;
-  assign \request$255 [16:10] = ca_count;
-  assign \request$255 [9:3] = ca_address;
-  assign \request$255 [2:0] = ca_slave_id;
+  assign \request$252 [17] = ca_write;
+  assign \request$252 [16:10] = ca_count;
+  assign \request$252 [9:3] = ca_address;
+  assign \request$252 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$28 ;
@@ -33111,33 +32981,25 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, cf
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign customs[75:38] = live[249:212];
-  assign customs[37:0] = live[198:161];
-  assign \words$185 [23:12] = live[211:200];
-  assign \words$185 [11:0] = live[160:149];
-  assign words[23:12] = live[211:200];
+  assign \words$179 [23:12] = live[178:167];
+  assign \words$179 [11:0] = live[160:149];
+  assign words[23:12] = live[178:167];
   assign words[11:0] = live[160:149];
-  assign live[274] = cfg_ssi_double;
-  assign live[273] = cfg_ssi_error_low;
-  assign live[272] = cfg_ssi_error;
-  assign live[271:260] = cfg_ssi_delay;
-  assign live[259] = cfg_ssi;
-  assign live[258:251] = cfg_spw_tolerance;
-  assign live[250] = cfg_spw_check;
-  assign live[249] = cfg_w1_crc_inverted;
-  assign live[248:233] = cfg_w1_crc_start;
-  assign live[232:217] = cfg_w1_crc_poly;
-  assign live[216:212] = cfg_w1_crc_width;
-  assign live[211] = cfg_w1_signed;
-  assign live[210] = cfg_w1_gray;
-  assign live[209:208] = cfg_w1_crc;
-  assign live[207] = cfg_w1_lc;
-  assign live[206] = cfg_w1_nenw;
-  assign live[205:200] = cfg_w1_data_bits;
-  assign live[199] = cfg_w1_enable;
-  assign live[198] = cfg_w0_crc_inverted;
-  assign live[197:182] = cfg_w0_crc_start;
-  assign live[181:166] = cfg_w0_crc_poly;
+  assign live[208] = cfg_ssi_double;
+  assign live[207] = cfg_ssi_error_low;
+  assign live[206] = cfg_ssi_error;
+  assign live[205:194] = cfg_ssi_delay;
+  assign live[193] = cfg_ssi;
+  assign live[192:185] = cfg_spw_tolerance;
+  assign live[184] = cfg_spw_check;
+  assign live[183:179] = cfg_w1_crc_width;
+  assign live[178] = cfg_w1_signed;
+  assign live[177] = cfg_w1_gray;
+  assign live[176:175] = cfg_w1_crc;
+  assign live[174] = cfg_w1_lc;
+  assign live[173] = cfg_w1_nenw;
+  assign live[172:167] = cfg_w1_data_bits;
+  assign live[166] = cfg_w1_enable;
   assign live[165:161] = cfg_w0_crc_width;
   assign live[160] = cfg_w0_signed;
   assign live[159] = cfg_w0_gray;
@@ -33198,16 +33060,16 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, ack_limit, ti
   wire \$13 ;
   wire \$130 ;
   wire \$131 ;
-  wire [37:0] \$132 ;
-  wire [37:0] \$133 ;
-  wire [37:0] \$134 ;
+  wire [4:0] \$132 ;
+  wire [4:0] \$133 ;
+  wire [4:0] \$134 ;
   wire \$135 ;
   wire \$136 ;
   wire \$137 ;
-  wire [37:0] \$138 ;
-  wire [37:0] \$139 ;
+  wire [4:0] \$138 ;
+  wire [4:0] \$139 ;
   wire \$14 ;
-  wire [37:0] \$140 ;
+  wire [4:0] \$140 ;
   wire [1:0] \$141 ;
   wire [2:0] \$142 ;
   reg \$143 ;
@@ -33318,7 +33180,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, ack_limit, ti
   wire [9:0] crc_widths;
   wire [4:0] \crc_widths[0] ;
   wire [4:0] \crc_widths[1] ;
-  wire [274:0] cycle;
+  wire [208:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [3:0] \cycle.confirm_frames ;
@@ -33349,10 +33211,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, ack_limit, ti
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
   wire \cycle.w0.signed ;
-  wire [37:0] \cycle.w0_crc ;
-  wire \cycle.w0_crc.inverted ;
-  wire [15:0] \cycle.w0_crc.poly ;
-  wire [15:0] \cycle.w0_crc.start ;
+  wire [4:0] \cycle.w0_crc ;
   wire [4:0] \cycle.w0_crc.width ;
   wire [11:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
@@ -33366,10 +33225,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, ack_limit, ti
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
   wire \cycle.w1.signed ;
-  wire [37:0] \cycle.w1_crc ;
-  wire \cycle.w1_crc.inverted ;
-  wire [15:0] \cycle.w1_crc.poly ;
-  wire [15:0] \cycle.w1_crc.start ;
+  wire [4:0] \cycle.w1_crc ;
   wire [4:0] \cycle.w1_crc.width ;
   wire \cycle.w1_enable ;
   output [11:0] delay_limit;
@@ -33378,8 +33234,8 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, ack_limit, ti
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [274:0] live;
-  wire [274:0] live;
+  input [208:0] live;
+  wire [208:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [3:0] \live.confirm_frames ;
@@ -33410,10 +33266,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, ack_limit, ti
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
   wire \live.w0.signed ;
-  wire [37:0] \live.w0_crc ;
-  wire \live.w0_crc.inverted ;
-  wire [15:0] \live.w0_crc.poly ;
-  wire [15:0] \live.w0_crc.start ;
+  wire [4:0] \live.w0_crc ;
   wire [4:0] \live.w0_crc.width ;
   wire [11:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
@@ -33427,10 +33280,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, ack_limit, ti
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
   wire \live.w1.signed ;
-  wire [37:0] \live.w1_crc ;
-  wire \live.w1_crc.inverted ;
-  wire [15:0] \live.w1_crc.poly ;
-  wire [15:0] \live.w1_crc.start ;
+  wire [4:0] \live.w1_crc ;
   wire [4:0] \live.w1_crc.width ;
   wire \live.w1_enable ;
   output [24:0] no_start_limit;
@@ -33483,58 +33333,58 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, ack_limit, ti
   assign \$36  = \$11  | \$35 ;
   assign \$37  = \$6  & \$36 ;
   assign \$38  = \$1  & \$37 ;
-  assign \$39  = ~ live[199];
-  assign \$40  = | live[205:200];
-  assign \$41  = ~ live[201];
-  assign \$42  = live[200] & \$41 ;
-  assign \$43  = ~ live[202];
+  assign \$39  = ~ live[166];
+  assign \$40  = | live[172:167];
+  assign \$41  = ~ live[168];
+  assign \$42  = live[167] & \$41 ;
+  assign \$43  = ~ live[169];
   assign \$44  = \$42  & \$43 ;
-  assign \$45  = \$44  & live[203];
-  assign \$46  = ~ live[204];
+  assign \$45  = \$44  & live[170];
+  assign \$46  = ~ live[171];
   assign \$47  = \$45  & \$46 ;
-  assign \$48  = \$47  & live[205];
-  assign \$49  = ~ live[202];
-  assign \$50  = live[201] & \$49 ;
-  assign \$51  = \$50  & live[203];
-  assign \$52  = ~ live[204];
+  assign \$48  = \$47  & live[172];
+  assign \$49  = ~ live[169];
+  assign \$50  = live[168] & \$49 ;
+  assign \$51  = \$50  & live[170];
+  assign \$52  = ~ live[171];
   assign \$53  = \$51  & \$52 ;
-  assign \$54  = \$53  & live[205];
+  assign \$54  = \$53  & live[172];
   assign \$55  = \$48  | \$54 ;
-  assign \$56  = live[202] & live[203];
-  assign \$57  = ~ live[204];
+  assign \$56  = live[169] & live[170];
+  assign \$57  = ~ live[171];
   assign \$58  = \$56  & \$57 ;
-  assign \$59  = \$58  & live[205];
+  assign \$59  = \$58  & live[172];
   assign \$60  = \$55  | \$59 ;
-  assign \$61  = live[204] & live[205];
+  assign \$61  = live[171] & live[172];
   assign \$62  = \$60  | \$61 ;
   assign \$63  = ~ \$62 ;
   assign \$64  = \$40  & \$63 ;
-  assign \$65  = ! live[209:208];
-  assign \$66  = live[209:208] == 1'h1;
+  assign \$65  = ! live[176:175];
+  assign \$66  = live[176:175] == 1'h1;
   assign \$67  = \$65  | \$66 ;
-  assign \$68  = live[209:208] == 2'h2;
+  assign \$68  = live[176:175] == 2'h2;
   assign \$69  = \$67  | \$68 ;
-  assign \$70  = live[209:208] == 2'h3;
-  assign \$71  = | live[216:212];
+  assign \$70  = live[176:175] == 2'h3;
+  assign \$71  = | live[183:179];
   assign \$72  = \$70  & \$71 ;
-  assign \$73  = ~ live[213];
-  assign \$74  = live[212] & \$73 ;
-  assign \$75  = ~ live[214];
+  assign \$73  = ~ live[180];
+  assign \$74  = live[179] & \$73 ;
+  assign \$75  = ~ live[181];
   assign \$76  = \$74  & \$75 ;
-  assign \$77  = ~ live[215];
+  assign \$77  = ~ live[182];
   assign \$78  = \$76  & \$77 ;
-  assign \$79  = \$78  & live[216];
-  assign \$80  = ~ live[214];
-  assign \$81  = live[213] & \$80 ;
-  assign \$82  = ~ live[215];
+  assign \$79  = \$78  & live[183];
+  assign \$80  = ~ live[181];
+  assign \$81  = live[180] & \$80 ;
+  assign \$82  = ~ live[182];
   assign \$83  = \$81  & \$82 ;
-  assign \$84  = \$83  & live[216];
+  assign \$84  = \$83  & live[183];
   assign \$85  = \$79  | \$84 ;
-  assign \$86  = ~ live[215];
-  assign \$87  = live[214] & \$86 ;
-  assign \$88  = \$87  & live[216];
+  assign \$86  = ~ live[182];
+  assign \$87  = live[181] & \$86 ;
+  assign \$88  = \$87  & live[183];
   assign \$89  = \$85  | \$88 ;
-  assign \$90  = live[215] & live[216];
+  assign \$90  = live[182] & live[183];
   assign \$91  = \$89  | \$90 ;
   assign \$92  = ~ \$91 ;
   assign \$93  = \$72  & \$92 ;
@@ -33542,22 +33392,22 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, ack_limit, ti
   assign \$95  = \$64  & \$94 ;
   assign \$96  = \$39  | \$95 ;
   assign \$97  = \$38  & \$96 ;
-  assign \$99  = live[199] & live[207];
+  assign \$99  = live[166] & live[174];
   assign \$100  = \$98  & \$99 ;
   assign \$101  = ~ \$100 ;
   assign \$102  = \$97  & \$101 ;
-  assign \$103  = ~ live[250];
-  assign \$104  = live[205:200] <= live[154:149];
-  assign \$105  = live[199] & \$104 ;
-  assign \$106  = | live[209:208];
+  assign \$103  = ~ live[184];
+  assign \$104  = live[172:167] <= live[154:149];
+  assign \$105  = live[166] & \$104 ;
+  assign \$106  = | live[176:175];
   assign \$107  = \$105  & \$106 ;
   assign \$108  = \$103  | \$107 ;
   assign \$109  = \$102  & \$108 ;
-  assign \$110  = live[272] & live[155];
+  assign \$110  = live[206] & live[155];
   assign \$111  = live[156] | \$110 ;
-  assign \$112  = \$111  | live[250];
-  assign \$113  = \$112  | live[199];
-  assign \$114  = live[259] & \$113 ;
+  assign \$112  = \$111  | live[184];
+  assign \$113  = \$112  | live[166];
+  assign \$114  = live[193] & \$113 ;
   assign \$115  = ~ \$114 ;
   assign \$116  = \$109  & \$115 ;
   assign \$117  = ! live[87:64];
@@ -33575,16 +33425,16 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, ack_limit, ti
   assign \$129  = live[158:157] == 2'h3;
   assign \$130  = live[158:157] == 2'h2;
   assign \$131  = live[158:157] == 1'h1;
-  assign \$132  = \$131  ? 38'h2000000066 : 38'h0000000000;
-  assign \$133  = \$130  ? 38'h2000121b30 : \$132 ;
-  assign \$134  = \$129  ? live[198:161] : \$133 ;
-  assign \$135  = live[209:208] == 2'h3;
-  assign \$136  = live[209:208] == 2'h2;
-  assign \$137  = live[209:208] == 1'h1;
-  assign \$138  = \$137  ? 38'h2000000066 : 38'h0000000000;
-  assign \$139  = \$136  ? 38'h2000121b30 : \$138 ;
-  assign \$140  = \$135  ? live[249:212] : \$139 ;
-  assign \$142  = 2'h1 + live[199];
+  assign \$132  = \$131  ? 5'h06 : 5'h00;
+  assign \$133  = \$130  ? 5'h10 : \$132 ;
+  assign \$134  = \$129  ? live[165:161] : \$133 ;
+  assign \$135  = live[176:175] == 2'h3;
+  assign \$136  = live[176:175] == 2'h2;
+  assign \$137  = live[176:175] == 1'h1;
+  assign \$138  = \$137  ? 5'h06 : 5'h00;
+  assign \$139  = \$136  ? 5'h10 : \$138 ;
+  assign \$140  = \$135  ? live[183:179] : \$139 ;
+  assign \$142  = 2'h1 + live[166];
   always @(posedge clk)
     ok <= \$143 ;
   always @(posedge clk)
@@ -33683,31 +33533,25 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, ack_limit, ti
   assign \live.w0.crc  = live[158:157];
   assign \live.w0.gray  = live[159];
   assign \live.w0.signed  = live[160];
-  assign \live.w0_crc  = live[198:161];
+  assign \live.w0_crc  = live[165:161];
   assign \live.w0_crc.width  = live[165:161];
-  assign \live.w0_crc.poly  = live[181:166];
-  assign \live.w0_crc.start  = live[197:182];
-  assign \live.w0_crc.inverted  = live[198];
-  assign \live.w1_enable  = live[199];
-  assign \live.w1  = live[211:200];
-  assign \live.w1.data_bits  = live[205:200];
-  assign \live.w1.nenw  = live[206];
-  assign \live.w1.lc  = live[207];
-  assign \live.w1.crc  = live[209:208];
-  assign \live.w1.gray  = live[210];
-  assign \live.w1.signed  = live[211];
-  assign \live.w1_crc  = live[249:212];
-  assign \live.w1_crc.width  = live[216:212];
-  assign \live.w1_crc.poly  = live[232:217];
-  assign \live.w1_crc.start  = live[248:233];
-  assign \live.w1_crc.inverted  = live[249];
-  assign \live.spw_check  = live[250];
-  assign \live.spw_tolerance  = live[258:251];
-  assign \live.ssi  = live[259];
-  assign \live.ssi_delay  = live[271:260];
-  assign \live.ssi_error  = live[272];
-  assign \live.ssi_error_low  = live[273];
-  assign \live.ssi_double  = live[274];
+  assign \live.w1_enable  = live[166];
+  assign \live.w1  = live[178:167];
+  assign \live.w1.data_bits  = live[172:167];
+  assign \live.w1.nenw  = live[173];
+  assign \live.w1.lc  = live[174];
+  assign \live.w1.crc  = live[176:175];
+  assign \live.w1.gray  = live[177];
+  assign \live.w1.signed  = live[178];
+  assign \live.w1_crc  = live[183:179];
+  assign \live.w1_crc.width  = live[183:179];
+  assign \live.spw_check  = live[184];
+  assign \live.spw_tolerance  = live[192:185];
+  assign \live.ssi  = live[193];
+  assign \live.ssi_delay  = live[205:194];
+  assign \live.ssi_error  = live[206];
+  assign \live.ssi_error_low  = live[207];
+  assign \live.ssi_double  = live[208];
   assign \cycle.ma_half_period  = live[15:0];
   assign \cycle.request_period  = live[39:16];
   assign \cycle.break_time  = live[63:40];
@@ -33726,35 +33570,29 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, ack_limit, ti
   assign \cycle.w0.crc  = live[158:157];
   assign \cycle.w0.gray  = live[159];
   assign \cycle.w0.signed  = live[160];
-  assign \cycle.w0_crc  = live[198:161];
+  assign \cycle.w0_crc  = live[165:161];
   assign \cycle.w0_crc.width  = live[165:161];
-  assign \cycle.w0_crc.poly  = live[181:166];
-  assign \cycle.w0_crc.start  = live[197:182];
-  assign \cycle.w0_crc.inverted  = live[198];
-  assign \cycle.w1_enable  = live[199];
-  assign \cycle.w1  = live[211:200];
-  assign \cycle.w1.data_bits  = live[205:200];
-  assign \cycle.w1.nenw  = live[206];
-  assign \cycle.w1.lc  = live[207];
-  assign \cycle.w1.crc  = live[209:208];
-  assign \cycle.w1.gray  = live[210];
-  assign \cycle.w1.signed  = live[211];
-  assign \cycle.w1_crc  = live[249:212];
-  assign \cycle.w1_crc.width  = live[216:212];
-  assign \cycle.w1_crc.poly  = live[232:217];
-  assign \cycle.w1_crc.start  = live[248:233];
-  assign \cycle.w1_crc.inverted  = live[249];
-  assign \cycle.spw_check  = live[250];
-  assign \cycle.spw_tolerance  = live[258:251];
-  assign \cycle.ssi  = live[259];
-  assign \cycle.ssi_delay  = live[271:260];
-  assign \cycle.ssi_error  = live[272];
-  assign \cycle.ssi_error_low  = live[273];
-  assign \cycle.ssi_double  = live[274];
+  assign \cycle.w1_enable  = live[166];
+  assign \cycle.w1  = live[178:167];
+  assign \cycle.w1.data_bits  = live[172:167];
+  assign \cycle.w1.nenw  = live[173];
+  assign \cycle.w1.lc  = live[174];
+  assign \cycle.w1.crc  = live[176:175];
+  assign \cycle.w1.gray  = live[177];
+  assign \cycle.w1.signed  = live[178];
+  assign \cycle.w1_crc  = live[183:179];
+  assign \cycle.w1_crc.width  = live[183:179];
+  assign \cycle.spw_check  = live[184];
+  assign \cycle.spw_tolerance  = live[192:185];
+  assign \cycle.ssi  = live[193];
+  assign \cycle.ssi_delay  = live[205:194];
+  assign \cycle.ssi_error  = live[206];
+  assign \cycle.ssi_error_low  = live[207];
+  assign \cycle.ssi_double  = live[208];
   assign \crc_widths[0]  = crc_widths[4:0];
   assign \crc_widths[1]  = crc_widths[9:5];
-  assign crc_widths[9:5] = \$140 [4:0];
-  assign crc_widths[4:0] = \$134 [4:0];
+  assign crc_widths[9:5] = \$140 ;
+  assign crc_widths[4:0] = \$134 ;
   assign \$98  = live[156];
   assign \$141  = 2'h1;
 endmodule
@@ -36732,8 +36570,8 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ssi, \port$13656$272 , words, customs, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
-, data1, lc, cpw_top, mismatch, crc_ok, clk);
+module \biss_master_wb.ch1.core.decoder (rst, \table , word_count, frame_end, lc_load, crc_table_addr, ssi, \port$13650$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne
+, nw, data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
   wire [1:0] \$10 ;
@@ -37342,7 +37180,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   input \bit ;
   wire \bit ;
   wire \bit$11 ;
-  wire \bit$40 ;
+  wire \bit$43 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -37366,6 +37204,12 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   reg [39:0] cpw_top = 40'h0000000000;
   output [1:0] crc_ok;
   wire [1:0] crc_ok;
+  output crc_table_addr;
+  wire crc_table_addr;
+  wire [32:0] crc_table_data;
+  wire \crc_table_data.inverted ;
+  wire [15:0] \crc_table_data.poly ;
+  wire [15:0] \crc_table_data.start ;
   input [9:0] crc_widths;
   wire [9:0] crc_widths;
   wire [9:0] \crc_widths$3 ;
@@ -37381,29 +37225,6 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   wire [6:0] \current.lc_end_m1 ;
   wire [6:0] \current.nenw_end_m1 ;
   wire [6:0] \current.word_end_m1 ;
-  input [75:0] customs;
-  wire [75:0] customs;
-  wire [75:0] \customs$34 ;
-  wire [37:0] \customs$34[0] ;
-  wire \customs$34[0].inverted ;
-  wire [15:0] \customs$34[0].poly ;
-  wire [15:0] \customs$34[0].start ;
-  wire [4:0] \customs$34[0].width ;
-  wire [37:0] \customs$34[1] ;
-  wire \customs$34[1].inverted ;
-  wire [15:0] \customs$34[1].poly ;
-  wire [15:0] \customs$34[1].start ;
-  wire [4:0] \customs$34[1].width ;
-  wire [37:0] \customs[0] ;
-  wire \customs[0].inverted ;
-  wire [15:0] \customs[0].poly ;
-  wire [15:0] \customs[0].start ;
-  wire [4:0] \customs[0].width ;
-  wire [37:0] \customs[1] ;
-  wire \customs[1].inverted ;
-  wire [15:0] \customs[1].poly ;
-  wire [15:0] \customs[1].start ;
-  wire [4:0] \customs[1].width ;
   output [54:0] data0;
   reg [54:0] data0 = 55'h00000000000000;
   output [39:0] data1;
@@ -37430,7 +37251,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   reg in_word;
   wire [6:0] index;
   (* init = 1'h0 *)
-  wire \index$43 ;
+  wire \index$46 ;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -37447,8 +37268,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13656$272 ;
-  wire [2:0] \port$13656$272 ;
+  input [2:0] \port$13650$206 ;
+  wire [2:0] \port$13650$206 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -37473,6 +37294,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   reg stop_bit = 1'h0;
   output stopped;
   reg stopped = 1'h0;
+  input [32:0] \table ;
+  wire [32:0] \table ;
+  wire \table.inverted ;
+  wire [15:0] \table.poly ;
+  wire [15:0] \table.start ;
+  wire table_index;
+  wire [9:0] widths;
+  wire [4:0] \widths[0] ;
+  wire [4:0] \widths[1] ;
   reg word = 1'h0;
   input [1:0] word_count;
   wire [1:0] word_count;
@@ -37757,7 +37587,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13656$272 [0];
+  assign error_bit = ssi & \port$13650$206 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -37788,19 +37618,19 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13656$272 [0];
+  assign \$24  = ssi & \port$13650$206 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13656$272 [0];
+  assign \$28  = ssi & \port$13650$206 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13656$272 [0];
+  assign \$35  = ssi & \port$13650$206 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13656$272 [0];
+  assign \$39  = ssi & \port$13650$206 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -37821,7 +37651,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$13656$272 [2];
+  assign \$61  = ssi & \port$13650$206 [2];
   assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -38107,15 +37937,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13656$272 [0];
+  assign \$347  = ssi & \port$13650$206 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13656$272 [0];
-  assign \$355  = ~ \port$13656$272 [1];
+  assign \$354  = ssi & \port$13650$206 [0];
+  assign \$355  = ~ \port$13650$206 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -38167,14 +37997,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
     .clk(clk),
     .codes(codes),
     .\cover (\cover ),
-    .customs(customs),
     .index(word),
     .last(last),
     .load(load),
-    .load_index(\$10 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
-    .rst(rst)
+    .rst(rst),
+    .\table (\table ),
+    .table_index(\$10 [0]),
+    .widths(crc_widths)
   );
   \biss_master_wb.ch1.core.decoder.field_ends  field_ends (
     .advance(advance),
@@ -38850,18 +38681,21 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13656$272 [0];
+  assign ssi_error = \port$13650$206 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
-  assign \customs$34  = customs;
-  assign \bit$40  = \bit ;
+  assign widths = crc_widths;
+  assign table_index = \$10 [0];
+  assign crc_table_data = \table ;
+  assign \bit$43  = \bit ;
   assign ok = crc_ok;
-  assign \index$43  = word;
+  assign \index$46  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13656$272 [2];
-  assign ssi_error_low = \port$13656$272 [1];
+  assign ssi_double = \port$13650$206 [2];
+  assign ssi_error_low = \port$13650$206 [1];
+  assign crc_table_addr = \$10 [0];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -38903,26 +38737,14 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, ss
   assign \current.lc_at0  = current[36];
   assign \codes[0]  = codes[1:0];
   assign \codes[1]  = codes[3:2];
-  assign \customs[0]  = customs[37:0];
-  assign \customs[0].width  = customs[4:0];
-  assign \customs[0].poly  = customs[20:5];
-  assign \customs[0].start  = customs[36:21];
-  assign \customs[0].inverted  = customs[37];
-  assign \customs[1]  = customs[75:38];
-  assign \customs[1].width  = customs[42:38];
-  assign \customs[1].poly  = customs[58:43];
-  assign \customs[1].start  = customs[74:59];
-  assign \customs[1].inverted  = customs[75];
-  assign \customs$34[0]  = customs[37:0];
-  assign \customs$34[0].width  = customs[4:0];
-  assign \customs$34[0].poly  = customs[20:5];
-  assign \customs$34[0].start  = customs[36:21];
-  assign \customs$34[0].inverted  = customs[37];
-  assign \customs$34[1]  = customs[75:38];
-  assign \customs$34[1].width  = customs[42:38];
-  assign \customs$34[1].poly  = customs[58:43];
-  assign \customs$34[1].start  = customs[74:59];
-  assign \customs$34[1].inverted  = customs[75];
+  assign \widths[0]  = crc_widths[4:0];
+  assign \widths[1]  = crc_widths[9:5];
+  assign \table.poly  = \table [15:0];
+  assign \table.start  = \table [31:16];
+  assign \table.inverted  = \table [32];
+  assign \crc_table_data.poly  = \table [15:0];
+  assign \crc_table_data.start  = \table [31:16];
+  assign \crc_table_data.inverted  = \table [32];
   assign \following.data_end_p1  = following[6:0];
   assign \following.data_end_m1  = following[13:7];
   assign \following.nenw_end_m1  = following[20:14];
@@ -39005,52 +38827,37 @@ module \biss_master_wb.ch1.core.decoder.copy (rst, first, \bit , receiver_clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, load_index, customs, \bit , receiver_clear, codes, index, ok, clk);
+module \biss_master_wb.ch1.core.decoder.crc (rst, \table , load, \cover , check, last, table_index, \bit , widths, receiver_clear, codes, index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
-  wire [37:0] \$10 ;
-  wire [1:0] \$100 ;
+  wire [1:0] \$10 ;
+  wire \$100 ;
   wire \$101 ;
-  wire [37:0] \$102 ;
-  wire [37:0] \$103 ;
-  wire [37:0] \$104 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
   wire \$105 ;
   wire \$106 ;
-  wire [15:0] \$107 ;
-  wire [15:0] \$108 ;
+  wire \$107 ;
+  wire \$108 ;
   wire \$109 ;
-  wire [37:0] \$11 ;
+  wire \$11 ;
   wire \$110 ;
   wire \$111 ;
   wire \$112 ;
-  wire \$113 ;
-  wire \$114 ;
-  wire \$115 ;
-  wire \$116 ;
-  wire \$117 ;
-  wire \$118 ;
-  wire \$119 ;
+  reg [15:0] \$113 ;
+  reg \$114 ;
+  reg [37:0] \$115 ;
+  reg [1:0] \$116 ;
   wire \$12 ;
-  wire \$120 ;
-  wire \$121 ;
-  wire \$122 ;
-  wire \$123 ;
-  wire \$124 ;
-  wire \$125 ;
-  wire \$126 ;
-  wire \$127 ;
-  reg [15:0] \$128 ;
-  reg \$129 ;
   wire [1:0] \$13 ;
-  reg [37:0] \$130 ;
-  reg [1:0] \$131 ;
   wire \$14 ;
   wire [1:0] \$15 ;
   wire [1:0] \$16 ;
   wire \$17 ;
   wire \$18 ;
   wire [1:0] \$19 ;
-  wire [1:0] \$2 ;
+  wire [4:0] \$2 ;
   wire \$20 ;
   wire [1:0] \$21 ;
   wire [1:0] \$22 ;
@@ -39066,78 +38873,78 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   wire [1:0] \$31 ;
   wire \$32 ;
   wire \$33 ;
-  wire [37:0] \$34 ;
+  wire [1:0] \$34 ;
   wire \$35 ;
-  wire [37:0] \$36 ;
-  wire [37:0] \$37 ;
+  wire [1:0] \$36 ;
+  wire [1:0] \$37 ;
   wire \$38 ;
-  wire [1:0] \$39 ;
-  wire [1:0] \$4 ;
-  wire \$40 ;
-  wire [1:0] \$41 ;
+  wire \$39 ;
+  wire [4:0] \$4 ;
+  wire [1:0] \$40 ;
+  wire \$41 ;
   wire [1:0] \$42 ;
-  wire \$43 ;
+  wire [1:0] \$43 ;
   wire \$44 ;
-  wire [1:0] \$45 ;
-  wire \$46 ;
-  wire [1:0] \$47 ;
-  wire [1:0] \$48 ;
-  wire \$49 ;
-  wire [1:0] \$5 ;
-  wire [37:0] \$50 ;
-  wire [37:0] \$51 ;
-  wire [37:0] \$52 ;
+  wire [37:0] \$45 ;
+  wire [37:0] \$46 ;
+  wire [37:0] \$47 ;
+  wire \$48 ;
+  wire [1:0] \$49 ;
+  wire [4:0] \$5 ;
+  wire \$50 ;
+  wire [1:0] \$51 ;
+  wire [1:0] \$52 ;
   wire \$53 ;
-  wire [1:0] \$54 ;
-  wire \$55 ;
-  wire [1:0] \$56 ;
+  wire \$54 ;
+  wire [1:0] \$55 ;
+  wire \$56 ;
   wire [1:0] \$57 ;
-  wire \$58 ;
+  wire [1:0] \$58 ;
   wire \$59 ;
   wire \$6 ;
-  wire [37:0] \$60 ;
-  wire \$61 ;
-  wire [37:0] \$62 ;
-  wire [37:0] \$63 ;
-  wire \$64 ;
-  wire [1:0] \$65 ;
-  wire \$66 ;
-  wire [1:0] \$67 ;
-  wire [1:0] \$68 ;
+  wire \$60 ;
+  wire [1:0] \$61 ;
+  wire \$62 ;
+  wire [1:0] \$63 ;
+  wire [1:0] \$64 ;
+  wire \$65 ;
+  wire [37:0] \$66 ;
+  wire [37:0] \$67 ;
+  wire [37:0] \$68 ;
   wire \$69 ;
-  wire \$7 ;
-  wire \$70 ;
-  wire [1:0] \$71 ;
-  wire \$72 ;
+  wire [1:0] \$7 ;
+  wire [1:0] \$70 ;
+  wire \$71 ;
+  wire [1:0] \$72 ;
   wire [1:0] \$73 ;
-  wire [1:0] \$74 ;
+  wire \$74 ;
   wire \$75 ;
-  wire [37:0] \$76 ;
-  wire [37:0] \$77 ;
-  wire [37:0] \$78 ;
-  wire \$79 ;
-  wire [37:0] \$8 ;
-  wire [1:0] \$80 ;
+  wire [1:0] \$76 ;
+  wire \$77 ;
+  wire [1:0] \$78 ;
+  wire [1:0] \$79 ;
+  wire \$8 ;
+  wire \$80 ;
   wire \$81 ;
   wire [1:0] \$82 ;
-  wire [1:0] \$83 ;
-  wire \$84 ;
-  wire \$85 ;
-  wire [37:0] \$86 ;
-  wire \$87 ;
+  wire \$83 ;
+  wire [1:0] \$84 ;
+  wire [1:0] \$85 ;
+  wire \$86 ;
+  wire [37:0] \$87 ;
   wire [37:0] \$88 ;
   wire [37:0] \$89 ;
-  wire \$9 ;
+  wire [1:0] \$9 ;
   wire \$90 ;
-  wire [1:0] \$91 ;
-  wire \$92 ;
-  wire [1:0] \$93 ;
-  wire [1:0] \$94 ;
+  wire \$91 ;
+  wire [15:0] \$92 ;
+  wire [15:0] \$93 ;
+  wire \$94 ;
   wire \$95 ;
   wire \$96 ;
-  wire [1:0] \$97 ;
+  wire \$97 ;
   wire \$98 ;
-  wire [1:0] \$99 ;
+  wire \$99 ;
   input \bit ;
   wire \bit ;
   input check;
@@ -39160,25 +38967,12 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   wire [1:0] \codes[1] ;
   input \cover ;
   wire \cover ;
-  input [75:0] customs;
-  wire [75:0] customs;
-  wire [37:0] \customs[0] ;
-  wire \customs[0].inverted ;
-  wire [15:0] \customs[0].poly ;
-  wire [15:0] \customs[0].start ;
-  wire [4:0] \customs[0].width ;
-  wire [37:0] \customs[1] ;
-  wire \customs[1].inverted ;
-  wire [15:0] \customs[1].poly ;
-  wire [15:0] \customs[1].start ;
-  wire [4:0] \customs[1].width ;
   input index;
   wire index;
   input last;
   wire last;
   input load;
   wire load;
-  input load_index;
   wire load_index;
   reg mismatch = 1'h0;
   output [1:0] ok;
@@ -39193,224 +38987,229 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   wire [15:0] \settings.poly ;
   wire [15:0] \settings.start ;
   wire [4:0] \settings.width ;
-  assign \$1  = ! load_index;
-  assign \$2  = load_index ? 2'h0 : codes[1:0];
-  assign \$4  = \$3  ? codes[3:2] : 2'h0;
+  input [32:0] \table ;
+  wire [32:0] \table ;
+  wire \table.inverted ;
+  wire [15:0] \table.poly ;
+  wire [15:0] \table.start ;
+  wire [37:0] table_crc;
+  wire \table_crc.inverted ;
+  wire [15:0] \table_crc.poly ;
+  wire [15:0] \table_crc.start ;
+  wire [4:0] \table_crc.width ;
+  input table_index;
+  wire table_index;
+  input [9:0] widths;
+  wire [9:0] widths;
+  wire [4:0] \widths[0] ;
+  wire [4:0] \widths[1] ;
+  assign \$1  = ! table_index;
+  assign \$2  = table_index ? 5'h00 : widths[4:0];
+  assign \$4  = \$3  ? widths[9:5] : 5'h00;
   assign \$5  = \$2  | \$4 ;
-  assign \$6  = \$5  == 2'h3;
-  assign \$7  = ! load_index;
-  assign \$8  = load_index ? 38'h0000000000 : customs[37:0];
-  assign \$10  = \$9  ? customs[75:38] : 38'h0000000000;
-  assign \$11  = \$8  | \$10 ;
-  assign \$12  = ! load_index;
-  assign \$13  = load_index ? 2'h0 : codes[1:0];
+  assign \$6  = ! table_index;
+  assign \$7  = table_index ? 2'h0 : codes[1:0];
+  assign \$9  = \$8  ? codes[3:2] : 2'h0;
+  assign \$10  = \$7  | \$9 ;
+  assign \$11  = \$10  == 2'h3;
+  assign \$12  = ! table_index;
+  assign \$13  = table_index ? 2'h0 : codes[1:0];
   assign \$15  = \$14  ? codes[3:2] : 2'h0;
   assign \$16  = \$13  | \$15 ;
   assign \$17  = \$16  == 2'h2;
-  assign \$18  = ! load_index;
-  assign \$19  = load_index ? 2'h0 : codes[1:0];
+  assign \$18  = ! table_index;
+  assign \$19  = table_index ? 2'h0 : codes[1:0];
   assign \$21  = \$20  ? codes[3:2] : 2'h0;
   assign \$22  = \$19  | \$21 ;
   assign \$23  = \$22  == 1'h1;
   assign \$24  = \$23  ? 38'h2000000066 : 38'h0000000000;
   assign \$25  = \$17  ? 38'h2000121b30 : \$24 ;
-  assign \$26  = \$6  ? \$11  : \$25 ;
-  assign \$27  = ! load_index;
-  assign \$28  = load_index ? 2'h0 : codes[1:0];
+  assign \$26  = \$11  ? table_crc : \$25 ;
+  assign \$27  = ! table_index;
+  assign \$28  = table_index ? 2'h0 : codes[1:0];
   assign \$30  = \$29  ? codes[3:2] : 2'h0;
   assign \$31  = \$28  | \$30 ;
   assign \$32  = \$31  == 2'h3;
-  assign \$33  = ! load_index;
-  assign \$34  = load_index ? 38'h0000000000 : customs[37:0];
-  assign \$36  = \$35  ? customs[75:38] : 38'h0000000000;
+  assign \$33  = ! table_index;
+  assign \$34  = table_index ? 2'h0 : codes[1:0];
+  assign \$36  = \$35  ? codes[3:2] : 2'h0;
   assign \$37  = \$34  | \$36 ;
-  assign \$38  = ! load_index;
-  assign \$39  = load_index ? 2'h0 : codes[1:0];
-  assign \$41  = \$40  ? codes[3:2] : 2'h0;
-  assign \$42  = \$39  | \$41 ;
-  assign \$43  = \$42  == 2'h2;
-  assign \$44  = ! load_index;
-  assign \$45  = load_index ? 2'h0 : codes[1:0];
-  assign \$47  = \$46  ? codes[3:2] : 2'h0;
-  assign \$48  = \$45  | \$47 ;
-  assign \$49  = \$48  == 1'h1;
-  assign \$50  = \$49  ? 38'h2000000066 : 38'h0000000000;
-  assign \$51  = \$43  ? 38'h2000121b30 : \$50 ;
-  assign \$52  = \$32  ? \$37  : \$51 ;
-  assign \$53  = ! load_index;
-  assign \$54  = load_index ? 2'h0 : codes[1:0];
-  assign \$56  = \$55  ? codes[3:2] : 2'h0;
-  assign \$57  = \$54  | \$56 ;
-  assign \$58  = \$57  == 2'h3;
-  assign \$59  = ! load_index;
-  assign \$60  = load_index ? 38'h0000000000 : customs[37:0];
-  assign \$62  = \$61  ? customs[75:38] : 38'h0000000000;
-  assign \$63  = \$60  | \$62 ;
-  assign \$64  = ! load_index;
-  assign \$65  = load_index ? 2'h0 : codes[1:0];
-  assign \$67  = \$66  ? codes[3:2] : 2'h0;
-  assign \$68  = \$65  | \$67 ;
-  assign \$69  = \$68  == 2'h2;
-  assign \$70  = ! load_index;
-  assign \$71  = load_index ? 2'h0 : codes[1:0];
-  assign \$73  = \$72  ? codes[3:2] : 2'h0;
-  assign \$74  = \$71  | \$73 ;
-  assign \$75  = \$74  == 1'h1;
-  assign \$76  = \$75  ? 38'h2000000066 : 38'h0000000000;
-  assign \$77  = \$69  ? 38'h2000121b30 : \$76 ;
-  assign \$78  = \$58  ? \$63  : \$77 ;
-  assign \$79  = ! load_index;
-  assign \$80  = load_index ? 2'h0 : codes[1:0];
-  assign \$82  = \$81  ? codes[3:2] : 2'h0;
-  assign \$83  = \$80  | \$82 ;
-  assign \$84  = \$83  == 2'h3;
-  assign \$85  = ! load_index;
-  assign \$86  = load_index ? 38'h0000000000 : customs[37:0];
-  assign \$88  = \$87  ? customs[75:38] : 38'h0000000000;
-  assign \$89  = \$86  | \$88 ;
-  assign \$90  = ! load_index;
-  assign \$91  = load_index ? 2'h0 : codes[1:0];
-  assign \$93  = \$92  ? codes[3:2] : 2'h0;
-  assign \$94  = \$91  | \$93 ;
-  assign \$95  = \$94  == 2'h2;
-  assign \$96  = ! load_index;
-  assign \$97  = load_index ? 2'h0 : codes[1:0];
-  assign \$99  = \$98  ? codes[3:2] : 2'h0;
-  assign \$100  = \$97  | \$99 ;
-  assign \$101  = \$100  == 1'h1;
-  assign \$102  = \$101  ? 38'h2000000066 : 38'h0000000000;
-  assign \$103  = \$95  ? 38'h2000121b30 : \$102 ;
-  assign \$104  = \$84  ? \$89  : \$103 ;
-  assign \$105  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$106  = \$105  ^ \bit ;
-  assign \$107  = \$106  ? settings[20:5] : 16'h0000;
-  assign \$108  = { \reg [14:0], 1'h0 } ^ \$107 ;
-  assign \$109  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$110  = \bit  ^ \$109 ;
-  assign \$111  = \$110  ^ settings[37];
-  assign \$112  = check & \$111 ;
-  assign \$113  = mismatch | \$112 ;
-  assign \$114  = ! index;
-  assign \$115  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$116  = \bit  ^ \$115 ;
-  assign \$117  = \$116  ^ settings[37];
-  assign \$118  = check & \$117 ;
-  assign \$119  = mismatch | \$118 ;
-  assign \$120  = ~ \$119 ;
-  assign \$122  = { \reg , 1'h0 } >> settings[4:0];
-  assign \$123  = \bit  ^ \$122 ;
-  assign \$124  = \$123  ^ settings[37];
-  assign \$125  = check & \$124 ;
-  assign \$126  = mismatch | \$125 ;
-  assign \$127  = ~ \$126 ;
+  assign \$38  = \$37  == 2'h2;
+  assign \$39  = ! table_index;
+  assign \$40  = table_index ? 2'h0 : codes[1:0];
+  assign \$42  = \$41  ? codes[3:2] : 2'h0;
+  assign \$43  = \$40  | \$42 ;
+  assign \$44  = \$43  == 1'h1;
+  assign \$45  = \$44  ? 38'h2000000066 : 38'h0000000000;
+  assign \$46  = \$38  ? 38'h2000121b30 : \$45 ;
+  assign \$47  = \$32  ? table_crc : \$46 ;
+  assign \$48  = ! table_index;
+  assign \$49  = table_index ? 2'h0 : codes[1:0];
+  assign \$51  = \$50  ? codes[3:2] : 2'h0;
+  assign \$52  = \$49  | \$51 ;
+  assign \$53  = \$52  == 2'h3;
+  assign \$54  = ! table_index;
+  assign \$55  = table_index ? 2'h0 : codes[1:0];
+  assign \$57  = \$56  ? codes[3:2] : 2'h0;
+  assign \$58  = \$55  | \$57 ;
+  assign \$59  = \$58  == 2'h2;
+  assign \$60  = ! table_index;
+  assign \$61  = table_index ? 2'h0 : codes[1:0];
+  assign \$63  = \$62  ? codes[3:2] : 2'h0;
+  assign \$64  = \$61  | \$63 ;
+  assign \$65  = \$64  == 1'h1;
+  assign \$66  = \$65  ? 38'h2000000066 : 38'h0000000000;
+  assign \$67  = \$59  ? 38'h2000121b30 : \$66 ;
+  assign \$68  = \$53  ? table_crc : \$67 ;
+  assign \$69  = ! table_index;
+  assign \$70  = table_index ? 2'h0 : codes[1:0];
+  assign \$72  = \$71  ? codes[3:2] : 2'h0;
+  assign \$73  = \$70  | \$72 ;
+  assign \$74  = \$73  == 2'h3;
+  assign \$75  = ! table_index;
+  assign \$76  = table_index ? 2'h0 : codes[1:0];
+  assign \$78  = \$77  ? codes[3:2] : 2'h0;
+  assign \$79  = \$76  | \$78 ;
+  assign \$80  = \$79  == 2'h2;
+  assign \$81  = ! table_index;
+  assign \$82  = table_index ? 2'h0 : codes[1:0];
+  assign \$84  = \$83  ? codes[3:2] : 2'h0;
+  assign \$85  = \$82  | \$84 ;
+  assign \$86  = \$85  == 1'h1;
+  assign \$87  = \$86  ? 38'h2000000066 : 38'h0000000000;
+  assign \$88  = \$80  ? 38'h2000121b30 : \$87 ;
+  assign \$89  = \$74  ? table_crc : \$88 ;
+  assign \$90  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$91  = \$90  ^ \bit ;
+  assign \$92  = \$91  ? settings[20:5] : 16'h0000;
+  assign \$93  = { \reg [14:0], 1'h0 } ^ \$92 ;
+  assign \$94  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$95  = \bit  ^ \$94 ;
+  assign \$96  = \$95  ^ settings[37];
+  assign \$97  = check & \$96 ;
+  assign \$98  = mismatch | \$97 ;
+  assign \$99  = ! index;
+  assign \$100  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$101  = \bit  ^ \$100 ;
+  assign \$102  = \$101  ^ settings[37];
+  assign \$103  = check & \$102 ;
+  assign \$104  = mismatch | \$103 ;
+  assign \$105  = ~ \$104 ;
+  assign \$107  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$108  = \bit  ^ \$107 ;
+  assign \$109  = \$108  ^ settings[37];
+  assign \$110  = check & \$109 ;
+  assign \$111  = mismatch | \$110 ;
+  assign \$112  = ~ \$111 ;
   always @(posedge clk)
-    \reg  <= \$128 ;
+    \reg  <= \$113 ;
   always @(posedge clk)
-    mismatch <= \$129 ;
+    mismatch <= \$114 ;
   always @(posedge clk)
-    settings <= \$130 ;
+    settings <= \$115 ;
   always @(posedge clk)
-    ok <= \$131 ;
+    ok <= \$116 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$128  = \reg ;
+    \$113  = \reg ;
     if (load) begin
-      \$128  = \$26 [36:21];
+      \$113  = \$26 [36:21];
     end else if (\cover ) begin
-      \$128  = \$108 ;
+      \$113  = \$93 ;
     end else if (check) begin
-      \$128  = { \reg [14:0], 1'h0 };
+      \$113  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$128  = 16'h0000;
+      \$113  = 16'h0000;
     end
     if (rst) begin
-      \$128  = 16'h0000;
+      \$113  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$129  = mismatch;
+    \$114  = mismatch;
     if (load) begin
-      \$129  = 1'h0;
+      \$114  = 1'h0;
     end else if (\cover ) begin
     end else if (check) begin
-      \$129  = \$113 ;
+      \$114  = \$98 ;
     end
     if (receiver_clear) begin
-      \$129  = 1'h0;
+      \$114  = 1'h0;
     end
     if (rst) begin
-      \$129  = 1'h0;
+      \$114  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$130  = settings;
+    \$115  = settings;
     if (load) begin
-      \$130 [4:0] = \$52 [4:0];
-      \$130 [20:5] = \$78 [20:5];
-      \$130 [37] = \$104 [37];
+      \$115 [4:0] = \$47 [4:0];
+      \$115 [20:5] = \$68 [20:5];
+      \$115 [37] = \$89 [37];
     end
     if (receiver_clear) begin
-      \$130 [20:0] = 21'h000000;
-      \$130 [37] = 1'h0;
+      \$115 [20:0] = 21'h000000;
+      \$115 [37] = 1'h0;
     end
     if (rst) begin
-      \$130  = 38'h0000000000;
+      \$115  = 38'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$131  = ok;
+    \$116  = ok;
     if (last) begin
-      if (\$114 ) begin
-        \$131 [0] = \$120 ;
+      if (\$99 ) begin
+        \$116 [0] = \$105 ;
       end
-      if (\$121 ) begin
-        \$131 [1] = \$127 ;
+      if (\$106 ) begin
+        \$116 [1] = \$112 ;
       end
     end
     if (receiver_clear) begin
-      \$131  = 2'h3;
+      \$116  = 2'h3;
     end
     if (rst) begin
-      \$131  = 2'h3;
+      \$116  = 2'h3;
     end
   end
+  assign load_index = table_index;
+  assign \table_crc.width  = table_crc[4:0];
+  assign \table_crc.poly  = table_crc[20:5];
+  assign \table_crc.start  = table_crc[36:21];
+  assign \table_crc.inverted  = table_crc[37];
+  assign \widths[0]  = widths[4:0];
+  assign \widths[1]  = widths[9:5];
+  assign \table.poly  = \table [15:0];
+  assign \table.start  = \table [31:16];
+  assign \table.inverted  = \table [32];
   assign \codes[0]  = codes[1:0];
   assign \codes[1]  = codes[3:2];
-  assign \customs[0]  = customs[37:0];
-  assign \customs[0].width  = customs[4:0];
-  assign \customs[0].poly  = customs[20:5];
-  assign \customs[0].start  = customs[36:21];
-  assign \customs[0].inverted  = customs[37];
-  assign \customs[1]  = customs[75:38];
-  assign \customs[1].width  = customs[42:38];
-  assign \customs[1].poly  = customs[58:43];
-  assign \customs[1].start  = customs[74:59];
-  assign \customs[1].inverted  = customs[75];
   assign \settings.width  = settings[4:0];
   assign \settings.poly  = settings[20:5];
   assign \settings.start  = settings[36:21];
   assign \settings.inverted  = settings[37];
-  assign \$3  = load_index;
-  assign \$9  = load_index;
-  assign \$14  = load_index;
-  assign \$20  = load_index;
-  assign \$29  = load_index;
-  assign \$35  = load_index;
-  assign \$40  = load_index;
-  assign \$46  = load_index;
-  assign \$55  = load_index;
-  assign \$61  = load_index;
-  assign \$66  = load_index;
-  assign \$72  = load_index;
-  assign \$81  = load_index;
-  assign \$87  = load_index;
-  assign \$92  = load_index;
-  assign \$98  = load_index;
-  assign \$121  = index;
+  assign table_crc[37] = \table [32];
+  assign table_crc[36:21] = \table [31:16];
+  assign table_crc[20:5] = \table [15:0];
+  assign table_crc[4:0] = \$5 ;
+  assign \$3  = table_index;
+  assign \$8  = table_index;
+  assign \$14  = table_index;
+  assign \$20  = table_index;
+  assign \$29  = table_index;
+  assign \$35  = table_index;
+  assign \$41  = table_index;
+  assign \$50  = table_index;
+  assign \$56  = table_index;
+  assign \$62  = table_index;
+  assign \$71  = table_index;
+  assign \$77  = table_index;
+  assign \$83  = table_index;
+  assign \$106  = index;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -41175,7 +40974,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.ma_stop (rst, \port$13656$199 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_wb.ch1.core.ma_stop (rst, \port$13650$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -41264,8 +41063,8 @@ module \biss_master_wb.ch1.core.ma_stop (rst, \port$13656$199 , ssi, ssi_error, 
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13656$199 ;
-  wire \port$13656$199 ;
+  input \port$13650$166 ;
+  wire \port$13650$166 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -41385,7 +41184,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, \port$13656$199 , ssi, ssi_error, 
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13656$199  : 1'h0;
+  assign \$13  = \$12  ? \port$13650$166  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -41553,7 +41352,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, \port$13656$199 , ssi, ssi_error, 
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13656$199 , 1'h1 };
+  assign enables = { \port$13650$166 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -43693,7 +43492,7 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13656$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13650$193 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -44276,8 +44075,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13656$259 ;
-  wire [12:0] \port$13656$259 ;
+  input [12:0] \port$13650$193 ;
+  wire [12:0] \port$13650$193 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -44300,7 +44099,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13656$259 [12:1] + 1'h1;
+  assign \$460  = \port$13650$193 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -44876,7 +44675,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13656$259 [0]),
+    .clear_high(\port$13650$193 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -45019,7 +44818,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13656$259 [0]) begin
+            if (\port$13650$193 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -45104,7 +44903,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13656$259 [0]) begin
+            if (\port$13650$193 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -45143,7 +44942,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13656$259 [12:1] };
+            \$534  = { 1'h0, \port$13650$193 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -45528,11 +45327,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13656$259 [12:1] };
-  assign fixed = \port$13656$259 [0];
+  assign fixed_delay = { 1'h0, \port$13650$193 [12:1] };
+  assign fixed = \port$13650$193 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13656$259 [0];
+  assign clear_high = \port$13650$193 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -48109,7 +47908,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13670$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13663$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -48151,8 +47950,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13670$0 ;
-  wire \port$13670$0 ;
+  input \port$13663$0 ;
+  wire \port$13663$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -48166,9 +47965,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13670$0  };
-  assign \$2  = { lc[4:0], \port$13670$0  } == last;
-  assign \$3  = { lc[4:0], \port$13670$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13663$0  };
+  assign \$2  = { lc[4:0], \port$13663$0  } == last;
+  assign \$3  = { lc[4:0], \port$13663$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -48278,7 +48077,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13670$0  };
+  assign lc_next = { lc[4:0], \port$13663$0  };
   assign zero = is_zero;
 endmodule
 
@@ -51075,7 +50874,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11578$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11582$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -51129,8 +50928,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11578$0 , lc
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [274:0] cfg;
-  wire [274:0] cfg;
+  input [208:0] cfg;
+  wire [208:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [3:0] \cfg.confirm_frames ;
@@ -51161,10 +50960,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11578$0 , lc
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
   wire \cfg.w0.signed ;
-  wire [37:0] \cfg.w0_crc ;
-  wire \cfg.w0_crc.inverted ;
-  wire [15:0] \cfg.w0_crc.poly ;
-  wire [15:0] \cfg.w0_crc.start ;
+  wire [4:0] \cfg.w0_crc ;
   wire [4:0] \cfg.w0_crc.width ;
   wire [11:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
@@ -51178,10 +50974,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11578$0 , lc
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
   wire \cfg.w1.signed ;
-  wire [37:0] \cfg.w1_crc ;
-  wire \cfg.w1_crc.inverted ;
-  wire [15:0] \cfg.w1_crc.poly ;
-  wire [15:0] \cfg.w1_crc.start ;
+  wire [4:0] \cfg.w1_crc ;
   wire [4:0] \cfg.w1_crc.width ;
   wire \cfg.w1_enable ;
   output clean;
@@ -51253,8 +51046,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11578$0 , lc
   wire noisy;
   output passed;
   wire passed;
-  output \port$11578$0 ;
-  wire \port$11578$0 ;
+  output \port$11582$0 ;
+  wire \port$11582$0 ;
   output report;
   wire report;
   input report_frame;
@@ -51302,9 +51095,9 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11578$0 , lc
   assign clean = \$47  & \$50 ;
   assign \$51  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$51  : 2'h0;
-  assign \$1  = ~ cfg[199];
+  assign \$1  = ~ cfg[166];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$4  = cfg[199] & cfg[207];
+  assign \$4  = cfg[166] & cfg[174];
   assign \$5  = | { \$4 , \$3  };
   assign \$6  = report_frame & \$5 ;
   assign \$8  = \$7  ? crc_ok[0] : \$2 ;
@@ -51313,10 +51106,10 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11578$0 , lc
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
   assign \$9  = & { \$2 , crc_ok[0] };
-  assign \$10  = cfg[250] & cfg[199];
+  assign \$10  = cfg[184] & cfg[166];
   assign \$11  = ~ spw_match;
   assign \$12  = \$10  & \$11 ;
-  assign \$14  = cfg[259] & copy_mismatch;
+  assign \$14  = cfg[193] & copy_mismatch;
   assign \$15  = \$13  | \$14 ;
   assign spw_mismatch = \$9  & \$15 ;
   assign \$16  = lc_repeat | lc_skip;
@@ -51337,7 +51130,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11578$0 , lc
   assign \$29  = & { \$2 , crc_ok[0] };
   assign \$30  = ~ \$29 ;
   assign \$31  = \$30  | spw_mismatch;
-  assign \$33  = cfg[199] & cfg[207];
+  assign \$33  = cfg[166] & cfg[174];
   assign \$34  = | { \$33 , \$32  };
   assign \$36  = \$35  ? crc_ok[0] : \$2 ;
   assign \$37  = \$34  & \$36 ;
@@ -51372,7 +51165,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11578$0 , lc
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$11578$0  = \$2 ;
+  assign \port$11582$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -51391,31 +51184,25 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$11578$0 , lc
   assign \cfg.w0.crc  = cfg[158:157];
   assign \cfg.w0.gray  = cfg[159];
   assign \cfg.w0.signed  = cfg[160];
-  assign \cfg.w0_crc  = cfg[198:161];
+  assign \cfg.w0_crc  = cfg[165:161];
   assign \cfg.w0_crc.width  = cfg[165:161];
-  assign \cfg.w0_crc.poly  = cfg[181:166];
-  assign \cfg.w0_crc.start  = cfg[197:182];
-  assign \cfg.w0_crc.inverted  = cfg[198];
-  assign \cfg.w1_enable  = cfg[199];
-  assign \cfg.w1  = cfg[211:200];
-  assign \cfg.w1.data_bits  = cfg[205:200];
-  assign \cfg.w1.nenw  = cfg[206];
-  assign \cfg.w1.lc  = cfg[207];
-  assign \cfg.w1.crc  = cfg[209:208];
-  assign \cfg.w1.gray  = cfg[210];
-  assign \cfg.w1.signed  = cfg[211];
-  assign \cfg.w1_crc  = cfg[249:212];
-  assign \cfg.w1_crc.width  = cfg[216:212];
-  assign \cfg.w1_crc.poly  = cfg[232:217];
-  assign \cfg.w1_crc.start  = cfg[248:233];
-  assign \cfg.w1_crc.inverted  = cfg[249];
-  assign \cfg.spw_check  = cfg[250];
-  assign \cfg.spw_tolerance  = cfg[258:251];
-  assign \cfg.ssi  = cfg[259];
-  assign \cfg.ssi_delay  = cfg[271:260];
-  assign \cfg.ssi_error  = cfg[272];
-  assign \cfg.ssi_error_low  = cfg[273];
-  assign \cfg.ssi_double  = cfg[274];
+  assign \cfg.w1_enable  = cfg[166];
+  assign \cfg.w1  = cfg[178:167];
+  assign \cfg.w1.data_bits  = cfg[172:167];
+  assign \cfg.w1.nenw  = cfg[173];
+  assign \cfg.w1.lc  = cfg[174];
+  assign \cfg.w1.crc  = cfg[176:175];
+  assign \cfg.w1.gray  = cfg[177];
+  assign \cfg.w1.signed  = cfg[178];
+  assign \cfg.w1_crc  = cfg[183:179];
+  assign \cfg.w1_crc.width  = cfg[183:179];
+  assign \cfg.spw_check  = cfg[184];
+  assign \cfg.spw_tolerance  = cfg[192:185];
+  assign \cfg.ssi  = cfg[193];
+  assign \cfg.ssi_delay  = cfg[205:194];
+  assign \cfg.ssi_error  = cfg[206];
+  assign \cfg.ssi_error_low  = cfg[207];
+  assign \cfg.ssi_double  = cfg[208];
   assign \$3  = cfg[156];
   assign \$7  = cfg[156];
   assign \$13  = \$12 ;

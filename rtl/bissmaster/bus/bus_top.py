@@ -17,7 +17,7 @@ from . import regmap as regmap_mod
 from .bus_adapters import AxiLiteAdapter, AxiLiteSignature, WishboneAdapter, WishboneSignature
 from ..master import BissMaster
 from ..layouts import COUNT_SETTLE, config_ports
-from ..params import COUNTER_HALF_BITS, DATA_BITS_MAX, MAX_WORDS, Crc, MasterParams
+from ..params import COUNTER_HALF_BITS, CRC_TABLE, DATA_BITS_MAX, MAX_WORDS, Crc, MasterParams
 from .register_bank import RegisterBank, block_signature
 from .uart import divider as uart_divider
 from .uart_bridge import DEFAULT_TIMEOUT_BITS, UartBridge, UartSignature, check_timeout_bits
@@ -71,6 +71,18 @@ CHANNEL_GLUE = ("trigger_enable", "frame_done", "frame_error", "done_count", "re
 FULL_PARAMS = MasterParams(max_data_bits=(DATA_BITS_MAX,) * MAX_WORDS,
                            word_crcs=((Crc.CRC6, Crc.CRC16),) * MAX_WORDS, counter_ram=True,
                            chain_memory=True)
+#: The CRC table's entry for word N (``crc_table``): the map's ``cfg_wN_crc_<field>`` at the
+#: bits of :data:`~bissmaster.params.CRC_TABLE`.
+CRC_TABLE_NAME = "crc_table"
+
+
+def crc_table_fields(words):
+    """``{signal: (table, entry, lsb)}``: where a ``crc_table`` core of ``words`` words finds
+    each word's custom CRC polynomial, start value and inversion (RegisterBank, ``tables``)."""
+    return {f"cfg_w{w}_crc_{name}": (CRC_TABLE_NAME, w, field.offset)
+            for w in range(words) for name, field in CRC_TABLE}
+
+
 #: Pulses of the bank taken into a flip-flop beside the core, so they reach it one clock
 #: later: the bank's pulse register sits by the bank, and with several channels the route from
 #: ``ctrl.abort``'s into a core's controller and timers was the critical path
@@ -122,8 +134,10 @@ class BusChannel(wiring.Component):
     params : MasterParams
         The core's; a core with counters is built with ``counter_ram`` (the map reads the
         counters from its memory), every core with ``chain_memory`` (the map reads words 2..7
-        from its chain memory; no change in a build of one or two words) and ``config_hold``
-        (the bank writes its configuration only while it is idle), and one with a
+        from its chain memory; no change in a build of one or two words), ``config_hold``
+        (the bank writes its configuration only while it is idle) and ``crc_table`` (the
+        words' custom CRC polynomials, start values and inversions in the bank's CRC table;
+        no change in a one-word build), and one with a
         timestamp with ``time_input`` (the top's one time base), whatever ``params`` says.
     regs : wiring.Signature
         The bank's channel block (:func:`~bissmaster.bus.register_bank.block_signature`).
@@ -141,6 +155,10 @@ class BusChannel(wiring.Component):
         The bank's write of this channel's configuration waits: keep the core in IDLE.
     cfg_free : Out(1)
         The core is idle: the waiting write acts (the core is built with ``config_hold``).
+    crc_table_addr : Out(range(words))
+    crc_table_data : In(CRC_TABLE)
+        Only in builds of two words or more with custom CRCs: the core's read of the bank's
+        CRC table (:func:`crc_table_fields`).
     frame_valid, frame_error : Out(1)
         Only with ``status=True`` (a board's LEDs): one-clock pulses when a cycle ends with a
         valid frame, or with any other status (``frame_error`` of the register map).
@@ -156,7 +174,7 @@ class BusChannel(wiring.Component):
         # The map reads words 2..7 from the core's chain memory (none in a two-word build),
         # and the bank writes the core's configuration only while it is idle (no copy per
         # cycle in the core).
-        params = replace(params, chain_memory=True, config_hold=True)
+        params = replace(params, chain_memory=True, config_hold=True, crc_table=True)
         if params.timestamped:
             # One time base for every channel (BusTop's `time_now`), not a counter per core.
             params = replace(params, time_input=True)
@@ -164,16 +182,19 @@ class BusChannel(wiring.Component):
         self.status = status
         full = BissMaster.ports(FULL_PARAMS)
         core = BissMaster.ports(params)
+        #: The map's configuration signals kept in the bank's CRC table (``crc_table``): each
+        #: word's custom CRC polynomial, start value and inversion.
+        self.table = (crc_table_fields(params.words) if params.crc_table_built else {})
         #: The map's configuration signals this channel's core does not have (word 1 in a
         #: one-word build, SSI or register access in a build without): the bank stores none
         #: of them (:class:`~bissmaster.bus.register_bank.RegisterBank`, ``absent``).
         self.absent = frozenset(name for name, member in regs.members.items()
                                 if member.flow == Out and name not in CHANNEL_GLUE
-                                and name not in core)
+                                and name not in core and name not in self.table)
         #: The map's configuration signals the core reads through its cycles (its ``cfg_*``
         #: ports): the bank writes them only while the core is idle (``held``).
         self.held = frozenset(name for name, _, _ in config_ports(params)
-                              if name in regs.members)
+                              if name in regs.members) | frozenset(self.table)
         for name, member in regs.members.items():
             if name in CHANNEL_GLUE:
                 continue
@@ -192,6 +213,8 @@ class BusChannel(wiring.Component):
             "slo": In(1, init=1),
             "cfg_hold": In(1),
             "cfg_free": Out(1),
+            **({"crc_table_addr": Out(range(params.words)), "crc_table_data": In(CRC_TABLE)}
+               if self.table else {}),
             **({"frame_valid": Out(1), "frame_error": Out(1)} if status else {}),
         })
 
@@ -273,6 +296,9 @@ class BusChannel(wiring.Component):
             core.cfg_hold.eq(self.cfg_hold),
             self.cfg_free.eq(~core.busy),
         ]
+        if self.table:
+            m.d.comb += [self.crc_table_addr.eq(core.crc_table_addr),
+                         core.crc_table_data.eq(self.crc_table_data)]
         if self.status:
             m.d.comb += [self.frame_valid.eq(core.done & core.valid),
                          self.frame_error.eq(core.done & ~core.valid)]
@@ -373,7 +399,8 @@ class BusTop(wiring.Component):
                                                   **self.options)
         m.submodules.bank = bank = RegisterBank(self.regmap, self.channels,
                                                 [c.absent for c in self._channels],
-                                                [c.held for c in self._channels])
+                                                [c.held for c in self._channels],
+                                                [c.table for c in self._channels])
         wiring.connect(m, adapter.regs, bank.bus)
 
         # The bus pins, flat.
@@ -406,6 +433,11 @@ class BusTop(wiring.Component):
                          bank.cfg_free[n].eq(channel.cfg_free),
                          getattr(self, f"ch{n}_ma").eq(channel.ma),
                          channel.slo.eq(getattr(self, f"ch{n}_slo"))]
+            if channel.table:
+                m.d.comb += [getattr(bank, f"ch{n}_{CRC_TABLE_NAME}_addr").eq(
+                                 channel.crc_table_addr),
+                             channel.crc_table_data.eq(
+                                 getattr(bank, f"ch{n}_{CRC_TABLE_NAME}_data"))]
             if self.status:
                 m.d.comb += [getattr(self, f"ch{n}_frame_valid").eq(channel.frame_valid),
                              getattr(self, f"ch{n}_frame_error").eq(channel.frame_error)]

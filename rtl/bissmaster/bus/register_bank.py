@@ -101,6 +101,19 @@ class RegisterBank(wiring.Component):
     and the bus's answer to this one, wait for it (up to the end of the cycle the core is
     in).
 
+    Tables (``tables``, the bus tops' CRC table: settings a ``crc_table`` core reads one word
+    at a time): a CONFIG field whose signal a channel's ``tables`` names is not a flip-flop but
+    bits ``lsb ..`` of entry ``entry`` of that channel's table, a memory written with the
+    field's held write (its byte lanes) and read combinationally by the core
+    (``ch<n>_<table>_addr`` -> ``ch<n>_<table>_data``: an asynchronous read, a distributed
+    RAM's read port on ECP5, Xilinx and Intel). A memory keeps its contents through a reset:
+    after one, the bank writes every entry with its fields' reset values, one entry per clock,
+    holding the core in IDLE (``cfg_hold``) and any held write until it is done. Read-back is
+    the configuration memory's, as for every configuration-only register; on iCE40 (no
+    distributed RAM, no configuration memory) the fields stay flip-flops and the table read
+    is a multiplexer over them. A table field must be held, lie in a configuration-only
+    register, and fill one byte lane's bits or whole aligned bytes.
+
     Writes: the request (``w_en``, address, data, strobes) is registered, and every write
     decodes from those flip-flops in the next clock. CONFIG fields are written one clock later
     still, lane by lane, from a per-register write flip-flop and a second copy of the data and
@@ -124,6 +137,9 @@ class RegisterBank(wiring.Component):
     held : sequence of sets of str, one per channel, optional
         The signals of CONFIG fields that the channel's core reads without a copy: a register
         with one of them is written only while the core is idle (above).
+    tables : sequence of dicts, one per channel, optional
+        ``{signal: (table, entry, lsb)}``: the CONFIG fields stored in the channel's tables
+        (above); every table named gets the ports ``ch<n>_<table>_addr`` and ``_data``.
 
     Attributes
     ----------
@@ -140,7 +156,7 @@ class RegisterBank(wiring.Component):
         Per channel: its core is idle (not ``busy``); a waiting write acts in the next clock.
     """
 
-    def __init__(self, regmap, channels, absent=None, held=None):
+    def __init__(self, regmap, channels, absent=None, held=None, tables=None):
         if not isinstance(channels, int) or not 1 <= channels <= regmap.channel_slots:
             raise ValueError(f"channels must be an integer from 1 to {regmap.channel_slots}, "
                              f"not {channels!r}")
@@ -152,6 +168,23 @@ class RegisterBank(wiring.Component):
         self.held = [frozenset(h) for h in (held or [()] * channels)]
         if len(self.held) != channels:
             raise ValueError(f"held must name one set per channel ({channels})")
+        self.tables = [dict(t) for t in (tables or [{}] * channels)]
+        if len(self.tables) != channels:
+            raise ValueError(f"tables must give one mapping per channel ({channels})")
+        table_members = {}
+        for n, table in enumerate(self.tables):
+            kinds, signals = regmap.signals(regmap.channel), {}
+            for signal, (name, entry, lsb) in table.items():
+                kind, width = kinds.get(signal, (None, 0))
+                if kind != Kind.CONFIG or signal not in self.held[n]:
+                    raise ValueError(f"channel {n}: table field {signal!r} is not a held "
+                                     f"configuration signal of the map")
+                signals.setdefault(name, []).append((entry, lsb, width))
+            for name, fields in signals.items():
+                entries = max(e for e, _, _ in fields) + 1
+                width = max(lsb + w for _, lsb, w in fields)
+                table_members[f"ch{n}_{name}_addr"] = In(range(entries))
+                table_members[f"ch{n}_{name}_data"] = Out(width)
         members = {
             "bus": In(RegisterBus(regmap.addr_width - 2)),
             "glob": Out(block_signature(regmap, regmap.globals)),
@@ -159,6 +192,7 @@ class RegisterBank(wiring.Component):
             "irq": Out(channels),
             "cfg_hold": Out(channels),
             "cfg_free": In(channels),
+            **table_members,
         }
         super().__init__(members)
 
@@ -233,6 +267,8 @@ class RegisterBank(wiring.Component):
         their reset value. A channel's registers of held configuration wait for its core
         (``waiting`` gets the block's wait flag). Returns the block's interrupt request."""
         held = frozenset() if channel is None else self.held[channel] - absent
+        tables = {} if channel is None else {
+            signal: place for signal, place in self.tables[channel].items() if signal not in absent}
         held_regs = [reg for reg in registers
                      if not reg.window and not reg.memory
                      and not any(f.kind == Kind.PULSE for f in reg.fields)
@@ -245,13 +281,17 @@ class RegisterBank(wiring.Component):
             # hold the write meanwhile (``w_busy``).
             wait = Signal(name=f"{prefix}_config_wait")
             go = Signal(name=f"{prefix}_config_go")
-            m.d.sync += go.eq(wait & ~go & self.cfg_free[channel])
-            m.d.comb += self.cfg_hold[channel].eq(wait)
+            # After a reset the tables are written with their reset values first (``_tables``).
+            clearing = (Signal(name=f"{prefix}_table_clearing", init=1)
+                        if tables and self._config_memory else C(0))
+            m.d.sync += go.eq(wait & ~go & self.cfg_free[channel] & ~clearing)
+            m.d.comb += self.cfg_hold[channel].eq(wait | clearing)
             waiting.append(wait)
         bus = self.bus
         w_en, w_addr, w_data, w_strb = self._w_en, self._w_addr, self._w_data, self._w_strb
         held_writes = []               # the first-stage writes of the held registers
         storage = {}                   # "register.field" -> the Signal that holds it
+        table_writes = []              # (field, its write enable, entry place) of table fields
         irq_terms = []
         # Registers of configuration only (read back from a memory, ``_shadow``).
         shadowed = [reg for reg in registers
@@ -296,6 +336,13 @@ class RegisterBank(wiring.Component):
                     # The core has no such setting: nothing to store (reads its reset value).
                     parts.append((f.lsb, C(f.reset, f.width)))
                     m.d.comb += self._signal(port, f).eq(f.reset)
+                elif f.kind == Kind.CONFIG and f.signal in tables and self._config_memory:
+                    # Stored in the channel's table: the memory's write (``_tables``); read
+                    # back from the configuration memory.
+                    if reg not in shadowed or reg not in held_regs:
+                        raise ValueError(f"{reg.path}.{f.name}: a table field must be held and "
+                                         f"in a register of configuration only")
+                    table_writes.append((f, config_write, tables[f.signal]))
                 elif f.kind == Kind.CONFIG:
                     reg_bits = Signal(f.width, init=f.reset, name=name)
                     storage[f"{reg.path}.{f.name}"] = reg_bits
@@ -309,7 +356,10 @@ class RegisterBank(wiring.Component):
                         with m.If(en & strb[lane]):
                             m.d.sync += reg_bits[lo:hi].eq(data[lo:hi])
                     parts.append((f.lsb, reg_bits))
-                    if f.signal:
+                    if f.signal in tables:
+                        # iCE40: the table is these flip-flops, read by a multiplexer.
+                        table_writes.append((f, reg_bits, tables[f.signal]))
+                    elif f.signal:
                         m.d.comb += self._signal(port, f).eq(reg_bits)
                 elif f.kind == Kind.PULSE:
                     pulse = Signal(f.width, name=name)
@@ -356,11 +406,77 @@ class RegisterBank(wiring.Component):
                 m.d.sync += wait.eq(0)
         if shadowed:
             self._shadow(m, base, registers, shadowed, shadow_writes, absent, prefix, windows)
+        if table_writes:
+            self._tables(m, channel, prefix, table_writes, clearing)
         # A cause requests an interrupt while set and enabled.
         irq = Signal(name=f"{prefix}_irq")
         m.d.comb += irq.eq(Cat((status & storage[enable]).any()
                                for status, enable in irq_terms if enable).any())
         return irq
+
+    def _tables(self, m, channel, prefix, table_writes, clearing):
+        """A channel's tables (class docstring, Tables): per table, one memory per field
+        position (the same field of every entry), written with the field's held write and
+        read asynchronously at ``ch<n>_<table>_addr``; on iCE40 ``table_writes`` holds each
+        field's flip-flops instead, read by compares with the address."""
+        sweep = None
+        if self._config_memory:
+            # After a reset, every entry is written with its reset values, one per clock.
+            entries = max(entry for _, _, (_, entry, _) in table_writes) + 1
+            sweep = Signal(range(entries), name=f"{prefix}_table_sweep")
+            with m.If(clearing):
+                m.d.sync += sweep.eq(sweep + 1)
+                with m.If(sweep == entries - 1):
+                    m.d.sync += clearing.eq(0)
+        by_table = {}
+        for f, source, (name, entry, lsb) in table_writes:
+            by_table.setdefault(name, {}).setdefault(lsb, []).append((entry, f, source))
+        for name, groups in by_table.items():
+            addr = getattr(self, f"ch{channel}_{name}_addr")
+            out = getattr(self, f"ch{channel}_{name}_data")
+            value = C(0, len(out))
+            for lsb, fields in sorted(groups.items()):
+                if self._config_memory:
+                    data = self._table_memory(m, f"{prefix}_{name}_{lsb}", addr, fields,
+                                              clearing, sweep)
+                else:
+                    data = 0
+                    for entry, _, bits in fields:
+                        data = data | Mux(addr == entry, bits, 0)
+                value = value | (Value.cast(data) << lsb)
+            m.d.comb += out.eq(value)
+
+    def _table_memory(self, m, name, addr, fields, clearing, sweep):
+        """One field position of a table: a memory of one entry per word, written by the
+        field's register writes (its byte lanes) or, while ``clearing``, with the entry's
+        reset value at the sweep's entry; returns its asynchronous read at ``addr``."""
+        f0 = fields[0][1]
+        if any(f.lsb != f0.lsb or f.width != f0.width for _, f, _ in fields):
+            raise ValueError(f"{name}: a table field has the same bits in every entry's register")
+        lanes = [lane for _, _, lane in self._lanes(f0)]
+        if len(lanes) > 1 and (f0.lsb % 8 or f0.width % 8):
+            raise ValueError(f"{name}: a table field fills one byte lane or whole aligned bytes")
+        depth = max(entry for entry, _, _ in fields) + 1
+        memory = Memory(shape=f0.width, depth=depth, init=[])
+        m.submodules[f"{name}_table"] = memory
+        wr = memory.write_port(granularity=8 if len(lanes) > 1 else None)
+        writes = Cat(write for _, _, write in fields)
+        entry = Signal(range(depth), name=f"{name}_table_write_entry")
+        reset = C(0, f0.width)
+        for at, f, write in fields:
+            with m.If(write):
+                m.d.comb += entry.eq(at)
+            if f.reset:
+                reset = reset | Mux(sweep == at, f.reset, 0)
+        strobes = Cat(self._w2_strb[lane] for lane in lanes)
+        m.d.comb += [
+            wr.addr.eq(Mux(clearing, sweep, entry)),
+            wr.data.eq(Mux(clearing, reset, self._w2_data[f0.lsb:f0.lsb + f0.width])),
+            wr.en.eq(Mux(clearing, 2**len(wr.en) - 1, Mux(writes.any(), strobes, 0))),
+        ]
+        rd = memory.read_port(domain="comb")
+        m.d.comb += rd.addr.eq(addr)
+        return rd.data
 
     @staticmethod
     def _shadowable(reg, absent):

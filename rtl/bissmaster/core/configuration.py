@@ -8,7 +8,7 @@ from .. import protocol
 from ..layouts import config_custom_crcs, config_enables, config_layout, config_words
 from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, QUIET_WIDTH, Crc
 from .const_compare import above, at_most
-from .crc_engine import crc_settings
+from .crc_engine import crc_settings, crc_width
 
 
 class Configuration(wiring.Component):
@@ -179,8 +179,8 @@ class Configuration(wiring.Component):
         else:
             customs = config_custom_crcs(cycle, p) or [None] * p.words
             for w, word in enumerate(config_words(cycle, p)):
-                m.d.comb += self.crc_widths[w].eq(
-                    crc_settings(word.crc, customs[w], p.word_crcs[w]).width)
+                m.d.comb += self.crc_widths[w].eq(crc_width(word.crc, customs[w],
+                                                            p.word_crcs[w]))
         # The words in the frame: word 0 and the enabled ones after it (in order: a gap is
         # refused above).
         m.d.comb += self.word_count.eq(sum(config_enables(cycle, p)))

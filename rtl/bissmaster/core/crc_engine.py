@@ -5,7 +5,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 from .. import protocol
-from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, Crc
+from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, CRC_TABLE, Crc
 from .word_select import select_word
 
 
@@ -34,6 +34,18 @@ def crc_settings(code, custom, kinds):
     return CRC_SETTINGS(value)
 
 
+def crc_width(code, custom, kinds):
+    """A word's CRC width resolved from its code (combinational): a named CRC's, the custom
+    CRC's ``custom.width`` (a :data:`CRC_SETTINGS` or :data:`CRC_WIDTH_ONLY` view; ``None``
+    without custom CRCs), 0 for none."""
+    width = C(0, range(CRC_MAX_WIDTH + 1))
+    for kind in kinds:
+        width = Mux(code == kind, NAMED_CRCS[kind][0], width)
+    if custom is not None:
+        width = Mux(code == Crc.CUSTOM, custom.width, width)
+    return width
+
+
 class CrcEngine(wiring.Component):
     """Checks each data word against the CRC that follows it, one received bit per clock.
 
@@ -48,6 +60,14 @@ class CrcEngine(wiring.Component):
     no resolved copy per word is kept (issue 27: that was a resolution per word). A one-word
     engine takes its word's CRC resolved instead (``word_crc``, held by the master's
     configuration for the cycle, as cheap as it gets with one word) and has no ``settings``.
+
+    **Table** (``table=True``, builds of 2+ words with custom CRCs): the custom CRCs'
+    polynomials, start values and inversions are not inputs per word but one table entry,
+    read combinationally (an asynchronous memory read, outside the engine): ``table_index``
+    names the word ``load`` prepares, ``table`` is that word's entry, and the width comes from
+    the word's resolved ``widths``. So the engine has no multiplexer over the words'
+    polynomials and start values at all (issue 27: 33 bits of an eight-way multiplexer become
+    a memory's read port).
 
     Every bit of the word *before* its CRC field (``cover``: data, nE, nW, LC) goes through
     the textbook shift register (MSB first, not reflected): feedback = register MSB xor bit,
@@ -69,7 +89,14 @@ class CrcEngine(wiring.Component):
         Each word's CRC code (``cfg_wN_crc``), held for the cycle (engines of 2+ words).
     customs : In(ArrayLayout(CRC_SETTINGS, words))
         Each word's custom CRC (``cfg_wN_crc_*``), held for the cycle (engines of 2+ words
-        with custom CRCs).
+        with custom CRCs, without ``table``).
+    widths : In(ArrayLayout(range(CRC_MAX_WIDTH + 1), words))
+        With ``table``: each word's resolved CRC width (Configuration.crc_widths).
+    table_index : Out(range(words))
+        With ``table``: the word whose entry ``table`` must give (``load_index``).
+    table : In(CRC_TABLE)
+        With ``table``: word ``table_index``'s custom polynomial, start value and inversion,
+        in the same clock.
     word_crc : In(CRC_SETTINGS)
         One-word engines: the word's CRC, resolved, held from ``load`` to its last bit.
     index : In(range(words))
@@ -92,14 +119,21 @@ class CrcEngine(wiring.Component):
         Per word: every received CRC bit matched.
     """
 
-    def __init__(self, words, kinds=tuple(NAMED_CRCS), custom=True):
+    def __init__(self, words, kinds=tuple(NAMED_CRCS), custom=True, table=False):
         """``kinds``: the named CRCs any word of the build may have; ``custom``: the build has
-        custom CRCs (``customs``). Both are unused by a one-word engine."""
+        custom CRCs (``customs``, or with ``table`` the table port). All three are unused by a
+        one-word engine."""
         self._words = words
         self._kinds = tuple(kinds)
         self._custom = custom
+        self._table = table and custom and words > 1
         if words == 1:
             settings = {"word_crc": In(CRC_SETTINGS)}
+        elif self._table:
+            settings = {"codes": In(data.ArrayLayout(Crc, words)),
+                        "widths": In(data.ArrayLayout(range(CRC_MAX_WIDTH + 1), words)),
+                        "table_index": Out(range(words)),
+                        "table": In(CRC_TABLE)}
         else:
             settings = {"codes": In(data.ArrayLayout(Crc, words)),
                         **({"customs": In(data.ArrayLayout(CRC_SETTINGS, words))}
@@ -126,9 +160,15 @@ class CrcEngine(wiring.Component):
             def of_load_word(values):
                 return select_word(self.load_index, [values[w] for w in range(n)])
 
-            load_crc = crc_settings(of_load_word(self.codes),
-                                    of_load_word(self.customs) if self._custom else None,
-                                    self._kinds)
+            if self._table:
+                custom = Signal(CRC_SETTINGS, name="table_crc")
+                m.d.comb += [self.table_index.eq(self.load_index),
+                             custom.width.eq(of_load_word(self.widths)),
+                             custom.poly.eq(self.table.poly), custom.start.eq(self.table.start),
+                             custom.inverted.eq(self.table.inverted)]
+            else:
+                custom = of_load_word(self.customs) if self._custom else None
+            load_crc = crc_settings(of_load_word(self.codes), custom, self._kinds)
             # The current word's width, polynomial and inversion (its start value went into
             # the register at ``load``).
             crc = Signal(CRC_SETTINGS, name="settings")

@@ -7,7 +7,7 @@ from amaranth.hdl import *
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import (CHAIN_FIRST_WORD, CRC_MAX_WIDTH, CRC_SETTINGS, SLOT_WIDTH,
+from ..params import (CHAIN_FIRST_WORD, CRC_MAX_WIDTH, CRC_SETTINGS, CRC_TABLE, SLOT_WIDTH,
                       WORD_INDEX_WIDTH, word_config)
 from .chain_results import CHAIN_INDEX_BITS
 from .crc_engine import CrcEngine
@@ -73,10 +73,13 @@ class FrameDecoder(wiring.Component):
             "bit": In(1),
             "words": In(data.ArrayLayout(word_config(params), words)),
             # Each word's resolved CRC width (Configuration.crc_widths); in builds of 2+ words
-            # with custom CRCs, each word's ``cfg_wN_crc_*`` settings; in one-word builds, the
-            # word's CRC resolved (Configuration.crc).
+            # with custom CRCs, each word's ``cfg_wN_crc_*`` settings, or with ``crc_table``
+            # the CRC engine's table port (CrcEngine); in one-word builds, the word's CRC
+            # resolved (Configuration.crc).
             "crc_widths": In(data.ArrayLayout(range(CRC_MAX_WIDTH + 1), words)),
             **({"word0_crc": In(CRC_SETTINGS)} if words == 1 else
+               {"crc_table_addr": Out(range(words)), "crc_table_data": In(CRC_TABLE)}
+               if params.crc_table_built else
                {"customs": In(data.ArrayLayout(CRC_SETTINGS, words))} if params.custom_crc
                else {}),
             "word_count": In(range(1, words + 1)),
@@ -323,12 +326,17 @@ class FrameDecoder(wiring.Component):
         p = self._params
         in_word, last_bit = s.in_word, s.idx == s.current.word_end_m1
         kinds = sorted({kind for crcs in p.word_crcs for kind in crcs})
-        m.submodules.crc = engine = CrcEngine(p.words, kinds=kinds, custom=p.custom_crc)
+        m.submodules.crc = engine = CrcEngine(p.words, kinds=kinds, custom=p.custom_crc,
+                                              table=p.crc_table_built)
         if p.words == 1:
             m.d.comb += engine.word_crc.eq(self.word0_crc)
         else:
             m.d.comb += [engine.codes[w].eq(self.words[w].crc) for w in range(p.words)]
-            if p.custom_crc:
+            if p.crc_table_built:
+                m.d.comb += [engine.widths.eq(self.crc_widths),
+                             self.crc_table_addr.eq(engine.table_index),
+                             engine.table.eq(self.crc_table_data)]
+            elif p.custom_crc:
                 m.d.comb += engine.customs.eq(self.customs)
         m.d.comb += [
             engine.load.eq(s.at_cds | (in_word & last_bit)),

@@ -9,6 +9,7 @@ the register-access windows (ca.wbuf, ca.rbuf) as ports of a 16 x 32 memory with
 (a memory of the test's own, lib.memory), read with the registers' latency.
 """
 
+import pytest
 from amaranth.sim import Simulator
 from amaranth.hdl import ClockDomain, Module
 from amaranth.lib import wiring
@@ -26,13 +27,13 @@ def offset(path):
     return CH0 + next(r for r in MAP.channel if r.path == path).offset
 
 
-def run(bench, channels=1, buffers=False, absent=None, held=None):
+def run(bench, channels=1, buffers=False, absent=None, held=None, tables=None):
     """``buffers``: channel 0's windows on one memory of the test (16 words, byte lanes): the
     write window writes it, the read window reads it through a registered port. ``absent``:
     the bank's per-channel signals the core lacks; ``held``: those it reads without a copy."""
     top = Module()
     top.domains.sync = ClockDomain()
-    top.submodules.bank = bank = RegisterBank(MAP, channels, absent, held)
+    top.submodules.bank = bank = RegisterBank(MAP, channels, absent, held, tables)
     if buffers:
         top.submodules.mem = mem = Memory(shape=32, depth=16, init=[])
         wr, rd = mem.write_port(granularity=8), mem.read_port()
@@ -565,3 +566,115 @@ def test_bus_response_waits_for_a_held_write():
         assert await _answered_after_release(ctx, bank, answered) == 3
         assert ctx.get(bus.ack) and ctx.get(bank.ch0.cfg_request_period) == 0x678
     run_adapter(WishboneAdapter, wishbone, held=HELD)
+
+
+#: A CRC table as the bus tops give it (docs/bus.md, "The CRC table"), written here from the
+#: map: entry N holds word N's polynomial in bits 0..15, its start value in 16..31 and its
+#: inversion in bit 32.
+TABLE = {f"cfg_w{w}_crc_{name}": ("crc", w, lsb) for w in range(8)
+         for name, lsb in (("poly", 0), ("start", 16), ("inverted", 32))}
+TABLE_REGISTERS = {0: ("cfg_crc0", "cfg_crc0_start"), 1: ("cfg_crc1", "cfg_crc1_start"),
+                   **{w: (f"cfg_w{w}_crc", f"cfg_w{w}_crc_start") for w in range(2, 8)}}
+
+
+def _entry(poly, start, inverted):
+    return poly | start << 16 | inverted << 32
+
+
+async def _table(ctx, bank, entry):
+    ctx.set(bank.ch0_crc_addr, entry)
+    await ctx.delay(1e-9)
+    return ctx.get(bank.ch0_crc_data)
+
+
+def test_crc_table_holds_each_words_crc_in_memory():
+    """docs/bus.md, "The CRC table": the polynomial, start value and inversion of each word's
+    custom CRC are written into entry N of the channel's table (byte lane by byte lane, as a
+    flip-flop register is) and read combinationally by the core; the registers read back what
+    was written; the width beside them stays a flip-flop setting. Held like the rest: with the
+    core busy, a write changes nothing until it is idle."""
+    async def bench(ctx, bank):
+        ctx.set(bank.cfg_free, 1)
+        for _ in range(10):                             # the clear after reset
+            await ctx.tick()
+        written = {}
+        for w, (crc_reg, start_reg) in TABLE_REGISTERS.items():
+            poly, start, inverted = 0x1021 + 7 * w, 0xFFFF - w, w % 2
+            await write(ctx, bank, offset(crc_reg), poly | (5 + w) << 16 | inverted << 24)
+            await ctx.tick()
+            await write(ctx, bank, offset(start_reg), start)
+            await ctx.tick()
+            written[w] = (poly, start, inverted)
+        for w, value in written.items():
+            assert await _table(ctx, bank, w) == _entry(*value), w
+            crc_reg, start_reg = TABLE_REGISTERS[w]
+            assert await read(ctx, bank, offset(crc_reg)) == (
+                value[0] | (5 + w) << 16 | value[2] << 24)
+            assert await read(ctx, bank, offset(start_reg)) == value[1]
+            assert ctx.get(getattr(bank.ch0, f"cfg_w{w}_crc_width")) == 5 + w
+        # One byte lane: only the polynomial's high byte changes.
+        await write(ctx, bank, offset("cfg_w3_crc"), 0xAB00, strb=0b0010)
+        await ctx.tick()
+        poly, start, inverted = written[3]
+        assert await _table(ctx, bank, 3) == _entry(0xAB00 | poly & 0xFF, start, inverted)
+        assert await _table(ctx, bank, 4) == _entry(*written[4])
+        # Busy core: the write waits, and the table keeps the old entry until it is idle.
+        ctx.set(bank.cfg_free, 0)
+        await write(ctx, bank, offset("cfg_crc0_start"), 0x1234)
+        for _ in range(20):
+            await ctx.tick()
+            assert await _table(ctx, bank, 0) == _entry(*written[0])
+        ctx.set(bank.cfg_free, 1)
+        await ctx.tick()
+        await ctx.tick()
+        assert await _table(ctx, bank, 0) == _entry(written[0][0], 0x1234, written[0][2])
+    run(bench, held=[set(TABLE) | {f"cfg_w{w}_crc_width" for w in range(8)}], tables=[TABLE])
+
+
+def test_crc_table_is_cleared_after_a_reset():
+    """A memory keeps its contents through a reset; the table must not: after a reset the bank
+    writes every entry with its reset value (0), one per clock, holding the core in IDLE
+    (cfg_hold) until then, and a write that comes meanwhile acts after it."""
+    held = set(TABLE)
+    top = Module()
+    top.domains.sync = cd = ClockDomain()
+    top.submodules.bank = bank = RegisterBank(MAP, 1, None, [held], [TABLE])
+    sim = Simulator(top)
+    sim.add_clock(1e-8)
+
+    async def bench(ctx):
+        ctx.set(bank.cfg_free, 1)
+        for _ in range(10):
+            await ctx.tick()
+        await write(ctx, bank, offset("cfg_w7_crc_start"), 0xBEEF)
+        await ctx.tick()
+        assert await _table(ctx, bank, 7) == _entry(0, 0xBEEF, 0)
+        ctx.set(cd.rst, 1)
+        await ctx.tick()
+        ctx.set(cd.rst, 0)
+        # A write right after the reset: it waits for the clear.
+        ctx.set(bank.bus.w_en, 1)
+        ctx.set(bank.bus.w_addr, offset("cfg_crc1") // 4)
+        ctx.set(bank.bus.w_data, 0x1_0007)
+        ctx.set(bank.bus.w_strb, 0xF)
+        holds = []
+        for _ in range(14):
+            await ctx.tick()
+            ctx.set(bank.bus.w_en, 0)
+            holds.append(ctx.get(bank.cfg_hold))
+        assert holds[:8] == [1] * 8 and holds[-1] == 0, holds
+        for w in range(8):
+            want = _entry(0x0007, 0, 0) if w == 1 else 0
+            assert await _table(ctx, bank, w) == want, w
+        assert await read(ctx, bank, offset("cfg_w7_crc_start")) == 0
+    sim.add_testbench(bench)
+    sim.run()
+
+
+@pytest.mark.filterwarnings("ignore::amaranth.hdl.UnusedElaboratable")
+def test_crc_table_refuses_fields_it_cannot_hold():
+    """A table field must be a held configuration signal of the map."""
+    with pytest.raises(ValueError, match="held configuration"):
+        RegisterBank(MAP, 1, None, [set()], [TABLE])
+    with pytest.raises(ValueError, match="held configuration"):
+        RegisterBank(MAP, 1, None, [{"nothing"}], [{"nothing": ("crc", 0, 0)}])

@@ -10,6 +10,7 @@ Cycle conventions: ``block_sim.py``.
 import random
 
 import pytest
+from amaranth.hdl import Elaboratable, Module, Mux, Signal
 
 from bissmaster.core.crc_engine import CrcEngine
 from encoder_model.crc import crc_msb_first, int_to_bits
@@ -51,7 +52,30 @@ NAMED_SETTINGS = {CRC_CODE["crc6"]: _settings(*BISS[0][1:4], True),
                   CRC_CODE["none"]: _settings(0, 0, 0, False)}
 
 
-def _run(words, jobs, seed):
+class _TableRead(Elaboratable):
+    """A table of the test's own beside a ``table`` engine: ``entries[w]`` (poly, start,
+    inverted) read combinationally at the engine's ``table_index``, as the bus tops' memory
+    is (docs/bus.md, "The CRC table")."""
+
+    def __init__(self, engine, words):
+        self.engine = engine
+        self.entries = [Signal(16 + 16 + 1, name=f"entry{w}") for w in range(words)]
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.engine = self.engine
+        picked = 0
+        for w, entry in enumerate(self.entries):
+            picked = Mux(self.engine.table_index == w, entry, picked)
+        m.d.comb += self.engine.table.as_value().eq(picked)
+        return m
+
+
+def _entry(settings):
+    return settings["poly"] | settings["start"] << 16 | settings["inverted"] << 32
+
+
+def _run(words, jobs, seed, table=False):
     """Each job is (word index, settings, covered bits, received CRC bits); settings are a
     custom CRC (a :func:`_settings` dict: the word's code is "custom") or a named CRC's code
     (a one-word engine gets the CRC resolved: the dict, or the named CRC's settings from
@@ -65,7 +89,8 @@ def _run(words, jobs, seed):
     cycle).
     Returns per job (ok[word] the clock after its last bit, ok[word] two clocks later)."""
     rng = random.Random(seed)
-    dut = CrcEngine(words)
+    dut = CrcEngine(words, table=table)
+    top = _TableRead(dut, words) if table else dut
     codes = [CRC_CODE["none"]] * words
     customs = [_settings(0, 0, 0, 0)] * words
     results = []
@@ -80,7 +105,14 @@ def _run(words, jobs, seed):
         else:
             codes[word], customs[word] = settings, _settings(*_random_crc(rng))
         ctx.set(dut.codes, codes)
-        ctx.set(dut.customs, customs)
+        if table:
+            # The table holds the custom settings; the width comes resolved (a named CRC's
+            # own, the custom one's, 0 for none).
+            ctx.set(top.entries[word], _entry(customs[word]))
+            ctx.set(dut.widths, [customs[w]["width"] if codes[w] == CRC_CODE["custom"]
+                                 else NAMED_SETTINGS[codes[w]]["width"] for w in range(words)])
+        else:
+            ctx.set(dut.customs, customs)
 
     async def tb(ctx):
         def drive(**values):
@@ -138,7 +170,7 @@ def _run(words, jobs, seed):
             ctx.set(getattr(dut, name), 0)
         ctx.set(dut.bit, rng.randrange(2))
 
-    simulate(dut, tb)
+    simulate(top, tb)
     return results
 
 
@@ -173,11 +205,13 @@ def _random_crc(rng):
     return width, rng.randrange(2**width) | 1, rng.randrange(2**width), rng.random() < 0.5
 
 
-@pytest.mark.parametrize("words", (1, 2))
-def test_crc_engine_random_crcs_and_words_in_turn(words):
+@pytest.mark.parametrize("words, table", ((1, False), (2, False), (2, True), (8, True)))
+def test_crc_engine_random_crcs_and_words_in_turn(words, table):
     """Random CRCs (width 1..16, odd polynomial, any start, inverted or not), random lengths,
     words in turn with their own settings: a correct CRC passes, one flipped bit anywhere
-    (covered data or the CRC) fails, and a word's verdict is held while other words run."""
+    (covered data or the CRC) fails, and a word's verdict is held while other words run.
+    ``table``: the custom settings come from a table read at the engine's ``table_index``,
+    the width resolved beside it."""
     rng = random.Random(8100 + words)
     jobs, expected = [], []
     for _ in range(120):
@@ -199,7 +233,7 @@ def test_crc_engine_random_crcs_and_words_in_turn(words):
                 received = received[:j] + [received[j] ^ 1] + received[j + 1:]
         jobs.append((word, _settings(width, poly, start, inverted), covered, received))
         expected.append((int(not flip),) * 2)
-    assert _run(words, jobs, seed=words) == expected
+    assert _run(words, jobs, seed=words, table=table) == expected
 
 
 def test_crc_engine_width_0_word_is_good_and_other_verdicts_hold():

@@ -37,10 +37,28 @@ def test_header_names_generator_and_parameters():
     ({"timestamp_width": 8}, "timestamp_width"),
     ({"half_period_width": 3}, "half_period_width"),
     ({"half_period_width": 17}, "half_period_width"),
+    ({"crc_table": True}, "crc_table needs config_hold"),
+    ({"crc_table": 1, "config_hold": True}, "crc_table must be a bool"),
 ])
 def test_bad_parameters_are_refused(kwargs, message):
     with pytest.raises(ValueError, match=message):
         MasterParams(**kwargs)
+
+
+def test_a_crc_table_build_reads_its_custom_crcs_from_the_table():
+    """docs/ports.md, "CRC table": in a build of two words the custom CRCs' polynomial, start
+    value and inversion are not ports but ``crc_table_addr`` / ``crc_table_data`` (33 bits);
+    the widths stay ports. A one-word build is not changed by the option."""
+    two = MasterParams(config_hold=True, crc_table=True)
+    text = generate(two)
+    assert "output crc_table_addr" in text and "input [32:0] crc_table_data" in text
+    for w in (0, 1):
+        assert f"cfg_w{w}_crc_width" in text
+        for name in ("poly", "start", "inverted"):
+            assert f"cfg_w{w}_crc_{name}" not in text
+    one = dict(max_data_bits=(36,), word_crcs=((Crc.CRC6,),), config_hold=True)
+    assert (generate(MasterParams(**one, crc_table=True)).split("\n")[12:]
+            == generate(MasterParams(**one)).split("\n")[12:])
 
 
 def test_biss_c_only_configuration_generates():
