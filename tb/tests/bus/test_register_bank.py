@@ -473,6 +473,34 @@ def test_configuration_read_returns_the_value_of_its_load_clock():
     run(bench)
 
 
+def test_first_write_after_a_reset_reads_back_in_its_first_clock():
+    """The first write of a configuration register since reset reads back from the first clock
+    its flip-flops hold it (r_load two clocks after an r_en in the clock after w_en), as every
+    later write does: the written-since-reset flag is not a clock late."""
+    async def bench(ctx, bank, rst):
+        period = offset("cfg_period")
+        await write(ctx, bank, period, 0x000005)
+        ctx.set(rst, 1)
+        await ctx.tick()
+        ctx.set(rst, 0)
+        ctx.set(bank.bus.w_en, 1)
+        ctx.set(bank.bus.w_addr, period // 4)
+        ctx.set(bank.bus.w_data, 0x000123)
+        ctx.set(bank.bus.w_strb, 0xF)
+        await ctx.tick()                                # clock 1: the request registered
+        ctx.set(bank.bus.w_en, 0)
+        ctx.set(bank.bus.r_en, 1)                       # r_en in clock 1
+        ctx.set(bank.bus.r_addr, period // 4)
+        await ctx.tick()
+        ctx.set(bank.bus.r_en, 0)
+        await ctx.tick()
+        ctx.set(bank.bus.r_load, 1)                     # r_load in clock 3
+        await ctx.tick()
+        ctx.set(bank.bus.r_load, 0)
+        assert ctx.get(bank.bus.r_data) == 0x000123
+    _run_with_reset(bench)
+
+
 #: A channel's held configuration in these tests: the request period (register cfg_period).
 HELD = [{"cfg_request_period"}]
 
