@@ -1124,7 +1124,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$5366$272 (cycle[274:272]),
+    .\port$5311$272 (cycle[274:272]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(sample),
@@ -1184,7 +1184,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$5366$199 (cycle[199]),
+    .\port$5311$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -1235,7 +1235,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$5366$259 (cycle[271:259]),
+    .\port$5311$259 (cycle[271:259]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(\sample$349 ),
@@ -1258,7 +1258,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$213 ),
     .load(load),
-    .\port$5354$0 (\bit ),
+    .\port$5299$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1325,7 +1325,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$4786$0 (\$28 ),
+    .\port$4731$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -5657,7 +5657,7 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$5366$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$5311$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
@@ -6372,8 +6372,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$5366$272 ;
-  wire [2:0] \port$5366$272 ;
+  input [2:0] \port$5311$272 ;
+  wire [2:0] \port$5311$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -6682,7 +6682,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$5366$272 [0];
+  assign error_bit = ssi & \port$5311$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -6713,19 +6713,19 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$5366$272 [0];
+  assign \$24  = ssi & \port$5311$272 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$5366$272 [0];
+  assign \$28  = ssi & \port$5311$272 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$5366$272 [0];
+  assign \$35  = ssi & \port$5311$272 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$5366$272 [0];
+  assign \$39  = ssi & \port$5311$272 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -6746,7 +6746,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$5366$272 [2];
+  assign \$61  = ssi & \port$5311$272 [2];
   assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -7032,15 +7032,15 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$5366$272 [0];
+  assign \$347  = ssi & \port$5311$272 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$5366$272 [0];
-  assign \$355  = ~ \port$5366$272 [1];
+  assign \$354  = ssi & \port$5311$272 [0];
+  assign \$355  = ~ \port$5311$272 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -7775,7 +7775,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$5366$272 [0];
+  assign ssi_error = \port$5311$272 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -7785,8 +7785,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign ok = crc_ok;
   assign \index$43  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$5366$272 [2];
-  assign ssi_error_low = \port$5366$272 [1];
+  assign ssi_double = \port$5311$272 [2];
+  assign ssi_error_low = \port$5311$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -7935,101 +7935,45 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, cu
   wire \$1 ;
   wire [37:0] \$10 ;
   wire [1:0] \$100 ;
-  wire [1:0] \$101 ;
-  wire \$102 ;
+  wire \$101 ;
+  wire [37:0] \$102 ;
   wire [37:0] \$103 ;
   wire [37:0] \$104 ;
-  wire [37:0] \$105 ;
+  wire \$105 ;
   wire \$106 ;
-  wire [1:0] \$107 ;
-  wire \$108 ;
-  wire [1:0] \$109 ;
+  wire [15:0] \$107 ;
+  wire [15:0] \$108 ;
+  wire \$109 ;
   wire [37:0] \$11 ;
-  wire [1:0] \$110 ;
+  wire \$110 ;
   wire \$111 ;
   wire \$112 ;
-  wire [37:0] \$113 ;
+  wire \$113 ;
   wire \$114 ;
-  wire [37:0] \$115 ;
-  wire [37:0] \$116 ;
+  wire \$115 ;
+  wire \$116 ;
   wire \$117 ;
-  wire [1:0] \$118 ;
+  wire \$118 ;
   wire \$119 ;
   wire \$12 ;
-  wire [1:0] \$120 ;
-  wire [1:0] \$121 ;
+  wire \$120 ;
+  wire \$121 ;
   wire \$122 ;
   wire \$123 ;
-  wire [1:0] \$124 ;
+  wire \$124 ;
   wire \$125 ;
-  wire [1:0] \$126 ;
-  wire [1:0] \$127 ;
-  wire \$128 ;
-  wire [37:0] \$129 ;
+  wire \$126 ;
+  wire \$127 ;
+  reg [15:0] \$128 ;
+  reg \$129 ;
   wire [1:0] \$13 ;
-  wire [37:0] \$130 ;
-  wire [37:0] \$131 ;
-  wire \$132 ;
-  wire [1:0] \$133 ;
-  wire \$134 ;
-  wire [1:0] \$135 ;
-  wire [1:0] \$136 ;
-  wire \$137 ;
-  wire \$138 ;
-  wire [37:0] \$139 ;
+  reg [37:0] \$130 ;
+  reg [1:0] \$131 ;
   wire \$14 ;
-  wire \$140 ;
-  wire [37:0] \$141 ;
-  wire [37:0] \$142 ;
-  wire \$143 ;
-  wire [1:0] \$144 ;
-  wire \$145 ;
-  wire [1:0] \$146 ;
-  wire [1:0] \$147 ;
-  wire \$148 ;
-  wire \$149 ;
   wire [1:0] \$15 ;
-  wire [1:0] \$150 ;
-  wire \$151 ;
-  wire [1:0] \$152 ;
-  wire [1:0] \$153 ;
-  wire \$154 ;
-  wire [37:0] \$155 ;
-  wire [37:0] \$156 ;
-  wire [37:0] \$157 ;
-  wire \$158 ;
-  wire [15:0] \$159 ;
   wire [1:0] \$16 ;
-  wire [15:0] \$160 ;
-  wire \$161 ;
-  wire \$162 ;
-  wire \$163 ;
-  wire \$164 ;
-  wire \$165 ;
-  wire \$166 ;
-  wire \$167 ;
-  wire \$168 ;
-  wire \$169 ;
   wire \$17 ;
-  wire \$170 ;
-  wire \$171 ;
-  wire \$172 ;
-  wire \$173 ;
-  wire \$174 ;
-  wire \$175 ;
-  wire \$176 ;
-  wire \$177 ;
-  wire \$178 ;
-  wire \$179 ;
   wire \$18 ;
-  wire \$180 ;
-  wire \$181 ;
-  wire \$182 ;
-  reg [15:0] \$183 ;
-  reg \$184 ;
-  reg \$185 ;
-  reg [37:0] \$186 ;
-  reg [1:0] \$187 ;
   wire [1:0] \$19 ;
   wire [1:0] \$2 ;
   wire \$20 ;
@@ -8098,27 +8042,27 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, cu
   wire [37:0] \$78 ;
   wire \$79 ;
   wire [37:0] \$8 ;
-  wire \$80 ;
-  wire [1:0] \$81 ;
-  wire \$82 ;
+  wire [1:0] \$80 ;
+  wire \$81 ;
+  wire [1:0] \$82 ;
   wire [1:0] \$83 ;
-  wire [1:0] \$84 ;
+  wire \$84 ;
   wire \$85 ;
-  wire \$86 ;
-  wire [37:0] \$87 ;
-  wire \$88 ;
+  wire [37:0] \$86 ;
+  wire \$87 ;
+  wire [37:0] \$88 ;
   wire [37:0] \$89 ;
   wire \$9 ;
-  wire [37:0] \$90 ;
-  wire \$91 ;
-  wire [1:0] \$92 ;
-  wire \$93 ;
+  wire \$90 ;
+  wire [1:0] \$91 ;
+  wire \$92 ;
+  wire [1:0] \$93 ;
   wire [1:0] \$94 ;
-  wire [1:0] \$95 ;
+  wire \$95 ;
   wire \$96 ;
-  wire \$97 ;
-  wire [1:0] \$98 ;
-  wire \$99 ;
+  wire [1:0] \$97 ;
+  wire \$98 ;
+  wire [1:0] \$99 ;
   input \bit ;
   wire \bit ;
   input check;
@@ -8162,7 +8106,6 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, cu
   input load_index;
   wire load_index;
   reg mismatch = 1'h0;
-  reg msb = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
   input receiver_clear;
@@ -8241,189 +8184,123 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, cu
   assign \$76  = \$75  ? 38'h2000000066 : 38'h0000000000;
   assign \$77  = \$69  ? 38'h2000121b30 : \$76 ;
   assign \$78  = \$58  ? \$63  : \$77 ;
-  assign \$79  = { \$52 [36:21], 1'h0 } >> \$78 [4:0];
-  assign \$80  = ! load_index;
-  assign \$81  = load_index ? 2'h0 : codes[1:0];
-  assign \$83  = \$82  ? codes[3:2] : 2'h0;
-  assign \$84  = \$81  | \$83 ;
-  assign \$85  = \$84  == 2'h3;
-  assign \$86  = ! load_index;
-  assign \$87  = load_index ? 38'h0000000000 : customs[37:0];
-  assign \$89  = \$88  ? customs[75:38] : 38'h0000000000;
-  assign \$90  = \$87  | \$89 ;
-  assign \$91  = ! load_index;
-  assign \$92  = load_index ? 2'h0 : codes[1:0];
-  assign \$94  = \$93  ? codes[3:2] : 2'h0;
-  assign \$95  = \$92  | \$94 ;
-  assign \$96  = \$95  == 2'h2;
-  assign \$97  = ! load_index;
-  assign \$98  = load_index ? 2'h0 : codes[1:0];
-  assign \$100  = \$99  ? codes[3:2] : 2'h0;
-  assign \$101  = \$98  | \$100 ;
-  assign \$102  = \$101  == 1'h1;
-  assign \$103  = \$102  ? 38'h2000000066 : 38'h0000000000;
-  assign \$104  = \$96  ? 38'h2000121b30 : \$103 ;
-  assign \$105  = \$85  ? \$90  : \$104 ;
-  assign \$106  = ! load_index;
-  assign \$107  = load_index ? 2'h0 : codes[1:0];
-  assign \$109  = \$108  ? codes[3:2] : 2'h0;
-  assign \$110  = \$107  | \$109 ;
-  assign \$111  = \$110  == 2'h3;
-  assign \$112  = ! load_index;
-  assign \$113  = load_index ? 38'h0000000000 : customs[37:0];
-  assign \$115  = \$114  ? customs[75:38] : 38'h0000000000;
-  assign \$116  = \$113  | \$115 ;
-  assign \$117  = ! load_index;
-  assign \$118  = load_index ? 2'h0 : codes[1:0];
-  assign \$120  = \$119  ? codes[3:2] : 2'h0;
-  assign \$121  = \$118  | \$120 ;
-  assign \$122  = \$121  == 2'h2;
-  assign \$123  = ! load_index;
-  assign \$124  = load_index ? 2'h0 : codes[1:0];
-  assign \$126  = \$125  ? codes[3:2] : 2'h0;
-  assign \$127  = \$124  | \$126 ;
-  assign \$128  = \$127  == 1'h1;
-  assign \$129  = \$128  ? 38'h2000000066 : 38'h0000000000;
-  assign \$130  = \$122  ? 38'h2000121b30 : \$129 ;
-  assign \$131  = \$111  ? \$116  : \$130 ;
-  assign \$132  = ! load_index;
-  assign \$133  = load_index ? 2'h0 : codes[1:0];
-  assign \$135  = \$134  ? codes[3:2] : 2'h0;
-  assign \$136  = \$133  | \$135 ;
-  assign \$137  = \$136  == 2'h3;
-  assign \$138  = ! load_index;
-  assign \$139  = load_index ? 38'h0000000000 : customs[37:0];
-  assign \$141  = \$140  ? customs[75:38] : 38'h0000000000;
-  assign \$142  = \$139  | \$141 ;
-  assign \$143  = ! load_index;
-  assign \$144  = load_index ? 2'h0 : codes[1:0];
-  assign \$146  = \$145  ? codes[3:2] : 2'h0;
-  assign \$147  = \$144  | \$146 ;
-  assign \$148  = \$147  == 2'h2;
-  assign \$149  = ! load_index;
-  assign \$150  = load_index ? 2'h0 : codes[1:0];
-  assign \$152  = \$151  ? codes[3:2] : 2'h0;
-  assign \$153  = \$150  | \$152 ;
-  assign \$154  = \$153  == 1'h1;
-  assign \$155  = \$154  ? 38'h2000000066 : 38'h0000000000;
-  assign \$156  = \$148  ? 38'h2000121b30 : \$155 ;
-  assign \$157  = \$137  ? \$142  : \$156 ;
-  assign \$158  = msb ^ \bit ;
-  assign \$159  = \$158  ? settings[20:5] : 16'h0000;
-  assign \$160  = { \reg [14:0], 1'h0 } ^ \$159 ;
-  assign \$161  = { \reg , 2'h0 } >> settings[4:0];
-  assign \$162  = msb ^ \bit ;
-  assign \$163  = { settings[20:5], 1'h0 } >> settings[4:0];
-  assign \$164  = \$162  & \$163 ;
-  assign \$165  = \$161  ^ \$164 ;
-  assign \$166  = \bit  ^ msb;
-  assign \$167  = \$166  ^ settings[37];
-  assign \$168  = check & \$167 ;
-  assign \$169  = mismatch | \$168 ;
-  assign \$170  = { \reg , 2'h0 } >> settings[4:0];
-  assign \$171  = ! index;
-  assign \$172  = \bit  ^ msb;
-  assign \$173  = \$172  ^ settings[37];
-  assign \$174  = check & \$173 ;
-  assign \$175  = mismatch | \$174 ;
-  assign \$176  = ~ \$175 ;
-  assign \$178  = \bit  ^ msb;
-  assign \$179  = \$178  ^ settings[37];
-  assign \$180  = check & \$179 ;
-  assign \$181  = mismatch | \$180 ;
-  assign \$182  = ~ \$181 ;
+  assign \$79  = ! load_index;
+  assign \$80  = load_index ? 2'h0 : codes[1:0];
+  assign \$82  = \$81  ? codes[3:2] : 2'h0;
+  assign \$83  = \$80  | \$82 ;
+  assign \$84  = \$83  == 2'h3;
+  assign \$85  = ! load_index;
+  assign \$86  = load_index ? 38'h0000000000 : customs[37:0];
+  assign \$88  = \$87  ? customs[75:38] : 38'h0000000000;
+  assign \$89  = \$86  | \$88 ;
+  assign \$90  = ! load_index;
+  assign \$91  = load_index ? 2'h0 : codes[1:0];
+  assign \$93  = \$92  ? codes[3:2] : 2'h0;
+  assign \$94  = \$91  | \$93 ;
+  assign \$95  = \$94  == 2'h2;
+  assign \$96  = ! load_index;
+  assign \$97  = load_index ? 2'h0 : codes[1:0];
+  assign \$99  = \$98  ? codes[3:2] : 2'h0;
+  assign \$100  = \$97  | \$99 ;
+  assign \$101  = \$100  == 1'h1;
+  assign \$102  = \$101  ? 38'h2000000066 : 38'h0000000000;
+  assign \$103  = \$95  ? 38'h2000121b30 : \$102 ;
+  assign \$104  = \$84  ? \$89  : \$103 ;
+  assign \$105  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$106  = \$105  ^ \bit ;
+  assign \$107  = \$106  ? settings[20:5] : 16'h0000;
+  assign \$108  = { \reg [14:0], 1'h0 } ^ \$107 ;
+  assign \$109  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$110  = \bit  ^ \$109 ;
+  assign \$111  = \$110  ^ settings[37];
+  assign \$112  = check & \$111 ;
+  assign \$113  = mismatch | \$112 ;
+  assign \$114  = ! index;
+  assign \$115  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$116  = \bit  ^ \$115 ;
+  assign \$117  = \$116  ^ settings[37];
+  assign \$118  = check & \$117 ;
+  assign \$119  = mismatch | \$118 ;
+  assign \$120  = ~ \$119 ;
+  assign \$122  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$123  = \bit  ^ \$122 ;
+  assign \$124  = \$123  ^ settings[37];
+  assign \$125  = check & \$124 ;
+  assign \$126  = mismatch | \$125 ;
+  assign \$127  = ~ \$126 ;
   always @(posedge clk)
-    \reg  <= \$183 ;
+    \reg  <= \$128 ;
   always @(posedge clk)
-    mismatch <= \$184 ;
+    mismatch <= \$129 ;
   always @(posedge clk)
-    msb <= \$185 ;
+    settings <= \$130 ;
   always @(posedge clk)
-    settings <= \$186 ;
-  always @(posedge clk)
-    ok <= \$187 ;
+    ok <= \$131 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    \$183  = \reg ;
+    \$128  = \reg ;
     if (load) begin
-      \$183  = \$26 [36:21];
+      \$128  = \$26 [36:21];
     end else if (\cover ) begin
-      \$183  = \$160 ;
+      \$128  = \$108 ;
     end else if (check) begin
-      \$183  = { \reg [14:0], 1'h0 };
+      \$128  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$183  = 16'h0000;
+      \$128  = 16'h0000;
     end
     if (rst) begin
-      \$183  = 16'h0000;
+      \$128  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    \$184  = mismatch;
+    \$129  = mismatch;
     if (load) begin
-      \$184  = 1'h0;
+      \$129  = 1'h0;
     end else if (\cover ) begin
     end else if (check) begin
-      \$184  = \$169 ;
+      \$129  = \$113 ;
     end
     if (receiver_clear) begin
-      \$184  = 1'h0;
+      \$129  = 1'h0;
     end
     if (rst) begin
-      \$184  = 1'h0;
+      \$129  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    \$185  = msb;
+    \$130  = settings;
     if (load) begin
-      \$185  = \$79 ;
-    end else if (\cover ) begin
-      \$185  = \$165 ;
-    end else if (check) begin
-      \$185  = \$170 ;
+      \$130 [4:0] = \$52 [4:0];
+      \$130 [20:5] = \$78 [20:5];
+      \$130 [37] = \$104 [37];
     end
     if (receiver_clear) begin
-      \$185  = 1'h0;
+      \$130 [20:0] = 21'h000000;
+      \$130 [37] = 1'h0;
     end
     if (rst) begin
-      \$185  = 1'h0;
+      \$130  = 38'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    \$186  = settings;
-    if (load) begin
-      \$186 [4:0] = \$105 [4:0];
-      \$186 [20:5] = \$131 [20:5];
-      \$186 [37] = \$157 [37];
-    end
-    if (receiver_clear) begin
-      \$186 [20:0] = 21'h000000;
-      \$186 [37] = 1'h0;
-    end
-    if (rst) begin
-      \$186  = 38'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    \$187  = ok;
+    \$131  = ok;
     if (last) begin
-      if (\$171 ) begin
-        \$187 [0] = \$176 ;
+      if (\$114 ) begin
+        \$131 [0] = \$120 ;
       end
-      if (\$177 ) begin
-        \$187 [1] = \$182 ;
+      if (\$121 ) begin
+        \$131 [1] = \$127 ;
       end
     end
     if (receiver_clear) begin
-      \$187  = 2'h3;
+      \$131  = 2'h3;
     end
     if (rst) begin
-      \$187  = 2'h3;
+      \$131  = 2'h3;
     end
   end
   assign \codes[0]  = codes[1:0];
@@ -8442,10 +8319,10 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, cu
   assign \settings.poly  = settings[20:5];
   assign \settings.start  = settings[36:21];
   assign \settings.inverted  = settings[37];
+  assign \$20  = load_index;
   assign \$3  = load_index;
   assign \$9  = load_index;
   assign \$14  = load_index;
-  assign \$20  = load_index;
   assign \$29  = load_index;
   assign \$35  = load_index;
   assign \$40  = load_index;
@@ -8454,19 +8331,11 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, cu
   assign \$61  = load_index;
   assign \$66  = load_index;
   assign \$72  = load_index;
-  assign \$82  = load_index;
-  assign \$88  = load_index;
-  assign \$93  = load_index;
-  assign \$99  = load_index;
-  assign \$108  = load_index;
-  assign \$114  = load_index;
-  assign \$119  = load_index;
-  assign \$125  = load_index;
-  assign \$134  = load_index;
-  assign \$140  = load_index;
-  assign \$145  = load_index;
-  assign \$151  = load_index;
-  assign \$177  = index;
+  assign \$81  = load_index;
+  assign \$87  = load_index;
+  assign \$92  = load_index;
+  assign \$98  = load_index;
+  assign \$121  = index;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -10231,7 +10100,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_stop (rst, words, \port$5366$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master.ma_stop (rst, words, \port$5311$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10320,8 +10189,8 @@ module \biss_master.ma_stop (rst, words, \port$5366$199 , ssi, ssi_error, ssi_do
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$5366$199 ;
-  wire \port$5366$199 ;
+  input \port$5311$199 ;
+  wire \port$5311$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -10441,7 +10310,7 @@ module \biss_master.ma_stop (rst, words, \port$5366$199 , ssi, ssi_error, ssi_do
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$5366$199  : 1'h0;
+  assign \$13  = \$12  ? \port$5311$199  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -10609,7 +10478,7 @@ module \biss_master.ma_stop (rst, words, \port$5366$199 , ssi, ssi_error, ssi_do
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$5366$199 , 1'h1 };
+  assign enables = { \port$5311$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -12749,7 +12618,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$5366$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$5311$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -13332,8 +13201,8 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$536
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$5366$259 ;
-  wire [12:0] \port$5366$259 ;
+  input [12:0] \port$5311$259 ;
+  wire [12:0] \port$5311$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -13356,7 +13225,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$536
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$5366$259 [12:1] + 1'h1;
+  assign \$460  = \port$5311$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -13932,7 +13801,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$536
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$5366$259 [0]),
+    .clear_high(\port$5311$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -14075,7 +13944,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$536
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$5366$259 [0]) begin
+            if (\port$5311$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -14160,7 +14029,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$536
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$5366$259 [0]) begin
+            if (\port$5311$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -14199,7 +14068,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$536
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$5366$259 [12:1] };
+            \$534  = { 1'h0, \port$5311$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -14584,11 +14453,11 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$536
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$5366$259 [12:1] };
-  assign fixed = \port$5366$259 [0];
+  assign fixed_delay = { 1'h0, \port$5311$259 [12:1] };
+  assign fixed = \port$5311$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$5366$259 [0];
+  assign clear_high = \port$5311$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -17123,7 +16992,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5354$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5299$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -17165,8 +17034,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5354$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5354$0 ;
-  wire \port$5354$0 ;
+  input \port$5299$0 ;
+  wire \port$5299$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -17180,9 +17049,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5354$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5354$0  };
-  assign \$2  = { lc[4:0], \port$5354$0  } == last;
-  assign \$3  = { lc[4:0], \port$5354$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5299$0  };
+  assign \$2  = { lc[4:0], \port$5299$0  } == last;
+  assign \$3  = { lc[4:0], \port$5299$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -17292,7 +17161,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5354$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5354$0  };
+  assign lc_next = { lc[4:0], \port$5299$0  };
   assign zero = is_zero;
 endmodule
 
@@ -20100,7 +19969,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$4786$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master.verdict (lc_skip_seen, noisy, \port$4731$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
@@ -20278,8 +20147,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$4786$0 , lc_check, lc_re
   wire noisy;
   output passed;
   wire passed;
-  output \port$4786$0 ;
-  wire \port$4786$0 ;
+  output \port$4731$0 ;
+  wire \port$4731$0 ;
   output report;
   wire report;
   input report_frame;
@@ -20397,7 +20266,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$4786$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4786$0  = \$2 ;
+  assign \port$4731$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

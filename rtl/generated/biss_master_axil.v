@@ -1070,7 +1070,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_ca_request_address(\regs__ca_address$487 ),
     .ch1_ca_request_count(\regs__ca_count$493 ),
     .ch1_ca_request_slave_id(\regs__ca_slave_id$503 ),
-    .\ch1_ca_request_write$438 (\regs__ca_write$515 ),
+    .\ch1_ca_request_write$437 (\regs__ca_write$515 ),
     .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$547 ),
     .ch1_cfg_break_break_time(\regs__cfg_break_time$549 ),
     .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$551 ),
@@ -1113,14 +1113,14 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$13613$0 (\$10 ),
-    .\port$13624$0 (\$11 ),
-    .\port$13701$0 (\$12 ),
-    .\port$14166$0 (\$13 ),
-    .\port$14177$0 (\$14 ),
-    .\port$14254$0 (\$15 ),
-    .\rd__addr$765 (ch0_crc_table_addr),
-    .\rd__addr$931 (ch1_crc_table_addr),
+    .\port$13515$0 (\$10 ),
+    .\port$13526$0 (\$11 ),
+    .\port$13603$0 (\$12 ),
+    .\port$14066$0 (\$13 ),
+    .\port$14077$0 (\$14 ),
+    .\port$14154$0 (\$15 ),
+    .\rd__addr$763 (ch0_crc_table_addr),
+    .\rd__addr$929 (ch1_crc_table_addr),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1202,9 +1202,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .crc_table_data(crc_table_data),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$13613$0 (\$10 ),
-    .\port$13624$0 (\$11 ),
-    .\port$13701$0 (\$12 ),
+    .\port$13515$0 (\$10 ),
+    .\port$13526$0 (\$11 ),
+    .\port$13603$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1277,9 +1277,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .crc_table_data(\crc_table_data$892 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$817 ),
-    .\port$14166$0 (\$13 ),
-    .\port$14177$0 (\$14 ),
-    .\port$14254$0 (\$15 ),
+    .\port$14066$0 (\$13 ),
+    .\port$14077$0 (\$14 ),
+    .\port$14154$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$481 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -2070,12 +2070,12 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_crc_table_data, ch0_irq, ch1__count_en, ch1__chain_en, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_crc_table_data, ch1_irq, bus__w_busy, bus__r_data, ch0__frame_error, ch0__busy
-, ch0__config_error, \rd__addr$765 , ch0__count_data, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, \rd__addr$931 , ch1__count_data, ch1__ca_busy, ch1__ca_rbuf_data, cfg_free, bus__w_addr, bus__w_data, bus__w_strb, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort
+, ch0__config_error, \rd__addr$763 , ch0__count_data, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, \rd__addr$929 , ch1__count_data, ch1__ca_busy, ch1__ca_rbuf_data, cfg_free, bus__w_addr, bus__w_data, bus__w_strb, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort
 , ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed
 , ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc1_w1_crc_width, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$145 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort
 , ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc
-, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc1_w1_crc_width, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$438 
-, ch1_ca_ctrl_start, ch1_ca_ctrl_abort, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13613$0 , \port$13624$0 , ch0__ca_done, \port$13701$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$14166$0 , \port$14177$0 , ch1__ca_done, \port$14254$0 , bus__r_addr);
+, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc1_w1_crc_width, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$437 
+, ch1_ca_ctrl_start, ch1_ca_ctrl_abort, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$13515$0 , \port$13526$0 , ch0__ca_done, \port$13603$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$14066$0 , \port$14077$0 , ch1__ca_done, \port$14154$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2097,7 +2097,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$1013 ;
   reg \$1014 ;
   reg \$1015 ;
-  reg \$1016 ;
+  reg [3:0] \$1016 ;
   reg \$1017 ;
   reg \$1018 ;
   reg \$1019 ;
@@ -2106,38 +2106,30 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$1021 ;
   reg \$1022 ;
   reg \$1023 ;
-  reg [3:0] \$1024 ;
+  reg \$1024 ;
   reg \$1025 ;
   reg \$1026 ;
   reg \$1027 ;
-  reg \$1028 ;
-  reg \$1029 ;
+  reg [5:0] \$1028 ;
+  reg [15:0] \$1029 ;
   wire \$103 ;
-  reg \$1030 ;
-  reg \$1031 ;
-  reg \$1032 ;
-  reg \$1033 ;
-  reg \$1034 ;
-  reg \$1035 ;
-  reg [5:0] \$1036 ;
-  reg [15:0] \$1037 ;
-  reg [12:0] \$1038 ;
-  reg [31:0] \$1039 ;
+  reg [12:0] \$1030 ;
+  reg [31:0] \$1031 ;
+  reg [31:0] \$1032 ;
+  reg [31:0] \$1033 ;
+  reg [31:0] \$1034 ;
+  reg [31:0] \$1035 ;
+  reg [3:0] \$1036 ;
+  reg \$1037 ;
+  reg [7:0] \$1038 ;
+  reg [12:0] \$1039 ;
   wire \$104 ;
-  reg [31:0] \$1040 ;
-  reg [31:0] \$1041 ;
-  reg [31:0] \$1042 ;
-  reg [31:0] \$1043 ;
-  reg [3:0] \$1044 ;
-  reg \$1045 ;
-  reg [7:0] \$1046 ;
-  reg [12:0] \$1047 ;
-  reg \$1048 ;
-  reg \$1049 ;
+  reg \$1040 ;
+  reg \$1041 ;
+  reg \$1042 ;
+  reg \$1043 ;
+  reg [31:0] \$1044 ;
   wire \$105 ;
-  reg \$1050 ;
-  reg \$1051 ;
-  reg [31:0] \$1052 ;
   wire \$106 ;
   wire [31:0] \$107 ;
   wire [31:0] \$108 ;
@@ -2146,11 +2138,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$110 ;
   wire [31:0] \$111 ;
   wire [14:0] \$112 ;
-  wire [3:0] \$113 ;
-  wire [14:0] \$114 ;
-  wire [3:0] \$115 ;
+  wire [1:0] \$113 ;
+  wire \$114 ;
+  wire \$115 ;
   wire \$116 ;
-  wire [1:0] \$117 ;
+  wire \$117 ;
   wire \$118 ;
   wire \$119 ;
   wire [31:0] \$12 ;
@@ -2204,10 +2196,10 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$163 ;
   wire \$164 ;
   wire \$165 ;
-  wire \$166 ;
-  wire \$167 ;
-  wire \$168 ;
-  wire \$169 ;
+  wire [31:0] \$166 ;
+  wire [31:0] \$167 ;
+  wire [31:0] \$168 ;
+  wire [31:0] \$169 ;
   wire [31:0] \$17 ;
   wire [31:0] \$170 ;
   wire [31:0] \$171 ;
@@ -2306,11 +2298,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$255 ;
   wire [31:0] \$256 ;
   wire [31:0] \$257 ;
-  wire [31:0] \$258 ;
-  wire [31:0] \$259 ;
+  wire \$258 ;
+  wire \$259 ;
   wire \$26 ;
-  wire [31:0] \$260 ;
-  wire [31:0] \$261 ;
+  wire \$260 ;
+  wire \$261 ;
   wire \$262 ;
   wire \$263 ;
   wire \$264 ;
@@ -2405,17 +2397,17 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$344 ;
   wire \$345 ;
   wire \$346 ;
-  wire \$347 ;
-  wire \$348 ;
+  wire [14:0] \$347 ;
+  wire [1:0] \$348 ;
   wire \$349 ;
   wire \$35 ;
   wire \$350 ;
-  wire [14:0] \$351 ;
-  wire [3:0] \$352 ;
-  wire [14:0] \$353 ;
-  wire [3:0] \$354 ;
+  wire \$351 ;
+  wire \$352 ;
+  wire \$353 ;
+  wire \$354 ;
   wire \$355 ;
-  wire [1:0] \$356 ;
+  wire \$356 ;
   wire \$357 ;
   wire \$358 ;
   wire \$359 ;
@@ -2466,14 +2458,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$4 ;
   wire \$40 ;
   wire \$400 ;
-  wire \$401 ;
-  wire \$402 ;
-  wire \$403 ;
-  wire \$404 ;
-  wire \$405 ;
-  wire \$406 ;
-  wire \$407 ;
-  wire \$408 ;
+  wire [31:0] \$401 ;
+  wire [31:0] \$402 ;
+  wire [31:0] \$403 ;
+  wire [31:0] \$404 ;
+  wire [31:0] \$405 ;
+  wire [31:0] \$406 ;
+  wire [31:0] \$407 ;
+  wire [31:0] \$408 ;
   wire [31:0] \$409 ;
   wire \$41 ;
   wire [31:0] \$410 ;
@@ -2567,16 +2559,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$490 ;
   wire [31:0] \$491 ;
   wire [31:0] \$492 ;
-  wire [31:0] \$493 ;
-  wire [31:0] \$494 ;
-  wire [31:0] \$495 ;
-  wire [31:0] \$496 ;
-  wire [31:0] \$497 ;
-  wire [31:0] \$498 ;
-  wire [31:0] \$499 ;
+  wire \$493 ;
+  wire \$494 ;
+  wire \$495 ;
+  wire \$496 ;
+  wire \$497 ;
+  wire \$498 ;
+  wire \$499 ;
   wire \$5 ;
   wire \$50 ;
-  wire [31:0] \$500 ;
+  wire \$500 ;
   wire \$501 ;
   wire \$502 ;
   wire \$503 ;
@@ -2650,47 +2642,47 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$565 ;
   wire \$566 ;
   wire \$567 ;
-  wire \$568 ;
-  wire \$569 ;
+  wire [14:0] \$568 ;
+  wire [14:0] \$569 ;
   wire \$57 ;
   wire \$570 ;
-  wire \$571 ;
-  wire \$572 ;
+  wire [14:0] \$571 ;
+  wire [14:0] \$572 ;
   wire \$573 ;
-  wire \$574 ;
-  wire \$575 ;
-  wire [14:0] \$576 ;
+  wire [14:0] \$574 ;
+  wire [14:0] \$575 ;
+  wire \$576 ;
   wire [14:0] \$577 ;
-  wire \$578 ;
-  wire [14:0] \$579 ;
+  wire [14:0] \$578 ;
+  wire \$579 ;
   wire \$58 ;
-  wire [14:0] \$580 ;
+  wire [3:0] \$580 ;
   wire \$581 ;
-  wire [14:0] \$582 ;
-  wire [14:0] \$583 ;
-  wire \$584 ;
-  wire [14:0] \$585 ;
-  wire [14:0] \$586 ;
+  wire \$582 ;
+  wire \$583 ;
+  wire [31:0] \$584 ;
+  wire \$585 ;
+  wire [1:0] \$586 ;
   wire \$587 ;
-  wire [3:0] \$588 ;
+  wire [1:0] \$588 ;
   wire \$589 ;
   wire \$59 ;
   wire \$590 ;
-  wire [31:0] \$591 ;
-  wire \$592 ;
-  wire [1:0] \$593 ;
-  wire \$594 ;
-  wire [1:0] \$595 ;
-  wire \$596 ;
+  wire [16:0] \$591 ;
+  wire [32:0] \$592 ;
+  wire [46:0] \$593 ;
+  wire [46:0] \$594 ;
+  wire [63:0] \$595 ;
+  wire [63:0] \$596 ;
   wire \$597 ;
-  wire [16:0] \$598 ;
-  wire [32:0] \$599 ;
+  wire \$598 ;
+  wire \$599 ;
   wire \$6 ;
   wire \$60 ;
-  wire [46:0] \$600 ;
-  wire [46:0] \$601 ;
-  wire [63:0] \$602 ;
-  wire [63:0] \$603 ;
+  wire \$600 ;
+  wire \$601 ;
+  wire \$602 ;
+  wire \$603 ;
   wire \$604 ;
   wire \$605 ;
   wire \$606 ;
@@ -2767,69 +2759,69 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$670 ;
   wire \$671 ;
   wire \$672 ;
-  wire \$673 ;
-  wire \$674 ;
+  wire [14:0] \$673 ;
+  wire [14:0] \$674 ;
   wire \$675 ;
-  wire \$676 ;
-  wire \$677 ;
+  wire [14:0] \$676 ;
+  wire [14:0] \$677 ;
   wire \$678 ;
-  wire \$679 ;
+  wire [14:0] \$679 ;
   wire \$68 ;
   wire [14:0] \$680 ;
-  wire [14:0] \$681 ;
-  wire \$682 ;
+  wire \$681 ;
+  wire [14:0] \$682 ;
   wire [14:0] \$683 ;
-  wire [14:0] \$684 ;
-  wire \$685 ;
-  wire [14:0] \$686 ;
-  wire [14:0] \$687 ;
+  wire \$684 ;
+  wire [3:0] \$685 ;
+  wire \$686 ;
+  wire \$687 ;
   wire \$688 ;
-  wire [14:0] \$689 ;
+  wire [31:0] \$689 ;
   wire \$69 ;
-  wire [14:0] \$690 ;
-  wire \$691 ;
-  wire [3:0] \$692 ;
-  wire \$693 ;
+  wire \$690 ;
+  wire [1:0] \$691 ;
+  wire \$692 ;
+  wire [1:0] \$693 ;
   wire \$694 ;
-  wire [31:0] \$695 ;
-  wire \$696 ;
-  wire [1:0] \$697 ;
-  wire \$698 ;
-  wire [1:0] \$699 ;
+  wire \$695 ;
+  wire [16:0] \$696 ;
+  wire [32:0] \$697 ;
+  wire [46:0] \$698 ;
+  wire [46:0] \$699 ;
   wire \$7 ;
   wire \$70 ;
-  wire \$700 ;
-  wire \$701 ;
-  wire [16:0] \$702 ;
-  wire [32:0] \$703 ;
-  wire [46:0] \$704 ;
-  wire [46:0] \$705 ;
-  wire [63:0] \$706 ;
-  wire [63:0] \$707 ;
+  wire [63:0] \$700 ;
+  wire [63:0] \$701 ;
+  wire \$702 ;
+  wire \$703 ;
+  wire \$704 ;
+  wire \$705 ;
+  wire \$706 ;
+  wire \$707 ;
   wire \$708 ;
-  wire \$709 ;
+  wire [31:0] \$709 ;
   wire \$71 ;
-  wire \$710 ;
-  wire \$711 ;
-  wire \$712 ;
-  wire \$713 ;
-  wire \$714 ;
-  wire [31:0] \$715 ;
-  wire [31:0] \$716 ;
+  wire [31:0] \$710 ;
+  reg \$711 ;
+  reg [10:0] \$712 ;
+  reg [31:0] \$713 ;
+  reg [3:0] \$714 ;
+  reg [31:0] \$715 ;
+  reg [3:0] \$716 ;
   reg \$717 ;
-  reg [10:0] \$718 ;
-  reg [31:0] \$719 ;
+  reg \$718 ;
+  reg \$719 ;
   wire \$72 ;
-  reg [3:0] \$720 ;
-  reg [31:0] \$721 ;
-  reg [3:0] \$722 ;
-  reg \$723 ;
+  reg \$720 ;
+  reg \$721 ;
+  reg \$722 ;
+  reg [31:0] \$723 ;
   reg \$724 ;
   reg \$725 ;
   reg \$726 ;
   reg \$727 ;
   reg \$728 ;
-  reg [31:0] \$729 ;
+  reg \$729 ;
   wire \$73 ;
   reg \$730 ;
   reg \$731 ;
@@ -2839,24 +2831,24 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$735 ;
   reg \$736 ;
   reg \$737 ;
-  reg \$738 ;
-  reg \$739 ;
+  reg [15:0] \$738 ;
+  reg [11:0] \$739 ;
   wire \$74 ;
   reg \$740 ;
-  reg \$741 ;
+  reg [23:0] \$741 ;
   reg \$742 ;
-  reg \$743 ;
-  reg [15:0] \$744 ;
-  reg [11:0] \$745 ;
+  reg [23:0] \$743 ;
+  reg \$744 ;
+  reg [23:0] \$745 ;
   reg \$746 ;
   reg [23:0] \$747 ;
   reg \$748 ;
-  reg [23:0] \$749 ;
+  reg [6:0] \$749 ;
   wire \$75 ;
   reg \$750 ;
-  reg [23:0] \$751 ;
-  reg \$752 ;
-  reg [23:0] \$753 ;
+  reg \$751 ;
+  reg [1:0] \$752 ;
+  reg \$753 ;
   reg \$754 ;
   reg [6:0] \$755 ;
   reg \$756 ;
@@ -2865,36 +2857,36 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$759 ;
   wire \$76 ;
   reg \$760 ;
-  reg [6:0] \$761 ;
+  reg \$761 ;
   reg \$762 ;
   reg \$763 ;
-  reg [1:0] \$764 ;
-  reg \$765 ;
-  reg \$766 ;
-  reg \$767 ;
-  reg \$768 ;
+  reg \$764 ;
+  reg [7:0] \$765 ;
+  reg [3:0] \$766 ;
+  reg [3:0] \$767 ;
+  reg [3:0] \$768 ;
   reg \$769 ;
   wire \$77 ;
-  reg \$770 ;
-  reg [7:0] \$771 ;
-  reg [3:0] \$772 ;
-  reg [3:0] \$773 ;
-  reg [3:0] \$774 ;
-  reg \$775 ;
-  reg [11:0] \$776 ;
+  reg [11:0] \$770 ;
+  reg \$771 ;
+  reg [4:0] \$772 ;
+  reg \$773 ;
+  reg \$774 ;
+  reg [4:0] \$775 ;
+  reg \$776 ;
   reg \$777 ;
-  reg [4:0] \$778 ;
+  reg \$778 ;
   reg \$779 ;
   wire \$78 ;
   reg \$780 ;
-  reg [4:0] \$781 ;
-  reg \$782 ;
+  reg \$781 ;
+  reg [11:0] \$782 ;
   reg \$783 ;
   reg \$784 ;
   reg \$785 ;
   reg \$786 ;
   reg \$787 ;
-  reg [11:0] \$788 ;
+  reg \$788 ;
   reg \$789 ;
   wire \$79 ;
   reg \$790 ;
@@ -2911,23 +2903,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$80 ;
   reg \$800 ;
   reg \$801 ;
-  reg \$802 ;
-  reg \$803 ;
-  reg \$804 ;
+  reg [2:0] \$802 ;
+  reg [6:0] \$803 ;
+  reg [6:0] \$804 ;
   reg \$805 ;
   reg \$806 ;
   reg \$807 ;
-  reg [2:0] \$808 ;
-  reg [6:0] \$809 ;
+  reg \$808 ;
+  reg [31:0] \$809 ;
   wire \$81 ;
-  reg [6:0] \$810 ;
-  reg \$811 ;
+  reg [14:0] \$810 ;
+  reg [3:0] \$811 ;
   reg \$812 ;
   reg \$813 ;
   reg \$814 ;
-  reg [31:0] \$815 ;
-  reg [14:0] \$816 ;
-  reg [3:0] \$817 ;
+  reg \$815 ;
+  reg \$816 ;
+  reg \$817 ;
   reg \$818 ;
   reg \$819 ;
   wire \$82 ;
@@ -2970,7 +2962,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$853 ;
   reg \$854 ;
   reg \$855 ;
-  reg \$856 ;
+  reg [3:0] \$856 ;
   reg \$857 ;
   reg \$858 ;
   reg \$859 ;
@@ -2978,38 +2970,38 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$860 ;
   reg \$861 ;
   reg \$862 ;
-  reg [3:0] \$863 ;
+  reg \$863 ;
   reg \$864 ;
   reg \$865 ;
   reg \$866 ;
   reg \$867 ;
-  reg \$868 ;
-  reg \$869 ;
+  reg [5:0] \$868 ;
+  reg [15:0] \$869 ;
   wire \$87 ;
-  reg \$870 ;
-  reg \$871 ;
-  reg \$872 ;
-  reg \$873 ;
-  reg \$874 ;
-  reg [5:0] \$875 ;
-  reg [15:0] \$876 ;
-  reg [12:0] \$877 ;
-  reg [31:0] \$878 ;
-  reg [31:0] \$879 ;
+  reg [12:0] \$870 ;
+  reg [31:0] \$871 ;
+  reg [31:0] \$872 ;
+  reg [31:0] \$873 ;
+  reg [31:0] \$874 ;
+  reg [31:0] \$875 ;
+  reg [3:0] \$876 ;
+  reg \$877 ;
+  reg [7:0] \$878 ;
+  reg [12:0] \$879 ;
   wire \$88 ;
-  reg [31:0] \$880 ;
-  reg [31:0] \$881 ;
-  reg [31:0] \$882 ;
-  reg [3:0] \$883 ;
-  reg \$884 ;
-  reg [7:0] \$885 ;
-  reg [12:0] \$886 ;
+  reg \$880 ;
+  reg \$881 ;
+  reg \$882 ;
+  reg \$883 ;
+  reg [31:0] \$884 ;
+  reg \$885 ;
+  reg \$886 ;
   reg \$887 ;
   reg \$888 ;
   reg \$889 ;
   wire \$89 ;
   reg \$890 ;
-  reg [31:0] \$891 ;
+  reg \$891 ;
   reg \$892 ;
   reg \$893 ;
   reg \$894 ;
@@ -3017,57 +3009,57 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$896 ;
   reg \$897 ;
   reg \$898 ;
-  reg \$899 ;
+  reg [15:0] \$899 ;
   wire [31:0] \$9 ;
   wire \$90 ;
-  reg \$900 ;
+  reg [11:0] \$900 ;
   reg \$901 ;
-  reg \$902 ;
+  reg [23:0] \$902 ;
   reg \$903 ;
-  reg \$904 ;
+  reg [23:0] \$904 ;
   reg \$905 ;
-  reg [15:0] \$906 ;
-  reg [11:0] \$907 ;
-  reg \$908 ;
-  reg [23:0] \$909 ;
+  reg [23:0] \$906 ;
+  reg \$907 ;
+  reg [23:0] \$908 ;
+  reg \$909 ;
   wire \$91 ;
-  reg \$910 ;
-  reg [23:0] \$911 ;
+  reg [6:0] \$910 ;
+  reg \$911 ;
   reg \$912 ;
-  reg [23:0] \$913 ;
+  reg [1:0] \$913 ;
   reg \$914 ;
-  reg [23:0] \$915 ;
-  reg \$916 ;
-  reg [6:0] \$917 ;
+  reg \$915 ;
+  reg [6:0] \$916 ;
+  reg \$917 ;
   reg \$918 ;
-  reg \$919 ;
+  reg [1:0] \$919 ;
   wire \$92 ;
-  reg [1:0] \$920 ;
+  reg \$920 ;
   reg \$921 ;
   reg \$922 ;
-  reg [6:0] \$923 ;
+  reg \$923 ;
   reg \$924 ;
   reg \$925 ;
-  reg [1:0] \$926 ;
-  reg \$927 ;
-  reg \$928 ;
-  reg \$929 ;
+  reg [7:0] \$926 ;
+  reg [3:0] \$927 ;
+  reg [3:0] \$928 ;
+  reg [3:0] \$929 ;
   wire \$93 ;
   reg \$930 ;
-  reg \$931 ;
+  reg [11:0] \$931 ;
   reg \$932 ;
-  reg [7:0] \$933 ;
-  reg [3:0] \$934 ;
-  reg [3:0] \$935 ;
-  reg [3:0] \$936 ;
+  reg [4:0] \$933 ;
+  reg \$934 ;
+  reg \$935 ;
+  reg [4:0] \$936 ;
   reg \$937 ;
-  reg [11:0] \$938 ;
+  reg \$938 ;
   reg \$939 ;
   wire \$94 ;
-  reg [4:0] \$940 ;
+  reg \$940 ;
   reg \$941 ;
   reg \$942 ;
-  reg [4:0] \$943 ;
+  reg [11:0] \$943 ;
   reg \$944 ;
   reg \$945 ;
   reg \$946 ;
@@ -3075,7 +3067,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$948 ;
   reg \$949 ;
   wire \$95 ;
-  reg [11:0] \$950 ;
+  reg \$950 ;
   reg \$951 ;
   reg \$952 ;
   reg \$953 ;
@@ -3089,23 +3081,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$960 ;
   reg \$961 ;
   reg \$962 ;
-  reg \$963 ;
-  reg \$964 ;
-  reg \$965 ;
+  reg [2:0] \$963 ;
+  reg [6:0] \$964 ;
+  reg [6:0] \$965 ;
   reg \$966 ;
   reg \$967 ;
   reg \$968 ;
   reg \$969 ;
   wire \$97 ;
-  reg [2:0] \$970 ;
-  reg [6:0] \$971 ;
-  reg [6:0] \$972 ;
+  reg [14:0] \$970 ;
+  reg [3:0] \$971 ;
+  reg \$972 ;
   reg \$973 ;
   reg \$974 ;
   reg \$975 ;
   reg \$976 ;
-  reg [14:0] \$977 ;
-  reg [3:0] \$978 ;
+  reg \$977 ;
+  reg \$978 ;
   reg \$979 ;
   wire \$98 ;
   reg \$980 ;
@@ -3576,7 +3568,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch0_config_read;
   wire [31:0] ch0_config_read_data;
   reg [3:0] ch0_config_read_index = 4'h0;
-  reg ch0_config_read_written = 1'h0;
   reg ch0_config_wait = 1'h0;
   reg [14:0] ch0_config_written = 15'h0000;
   wire ch0_count_chain2_write;
@@ -3963,8 +3954,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$438 ;
-  reg \ch1_ca_request_write$438  = 1'h0;
+  output \ch1_ca_request_write$437 ;
+  reg \ch1_ca_request_write$437  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_chain2_write;
   wire ch1_caps_chain_write;
@@ -4116,7 +4107,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch1_config_read;
   wire [31:0] ch1_config_read_data;
   reg [3:0] ch1_config_read_index = 4'h0;
-  reg ch1_config_read_written = 1'h0;
   reg ch1_config_wait = 1'h0;
   reg [14:0] ch1_config_written = 15'h0000;
   wire ch1_count_chain2_write;
@@ -4260,66 +4250,66 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$13613$0 ;
-  wire [186:0] \port$13613$0 ;
-  input [79:0] \port$13624$0 ;
-  wire [79:0] \port$13624$0 ;
-  input [9:0] \port$13701$0 ;
-  wire [9:0] \port$13701$0 ;
-  input [186:0] \port$14166$0 ;
-  wire [186:0] \port$14166$0 ;
-  input [79:0] \port$14177$0 ;
-  wire [79:0] \port$14177$0 ;
-  input [9:0] \port$14254$0 ;
-  wire [9:0] \port$14254$0 ;
+  input [186:0] \port$13515$0 ;
+  wire [186:0] \port$13515$0 ;
+  input [79:0] \port$13526$0 ;
+  wire [79:0] \port$13526$0 ;
+  input [9:0] \port$13603$0 ;
+  wire [9:0] \port$13603$0 ;
+  input [186:0] \port$14066$0 ;
+  wire [186:0] \port$14066$0 ;
+  input [79:0] \port$14077$0 ;
+  wire [79:0] \port$14077$0 ;
+  input [9:0] \port$14154$0 ;
+  wire [9:0] \port$14154$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
-  input \rd__addr$765 ;
-  wire \rd__addr$765 ;
-  wire \rd__addr$771 ;
-  wire \rd__addr$776 ;
+  input \rd__addr$763 ;
+  wire \rd__addr$763 ;
+  wire \rd__addr$769 ;
+  wire \rd__addr$774 ;
   (* init = 4'h0 *)
-  wire [3:0] \rd__addr$925 ;
-  input \rd__addr$931 ;
-  wire \rd__addr$931 ;
-  wire \rd__addr$937 ;
-  wire \rd__addr$942 ;
+  wire [3:0] \rd__addr$923 ;
+  input \rd__addr$929 ;
+  wire \rd__addr$929 ;
+  wire \rd__addr$935 ;
+  wire \rd__addr$940 ;
   wire [31:0] rd__data;
-  wire [15:0] \rd__data$778 ;
-  wire [15:0] \rd__data$779 ;
-  wire \rd__data$780 ;
-  wire [31:0] \rd__data$926 ;
-  wire [15:0] \rd__data$944 ;
-  wire [15:0] \rd__data$945 ;
-  wire \rd__data$946 ;
+  wire [15:0] \rd__data$776 ;
+  wire [15:0] \rd__data$777 ;
+  wire \rd__data$778 ;
+  wire [31:0] \rd__data$924 ;
+  wire [15:0] \rd__data$942 ;
+  wire [15:0] \rd__data$943 ;
+  wire \rd__data$944 ;
   input rst;
   wire rst;
   wire [3:0] wr__addr;
-  wire \wr__addr$762 ;
-  wire \wr__addr$768 ;
-  wire \wr__addr$773 ;
-  wire [3:0] \wr__addr$922 ;
-  wire \wr__addr$928 ;
-  wire \wr__addr$934 ;
-  wire \wr__addr$939 ;
+  wire \wr__addr$760 ;
+  wire \wr__addr$766 ;
+  wire \wr__addr$771 ;
+  wire [3:0] \wr__addr$920 ;
+  wire \wr__addr$926 ;
+  wire \wr__addr$932 ;
+  wire \wr__addr$937 ;
   (* init = 32'd0 *)
   wire [31:0] wr__data;
-  wire [15:0] \wr__data$763 ;
-  wire [15:0] \wr__data$769 ;
-  wire \wr__data$774 ;
+  wire [15:0] \wr__data$761 ;
+  wire [15:0] \wr__data$767 ;
+  wire \wr__data$772 ;
   (* init = 32'd0 *)
-  wire [31:0] \wr__data$923 ;
-  wire [15:0] \wr__data$929 ;
-  wire [15:0] \wr__data$935 ;
-  wire \wr__data$940 ;
+  wire [31:0] \wr__data$921 ;
+  wire [15:0] \wr__data$927 ;
+  wire [15:0] \wr__data$933 ;
+  wire \wr__data$938 ;
   wire [3:0] wr__en;
-  wire [1:0] \wr__en$764 ;
-  wire [1:0] \wr__en$770 ;
-  wire \wr__en$775 ;
-  wire [3:0] \wr__en$924 ;
-  wire [1:0] \wr__en$930 ;
-  wire [1:0] \wr__en$936 ;
-  wire \wr__en$941 ;
+  wire [1:0] \wr__en$762 ;
+  wire [1:0] \wr__en$768 ;
+  wire \wr__en$773 ;
+  wire [3:0] \wr__en$922 ;
+  wire [1:0] \wr__en$928 ;
+  wire [1:0] \wr__en$934 ;
+  wire \wr__en$939 ;
   reg [10:0] write_addr = 11'h000;
   output [31:0] write_data;
   reg [31:0] write_data = 32'd0;
@@ -4345,13 +4335,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @(posedge clk) begin
     if (wr__en[0])
-      ch0_config_memory[{ \$574 , \$573 , \$572 , \$571  }][7:0] <= config_memory0_write_data[7:0];
+      ch0_config_memory[{ \$566 , \$565 , \$564 , \$563  }][7:0] <= config_memory0_write_data[7:0];
     if (wr__en[1])
-      ch0_config_memory[{ \$574 , \$573 , \$572 , \$571  }][15:8] <= config_memory0_write_data[15:8];
+      ch0_config_memory[{ \$566 , \$565 , \$564 , \$563  }][15:8] <= config_memory0_write_data[15:8];
     if (wr__en[2])
-      ch0_config_memory[{ \$574 , \$573 , \$572 , \$571  }][23:16] <= config_memory0_write_data[23:16];
+      ch0_config_memory[{ \$566 , \$565 , \$564 , \$563  }][23:16] <= config_memory0_write_data[23:16];
     if (wr__en[3])
-      ch0_config_memory[{ \$574 , \$573 , \$572 , \$571  }][31:24] <= config_memory0_write_data[31:24];
+      ch0_config_memory[{ \$566 , \$565 , \$564 , \$563  }][31:24] <= config_memory0_write_data[31:24];
   end
   assign rd__data = ch0_config_memory[ch0_config_read_index];
   reg [15:0] ch0_crc_table_0_table [1:0];
@@ -4360,34 +4350,34 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     ch0_crc_table_0_table[1] = 16'h0000;
   end
   always @(posedge clk) begin
-    if (\wr__en$764 [0])
-      ch0_crc_table_0_table[\wr__addr$762 ][7:0] <= \wr__data$763 [7:0];
-    if (\wr__en$764 [1])
-      ch0_crc_table_0_table[\wr__addr$762 ][15:8] <= \wr__data$763 [15:8];
+    if (\wr__en$762 [0])
+      ch0_crc_table_0_table[\wr__addr$760 ][7:0] <= \wr__data$761 [7:0];
+    if (\wr__en$762 [1])
+      ch0_crc_table_0_table[\wr__addr$760 ][15:8] <= \wr__data$761 [15:8];
   end
-  assign \rd__data$778  = ch0_crc_table_0_table[\rd__addr$765 ];
+  assign \rd__data$776  = ch0_crc_table_0_table[\rd__addr$763 ];
   reg [15:0] ch0_crc_table_16_table [1:0];
   initial begin
     ch0_crc_table_16_table[0] = 16'h0000;
     ch0_crc_table_16_table[1] = 16'h0000;
   end
   always @(posedge clk) begin
-    if (\wr__en$770 [0])
-      ch0_crc_table_16_table[\wr__addr$768 ][7:0] <= \wr__data$769 [7:0];
-    if (\wr__en$770 [1])
-      ch0_crc_table_16_table[\wr__addr$768 ][15:8] <= \wr__data$769 [15:8];
+    if (\wr__en$768 [0])
+      ch0_crc_table_16_table[\wr__addr$766 ][7:0] <= \wr__data$767 [7:0];
+    if (\wr__en$768 [1])
+      ch0_crc_table_16_table[\wr__addr$766 ][15:8] <= \wr__data$767 [15:8];
   end
-  assign \rd__data$779  = ch0_crc_table_16_table[\rd__addr$765 ];
+  assign \rd__data$777  = ch0_crc_table_16_table[\rd__addr$763 ];
   reg [0:0] ch0_crc_table_32_table [1:0];
   initial begin
     ch0_crc_table_32_table[0] = 1'h0;
     ch0_crc_table_32_table[1] = 1'h0;
   end
   always @(posedge clk) begin
-    if (\wr__en$775 )
-      ch0_crc_table_32_table[\wr__addr$773 ] <= \wr__data$774 ;
+    if (\wr__en$773 )
+      ch0_crc_table_32_table[\wr__addr$771 ] <= \wr__data$772 ;
   end
-  assign \rd__data$780  = ch0_crc_table_32_table[\rd__addr$765 ];
+  assign \rd__data$778  = ch0_crc_table_32_table[\rd__addr$763 ];
   reg [31:0] ch1_config_memory [14:0];
   initial begin
     ch1_config_memory[0] = 32'd0;
@@ -4407,50 +4397,50 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     ch1_config_memory[14] = 32'd0;
   end
   always @(posedge clk) begin
-    if (\wr__en$924 [0])
-      ch1_config_memory[{ \$678 , \$677 , \$676 , \$675  }][7:0] <= config_memory0_write_data[7:0];
-    if (\wr__en$924 [1])
-      ch1_config_memory[{ \$678 , \$677 , \$676 , \$675  }][15:8] <= config_memory0_write_data[15:8];
-    if (\wr__en$924 [2])
-      ch1_config_memory[{ \$678 , \$677 , \$676 , \$675  }][23:16] <= config_memory0_write_data[23:16];
-    if (\wr__en$924 [3])
-      ch1_config_memory[{ \$678 , \$677 , \$676 , \$675  }][31:24] <= config_memory0_write_data[31:24];
+    if (\wr__en$922 [0])
+      ch1_config_memory[{ \$671 , \$670 , \$669 , \$668  }][7:0] <= config_memory0_write_data[7:0];
+    if (\wr__en$922 [1])
+      ch1_config_memory[{ \$671 , \$670 , \$669 , \$668  }][15:8] <= config_memory0_write_data[15:8];
+    if (\wr__en$922 [2])
+      ch1_config_memory[{ \$671 , \$670 , \$669 , \$668  }][23:16] <= config_memory0_write_data[23:16];
+    if (\wr__en$922 [3])
+      ch1_config_memory[{ \$671 , \$670 , \$669 , \$668  }][31:24] <= config_memory0_write_data[31:24];
   end
-  assign \rd__data$926  = ch1_config_memory[ch1_config_read_index];
+  assign \rd__data$924  = ch1_config_memory[ch1_config_read_index];
   reg [15:0] ch1_crc_table_0_table [1:0];
   initial begin
     ch1_crc_table_0_table[0] = 16'h0000;
     ch1_crc_table_0_table[1] = 16'h0000;
   end
   always @(posedge clk) begin
-    if (\wr__en$930 [0])
-      ch1_crc_table_0_table[\wr__addr$928 ][7:0] <= \wr__data$929 [7:0];
-    if (\wr__en$930 [1])
-      ch1_crc_table_0_table[\wr__addr$928 ][15:8] <= \wr__data$929 [15:8];
+    if (\wr__en$928 [0])
+      ch1_crc_table_0_table[\wr__addr$926 ][7:0] <= \wr__data$927 [7:0];
+    if (\wr__en$928 [1])
+      ch1_crc_table_0_table[\wr__addr$926 ][15:8] <= \wr__data$927 [15:8];
   end
-  assign \rd__data$944  = ch1_crc_table_0_table[\rd__addr$931 ];
+  assign \rd__data$942  = ch1_crc_table_0_table[\rd__addr$929 ];
   reg [15:0] ch1_crc_table_16_table [1:0];
   initial begin
     ch1_crc_table_16_table[0] = 16'h0000;
     ch1_crc_table_16_table[1] = 16'h0000;
   end
   always @(posedge clk) begin
-    if (\wr__en$936 [0])
-      ch1_crc_table_16_table[\wr__addr$934 ][7:0] <= \wr__data$935 [7:0];
-    if (\wr__en$936 [1])
-      ch1_crc_table_16_table[\wr__addr$934 ][15:8] <= \wr__data$935 [15:8];
+    if (\wr__en$934 [0])
+      ch1_crc_table_16_table[\wr__addr$932 ][7:0] <= \wr__data$933 [7:0];
+    if (\wr__en$934 [1])
+      ch1_crc_table_16_table[\wr__addr$932 ][15:8] <= \wr__data$933 [15:8];
   end
-  assign \rd__data$945  = ch1_crc_table_16_table[\rd__addr$931 ];
+  assign \rd__data$943  = ch1_crc_table_16_table[\rd__addr$929 ];
   reg [0:0] ch1_crc_table_32_table [1:0];
   initial begin
     ch1_crc_table_32_table[0] = 1'h0;
     ch1_crc_table_32_table[1] = 1'h0;
   end
   always @(posedge clk) begin
-    if (\wr__en$941 )
-      ch1_crc_table_32_table[\wr__addr$939 ] <= \wr__data$940 ;
+    if (\wr__en$939 )
+      ch1_crc_table_32_table[\wr__addr$937 ] <= \wr__data$938 ;
   end
-  assign \rd__data$946  = ch1_crc_table_32_table[\rd__addr$931 ];
+  assign \rd__data$944  = ch1_crc_table_32_table[\rd__addr$929 ];
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__r_addr;
@@ -4560,1447 +4550,1485 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$110  = config_memory0_write_fill & \$109 ;
   assign \$111  = \$108  | \$110 ;
   assign \$112  = ch0_config_written | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
-  assign \$113  = ch0_config_read ? config_memory0_read_index : ch0_config_read_index;
-  assign \$114  = ch0_config_written | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
-  assign \$115  = ch0_config_read ? config_memory0_read_index : ch0_config_read_index;
-  assign \$116  = \$114  >> \$115 ;
-  assign \$117  = ch0_table_sweep + 1'h1;
-  assign \$119  = bus__r_addr == 8'h80;
-  assign \$120  = bus__r_addr == 8'h81;
-  assign \$121  = bus__r_addr == 8'h82;
-  assign \$122  = bus__r_addr == 8'h84;
-  assign \$123  = bus__r_addr == 8'h86;
-  assign \$124  = bus__r_addr == 8'h87;
-  assign \$125  = bus__r_addr == 8'h90;
-  assign \$126  = bus__r_addr == 8'h91;
-  assign \$127  = bus__r_addr == 8'h92;
-  assign \$128  = bus__r_addr == 8'h93;
-  assign \$129  = bus__r_addr == 8'h94;
-  assign \$130  = bus__r_addr == 8'h95;
-  assign \$131  = bus__r_addr == 8'h96;
-  assign \$132  = bus__r_addr == 8'h97;
-  assign \$133  = bus__r_addr == 8'ha5;
-  assign \$134  = bus__r_addr == 8'ha6;
-  assign \$135  = bus__r_addr == 8'ha7;
-  assign \$136  = bus__r_addr == 8'ha8;
-  assign \$137  = bus__r_addr == 8'ha9;
-  assign \$138  = bus__r_addr == 8'haa;
-  assign \$139  = bus__r_addr == 8'hac;
-  assign \$140  = bus__r_addr == 8'had;
-  assign \$141  = bus__r_addr == 8'hae;
-  assign \$142  = bus__r_addr == 8'hb0;
-  assign \$143  = bus__r_addr == 8'hb1;
-  assign \$144  = bus__r_addr == 8'hb2;
-  assign \$145  = bus__r_addr == 8'hb4;
-  assign \$146  = bus__r_addr == 8'hb5;
-  assign \$147  = bus__r_addr == 8'hb6;
-  assign \$148  = bus__r_addr == 8'hb8;
-  assign \$149  = bus__r_addr == 8'hb9;
-  assign \$150  = bus__r_addr == 8'hba;
-  assign \$151  = bus__r_addr == 8'hbc;
-  assign \$152  = bus__r_addr == 8'hbd;
-  assign \$153  = bus__r_addr == 8'hbe;
-  assign \$154  = bus__r_addr == 8'hc1;
-  assign \$155  = bus__r_addr == 8'hc2;
-  assign \$156  = bus__r_addr == 8'hc3;
-  assign \$157  = bus__r_addr == 8'hc4;
-  assign \$158  = bus__r_addr == 8'hc5;
-  assign \$159  = bus__r_addr == 8'hfc;
-  assign \$160  = bus__r_addr == 8'hfd;
-  assign \$161  = ch0_read_select_90 & bus__r_load;
-  assign \$162  = bus__r_addr[10:3] == 5'h13;
-  assign \$163  = bus__r_en & \$162 ;
-  assign \$164  = bus__r_addr[10:4] == 4'hf;
+  assign \$113  = ch0_table_sweep + 1'h1;
+  assign \$115  = bus__r_addr == 8'h80;
+  assign \$116  = bus__r_addr == 8'h81;
+  assign \$117  = bus__r_addr == 8'h82;
+  assign \$118  = bus__r_addr == 8'h84;
+  assign \$119  = bus__r_addr == 8'h86;
+  assign \$120  = bus__r_addr == 8'h87;
+  assign \$121  = bus__r_addr == 8'h90;
+  assign \$122  = bus__r_addr == 8'h91;
+  assign \$123  = bus__r_addr == 8'h92;
+  assign \$124  = bus__r_addr == 8'h93;
+  assign \$125  = bus__r_addr == 8'h94;
+  assign \$126  = bus__r_addr == 8'h95;
+  assign \$127  = bus__r_addr == 8'h96;
+  assign \$128  = bus__r_addr == 8'h97;
+  assign \$129  = bus__r_addr == 8'ha5;
+  assign \$130  = bus__r_addr == 8'ha6;
+  assign \$131  = bus__r_addr == 8'ha7;
+  assign \$132  = bus__r_addr == 8'ha8;
+  assign \$133  = bus__r_addr == 8'ha9;
+  assign \$134  = bus__r_addr == 8'haa;
+  assign \$135  = bus__r_addr == 8'hac;
+  assign \$136  = bus__r_addr == 8'had;
+  assign \$137  = bus__r_addr == 8'hae;
+  assign \$138  = bus__r_addr == 8'hb0;
+  assign \$139  = bus__r_addr == 8'hb1;
+  assign \$140  = bus__r_addr == 8'hb2;
+  assign \$141  = bus__r_addr == 8'hb4;
+  assign \$142  = bus__r_addr == 8'hb5;
+  assign \$143  = bus__r_addr == 8'hb6;
+  assign \$144  = bus__r_addr == 8'hb8;
+  assign \$145  = bus__r_addr == 8'hb9;
+  assign \$146  = bus__r_addr == 8'hba;
+  assign \$147  = bus__r_addr == 8'hbc;
+  assign \$148  = bus__r_addr == 8'hbd;
+  assign \$149  = bus__r_addr == 8'hbe;
+  assign \$150  = bus__r_addr == 8'hc1;
+  assign \$151  = bus__r_addr == 8'hc2;
+  assign \$152  = bus__r_addr == 8'hc3;
+  assign \$153  = bus__r_addr == 8'hc4;
+  assign \$154  = bus__r_addr == 8'hc5;
+  assign \$155  = bus__r_addr == 8'hfc;
+  assign \$156  = bus__r_addr == 8'hfd;
+  assign \$157  = ch0_read_select_90 & bus__r_load;
+  assign \$158  = bus__r_addr[10:3] == 5'h13;
+  assign \$159  = bus__r_en & \$158 ;
+  assign \$160  = bus__r_addr[10:4] == 4'hf;
+  assign \$161  = bus__r_en & \$160 ;
+  assign \$162  = bus__r_addr[3:0] < 4'hc;
+  assign \$163  = \$161  & \$162 ;
+  assign \$164  = bus__r_addr[10:4] == 4'he;
   assign \$165  = bus__r_en & \$164 ;
-  assign \$166  = bus__r_addr[3:0] < 4'hc;
-  assign \$167  = \$165  & \$166 ;
-  assign \$168  = bus__r_addr[10:4] == 4'he;
-  assign \$169  = bus__r_en & \$168 ;
-  assign \$170  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$172  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$166  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$168  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$169  = \$167  | \$168 ;
+  assign \$170  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
+  assign \$171  = \$169  | \$170 ;
+  assign \$172  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$173  = \$171  | \$172 ;
-  assign \$174  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
-  assign \$175  = \$173  | \$174 ;
-  assign \$176  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
-  assign \$177  = \$175  | \$176 ;
-  assign \$182  = ch0_read_select_90 ? { 2'h0, \port$13613$0 [182:177], 4'h0, \port$13613$0 [186:183], 1'h0, \port$13613$0 [176:174], 1'h0, \port$13613$0 [133:131], 3'h0, \port$13613$0 [49], \port$13613$0 [3:0] } : 32'd0;
+  assign \$178  = ch0_read_select_90 ? { 2'h0, \port$13515$0 [182:177], 4'h0, \port$13515$0 [186:183], 1'h0, \port$13515$0 [176:174], 1'h0, \port$13515$0 [133:131], 3'h0, \port$13515$0 [49], \port$13515$0 [3:0] } : 32'd0;
+  assign \$179  = \$177  | \$178 ;
+  assign \$180  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$181  = \$179  | \$180 ;
+  assign \$182  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
   assign \$183  = \$181  | \$182 ;
-  assign \$184  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$184  = ch0_read_select_93 ? ch0_result_w0_hi_data_snapshot : 32'd0;
   assign \$185  = \$183  | \$184 ;
-  assign \$186  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$186  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
   assign \$187  = \$185  | \$186 ;
-  assign \$188  = ch0_read_select_93 ? ch0_result_w0_hi_data_snapshot : 32'd0;
+  assign \$188  = ch0_read_select_95 ? ch0_result_w1_hi_data_snapshot : 32'd0;
   assign \$189  = \$187  | \$188 ;
-  assign \$190  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$190  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
   assign \$191  = \$189  | \$190 ;
-  assign \$192  = ch0_read_select_95 ? ch0_result_w1_hi_data_snapshot : 32'd0;
+  assign \$192  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$193  = \$191  | \$192 ;
-  assign \$194  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
-  assign \$195  = \$193  | \$194 ;
-  assign \$196  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
-  assign \$197  = \$195  | \$196 ;
-  assign \$242  = ch0_read_select_c2 ? { 17'h00000, \port$13701$0 [9:3], 1'h0, \port$13701$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$238  = ch0_read_select_c2 ? { 17'h00000, \port$13603$0 [9:3], 1'h0, \port$13603$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$239  = \$237  | \$238 ;
+  assign \$240  = ch0_read_select_c3 ? \port$13526$0 [31:0] : 32'd0;
+  assign \$241  = \$239  | \$240 ;
+  assign \$242  = ch0_read_select_c4 ? \port$13526$0 [63:32] : 32'd0;
   assign \$243  = \$241  | \$242 ;
-  assign \$244  = ch0_read_select_c3 ? \port$13624$0 [31:0] : 32'd0;
+  assign \$244  = ch0_read_select_c5 ? { 16'h0000, \port$13526$0 [79:64] } : 32'd0;
   assign \$245  = \$243  | \$244 ;
-  assign \$246  = ch0_read_select_c4 ? \port$13624$0 [63:32] : 32'd0;
-  assign \$247  = \$245  | \$246 ;
-  assign \$248  = ch0_read_select_c5 ? { 16'h0000, \port$13624$0 [79:64] } : 32'd0;
+  assign \$248  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$249  = \$247  | \$248 ;
-  assign \$252  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
-  assign \$253  = \$251  | \$252 ;
-  assign \$254  = ch0_window0_read ? ch0__count_data : 32'd0;
+  assign \$250  = ch0_window0_read ? ch0__count_data : 32'd0;
+  assign \$251  = \$249  | \$250 ;
+  assign \$254  = ch0_window2_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$255  = \$253  | \$254 ;
-  assign \$258  = ch0_window2_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$259  = \$257  | \$258 ;
-  assign \$260  = ch0_window3_read ? ch0_config_read_data : 32'd0;
-  assign \$261  = \$259  | \$260 ;
-  assign \$262  = ~ ch1_config_go;
-  assign \$263  = ch1_config_wait & \$262 ;
-  assign \$264  = \$263  & cfg_free[1];
-  assign \$265  = ~ ch1_table_clearing;
-  assign \$266  = \$264  & \$265 ;
-  assign \$267  = write_data[0] & write_strb[0];
+  assign \$256  = ch0_window3_read ? ch0_config_read_data : 32'd0;
+  assign \$257  = \$255  | \$256 ;
+  assign \$258  = ~ ch1_config_go;
+  assign \$259  = ch1_config_wait & \$258 ;
+  assign \$260  = \$259  & cfg_free[1];
+  assign \$261  = ~ ch1_table_clearing;
+  assign \$262  = \$260  & \$261 ;
+  assign \$263  = write_data[0] & write_strb[0];
+  assign \$264  = ch1_ctrl_write ? \$263  : 1'h0;
+  assign \$265  = write_data[1] & write_strb[0];
+  assign \$266  = ch1_ctrl_write ? \$265  : 1'h0;
+  assign \$267  = write_data[2] & write_strb[0];
   assign \$268  = ch1_ctrl_write ? \$267  : 1'h0;
-  assign \$269  = write_data[1] & write_strb[0];
-  assign \$270  = ch1_ctrl_write ? \$269  : 1'h0;
-  assign \$271  = write_data[2] & write_strb[0];
-  assign \$272  = ch1_ctrl_write ? \$271  : 1'h0;
-  assign \$273  = ch1_ctrl_write & write_strb[1];
-  assign \$274  = ch1_ctrl_write & write_strb[1];
-  assign \$275  = write_data[0] & write_strb[0];
+  assign \$269  = ch1_ctrl_write & write_strb[1];
+  assign \$270  = ch1_ctrl_write & write_strb[1];
+  assign \$271  = write_data[0] & write_strb[0];
+  assign \$272  = ch1_irq_status_write ? \$271  : 1'h0;
+  assign \$273  = write_data[1] & write_strb[0];
+  assign \$274  = ch1_irq_status_write ? \$273  : 1'h0;
+  assign \$275  = write_data[2] & write_strb[0];
   assign \$276  = ch1_irq_status_write ? \$275  : 1'h0;
-  assign \$277  = write_data[1] & write_strb[0];
-  assign \$278  = ch1_irq_status_write ? \$277  : 1'h0;
-  assign \$279  = write_data[2] & write_strb[0];
-  assign \$280  = ch1_irq_status_write ? \$279  : 1'h0;
-  assign \$281  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$282  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$283  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$284  = write_addr == 9'h108;
-  assign \$285  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$286  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$287  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$288  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$289  = write_addr == 9'h109;
-  assign \$290  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$291  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$292  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$293  = write_addr == 9'h10a;
-  assign \$294  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$295  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$296  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$297  = write_addr == 9'h10b;
-  assign \$298  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$299  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$300  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$301  = write_addr == 9'h10c;
-  assign \$302  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$303  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$304  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$305  = write_addr == 9'h10d;
-  assign \$306  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$307  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$308  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$309  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$310  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$311  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$312  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$313  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$277  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$278  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$279  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$280  = write_addr == 9'h108;
+  assign \$281  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$282  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$283  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$284  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$285  = write_addr == 9'h109;
+  assign \$286  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$287  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$288  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$289  = write_addr == 9'h10a;
+  assign \$290  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$291  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$292  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$293  = write_addr == 9'h10b;
+  assign \$294  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$295  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$296  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$297  = write_addr == 9'h10c;
+  assign \$298  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$299  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$300  = ch1_cfg_timeout_config_write & config_write_strb[2];
+  assign \$301  = write_addr == 9'h10d;
+  assign \$302  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$303  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$304  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$305  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$306  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$307  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$308  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$309  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$310  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$311  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$312  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$313  = ch1_cfg_words_config_write & config_write_strb[3];
   assign \$314  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$315  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$316  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$317  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$318  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$319  = write_addr == 9'h10e;
-  assign \$320  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$321  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$322  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$323  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$324  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$325  = ch1_cfg_checks_config_write & config_write_strb[3];
-  assign \$326  = write_addr == 9'h10f;
-  assign \$327  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$328  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$329  = write_addr == 9'h120;
-  assign \$330  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$331  = write_addr == 9'h121;
-  assign \$332  = write_addr == 9'h122;
-  assign \$333  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$334  = write_addr == 9'h123;
-  assign \$335  = write_addr == 9'h124;
-  assign \$336  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$337  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$338  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$339  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$340  = ch1_cfg_ssi_config_write & config_write_strb[2];
-  assign \$341  = ch1_cfg_ssi_config_write & config_write_strb[3];
-  assign \$342  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$343  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$344  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$345  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$346  = write_data[0] & write_strb[0];
-  assign \$347  = ch1_ca_ctrl_write ? \$346  : 1'h0;
-  assign \$348  = write_data[1] & write_strb[0];
-  assign \$349  = ch1_ca_ctrl_write ? \$348  : 1'h0;
-  assign \$350  = | { ch1_cfg_ssi_write, ch1_cfg_crc1_start_write, ch1_cfg_crc1_write, ch1_cfg_crc0_start_write, ch1_cfg_crc0_write, ch1_cfg_quiet_write, ch1_cfg_checks_write, ch1_cfg_words_write, ch1_cfg_timeout_write, ch1_cfg_ack_write, ch1_cfg_break_write, ch1_cfg_period_write, ch1_cfg_ma_write };
-  assign \$351  = ch1_config_written | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
-  assign \$352  = ch1_config_read ? config_memory0_read_index : ch1_config_read_index;
-  assign \$353  = ch1_config_written | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
-  assign \$354  = ch1_config_read ? config_memory0_read_index : ch1_config_read_index;
-  assign \$355  = \$353  >> \$354 ;
-  assign \$356  = ch1_table_sweep + 1'h1;
-  assign \$358  = bus__r_addr == 9'h100;
-  assign \$359  = bus__r_addr == 9'h101;
-  assign \$360  = bus__r_addr == 9'h102;
-  assign \$361  = bus__r_addr == 9'h104;
-  assign \$362  = bus__r_addr == 9'h106;
-  assign \$363  = bus__r_addr == 9'h107;
-  assign \$364  = bus__r_addr == 9'h110;
-  assign \$365  = bus__r_addr == 9'h111;
-  assign \$366  = bus__r_addr == 9'h112;
-  assign \$367  = bus__r_addr == 9'h113;
-  assign \$368  = bus__r_addr == 9'h114;
-  assign \$369  = bus__r_addr == 9'h115;
-  assign \$370  = bus__r_addr == 9'h116;
-  assign \$371  = bus__r_addr == 9'h117;
-  assign \$372  = bus__r_addr == 9'h125;
-  assign \$373  = bus__r_addr == 9'h126;
-  assign \$374  = bus__r_addr == 9'h127;
-  assign \$375  = bus__r_addr == 9'h128;
-  assign \$376  = bus__r_addr == 9'h129;
-  assign \$377  = bus__r_addr == 9'h12a;
-  assign \$378  = bus__r_addr == 9'h12c;
-  assign \$379  = bus__r_addr == 9'h12d;
-  assign \$380  = bus__r_addr == 9'h12e;
-  assign \$381  = bus__r_addr == 9'h130;
-  assign \$382  = bus__r_addr == 9'h131;
-  assign \$383  = bus__r_addr == 9'h132;
-  assign \$384  = bus__r_addr == 9'h134;
-  assign \$385  = bus__r_addr == 9'h135;
-  assign \$386  = bus__r_addr == 9'h136;
-  assign \$387  = bus__r_addr == 9'h138;
-  assign \$388  = bus__r_addr == 9'h139;
-  assign \$389  = bus__r_addr == 9'h13a;
-  assign \$390  = bus__r_addr == 9'h13c;
-  assign \$391  = bus__r_addr == 9'h13d;
-  assign \$392  = bus__r_addr == 9'h13e;
-  assign \$393  = bus__r_addr == 9'h141;
-  assign \$394  = bus__r_addr == 9'h142;
-  assign \$395  = bus__r_addr == 9'h143;
-  assign \$396  = bus__r_addr == 9'h144;
-  assign \$397  = bus__r_addr == 9'h145;
-  assign \$398  = bus__r_addr == 9'h17c;
-  assign \$399  = bus__r_addr == 9'h17d;
-  assign \$400  = ch1_read_select_110 & bus__r_load;
-  assign \$401  = bus__r_addr[10:3] == 6'h23;
-  assign \$402  = bus__r_en & \$401 ;
-  assign \$403  = bus__r_addr[10:4] == 5'h17;
-  assign \$404  = bus__r_en & \$403 ;
-  assign \$405  = bus__r_addr[3:0] < 4'hc;
-  assign \$406  = \$404  & \$405 ;
-  assign \$407  = bus__r_addr[10:4] == 5'h16;
-  assign \$408  = bus__r_en & \$407 ;
-  assign \$409  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$411  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$412  = \$410  | \$411 ;
-  assign \$413  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
+  assign \$315  = write_addr == 9'h10e;
+  assign \$316  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$317  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$318  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$319  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$320  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$321  = ch1_cfg_checks_config_write & config_write_strb[3];
+  assign \$322  = write_addr == 9'h10f;
+  assign \$323  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$324  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$325  = write_addr == 9'h120;
+  assign \$326  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$327  = write_addr == 9'h121;
+  assign \$328  = write_addr == 9'h122;
+  assign \$329  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$330  = write_addr == 9'h123;
+  assign \$331  = write_addr == 9'h124;
+  assign \$332  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$333  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$334  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$335  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$336  = ch1_cfg_ssi_config_write & config_write_strb[2];
+  assign \$337  = ch1_cfg_ssi_config_write & config_write_strb[3];
+  assign \$338  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$339  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$340  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$341  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$342  = write_data[0] & write_strb[0];
+  assign \$343  = ch1_ca_ctrl_write ? \$342  : 1'h0;
+  assign \$344  = write_data[1] & write_strb[0];
+  assign \$345  = ch1_ca_ctrl_write ? \$344  : 1'h0;
+  assign \$346  = | { ch1_cfg_ssi_write, ch1_cfg_crc1_start_write, ch1_cfg_crc1_write, ch1_cfg_crc0_start_write, ch1_cfg_crc0_write, ch1_cfg_quiet_write, ch1_cfg_checks_write, ch1_cfg_words_write, ch1_cfg_timeout_write, ch1_cfg_ack_write, ch1_cfg_break_write, ch1_cfg_period_write, ch1_cfg_ma_write };
+  assign \$347  = ch1_config_written | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$348  = ch1_table_sweep + 1'h1;
+  assign \$350  = bus__r_addr == 9'h100;
+  assign \$351  = bus__r_addr == 9'h101;
+  assign \$352  = bus__r_addr == 9'h102;
+  assign \$353  = bus__r_addr == 9'h104;
+  assign \$354  = bus__r_addr == 9'h106;
+  assign \$355  = bus__r_addr == 9'h107;
+  assign \$356  = bus__r_addr == 9'h110;
+  assign \$357  = bus__r_addr == 9'h111;
+  assign \$358  = bus__r_addr == 9'h112;
+  assign \$359  = bus__r_addr == 9'h113;
+  assign \$360  = bus__r_addr == 9'h114;
+  assign \$361  = bus__r_addr == 9'h115;
+  assign \$362  = bus__r_addr == 9'h116;
+  assign \$363  = bus__r_addr == 9'h117;
+  assign \$364  = bus__r_addr == 9'h125;
+  assign \$365  = bus__r_addr == 9'h126;
+  assign \$366  = bus__r_addr == 9'h127;
+  assign \$367  = bus__r_addr == 9'h128;
+  assign \$368  = bus__r_addr == 9'h129;
+  assign \$369  = bus__r_addr == 9'h12a;
+  assign \$370  = bus__r_addr == 9'h12c;
+  assign \$371  = bus__r_addr == 9'h12d;
+  assign \$372  = bus__r_addr == 9'h12e;
+  assign \$373  = bus__r_addr == 9'h130;
+  assign \$374  = bus__r_addr == 9'h131;
+  assign \$375  = bus__r_addr == 9'h132;
+  assign \$376  = bus__r_addr == 9'h134;
+  assign \$377  = bus__r_addr == 9'h135;
+  assign \$378  = bus__r_addr == 9'h136;
+  assign \$379  = bus__r_addr == 9'h138;
+  assign \$380  = bus__r_addr == 9'h139;
+  assign \$381  = bus__r_addr == 9'h13a;
+  assign \$382  = bus__r_addr == 9'h13c;
+  assign \$383  = bus__r_addr == 9'h13d;
+  assign \$384  = bus__r_addr == 9'h13e;
+  assign \$385  = bus__r_addr == 9'h141;
+  assign \$386  = bus__r_addr == 9'h142;
+  assign \$387  = bus__r_addr == 9'h143;
+  assign \$388  = bus__r_addr == 9'h144;
+  assign \$389  = bus__r_addr == 9'h145;
+  assign \$390  = bus__r_addr == 9'h17c;
+  assign \$391  = bus__r_addr == 9'h17d;
+  assign \$392  = ch1_read_select_110 & bus__r_load;
+  assign \$393  = bus__r_addr[10:3] == 6'h23;
+  assign \$394  = bus__r_en & \$393 ;
+  assign \$395  = bus__r_addr[10:4] == 5'h17;
+  assign \$396  = bus__r_en & \$395 ;
+  assign \$397  = bus__r_addr[3:0] < 4'hc;
+  assign \$398  = \$396  & \$397 ;
+  assign \$399  = bus__r_addr[10:4] == 5'h16;
+  assign \$400  = bus__r_en & \$399 ;
+  assign \$401  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$403  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
+  assign \$404  = \$402  | \$403 ;
+  assign \$405  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
+  assign \$406  = \$404  | \$405 ;
+  assign \$407  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$408  = \$406  | \$407 ;
+  assign \$413  = ch1_read_select_110 ? { 2'h0, \port$14066$0 [182:177], 4'h0, \port$14066$0 [186:183], 1'h0, \port$14066$0 [176:174], 1'h0, \port$14066$0 [133:131], 3'h0, \port$14066$0 [49], \port$14066$0 [3:0] } : 32'd0;
   assign \$414  = \$412  | \$413 ;
-  assign \$415  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$415  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$416  = \$414  | \$415 ;
-  assign \$421  = ch1_read_select_110 ? { 2'h0, \port$14166$0 [182:177], 4'h0, \port$14166$0 [186:183], 1'h0, \port$14166$0 [176:174], 1'h0, \port$14166$0 [133:131], 3'h0, \port$14166$0 [49], \port$14166$0 [3:0] } : 32'd0;
+  assign \$417  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$418  = \$416  | \$417 ;
+  assign \$419  = ch1_read_select_113 ? ch1_result_w0_hi_data_snapshot : 32'd0;
+  assign \$420  = \$418  | \$419 ;
+  assign \$421  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
   assign \$422  = \$420  | \$421 ;
-  assign \$423  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$423  = ch1_read_select_115 ? ch1_result_w1_hi_data_snapshot : 32'd0;
   assign \$424  = \$422  | \$423 ;
-  assign \$425  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$425  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$426  = \$424  | \$425 ;
-  assign \$427  = ch1_read_select_113 ? ch1_result_w0_hi_data_snapshot : 32'd0;
+  assign \$427  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$428  = \$426  | \$427 ;
-  assign \$429  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
-  assign \$430  = \$428  | \$429 ;
-  assign \$431  = ch1_read_select_115 ? ch1_result_w1_hi_data_snapshot : 32'd0;
-  assign \$432  = \$430  | \$431 ;
-  assign \$433  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
-  assign \$434  = \$432  | \$433 ;
-  assign \$435  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
-  assign \$436  = \$434  | \$435 ;
-  assign \$481  = ch1_read_select_142 ? { 17'h00000, \port$14254$0 [9:3], 1'h0, \port$14254$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
-  assign \$482  = \$480  | \$481 ;
-  assign \$483  = ch1_read_select_143 ? \port$14177$0 [31:0] : 32'd0;
+  assign \$473  = ch1_read_select_142 ? { 17'h00000, \port$14154$0 [9:3], 1'h0, \port$14154$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$474  = \$472  | \$473 ;
+  assign \$475  = ch1_read_select_143 ? \port$14077$0 [31:0] : 32'd0;
+  assign \$476  = \$474  | \$475 ;
+  assign \$477  = ch1_read_select_144 ? \port$14077$0 [63:32] : 32'd0;
+  assign \$478  = \$476  | \$477 ;
+  assign \$479  = ch1_read_select_145 ? { 16'h0000, \port$14077$0 [79:64] } : 32'd0;
+  assign \$480  = \$478  | \$479 ;
+  assign \$483  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$484  = \$482  | \$483 ;
-  assign \$485  = ch1_read_select_144 ? \port$14177$0 [63:32] : 32'd0;
+  assign \$485  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$486  = \$484  | \$485 ;
-  assign \$487  = ch1_read_select_145 ? { 16'h0000, \port$14177$0 [79:64] } : 32'd0;
-  assign \$488  = \$486  | \$487 ;
-  assign \$491  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
+  assign \$489  = ch1_window2_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$490  = \$488  | \$489 ;
+  assign \$491  = ch1_window3_read ? ch1_config_read_data : 32'd0;
   assign \$492  = \$490  | \$491 ;
-  assign \$493  = ch1_window0_read ? ch1__count_data : 32'd0;
-  assign \$494  = \$492  | \$493 ;
-  assign \$497  = ch1_window2_read ? ch1__ca_rbuf_data : 32'd0;
-  assign \$498  = \$496  | \$497 ;
-  assign \$499  = ch1_window3_read ? ch1_config_read_data : 32'd0;
-  assign \$500  = \$498  | \$499 ;
-  assign \$501  = ! write_addr;
-  assign g_id_write = write_en & \$501 ;
-  assign \$502  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$502 ;
-  assign \$503  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$503 ;
-  assign \$504  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$504 ;
-  assign \$505  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$505 ;
-  assign \$506  = ch0_config_wait | ch0_table_clearing;
-  assign \$507  = bus__r_addr[10:3] == 5'h13;
-  assign ch0__count_en = bus__r_en & \$507 ;
-  assign \$508  = bus__r_addr[10:4] == 4'hf;
-  assign \$509  = bus__r_en & \$508 ;
-  assign \$510  = bus__r_addr[3:0] < 4'hc;
-  assign ch0__chain_en = \$509  & \$510 ;
-  assign \$511  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$511 ;
-  assign \$512  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$512 ;
-  assign \$513  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$513 ;
-  assign \$514  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$514 ;
-  assign \$515  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$515 ;
-  assign \$516  = write_addr == 8'h86;
-  assign ch0_caps_chain_write = write_en & \$516 ;
-  assign \$517  = write_addr == 8'h87;
-  assign ch0_caps_chain2_write = write_en & \$517 ;
-  assign \$518  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$518 ;
+  assign \$493  = ! write_addr;
+  assign g_id_write = write_en & \$493 ;
+  assign \$494  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$494 ;
+  assign \$495  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$495 ;
+  assign \$496  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$496 ;
+  assign \$497  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$497 ;
+  assign \$498  = ch0_config_wait | ch0_table_clearing;
+  assign \$499  = bus__r_addr[10:3] == 5'h13;
+  assign ch0__count_en = bus__r_en & \$499 ;
+  assign \$500  = bus__r_addr[10:4] == 4'hf;
+  assign \$501  = bus__r_en & \$500 ;
+  assign \$502  = bus__r_addr[3:0] < 4'hc;
+  assign ch0__chain_en = \$501  & \$502 ;
+  assign \$503  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$503 ;
+  assign \$504  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$504 ;
+  assign \$505  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$505 ;
+  assign \$506  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$506 ;
+  assign \$507  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$507 ;
+  assign \$508  = write_addr == 8'h86;
+  assign ch0_caps_chain_write = write_en & \$508 ;
+  assign \$509  = write_addr == 8'h87;
+  assign ch0_caps_chain2_write = write_en & \$509 ;
+  assign \$510  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$510 ;
   assign ch0_cfg_ma_config_write = ch0_cfg_ma_config_addressed & ch0_config_go;
-  assign \$519  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$519 ;
+  assign \$511  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$511 ;
   assign ch0_cfg_period_config_write = ch0_cfg_period_config_addressed & ch0_config_go;
-  assign \$520  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$520 ;
+  assign \$512  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$512 ;
   assign ch0_cfg_break_config_write = ch0_cfg_break_config_addressed & ch0_config_go;
-  assign \$521  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$521 ;
+  assign \$513  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$513 ;
   assign ch0_cfg_ack_config_write = ch0_cfg_ack_config_addressed & ch0_config_go;
-  assign \$522  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$522 ;
+  assign \$514  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$514 ;
   assign ch0_cfg_timeout_config_write = ch0_cfg_timeout_config_addressed & ch0_config_go;
-  assign \$523  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$523 ;
+  assign \$515  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$515 ;
   assign ch0_cfg_words_config_write = ch0_cfg_words_config_addressed & ch0_config_go;
-  assign \$524  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$524 ;
+  assign \$516  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$516 ;
   assign ch0_cfg_checks_config_write = ch0_cfg_checks_config_addressed & ch0_config_go;
-  assign \$525  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$525 ;
+  assign \$517  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$517 ;
   assign ch0_cfg_quiet_config_write = ch0_cfg_quiet_config_addressed & ch0_config_go;
-  assign \$526  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$526 ;
-  assign \$527  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$527 ;
-  assign \$528  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$528 ;
-  assign \$529  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$529 ;
-  assign \$530  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$530 ;
-  assign \$531  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$531 ;
-  assign \$532  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$532 ;
-  assign \$533  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$533 ;
-  assign \$534  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$534 ;
+  assign \$518  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$518 ;
+  assign \$519  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$519 ;
+  assign \$520  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$520 ;
+  assign \$521  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$521 ;
+  assign \$522  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$522 ;
+  assign \$523  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$523 ;
+  assign \$524  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$524 ;
+  assign \$525  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$525 ;
+  assign \$526  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$526 ;
   assign ch0_cfg_crc0_config_write = ch0_cfg_crc0_config_addressed & ch0_config_go;
-  assign \$535  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$535 ;
+  assign \$527  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$527 ;
   assign ch0_cfg_crc0_start_config_write = ch0_cfg_crc0_start_config_addressed & ch0_config_go;
-  assign \$536  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$536 ;
+  assign \$528  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$528 ;
   assign ch0_cfg_crc1_config_write = ch0_cfg_crc1_config_addressed & ch0_config_go;
-  assign \$537  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$537 ;
+  assign \$529  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$529 ;
   assign ch0_cfg_crc1_start_config_write = ch0_cfg_crc1_start_config_addressed & ch0_config_go;
-  assign \$538  = write_addr == 8'ha4;
-  assign ch0_cfg_ssi_write = write_en & \$538 ;
+  assign \$530  = write_addr == 8'ha4;
+  assign ch0_cfg_ssi_write = write_en & \$530 ;
   assign ch0_cfg_ssi_config_write = ch0_cfg_ssi_config_addressed & ch0_config_go;
-  assign \$539  = write_addr == 8'ha5;
-  assign ch0_count_chain_write = write_en & \$539 ;
-  assign \$540  = write_addr == 8'ha6;
-  assign ch0_count_chain2_write = write_en & \$540 ;
-  assign \$541  = write_addr == 8'ha7;
-  assign ch0_count_chain3_write = write_en & \$541 ;
-  assign \$542  = write_addr == 8'ha8;
-  assign ch0_cfg_w2_write = write_en & \$542 ;
-  assign \$543  = write_addr == 8'ha9;
-  assign ch0_cfg_w2_crc_write = write_en & \$543 ;
-  assign \$544  = write_addr == 8'haa;
-  assign ch0_cfg_w2_crc_start_write = write_en & \$544 ;
-  assign \$545  = write_addr == 8'hac;
-  assign ch0_cfg_w3_write = write_en & \$545 ;
-  assign \$546  = write_addr == 8'had;
-  assign ch0_cfg_w3_crc_write = write_en & \$546 ;
-  assign \$547  = write_addr == 8'hae;
-  assign ch0_cfg_w3_crc_start_write = write_en & \$547 ;
-  assign \$548  = write_addr == 8'hb0;
-  assign ch0_cfg_w4_write = write_en & \$548 ;
-  assign \$549  = write_addr == 8'hb1;
-  assign ch0_cfg_w4_crc_write = write_en & \$549 ;
-  assign \$550  = write_addr == 8'hb2;
-  assign ch0_cfg_w4_crc_start_write = write_en & \$550 ;
-  assign \$551  = write_addr == 8'hb4;
-  assign ch0_cfg_w5_write = write_en & \$551 ;
-  assign \$552  = write_addr == 8'hb5;
-  assign ch0_cfg_w5_crc_write = write_en & \$552 ;
-  assign \$553  = write_addr == 8'hb6;
-  assign ch0_cfg_w5_crc_start_write = write_en & \$553 ;
-  assign \$554  = write_addr == 8'hb8;
-  assign ch0_cfg_w6_write = write_en & \$554 ;
-  assign \$555  = write_addr == 8'hb9;
-  assign ch0_cfg_w6_crc_write = write_en & \$555 ;
-  assign \$556  = write_addr == 8'hba;
-  assign ch0_cfg_w6_crc_start_write = write_en & \$556 ;
-  assign \$557  = write_addr == 8'hbc;
-  assign ch0_cfg_w7_write = write_en & \$557 ;
-  assign \$558  = write_addr == 8'hbd;
-  assign ch0_cfg_w7_crc_write = write_en & \$558 ;
-  assign \$559  = write_addr == 8'hbe;
-  assign ch0_cfg_w7_crc_start_write = write_en & \$559 ;
-  assign \$560  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$560 ;
-  assign \$561  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$561 ;
-  assign \$562  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$562 ;
-  assign \$563  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$563 ;
-  assign \$564  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$564 ;
-  assign \$565  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$565 ;
-  assign \$566  = write_addr[10:4] == 4'hd;
-  assign \$567  = write_en & \$566 ;
-  assign ch0__ca_wbuf_en = \$567  ? write_strb : 4'h0;
-  assign \$568  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$568 ;
-  assign \$569  = write_addr == 8'hfc;
-  assign ch0_chain_flags_write = write_en & \$569 ;
-  assign \$570  = write_addr == 8'hfd;
-  assign ch0_chain_updates_write = write_en & \$570 ;
-  assign \$571  = | { ch0_cfg_ssi_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write, ch0_cfg_checks_config_write, ch0_cfg_timeout_config_write, ch0_cfg_break_config_write, ch0_cfg_ma_config_write };
-  assign \$572  = | { ch0_ca_request_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write };
-  assign \$573  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write };
-  assign \$574  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write };
-  assign \$575  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
-  assign \$576  = ~ ch0_config_written;
-  assign \$577  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$576 ;
-  assign \$578  = | \$577 ;
-  assign \$579  = ~ ch0_config_written;
-  assign \$580  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$579 ;
-  assign \$581  = | \$580 ;
-  assign \$582  = ~ ch0_config_written;
-  assign \$583  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$582 ;
-  assign \$584  = | \$583 ;
-  assign \$585  = ~ ch0_config_written;
-  assign \$586  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$585 ;
-  assign \$587  = | \$586 ;
-  assign \$588  = config_write_strb | { \$587 , \$584 , \$581 , \$578  };
-  assign wr__en = \$575  ? \$588  : 4'h0;
-  assign \$589  = bus__r_addr[10:7] == 1'h1;
-  assign \$590  = bus__r_en & \$589 ;
-  assign ch0_config_read = \$590  & config_memory0_read_hit;
-  assign \$591  = ch0_config_read_written ? rd__data : 32'd0;
-  assign \wr__addr$762  = ch0_table_clearing ? ch0_table_sweep : ch0_crc_table_0_table_write_entry;
-  assign \wr__data$763  = ch0_table_clearing ? 16'h0000 : config_write_data[15:0];
-  assign \$592  = | { ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write };
-  assign \$593  = \$592  ? config_write_strb[1:0] : 2'h0;
-  assign \wr__en$764  = ch0_table_clearing ? 2'h3 : \$593 ;
-  assign \wr__addr$768  = ch0_table_clearing ? ch0_table_sweep : ch0_crc_table_16_table_write_entry;
-  assign \wr__data$769  = ch0_table_clearing ? 16'h0000 : config_write_data[15:0];
-  assign \$594  = | { ch0_cfg_crc1_start_config_write, ch0_cfg_crc0_start_config_write };
-  assign \$595  = \$594  ? config_write_strb[1:0] : 2'h0;
-  assign \wr__en$770  = ch0_table_clearing ? 2'h3 : \$595 ;
-  assign \wr__addr$773  = ch0_table_clearing ? ch0_table_sweep : ch0_crc_table_32_table_write_entry;
-  assign \wr__data$774  = ch0_table_clearing ? 1'h0 : config_write_data[24];
-  assign \$596  = | { ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write };
-  assign \$597  = \$596  ? config_write_strb[3] : 1'h0;
-  assign \wr__en$775  = ch0_table_clearing ? 1'h1 : \$597 ;
-  assign \$601  = { 14'h0000, \$599  } | \$600 ;
-  assign \$603  = { 17'h00000, \$601  } | \$602 ;
-  assign \$604  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$606  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$608  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$609 , \$607 , \$605  };
-  assign \$610  = ch1_config_wait | ch1_table_clearing;
-  assign \$611  = bus__r_addr[10:3] == 6'h23;
-  assign ch1__count_en = bus__r_en & \$611 ;
-  assign \$612  = bus__r_addr[10:4] == 5'h17;
-  assign \$613  = bus__r_en & \$612 ;
-  assign \$614  = bus__r_addr[3:0] < 4'hc;
-  assign ch1__chain_en = \$613  & \$614 ;
-  assign \$615  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$615 ;
-  assign \$616  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$616 ;
-  assign \$617  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$617 ;
-  assign \$618  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$618 ;
-  assign \$619  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$619 ;
-  assign \$620  = write_addr == 9'h106;
-  assign ch1_caps_chain_write = write_en & \$620 ;
-  assign \$621  = write_addr == 9'h107;
-  assign ch1_caps_chain2_write = write_en & \$621 ;
-  assign \$622  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$622 ;
+  assign \$531  = write_addr == 8'ha5;
+  assign ch0_count_chain_write = write_en & \$531 ;
+  assign \$532  = write_addr == 8'ha6;
+  assign ch0_count_chain2_write = write_en & \$532 ;
+  assign \$533  = write_addr == 8'ha7;
+  assign ch0_count_chain3_write = write_en & \$533 ;
+  assign \$534  = write_addr == 8'ha8;
+  assign ch0_cfg_w2_write = write_en & \$534 ;
+  assign \$535  = write_addr == 8'ha9;
+  assign ch0_cfg_w2_crc_write = write_en & \$535 ;
+  assign \$536  = write_addr == 8'haa;
+  assign ch0_cfg_w2_crc_start_write = write_en & \$536 ;
+  assign \$537  = write_addr == 8'hac;
+  assign ch0_cfg_w3_write = write_en & \$537 ;
+  assign \$538  = write_addr == 8'had;
+  assign ch0_cfg_w3_crc_write = write_en & \$538 ;
+  assign \$539  = write_addr == 8'hae;
+  assign ch0_cfg_w3_crc_start_write = write_en & \$539 ;
+  assign \$540  = write_addr == 8'hb0;
+  assign ch0_cfg_w4_write = write_en & \$540 ;
+  assign \$541  = write_addr == 8'hb1;
+  assign ch0_cfg_w4_crc_write = write_en & \$541 ;
+  assign \$542  = write_addr == 8'hb2;
+  assign ch0_cfg_w4_crc_start_write = write_en & \$542 ;
+  assign \$543  = write_addr == 8'hb4;
+  assign ch0_cfg_w5_write = write_en & \$543 ;
+  assign \$544  = write_addr == 8'hb5;
+  assign ch0_cfg_w5_crc_write = write_en & \$544 ;
+  assign \$545  = write_addr == 8'hb6;
+  assign ch0_cfg_w5_crc_start_write = write_en & \$545 ;
+  assign \$546  = write_addr == 8'hb8;
+  assign ch0_cfg_w6_write = write_en & \$546 ;
+  assign \$547  = write_addr == 8'hb9;
+  assign ch0_cfg_w6_crc_write = write_en & \$547 ;
+  assign \$548  = write_addr == 8'hba;
+  assign ch0_cfg_w6_crc_start_write = write_en & \$548 ;
+  assign \$549  = write_addr == 8'hbc;
+  assign ch0_cfg_w7_write = write_en & \$549 ;
+  assign \$550  = write_addr == 8'hbd;
+  assign ch0_cfg_w7_crc_write = write_en & \$550 ;
+  assign \$551  = write_addr == 8'hbe;
+  assign ch0_cfg_w7_crc_start_write = write_en & \$551 ;
+  assign \$552  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$552 ;
+  assign \$553  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$553 ;
+  assign \$554  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$554 ;
+  assign \$555  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$555 ;
+  assign \$556  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$556 ;
+  assign \$557  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$557 ;
+  assign \$558  = write_addr[10:4] == 4'hd;
+  assign \$559  = write_en & \$558 ;
+  assign ch0__ca_wbuf_en = \$559  ? write_strb : 4'h0;
+  assign \$560  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$560 ;
+  assign \$561  = write_addr == 8'hfc;
+  assign ch0_chain_flags_write = write_en & \$561 ;
+  assign \$562  = write_addr == 8'hfd;
+  assign ch0_chain_updates_write = write_en & \$562 ;
+  assign \$563  = | { ch0_cfg_ssi_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write, ch0_cfg_checks_config_write, ch0_cfg_timeout_config_write, ch0_cfg_break_config_write, ch0_cfg_ma_config_write };
+  assign \$564  = | { ch0_ca_request_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write };
+  assign \$565  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write };
+  assign \$566  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write };
+  assign \$567  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
+  assign \$568  = ~ ch0_config_written;
+  assign \$569  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$568 ;
+  assign \$570  = | \$569 ;
+  assign \$571  = ~ ch0_config_written;
+  assign \$572  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$571 ;
+  assign \$573  = | \$572 ;
+  assign \$574  = ~ ch0_config_written;
+  assign \$575  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$574 ;
+  assign \$576  = | \$575 ;
+  assign \$577  = ~ ch0_config_written;
+  assign \$578  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$577 ;
+  assign \$579  = | \$578 ;
+  assign \$580  = config_write_strb | { \$579 , \$576 , \$573 , \$570  };
+  assign wr__en = \$567  ? \$580  : 4'h0;
+  assign \$581  = bus__r_addr[10:7] == 1'h1;
+  assign \$582  = bus__r_en & \$581 ;
+  assign ch0_config_read = \$582  & config_memory0_read_hit;
+  assign \$583  = ch0_config_written >> ch0_config_read_index;
+  assign \$584  = \$583  ? rd__data : 32'd0;
+  assign \wr__addr$760  = ch0_table_clearing ? ch0_table_sweep : ch0_crc_table_0_table_write_entry;
+  assign \wr__data$761  = ch0_table_clearing ? 16'h0000 : config_write_data[15:0];
+  assign \$585  = | { ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write };
+  assign \$586  = \$585  ? config_write_strb[1:0] : 2'h0;
+  assign \wr__en$762  = ch0_table_clearing ? 2'h3 : \$586 ;
+  assign \wr__addr$766  = ch0_table_clearing ? ch0_table_sweep : ch0_crc_table_16_table_write_entry;
+  assign \wr__data$767  = ch0_table_clearing ? 16'h0000 : config_write_data[15:0];
+  assign \$587  = | { ch0_cfg_crc1_start_config_write, ch0_cfg_crc0_start_config_write };
+  assign \$588  = \$587  ? config_write_strb[1:0] : 2'h0;
+  assign \wr__en$768  = ch0_table_clearing ? 2'h3 : \$588 ;
+  assign \wr__addr$771  = ch0_table_clearing ? ch0_table_sweep : ch0_crc_table_32_table_write_entry;
+  assign \wr__data$772  = ch0_table_clearing ? 1'h0 : config_write_data[24];
+  assign \$589  = | { ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write };
+  assign \$590  = \$589  ? config_write_strb[3] : 1'h0;
+  assign \wr__en$773  = ch0_table_clearing ? 1'h1 : \$590 ;
+  assign \$594  = { 14'h0000, \$592  } | \$593 ;
+  assign \$596  = { 17'h00000, \$594  } | \$595 ;
+  assign \$597  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$599  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$601  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$602 , \$600 , \$598  };
+  assign \$603  = ch1_config_wait | ch1_table_clearing;
+  assign \$604  = bus__r_addr[10:3] == 6'h23;
+  assign ch1__count_en = bus__r_en & \$604 ;
+  assign \$605  = bus__r_addr[10:4] == 5'h17;
+  assign \$606  = bus__r_en & \$605 ;
+  assign \$607  = bus__r_addr[3:0] < 4'hc;
+  assign ch1__chain_en = \$606  & \$607 ;
+  assign \$608  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$608 ;
+  assign \$609  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$609 ;
+  assign \$610  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$610 ;
+  assign \$611  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$611 ;
+  assign \$612  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$612 ;
+  assign \$613  = write_addr == 9'h106;
+  assign ch1_caps_chain_write = write_en & \$613 ;
+  assign \$614  = write_addr == 9'h107;
+  assign ch1_caps_chain2_write = write_en & \$614 ;
+  assign \$615  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$615 ;
   assign ch1_cfg_ma_config_write = ch1_cfg_ma_config_addressed & ch1_config_go;
-  assign \$623  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$623 ;
+  assign \$616  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$616 ;
   assign ch1_cfg_period_config_write = ch1_cfg_period_config_addressed & ch1_config_go;
-  assign \$624  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$624 ;
+  assign \$617  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$617 ;
   assign ch1_cfg_break_config_write = ch1_cfg_break_config_addressed & ch1_config_go;
-  assign \$625  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$625 ;
+  assign \$618  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$618 ;
   assign ch1_cfg_ack_config_write = ch1_cfg_ack_config_addressed & ch1_config_go;
-  assign \$626  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$626 ;
+  assign \$619  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$619 ;
   assign ch1_cfg_timeout_config_write = ch1_cfg_timeout_config_addressed & ch1_config_go;
-  assign \$627  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$627 ;
+  assign \$620  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$620 ;
   assign ch1_cfg_words_config_write = ch1_cfg_words_config_addressed & ch1_config_go;
-  assign \$628  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$628 ;
+  assign \$621  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$621 ;
   assign ch1_cfg_checks_config_write = ch1_cfg_checks_config_addressed & ch1_config_go;
-  assign \$629  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$629 ;
+  assign \$622  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$622 ;
   assign ch1_cfg_quiet_config_write = ch1_cfg_quiet_config_addressed & ch1_config_go;
-  assign \$630  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$630 ;
-  assign \$631  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$631 ;
-  assign \$632  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$632 ;
-  assign \$633  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$633 ;
-  assign \$634  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$634 ;
-  assign \$635  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$635 ;
-  assign \$636  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$636 ;
-  assign \$637  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$637 ;
-  assign \$638  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$638 ;
+  assign \$623  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$623 ;
+  assign \$624  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$624 ;
+  assign \$625  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$625 ;
+  assign \$626  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$626 ;
+  assign \$627  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$627 ;
+  assign \$628  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$628 ;
+  assign \$629  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$629 ;
+  assign \$630  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$630 ;
+  assign \$631  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$631 ;
   assign ch1_cfg_crc0_config_write = ch1_cfg_crc0_config_addressed & ch1_config_go;
-  assign \$639  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$639 ;
+  assign \$632  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$632 ;
   assign ch1_cfg_crc0_start_config_write = ch1_cfg_crc0_start_config_addressed & ch1_config_go;
-  assign \$640  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$640 ;
+  assign \$633  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$633 ;
   assign ch1_cfg_crc1_config_write = ch1_cfg_crc1_config_addressed & ch1_config_go;
-  assign \$641  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$641 ;
+  assign \$634  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$634 ;
   assign ch1_cfg_crc1_start_config_write = ch1_cfg_crc1_start_config_addressed & ch1_config_go;
-  assign \$642  = write_addr == 9'h124;
-  assign ch1_cfg_ssi_write = write_en & \$642 ;
+  assign \$635  = write_addr == 9'h124;
+  assign ch1_cfg_ssi_write = write_en & \$635 ;
   assign ch1_cfg_ssi_config_write = ch1_cfg_ssi_config_addressed & ch1_config_go;
-  assign \$643  = write_addr == 9'h125;
-  assign ch1_count_chain_write = write_en & \$643 ;
-  assign \$644  = write_addr == 9'h126;
-  assign ch1_count_chain2_write = write_en & \$644 ;
-  assign \$645  = write_addr == 9'h127;
-  assign ch1_count_chain3_write = write_en & \$645 ;
-  assign \$646  = write_addr == 9'h128;
-  assign ch1_cfg_w2_write = write_en & \$646 ;
-  assign \$647  = write_addr == 9'h129;
-  assign ch1_cfg_w2_crc_write = write_en & \$647 ;
-  assign \$648  = write_addr == 9'h12a;
-  assign ch1_cfg_w2_crc_start_write = write_en & \$648 ;
-  assign \$649  = write_addr == 9'h12c;
-  assign ch1_cfg_w3_write = write_en & \$649 ;
-  assign \$650  = write_addr == 9'h12d;
-  assign ch1_cfg_w3_crc_write = write_en & \$650 ;
-  assign \$651  = write_addr == 9'h12e;
-  assign ch1_cfg_w3_crc_start_write = write_en & \$651 ;
-  assign \$652  = write_addr == 9'h130;
-  assign ch1_cfg_w4_write = write_en & \$652 ;
-  assign \$653  = write_addr == 9'h131;
-  assign ch1_cfg_w4_crc_write = write_en & \$653 ;
-  assign \$654  = write_addr == 9'h132;
-  assign ch1_cfg_w4_crc_start_write = write_en & \$654 ;
-  assign \$655  = write_addr == 9'h134;
-  assign ch1_cfg_w5_write = write_en & \$655 ;
-  assign \$656  = write_addr == 9'h135;
-  assign ch1_cfg_w5_crc_write = write_en & \$656 ;
-  assign \$657  = write_addr == 9'h136;
-  assign ch1_cfg_w5_crc_start_write = write_en & \$657 ;
-  assign \$658  = write_addr == 9'h138;
-  assign ch1_cfg_w6_write = write_en & \$658 ;
-  assign \$659  = write_addr == 9'h139;
-  assign ch1_cfg_w6_crc_write = write_en & \$659 ;
-  assign \$660  = write_addr == 9'h13a;
-  assign ch1_cfg_w6_crc_start_write = write_en & \$660 ;
-  assign \$661  = write_addr == 9'h13c;
-  assign ch1_cfg_w7_write = write_en & \$661 ;
-  assign \$662  = write_addr == 9'h13d;
-  assign ch1_cfg_w7_crc_write = write_en & \$662 ;
-  assign \$663  = write_addr == 9'h13e;
-  assign ch1_cfg_w7_crc_start_write = write_en & \$663 ;
-  assign \$664  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$664 ;
-  assign \$665  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$665 ;
-  assign \$666  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$666 ;
-  assign \$667  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$667 ;
-  assign \$668  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$668 ;
-  assign \$669  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$669 ;
-  assign \$670  = write_addr[10:4] == 5'h15;
-  assign \$671  = write_en & \$670 ;
-  assign ch1__ca_wbuf_en = \$671  ? write_strb : 4'h0;
-  assign \$672  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$672 ;
-  assign \$673  = write_addr == 9'h17c;
-  assign ch1_chain_flags_write = write_en & \$673 ;
-  assign \$674  = write_addr == 9'h17d;
-  assign ch1_chain_updates_write = write_en & \$674 ;
-  assign \$675  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
-  assign \$676  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
-  assign \$677  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
-  assign \$678  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
-  assign \$679  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
-  assign \$680  = ~ ch1_config_written;
-  assign \$681  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$680 ;
-  assign \$682  = | \$681 ;
-  assign \$683  = ~ ch1_config_written;
-  assign \$684  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$683 ;
-  assign \$685  = | \$684 ;
-  assign \$686  = ~ ch1_config_written;
-  assign \$687  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$686 ;
-  assign \$688  = | \$687 ;
-  assign \$689  = ~ ch1_config_written;
-  assign \$690  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$689 ;
-  assign \$691  = | \$690 ;
-  assign \$692  = config_write_strb | { \$691 , \$688 , \$685 , \$682  };
-  assign \wr__en$924  = \$679  ? \$692  : 4'h0;
-  assign \$693  = bus__r_addr[10:7] == 2'h2;
-  assign \$694  = bus__r_en & \$693 ;
-  assign ch1_config_read = \$694  & config_memory0_read_hit;
-  assign \$695  = ch1_config_read_written ? \rd__data$926  : 32'd0;
-  assign \wr__addr$928  = ch1_table_clearing ? ch1_table_sweep : ch1_crc_table_0_table_write_entry;
-  assign \wr__data$929  = ch1_table_clearing ? 16'h0000 : config_write_data[15:0];
-  assign \$696  = | { ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write };
-  assign \$697  = \$696  ? config_write_strb[1:0] : 2'h0;
-  assign \wr__en$930  = ch1_table_clearing ? 2'h3 : \$697 ;
-  assign \wr__addr$934  = ch1_table_clearing ? ch1_table_sweep : ch1_crc_table_16_table_write_entry;
-  assign \wr__data$935  = ch1_table_clearing ? 16'h0000 : config_write_data[15:0];
-  assign \$698  = | { ch1_cfg_crc1_start_config_write, ch1_cfg_crc0_start_config_write };
-  assign \$699  = \$698  ? config_write_strb[1:0] : 2'h0;
-  assign \wr__en$936  = ch1_table_clearing ? 2'h3 : \$699 ;
-  assign \wr__addr$939  = ch1_table_clearing ? ch1_table_sweep : ch1_crc_table_32_table_write_entry;
-  assign \wr__data$940  = ch1_table_clearing ? 1'h0 : config_write_data[24];
-  assign \$700  = | { ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write };
-  assign \$701  = \$700  ? config_write_strb[3] : 1'h0;
-  assign \wr__en$941  = ch1_table_clearing ? 1'h1 : \$701 ;
-  assign \$705  = { 14'h0000, \$703  } | \$704 ;
-  assign \$707  = { 17'h00000, \$705  } | \$706 ;
-  assign \$708  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$710  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$712  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$713 , \$711 , \$709  };
-  assign \$714  = | { ch1_config_wait, ch0_config_wait };
-  assign bus__w_busy = write_en | \$714 ;
-  assign \$716  = \$715  | ch0_read_data;
-  assign bus__r_data = \$716  | ch1_read_data;
+  assign \$636  = write_addr == 9'h125;
+  assign ch1_count_chain_write = write_en & \$636 ;
+  assign \$637  = write_addr == 9'h126;
+  assign ch1_count_chain2_write = write_en & \$637 ;
+  assign \$638  = write_addr == 9'h127;
+  assign ch1_count_chain3_write = write_en & \$638 ;
+  assign \$639  = write_addr == 9'h128;
+  assign ch1_cfg_w2_write = write_en & \$639 ;
+  assign \$640  = write_addr == 9'h129;
+  assign ch1_cfg_w2_crc_write = write_en & \$640 ;
+  assign \$641  = write_addr == 9'h12a;
+  assign ch1_cfg_w2_crc_start_write = write_en & \$641 ;
+  assign \$642  = write_addr == 9'h12c;
+  assign ch1_cfg_w3_write = write_en & \$642 ;
+  assign \$643  = write_addr == 9'h12d;
+  assign ch1_cfg_w3_crc_write = write_en & \$643 ;
+  assign \$644  = write_addr == 9'h12e;
+  assign ch1_cfg_w3_crc_start_write = write_en & \$644 ;
+  assign \$645  = write_addr == 9'h130;
+  assign ch1_cfg_w4_write = write_en & \$645 ;
+  assign \$646  = write_addr == 9'h131;
+  assign ch1_cfg_w4_crc_write = write_en & \$646 ;
+  assign \$647  = write_addr == 9'h132;
+  assign ch1_cfg_w4_crc_start_write = write_en & \$647 ;
+  assign \$648  = write_addr == 9'h134;
+  assign ch1_cfg_w5_write = write_en & \$648 ;
+  assign \$649  = write_addr == 9'h135;
+  assign ch1_cfg_w5_crc_write = write_en & \$649 ;
+  assign \$650  = write_addr == 9'h136;
+  assign ch1_cfg_w5_crc_start_write = write_en & \$650 ;
+  assign \$651  = write_addr == 9'h138;
+  assign ch1_cfg_w6_write = write_en & \$651 ;
+  assign \$652  = write_addr == 9'h139;
+  assign ch1_cfg_w6_crc_write = write_en & \$652 ;
+  assign \$653  = write_addr == 9'h13a;
+  assign ch1_cfg_w6_crc_start_write = write_en & \$653 ;
+  assign \$654  = write_addr == 9'h13c;
+  assign ch1_cfg_w7_write = write_en & \$654 ;
+  assign \$655  = write_addr == 9'h13d;
+  assign ch1_cfg_w7_crc_write = write_en & \$655 ;
+  assign \$656  = write_addr == 9'h13e;
+  assign ch1_cfg_w7_crc_start_write = write_en & \$656 ;
+  assign \$657  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$657 ;
+  assign \$658  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$658 ;
+  assign \$659  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$659 ;
+  assign \$660  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$660 ;
+  assign \$661  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$661 ;
+  assign \$662  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$662 ;
+  assign \$663  = write_addr[10:4] == 5'h15;
+  assign \$664  = write_en & \$663 ;
+  assign ch1__ca_wbuf_en = \$664  ? write_strb : 4'h0;
+  assign \$665  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$665 ;
+  assign \$666  = write_addr == 9'h17c;
+  assign ch1_chain_flags_write = write_en & \$666 ;
+  assign \$667  = write_addr == 9'h17d;
+  assign ch1_chain_updates_write = write_en & \$667 ;
+  assign \$668  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
+  assign \$669  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
+  assign \$670  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
+  assign \$671  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
+  assign \$672  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$673  = ~ ch1_config_written;
+  assign \$674  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$673 ;
+  assign \$675  = | \$674 ;
+  assign \$676  = ~ ch1_config_written;
+  assign \$677  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$676 ;
+  assign \$678  = | \$677 ;
+  assign \$679  = ~ ch1_config_written;
+  assign \$680  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$679 ;
+  assign \$681  = | \$680 ;
+  assign \$682  = ~ ch1_config_written;
+  assign \$683  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$682 ;
+  assign \$684  = | \$683 ;
+  assign \$685  = config_write_strb | { \$684 , \$681 , \$678 , \$675  };
+  assign \wr__en$922  = \$672  ? \$685  : 4'h0;
+  assign \$686  = bus__r_addr[10:7] == 2'h2;
+  assign \$687  = bus__r_en & \$686 ;
+  assign ch1_config_read = \$687  & config_memory0_read_hit;
+  assign \$688  = ch1_config_written >> ch1_config_read_index;
+  assign \$689  = \$688  ? \rd__data$924  : 32'd0;
+  assign \wr__addr$926  = ch1_table_clearing ? ch1_table_sweep : ch1_crc_table_0_table_write_entry;
+  assign \wr__data$927  = ch1_table_clearing ? 16'h0000 : config_write_data[15:0];
+  assign \$690  = | { ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write };
+  assign \$691  = \$690  ? config_write_strb[1:0] : 2'h0;
+  assign \wr__en$928  = ch1_table_clearing ? 2'h3 : \$691 ;
+  assign \wr__addr$932  = ch1_table_clearing ? ch1_table_sweep : ch1_crc_table_16_table_write_entry;
+  assign \wr__data$933  = ch1_table_clearing ? 16'h0000 : config_write_data[15:0];
+  assign \$692  = | { ch1_cfg_crc1_start_config_write, ch1_cfg_crc0_start_config_write };
+  assign \$693  = \$692  ? config_write_strb[1:0] : 2'h0;
+  assign \wr__en$934  = ch1_table_clearing ? 2'h3 : \$693 ;
+  assign \wr__addr$937  = ch1_table_clearing ? ch1_table_sweep : ch1_crc_table_32_table_write_entry;
+  assign \wr__data$938  = ch1_table_clearing ? 1'h0 : config_write_data[24];
+  assign \$694  = | { ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write };
+  assign \$695  = \$694  ? config_write_strb[3] : 1'h0;
+  assign \wr__en$939  = ch1_table_clearing ? 1'h1 : \$695 ;
+  assign \$699  = { 14'h0000, \$697  } | \$698 ;
+  assign \$701  = { 17'h00000, \$699  } | \$700 ;
+  assign \$702  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$704  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$706  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$707 , \$705 , \$703  };
+  assign \$708  = | { ch1_config_wait, ch0_config_wait };
+  assign bus__w_busy = write_en | \$708 ;
+  assign \$710  = \$709  | ch0_read_data;
+  assign bus__r_data = \$710  | ch1_read_data;
   always @(posedge clk)
-    write_en <= \$717 ;
+    write_en <= \$711 ;
   always @(posedge clk)
-    write_addr <= \$718 ;
+    write_addr <= \$712 ;
   always @(posedge clk)
-    write_data <= \$719 ;
+    write_data <= \$713 ;
   always @(posedge clk)
-    write_strb <= \$720 ;
+    write_strb <= \$714 ;
   always @(posedge clk)
-    config_write_data <= \$721 ;
+    config_write_data <= \$715 ;
   always @(posedge clk)
-    config_write_strb <= \$722 ;
+    config_write_strb <= \$716 ;
   always @(posedge clk)
-    g_trigger_start <= \$723 ;
+    g_trigger_start <= \$717 ;
   always @(posedge clk)
-    g_read_select_0 <= \$724 ;
+    g_read_select_0 <= \$718 ;
   always @(posedge clk)
-    g_read_select_1 <= \$725 ;
+    g_read_select_1 <= \$719 ;
   always @(posedge clk)
-    g_read_select_2 <= \$726 ;
+    g_read_select_2 <= \$720 ;
   always @(posedge clk)
-    g_read_select_3 <= \$727 ;
+    g_read_select_3 <= \$721 ;
   always @(posedge clk)
-    g_read_select_4 <= \$728 ;
+    g_read_select_4 <= \$722 ;
   always @(posedge clk)
-    g_read_data <= \$729 ;
+    g_read_data <= \$723 ;
   always @(posedge clk)
-    ch0_config_go <= \$730 ;
+    ch0_config_go <= \$724 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$731 ;
+    ch0_ctrl_start <= \$725 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$732 ;
+    ch0_ctrl_abort <= \$726 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$733 ;
+    ch0_ctrl_clear_counters <= \$727 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$734 ;
+    ch0_ctrl_periodic <= \$728 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$735 ;
+    ch0_ctrl_trigger_enable <= \$729 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$736 ;
+    ch0_irq_status_done <= \$730 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$737 ;
+    ch0_irq_status_error <= \$731 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$738 ;
+    ch0_irq_status_access_done <= \$732 ;
   always @(posedge clk)
-    ch0_irq_enable_config_write <= \$739 ;
+    ch0_irq_enable_config_write <= \$733 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$740 ;
+    ch0_irq_enable_done <= \$734 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$741 ;
+    ch0_irq_enable_error <= \$735 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$742 ;
+    ch0_irq_enable_access_done <= \$736 ;
   always @(posedge clk)
-    ch0_cfg_ma_config_addressed <= \$743 ;
+    ch0_cfg_ma_config_addressed <= \$737 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$744 ;
+    ch0_cfg_ma_ma_half_period <= \$738 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$745 ;
+    ch0_cfg_ma_delay_limit <= \$739 ;
   always @(posedge clk)
-    ch0_cfg_period_config_addressed <= \$746 ;
+    ch0_cfg_period_config_addressed <= \$740 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$747 ;
+    ch0_cfg_period_request_period <= \$741 ;
   always @(posedge clk)
-    ch0_cfg_break_config_addressed <= \$748 ;
+    ch0_cfg_break_config_addressed <= \$742 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$749 ;
+    ch0_cfg_break_break_time <= \$743 ;
   always @(posedge clk)
-    ch0_cfg_ack_config_addressed <= \$750 ;
+    ch0_cfg_ack_config_addressed <= \$744 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$751 ;
+    ch0_cfg_ack_ack_limit <= \$745 ;
   always @(posedge clk)
-    ch0_cfg_timeout_config_addressed <= \$752 ;
+    ch0_cfg_timeout_config_addressed <= \$746 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$753 ;
+    ch0_cfg_timeout_timeout_limit <= \$747 ;
   always @(posedge clk)
-    ch0_cfg_words_config_addressed <= \$754 ;
+    ch0_cfg_words_config_addressed <= \$748 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$755 ;
+    ch0_cfg_words_w0_data_bits <= \$749 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$756 ;
+    ch0_cfg_words_w0_nenw <= \$750 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$757 ;
+    ch0_cfg_words_w0_lc <= \$751 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$758 ;
+    ch0_cfg_words_w0_crc <= \$752 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$759 ;
+    ch0_cfg_words_w0_gray <= \$753 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_signed <= \$760 ;
+    ch0_cfg_words_w0_signed <= \$754 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$761 ;
+    ch0_cfg_words_w1_data_bits <= \$755 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$762 ;
+    ch0_cfg_words_w1_nenw <= \$756 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$763 ;
+    ch0_cfg_words_w1_lc <= \$757 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$764 ;
+    ch0_cfg_words_w1_crc <= \$758 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$765 ;
+    ch0_cfg_words_w1_gray <= \$759 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_signed <= \$766 ;
+    ch0_cfg_words_w1_signed <= \$760 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$767 ;
+    ch0_cfg_words_w1_enable <= \$761 ;
   always @(posedge clk)
-    ch0_cfg_checks_config_addressed <= \$768 ;
+    ch0_cfg_checks_config_addressed <= \$762 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$769 ;
+    ch0_cfg_checks_end_check <= \$763 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$770 ;
+    ch0_cfg_checks_spw_check <= \$764 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$771 ;
+    ch0_cfg_checks_spw_tolerance <= \$765 ;
   always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$772 ;
+    ch0_cfg_checks_noise_limit <= \$766 ;
   always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$773 ;
+    ch0_cfg_checks_delay_tolerance <= \$767 ;
   always @(posedge clk)
-    ch0_cfg_checks_confirm_frames <= \$774 ;
+    ch0_cfg_checks_confirm_frames <= \$768 ;
   always @(posedge clk)
-    ch0_cfg_quiet_config_addressed <= \$775 ;
+    ch0_cfg_quiet_config_addressed <= \$769 ;
   always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$776 ;
+    ch0_cfg_quiet_quiet_time <= \$770 ;
   always @(posedge clk)
-    ch0_cfg_crc0_config_addressed <= \$777 ;
+    ch0_cfg_crc0_config_addressed <= \$771 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$778 ;
+    ch0_cfg_crc0_w0_crc_width <= \$772 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_config_addressed <= \$779 ;
+    ch0_cfg_crc0_start_config_addressed <= \$773 ;
   always @(posedge clk)
-    ch0_cfg_crc1_config_addressed <= \$780 ;
+    ch0_cfg_crc1_config_addressed <= \$774 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$781 ;
+    ch0_cfg_crc1_w1_crc_width <= \$775 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_config_addressed <= \$782 ;
+    ch0_cfg_crc1_start_config_addressed <= \$776 ;
   always @(posedge clk)
-    ch0_cfg_ssi_config_addressed <= \$783 ;
+    ch0_cfg_ssi_config_addressed <= \$777 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi <= \$784 ;
+    ch0_cfg_ssi_ssi <= \$778 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_error <= \$785 ;
+    ch0_cfg_ssi_ssi_error <= \$779 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_error_low <= \$786 ;
+    ch0_cfg_ssi_ssi_error_low <= \$780 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_double <= \$787 ;
+    ch0_cfg_ssi_ssi_double <= \$781 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_delay <= \$788 ;
+    ch0_cfg_ssi_ssi_delay <= \$782 ;
   always @(posedge clk)
-    ch0_cfg_w2_config_write <= \$789 ;
+    ch0_cfg_w2_config_write <= \$783 ;
   always @(posedge clk)
-    ch0_cfg_w2_crc_config_write <= \$790 ;
+    ch0_cfg_w2_crc_config_write <= \$784 ;
   always @(posedge clk)
-    ch0_cfg_w2_crc_start_config_write <= \$791 ;
+    ch0_cfg_w2_crc_start_config_write <= \$785 ;
   always @(posedge clk)
-    ch0_cfg_w3_config_write <= \$792 ;
+    ch0_cfg_w3_config_write <= \$786 ;
   always @(posedge clk)
-    ch0_cfg_w3_crc_config_write <= \$793 ;
+    ch0_cfg_w3_crc_config_write <= \$787 ;
   always @(posedge clk)
-    ch0_cfg_w3_crc_start_config_write <= \$794 ;
+    ch0_cfg_w3_crc_start_config_write <= \$788 ;
   always @(posedge clk)
-    ch0_cfg_w4_config_write <= \$795 ;
+    ch0_cfg_w4_config_write <= \$789 ;
   always @(posedge clk)
-    ch0_cfg_w4_crc_config_write <= \$796 ;
+    ch0_cfg_w4_crc_config_write <= \$790 ;
   always @(posedge clk)
-    ch0_cfg_w4_crc_start_config_write <= \$797 ;
+    ch0_cfg_w4_crc_start_config_write <= \$791 ;
   always @(posedge clk)
-    ch0_cfg_w5_config_write <= \$798 ;
+    ch0_cfg_w5_config_write <= \$792 ;
   always @(posedge clk)
-    ch0_cfg_w5_crc_config_write <= \$799 ;
+    ch0_cfg_w5_crc_config_write <= \$793 ;
   always @(posedge clk)
-    ch0_cfg_w5_crc_start_config_write <= \$800 ;
+    ch0_cfg_w5_crc_start_config_write <= \$794 ;
   always @(posedge clk)
-    ch0_cfg_w6_config_write <= \$801 ;
+    ch0_cfg_w6_config_write <= \$795 ;
   always @(posedge clk)
-    ch0_cfg_w6_crc_config_write <= \$802 ;
+    ch0_cfg_w6_crc_config_write <= \$796 ;
   always @(posedge clk)
-    ch0_cfg_w6_crc_start_config_write <= \$803 ;
+    ch0_cfg_w6_crc_start_config_write <= \$797 ;
   always @(posedge clk)
-    ch0_cfg_w7_config_write <= \$804 ;
+    ch0_cfg_w7_config_write <= \$798 ;
   always @(posedge clk)
-    ch0_cfg_w7_crc_config_write <= \$805 ;
+    ch0_cfg_w7_crc_config_write <= \$799 ;
   always @(posedge clk)
-    ch0_cfg_w7_crc_start_config_write <= \$806 ;
+    ch0_cfg_w7_crc_start_config_write <= \$800 ;
   always @(posedge clk)
-    ch0_ca_request_config_write <= \$807 ;
+    ch0_ca_request_config_write <= \$801 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$808 ;
+    ch0_ca_request_slave_id <= \$802 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$809 ;
+    ch0_ca_request_address <= \$803 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$810 ;
+    ch0_ca_request_count <= \$804 ;
   always @(posedge clk)
-    \ch0_ca_request_write$145  <= \$811 ;
+    \ch0_ca_request_write$145  <= \$805 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$812 ;
+    ch0_ca_ctrl_start <= \$806 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$813 ;
+    ch0_ca_ctrl_abort <= \$807 ;
   always @(posedge clk)
-    ch0_config_wait <= \$814 ;
+    ch0_config_wait <= \$808 ;
   always @(posedge clk)
-    config_memory0_write_data <= \$815 ;
+    config_memory0_write_data <= \$809 ;
   always @(posedge clk)
-    ch0_config_written <= \$816 ;
+    ch0_config_written <= \$810 ;
   always @(posedge clk)
-    ch0_config_read_index <= \$817 ;
+    ch0_config_read_index <= \$811 ;
   always @(posedge clk)
-    ch0_config_read_written <= \$818 ;
+    ch0_table_sweep <= \$812 ;
   always @(posedge clk)
-    ch0_table_sweep <= \$819 ;
+    ch0_table_clearing <= \$813 ;
   always @(posedge clk)
-    ch0_table_clearing <= \$820 ;
+    ch0_read_select_80 <= \$814 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$821 ;
+    ch0_read_select_81 <= \$815 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$822 ;
+    ch0_read_select_82 <= \$816 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$823 ;
+    ch0_read_select_84 <= \$817 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$824 ;
+    ch0_read_select_86 <= \$818 ;
   always @(posedge clk)
-    ch0_read_select_86 <= \$825 ;
+    ch0_read_select_87 <= \$819 ;
   always @(posedge clk)
-    ch0_read_select_87 <= \$826 ;
+    ch0_read_select_90 <= \$820 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$827 ;
+    ch0_read_select_91 <= \$821 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$828 ;
+    ch0_read_select_92 <= \$822 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$829 ;
+    ch0_read_select_93 <= \$823 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$830 ;
+    ch0_read_select_94 <= \$824 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$831 ;
+    ch0_read_select_95 <= \$825 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$832 ;
+    ch0_read_select_96 <= \$826 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$833 ;
+    ch0_read_select_97 <= \$827 ;
   always @(posedge clk)
-    ch0_read_select_97 <= \$834 ;
+    ch0_read_select_a5 <= \$828 ;
   always @(posedge clk)
-    ch0_read_select_a5 <= \$835 ;
+    ch0_read_select_a6 <= \$829 ;
   always @(posedge clk)
-    ch0_read_select_a6 <= \$836 ;
+    ch0_read_select_a7 <= \$830 ;
   always @(posedge clk)
-    ch0_read_select_a7 <= \$837 ;
+    ch0_read_select_a8 <= \$831 ;
   always @(posedge clk)
-    ch0_read_select_a8 <= \$838 ;
+    ch0_read_select_a9 <= \$832 ;
   always @(posedge clk)
-    ch0_read_select_a9 <= \$839 ;
+    ch0_read_select_aa <= \$833 ;
   always @(posedge clk)
-    ch0_read_select_aa <= \$840 ;
+    ch0_read_select_ac <= \$834 ;
   always @(posedge clk)
-    ch0_read_select_ac <= \$841 ;
+    ch0_read_select_ad <= \$835 ;
   always @(posedge clk)
-    ch0_read_select_ad <= \$842 ;
+    ch0_read_select_ae <= \$836 ;
   always @(posedge clk)
-    ch0_read_select_ae <= \$843 ;
+    ch0_read_select_b0 <= \$837 ;
   always @(posedge clk)
-    ch0_read_select_b0 <= \$844 ;
+    ch0_read_select_b1 <= \$838 ;
   always @(posedge clk)
-    ch0_read_select_b1 <= \$845 ;
+    ch0_read_select_b2 <= \$839 ;
   always @(posedge clk)
-    ch0_read_select_b2 <= \$846 ;
+    ch0_read_select_b4 <= \$840 ;
   always @(posedge clk)
-    ch0_read_select_b4 <= \$847 ;
+    ch0_read_select_b5 <= \$841 ;
   always @(posedge clk)
-    ch0_read_select_b5 <= \$848 ;
+    ch0_read_select_b6 <= \$842 ;
   always @(posedge clk)
-    ch0_read_select_b6 <= \$849 ;
+    ch0_read_select_b8 <= \$843 ;
   always @(posedge clk)
-    ch0_read_select_b8 <= \$850 ;
+    ch0_read_select_b9 <= \$844 ;
   always @(posedge clk)
-    ch0_read_select_b9 <= \$851 ;
+    ch0_read_select_ba <= \$845 ;
   always @(posedge clk)
-    ch0_read_select_ba <= \$852 ;
+    ch0_read_select_bc <= \$846 ;
   always @(posedge clk)
-    ch0_read_select_bc <= \$853 ;
+    ch0_read_select_bd <= \$847 ;
   always @(posedge clk)
-    ch0_read_select_bd <= \$854 ;
+    ch0_read_select_be <= \$848 ;
   always @(posedge clk)
-    ch0_read_select_be <= \$855 ;
+    ch0_read_select_c1 <= \$849 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$856 ;
+    ch0_read_select_c2 <= \$850 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$857 ;
+    ch0_read_select_c3 <= \$851 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$858 ;
+    ch0_read_select_c4 <= \$852 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$859 ;
+    ch0_read_select_c5 <= \$853 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$860 ;
+    ch0_read_select_fc <= \$854 ;
   always @(posedge clk)
-    ch0_read_select_fc <= \$861 ;
+    ch0_read_select_fd <= \$855 ;
   always @(posedge clk)
-    ch0_read_select_fd <= \$862 ;
+    ch0_result_status_status_snapshot <= \$856 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$863 ;
+    ch0_result_status_cds_snapshot <= \$857 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$864 ;
+    ch0_result_status_w0_ne_snapshot <= \$858 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$865 ;
+    ch0_result_status_w0_nw_snapshot <= \$859 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$866 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$860 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$867 ;
+    ch0_result_status_w1_ne_snapshot <= \$861 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$868 ;
+    ch0_result_status_w1_nw_snapshot <= \$862 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$869 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$863 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$870 ;
+    ch0_result_status_lc_repeat_snapshot <= \$864 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$871 ;
+    ch0_result_status_lc_skip_snapshot <= \$865 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$872 ;
+    ch0_result_status_lc_zero_snapshot <= \$866 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$873 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$867 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$874 ;
+    ch0_result_status_lc_snapshot <= \$868 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$875 ;
+    ch0_result_seq_seq_snapshot <= \$869 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$876 ;
+    ch0_result_seq_line_delay_snapshot <= \$870 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$877 ;
+    ch0_result_w0_lo_data_snapshot <= \$871 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$878 ;
+    ch0_result_w0_hi_data_snapshot <= \$872 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$879 ;
+    ch0_result_w1_lo_data_snapshot <= \$873 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$880 ;
+    ch0_result_w1_hi_data_snapshot <= \$874 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$881 ;
+    ch0_result_timestamp_time_snapshot <= \$875 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$882 ;
+    ch0_result_line_noise_events_snapshot <= \$876 ;
   always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$883 ;
+    ch0_result_line_delay_settled_snapshot <= \$877 ;
   always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$884 ;
+    ch0_result_line_delay_spread_snapshot <= \$878 ;
   always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$885 ;
+    ch0_result_line_settled_delay_snapshot <= \$879 ;
   always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$886 ;
+    ch0_window0_read <= \$880 ;
   always @(posedge clk)
-    ch0_window0_read <= \$887 ;
+    ch0_window1_read <= \$881 ;
   always @(posedge clk)
-    ch0_window1_read <= \$888 ;
+    ch0_window2_read <= \$882 ;
   always @(posedge clk)
-    ch0_window2_read <= \$889 ;
+    ch0_window3_read <= \$883 ;
   always @(posedge clk)
-    ch0_window3_read <= \$890 ;
+    ch0_read_data <= \$884 ;
   always @(posedge clk)
-    ch0_read_data <= \$891 ;
+    ch1_config_go <= \$885 ;
   always @(posedge clk)
-    ch1_config_go <= \$892 ;
+    ch1_ctrl_start <= \$886 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$893 ;
+    ch1_ctrl_abort <= \$887 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$894 ;
+    ch1_ctrl_clear_counters <= \$888 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$895 ;
+    ch1_ctrl_periodic <= \$889 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$896 ;
+    ch1_ctrl_trigger_enable <= \$890 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$897 ;
+    ch1_irq_status_done <= \$891 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$898 ;
+    ch1_irq_status_error <= \$892 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$899 ;
+    ch1_irq_status_access_done <= \$893 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$900 ;
+    ch1_irq_enable_config_write <= \$894 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$901 ;
+    ch1_irq_enable_done <= \$895 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$902 ;
+    ch1_irq_enable_error <= \$896 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$903 ;
+    ch1_irq_enable_access_done <= \$897 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$904 ;
+    ch1_cfg_ma_config_addressed <= \$898 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_addressed <= \$905 ;
+    ch1_cfg_ma_ma_half_period <= \$899 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$906 ;
+    ch1_cfg_ma_delay_limit <= \$900 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$907 ;
+    ch1_cfg_period_config_addressed <= \$901 ;
   always @(posedge clk)
-    ch1_cfg_period_config_addressed <= \$908 ;
+    ch1_cfg_period_request_period <= \$902 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$909 ;
+    ch1_cfg_break_config_addressed <= \$903 ;
   always @(posedge clk)
-    ch1_cfg_break_config_addressed <= \$910 ;
+    ch1_cfg_break_break_time <= \$904 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$911 ;
+    ch1_cfg_ack_config_addressed <= \$905 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_addressed <= \$912 ;
+    ch1_cfg_ack_ack_limit <= \$906 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$913 ;
+    ch1_cfg_timeout_config_addressed <= \$907 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_addressed <= \$914 ;
+    ch1_cfg_timeout_timeout_limit <= \$908 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$915 ;
+    ch1_cfg_words_config_addressed <= \$909 ;
   always @(posedge clk)
-    ch1_cfg_words_config_addressed <= \$916 ;
+    ch1_cfg_words_w0_data_bits <= \$910 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$917 ;
+    ch1_cfg_words_w0_nenw <= \$911 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$918 ;
+    ch1_cfg_words_w0_lc <= \$912 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$919 ;
+    ch1_cfg_words_w0_crc <= \$913 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$920 ;
+    ch1_cfg_words_w0_gray <= \$914 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$921 ;
+    ch1_cfg_words_w0_signed <= \$915 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_signed <= \$922 ;
+    ch1_cfg_words_w1_data_bits <= \$916 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$923 ;
+    ch1_cfg_words_w1_nenw <= \$917 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$924 ;
+    ch1_cfg_words_w1_lc <= \$918 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$925 ;
+    ch1_cfg_words_w1_crc <= \$919 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$926 ;
+    ch1_cfg_words_w1_gray <= \$920 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$927 ;
+    ch1_cfg_words_w1_signed <= \$921 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_signed <= \$928 ;
+    ch1_cfg_words_w1_enable <= \$922 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$929 ;
+    ch1_cfg_checks_config_addressed <= \$923 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_addressed <= \$930 ;
+    ch1_cfg_checks_end_check <= \$924 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$931 ;
+    ch1_cfg_checks_spw_check <= \$925 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$932 ;
+    ch1_cfg_checks_spw_tolerance <= \$926 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$933 ;
+    ch1_cfg_checks_noise_limit <= \$927 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$934 ;
+    ch1_cfg_checks_delay_tolerance <= \$928 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$935 ;
+    ch1_cfg_checks_confirm_frames <= \$929 ;
   always @(posedge clk)
-    ch1_cfg_checks_confirm_frames <= \$936 ;
+    ch1_cfg_quiet_config_addressed <= \$930 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_addressed <= \$937 ;
+    ch1_cfg_quiet_quiet_time <= \$931 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$938 ;
+    ch1_cfg_crc0_config_addressed <= \$932 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_addressed <= \$939 ;
+    ch1_cfg_crc0_w0_crc_width <= \$933 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$940 ;
+    ch1_cfg_crc0_start_config_addressed <= \$934 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_addressed <= \$941 ;
+    ch1_cfg_crc1_config_addressed <= \$935 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_addressed <= \$942 ;
+    ch1_cfg_crc1_w1_crc_width <= \$936 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$943 ;
+    ch1_cfg_crc1_start_config_addressed <= \$937 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_addressed <= \$944 ;
+    ch1_cfg_ssi_config_addressed <= \$938 ;
   always @(posedge clk)
-    ch1_cfg_ssi_config_addressed <= \$945 ;
+    ch1_cfg_ssi_ssi <= \$939 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi <= \$946 ;
+    ch1_cfg_ssi_ssi_error <= \$940 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error <= \$947 ;
+    ch1_cfg_ssi_ssi_error_low <= \$941 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error_low <= \$948 ;
+    ch1_cfg_ssi_ssi_double <= \$942 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_double <= \$949 ;
+    ch1_cfg_ssi_ssi_delay <= \$943 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_delay <= \$950 ;
+    ch1_cfg_w2_config_write <= \$944 ;
   always @(posedge clk)
-    ch1_cfg_w2_config_write <= \$951 ;
+    ch1_cfg_w2_crc_config_write <= \$945 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_config_write <= \$952 ;
+    ch1_cfg_w2_crc_start_config_write <= \$946 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_start_config_write <= \$953 ;
+    ch1_cfg_w3_config_write <= \$947 ;
   always @(posedge clk)
-    ch1_cfg_w3_config_write <= \$954 ;
+    ch1_cfg_w3_crc_config_write <= \$948 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_config_write <= \$955 ;
+    ch1_cfg_w3_crc_start_config_write <= \$949 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_start_config_write <= \$956 ;
+    ch1_cfg_w4_config_write <= \$950 ;
   always @(posedge clk)
-    ch1_cfg_w4_config_write <= \$957 ;
+    ch1_cfg_w4_crc_config_write <= \$951 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_config_write <= \$958 ;
+    ch1_cfg_w4_crc_start_config_write <= \$952 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_start_config_write <= \$959 ;
+    ch1_cfg_w5_config_write <= \$953 ;
   always @(posedge clk)
-    ch1_cfg_w5_config_write <= \$960 ;
+    ch1_cfg_w5_crc_config_write <= \$954 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_config_write <= \$961 ;
+    ch1_cfg_w5_crc_start_config_write <= \$955 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_start_config_write <= \$962 ;
+    ch1_cfg_w6_config_write <= \$956 ;
   always @(posedge clk)
-    ch1_cfg_w6_config_write <= \$963 ;
+    ch1_cfg_w6_crc_config_write <= \$957 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_config_write <= \$964 ;
+    ch1_cfg_w6_crc_start_config_write <= \$958 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_start_config_write <= \$965 ;
+    ch1_cfg_w7_config_write <= \$959 ;
   always @(posedge clk)
-    ch1_cfg_w7_config_write <= \$966 ;
+    ch1_cfg_w7_crc_config_write <= \$960 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_config_write <= \$967 ;
+    ch1_cfg_w7_crc_start_config_write <= \$961 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_start_config_write <= \$968 ;
+    ch1_ca_request_config_write <= \$962 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$969 ;
+    ch1_ca_request_slave_id <= \$963 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$970 ;
+    ch1_ca_request_address <= \$964 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$971 ;
+    ch1_ca_request_count <= \$965 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$972 ;
+    \ch1_ca_request_write$437  <= \$966 ;
   always @(posedge clk)
-    \ch1_ca_request_write$438  <= \$973 ;
+    ch1_ca_ctrl_start <= \$967 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$974 ;
+    ch1_ca_ctrl_abort <= \$968 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$975 ;
+    ch1_config_wait <= \$969 ;
   always @(posedge clk)
-    ch1_config_wait <= \$976 ;
+    ch1_config_written <= \$970 ;
   always @(posedge clk)
-    ch1_config_written <= \$977 ;
+    ch1_config_read_index <= \$971 ;
   always @(posedge clk)
-    ch1_config_read_index <= \$978 ;
+    ch1_table_sweep <= \$972 ;
   always @(posedge clk)
-    ch1_config_read_written <= \$979 ;
+    ch1_table_clearing <= \$973 ;
   always @(posedge clk)
-    ch1_table_sweep <= \$980 ;
+    ch1_read_select_100 <= \$974 ;
   always @(posedge clk)
-    ch1_table_clearing <= \$981 ;
+    ch1_read_select_101 <= \$975 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$982 ;
+    ch1_read_select_102 <= \$976 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$983 ;
+    ch1_read_select_104 <= \$977 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$984 ;
+    ch1_read_select_106 <= \$978 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$985 ;
+    ch1_read_select_107 <= \$979 ;
   always @(posedge clk)
-    ch1_read_select_106 <= \$986 ;
+    ch1_read_select_110 <= \$980 ;
   always @(posedge clk)
-    ch1_read_select_107 <= \$987 ;
+    ch1_read_select_111 <= \$981 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$988 ;
+    ch1_read_select_112 <= \$982 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$989 ;
+    ch1_read_select_113 <= \$983 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$990 ;
+    ch1_read_select_114 <= \$984 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$991 ;
+    ch1_read_select_115 <= \$985 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$992 ;
+    ch1_read_select_116 <= \$986 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$993 ;
+    ch1_read_select_117 <= \$987 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$994 ;
+    ch1_read_select_125 <= \$988 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$995 ;
+    ch1_read_select_126 <= \$989 ;
   always @(posedge clk)
-    ch1_read_select_125 <= \$996 ;
+    ch1_read_select_127 <= \$990 ;
   always @(posedge clk)
-    ch1_read_select_126 <= \$997 ;
+    ch1_read_select_128 <= \$991 ;
   always @(posedge clk)
-    ch1_read_select_127 <= \$998 ;
+    ch1_read_select_129 <= \$992 ;
   always @(posedge clk)
-    ch1_read_select_128 <= \$999 ;
+    ch1_read_select_12a <= \$993 ;
   always @(posedge clk)
-    ch1_read_select_129 <= \$1000 ;
+    ch1_read_select_12c <= \$994 ;
   always @(posedge clk)
-    ch1_read_select_12a <= \$1001 ;
+    ch1_read_select_12d <= \$995 ;
   always @(posedge clk)
-    ch1_read_select_12c <= \$1002 ;
+    ch1_read_select_12e <= \$996 ;
   always @(posedge clk)
-    ch1_read_select_12d <= \$1003 ;
+    ch1_read_select_130 <= \$997 ;
   always @(posedge clk)
-    ch1_read_select_12e <= \$1004 ;
+    ch1_read_select_131 <= \$998 ;
   always @(posedge clk)
-    ch1_read_select_130 <= \$1005 ;
+    ch1_read_select_132 <= \$999 ;
   always @(posedge clk)
-    ch1_read_select_131 <= \$1006 ;
+    ch1_read_select_134 <= \$1000 ;
   always @(posedge clk)
-    ch1_read_select_132 <= \$1007 ;
+    ch1_read_select_135 <= \$1001 ;
   always @(posedge clk)
-    ch1_read_select_134 <= \$1008 ;
+    ch1_read_select_136 <= \$1002 ;
   always @(posedge clk)
-    ch1_read_select_135 <= \$1009 ;
+    ch1_read_select_138 <= \$1003 ;
   always @(posedge clk)
-    ch1_read_select_136 <= \$1010 ;
+    ch1_read_select_139 <= \$1004 ;
   always @(posedge clk)
-    ch1_read_select_138 <= \$1011 ;
+    ch1_read_select_13a <= \$1005 ;
   always @(posedge clk)
-    ch1_read_select_139 <= \$1012 ;
+    ch1_read_select_13c <= \$1006 ;
   always @(posedge clk)
-    ch1_read_select_13a <= \$1013 ;
+    ch1_read_select_13d <= \$1007 ;
   always @(posedge clk)
-    ch1_read_select_13c <= \$1014 ;
+    ch1_read_select_13e <= \$1008 ;
   always @(posedge clk)
-    ch1_read_select_13d <= \$1015 ;
+    ch1_read_select_141 <= \$1009 ;
   always @(posedge clk)
-    ch1_read_select_13e <= \$1016 ;
+    ch1_read_select_142 <= \$1010 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$1017 ;
+    ch1_read_select_143 <= \$1011 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$1018 ;
+    ch1_read_select_144 <= \$1012 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$1019 ;
+    ch1_read_select_145 <= \$1013 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$1020 ;
+    ch1_read_select_17c <= \$1014 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$1021 ;
+    ch1_read_select_17d <= \$1015 ;
   always @(posedge clk)
-    ch1_read_select_17c <= \$1022 ;
+    ch1_result_status_status_snapshot <= \$1016 ;
   always @(posedge clk)
-    ch1_read_select_17d <= \$1023 ;
+    ch1_result_status_cds_snapshot <= \$1017 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$1024 ;
+    ch1_result_status_w0_ne_snapshot <= \$1018 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$1025 ;
+    ch1_result_status_w0_nw_snapshot <= \$1019 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$1026 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$1020 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$1027 ;
+    ch1_result_status_w1_ne_snapshot <= \$1021 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$1028 ;
+    ch1_result_status_w1_nw_snapshot <= \$1022 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$1029 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$1023 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$1030 ;
+    ch1_result_status_lc_repeat_snapshot <= \$1024 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$1031 ;
+    ch1_result_status_lc_skip_snapshot <= \$1025 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$1032 ;
+    ch1_result_status_lc_zero_snapshot <= \$1026 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$1033 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$1027 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$1034 ;
+    ch1_result_status_lc_snapshot <= \$1028 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$1035 ;
+    ch1_result_seq_seq_snapshot <= \$1029 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$1036 ;
+    ch1_result_seq_line_delay_snapshot <= \$1030 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$1037 ;
+    ch1_result_w0_lo_data_snapshot <= \$1031 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$1038 ;
+    ch1_result_w0_hi_data_snapshot <= \$1032 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$1039 ;
+    ch1_result_w1_lo_data_snapshot <= \$1033 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$1040 ;
+    ch1_result_w1_hi_data_snapshot <= \$1034 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$1041 ;
+    ch1_result_timestamp_time_snapshot <= \$1035 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$1042 ;
+    ch1_result_line_noise_events_snapshot <= \$1036 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$1043 ;
+    ch1_result_line_delay_settled_snapshot <= \$1037 ;
   always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$1044 ;
+    ch1_result_line_delay_spread_snapshot <= \$1038 ;
   always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$1045 ;
+    ch1_result_line_settled_delay_snapshot <= \$1039 ;
   always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$1046 ;
+    ch1_window0_read <= \$1040 ;
   always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$1047 ;
+    ch1_window1_read <= \$1041 ;
   always @(posedge clk)
-    ch1_window0_read <= \$1048 ;
+    ch1_window2_read <= \$1042 ;
   always @(posedge clk)
-    ch1_window1_read <= \$1049 ;
+    ch1_window3_read <= \$1043 ;
   always @(posedge clk)
-    ch1_window2_read <= \$1050 ;
-  always @(posedge clk)
-    ch1_window3_read <= \$1051 ;
-  always @(posedge clk)
-    ch1_read_data <= \$1052 ;
+    ch1_read_data <= \$1044 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$717  = bus__w_en;
+    \$711  = bus__w_en;
+    if (rst) begin
+      \$711  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$712  = write_addr;
+    if (bus__w_en) begin
+      \$712  = bus__w_addr;
+    end
+    if (rst) begin
+      \$712  = 11'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$713  = write_data;
+    if (bus__w_en) begin
+      \$713  = bus__w_data;
+    end
+    if (rst) begin
+      \$713  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$714  = write_strb;
+    if (bus__w_en) begin
+      \$714  = bus__w_strb;
+    end
+    if (rst) begin
+      \$714  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$715  = config_write_data;
+    if (write_en) begin
+      \$715  = write_data;
+    end
+    if (rst) begin
+      \$715  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$716  = config_write_strb;
+    if (write_en) begin
+      \$716  = write_strb;
+    end
+    if (rst) begin
+      \$716  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$717  = \$2 ;
     if (rst) begin
       \$717  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$718  = write_addr;
-    if (bus__w_en) begin
-      \$718  = bus__w_addr;
-    end
-    if (rst) begin
-      \$718  = 11'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$719  = write_data;
-    if (bus__w_en) begin
-      \$719  = bus__w_data;
-    end
-    if (rst) begin
-      \$719  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$720  = write_strb;
-    if (bus__w_en) begin
-      \$720  = bus__w_strb;
-    end
-    if (rst) begin
-      \$720  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$721  = config_write_data;
-    if (write_en) begin
-      \$721  = write_data;
-    end
-    if (rst) begin
-      \$721  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$722  = config_write_strb;
-    if (write_en) begin
-      \$722  = write_strb;
-    end
-    if (rst) begin
-      \$722  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$723  = \$2 ;
-    if (rst) begin
-      \$723  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$724  = g_read_select_0;
+    \$718  = g_read_select_0;
     if (bus__r_en) begin
-      \$724  = \$3 ;
+      \$718  = \$3 ;
     end
+    if (rst) begin
+      \$718  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$719  = g_read_select_1;
+    if (bus__r_en) begin
+      \$719  = \$4 ;
+    end
+    if (rst) begin
+      \$719  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$720  = g_read_select_2;
+    if (bus__r_en) begin
+      \$720  = \$5 ;
+    end
+    if (rst) begin
+      \$720  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$721  = g_read_select_3;
+    if (bus__r_en) begin
+      \$721  = \$6 ;
+    end
+    if (rst) begin
+      \$721  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$722  = g_read_select_4;
+    if (bus__r_en) begin
+      \$722  = \$7 ;
+    end
+    if (rst) begin
+      \$722  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$723  = g_read_data;
+    if (bus__r_load) begin
+      \$723  = \$17 ;
+    end
+    if (rst) begin
+      \$723  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$724  = \$22 ;
     if (rst) begin
       \$724  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$725  = g_read_select_1;
-    if (bus__r_en) begin
-      \$725  = \$4 ;
-    end
+    \$725  = \$24 ;
     if (rst) begin
       \$725  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$726  = g_read_select_2;
-    if (bus__r_en) begin
-      \$726  = \$5 ;
-    end
+    \$726  = \$26 ;
     if (rst) begin
       \$726  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$727  = g_read_select_3;
-    if (bus__r_en) begin
-      \$727  = \$6 ;
-    end
+    \$727  = \$28 ;
     if (rst) begin
       \$727  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$728  = g_read_select_4;
-    if (bus__r_en) begin
-      \$728  = \$7 ;
+    \$728  = ch0_ctrl_periodic;
+    if (\$29 ) begin
+      \$728  = write_data[8];
     end
     if (rst) begin
       \$728  = 1'h0;
@@ -6008,47 +6036,62 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$729  = g_read_data;
-    if (bus__r_load) begin
-      \$729  = \$17 ;
+    \$729  = ch0_ctrl_trigger_enable;
+    if (\$30 ) begin
+      \$729  = write_data[9];
     end
     if (rst) begin
-      \$729  = 32'd0;
+      \$729  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$730  = \$22 ;
+    \$730  = ch0_irq_status_done;
+    if (ch0__frame_done) begin
+      \$730  = 1'h1;
+    end else if (\$32 ) begin
+      \$730  = 1'h0;
+    end
     if (rst) begin
       \$730  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$731  = \$24 ;
+    \$731  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$731  = 1'h1;
+    end else if (\$34 ) begin
+      \$731  = 1'h0;
+    end
     if (rst) begin
       \$731  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$732  = \$26 ;
+    \$732  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$732  = 1'h1;
+    end else if (\$36 ) begin
+      \$732  = 1'h0;
+    end
     if (rst) begin
       \$732  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$733  = \$28 ;
+    \$733  = ch0_irq_enable_write;
     if (rst) begin
       \$733  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$734  = ch0_ctrl_periodic;
-    if (\$29 ) begin
-      \$734  = write_data[8];
+    \$734  = ch0_irq_enable_done;
+    if (\$37 ) begin
+      \$734  = config_write_data[0];
     end
     if (rst) begin
       \$734  = 1'h0;
@@ -6056,9 +6099,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$735  = ch0_ctrl_trigger_enable;
-    if (\$30 ) begin
-      \$735  = write_data[9];
+    \$735  = ch0_irq_enable_error;
+    if (\$38 ) begin
+      \$735  = config_write_data[1];
     end
     if (rst) begin
       \$735  = 1'h0;
@@ -6066,11 +6109,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$736  = ch0_irq_status_done;
-    if (ch0__frame_done) begin
-      \$736  = 1'h1;
-    end else if (\$32 ) begin
-      \$736  = 1'h0;
+    \$736  = ch0_irq_enable_access_done;
+    if (\$39 ) begin
+      \$736  = config_write_data[2];
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6078,115 +6119,123 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$737  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$737  = 1'h1;
-    end else if (\$34 ) begin
-      \$737  = 1'h0;
-    end
+    \$737  = \$40 ;
     if (rst) begin
       \$737  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$738  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$738  = 1'h1;
-    end else if (\$36 ) begin
-      \$738  = 1'h0;
+    \$738  = ch0_cfg_ma_ma_half_period;
+    if (\$41 ) begin
+      \$738 [7:0] = config_write_data[7:0];
+    end
+    if (\$42 ) begin
+      \$738 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$738  = 1'h0;
+      \$738  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$739  = ch0_irq_enable_write;
+    \$739  = ch0_cfg_ma_delay_limit;
+    if (\$43 ) begin
+      \$739 [7:0] = config_write_data[23:16];
+    end
+    if (\$44 ) begin
+      \$739 [11:8] = config_write_data[27:24];
+    end
     if (rst) begin
-      \$739  = 1'h0;
+      \$739  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$740  = ch0_irq_enable_done;
-    if (\$37 ) begin
-      \$740  = config_write_data[0];
-    end
+    \$740  = \$45 ;
     if (rst) begin
       \$740  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$741  = ch0_irq_enable_error;
-    if (\$38 ) begin
-      \$741  = config_write_data[1];
+    \$741  = ch0_cfg_period_request_period;
+    if (\$46 ) begin
+      \$741 [7:0] = config_write_data[7:0];
+    end
+    if (\$47 ) begin
+      \$741 [15:8] = config_write_data[15:8];
+    end
+    if (\$48 ) begin
+      \$741 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$741  = 1'h0;
+      \$741  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$742  = ch0_irq_enable_access_done;
-    if (\$39 ) begin
-      \$742  = config_write_data[2];
-    end
+    \$742  = \$49 ;
     if (rst) begin
       \$742  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$743  = \$40 ;
+    \$743  = ch0_cfg_break_break_time;
+    if (\$50 ) begin
+      \$743 [7:0] = config_write_data[7:0];
+    end
+    if (\$51 ) begin
+      \$743 [15:8] = config_write_data[15:8];
+    end
+    if (\$52 ) begin
+      \$743 [23:16] = config_write_data[23:16];
+    end
     if (rst) begin
-      \$743  = 1'h0;
+      \$743  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$744  = ch0_cfg_ma_ma_half_period;
-    if (\$41 ) begin
-      \$744 [7:0] = config_write_data[7:0];
-    end
-    if (\$42 ) begin
-      \$744 [15:8] = config_write_data[15:8];
-    end
+    \$744  = \$53 ;
     if (rst) begin
-      \$744  = 16'h0000;
+      \$744  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$745  = ch0_cfg_ma_delay_limit;
-    if (\$43 ) begin
-      \$745 [7:0] = config_write_data[23:16];
+    \$745  = ch0_cfg_ack_ack_limit;
+    if (\$54 ) begin
+      \$745 [7:0] = config_write_data[7:0];
     end
-    if (\$44 ) begin
-      \$745 [11:8] = config_write_data[27:24];
+    if (\$55 ) begin
+      \$745 [15:8] = config_write_data[15:8];
+    end
+    if (\$56 ) begin
+      \$745 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$745  = 12'h000;
+      \$745  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$746  = \$45 ;
+    \$746  = \$57 ;
     if (rst) begin
       \$746  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$747  = ch0_cfg_period_request_period;
-    if (\$46 ) begin
+    \$747  = ch0_cfg_timeout_timeout_limit;
+    if (\$58 ) begin
       \$747 [7:0] = config_write_data[7:0];
     end
-    if (\$47 ) begin
+    if (\$59 ) begin
       \$747 [15:8] = config_write_data[15:8];
     end
-    if (\$48 ) begin
+    if (\$60 ) begin
       \$747 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -6195,85 +6244,76 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$748  = \$49 ;
+    \$748  = \$61 ;
     if (rst) begin
       \$748  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$749  = ch0_cfg_break_break_time;
-    if (\$50 ) begin
-      \$749 [7:0] = config_write_data[7:0];
-    end
-    if (\$51 ) begin
-      \$749 [15:8] = config_write_data[15:8];
-    end
-    if (\$52 ) begin
-      \$749 [23:16] = config_write_data[23:16];
+    \$749  = ch0_cfg_words_w0_data_bits;
+    if (\$62 ) begin
+      \$749  = config_write_data[6:0];
     end
     if (rst) begin
-      \$749  = 24'h000000;
+      \$749  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$750  = \$53 ;
+    \$750  = ch0_cfg_words_w0_nenw;
+    if (\$63 ) begin
+      \$750  = config_write_data[7];
+    end
     if (rst) begin
       \$750  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$751  = ch0_cfg_ack_ack_limit;
-    if (\$54 ) begin
-      \$751 [7:0] = config_write_data[7:0];
-    end
-    if (\$55 ) begin
-      \$751 [15:8] = config_write_data[15:8];
-    end
-    if (\$56 ) begin
-      \$751 [23:16] = config_write_data[23:16];
+    \$751  = ch0_cfg_words_w0_lc;
+    if (\$64 ) begin
+      \$751  = config_write_data[8];
     end
     if (rst) begin
-      \$751  = 24'h000000;
+      \$751  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$752  = \$57 ;
+    \$752  = ch0_cfg_words_w0_crc;
+    if (\$65 ) begin
+      \$752  = config_write_data[10:9];
+    end
     if (rst) begin
-      \$752  = 1'h0;
+      \$752  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$753  = ch0_cfg_timeout_timeout_limit;
-    if (\$58 ) begin
-      \$753 [7:0] = config_write_data[7:0];
-    end
-    if (\$59 ) begin
-      \$753 [15:8] = config_write_data[15:8];
-    end
-    if (\$60 ) begin
-      \$753 [23:16] = config_write_data[23:16];
+    \$753  = ch0_cfg_words_w0_gray;
+    if (\$66 ) begin
+      \$753  = config_write_data[11];
     end
     if (rst) begin
-      \$753  = 24'h000000;
+      \$753  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$754  = \$61 ;
+    \$754  = ch0_cfg_words_w0_signed;
+    if (\$67 ) begin
+      \$754  = config_write_data[12];
+    end
     if (rst) begin
       \$754  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$755  = ch0_cfg_words_w0_data_bits;
-    if (\$62 ) begin
-      \$755  = config_write_data[6:0];
+    \$755  = ch0_cfg_words_w1_data_bits;
+    if (\$68 ) begin
+      \$755  = config_write_data[22:16];
     end
     if (rst) begin
       \$755  = 7'h00;
@@ -6281,9 +6321,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$756  = ch0_cfg_words_w0_nenw;
-    if (\$63 ) begin
-      \$756  = config_write_data[7];
+    \$756  = ch0_cfg_words_w1_nenw;
+    if (\$69 ) begin
+      \$756  = config_write_data[23];
     end
     if (rst) begin
       \$756  = 1'h0;
@@ -6291,9 +6331,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$757  = ch0_cfg_words_w0_lc;
-    if (\$64 ) begin
-      \$757  = config_write_data[8];
+    \$757  = ch0_cfg_words_w1_lc;
+    if (\$70 ) begin
+      \$757  = config_write_data[24];
     end
     if (rst) begin
       \$757  = 1'h0;
@@ -6301,9 +6341,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$758  = ch0_cfg_words_w0_crc;
-    if (\$65 ) begin
-      \$758  = config_write_data[10:9];
+    \$758  = ch0_cfg_words_w1_crc;
+    if (\$71 ) begin
+      \$758  = config_write_data[26:25];
     end
     if (rst) begin
       \$758  = 2'h0;
@@ -6311,9 +6351,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$759  = ch0_cfg_words_w0_gray;
-    if (\$66 ) begin
-      \$759  = config_write_data[11];
+    \$759  = ch0_cfg_words_w1_gray;
+    if (\$72 ) begin
+      \$759  = config_write_data[27];
     end
     if (rst) begin
       \$759  = 1'h0;
@@ -6321,9 +6361,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$760  = ch0_cfg_words_w0_signed;
-    if (\$67 ) begin
-      \$760  = config_write_data[12];
+    \$760  = ch0_cfg_words_w1_signed;
+    if (\$73 ) begin
+      \$760  = config_write_data[28];
     end
     if (rst) begin
       \$760  = 1'h0;
@@ -6331,29 +6371,26 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$761  = ch0_cfg_words_w1_data_bits;
-    if (\$68 ) begin
-      \$761  = config_write_data[22:16];
+    \$761  = ch0_cfg_words_w1_enable;
+    if (\$74 ) begin
+      \$761  = config_write_data[31];
     end
     if (rst) begin
-      \$761  = 7'h00;
+      \$761  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$762  = ch0_cfg_words_w1_nenw;
-    if (\$69 ) begin
-      \$762  = config_write_data[23];
-    end
+    \$762  = \$75 ;
     if (rst) begin
       \$762  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$763  = ch0_cfg_words_w1_lc;
-    if (\$70 ) begin
-      \$763  = config_write_data[24];
+    \$763  = ch0_cfg_checks_end_check;
+    if (\$76 ) begin
+      \$763  = config_write_data[0];
     end
     if (rst) begin
       \$763  = 1'h0;
@@ -6361,474 +6398,485 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$764  = ch0_cfg_words_w1_crc;
-    if (\$71 ) begin
-      \$764  = config_write_data[26:25];
+    \$764  = ch0_cfg_checks_spw_check;
+    if (\$77 ) begin
+      \$764  = config_write_data[1];
     end
     if (rst) begin
-      \$764  = 2'h0;
+      \$764  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$765  = ch0_cfg_words_w1_gray;
-    if (\$72 ) begin
-      \$765  = config_write_data[27];
+    \$765  = ch0_cfg_checks_spw_tolerance;
+    if (\$78 ) begin
+      \$765  = config_write_data[15:8];
     end
     if (rst) begin
-      \$765  = 1'h0;
+      \$765  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$766  = ch0_cfg_words_w1_signed;
-    if (\$73 ) begin
-      \$766  = config_write_data[28];
+    \$766  = ch0_cfg_checks_noise_limit;
+    if (\$79 ) begin
+      \$766  = config_write_data[19:16];
     end
     if (rst) begin
-      \$766  = 1'h0;
+      \$766  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$767  = ch0_cfg_words_w1_enable;
-    if (\$74 ) begin
-      \$767  = config_write_data[31];
+    \$767  = ch0_cfg_checks_delay_tolerance;
+    if (\$80 ) begin
+      \$767  = config_write_data[23:20];
     end
     if (rst) begin
-      \$767  = 1'h0;
+      \$767  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$768  = \$75 ;
+    \$768  = ch0_cfg_checks_confirm_frames;
+    if (\$81 ) begin
+      \$768  = config_write_data[27:24];
+    end
     if (rst) begin
-      \$768  = 1'h0;
+      \$768  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$769  = ch0_cfg_checks_end_check;
-    if (\$76 ) begin
-      \$769  = config_write_data[0];
-    end
+    \$769  = \$82 ;
     if (rst) begin
       \$769  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$770  = ch0_cfg_checks_spw_check;
-    if (\$77 ) begin
-      \$770  = config_write_data[1];
-    end
-    if (rst) begin
-      \$770  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$771  = ch0_cfg_checks_spw_tolerance;
-    if (\$78 ) begin
-      \$771  = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$771  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$772  = ch0_cfg_checks_noise_limit;
-    if (\$79 ) begin
-      \$772  = config_write_data[19:16];
-    end
-    if (rst) begin
-      \$772  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$773  = ch0_cfg_checks_delay_tolerance;
-    if (\$80 ) begin
-      \$773  = config_write_data[23:20];
-    end
-    if (rst) begin
-      \$773  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$774  = ch0_cfg_checks_confirm_frames;
-    if (\$81 ) begin
-      \$774  = config_write_data[27:24];
-    end
-    if (rst) begin
-      \$774  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$775  = \$82 ;
-    if (rst) begin
-      \$775  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$776  = ch0_cfg_quiet_quiet_time;
+    \$770  = ch0_cfg_quiet_quiet_time;
     if (\$83 ) begin
-      \$776 [7:0] = config_write_data[7:0];
+      \$770 [7:0] = config_write_data[7:0];
     end
     if (\$84 ) begin
-      \$776 [11:8] = config_write_data[11:8];
+      \$770 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$776  = 12'h000;
+      \$770  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$777  = \$85 ;
+    \$771  = \$85 ;
+    if (rst) begin
+      \$771  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$772  = ch0_cfg_crc0_w0_crc_width;
+    if (\$86 ) begin
+      \$772  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$772  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$773  = \$87 ;
+    if (rst) begin
+      \$773  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$774  = \$88 ;
+    if (rst) begin
+      \$774  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$775  = ch0_cfg_crc1_w1_crc_width;
+    if (\$89 ) begin
+      \$775  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$775  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$776  = \$90 ;
+    if (rst) begin
+      \$776  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$777  = \$91 ;
     if (rst) begin
       \$777  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$778  = ch0_cfg_crc0_w0_crc_width;
-    if (\$86 ) begin
-      \$778  = config_write_data[20:16];
+    \$778  = ch0_cfg_ssi_ssi;
+    if (\$92 ) begin
+      \$778  = config_write_data[0];
     end
     if (rst) begin
-      \$778  = 5'h00;
+      \$778  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$779  = \$87 ;
+    \$779  = ch0_cfg_ssi_ssi_error;
+    if (\$93 ) begin
+      \$779  = config_write_data[1];
+    end
     if (rst) begin
       \$779  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$780  = \$88 ;
+    \$780  = ch0_cfg_ssi_ssi_error_low;
+    if (\$94 ) begin
+      \$780  = config_write_data[2];
+    end
     if (rst) begin
       \$780  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$781  = ch0_cfg_crc1_w1_crc_width;
-    if (\$89 ) begin
-      \$781  = config_write_data[20:16];
+    \$781  = ch0_cfg_ssi_ssi_double;
+    if (\$95 ) begin
+      \$781  = config_write_data[3];
     end
     if (rst) begin
-      \$781  = 5'h00;
+      \$781  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$782  = \$90 ;
+    \$782  = ch0_cfg_ssi_ssi_delay;
+    if (\$96 ) begin
+      \$782 [7:0] = config_write_data[23:16];
+    end
+    if (\$97 ) begin
+      \$782 [11:8] = config_write_data[27:24];
+    end
     if (rst) begin
-      \$782  = 1'h0;
+      \$782  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$783  = \$91 ;
+    \$783  = ch0_cfg_w2_write;
     if (rst) begin
       \$783  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$784  = ch0_cfg_ssi_ssi;
-    if (\$92 ) begin
-      \$784  = config_write_data[0];
-    end
+    \$784  = ch0_cfg_w2_crc_write;
     if (rst) begin
       \$784  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$785  = ch0_cfg_ssi_ssi_error;
-    if (\$93 ) begin
-      \$785  = config_write_data[1];
-    end
+    \$785  = ch0_cfg_w2_crc_start_write;
     if (rst) begin
       \$785  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$786  = ch0_cfg_ssi_ssi_error_low;
-    if (\$94 ) begin
-      \$786  = config_write_data[2];
-    end
+    \$786  = ch0_cfg_w3_write;
     if (rst) begin
       \$786  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$787  = ch0_cfg_ssi_ssi_double;
-    if (\$95 ) begin
-      \$787  = config_write_data[3];
-    end
+    \$787  = ch0_cfg_w3_crc_write;
     if (rst) begin
       \$787  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$788  = ch0_cfg_ssi_ssi_delay;
-    if (\$96 ) begin
-      \$788 [7:0] = config_write_data[23:16];
-    end
-    if (\$97 ) begin
-      \$788 [11:8] = config_write_data[27:24];
-    end
+    \$788  = ch0_cfg_w3_crc_start_write;
     if (rst) begin
-      \$788  = 12'h000;
+      \$788  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$789  = ch0_cfg_w2_write;
+    \$789  = ch0_cfg_w4_write;
     if (rst) begin
       \$789  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$790  = ch0_cfg_w2_crc_write;
+    \$790  = ch0_cfg_w4_crc_write;
     if (rst) begin
       \$790  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$791  = ch0_cfg_w2_crc_start_write;
+    \$791  = ch0_cfg_w4_crc_start_write;
     if (rst) begin
       \$791  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$792  = ch0_cfg_w3_write;
+    \$792  = ch0_cfg_w5_write;
     if (rst) begin
       \$792  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$793  = ch0_cfg_w3_crc_write;
+    \$793  = ch0_cfg_w5_crc_write;
     if (rst) begin
       \$793  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$794  = ch0_cfg_w3_crc_start_write;
+    \$794  = ch0_cfg_w5_crc_start_write;
     if (rst) begin
       \$794  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$795  = ch0_cfg_w4_write;
+    \$795  = ch0_cfg_w6_write;
     if (rst) begin
       \$795  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$796  = ch0_cfg_w4_crc_write;
+    \$796  = ch0_cfg_w6_crc_write;
     if (rst) begin
       \$796  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$797  = ch0_cfg_w4_crc_start_write;
+    \$797  = ch0_cfg_w6_crc_start_write;
     if (rst) begin
       \$797  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$798  = ch0_cfg_w5_write;
+    \$798  = ch0_cfg_w7_write;
     if (rst) begin
       \$798  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$799  = ch0_cfg_w5_crc_write;
+    \$799  = ch0_cfg_w7_crc_write;
     if (rst) begin
       \$799  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$800  = ch0_cfg_w5_crc_start_write;
+    \$800  = ch0_cfg_w7_crc_start_write;
     if (rst) begin
       \$800  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$801  = ch0_cfg_w6_write;
+    \$801  = ch0_ca_request_write;
     if (rst) begin
       \$801  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$802  = ch0_cfg_w6_crc_write;
+    \$802  = ch0_ca_request_slave_id;
+    if (\$98 ) begin
+      \$802  = config_write_data[2:0];
+    end
     if (rst) begin
-      \$802  = 1'h0;
+      \$802  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$803  = ch0_cfg_w6_crc_start_write;
+    \$803  = ch0_ca_request_address;
+    if (\$99 ) begin
+      \$803  = config_write_data[14:8];
+    end
     if (rst) begin
-      \$803  = 1'h0;
+      \$803  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$804  = ch0_cfg_w7_write;
+    \$804  = ch0_ca_request_count;
+    if (\$100 ) begin
+      \$804  = config_write_data[22:16];
+    end
     if (rst) begin
-      \$804  = 1'h0;
+      \$804  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$805  = ch0_cfg_w7_crc_write;
+    \$805  = \ch0_ca_request_write$145 ;
+    if (\$101 ) begin
+      \$805  = config_write_data[24];
+    end
     if (rst) begin
       \$805  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$806  = ch0_cfg_w7_crc_start_write;
+    \$806  = \$103 ;
     if (rst) begin
       \$806  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$807  = ch0_ca_request_write;
+    \$807  = \$105 ;
     if (rst) begin
       \$807  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$808  = ch0_ca_request_slave_id;
-    if (\$98 ) begin
-      \$808  = config_write_data[2:0];
+    \$808  = ch0_config_wait;
+    if (\$106 ) begin
+      \$808  = 1'h1;
+    end else if (ch0_config_go) begin
+      \$808  = 1'h0;
     end
     if (rst) begin
-      \$808  = 3'h0;
+      \$808  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$809  = ch0_ca_request_address;
-    if (\$99 ) begin
-      \$809  = config_write_data[14:8];
+    \$809  = config_memory0_write_data;
+    if (write_en) begin
+      \$809  = \$111 ;
     end
     if (rst) begin
-      \$809  = 7'h00;
+      \$809  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$810  = ch0_ca_request_count;
-    if (\$100 ) begin
-      \$810  = config_write_data[22:16];
-    end
+    \$810  = \$112 ;
     if (rst) begin
-      \$810  = 7'h00;
+      \$810  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$811  = \ch0_ca_request_write$145 ;
-    if (\$101 ) begin
-      \$811  = config_write_data[24];
+    \$811  = ch0_config_read_index;
+    if (ch0_config_read) begin
+      \$811  = config_memory0_read_index;
     end
     if (rst) begin
-      \$811  = 1'h0;
+      \$811  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$812  = \$103 ;
+    \$812  = ch0_table_sweep;
+    if (ch0_table_clearing) begin
+      \$812  = \$113 [0];
+    end
     if (rst) begin
       \$812  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$813  = \$105 ;
+    \$813  = ch0_table_clearing;
+    if (ch0_table_clearing) begin
+      if (\$114 ) begin
+        \$813  = 1'h0;
+      end
+    end
     if (rst) begin
-      \$813  = 1'h0;
+      \$813  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$814  = ch0_config_wait;
-    if (\$106 ) begin
-      \$814  = 1'h1;
-    end else if (ch0_config_go) begin
+    \$814  = ch0_read_select_80;
+    if (bus__r_en) begin
+      \$814  = \$115 ;
+    end
+    if (rst) begin
       \$814  = 1'h0;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$815  = ch0_read_select_81;
+    if (bus__r_en) begin
+      \$815  = \$116 ;
+    end
     if (rst) begin
-      \$814  = 1'h0;
+      \$815  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$815  = config_memory0_write_data;
-    if (write_en) begin
-      \$815  = \$111 ;
+    \$816  = ch0_read_select_82;
+    if (bus__r_en) begin
+      \$816  = \$117 ;
     end
     if (rst) begin
-      \$815  = 32'd0;
+      \$816  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$816  = \$112 ;
+    \$817  = ch0_read_select_84;
+    if (bus__r_en) begin
+      \$817  = \$118 ;
+    end
     if (rst) begin
-      \$816  = 15'h0000;
+      \$817  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$817  = \$113 ;
-    if (rst) begin
-      \$817  = 4'h0;
+    \$818  = ch0_read_select_86;
+    if (bus__r_en) begin
+      \$818  = \$119 ;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$818  = \$116 ;
     if (rst) begin
       \$818  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$819  = ch0_table_sweep;
-    if (ch0_table_clearing) begin
-      \$819  = \$117 [0];
+    \$819  = ch0_read_select_87;
+    if (bus__r_en) begin
+      \$819  = \$120 ;
     end
     if (rst) begin
       \$819  = 1'h0;
@@ -6836,21 +6884,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$820  = ch0_table_clearing;
-    if (ch0_table_clearing) begin
-      if (\$118 ) begin
-        \$820  = 1'h0;
-      end
+    \$820  = ch0_read_select_90;
+    if (bus__r_en) begin
+      \$820  = \$121 ;
     end
     if (rst) begin
-      \$820  = 1'h1;
+      \$820  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$821  = ch0_read_select_80;
+    \$821  = ch0_read_select_91;
     if (bus__r_en) begin
-      \$821  = \$119 ;
+      \$821  = \$122 ;
     end
     if (rst) begin
       \$821  = 1'h0;
@@ -6858,9 +6904,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$822  = ch0_read_select_81;
+    \$822  = ch0_read_select_92;
     if (bus__r_en) begin
-      \$822  = \$120 ;
+      \$822  = \$123 ;
     end
     if (rst) begin
       \$822  = 1'h0;
@@ -6868,9 +6914,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$823  = ch0_read_select_82;
+    \$823  = ch0_read_select_93;
     if (bus__r_en) begin
-      \$823  = \$121 ;
+      \$823  = \$124 ;
     end
     if (rst) begin
       \$823  = 1'h0;
@@ -6878,9 +6924,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$824  = ch0_read_select_84;
+    \$824  = ch0_read_select_94;
     if (bus__r_en) begin
-      \$824  = \$122 ;
+      \$824  = \$125 ;
     end
     if (rst) begin
       \$824  = 1'h0;
@@ -6888,9 +6934,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$825  = ch0_read_select_86;
+    \$825  = ch0_read_select_95;
     if (bus__r_en) begin
-      \$825  = \$123 ;
+      \$825  = \$126 ;
     end
     if (rst) begin
       \$825  = 1'h0;
@@ -6898,9 +6944,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$826  = ch0_read_select_87;
+    \$826  = ch0_read_select_96;
     if (bus__r_en) begin
-      \$826  = \$124 ;
+      \$826  = \$127 ;
     end
     if (rst) begin
       \$826  = 1'h0;
@@ -6908,9 +6954,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$827  = ch0_read_select_90;
+    \$827  = ch0_read_select_97;
     if (bus__r_en) begin
-      \$827  = \$125 ;
+      \$827  = \$128 ;
     end
     if (rst) begin
       \$827  = 1'h0;
@@ -6918,9 +6964,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$828  = ch0_read_select_91;
+    \$828  = ch0_read_select_a5;
     if (bus__r_en) begin
-      \$828  = \$126 ;
+      \$828  = \$129 ;
     end
     if (rst) begin
       \$828  = 1'h0;
@@ -6928,9 +6974,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$829  = ch0_read_select_92;
+    \$829  = ch0_read_select_a6;
     if (bus__r_en) begin
-      \$829  = \$127 ;
+      \$829  = \$130 ;
     end
     if (rst) begin
       \$829  = 1'h0;
@@ -6938,9 +6984,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$830  = ch0_read_select_93;
+    \$830  = ch0_read_select_a7;
     if (bus__r_en) begin
-      \$830  = \$128 ;
+      \$830  = \$131 ;
     end
     if (rst) begin
       \$830  = 1'h0;
@@ -6948,9 +6994,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$831  = ch0_read_select_94;
+    \$831  = ch0_read_select_a8;
     if (bus__r_en) begin
-      \$831  = \$129 ;
+      \$831  = \$132 ;
     end
     if (rst) begin
       \$831  = 1'h0;
@@ -6958,9 +7004,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$832  = ch0_read_select_95;
+    \$832  = ch0_read_select_a9;
     if (bus__r_en) begin
-      \$832  = \$130 ;
+      \$832  = \$133 ;
     end
     if (rst) begin
       \$832  = 1'h0;
@@ -6968,9 +7014,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$833  = ch0_read_select_96;
+    \$833  = ch0_read_select_aa;
     if (bus__r_en) begin
-      \$833  = \$131 ;
+      \$833  = \$134 ;
     end
     if (rst) begin
       \$833  = 1'h0;
@@ -6978,9 +7024,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$834  = ch0_read_select_97;
+    \$834  = ch0_read_select_ac;
     if (bus__r_en) begin
-      \$834  = \$132 ;
+      \$834  = \$135 ;
     end
     if (rst) begin
       \$834  = 1'h0;
@@ -6988,9 +7034,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$835  = ch0_read_select_a5;
+    \$835  = ch0_read_select_ad;
     if (bus__r_en) begin
-      \$835  = \$133 ;
+      \$835  = \$136 ;
     end
     if (rst) begin
       \$835  = 1'h0;
@@ -6998,9 +7044,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$836  = ch0_read_select_a6;
+    \$836  = ch0_read_select_ae;
     if (bus__r_en) begin
-      \$836  = \$134 ;
+      \$836  = \$137 ;
     end
     if (rst) begin
       \$836  = 1'h0;
@@ -7008,9 +7054,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$837  = ch0_read_select_a7;
+    \$837  = ch0_read_select_b0;
     if (bus__r_en) begin
-      \$837  = \$135 ;
+      \$837  = \$138 ;
     end
     if (rst) begin
       \$837  = 1'h0;
@@ -7018,9 +7064,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$838  = ch0_read_select_a8;
+    \$838  = ch0_read_select_b1;
     if (bus__r_en) begin
-      \$838  = \$136 ;
+      \$838  = \$139 ;
     end
     if (rst) begin
       \$838  = 1'h0;
@@ -7028,9 +7074,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$839  = ch0_read_select_a9;
+    \$839  = ch0_read_select_b2;
     if (bus__r_en) begin
-      \$839  = \$137 ;
+      \$839  = \$140 ;
     end
     if (rst) begin
       \$839  = 1'h0;
@@ -7038,9 +7084,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$840  = ch0_read_select_aa;
+    \$840  = ch0_read_select_b4;
     if (bus__r_en) begin
-      \$840  = \$138 ;
+      \$840  = \$141 ;
     end
     if (rst) begin
       \$840  = 1'h0;
@@ -7048,9 +7094,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$841  = ch0_read_select_ac;
+    \$841  = ch0_read_select_b5;
     if (bus__r_en) begin
-      \$841  = \$139 ;
+      \$841  = \$142 ;
     end
     if (rst) begin
       \$841  = 1'h0;
@@ -7058,9 +7104,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$842  = ch0_read_select_ad;
+    \$842  = ch0_read_select_b6;
     if (bus__r_en) begin
-      \$842  = \$140 ;
+      \$842  = \$143 ;
     end
     if (rst) begin
       \$842  = 1'h0;
@@ -7068,9 +7114,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$843  = ch0_read_select_ae;
+    \$843  = ch0_read_select_b8;
     if (bus__r_en) begin
-      \$843  = \$141 ;
+      \$843  = \$144 ;
     end
     if (rst) begin
       \$843  = 1'h0;
@@ -7078,9 +7124,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$844  = ch0_read_select_b0;
+    \$844  = ch0_read_select_b9;
     if (bus__r_en) begin
-      \$844  = \$142 ;
+      \$844  = \$145 ;
     end
     if (rst) begin
       \$844  = 1'h0;
@@ -7088,9 +7134,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$845  = ch0_read_select_b1;
+    \$845  = ch0_read_select_ba;
     if (bus__r_en) begin
-      \$845  = \$143 ;
+      \$845  = \$146 ;
     end
     if (rst) begin
       \$845  = 1'h0;
@@ -7098,9 +7144,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$846  = ch0_read_select_b2;
+    \$846  = ch0_read_select_bc;
     if (bus__r_en) begin
-      \$846  = \$144 ;
+      \$846  = \$147 ;
     end
     if (rst) begin
       \$846  = 1'h0;
@@ -7108,9 +7154,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$847  = ch0_read_select_b4;
+    \$847  = ch0_read_select_bd;
     if (bus__r_en) begin
-      \$847  = \$145 ;
+      \$847  = \$148 ;
     end
     if (rst) begin
       \$847  = 1'h0;
@@ -7118,9 +7164,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$848  = ch0_read_select_b5;
+    \$848  = ch0_read_select_be;
     if (bus__r_en) begin
-      \$848  = \$146 ;
+      \$848  = \$149 ;
     end
     if (rst) begin
       \$848  = 1'h0;
@@ -7128,9 +7174,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$849  = ch0_read_select_b6;
+    \$849  = ch0_read_select_c1;
     if (bus__r_en) begin
-      \$849  = \$147 ;
+      \$849  = \$150 ;
     end
     if (rst) begin
       \$849  = 1'h0;
@@ -7138,9 +7184,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$850  = ch0_read_select_b8;
+    \$850  = ch0_read_select_c2;
     if (bus__r_en) begin
-      \$850  = \$148 ;
+      \$850  = \$151 ;
     end
     if (rst) begin
       \$850  = 1'h0;
@@ -7148,9 +7194,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$851  = ch0_read_select_b9;
+    \$851  = ch0_read_select_c3;
     if (bus__r_en) begin
-      \$851  = \$149 ;
+      \$851  = \$152 ;
     end
     if (rst) begin
       \$851  = 1'h0;
@@ -7158,9 +7204,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$852  = ch0_read_select_ba;
+    \$852  = ch0_read_select_c4;
     if (bus__r_en) begin
-      \$852  = \$150 ;
+      \$852  = \$153 ;
     end
     if (rst) begin
       \$852  = 1'h0;
@@ -7168,9 +7214,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$853  = ch0_read_select_bc;
+    \$853  = ch0_read_select_c5;
     if (bus__r_en) begin
-      \$853  = \$151 ;
+      \$853  = \$154 ;
     end
     if (rst) begin
       \$853  = 1'h0;
@@ -7178,9 +7224,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$854  = ch0_read_select_bd;
+    \$854  = ch0_read_select_fc;
     if (bus__r_en) begin
-      \$854  = \$152 ;
+      \$854  = \$155 ;
     end
     if (rst) begin
       \$854  = 1'h0;
@@ -7188,9 +7234,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$855  = ch0_read_select_be;
+    \$855  = ch0_read_select_fd;
     if (bus__r_en) begin
-      \$855  = \$153 ;
+      \$855  = \$156 ;
     end
     if (rst) begin
       \$855  = 1'h0;
@@ -7198,19 +7244,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$856  = ch0_read_select_c1;
-    if (bus__r_en) begin
-      \$856  = \$154 ;
+    \$856  = ch0_result_status_status_snapshot;
+    if (\$157 ) begin
+      \$856  = \port$13515$0 [3:0];
     end
     if (rst) begin
-      \$856  = 1'h0;
+      \$856  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$857  = ch0_read_select_c2;
-    if (bus__r_en) begin
-      \$857  = \$155 ;
+    \$857  = ch0_result_status_cds_snapshot;
+    if (\$157 ) begin
+      \$857  = \port$13515$0 [49];
     end
     if (rst) begin
       \$857  = 1'h0;
@@ -7218,9 +7264,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$858  = ch0_read_select_c3;
-    if (bus__r_en) begin
-      \$858  = \$156 ;
+    \$858  = ch0_result_status_w0_ne_snapshot;
+    if (\$157 ) begin
+      \$858  = \port$13515$0 [131];
     end
     if (rst) begin
       \$858  = 1'h0;
@@ -7228,9 +7274,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$859  = ch0_read_select_c4;
-    if (bus__r_en) begin
-      \$859  = \$157 ;
+    \$859  = ch0_result_status_w0_nw_snapshot;
+    if (\$157 ) begin
+      \$859  = \port$13515$0 [132];
     end
     if (rst) begin
       \$859  = 1'h0;
@@ -7238,9 +7284,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$860  = ch0_read_select_c5;
-    if (bus__r_en) begin
-      \$860  = \$158 ;
+    \$860  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$157 ) begin
+      \$860  = \port$13515$0 [133];
     end
     if (rst) begin
       \$860  = 1'h0;
@@ -7248,9 +7294,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$861  = ch0_read_select_fc;
-    if (bus__r_en) begin
-      \$861  = \$159 ;
+    \$861  = ch0_result_status_w1_ne_snapshot;
+    if (\$157 ) begin
+      \$861  = \port$13515$0 [174];
     end
     if (rst) begin
       \$861  = 1'h0;
@@ -7258,9 +7304,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$862  = ch0_read_select_fd;
-    if (bus__r_en) begin
-      \$862  = \$160 ;
+    \$862  = ch0_result_status_w1_nw_snapshot;
+    if (\$157 ) begin
+      \$862  = \port$13515$0 [175];
     end
     if (rst) begin
       \$862  = 1'h0;
@@ -7268,19 +7314,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$863  = ch0_result_status_status_snapshot;
-    if (\$161 ) begin
-      \$863  = \port$13613$0 [3:0];
+    \$863  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$157 ) begin
+      \$863  = \port$13515$0 [176];
     end
     if (rst) begin
-      \$863  = 4'h0;
+      \$863  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$864  = ch0_result_status_cds_snapshot;
-    if (\$161 ) begin
-      \$864  = \port$13613$0 [49];
+    \$864  = ch0_result_status_lc_repeat_snapshot;
+    if (\$157 ) begin
+      \$864  = \port$13515$0 [183];
     end
     if (rst) begin
       \$864  = 1'h0;
@@ -7288,9 +7334,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$865  = ch0_result_status_w0_ne_snapshot;
-    if (\$161 ) begin
-      \$865  = \port$13613$0 [131];
+    \$865  = ch0_result_status_lc_skip_snapshot;
+    if (\$157 ) begin
+      \$865  = \port$13515$0 [184];
     end
     if (rst) begin
       \$865  = 1'h0;
@@ -7298,9 +7344,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$866  = ch0_result_status_w0_nw_snapshot;
-    if (\$161 ) begin
-      \$866  = \port$13613$0 [132];
+    \$866  = ch0_result_status_lc_zero_snapshot;
+    if (\$157 ) begin
+      \$866  = \port$13515$0 [185];
     end
     if (rst) begin
       \$866  = 1'h0;
@@ -7308,9 +7354,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$867  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$161 ) begin
-      \$867  = \port$13613$0 [133];
+    \$867  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$157 ) begin
+      \$867  = \port$13515$0 [186];
     end
     if (rst) begin
       \$867  = 1'h0;
@@ -7318,219 +7364,207 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$868  = ch0_result_status_w1_ne_snapshot;
-    if (\$161 ) begin
-      \$868  = \port$13613$0 [174];
+    \$868  = ch0_result_status_lc_snapshot;
+    if (\$157 ) begin
+      \$868  = \port$13515$0 [182:177];
     end
     if (rst) begin
-      \$868  = 1'h0;
+      \$868  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$869  = ch0_result_status_w1_nw_snapshot;
-    if (\$161 ) begin
-      \$869  = \port$13613$0 [175];
+    \$869  = ch0_result_seq_seq_snapshot;
+    if (\$157 ) begin
+      \$869  = ch0__done_count;
     end
     if (rst) begin
-      \$869  = 1'h0;
+      \$869  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$870  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$161 ) begin
-      \$870  = \port$13613$0 [176];
+    \$870  = ch0_result_seq_line_delay_snapshot;
+    if (\$157 ) begin
+      \$870  = \port$13515$0 [48:36];
     end
     if (rst) begin
-      \$870  = 1'h0;
+      \$870  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$871  = ch0_result_status_lc_repeat_snapshot;
-    if (\$161 ) begin
-      \$871  = \port$13613$0 [183];
+    \$871  = ch0_result_w0_lo_data_snapshot;
+    if (\$157 ) begin
+      \$871  = \port$13515$0 [107:76];
     end
     if (rst) begin
-      \$871  = 1'h0;
+      \$871  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$872  = ch0_result_status_lc_skip_snapshot;
-    if (\$161 ) begin
-      \$872  = \port$13613$0 [184];
+    \$872  = ch0_result_w0_hi_data_snapshot;
+    if (\$157 ) begin
+      \$872  = { 9'h000, \port$13515$0 [130:108] };
     end
     if (rst) begin
-      \$872  = 1'h0;
+      \$872  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$873  = ch0_result_status_lc_zero_snapshot;
-    if (\$161 ) begin
-      \$873  = \port$13613$0 [185];
+    \$873  = ch0_result_w1_lo_data_snapshot;
+    if (\$157 ) begin
+      \$873  = \port$13515$0 [165:134];
     end
     if (rst) begin
-      \$873  = 1'h0;
+      \$873  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$874  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$161 ) begin
-      \$874  = \port$13613$0 [186];
+    \$874  = ch0_result_w1_hi_data_snapshot;
+    if (\$157 ) begin
+      \$874  = { 24'h000000, \port$13515$0 [173:166] };
     end
     if (rst) begin
-      \$874  = 1'h0;
+      \$874  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$875  = ch0_result_status_lc_snapshot;
-    if (\$161 ) begin
-      \$875  = \port$13613$0 [182:177];
+    \$875  = ch0_result_timestamp_time_snapshot;
+    if (\$157 ) begin
+      \$875  = \port$13515$0 [35:4];
     end
     if (rst) begin
-      \$875  = 6'h00;
+      \$875  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$876  = ch0_result_seq_seq_snapshot;
-    if (\$161 ) begin
-      \$876  = ch0__done_count;
+    \$876  = ch0_result_line_noise_events_snapshot;
+    if (\$157 ) begin
+      \$876  = \port$13515$0 [53:50];
     end
     if (rst) begin
-      \$876  = 16'h0000;
+      \$876  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$877  = ch0_result_seq_line_delay_snapshot;
-    if (\$161 ) begin
-      \$877  = \port$13613$0 [48:36];
+    \$877  = ch0_result_line_delay_settled_snapshot;
+    if (\$157 ) begin
+      \$877  = \port$13515$0 [54];
     end
     if (rst) begin
-      \$877  = 13'h0000;
+      \$877  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$878  = ch0_result_w0_lo_data_snapshot;
-    if (\$161 ) begin
-      \$878  = \port$13613$0 [107:76];
+    \$878  = ch0_result_line_delay_spread_snapshot;
+    if (\$157 ) begin
+      \$878  = \port$13515$0 [75:68];
     end
     if (rst) begin
-      \$878  = 32'd0;
+      \$878  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$879  = ch0_result_w0_hi_data_snapshot;
-    if (\$161 ) begin
-      \$879  = { 9'h000, \port$13613$0 [130:108] };
+    \$879  = ch0_result_line_settled_delay_snapshot;
+    if (\$157 ) begin
+      \$879  = \port$13515$0 [67:55];
     end
     if (rst) begin
-      \$879  = 32'd0;
+      \$879  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$880  = ch0_result_w1_lo_data_snapshot;
-    if (\$161 ) begin
-      \$880  = \port$13613$0 [165:134];
-    end
-    if (rst) begin
-      \$880  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$881  = ch0_result_w1_hi_data_snapshot;
-    if (\$161 ) begin
-      \$881  = { 24'h000000, \port$13613$0 [173:166] };
-    end
-    if (rst) begin
-      \$881  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$882  = ch0_result_timestamp_time_snapshot;
-    if (\$161 ) begin
-      \$882  = \port$13613$0 [35:4];
-    end
-    if (rst) begin
-      \$882  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$883  = ch0_result_line_noise_events_snapshot;
-    if (\$161 ) begin
-      \$883  = \port$13613$0 [53:50];
-    end
-    if (rst) begin
-      \$883  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$884  = ch0_result_line_delay_settled_snapshot;
-    if (\$161 ) begin
-      \$884  = \port$13613$0 [54];
-    end
-    if (rst) begin
-      \$884  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$885  = ch0_result_line_delay_spread_snapshot;
-    if (\$161 ) begin
-      \$885  = \port$13613$0 [75:68];
-    end
-    if (rst) begin
-      \$885  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$886  = ch0_result_line_settled_delay_snapshot;
-    if (\$161 ) begin
-      \$886  = \port$13613$0 [67:55];
-    end
-    if (rst) begin
-      \$886  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$887  = ch0_window0_read;
+    \$880  = ch0_window0_read;
     if (bus__r_en) begin
-      \$887  = \$163 ;
+      \$880  = \$159 ;
     end
+    if (rst) begin
+      \$880  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$881  = ch0_window1_read;
+    if (bus__r_en) begin
+      \$881  = \$163 ;
+    end
+    if (rst) begin
+      \$881  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$882  = ch0_window2_read;
+    if (bus__r_en) begin
+      \$882  = \$165 ;
+    end
+    if (rst) begin
+      \$882  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$883  = ch0_window3_read;
+    if (bus__r_en) begin
+      \$883  = ch0_config_read;
+    end
+    if (rst) begin
+      \$883  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$884  = ch0_read_data;
+    if (bus__r_load) begin
+      \$884  = \$257 ;
+    end
+    if (rst) begin
+      \$884  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$885  = \$262 ;
+    if (rst) begin
+      \$885  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$886  = \$264 ;
+    if (rst) begin
+      \$886  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$887  = \$266 ;
     if (rst) begin
       \$887  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$888  = ch0_window1_read;
-    if (bus__r_en) begin
-      \$888  = \$167 ;
-    end
+    \$888  = \$268 ;
     if (rst) begin
       \$888  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$889  = ch0_window2_read;
-    if (bus__r_en) begin
-      \$889  = \$169 ;
+    \$889  = ch1_ctrl_periodic;
+    if (\$269 ) begin
+      \$889  = write_data[8];
     end
     if (rst) begin
       \$889  = 1'h0;
@@ -7538,9 +7572,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$890  = ch0_window3_read;
-    if (bus__r_en) begin
-      \$890  = ch0_config_read;
+    \$890  = ch1_ctrl_trigger_enable;
+    if (\$270 ) begin
+      \$890  = write_data[9];
     end
     if (rst) begin
       \$890  = 1'h0;
@@ -7548,47 +7582,62 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$891  = ch0_read_data;
-    if (bus__r_load) begin
-      \$891  = \$261 ;
+    \$891  = ch1_irq_status_done;
+    if (ch1__frame_done) begin
+      \$891  = 1'h1;
+    end else if (\$272 ) begin
+      \$891  = 1'h0;
     end
     if (rst) begin
-      \$891  = 32'd0;
+      \$891  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$892  = \$266 ;
+    \$892  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$892  = 1'h1;
+    end else if (\$274 ) begin
+      \$892  = 1'h0;
+    end
     if (rst) begin
       \$892  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$893  = \$268 ;
+    \$893  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$893  = 1'h1;
+    end else if (\$276 ) begin
+      \$893  = 1'h0;
+    end
     if (rst) begin
       \$893  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$894  = \$270 ;
+    \$894  = ch1_irq_enable_write;
     if (rst) begin
       \$894  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$895  = \$272 ;
+    \$895  = ch1_irq_enable_done;
+    if (\$277 ) begin
+      \$895  = config_write_data[0];
+    end
     if (rst) begin
       \$895  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$896  = ch1_ctrl_periodic;
-    if (\$273 ) begin
-      \$896  = write_data[8];
+    \$896  = ch1_irq_enable_error;
+    if (\$278 ) begin
+      \$896  = config_write_data[1];
     end
     if (rst) begin
       \$896  = 1'h0;
@@ -7596,9 +7645,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$897  = ch1_ctrl_trigger_enable;
-    if (\$274 ) begin
-      \$897  = write_data[9];
+    \$897  = ch1_irq_enable_access_done;
+    if (\$279 ) begin
+      \$897  = config_write_data[2];
     end
     if (rst) begin
       \$897  = 1'h0;
@@ -7606,224 +7655,221 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$898  = ch1_irq_status_done;
-    if (ch1__frame_done) begin
-      \$898  = 1'h1;
-    end else if (\$276 ) begin
-      \$898  = 1'h0;
-    end
+    \$898  = \$280 ;
     if (rst) begin
       \$898  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$899  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$899  = 1'h1;
-    end else if (\$278 ) begin
-      \$899  = 1'h0;
+    \$899  = ch1_cfg_ma_ma_half_period;
+    if (\$281 ) begin
+      \$899 [7:0] = config_write_data[7:0];
+    end
+    if (\$282 ) begin
+      \$899 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$899  = 1'h0;
+      \$899  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$900  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$900  = 1'h1;
-    end else if (\$280 ) begin
-      \$900  = 1'h0;
+    \$900  = ch1_cfg_ma_delay_limit;
+    if (\$283 ) begin
+      \$900 [7:0] = config_write_data[23:16];
+    end
+    if (\$284 ) begin
+      \$900 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$900  = 1'h0;
+      \$900  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$901  = ch1_irq_enable_write;
+    \$901  = \$285 ;
     if (rst) begin
       \$901  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$902  = ch1_irq_enable_done;
-    if (\$281 ) begin
-      \$902  = config_write_data[0];
+    \$902  = ch1_cfg_period_request_period;
+    if (\$286 ) begin
+      \$902 [7:0] = config_write_data[7:0];
+    end
+    if (\$287 ) begin
+      \$902 [15:8] = config_write_data[15:8];
+    end
+    if (\$288 ) begin
+      \$902 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$902  = 1'h0;
+      \$902  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$903  = ch1_irq_enable_error;
-    if (\$282 ) begin
-      \$903  = config_write_data[1];
-    end
+    \$903  = \$289 ;
     if (rst) begin
       \$903  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$904  = ch1_irq_enable_access_done;
-    if (\$283 ) begin
-      \$904  = config_write_data[2];
+    \$904  = ch1_cfg_break_break_time;
+    if (\$290 ) begin
+      \$904 [7:0] = config_write_data[7:0];
+    end
+    if (\$291 ) begin
+      \$904 [15:8] = config_write_data[15:8];
+    end
+    if (\$292 ) begin
+      \$904 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$904  = 1'h0;
+      \$904  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$905  = \$284 ;
+    \$905  = \$293 ;
     if (rst) begin
       \$905  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$906  = ch1_cfg_ma_ma_half_period;
-    if (\$285 ) begin
+    \$906  = ch1_cfg_ack_ack_limit;
+    if (\$294 ) begin
       \$906 [7:0] = config_write_data[7:0];
     end
-    if (\$286 ) begin
+    if (\$295 ) begin
       \$906 [15:8] = config_write_data[15:8];
     end
-    if (rst) begin
-      \$906  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$907  = ch1_cfg_ma_delay_limit;
-    if (\$287 ) begin
-      \$907 [7:0] = config_write_data[23:16];
-    end
-    if (\$288 ) begin
-      \$907 [11:8] = config_write_data[27:24];
-    end
-    if (rst) begin
-      \$907  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$908  = \$289 ;
-    if (rst) begin
-      \$908  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$909  = ch1_cfg_period_request_period;
-    if (\$290 ) begin
-      \$909 [7:0] = config_write_data[7:0];
-    end
-    if (\$291 ) begin
-      \$909 [15:8] = config_write_data[15:8];
-    end
-    if (\$292 ) begin
-      \$909 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$909  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$910  = \$293 ;
-    if (rst) begin
-      \$910  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$911  = ch1_cfg_break_break_time;
-    if (\$294 ) begin
-      \$911 [7:0] = config_write_data[7:0];
-    end
-    if (\$295 ) begin
-      \$911 [15:8] = config_write_data[15:8];
-    end
     if (\$296 ) begin
-      \$911 [23:16] = config_write_data[23:16];
+      \$906 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$911  = 24'h000000;
+      \$906  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$912  = \$297 ;
+    \$907  = \$297 ;
+    if (rst) begin
+      \$907  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$908  = ch1_cfg_timeout_timeout_limit;
+    if (\$298 ) begin
+      \$908 [7:0] = config_write_data[7:0];
+    end
+    if (\$299 ) begin
+      \$908 [15:8] = config_write_data[15:8];
+    end
+    if (\$300 ) begin
+      \$908 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$908  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$909  = \$301 ;
+    if (rst) begin
+      \$909  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$910  = ch1_cfg_words_w0_data_bits;
+    if (\$302 ) begin
+      \$910  = config_write_data[6:0];
+    end
+    if (rst) begin
+      \$910  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$911  = ch1_cfg_words_w0_nenw;
+    if (\$303 ) begin
+      \$911  = config_write_data[7];
+    end
+    if (rst) begin
+      \$911  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$912  = ch1_cfg_words_w0_lc;
+    if (\$304 ) begin
+      \$912  = config_write_data[8];
+    end
     if (rst) begin
       \$912  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$913  = ch1_cfg_ack_ack_limit;
-    if (\$298 ) begin
-      \$913 [7:0] = config_write_data[7:0];
-    end
-    if (\$299 ) begin
-      \$913 [15:8] = config_write_data[15:8];
-    end
-    if (\$300 ) begin
-      \$913 [23:16] = config_write_data[23:16];
+    \$913  = ch1_cfg_words_w0_crc;
+    if (\$305 ) begin
+      \$913  = config_write_data[10:9];
     end
     if (rst) begin
-      \$913  = 24'h000000;
+      \$913  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$914  = \$301 ;
+    \$914  = ch1_cfg_words_w0_gray;
+    if (\$306 ) begin
+      \$914  = config_write_data[11];
+    end
     if (rst) begin
       \$914  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$915  = ch1_cfg_timeout_timeout_limit;
-    if (\$302 ) begin
-      \$915 [7:0] = config_write_data[7:0];
-    end
-    if (\$303 ) begin
-      \$915 [15:8] = config_write_data[15:8];
-    end
-    if (\$304 ) begin
-      \$915 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$915  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$916  = \$305 ;
-    if (rst) begin
-      \$916  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$917  = ch1_cfg_words_w0_data_bits;
-    if (\$306 ) begin
-      \$917  = config_write_data[6:0];
-    end
-    if (rst) begin
-      \$917  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$918  = ch1_cfg_words_w0_nenw;
+    \$915  = ch1_cfg_words_w0_signed;
     if (\$307 ) begin
-      \$918  = config_write_data[7];
+      \$915  = config_write_data[12];
+    end
+    if (rst) begin
+      \$915  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$916  = ch1_cfg_words_w1_data_bits;
+    if (\$308 ) begin
+      \$916  = config_write_data[22:16];
+    end
+    if (rst) begin
+      \$916  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$917  = ch1_cfg_words_w1_nenw;
+    if (\$309 ) begin
+      \$917  = config_write_data[23];
+    end
+    if (rst) begin
+      \$917  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$918  = ch1_cfg_words_w1_lc;
+    if (\$310 ) begin
+      \$918  = config_write_data[24];
     end
     if (rst) begin
       \$918  = 1'h0;
@@ -7831,29 +7877,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$919  = ch1_cfg_words_w0_lc;
-    if (\$308 ) begin
-      \$919  = config_write_data[8];
+    \$919  = ch1_cfg_words_w1_crc;
+    if (\$311 ) begin
+      \$919  = config_write_data[26:25];
     end
     if (rst) begin
-      \$919  = 1'h0;
+      \$919  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$920  = ch1_cfg_words_w0_crc;
-    if (\$309 ) begin
-      \$920  = config_write_data[10:9];
+    \$920  = ch1_cfg_words_w1_gray;
+    if (\$312 ) begin
+      \$920  = config_write_data[27];
     end
     if (rst) begin
-      \$920  = 2'h0;
+      \$920  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$921  = ch1_cfg_words_w0_gray;
-    if (\$310 ) begin
-      \$921  = config_write_data[11];
+    \$921  = ch1_cfg_words_w1_signed;
+    if (\$313 ) begin
+      \$921  = config_write_data[28];
     end
     if (rst) begin
       \$921  = 1'h0;
@@ -7861,9 +7907,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$922  = ch1_cfg_words_w0_signed;
-    if (\$311 ) begin
-      \$922  = config_write_data[12];
+    \$922  = ch1_cfg_words_w1_enable;
+    if (\$314 ) begin
+      \$922  = config_write_data[31];
     end
     if (rst) begin
       \$922  = 1'h0;
@@ -7871,19 +7917,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$923  = ch1_cfg_words_w1_data_bits;
-    if (\$312 ) begin
-      \$923  = config_write_data[22:16];
-    end
+    \$923  = \$315 ;
     if (rst) begin
-      \$923  = 7'h00;
+      \$923  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$924  = ch1_cfg_words_w1_nenw;
-    if (\$313 ) begin
-      \$924  = config_write_data[23];
+    \$924  = ch1_cfg_checks_end_check;
+    if (\$316 ) begin
+      \$924  = config_write_data[0];
     end
     if (rst) begin
       \$924  = 1'h0;
@@ -7891,9 +7934,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$925  = ch1_cfg_words_w1_lc;
-    if (\$314 ) begin
-      \$925  = config_write_data[24];
+    \$925  = ch1_cfg_checks_spw_check;
+    if (\$317 ) begin
+      \$925  = config_write_data[1];
     end
     if (rst) begin
       \$925  = 1'h0;
@@ -7901,433 +7944,435 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$926  = ch1_cfg_words_w1_crc;
-    if (\$315 ) begin
-      \$926  = config_write_data[26:25];
-    end
-    if (rst) begin
-      \$926  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$927  = ch1_cfg_words_w1_gray;
-    if (\$316 ) begin
-      \$927  = config_write_data[27];
-    end
-    if (rst) begin
-      \$927  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$928  = ch1_cfg_words_w1_signed;
-    if (\$317 ) begin
-      \$928  = config_write_data[28];
-    end
-    if (rst) begin
-      \$928  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$929  = ch1_cfg_words_w1_enable;
+    \$926  = ch1_cfg_checks_spw_tolerance;
     if (\$318 ) begin
-      \$929  = config_write_data[31];
+      \$926  = config_write_data[15:8];
     end
     if (rst) begin
-      \$929  = 1'h0;
+      \$926  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$930  = \$319 ;
+    \$927  = ch1_cfg_checks_noise_limit;
+    if (\$319 ) begin
+      \$927  = config_write_data[19:16];
+    end
+    if (rst) begin
+      \$927  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$928  = ch1_cfg_checks_delay_tolerance;
+    if (\$320 ) begin
+      \$928  = config_write_data[23:20];
+    end
+    if (rst) begin
+      \$928  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$929  = ch1_cfg_checks_confirm_frames;
+    if (\$321 ) begin
+      \$929  = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$929  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$930  = \$322 ;
     if (rst) begin
       \$930  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$931  = ch1_cfg_checks_end_check;
-    if (\$320 ) begin
-      \$931  = config_write_data[0];
+    \$931  = ch1_cfg_quiet_quiet_time;
+    if (\$323 ) begin
+      \$931 [7:0] = config_write_data[7:0];
+    end
+    if (\$324 ) begin
+      \$931 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$931  = 1'h0;
+      \$931  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$932  = ch1_cfg_checks_spw_check;
-    if (\$321 ) begin
-      \$932  = config_write_data[1];
-    end
+    \$932  = \$325 ;
     if (rst) begin
       \$932  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$933  = ch1_cfg_checks_spw_tolerance;
-    if (\$322 ) begin
-      \$933  = config_write_data[15:8];
+    \$933  = ch1_cfg_crc0_w0_crc_width;
+    if (\$326 ) begin
+      \$933  = config_write_data[20:16];
     end
     if (rst) begin
-      \$933  = 8'h00;
+      \$933  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$934  = ch1_cfg_checks_noise_limit;
-    if (\$323 ) begin
-      \$934  = config_write_data[19:16];
-    end
+    \$934  = \$327 ;
     if (rst) begin
-      \$934  = 4'h0;
+      \$934  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$935  = ch1_cfg_checks_delay_tolerance;
-    if (\$324 ) begin
-      \$935  = config_write_data[23:20];
-    end
+    \$935  = \$328 ;
     if (rst) begin
-      \$935  = 4'h0;
+      \$935  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$936  = ch1_cfg_checks_confirm_frames;
-    if (\$325 ) begin
-      \$936  = config_write_data[27:24];
+    \$936  = ch1_cfg_crc1_w1_crc_width;
+    if (\$329 ) begin
+      \$936  = config_write_data[20:16];
     end
     if (rst) begin
-      \$936  = 4'h0;
+      \$936  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$937  = \$326 ;
+    \$937  = \$330 ;
     if (rst) begin
       \$937  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$938  = ch1_cfg_quiet_quiet_time;
-    if (\$327 ) begin
-      \$938 [7:0] = config_write_data[7:0];
-    end
-    if (\$328 ) begin
-      \$938 [11:8] = config_write_data[11:8];
-    end
+    \$938  = \$331 ;
     if (rst) begin
-      \$938  = 12'h000;
+      \$938  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$939  = \$329 ;
+    \$939  = ch1_cfg_ssi_ssi;
+    if (\$332 ) begin
+      \$939  = config_write_data[0];
+    end
     if (rst) begin
       \$939  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$940  = ch1_cfg_crc0_w0_crc_width;
-    if (\$330 ) begin
-      \$940  = config_write_data[20:16];
+    \$940  = ch1_cfg_ssi_ssi_error;
+    if (\$333 ) begin
+      \$940  = config_write_data[1];
     end
     if (rst) begin
-      \$940  = 5'h00;
+      \$940  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$941  = \$331 ;
+    \$941  = ch1_cfg_ssi_ssi_error_low;
+    if (\$334 ) begin
+      \$941  = config_write_data[2];
+    end
     if (rst) begin
       \$941  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$942  = \$332 ;
+    \$942  = ch1_cfg_ssi_ssi_double;
+    if (\$335 ) begin
+      \$942  = config_write_data[3];
+    end
     if (rst) begin
       \$942  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$943  = ch1_cfg_crc1_w1_crc_width;
-    if (\$333 ) begin
-      \$943  = config_write_data[20:16];
+    \$943  = ch1_cfg_ssi_ssi_delay;
+    if (\$336 ) begin
+      \$943 [7:0] = config_write_data[23:16];
+    end
+    if (\$337 ) begin
+      \$943 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$943  = 5'h00;
+      \$943  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$944  = \$334 ;
+    \$944  = ch1_cfg_w2_write;
     if (rst) begin
       \$944  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$945  = \$335 ;
+    \$945  = ch1_cfg_w2_crc_write;
     if (rst) begin
       \$945  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$946  = ch1_cfg_ssi_ssi;
-    if (\$336 ) begin
-      \$946  = config_write_data[0];
-    end
+    \$946  = ch1_cfg_w2_crc_start_write;
     if (rst) begin
       \$946  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$947  = ch1_cfg_ssi_ssi_error;
-    if (\$337 ) begin
-      \$947  = config_write_data[1];
-    end
+    \$947  = ch1_cfg_w3_write;
     if (rst) begin
       \$947  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$948  = ch1_cfg_ssi_ssi_error_low;
-    if (\$338 ) begin
-      \$948  = config_write_data[2];
-    end
+    \$948  = ch1_cfg_w3_crc_write;
     if (rst) begin
       \$948  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$949  = ch1_cfg_ssi_ssi_double;
-    if (\$339 ) begin
-      \$949  = config_write_data[3];
-    end
+    \$949  = ch1_cfg_w3_crc_start_write;
     if (rst) begin
       \$949  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$950  = ch1_cfg_ssi_ssi_delay;
-    if (\$340 ) begin
-      \$950 [7:0] = config_write_data[23:16];
-    end
-    if (\$341 ) begin
-      \$950 [11:8] = config_write_data[27:24];
-    end
+    \$950  = ch1_cfg_w4_write;
     if (rst) begin
-      \$950  = 12'h000;
+      \$950  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$951  = ch1_cfg_w2_write;
+    \$951  = ch1_cfg_w4_crc_write;
     if (rst) begin
       \$951  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$952  = ch1_cfg_w2_crc_write;
+    \$952  = ch1_cfg_w4_crc_start_write;
     if (rst) begin
       \$952  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$953  = ch1_cfg_w2_crc_start_write;
+    \$953  = ch1_cfg_w5_write;
     if (rst) begin
       \$953  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$954  = ch1_cfg_w3_write;
+    \$954  = ch1_cfg_w5_crc_write;
     if (rst) begin
       \$954  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$955  = ch1_cfg_w3_crc_write;
+    \$955  = ch1_cfg_w5_crc_start_write;
     if (rst) begin
       \$955  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$956  = ch1_cfg_w3_crc_start_write;
+    \$956  = ch1_cfg_w6_write;
     if (rst) begin
       \$956  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$957  = ch1_cfg_w4_write;
+    \$957  = ch1_cfg_w6_crc_write;
     if (rst) begin
       \$957  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$958  = ch1_cfg_w4_crc_write;
+    \$958  = ch1_cfg_w6_crc_start_write;
     if (rst) begin
       \$958  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$959  = ch1_cfg_w4_crc_start_write;
+    \$959  = ch1_cfg_w7_write;
     if (rst) begin
       \$959  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$960  = ch1_cfg_w5_write;
+    \$960  = ch1_cfg_w7_crc_write;
     if (rst) begin
       \$960  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$961  = ch1_cfg_w5_crc_write;
+    \$961  = ch1_cfg_w7_crc_start_write;
     if (rst) begin
       \$961  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$962  = ch1_cfg_w5_crc_start_write;
+    \$962  = ch1_ca_request_write;
     if (rst) begin
       \$962  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$963  = ch1_cfg_w6_write;
+    \$963  = ch1_ca_request_slave_id;
+    if (\$338 ) begin
+      \$963  = config_write_data[2:0];
+    end
     if (rst) begin
-      \$963  = 1'h0;
+      \$963  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$964  = ch1_cfg_w6_crc_write;
+    \$964  = ch1_ca_request_address;
+    if (\$339 ) begin
+      \$964  = config_write_data[14:8];
+    end
     if (rst) begin
-      \$964  = 1'h0;
+      \$964  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$965  = ch1_cfg_w6_crc_start_write;
+    \$965  = ch1_ca_request_count;
+    if (\$340 ) begin
+      \$965  = config_write_data[22:16];
+    end
     if (rst) begin
-      \$965  = 1'h0;
+      \$965  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$966  = ch1_cfg_w7_write;
+    \$966  = \ch1_ca_request_write$437 ;
+    if (\$341 ) begin
+      \$966  = config_write_data[24];
+    end
     if (rst) begin
       \$966  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$967  = ch1_cfg_w7_crc_write;
+    \$967  = \$343 ;
     if (rst) begin
       \$967  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$968  = ch1_cfg_w7_crc_start_write;
+    \$968  = \$345 ;
     if (rst) begin
       \$968  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$969  = ch1_ca_request_write;
+    \$969  = ch1_config_wait;
+    if (\$346 ) begin
+      \$969  = 1'h1;
+    end else if (ch1_config_go) begin
+      \$969  = 1'h0;
+    end
     if (rst) begin
       \$969  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$970  = ch1_ca_request_slave_id;
-    if (\$342 ) begin
-      \$970  = config_write_data[2:0];
-    end
+    \$970  = \$347 ;
     if (rst) begin
-      \$970  = 3'h0;
+      \$970  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$971  = ch1_ca_request_address;
-    if (\$343 ) begin
-      \$971  = config_write_data[14:8];
+    \$971  = ch1_config_read_index;
+    if (ch1_config_read) begin
+      \$971  = config_memory0_read_index;
     end
     if (rst) begin
-      \$971  = 7'h00;
+      \$971  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$972  = ch1_ca_request_count;
-    if (\$344 ) begin
-      \$972  = config_write_data[22:16];
+    \$972  = ch1_table_sweep;
+    if (ch1_table_clearing) begin
+      \$972  = \$348 [0];
     end
     if (rst) begin
-      \$972  = 7'h00;
+      \$972  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$973  = \ch1_ca_request_write$438 ;
-    if (\$345 ) begin
-      \$973  = config_write_data[24];
+    \$973  = ch1_table_clearing;
+    if (ch1_table_clearing) begin
+      if (\$349 ) begin
+        \$973  = 1'h0;
+      end
     end
     if (rst) begin
-      \$973  = 1'h0;
+      \$973  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$974  = \$347 ;
+    \$974  = ch1_read_select_100;
+    if (bus__r_en) begin
+      \$974  = \$350 ;
+    end
     if (rst) begin
       \$974  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$975  = \$349 ;
+    \$975  = ch1_read_select_101;
+    if (bus__r_en) begin
+      \$975  = \$351 ;
+    end
     if (rst) begin
       \$975  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$976  = ch1_config_wait;
-    if (\$350 ) begin
-      \$976  = 1'h1;
-    end else if (ch1_config_go) begin
-      \$976  = 1'h0;
+    \$976  = ch1_read_select_102;
+    if (bus__r_en) begin
+      \$976  = \$352 ;
     end
     if (rst) begin
       \$976  = 1'h0;
@@ -8335,30 +8380,39 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$977  = \$351 ;
+    \$977  = ch1_read_select_104;
+    if (bus__r_en) begin
+      \$977  = \$353 ;
+    end
     if (rst) begin
-      \$977  = 15'h0000;
+      \$977  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$978  = \$352 ;
+    \$978  = ch1_read_select_106;
+    if (bus__r_en) begin
+      \$978  = \$354 ;
+    end
     if (rst) begin
-      \$978  = 4'h0;
+      \$978  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$979  = \$355 ;
+    \$979  = ch1_read_select_107;
+    if (bus__r_en) begin
+      \$979  = \$355 ;
+    end
     if (rst) begin
       \$979  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$980  = ch1_table_sweep;
-    if (ch1_table_clearing) begin
-      \$980  = \$356 [0];
+    \$980  = ch1_read_select_110;
+    if (bus__r_en) begin
+      \$980  = \$356 ;
     end
     if (rst) begin
       \$980  = 1'h0;
@@ -8366,19 +8420,17 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$981  = ch1_table_clearing;
-    if (ch1_table_clearing) begin
-      if (\$357 ) begin
-        \$981  = 1'h0;
-      end
+    \$981  = ch1_read_select_111;
+    if (bus__r_en) begin
+      \$981  = \$357 ;
     end
     if (rst) begin
-      \$981  = 1'h1;
+      \$981  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$982  = ch1_read_select_100;
+    \$982  = ch1_read_select_112;
     if (bus__r_en) begin
       \$982  = \$358 ;
     end
@@ -8388,7 +8440,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$983  = ch1_read_select_101;
+    \$983  = ch1_read_select_113;
     if (bus__r_en) begin
       \$983  = \$359 ;
     end
@@ -8398,7 +8450,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$984  = ch1_read_select_102;
+    \$984  = ch1_read_select_114;
     if (bus__r_en) begin
       \$984  = \$360 ;
     end
@@ -8408,7 +8460,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$985  = ch1_read_select_104;
+    \$985  = ch1_read_select_115;
     if (bus__r_en) begin
       \$985  = \$361 ;
     end
@@ -8418,7 +8470,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$986  = ch1_read_select_106;
+    \$986  = ch1_read_select_116;
     if (bus__r_en) begin
       \$986  = \$362 ;
     end
@@ -8428,7 +8480,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$987  = ch1_read_select_107;
+    \$987  = ch1_read_select_117;
     if (bus__r_en) begin
       \$987  = \$363 ;
     end
@@ -8438,7 +8490,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$988  = ch1_read_select_110;
+    \$988  = ch1_read_select_125;
     if (bus__r_en) begin
       \$988  = \$364 ;
     end
@@ -8448,7 +8500,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$989  = ch1_read_select_111;
+    \$989  = ch1_read_select_126;
     if (bus__r_en) begin
       \$989  = \$365 ;
     end
@@ -8458,7 +8510,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$990  = ch1_read_select_112;
+    \$990  = ch1_read_select_127;
     if (bus__r_en) begin
       \$990  = \$366 ;
     end
@@ -8468,7 +8520,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$991  = ch1_read_select_113;
+    \$991  = ch1_read_select_128;
     if (bus__r_en) begin
       \$991  = \$367 ;
     end
@@ -8478,7 +8530,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$992  = ch1_read_select_114;
+    \$992  = ch1_read_select_129;
     if (bus__r_en) begin
       \$992  = \$368 ;
     end
@@ -8488,7 +8540,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$993  = ch1_read_select_115;
+    \$993  = ch1_read_select_12a;
     if (bus__r_en) begin
       \$993  = \$369 ;
     end
@@ -8498,7 +8550,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$994  = ch1_read_select_116;
+    \$994  = ch1_read_select_12c;
     if (bus__r_en) begin
       \$994  = \$370 ;
     end
@@ -8508,7 +8560,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$995  = ch1_read_select_117;
+    \$995  = ch1_read_select_12d;
     if (bus__r_en) begin
       \$995  = \$371 ;
     end
@@ -8518,7 +8570,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$996  = ch1_read_select_125;
+    \$996  = ch1_read_select_12e;
     if (bus__r_en) begin
       \$996  = \$372 ;
     end
@@ -8528,7 +8580,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$997  = ch1_read_select_126;
+    \$997  = ch1_read_select_130;
     if (bus__r_en) begin
       \$997  = \$373 ;
     end
@@ -8538,7 +8590,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$998  = ch1_read_select_127;
+    \$998  = ch1_read_select_131;
     if (bus__r_en) begin
       \$998  = \$374 ;
     end
@@ -8548,7 +8600,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$999  = ch1_read_select_128;
+    \$999  = ch1_read_select_132;
     if (bus__r_en) begin
       \$999  = \$375 ;
     end
@@ -8558,7 +8610,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1000  = ch1_read_select_129;
+    \$1000  = ch1_read_select_134;
     if (bus__r_en) begin
       \$1000  = \$376 ;
     end
@@ -8568,7 +8620,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1001  = ch1_read_select_12a;
+    \$1001  = ch1_read_select_135;
     if (bus__r_en) begin
       \$1001  = \$377 ;
     end
@@ -8578,7 +8630,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1002  = ch1_read_select_12c;
+    \$1002  = ch1_read_select_136;
     if (bus__r_en) begin
       \$1002  = \$378 ;
     end
@@ -8588,7 +8640,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1003  = ch1_read_select_12d;
+    \$1003  = ch1_read_select_138;
     if (bus__r_en) begin
       \$1003  = \$379 ;
     end
@@ -8598,7 +8650,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1004  = ch1_read_select_12e;
+    \$1004  = ch1_read_select_139;
     if (bus__r_en) begin
       \$1004  = \$380 ;
     end
@@ -8608,7 +8660,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1005  = ch1_read_select_130;
+    \$1005  = ch1_read_select_13a;
     if (bus__r_en) begin
       \$1005  = \$381 ;
     end
@@ -8618,7 +8670,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1006  = ch1_read_select_131;
+    \$1006  = ch1_read_select_13c;
     if (bus__r_en) begin
       \$1006  = \$382 ;
     end
@@ -8628,7 +8680,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1007  = ch1_read_select_132;
+    \$1007  = ch1_read_select_13d;
     if (bus__r_en) begin
       \$1007  = \$383 ;
     end
@@ -8638,7 +8690,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1008  = ch1_read_select_134;
+    \$1008  = ch1_read_select_13e;
     if (bus__r_en) begin
       \$1008  = \$384 ;
     end
@@ -8648,7 +8700,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1009  = ch1_read_select_135;
+    \$1009  = ch1_read_select_141;
     if (bus__r_en) begin
       \$1009  = \$385 ;
     end
@@ -8658,7 +8710,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1010  = ch1_read_select_136;
+    \$1010  = ch1_read_select_142;
     if (bus__r_en) begin
       \$1010  = \$386 ;
     end
@@ -8668,7 +8720,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1011  = ch1_read_select_138;
+    \$1011  = ch1_read_select_143;
     if (bus__r_en) begin
       \$1011  = \$387 ;
     end
@@ -8678,7 +8730,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1012  = ch1_read_select_139;
+    \$1012  = ch1_read_select_144;
     if (bus__r_en) begin
       \$1012  = \$388 ;
     end
@@ -8688,7 +8740,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1013  = ch1_read_select_13a;
+    \$1013  = ch1_read_select_145;
     if (bus__r_en) begin
       \$1013  = \$389 ;
     end
@@ -8698,7 +8750,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1014  = ch1_read_select_13c;
+    \$1014  = ch1_read_select_17c;
     if (bus__r_en) begin
       \$1014  = \$390 ;
     end
@@ -8708,7 +8760,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1015  = ch1_read_select_13d;
+    \$1015  = ch1_read_select_17d;
     if (bus__r_en) begin
       \$1015  = \$391 ;
     end
@@ -8718,19 +8770,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1016  = ch1_read_select_13e;
-    if (bus__r_en) begin
-      \$1016  = \$392 ;
+    \$1016  = ch1_result_status_status_snapshot;
+    if (\$392 ) begin
+      \$1016  = \port$14066$0 [3:0];
     end
     if (rst) begin
-      \$1016  = 1'h0;
+      \$1016  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1017  = ch1_read_select_141;
-    if (bus__r_en) begin
-      \$1017  = \$393 ;
+    \$1017  = ch1_result_status_cds_snapshot;
+    if (\$392 ) begin
+      \$1017  = \port$14066$0 [49];
     end
     if (rst) begin
       \$1017  = 1'h0;
@@ -8738,9 +8790,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1018  = ch1_read_select_142;
-    if (bus__r_en) begin
-      \$1018  = \$394 ;
+    \$1018  = ch1_result_status_w0_ne_snapshot;
+    if (\$392 ) begin
+      \$1018  = \port$14066$0 [131];
     end
     if (rst) begin
       \$1018  = 1'h0;
@@ -8748,9 +8800,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1019  = ch1_read_select_143;
-    if (bus__r_en) begin
-      \$1019  = \$395 ;
+    \$1019  = ch1_result_status_w0_nw_snapshot;
+    if (\$392 ) begin
+      \$1019  = \port$14066$0 [132];
     end
     if (rst) begin
       \$1019  = 1'h0;
@@ -8758,9 +8810,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1020  = ch1_read_select_144;
-    if (bus__r_en) begin
-      \$1020  = \$396 ;
+    \$1020  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$392 ) begin
+      \$1020  = \port$14066$0 [133];
     end
     if (rst) begin
       \$1020  = 1'h0;
@@ -8768,9 +8820,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1021  = ch1_read_select_145;
-    if (bus__r_en) begin
-      \$1021  = \$397 ;
+    \$1021  = ch1_result_status_w1_ne_snapshot;
+    if (\$392 ) begin
+      \$1021  = \port$14066$0 [174];
     end
     if (rst) begin
       \$1021  = 1'h0;
@@ -8778,9 +8830,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1022  = ch1_read_select_17c;
-    if (bus__r_en) begin
-      \$1022  = \$398 ;
+    \$1022  = ch1_result_status_w1_nw_snapshot;
+    if (\$392 ) begin
+      \$1022  = \port$14066$0 [175];
     end
     if (rst) begin
       \$1022  = 1'h0;
@@ -8788,9 +8840,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1023  = ch1_read_select_17d;
-    if (bus__r_en) begin
-      \$1023  = \$399 ;
+    \$1023  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$392 ) begin
+      \$1023  = \port$14066$0 [176];
     end
     if (rst) begin
       \$1023  = 1'h0;
@@ -8798,19 +8850,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1024  = ch1_result_status_status_snapshot;
-    if (\$400 ) begin
-      \$1024  = \port$14166$0 [3:0];
+    \$1024  = ch1_result_status_lc_repeat_snapshot;
+    if (\$392 ) begin
+      \$1024  = \port$14066$0 [183];
     end
     if (rst) begin
-      \$1024  = 4'h0;
+      \$1024  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1025  = ch1_result_status_cds_snapshot;
-    if (\$400 ) begin
-      \$1025  = \port$14166$0 [49];
+    \$1025  = ch1_result_status_lc_skip_snapshot;
+    if (\$392 ) begin
+      \$1025  = \port$14066$0 [184];
     end
     if (rst) begin
       \$1025  = 1'h0;
@@ -8818,9 +8870,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1026  = ch1_result_status_w0_ne_snapshot;
-    if (\$400 ) begin
-      \$1026  = \port$14166$0 [131];
+    \$1026  = ch1_result_status_lc_zero_snapshot;
+    if (\$392 ) begin
+      \$1026  = \port$14066$0 [185];
     end
     if (rst) begin
       \$1026  = 1'h0;
@@ -8828,9 +8880,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1027  = ch1_result_status_w0_nw_snapshot;
-    if (\$400 ) begin
-      \$1027  = \port$14166$0 [132];
+    \$1027  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$392 ) begin
+      \$1027  = \port$14066$0 [186];
     end
     if (rst) begin
       \$1027  = 1'h0;
@@ -8838,252 +8890,172 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1028  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$400 ) begin
-      \$1028  = \port$14166$0 [133];
+    \$1028  = ch1_result_status_lc_snapshot;
+    if (\$392 ) begin
+      \$1028  = \port$14066$0 [182:177];
     end
     if (rst) begin
-      \$1028  = 1'h0;
+      \$1028  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1029  = ch1_result_status_w1_ne_snapshot;
-    if (\$400 ) begin
-      \$1029  = \port$14166$0 [174];
+    \$1029  = ch1_result_seq_seq_snapshot;
+    if (\$392 ) begin
+      \$1029  = ch1__done_count;
     end
     if (rst) begin
-      \$1029  = 1'h0;
+      \$1029  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1030  = ch1_result_status_w1_nw_snapshot;
-    if (\$400 ) begin
-      \$1030  = \port$14166$0 [175];
+    \$1030  = ch1_result_seq_line_delay_snapshot;
+    if (\$392 ) begin
+      \$1030  = \port$14066$0 [48:36];
     end
     if (rst) begin
-      \$1030  = 1'h0;
+      \$1030  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1031  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$400 ) begin
-      \$1031  = \port$14166$0 [176];
+    \$1031  = ch1_result_w0_lo_data_snapshot;
+    if (\$392 ) begin
+      \$1031  = \port$14066$0 [107:76];
     end
     if (rst) begin
-      \$1031  = 1'h0;
+      \$1031  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1032  = ch1_result_status_lc_repeat_snapshot;
-    if (\$400 ) begin
-      \$1032  = \port$14166$0 [183];
+    \$1032  = ch1_result_w0_hi_data_snapshot;
+    if (\$392 ) begin
+      \$1032  = { 9'h000, \port$14066$0 [130:108] };
     end
     if (rst) begin
-      \$1032  = 1'h0;
+      \$1032  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1033  = ch1_result_status_lc_skip_snapshot;
-    if (\$400 ) begin
-      \$1033  = \port$14166$0 [184];
+    \$1033  = ch1_result_w1_lo_data_snapshot;
+    if (\$392 ) begin
+      \$1033  = \port$14066$0 [165:134];
     end
     if (rst) begin
-      \$1033  = 1'h0;
+      \$1033  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1034  = ch1_result_status_lc_zero_snapshot;
-    if (\$400 ) begin
-      \$1034  = \port$14166$0 [185];
+    \$1034  = ch1_result_w1_hi_data_snapshot;
+    if (\$392 ) begin
+      \$1034  = { 24'h000000, \port$14066$0 [173:166] };
     end
     if (rst) begin
-      \$1034  = 1'h0;
+      \$1034  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1035  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$400 ) begin
-      \$1035  = \port$14166$0 [186];
+    \$1035  = ch1_result_timestamp_time_snapshot;
+    if (\$392 ) begin
+      \$1035  = \port$14066$0 [35:4];
     end
     if (rst) begin
-      \$1035  = 1'h0;
+      \$1035  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1036  = ch1_result_status_lc_snapshot;
-    if (\$400 ) begin
-      \$1036  = \port$14166$0 [182:177];
+    \$1036  = ch1_result_line_noise_events_snapshot;
+    if (\$392 ) begin
+      \$1036  = \port$14066$0 [53:50];
     end
     if (rst) begin
-      \$1036  = 6'h00;
+      \$1036  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1037  = ch1_result_seq_seq_snapshot;
-    if (\$400 ) begin
-      \$1037  = ch1__done_count;
+    \$1037  = ch1_result_line_delay_settled_snapshot;
+    if (\$392 ) begin
+      \$1037  = \port$14066$0 [54];
     end
     if (rst) begin
-      \$1037  = 16'h0000;
+      \$1037  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1038  = ch1_result_seq_line_delay_snapshot;
-    if (\$400 ) begin
-      \$1038  = \port$14166$0 [48:36];
+    \$1038  = ch1_result_line_delay_spread_snapshot;
+    if (\$392 ) begin
+      \$1038  = \port$14066$0 [75:68];
     end
     if (rst) begin
-      \$1038  = 13'h0000;
+      \$1038  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1039  = ch1_result_w0_lo_data_snapshot;
-    if (\$400 ) begin
-      \$1039  = \port$14166$0 [107:76];
+    \$1039  = ch1_result_line_settled_delay_snapshot;
+    if (\$392 ) begin
+      \$1039  = \port$14066$0 [67:55];
     end
     if (rst) begin
-      \$1039  = 32'd0;
+      \$1039  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1040  = ch1_result_w0_hi_data_snapshot;
-    if (\$400 ) begin
-      \$1040  = { 9'h000, \port$14166$0 [130:108] };
-    end
-    if (rst) begin
-      \$1040  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1041  = ch1_result_w1_lo_data_snapshot;
-    if (\$400 ) begin
-      \$1041  = \port$14166$0 [165:134];
-    end
-    if (rst) begin
-      \$1041  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1042  = ch1_result_w1_hi_data_snapshot;
-    if (\$400 ) begin
-      \$1042  = { 24'h000000, \port$14166$0 [173:166] };
-    end
-    if (rst) begin
-      \$1042  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1043  = ch1_result_timestamp_time_snapshot;
-    if (\$400 ) begin
-      \$1043  = \port$14166$0 [35:4];
-    end
-    if (rst) begin
-      \$1043  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1044  = ch1_result_line_noise_events_snapshot;
-    if (\$400 ) begin
-      \$1044  = \port$14166$0 [53:50];
-    end
-    if (rst) begin
-      \$1044  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1045  = ch1_result_line_delay_settled_snapshot;
-    if (\$400 ) begin
-      \$1045  = \port$14166$0 [54];
-    end
-    if (rst) begin
-      \$1045  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1046  = ch1_result_line_delay_spread_snapshot;
-    if (\$400 ) begin
-      \$1046  = \port$14166$0 [75:68];
-    end
-    if (rst) begin
-      \$1046  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1047  = ch1_result_line_settled_delay_snapshot;
-    if (\$400 ) begin
-      \$1047  = \port$14166$0 [67:55];
-    end
-    if (rst) begin
-      \$1047  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1048  = ch1_window0_read;
+    \$1040  = ch1_window0_read;
     if (bus__r_en) begin
-      \$1048  = \$402 ;
+      \$1040  = \$394 ;
     end
     if (rst) begin
-      \$1048  = 1'h0;
+      \$1040  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1049  = ch1_window1_read;
+    \$1041  = ch1_window1_read;
     if (bus__r_en) begin
-      \$1049  = \$406 ;
+      \$1041  = \$398 ;
     end
     if (rst) begin
-      \$1049  = 1'h0;
+      \$1041  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1050  = ch1_window2_read;
+    \$1042  = ch1_window2_read;
     if (bus__r_en) begin
-      \$1050  = \$408 ;
+      \$1042  = \$400 ;
     end
     if (rst) begin
-      \$1050  = 1'h0;
+      \$1042  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1051  = ch1_window3_read;
+    \$1043  = ch1_window3_read;
     if (bus__r_en) begin
-      \$1051  = ch1_config_read;
+      \$1043  = ch1_config_read;
     end
     if (rst) begin
-      \$1051  = 1'h0;
+      \$1043  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1052  = ch1_read_data;
+    \$1044  = ch1_read_data;
     if (bus__r_load) begin
-      \$1052  = \$500 ;
+      \$1044  = \$492 ;
     end
     if (rst) begin
-      \$1052  = 32'd0;
+      \$1044  = 32'd0;
     end
   end
   always @* begin
@@ -9292,27 +9264,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$13613$0 [3:0];
-  assign ch0__cds = \port$13613$0 [49];
-  assign ch0__word0_ne = \port$13613$0 [131];
-  assign ch0__word0_nw = \port$13613$0 [132];
-  assign ch0__word0_crc_ok = \port$13613$0 [133];
-  assign ch0__word1_ne = \port$13613$0 [174];
-  assign ch0__word1_nw = \port$13613$0 [175];
-  assign ch0__word1_crc_ok = \port$13613$0 [176];
-  assign ch0__lc_repeat = \port$13613$0 [183];
-  assign ch0__lc_skip = \port$13613$0 [184];
-  assign ch0__lc_zero = \port$13613$0 [185];
-  assign ch0__spw_mismatch = \port$13613$0 [186];
-  assign ch0__lc = \port$13613$0 [182:177];
-  assign ch0__line_delay = \port$13613$0 [48:36];
-  assign ch0__word0_position = { 9'h000, \port$13613$0 [130:76] };
-  assign ch0__word1_position = { 24'h000000, \port$13613$0 [173:134] };
-  assign ch0__timestamp = \port$13613$0 [35:4];
-  assign ch0__noise_events = \port$13613$0 [53:50];
-  assign ch0__delay_settled = \port$13613$0 [54];
-  assign ch0__delay_spread = \port$13613$0 [75:68];
-  assign ch0__settled_delay = \port$13613$0 [67:55];
+  assign ch0__status = \port$13515$0 [3:0];
+  assign ch0__cds = \port$13515$0 [49];
+  assign ch0__word0_ne = \port$13515$0 [131];
+  assign ch0__word0_nw = \port$13515$0 [132];
+  assign ch0__word0_crc_ok = \port$13515$0 [133];
+  assign ch0__word1_ne = \port$13515$0 [174];
+  assign ch0__word1_nw = \port$13515$0 [175];
+  assign ch0__word1_crc_ok = \port$13515$0 [176];
+  assign ch0__lc_repeat = \port$13515$0 [183];
+  assign ch0__lc_skip = \port$13515$0 [184];
+  assign ch0__lc_zero = \port$13515$0 [185];
+  assign ch0__spw_mismatch = \port$13515$0 [186];
+  assign ch0__lc = \port$13515$0 [182:177];
+  assign ch0__line_delay = \port$13515$0 [48:36];
+  assign ch0__word0_position = { 9'h000, \port$13515$0 [130:76] };
+  assign ch0__word1_position = { 24'h000000, \port$13515$0 [173:134] };
+  assign ch0__timestamp = \port$13515$0 [35:4];
+  assign ch0__noise_events = \port$13515$0 [53:50];
+  assign ch0__delay_settled = \port$13515$0 [54];
+  assign ch0__delay_spread = \port$13515$0 [75:68];
+  assign ch0__settled_delay = \port$13515$0 [67:55];
   assign ch0__cap_data_bits_w0 = 7'h37;
   assign ch0__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9333,13 +9305,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$13701$0 [2:0];
-  assign ch0__ca_bytes_done = \port$13701$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$13624$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$13624$0 [31:16];
-  assign ch0__count_ca_refused = \port$13624$0 [47:32];
-  assign ch0__count_ca_aborted = \port$13624$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$13624$0 [79:64];
+  assign ch0__ca_status = \port$13603$0 [2:0];
+  assign ch0__ca_bytes_done = \port$13603$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$13526$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$13526$0 [31:16];
+  assign ch0__count_ca_refused = \port$13526$0 [47:32];
+  assign ch0__count_ca_aborted = \port$13526$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$13526$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9359,27 +9331,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$14166$0 [3:0];
-  assign ch1__cds = \port$14166$0 [49];
-  assign ch1__word0_ne = \port$14166$0 [131];
-  assign ch1__word0_nw = \port$14166$0 [132];
-  assign ch1__word0_crc_ok = \port$14166$0 [133];
-  assign ch1__word1_ne = \port$14166$0 [174];
-  assign ch1__word1_nw = \port$14166$0 [175];
-  assign ch1__word1_crc_ok = \port$14166$0 [176];
-  assign ch1__lc_repeat = \port$14166$0 [183];
-  assign ch1__lc_skip = \port$14166$0 [184];
-  assign ch1__lc_zero = \port$14166$0 [185];
-  assign ch1__spw_mismatch = \port$14166$0 [186];
-  assign ch1__lc = \port$14166$0 [182:177];
-  assign ch1__line_delay = \port$14166$0 [48:36];
-  assign ch1__word0_position = { 9'h000, \port$14166$0 [130:76] };
-  assign ch1__word1_position = { 24'h000000, \port$14166$0 [173:134] };
-  assign ch1__timestamp = \port$14166$0 [35:4];
-  assign ch1__noise_events = \port$14166$0 [53:50];
-  assign ch1__delay_settled = \port$14166$0 [54];
-  assign ch1__delay_spread = \port$14166$0 [75:68];
-  assign ch1__settled_delay = \port$14166$0 [67:55];
+  assign ch1__status = \port$14066$0 [3:0];
+  assign ch1__cds = \port$14066$0 [49];
+  assign ch1__word0_ne = \port$14066$0 [131];
+  assign ch1__word0_nw = \port$14066$0 [132];
+  assign ch1__word0_crc_ok = \port$14066$0 [133];
+  assign ch1__word1_ne = \port$14066$0 [174];
+  assign ch1__word1_nw = \port$14066$0 [175];
+  assign ch1__word1_crc_ok = \port$14066$0 [176];
+  assign ch1__lc_repeat = \port$14066$0 [183];
+  assign ch1__lc_skip = \port$14066$0 [184];
+  assign ch1__lc_zero = \port$14066$0 [185];
+  assign ch1__spw_mismatch = \port$14066$0 [186];
+  assign ch1__lc = \port$14066$0 [182:177];
+  assign ch1__line_delay = \port$14066$0 [48:36];
+  assign ch1__word0_position = { 9'h000, \port$14066$0 [130:76] };
+  assign ch1__word1_position = { 24'h000000, \port$14066$0 [173:134] };
+  assign ch1__timestamp = \port$14066$0 [35:4];
+  assign ch1__noise_events = \port$14066$0 [53:50];
+  assign ch1__delay_settled = \port$14066$0 [54];
+  assign ch1__delay_spread = \port$14066$0 [75:68];
+  assign ch1__settled_delay = \port$14066$0 [67:55];
   assign ch1__cap_data_bits_w0 = 7'h37;
   assign ch1__cap_data_bits_w1 = 7'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9400,13 +9372,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$14254$0 [2:0];
-  assign ch1__ca_bytes_done = \port$14254$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$14177$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$14177$0 [31:16];
-  assign ch1__count_ca_refused = \port$14177$0 [47:32];
-  assign ch1__count_ca_aborted = \port$14177$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$14177$0 [79:64];
+  assign ch1__ca_status = \port$14154$0 [2:0];
+  assign ch1__ca_bytes_done = \port$14154$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$14077$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$14077$0 [31:16];
+  assign ch1__count_ca_refused = \port$14077$0 [47:32];
+  assign ch1__count_ca_aborted = \port$14077$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$14077$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9541,12 +9513,12 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
   assign ch0__ca_rbuf_addr = bus__r_addr[3:0];
-  assign wr__addr = { \$574 , \$573 , \$572 , \$571  };
+  assign wr__addr = { \$566 , \$565 , \$564 , \$563  };
   assign wr__data = config_memory0_write_data;
   assign rd__addr = ch0_config_read_index;
-  assign ch0_crc_table_addr = \rd__addr$765 ;
-  assign \rd__addr$771  = \rd__addr$765 ;
-  assign \rd__addr$776  = \rd__addr$765 ;
+  assign ch0_crc_table_addr = \rd__addr$763 ;
+  assign \rd__addr$769  = \rd__addr$763 ;
+  assign \rd__addr$774  = \rd__addr$763 ;
   assign ch1__count_addr = bus__r_addr[2:0];
   assign ch1__chain_addr = bus__r_addr[3:0];
   assign ch1__start = ch1_ctrl_start;
@@ -9656,153 +9628,153 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$438 ;
+  assign ch1__ca_write = \ch1_ca_request_write$437 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
   assign ch1__ca_wbuf_data = write_data;
   assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
-  assign \wr__addr$922  = { \$678 , \$677 , \$676 , \$675  };
-  assign \wr__data$923  = config_memory0_write_data;
-  assign \rd__addr$925  = ch1_config_read_index;
-  assign ch1_crc_table_addr = \rd__addr$931 ;
-  assign \rd__addr$937  = \rd__addr$931 ;
-  assign \rd__addr$942  = \rd__addr$931 ;
+  assign \wr__addr$920  = { \$671 , \$670 , \$669 , \$668  };
+  assign \wr__data$921  = config_memory0_write_data;
+  assign \rd__addr$923  = ch1_config_read_index;
+  assign ch1_crc_table_addr = \rd__addr$929 ;
+  assign \rd__addr$935  = \rd__addr$929 ;
+  assign \rd__addr$940  = \rd__addr$929 ;
   assign irq = { ch1_irq, ch0_irq };
-  assign ch0_crc_table_data = \$603 [32:0];
-  assign ch1_crc_table_data = \$707 [32:0];
+  assign ch0_crc_table_data = \$596 [32:0];
+  assign ch1_crc_table_data = \$701 [32:0];
   assign ch0__ca_wbuf_addr = write_addr[3:0];
-  assign cfg_hold[1] = \$610 ;
-  assign cfg_hold[0] = \$506 ;
+  assign cfg_hold[1] = \$603 ;
+  assign cfg_hold[0] = \$498 ;
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$605  = \$604 ;
-  assign \$607  = \$606 ;
-  assign \$609  = \$608 ;
-  assign \$709  = \$708 ;
-  assign \$711  = \$710 ;
-  assign \$713  = \$712 ;
-  assign \$118  = ch0_table_sweep;
-  assign \$171  = \$170 ;
-  assign \$178  = 32'd0;
-  assign \$179  = \$177 ;
-  assign \$180  = 32'd0;
-  assign \$181  = \$177 ;
+  assign \$598  = \$597 ;
+  assign \$600  = \$599 ;
+  assign \$602  = \$601 ;
+  assign \$703  = \$702 ;
+  assign \$705  = \$704 ;
+  assign \$707  = \$706 ;
+  assign \$114  = ch0_table_sweep;
+  assign \$167  = \$166 ;
+  assign \$174  = 32'd0;
+  assign \$175  = \$173 ;
+  assign \$176  = 32'd0;
+  assign \$177  = \$173 ;
+  assign \$194  = 32'd0;
+  assign \$195  = \$193 ;
+  assign \$196  = 32'd0;
+  assign \$197  = \$193 ;
   assign \$198  = 32'd0;
-  assign \$199  = \$197 ;
+  assign \$199  = \$193 ;
   assign \$200  = 32'd0;
-  assign \$201  = \$197 ;
+  assign \$201  = \$193 ;
   assign \$202  = 32'd0;
-  assign \$203  = \$197 ;
+  assign \$203  = \$193 ;
   assign \$204  = 32'd0;
-  assign \$205  = \$197 ;
+  assign \$205  = \$193 ;
   assign \$206  = 32'd0;
-  assign \$207  = \$197 ;
+  assign \$207  = \$193 ;
   assign \$208  = 32'd0;
-  assign \$209  = \$197 ;
+  assign \$209  = \$193 ;
   assign \$210  = 32'd0;
-  assign \$211  = \$197 ;
+  assign \$211  = \$193 ;
   assign \$212  = 32'd0;
-  assign \$213  = \$197 ;
+  assign \$213  = \$193 ;
   assign \$214  = 32'd0;
-  assign \$215  = \$197 ;
+  assign \$215  = \$193 ;
   assign \$216  = 32'd0;
-  assign \$217  = \$197 ;
+  assign \$217  = \$193 ;
   assign \$218  = 32'd0;
-  assign \$219  = \$197 ;
+  assign \$219  = \$193 ;
   assign \$220  = 32'd0;
-  assign \$221  = \$197 ;
+  assign \$221  = \$193 ;
   assign \$222  = 32'd0;
-  assign \$223  = \$197 ;
+  assign \$223  = \$193 ;
   assign \$224  = 32'd0;
-  assign \$225  = \$197 ;
+  assign \$225  = \$193 ;
   assign \$226  = 32'd0;
-  assign \$227  = \$197 ;
+  assign \$227  = \$193 ;
   assign \$228  = 32'd0;
-  assign \$229  = \$197 ;
+  assign \$229  = \$193 ;
   assign \$230  = 32'd0;
-  assign \$231  = \$197 ;
+  assign \$231  = \$193 ;
   assign \$232  = 32'd0;
-  assign \$233  = \$197 ;
+  assign \$233  = \$193 ;
   assign \$234  = 32'd0;
-  assign \$235  = \$197 ;
+  assign \$235  = \$193 ;
   assign \$236  = 32'd0;
-  assign \$237  = \$197 ;
-  assign \$238  = 32'd0;
-  assign \$239  = \$197 ;
-  assign \$240  = 32'd0;
-  assign \$241  = \$197 ;
-  assign \$250  = 32'd0;
-  assign \$251  = \$249 ;
-  assign \$256  = 32'd0;
-  assign \$257  = \$255 ;
-  assign ch0_config_read_data = \$591 ;
-  assign \$357  = ch1_table_sweep;
-  assign \$410  = \$409 ;
-  assign \$417  = 32'd0;
-  assign \$418  = \$416 ;
-  assign \$419  = 32'd0;
-  assign \$420  = \$416 ;
+  assign \$237  = \$193 ;
+  assign \$246  = 32'd0;
+  assign \$247  = \$245 ;
+  assign \$252  = 32'd0;
+  assign \$253  = \$251 ;
+  assign ch0_config_read_data = \$584 ;
+  assign \$349  = ch1_table_sweep;
+  assign \$402  = \$401 ;
+  assign \$409  = 32'd0;
+  assign \$410  = \$408 ;
+  assign \$411  = 32'd0;
+  assign \$412  = \$408 ;
+  assign \$429  = 32'd0;
+  assign \$430  = \$428 ;
+  assign \$431  = 32'd0;
+  assign \$432  = \$428 ;
+  assign \$433  = 32'd0;
+  assign \$434  = \$428 ;
+  assign \$435  = 32'd0;
+  assign \$436  = \$428 ;
   assign \$437  = 32'd0;
-  assign \$438  = \$436 ;
+  assign \$438  = \$428 ;
   assign \$439  = 32'd0;
-  assign \$440  = \$436 ;
+  assign \$440  = \$428 ;
   assign \$441  = 32'd0;
-  assign \$442  = \$436 ;
+  assign \$442  = \$428 ;
   assign \$443  = 32'd0;
-  assign \$444  = \$436 ;
+  assign \$444  = \$428 ;
   assign \$445  = 32'd0;
-  assign \$446  = \$436 ;
+  assign \$446  = \$428 ;
   assign \$447  = 32'd0;
-  assign \$448  = \$436 ;
+  assign \$448  = \$428 ;
   assign \$449  = 32'd0;
-  assign \$450  = \$436 ;
+  assign \$450  = \$428 ;
   assign \$451  = 32'd0;
-  assign \$452  = \$436 ;
+  assign \$452  = \$428 ;
   assign \$453  = 32'd0;
-  assign \$454  = \$436 ;
+  assign \$454  = \$428 ;
   assign \$455  = 32'd0;
-  assign \$456  = \$436 ;
+  assign \$456  = \$428 ;
   assign \$457  = 32'd0;
-  assign \$458  = \$436 ;
+  assign \$458  = \$428 ;
   assign \$459  = 32'd0;
-  assign \$460  = \$436 ;
+  assign \$460  = \$428 ;
   assign \$461  = 32'd0;
-  assign \$462  = \$436 ;
+  assign \$462  = \$428 ;
   assign \$463  = 32'd0;
-  assign \$464  = \$436 ;
+  assign \$464  = \$428 ;
   assign \$465  = 32'd0;
-  assign \$466  = \$436 ;
+  assign \$466  = \$428 ;
   assign \$467  = 32'd0;
-  assign \$468  = \$436 ;
+  assign \$468  = \$428 ;
   assign \$469  = 32'd0;
-  assign \$470  = \$436 ;
+  assign \$470  = \$428 ;
   assign \$471  = 32'd0;
-  assign \$472  = \$436 ;
-  assign \$473  = 32'd0;
-  assign \$474  = \$436 ;
-  assign \$475  = 32'd0;
-  assign \$476  = \$436 ;
-  assign \$477  = 32'd0;
-  assign \$478  = \$436 ;
-  assign \$479  = 32'd0;
-  assign \$480  = \$436 ;
-  assign \$489  = 32'd0;
-  assign \$490  = \$488 ;
-  assign \$495  = 32'd0;
-  assign \$496  = \$494 ;
-  assign ch1_config_read_data = \$695 ;
+  assign \$472  = \$428 ;
+  assign \$481  = 32'd0;
+  assign \$482  = \$480 ;
+  assign \$487  = 32'd0;
+  assign \$488  = \$486 ;
+  assign ch1_config_read_data = \$689 ;
   assign g_irq = 1'h0;
-  assign \$598  = { 1'h0, \rd__data$778  };
-  assign \$599  = { 16'h0000, \$598  };
-  assign \$600  = { 15'h0000, \rd__data$779 , 16'h0000 };
-  assign \$602  = { 31'h00000000, \rd__data$780 , 32'h00000000 };
-  assign \$702  = { 1'h0, \rd__data$944  };
-  assign \$703  = { 16'h0000, \$702  };
-  assign \$704  = { 15'h0000, \rd__data$945 , 16'h0000 };
-  assign \$706  = { 31'h00000000, \rd__data$946 , 32'h00000000 };
-  assign \$715  = g_read_data;
+  assign \$591  = { 1'h0, \rd__data$776  };
+  assign \$592  = { 16'h0000, \$591  };
+  assign \$593  = { 15'h0000, \rd__data$777 , 16'h0000 };
+  assign \$595  = { 31'h00000000, \rd__data$778 , 32'h00000000 };
+  assign \$696  = { 1'h0, \rd__data$942  };
+  assign \$697  = { 16'h0000, \$696  };
+  assign \$698  = { 15'h0000, \rd__data$943 , 16'h0000 };
+  assign \$700  = { 31'h00000000, \rd__data$944 , 32'h00000000 };
+  assign \$709  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -10084,7 +10056,7 @@ endmodule
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_rbuf_en, crc_table_data, regs__frame_error, cfg_free, regs__busy, regs__config_error, crc_table_addr, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle
 , clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed
 , cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13613$0 , \port$13624$0 , regs__ca_done, \port$13701$0 , ca_rbuf_addr);
+, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$13515$0 , \port$13526$0 , regs__ca_done, \port$13603$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10275,12 +10247,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$13613$0 ;
-  wire [186:0] \port$13613$0 ;
-  output [79:0] \port$13624$0 ;
-  wire [79:0] \port$13624$0 ;
-  output [9:0] \port$13701$0 ;
-  wire [9:0] \port$13701$0 ;
+  output [186:0] \port$13515$0 ;
+  wire [186:0] \port$13515$0 ;
+  output [79:0] \port$13526$0 ;
+  wire [79:0] \port$13526$0 ;
+  output [9:0] \port$13603$0 ;
+  wire [9:0] \port$13603$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10762,9 +10734,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en
   assign \cfg_hold$199  = cfg_hold;
   assign \crc_table_addr$202  = crc_table_addr;
   assign \crc_table_data$204  = crc_table_data;
-  assign \port$13613$0  = \$24 ;
-  assign \port$13624$0  = \$25 ;
-  assign \port$13701$0  = \$26 ;
+  assign \port$13515$0  = \$24 ;
+  assign \port$13526$0  = \$25 ;
+  assign \port$13603$0  = \$26 ;
   assign \crc_table_data.poly  = crc_table_data[15:0];
   assign \crc_table_data.start  = crc_table_data[31:16];
   assign \crc_table_data.inverted  = crc_table_data[32];
@@ -11810,7 +11782,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13223$206 (live[208:206]),
+    .\port$13127$206 (live[208:206]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(sample),
@@ -11871,7 +11843,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13223$166 (live[166]),
+    .\port$13127$166 (live[166]),
     .rises(rises),
     .rst(rst),
     .ssi(live[193]),
@@ -11922,7 +11894,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$58 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13223$193 (live[205:193]),
+    .\port$13127$193 (live[205:193]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -11947,7 +11919,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13236$0 (\bit ),
+    .\port$13140$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -12015,7 +11987,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$6089$0 (\$28 ),
+    .\port$6042$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -16104,7 +16076,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, lc_load, crc_table_addr, ssi, \port$13223$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne
+module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, lc_load, crc_table_addr, ssi, \port$13127$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne
 , nw, data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -16802,8 +16774,8 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13223$206 ;
-  wire [2:0] \port$13223$206 ;
+  input [2:0] \port$13127$206 ;
+  wire [2:0] \port$13127$206 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -17121,7 +17093,7 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13223$206 [0];
+  assign error_bit = ssi & \port$13127$206 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -17152,19 +17124,19 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13223$206 [0];
+  assign \$24  = ssi & \port$13127$206 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13223$206 [0];
+  assign \$28  = ssi & \port$13127$206 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13223$206 [0];
+  assign \$35  = ssi & \port$13127$206 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13223$206 [0];
+  assign \$39  = ssi & \port$13127$206 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -17185,7 +17157,7 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$13223$206 [2];
+  assign \$61  = ssi & \port$13127$206 [2];
   assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -17471,15 +17443,15 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13223$206 [0];
+  assign \$347  = ssi & \port$13127$206 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13223$206 [0];
-  assign \$355  = ~ \port$13223$206 [1];
+  assign \$354  = ssi & \port$13127$206 [0];
+  assign \$355  = ~ \port$13127$206 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -18215,7 +18187,7 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13223$206 [0];
+  assign ssi_error = \port$13127$206 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -18227,8 +18199,8 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign ok = crc_ok;
   assign \index$46  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13223$206 [2];
-  assign ssi_error_low = \port$13223$206 [1];
+  assign ssi_double = \port$13127$206 [2];
+  assign ssi_error_low = \port$13127$206 [1];
   assign crc_table_addr = \$10 [0];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
@@ -18365,75 +18337,29 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, \table , load, \cover , chec
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire [1:0] \$10 ;
-  wire [1:0] \$100 ;
-  wire [1:0] \$101 ;
+  wire \$100 ;
+  wire \$101 ;
   wire \$102 ;
   wire \$103 ;
-  wire [1:0] \$104 ;
+  wire \$104 ;
   wire \$105 ;
-  wire [1:0] \$106 ;
-  wire [1:0] \$107 ;
+  wire \$106 ;
+  wire \$107 ;
   wire \$108 ;
-  wire [37:0] \$109 ;
+  wire \$109 ;
   wire \$11 ;
-  wire [37:0] \$110 ;
-  wire [37:0] \$111 ;
+  wire \$110 ;
+  wire \$111 ;
   wire \$112 ;
-  wire [1:0] \$113 ;
-  wire \$114 ;
-  wire [1:0] \$115 ;
-  wire [1:0] \$116 ;
-  wire \$117 ;
-  wire \$118 ;
-  wire [1:0] \$119 ;
+  reg [15:0] \$113 ;
+  reg \$114 ;
+  reg [37:0] \$115 ;
+  reg [1:0] \$116 ;
   wire \$12 ;
-  wire \$120 ;
-  wire [1:0] \$121 ;
-  wire [1:0] \$122 ;
-  wire \$123 ;
-  wire \$124 ;
-  wire [1:0] \$125 ;
-  wire \$126 ;
-  wire [1:0] \$127 ;
-  wire [1:0] \$128 ;
-  wire \$129 ;
   wire [1:0] \$13 ;
-  wire [37:0] \$130 ;
-  wire [37:0] \$131 ;
-  wire [37:0] \$132 ;
-  wire \$133 ;
-  wire [15:0] \$134 ;
-  wire [15:0] \$135 ;
-  wire \$136 ;
-  wire \$137 ;
-  wire \$138 ;
-  wire \$139 ;
   wire \$14 ;
-  wire \$140 ;
-  wire \$141 ;
-  wire \$142 ;
-  wire \$143 ;
-  wire \$144 ;
-  wire \$145 ;
-  wire \$146 ;
-  wire \$147 ;
-  wire \$148 ;
-  wire \$149 ;
   wire [1:0] \$15 ;
-  wire \$150 ;
-  wire \$151 ;
-  wire \$152 ;
-  wire \$153 ;
-  wire \$154 ;
-  wire \$155 ;
-  wire \$156 ;
-  wire \$157 ;
-  reg [15:0] \$158 ;
-  reg \$159 ;
   wire [1:0] \$16 ;
-  reg \$160 ;
-  reg [37:0] \$161 ;
-  reg [1:0] \$162 ;
   wire \$17 ;
   wire \$18 ;
   wire [1:0] \$19 ;
@@ -18493,37 +18419,37 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, \table , load, \cover , chec
   wire [37:0] \$68 ;
   wire \$69 ;
   wire [1:0] \$7 ;
-  wire \$70 ;
-  wire [1:0] \$71 ;
-  wire \$72 ;
+  wire [1:0] \$70 ;
+  wire \$71 ;
+  wire [1:0] \$72 ;
   wire [1:0] \$73 ;
-  wire [1:0] \$74 ;
+  wire \$74 ;
   wire \$75 ;
-  wire \$76 ;
-  wire [1:0] \$77 ;
-  wire \$78 ;
+  wire [1:0] \$76 ;
+  wire \$77 ;
+  wire [1:0] \$78 ;
   wire [1:0] \$79 ;
   wire \$8 ;
-  wire [1:0] \$80 ;
+  wire \$80 ;
   wire \$81 ;
-  wire \$82 ;
-  wire [1:0] \$83 ;
-  wire \$84 ;
+  wire [1:0] \$82 ;
+  wire \$83 ;
+  wire [1:0] \$84 ;
   wire [1:0] \$85 ;
-  wire [1:0] \$86 ;
-  wire \$87 ;
+  wire \$86 ;
+  wire [37:0] \$87 ;
   wire [37:0] \$88 ;
   wire [37:0] \$89 ;
   wire [1:0] \$9 ;
-  wire [37:0] \$90 ;
+  wire \$90 ;
   wire \$91 ;
-  wire [1:0] \$92 ;
-  wire \$93 ;
-  wire [1:0] \$94 ;
-  wire [1:0] \$95 ;
+  wire [15:0] \$92 ;
+  wire [15:0] \$93 ;
+  wire \$94 ;
+  wire \$95 ;
   wire \$96 ;
   wire \$97 ;
-  wire [1:0] \$98 ;
+  wire \$98 ;
   wire \$99 ;
   input \bit ;
   wire \bit ;
@@ -18555,7 +18481,6 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, \table , load, \cover , chec
   wire load;
   wire load_index;
   reg mismatch = 1'h0;
-  reg msb = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
   input receiver_clear;
@@ -18642,177 +18567,119 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, \table , load, \cover , chec
   assign \$66  = \$65  ? 38'h2000000066 : 38'h0000000000;
   assign \$67  = \$59  ? 38'h2000121b30 : \$66 ;
   assign \$68  = \$53  ? table_crc : \$67 ;
-  assign \$69  = { \$47 [36:21], 1'h0 } >> \$68 [4:0];
-  assign \$70  = ! table_index;
-  assign \$71  = table_index ? 2'h0 : codes[1:0];
-  assign \$73  = \$72  ? codes[3:2] : 2'h0;
-  assign \$74  = \$71  | \$73 ;
-  assign \$75  = \$74  == 2'h3;
-  assign \$76  = ! table_index;
-  assign \$77  = table_index ? 2'h0 : codes[1:0];
-  assign \$79  = \$78  ? codes[3:2] : 2'h0;
-  assign \$80  = \$77  | \$79 ;
-  assign \$81  = \$80  == 2'h2;
-  assign \$82  = ! table_index;
-  assign \$83  = table_index ? 2'h0 : codes[1:0];
-  assign \$85  = \$84  ? codes[3:2] : 2'h0;
-  assign \$86  = \$83  | \$85 ;
-  assign \$87  = \$86  == 1'h1;
-  assign \$88  = \$87  ? 38'h2000000066 : 38'h0000000000;
-  assign \$89  = \$81  ? 38'h2000121b30 : \$88 ;
-  assign \$90  = \$75  ? table_crc : \$89 ;
-  assign \$91  = ! table_index;
-  assign \$92  = table_index ? 2'h0 : codes[1:0];
-  assign \$94  = \$93  ? codes[3:2] : 2'h0;
-  assign \$95  = \$92  | \$94 ;
-  assign \$96  = \$95  == 2'h3;
-  assign \$97  = ! table_index;
-  assign \$98  = table_index ? 2'h0 : codes[1:0];
-  assign \$100  = \$99  ? codes[3:2] : 2'h0;
-  assign \$101  = \$98  | \$100 ;
-  assign \$102  = \$101  == 2'h2;
-  assign \$103  = ! table_index;
-  assign \$104  = table_index ? 2'h0 : codes[1:0];
-  assign \$106  = \$105  ? codes[3:2] : 2'h0;
-  assign \$107  = \$104  | \$106 ;
-  assign \$108  = \$107  == 1'h1;
-  assign \$109  = \$108  ? 38'h2000000066 : 38'h0000000000;
-  assign \$110  = \$102  ? 38'h2000121b30 : \$109 ;
-  assign \$111  = \$96  ? table_crc : \$110 ;
-  assign \$112  = ! table_index;
-  assign \$113  = table_index ? 2'h0 : codes[1:0];
-  assign \$115  = \$114  ? codes[3:2] : 2'h0;
-  assign \$116  = \$113  | \$115 ;
-  assign \$117  = \$116  == 2'h3;
-  assign \$118  = ! table_index;
-  assign \$119  = table_index ? 2'h0 : codes[1:0];
-  assign \$121  = \$120  ? codes[3:2] : 2'h0;
-  assign \$122  = \$119  | \$121 ;
-  assign \$123  = \$122  == 2'h2;
-  assign \$124  = ! table_index;
-  assign \$125  = table_index ? 2'h0 : codes[1:0];
-  assign \$127  = \$126  ? codes[3:2] : 2'h0;
-  assign \$128  = \$125  | \$127 ;
-  assign \$129  = \$128  == 1'h1;
-  assign \$130  = \$129  ? 38'h2000000066 : 38'h0000000000;
-  assign \$131  = \$123  ? 38'h2000121b30 : \$130 ;
-  assign \$132  = \$117  ? table_crc : \$131 ;
-  assign \$133  = msb ^ \bit ;
-  assign \$134  = \$133  ? settings[20:5] : 16'h0000;
-  assign \$135  = { \reg [14:0], 1'h0 } ^ \$134 ;
-  assign \$136  = { \reg , 2'h0 } >> settings[4:0];
-  assign \$137  = msb ^ \bit ;
-  assign \$138  = { settings[20:5], 1'h0 } >> settings[4:0];
-  assign \$139  = \$137  & \$138 ;
-  assign \$140  = \$136  ^ \$139 ;
-  assign \$141  = \bit  ^ msb;
-  assign \$142  = \$141  ^ settings[37];
-  assign \$143  = check & \$142 ;
-  assign \$144  = mismatch | \$143 ;
-  assign \$145  = { \reg , 2'h0 } >> settings[4:0];
-  assign \$146  = ! index;
-  assign \$147  = \bit  ^ msb;
-  assign \$148  = \$147  ^ settings[37];
-  assign \$149  = check & \$148 ;
-  assign \$150  = mismatch | \$149 ;
-  assign \$151  = ~ \$150 ;
-  assign \$153  = \bit  ^ msb;
-  assign \$154  = \$153  ^ settings[37];
-  assign \$155  = check & \$154 ;
-  assign \$156  = mismatch | \$155 ;
-  assign \$157  = ~ \$156 ;
+  assign \$69  = ! table_index;
+  assign \$70  = table_index ? 2'h0 : codes[1:0];
+  assign \$72  = \$71  ? codes[3:2] : 2'h0;
+  assign \$73  = \$70  | \$72 ;
+  assign \$74  = \$73  == 2'h3;
+  assign \$75  = ! table_index;
+  assign \$76  = table_index ? 2'h0 : codes[1:0];
+  assign \$78  = \$77  ? codes[3:2] : 2'h0;
+  assign \$79  = \$76  | \$78 ;
+  assign \$80  = \$79  == 2'h2;
+  assign \$81  = ! table_index;
+  assign \$82  = table_index ? 2'h0 : codes[1:0];
+  assign \$84  = \$83  ? codes[3:2] : 2'h0;
+  assign \$85  = \$82  | \$84 ;
+  assign \$86  = \$85  == 1'h1;
+  assign \$87  = \$86  ? 38'h2000000066 : 38'h0000000000;
+  assign \$88  = \$80  ? 38'h2000121b30 : \$87 ;
+  assign \$89  = \$74  ? table_crc : \$88 ;
+  assign \$90  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$91  = \$90  ^ \bit ;
+  assign \$92  = \$91  ? settings[20:5] : 16'h0000;
+  assign \$93  = { \reg [14:0], 1'h0 } ^ \$92 ;
+  assign \$94  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$95  = \bit  ^ \$94 ;
+  assign \$96  = \$95  ^ settings[37];
+  assign \$97  = check & \$96 ;
+  assign \$98  = mismatch | \$97 ;
+  assign \$99  = ! index;
+  assign \$100  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$101  = \bit  ^ \$100 ;
+  assign \$102  = \$101  ^ settings[37];
+  assign \$103  = check & \$102 ;
+  assign \$104  = mismatch | \$103 ;
+  assign \$105  = ~ \$104 ;
+  assign \$107  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$108  = \bit  ^ \$107 ;
+  assign \$109  = \$108  ^ settings[37];
+  assign \$110  = check & \$109 ;
+  assign \$111  = mismatch | \$110 ;
+  assign \$112  = ~ \$111 ;
   always @(posedge clk)
-    \reg  <= \$158 ;
+    \reg  <= \$113 ;
   always @(posedge clk)
-    mismatch <= \$159 ;
+    mismatch <= \$114 ;
   always @(posedge clk)
-    msb <= \$160 ;
+    settings <= \$115 ;
   always @(posedge clk)
-    settings <= \$161 ;
-  always @(posedge clk)
-    ok <= \$162 ;
+    ok <= \$116 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$158  = \reg ;
+    \$113  = \reg ;
     if (load) begin
-      \$158  = \$26 [36:21];
+      \$113  = \$26 [36:21];
     end else if (\cover ) begin
-      \$158  = \$135 ;
+      \$113  = \$93 ;
     end else if (check) begin
-      \$158  = { \reg [14:0], 1'h0 };
+      \$113  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$158  = 16'h0000;
+      \$113  = 16'h0000;
     end
     if (rst) begin
-      \$158  = 16'h0000;
+      \$113  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$159  = mismatch;
+    \$114  = mismatch;
     if (load) begin
-      \$159  = 1'h0;
+      \$114  = 1'h0;
     end else if (\cover ) begin
     end else if (check) begin
-      \$159  = \$144 ;
+      \$114  = \$98 ;
     end
     if (receiver_clear) begin
-      \$159  = 1'h0;
+      \$114  = 1'h0;
     end
     if (rst) begin
-      \$159  = 1'h0;
+      \$114  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$160  = msb;
+    \$115  = settings;
     if (load) begin
-      \$160  = \$69 ;
-    end else if (\cover ) begin
-      \$160  = \$140 ;
-    end else if (check) begin
-      \$160  = \$145 ;
+      \$115 [4:0] = \$47 [4:0];
+      \$115 [20:5] = \$68 [20:5];
+      \$115 [37] = \$89 [37];
     end
     if (receiver_clear) begin
-      \$160  = 1'h0;
+      \$115 [20:0] = 21'h000000;
+      \$115 [37] = 1'h0;
     end
     if (rst) begin
-      \$160  = 1'h0;
+      \$115  = 38'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$161  = settings;
-    if (load) begin
-      \$161 [4:0] = \$90 [4:0];
-      \$161 [20:5] = \$111 [20:5];
-      \$161 [37] = \$132 [37];
-    end
-    if (receiver_clear) begin
-      \$161 [20:0] = 21'h000000;
-      \$161 [37] = 1'h0;
-    end
-    if (rst) begin
-      \$161  = 38'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$162  = ok;
+    \$116  = ok;
     if (last) begin
-      if (\$146 ) begin
-        \$162 [0] = \$151 ;
+      if (\$99 ) begin
+        \$116 [0] = \$105 ;
       end
-      if (\$152 ) begin
-        \$162 [1] = \$157 ;
+      if (\$106 ) begin
+        \$116 [1] = \$112 ;
       end
     end
     if (receiver_clear) begin
-      \$162  = 2'h3;
+      \$116  = 2'h3;
     end
     if (rst) begin
-      \$162  = 2'h3;
+      \$116  = 2'h3;
     end
   end
   assign load_index = table_index;
@@ -18845,16 +18712,10 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, \table , load, \cover , chec
   assign \$50  = table_index;
   assign \$56  = table_index;
   assign \$62  = table_index;
-  assign \$72  = table_index;
-  assign \$78  = table_index;
-  assign \$84  = table_index;
-  assign \$93  = table_index;
-  assign \$99  = table_index;
-  assign \$105  = table_index;
-  assign \$114  = table_index;
-  assign \$120  = table_index;
-  assign \$126  = table_index;
-  assign \$152  = index;
+  assign \$71  = table_index;
+  assign \$77  = table_index;
+  assign \$83  = table_index;
+  assign \$106  = index;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -20619,7 +20480,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.ma_stop (rst, \port$13223$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_axil.ch0.core.ma_stop (rst, \port$13127$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20708,8 +20569,8 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13223$166 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13223$166 ;
-  wire \port$13223$166 ;
+  input \port$13127$166 ;
+  wire \port$13127$166 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20829,7 +20690,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13223$166 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13223$166  : 1'h0;
+  assign \$13  = \$12  ? \port$13127$166  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -20997,7 +20858,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13223$166 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13223$166 , 1'h1 };
+  assign enables = { \port$13127$166 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -23137,7 +22998,7 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13223$193 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13127$193 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -23720,8 +23581,8 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13223$193 ;
-  wire [12:0] \port$13223$193 ;
+  input [12:0] \port$13127$193 ;
+  wire [12:0] \port$13127$193 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -23744,7 +23605,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13223$193 [12:1] + 1'h1;
+  assign \$460  = \port$13127$193 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -24320,7 +24181,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13223$193 [0]),
+    .clear_high(\port$13127$193 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -24463,7 +24324,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13223$193 [0]) begin
+            if (\port$13127$193 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -24548,7 +24409,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13223$193 [0]) begin
+            if (\port$13127$193 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -24587,7 +24448,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13223$193 [12:1] };
+            \$534  = { 1'h0, \port$13127$193 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -24972,11 +24833,11 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13223$193 [12:1] };
-  assign fixed = \port$13223$193 [0];
+  assign fixed_delay = { 1'h0, \port$13127$193 [12:1] };
+  assign fixed = \port$13127$193 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13223$193 [0];
+  assign clear_high = \port$13127$193 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -27553,7 +27414,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13236$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13140$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -27595,8 +27456,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13236$0 ;
-  wire \port$13236$0 ;
+  input \port$13140$0 ;
+  wire \port$13140$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -27610,9 +27471,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13236$0  };
-  assign \$2  = { lc[4:0], \port$13236$0  } == last;
-  assign \$3  = { lc[4:0], \port$13236$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13140$0  };
+  assign \$2  = { lc[4:0], \port$13140$0  } == last;
+  assign \$3  = { lc[4:0], \port$13140$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -27722,7 +27583,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13236$0  };
+  assign lc_next = { lc[4:0], \port$13140$0  };
   assign zero = is_zero;
 endmodule
 
@@ -30519,7 +30380,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$6089$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$6042$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -30691,8 +30552,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$6089$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$6089$0 ;
-  wire \port$6089$0 ;
+  output \port$6042$0 ;
+  wire \port$6042$0 ;
   output report;
   wire report;
   input report_frame;
@@ -30810,7 +30671,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$6089$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$6089$0  = \$2 ;
+  assign \port$6042$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -30861,7 +30722,7 @@ endmodule
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_rbuf_en, crc_table_data, regs__frame_error, cfg_free, regs__busy, regs__config_error, crc_table_addr, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle
 , clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed
 , cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14166$0 , \port$14177$0 , regs__ca_done, \port$14254$0 , ca_rbuf_addr);
+, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14066$0 , \port$14077$0 , regs__ca_done, \port$14154$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -31052,12 +30913,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$14166$0 ;
-  wire [186:0] \port$14166$0 ;
-  output [79:0] \port$14177$0 ;
-  wire [79:0] \port$14177$0 ;
-  output [9:0] \port$14254$0 ;
-  wire [9:0] \port$14254$0 ;
+  output [186:0] \port$14066$0 ;
+  wire [186:0] \port$14066$0 ;
+  output [79:0] \port$14077$0 ;
+  wire [79:0] \port$14077$0 ;
+  output [9:0] \port$14154$0 ;
+  wire [9:0] \port$14154$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -31539,9 +31400,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en
   assign \cfg_hold$199  = cfg_hold;
   assign \crc_table_addr$202  = crc_table_addr;
   assign \crc_table_data$204  = crc_table_data;
-  assign \port$14166$0  = \$24 ;
-  assign \port$14177$0  = \$25 ;
-  assign \port$14254$0  = \$26 ;
+  assign \port$14066$0  = \$24 ;
+  assign \port$14077$0  = \$25 ;
+  assign \port$14154$0  = \$26 ;
   assign \crc_table_data.poly  = crc_table_data[15:0];
   assign \crc_table_data.start  = crc_table_data[31:16];
   assign \crc_table_data.inverted  = crc_table_data[32];
@@ -32587,7 +32448,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13776$206 (live[208:206]),
+    .\port$13678$206 (live[208:206]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(sample),
@@ -32648,7 +32509,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13776$166 (live[166]),
+    .\port$13678$166 (live[166]),
     .rises(rises),
     .rst(rst),
     .ssi(live[193]),
@@ -32699,7 +32560,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$58 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13776$193 (live[205:193]),
+    .\port$13678$193 (live[205:193]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -32724,7 +32585,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13789$0 (\bit ),
+    .\port$13691$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -32792,7 +32653,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$11690$0 (\$28 ),
+    .\port$11598$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -36881,7 +36742,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, lc_load, crc_table_addr, ssi, \port$13776$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne
+module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, lc_load, crc_table_addr, ssi, \port$13678$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne
 , nw, data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -37579,8 +37440,8 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13776$206 ;
-  wire [2:0] \port$13776$206 ;
+  input [2:0] \port$13678$206 ;
+  wire [2:0] \port$13678$206 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -37898,7 +37759,7 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
     lc <= \$600 ;
   always @(posedge clk)
     cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13776$206 [0];
+  assign error_bit = ssi & \port$13678$206 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -37929,19 +37790,19 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \$21  = slots == 16'hfffe;
   assign \$22  = sample & \bit ;
   assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13776$206 [0];
+  assign \$24  = ssi & \port$13678$206 [0];
   assign \$26  = words[5:0] + \$25 ;
   assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13776$206 [0];
+  assign \$28  = ssi & \port$13678$206 [0];
   assign \$30  = words[5:0] + \$29 ;
   assign \$31  = | \$30 ;
   assign \$32  = \$27  & \$31 ;
   assign \$33  = | words[17:12];
   assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13776$206 [0];
+  assign \$35  = ssi & \port$13678$206 [0];
   assign \$37  = words[5:0] + \$36 ;
   assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13776$206 [0];
+  assign \$39  = ssi & \port$13678$206 [0];
   assign \$41  = words[5:0] + \$40 ;
   assign \$42  = | \$41 ;
   assign \$43  = \$38  & \$42 ;
@@ -37962,7 +37823,7 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \$58  = idx == current[34:28];
   assign \$59  = word_count - 1'h1;
   assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$13776$206 [2];
+  assign \$61  = ssi & \port$13678$206 [2];
   assign \$62  = word + 1'h1;
   assign \$63  = idx + 1'h1;
   assign \$64  = idx == current[34:28];
@@ -38248,15 +38109,15 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \$344  = \$341  & \$343 ;
   assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
   assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13776$206 [0];
+  assign \$347  = ssi & \port$13678$206 [0];
   assign \$348  = ~ \$347 ;
   assign \$349  = \$346  & \$348 ;
   assign \$350  = ! word;
   assign \$351  = in_word & \$350 ;
   assign \$352  = idx == words[5:0];
   assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13776$206 [0];
-  assign \$355  = ~ \port$13776$206 [1];
+  assign \$354  = ssi & \port$13678$206 [0];
+  assign \$355  = ~ \port$13678$206 [1];
   assign \$356  = \$354  & \$355 ;
   assign \$357  = \bit  ^ \$356 ;
   assign \$358  = ~ words[6];
@@ -38992,7 +38853,7 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13776$206 [0];
+  assign ssi_error = \port$13678$206 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -39004,8 +38865,8 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign ok = crc_ok;
   assign \index$46  = word;
   assign load_index = \$10 [0];
-  assign ssi_double = \port$13776$206 [2];
-  assign ssi_error_low = \port$13776$206 [1];
+  assign ssi_double = \port$13678$206 [2];
+  assign ssi_error_low = \port$13678$206 [1];
   assign crc_table_addr = \$10 [0];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
@@ -39142,75 +39003,29 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, \table , load, \cover , chec
   reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
   wire [1:0] \$10 ;
-  wire [1:0] \$100 ;
-  wire [1:0] \$101 ;
+  wire \$100 ;
+  wire \$101 ;
   wire \$102 ;
   wire \$103 ;
-  wire [1:0] \$104 ;
+  wire \$104 ;
   wire \$105 ;
-  wire [1:0] \$106 ;
-  wire [1:0] \$107 ;
+  wire \$106 ;
+  wire \$107 ;
   wire \$108 ;
-  wire [37:0] \$109 ;
+  wire \$109 ;
   wire \$11 ;
-  wire [37:0] \$110 ;
-  wire [37:0] \$111 ;
+  wire \$110 ;
+  wire \$111 ;
   wire \$112 ;
-  wire [1:0] \$113 ;
-  wire \$114 ;
-  wire [1:0] \$115 ;
-  wire [1:0] \$116 ;
-  wire \$117 ;
-  wire \$118 ;
-  wire [1:0] \$119 ;
+  reg [15:0] \$113 ;
+  reg \$114 ;
+  reg [37:0] \$115 ;
+  reg [1:0] \$116 ;
   wire \$12 ;
-  wire \$120 ;
-  wire [1:0] \$121 ;
-  wire [1:0] \$122 ;
-  wire \$123 ;
-  wire \$124 ;
-  wire [1:0] \$125 ;
-  wire \$126 ;
-  wire [1:0] \$127 ;
-  wire [1:0] \$128 ;
-  wire \$129 ;
   wire [1:0] \$13 ;
-  wire [37:0] \$130 ;
-  wire [37:0] \$131 ;
-  wire [37:0] \$132 ;
-  wire \$133 ;
-  wire [15:0] \$134 ;
-  wire [15:0] \$135 ;
-  wire \$136 ;
-  wire \$137 ;
-  wire \$138 ;
-  wire \$139 ;
   wire \$14 ;
-  wire \$140 ;
-  wire \$141 ;
-  wire \$142 ;
-  wire \$143 ;
-  wire \$144 ;
-  wire \$145 ;
-  wire \$146 ;
-  wire \$147 ;
-  wire \$148 ;
-  wire \$149 ;
   wire [1:0] \$15 ;
-  wire \$150 ;
-  wire \$151 ;
-  wire \$152 ;
-  wire \$153 ;
-  wire \$154 ;
-  wire \$155 ;
-  wire \$156 ;
-  wire \$157 ;
-  reg [15:0] \$158 ;
-  reg \$159 ;
   wire [1:0] \$16 ;
-  reg \$160 ;
-  reg [37:0] \$161 ;
-  reg [1:0] \$162 ;
   wire \$17 ;
   wire \$18 ;
   wire [1:0] \$19 ;
@@ -39270,37 +39085,37 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, \table , load, \cover , chec
   wire [37:0] \$68 ;
   wire \$69 ;
   wire [1:0] \$7 ;
-  wire \$70 ;
-  wire [1:0] \$71 ;
-  wire \$72 ;
+  wire [1:0] \$70 ;
+  wire \$71 ;
+  wire [1:0] \$72 ;
   wire [1:0] \$73 ;
-  wire [1:0] \$74 ;
+  wire \$74 ;
   wire \$75 ;
-  wire \$76 ;
-  wire [1:0] \$77 ;
-  wire \$78 ;
+  wire [1:0] \$76 ;
+  wire \$77 ;
+  wire [1:0] \$78 ;
   wire [1:0] \$79 ;
   wire \$8 ;
-  wire [1:0] \$80 ;
+  wire \$80 ;
   wire \$81 ;
-  wire \$82 ;
-  wire [1:0] \$83 ;
-  wire \$84 ;
+  wire [1:0] \$82 ;
+  wire \$83 ;
+  wire [1:0] \$84 ;
   wire [1:0] \$85 ;
-  wire [1:0] \$86 ;
-  wire \$87 ;
+  wire \$86 ;
+  wire [37:0] \$87 ;
   wire [37:0] \$88 ;
   wire [37:0] \$89 ;
   wire [1:0] \$9 ;
-  wire [37:0] \$90 ;
+  wire \$90 ;
   wire \$91 ;
-  wire [1:0] \$92 ;
-  wire \$93 ;
-  wire [1:0] \$94 ;
-  wire [1:0] \$95 ;
+  wire [15:0] \$92 ;
+  wire [15:0] \$93 ;
+  wire \$94 ;
+  wire \$95 ;
   wire \$96 ;
   wire \$97 ;
-  wire [1:0] \$98 ;
+  wire \$98 ;
   wire \$99 ;
   input \bit ;
   wire \bit ;
@@ -39332,7 +39147,6 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, \table , load, \cover , chec
   wire load;
   wire load_index;
   reg mismatch = 1'h0;
-  reg msb = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
   input receiver_clear;
@@ -39419,177 +39233,119 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, \table , load, \cover , chec
   assign \$66  = \$65  ? 38'h2000000066 : 38'h0000000000;
   assign \$67  = \$59  ? 38'h2000121b30 : \$66 ;
   assign \$68  = \$53  ? table_crc : \$67 ;
-  assign \$69  = { \$47 [36:21], 1'h0 } >> \$68 [4:0];
-  assign \$70  = ! table_index;
-  assign \$71  = table_index ? 2'h0 : codes[1:0];
-  assign \$73  = \$72  ? codes[3:2] : 2'h0;
-  assign \$74  = \$71  | \$73 ;
-  assign \$75  = \$74  == 2'h3;
-  assign \$76  = ! table_index;
-  assign \$77  = table_index ? 2'h0 : codes[1:0];
-  assign \$79  = \$78  ? codes[3:2] : 2'h0;
-  assign \$80  = \$77  | \$79 ;
-  assign \$81  = \$80  == 2'h2;
-  assign \$82  = ! table_index;
-  assign \$83  = table_index ? 2'h0 : codes[1:0];
-  assign \$85  = \$84  ? codes[3:2] : 2'h0;
-  assign \$86  = \$83  | \$85 ;
-  assign \$87  = \$86  == 1'h1;
-  assign \$88  = \$87  ? 38'h2000000066 : 38'h0000000000;
-  assign \$89  = \$81  ? 38'h2000121b30 : \$88 ;
-  assign \$90  = \$75  ? table_crc : \$89 ;
-  assign \$91  = ! table_index;
-  assign \$92  = table_index ? 2'h0 : codes[1:0];
-  assign \$94  = \$93  ? codes[3:2] : 2'h0;
-  assign \$95  = \$92  | \$94 ;
-  assign \$96  = \$95  == 2'h3;
-  assign \$97  = ! table_index;
-  assign \$98  = table_index ? 2'h0 : codes[1:0];
-  assign \$100  = \$99  ? codes[3:2] : 2'h0;
-  assign \$101  = \$98  | \$100 ;
-  assign \$102  = \$101  == 2'h2;
-  assign \$103  = ! table_index;
-  assign \$104  = table_index ? 2'h0 : codes[1:0];
-  assign \$106  = \$105  ? codes[3:2] : 2'h0;
-  assign \$107  = \$104  | \$106 ;
-  assign \$108  = \$107  == 1'h1;
-  assign \$109  = \$108  ? 38'h2000000066 : 38'h0000000000;
-  assign \$110  = \$102  ? 38'h2000121b30 : \$109 ;
-  assign \$111  = \$96  ? table_crc : \$110 ;
-  assign \$112  = ! table_index;
-  assign \$113  = table_index ? 2'h0 : codes[1:0];
-  assign \$115  = \$114  ? codes[3:2] : 2'h0;
-  assign \$116  = \$113  | \$115 ;
-  assign \$117  = \$116  == 2'h3;
-  assign \$118  = ! table_index;
-  assign \$119  = table_index ? 2'h0 : codes[1:0];
-  assign \$121  = \$120  ? codes[3:2] : 2'h0;
-  assign \$122  = \$119  | \$121 ;
-  assign \$123  = \$122  == 2'h2;
-  assign \$124  = ! table_index;
-  assign \$125  = table_index ? 2'h0 : codes[1:0];
-  assign \$127  = \$126  ? codes[3:2] : 2'h0;
-  assign \$128  = \$125  | \$127 ;
-  assign \$129  = \$128  == 1'h1;
-  assign \$130  = \$129  ? 38'h2000000066 : 38'h0000000000;
-  assign \$131  = \$123  ? 38'h2000121b30 : \$130 ;
-  assign \$132  = \$117  ? table_crc : \$131 ;
-  assign \$133  = msb ^ \bit ;
-  assign \$134  = \$133  ? settings[20:5] : 16'h0000;
-  assign \$135  = { \reg [14:0], 1'h0 } ^ \$134 ;
-  assign \$136  = { \reg , 2'h0 } >> settings[4:0];
-  assign \$137  = msb ^ \bit ;
-  assign \$138  = { settings[20:5], 1'h0 } >> settings[4:0];
-  assign \$139  = \$137  & \$138 ;
-  assign \$140  = \$136  ^ \$139 ;
-  assign \$141  = \bit  ^ msb;
-  assign \$142  = \$141  ^ settings[37];
-  assign \$143  = check & \$142 ;
-  assign \$144  = mismatch | \$143 ;
-  assign \$145  = { \reg , 2'h0 } >> settings[4:0];
-  assign \$146  = ! index;
-  assign \$147  = \bit  ^ msb;
-  assign \$148  = \$147  ^ settings[37];
-  assign \$149  = check & \$148 ;
-  assign \$150  = mismatch | \$149 ;
-  assign \$151  = ~ \$150 ;
-  assign \$153  = \bit  ^ msb;
-  assign \$154  = \$153  ^ settings[37];
-  assign \$155  = check & \$154 ;
-  assign \$156  = mismatch | \$155 ;
-  assign \$157  = ~ \$156 ;
+  assign \$69  = ! table_index;
+  assign \$70  = table_index ? 2'h0 : codes[1:0];
+  assign \$72  = \$71  ? codes[3:2] : 2'h0;
+  assign \$73  = \$70  | \$72 ;
+  assign \$74  = \$73  == 2'h3;
+  assign \$75  = ! table_index;
+  assign \$76  = table_index ? 2'h0 : codes[1:0];
+  assign \$78  = \$77  ? codes[3:2] : 2'h0;
+  assign \$79  = \$76  | \$78 ;
+  assign \$80  = \$79  == 2'h2;
+  assign \$81  = ! table_index;
+  assign \$82  = table_index ? 2'h0 : codes[1:0];
+  assign \$84  = \$83  ? codes[3:2] : 2'h0;
+  assign \$85  = \$82  | \$84 ;
+  assign \$86  = \$85  == 1'h1;
+  assign \$87  = \$86  ? 38'h2000000066 : 38'h0000000000;
+  assign \$88  = \$80  ? 38'h2000121b30 : \$87 ;
+  assign \$89  = \$74  ? table_crc : \$88 ;
+  assign \$90  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$91  = \$90  ^ \bit ;
+  assign \$92  = \$91  ? settings[20:5] : 16'h0000;
+  assign \$93  = { \reg [14:0], 1'h0 } ^ \$92 ;
+  assign \$94  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$95  = \bit  ^ \$94 ;
+  assign \$96  = \$95  ^ settings[37];
+  assign \$97  = check & \$96 ;
+  assign \$98  = mismatch | \$97 ;
+  assign \$99  = ! index;
+  assign \$100  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$101  = \bit  ^ \$100 ;
+  assign \$102  = \$101  ^ settings[37];
+  assign \$103  = check & \$102 ;
+  assign \$104  = mismatch | \$103 ;
+  assign \$105  = ~ \$104 ;
+  assign \$107  = { \reg , 1'h0 } >> settings[4:0];
+  assign \$108  = \bit  ^ \$107 ;
+  assign \$109  = \$108  ^ settings[37];
+  assign \$110  = check & \$109 ;
+  assign \$111  = mismatch | \$110 ;
+  assign \$112  = ~ \$111 ;
   always @(posedge clk)
-    \reg  <= \$158 ;
+    \reg  <= \$113 ;
   always @(posedge clk)
-    mismatch <= \$159 ;
+    mismatch <= \$114 ;
   always @(posedge clk)
-    msb <= \$160 ;
+    settings <= \$115 ;
   always @(posedge clk)
-    settings <= \$161 ;
-  always @(posedge clk)
-    ok <= \$162 ;
+    ok <= \$116 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$158  = \reg ;
+    \$113  = \reg ;
     if (load) begin
-      \$158  = \$26 [36:21];
+      \$113  = \$26 [36:21];
     end else if (\cover ) begin
-      \$158  = \$135 ;
+      \$113  = \$93 ;
     end else if (check) begin
-      \$158  = { \reg [14:0], 1'h0 };
+      \$113  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$158  = 16'h0000;
+      \$113  = 16'h0000;
     end
     if (rst) begin
-      \$158  = 16'h0000;
+      \$113  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$159  = mismatch;
+    \$114  = mismatch;
     if (load) begin
-      \$159  = 1'h0;
+      \$114  = 1'h0;
     end else if (\cover ) begin
     end else if (check) begin
-      \$159  = \$144 ;
+      \$114  = \$98 ;
     end
     if (receiver_clear) begin
-      \$159  = 1'h0;
+      \$114  = 1'h0;
     end
     if (rst) begin
-      \$159  = 1'h0;
+      \$114  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$160  = msb;
+    \$115  = settings;
     if (load) begin
-      \$160  = \$69 ;
-    end else if (\cover ) begin
-      \$160  = \$140 ;
-    end else if (check) begin
-      \$160  = \$145 ;
+      \$115 [4:0] = \$47 [4:0];
+      \$115 [20:5] = \$68 [20:5];
+      \$115 [37] = \$89 [37];
     end
     if (receiver_clear) begin
-      \$160  = 1'h0;
+      \$115 [20:0] = 21'h000000;
+      \$115 [37] = 1'h0;
     end
     if (rst) begin
-      \$160  = 1'h0;
+      \$115  = 38'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$161  = settings;
-    if (load) begin
-      \$161 [4:0] = \$90 [4:0];
-      \$161 [20:5] = \$111 [20:5];
-      \$161 [37] = \$132 [37];
-    end
-    if (receiver_clear) begin
-      \$161 [20:0] = 21'h000000;
-      \$161 [37] = 1'h0;
-    end
-    if (rst) begin
-      \$161  = 38'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
-    \$162  = ok;
+    \$116  = ok;
     if (last) begin
-      if (\$146 ) begin
-        \$162 [0] = \$151 ;
+      if (\$99 ) begin
+        \$116 [0] = \$105 ;
       end
-      if (\$152 ) begin
-        \$162 [1] = \$157 ;
+      if (\$106 ) begin
+        \$116 [1] = \$112 ;
       end
     end
     if (receiver_clear) begin
-      \$162  = 2'h3;
+      \$116  = 2'h3;
     end
     if (rst) begin
-      \$162  = 2'h3;
+      \$116  = 2'h3;
     end
   end
   assign load_index = table_index;
@@ -39622,16 +39378,10 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, \table , load, \cover , chec
   assign \$50  = table_index;
   assign \$56  = table_index;
   assign \$62  = table_index;
-  assign \$72  = table_index;
-  assign \$78  = table_index;
-  assign \$84  = table_index;
-  assign \$93  = table_index;
-  assign \$99  = table_index;
-  assign \$105  = table_index;
-  assign \$114  = table_index;
-  assign \$120  = table_index;
-  assign \$126  = table_index;
-  assign \$152  = index;
+  assign \$71  = table_index;
+  assign \$77  = table_index;
+  assign \$83  = table_index;
+  assign \$106  = index;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -41396,7 +41146,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.ma_stop (rst, \port$13776$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_axil.ch1.core.ma_stop (rst, \port$13678$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -41485,8 +41235,8 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13776$166 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13776$166 ;
-  wire \port$13776$166 ;
+  input \port$13678$166 ;
+  wire \port$13678$166 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -41606,7 +41356,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13776$166 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13776$166  : 1'h0;
+  assign \$13  = \$12  ? \port$13678$166  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -41774,7 +41524,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13776$166 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13776$166 , 1'h1 };
+  assign enables = { \port$13678$166 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -43914,7 +43664,7 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13776$193 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13678$193 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -44497,8 +44247,8 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13776$193 ;
-  wire [12:0] \port$13776$193 ;
+  input [12:0] \port$13678$193 ;
+  wire [12:0] \port$13678$193 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -44521,7 +44271,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13776$193 [12:1] + 1'h1;
+  assign \$460  = \port$13678$193 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -45097,7 +44847,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13776$193 [0]),
+    .clear_high(\port$13678$193 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -45240,7 +44990,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13776$193 [0]) begin
+            if (\port$13678$193 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -45325,7 +45075,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13776$193 [0]) begin
+            if (\port$13678$193 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -45364,7 +45114,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13776$193 [12:1] };
+            \$534  = { 1'h0, \port$13678$193 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -45749,11 +45499,11 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13776$193 [12:1] };
-  assign fixed = \port$13776$193 [0];
+  assign fixed_delay = { 1'h0, \port$13678$193 [12:1] };
+  assign fixed = \port$13678$193 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13776$193 [0];
+  assign clear_high = \port$13678$193 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -48330,7 +48080,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13789$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13691$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -48372,8 +48122,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13789$0 ;
-  wire \port$13789$0 ;
+  input \port$13691$0 ;
+  wire \port$13691$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -48387,9 +48137,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13789$0  };
-  assign \$2  = { lc[4:0], \port$13789$0  } == last;
-  assign \$3  = { lc[4:0], \port$13789$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13691$0  };
+  assign \$2  = { lc[4:0], \port$13691$0  } == last;
+  assign \$3  = { lc[4:0], \port$13691$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -48499,7 +48249,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13789$0  };
+  assign lc_next = { lc[4:0], \port$13691$0  };
   assign zero = is_zero;
 endmodule
 
@@ -51296,7 +51046,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11690$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11598$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -51468,8 +51218,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11690$0 , 
   wire noisy;
   output passed;
   wire passed;
-  output \port$11690$0 ;
-  wire \port$11690$0 ;
+  output \port$11598$0 ;
+  wire \port$11598$0 ;
   output report;
   wire report;
   input report_frame;
@@ -51587,7 +51337,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11690$0 , 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$11690$0  = \$2 ;
+  assign \port$11598$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -89,7 +89,6 @@ INTERNALS = {
     "decoder.word": ("signal", "", "word"),                     # word index (builds of 2+ words)
     "decoder.crc_reg": ("signal", "crc", "reg"),                # the CrcEngine's shift register
     "decoder.crc_mismatch": ("signal", "crc", "mismatch"),      # a received CRC bit differed
-    "decoder.crc_msb": ("signal", "crc", "msb"),                # the register's MSB, kept apart
     "decoder.crc_settings": ("signal", "crc", "settings"),      # the current word's CRC
     "decoder.ends_current": ("signal", "field_ends", "current_ends"),      # its field ends ...
     "decoder.ends_following": ("signal", "field_ends", "following_ends"),  # ... the next word's
@@ -1197,13 +1196,6 @@ class DecoderCrcHarness(Harness):
         rtl = None
         if self.lemmas:
             rtl = dict(_crc_state(inside), ok=dut.crc_ok)
-            # The engine keeps its register's MSB in a flip-flop of its own: it is always bit
-            # width - 1 of the register (0 for width 0), the width the engine runs.
-            width = (_engine_settings(cfg[0]["crc"])["width"] if p.words == 1
-                     else CRC_SETTINGS(inside("decoder.crc_settings")).width)
-            m.d.comb += Assert(inside("decoder.crc_msb")
-                               == Cat(C(0, 1), rtl["reg"]).bit_select(width, 1),
-                               "lemma: the engine's MSB is its register's")
         parse = _FrameParser(m, sample, bit, cfg, count, lemmas=self.lemmas, rtl=rtl,
                              mutation=self.mutation)
         in_done = parse.phase == _FrameParser.DONE

@@ -539,14 +539,8 @@ class RegisterBank(wiring.Component):
         hit = Signal(name=f"{prefix}_config_read")
         m.d.comb += hit.eq(bus.r_en & (bus.r_addr[low:] == base // 4 >> low) & r_shadow)
         index = Signal(range(count), name=f"{prefix}_config_read_index")
-        next_index = Mux(hit, r_index, index)
-        m.d.sync += index.eq(next_index)
-        # Whether the register read has been written since reset, as a flip-flop set from the
-        # index and the flags each takes in the next clock: ``written[index]`` in every clock.
-        # As a select in front of the read data it was copied into every data bit's logic by
-        # the LUT mapper (ABC, for depth): about 150 LUT4 more per channel on ECP5.
-        was_written = Signal(name=f"{prefix}_config_read_written")
-        m.d.sync += was_written.eq((written | writes).bit_select(next_index, 1))
+        with m.If(hit):
+            m.d.sync += index.eq(r_index)
         rd = memory.read_port(domain="comb")
         m.d.comb += rd.addr.eq(index)
         value = Signal(DATA_WIDTH, name=f"{prefix}_config_read_data")
@@ -558,7 +552,7 @@ class RegisterBank(wiring.Component):
                 unwritten = unwritten | Mux(index == k, reset[k], 0)
             if const[k]:
                 fixed = fixed | Mux(index == k, const[k], 0)
-        m.d.comb += value.eq(Mux(was_written, rd.data, unwritten) | fixed)
+        m.d.comb += value.eq(Mux(written.bit_select(index, 1), rd.data, unwritten) | fixed)
         windows.append((hit, value))
 
     def _shadow_common(self, m, registers, shadowed, absent, mask, reset):

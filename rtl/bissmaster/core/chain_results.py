@@ -94,11 +94,10 @@ class ChainResults(wiring.Component):
         rd = memory.read_port(domain="comb")
         write_page, read_page = Signal(), Signal()
         published = Signal(range(self._chain + 1))     # chain words of the published frame
-        publishing = Mux(self.words_published > CHAIN_FIRST_WORD,
-                         self.words_published - CHAIN_FIRST_WORD, 0)
         with m.If(self.publish):
             m.d.sync += [read_page.eq(write_page), write_page.eq(~write_page),
-                         published.eq(publishing)]
+                         published.eq(Mux(self.words_published > CHAIN_FIRST_WORD,
+                                          self.words_published - CHAIN_FIRST_WORD, 0))]
 
         # The word's bits 31..0 in the clock after its end (its last bit may be a data bit,
         # in ``data`` from then on), bits 63..32 in the one after, into the page being
@@ -124,16 +123,8 @@ class ChainResults(wiring.Component):
         address = Signal.like(self.read_addr)
         with m.If(self.read_en):
             m.d.sync += address.eq(self.read_addr)
-        # Whether the word addressed is in the published frame, as a flip-flop set from the
-        # address and the count each takes in the next clock: it is ``(address >> 1) <
-        # published`` in every clock. A compare in front of the read data's AND was copied
-        # into the logic of every data bit by the LUT mapper (ABC, for depth): about 220 LUT4
-        # more in the ECP5 build of six chain words.
-        present = Signal()
-        m.d.sync += present.eq((Mux(self.read_en, self.read_addr, address) >> 1)
-                               < Mux(self.publish, publishing, published))
         m.d.comb += [
             rd.addr.eq(Cat(address[:slot_bits], read_page)),
-            self.read_data.eq(Mux(present, rd.data, 0)),
+            self.read_data.eq(Mux((address >> 1) < published, rd.data, 0)),
         ]
         return m

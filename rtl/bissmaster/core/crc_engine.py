@@ -175,36 +175,25 @@ class CrcEngine(wiring.Component):
 
         reg = Signal(CRC_MAX_WIDTH)
         mismatch = Signal()
-        # The MSB of the ``width``-bit register (bit width - 1; 0 for width 0), kept in a
-        # flip-flop of its own, set with the register from what its next MSB will be (``top``
-        # below), so that it always equals bit width - 1 of ``reg``. As a select of the
-        # register by the width (the plain way), the LUT mapper (ABC, for depth) copied that
-        # select into the next-state logic of the register bits and of the verdict: the
-        # eight-word engine of the bus tops alone on ECP5 270 -> 217 LUT4, 98 -> 44 PFUMX.
-        msb = Signal(name="msb")
-
-        def top(value, width, below=0):
-            """Bit ``width - 1 - below`` of ``value`` (0 where that is below bit 0)."""
-            return Cat(C(0, 1 + below), value).bit_select(width, 1)
-
+        # The MSB of a ``width``-bit register: bit width - 1, i.e. bit ``width`` of the
+        # register with a 0 below it (width 0 reads that 0 and is never used). The register is
+        # loaded with the start value before the word's first bit, so this wide select runs
+        # on flip-flops only; the control that follows the sampler picks late.
+        msb = Cat(C(0, 1), reg).bit_select(crc.width, 1)
         shifted = Cat(C(0, 1), reg[:-1])
         feedback = msb ^ self.bit
         wrong = self.check & (self.bit ^ msb ^ crc.inverted)
         seen = mismatch | wrong
 
         with m.If(self.load):
-            m.d.sync += [reg.eq(load_crc.start), mismatch.eq(0),
-                         msb.eq(top(load_crc.start, load_crc.width))]
+            m.d.sync += [reg.eq(load_crc.start), mismatch.eq(0)]
             if n > 1:
                 m.d.sync += [crc.width.eq(load_crc.width), crc.poly.eq(load_crc.poly),
                              crc.inverted.eq(load_crc.inverted)]
         with m.Elif(self.cover):
-            m.d.sync += [reg.eq(shifted ^ Mux(feedback, crc.poly, 0)),
-                         msb.eq(top(reg, crc.width, below=1)
-                                ^ (feedback & top(crc.poly, crc.width)))]
+            m.d.sync += reg.eq(shifted ^ Mux(feedback, crc.poly, 0))
         with m.Elif(self.check):
-            m.d.sync += [reg.eq(shifted), mismatch.eq(seen),
-                         msb.eq(top(reg, crc.width, below=1))]
+            m.d.sync += [reg.eq(shifted), mismatch.eq(seen)]
         with m.If(self.last):
             for w in range(n):
                 with m.If(word == w):

@@ -476,7 +476,8 @@ def test_configuration_read_returns_the_value_of_its_load_clock():
 def test_first_write_after_a_reset_reads_back_in_its_first_clock():
     """The first write of a configuration register since reset reads back from the first clock
     its flip-flops hold it (r_load two clocks after an r_en in the clock after w_en), as every
-    later write does: the written-since-reset flag is not a clock late."""
+    later write does: the read-back memory's written-since-reset flag is current in that
+    clock, not a clock late (the reset value would be read)."""
     async def bench(ctx, bank, rst):
         period = offset("cfg_period")
         await write(ctx, bank, period, 0x000005)
