@@ -102,7 +102,8 @@ BUS_CONFIGS = {
     # a chain of four words behind the bus (issue 26; the core alone: `chain-4`)
     "axil-chain-4": ("axil", 1, "chain", ("ecp5",), CHAIN_4_OPTIONS),
     # one channel of eight long words: what each channel of issue 27's axil-8 target costs
-    "axil-chain-8": ("axil", 1, "chain", ("ecp5",), CHAIN_8_OPTIONS),
+    # (Xilinx and Intel: whether its memories, the CRC table's among them, are RAM there)
+    "axil-chain-8": ("axil", 1, "chain", ("ecp5", "xilinx", "intel"), CHAIN_8_OPTIONS),
     # issue 27's target itself: eight such channels. nextpnr packs it and reports the
     # device's share it needs (it does not fit the 25F: "does not fit", with the counts).
     "axil-8": ("axil", 8, "chain", ("ecp5",), CHAIN_8_OPTIONS),

@@ -1068,12 +1068,12 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$14021$0 (\$10 ),
-    .\port$14032$0 (\$11 ),
-    .\port$14109$0 (\$12 ),
-    .\port$14572$0 (\$13 ),
-    .\port$14583$0 (\$14 ),
-    .\port$14660$0 (\$15 ),
+    .\port$14025$0 (\$10 ),
+    .\port$14036$0 (\$11 ),
+    .\port$14113$0 (\$12 ),
+    .\port$14578$0 (\$13 ),
+    .\port$14589$0 (\$14 ),
+    .\port$14666$0 (\$15 ),
     .\rd__addr$763 (ch0_crc_table_addr),
     .\rd__addr$929 (ch1_crc_table_addr),
     .rst(rst),
@@ -1145,9 +1145,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .crc_table_data(crc_table_data),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$14021$0 (\$10 ),
-    .\port$14032$0 (\$11 ),
-    .\port$14109$0 (\$12 ),
+    .\port$14025$0 (\$10 ),
+    .\port$14036$0 (\$11 ),
+    .\port$14113$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1220,9 +1220,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .crc_table_data(\crc_table_data$862 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$787 ),
-    .\port$14572$0 (\$13 ),
-    .\port$14583$0 (\$14 ),
-    .\port$14660$0 (\$15 ),
+    .\port$14578$0 (\$13 ),
+    .\port$14589$0 (\$14 ),
+    .\port$14666$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$451 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1994,13 +1994,13 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_crc_table_data, ch0_irq, ch1__count_en, ch1__chain_en, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_crc_table_data, ch1_irq, bus__w_busy, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, \rd__addr$763 , ch0__count_data, ch0__ca_busy
-, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, \rd__addr$929 , ch1__count_data, ch1__ca_busy, ch1__ca_rbuf_data, cfg_free, bus__w_en, bus__r_en, bus__r_load, bus__w_addr, bus__w_data, bus__r_addr, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters
-, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable
-, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc1_w1_crc_width, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$145 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start
-, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray
-, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc1_w1_crc_width, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$437 , ch1_ca_ctrl_start
-, ch1_ca_ctrl_abort, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$14021$0 , \port$14032$0 , ch0__ca_done, \port$14109$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$14572$0 , \port$14583$0 , ch1__ca_done, \port$14660$0 , clk);
+module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_crc_table_data, ch0_irq, ch1__count_en, ch1__chain_en, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_crc_table_data, ch1_irq, bus__w_busy, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__count_data, ch0__ca_busy, ch0__ca_rbuf_data
+, ch1__frame_error, ch1__busy, ch1__config_error, ch1__count_data, ch1__ca_busy, ch1__ca_rbuf_data, cfg_free, bus__w_en, bus__r_en, bus__r_load, bus__w_addr, bus__w_data, bus__r_addr, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable
+, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check
+, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc1_w1_crc_width, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$145 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
+, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
+, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc1_w1_crc_width, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$437 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, cfg_hold
+, ch0__frame_done, ch0__done_count, ch0__result_updates, \rd__addr$763 , \port$14025$0 , \port$14036$0 , ch0__ca_done, \port$14113$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \rd__addr$929 , \port$14578$0 , \port$14589$0 , ch1__ca_done, \port$14666$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -4174,18 +4174,18 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$14021$0 ;
-  wire [186:0] \port$14021$0 ;
-  input [79:0] \port$14032$0 ;
-  wire [79:0] \port$14032$0 ;
-  input [9:0] \port$14109$0 ;
-  wire [9:0] \port$14109$0 ;
-  input [186:0] \port$14572$0 ;
-  wire [186:0] \port$14572$0 ;
-  input [79:0] \port$14583$0 ;
-  wire [79:0] \port$14583$0 ;
-  input [9:0] \port$14660$0 ;
-  wire [9:0] \port$14660$0 ;
+  input [186:0] \port$14025$0 ;
+  wire [186:0] \port$14025$0 ;
+  input [79:0] \port$14036$0 ;
+  wire [79:0] \port$14036$0 ;
+  input [9:0] \port$14113$0 ;
+  wire [9:0] \port$14113$0 ;
+  input [186:0] \port$14578$0 ;
+  wire [186:0] \port$14578$0 ;
+  input [79:0] \port$14589$0 ;
+  wire [79:0] \port$14589$0 ;
+  input [9:0] \port$14666$0 ;
+  wire [9:0] \port$14666$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   input \rd__addr$763 ;
@@ -4533,7 +4533,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$171  = \$169  | \$170 ;
   assign \$172  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$173  = \$171  | \$172 ;
-  assign \$178  = ch0_read_select_90 ? { 2'h0, \port$14021$0 [182:177], 4'h0, \port$14021$0 [186:183], 1'h0, \port$14021$0 [176:174], 1'h0, \port$14021$0 [133:131], 3'h0, \port$14021$0 [49], \port$14021$0 [3:0] } : 32'd0;
+  assign \$178  = ch0_read_select_90 ? { 2'h0, \port$14025$0 [182:177], 4'h0, \port$14025$0 [186:183], 1'h0, \port$14025$0 [176:174], 1'h0, \port$14025$0 [133:131], 3'h0, \port$14025$0 [49], \port$14025$0 [3:0] } : 32'd0;
   assign \$179  = \$177  | \$178 ;
   assign \$180  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$181  = \$179  | \$180 ;
@@ -4549,13 +4549,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$191  = \$189  | \$190 ;
   assign \$192  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$193  = \$191  | \$192 ;
-  assign \$238  = ch0_read_select_c2 ? { 17'h00000, \port$14109$0 [9:3], 1'h0, \port$14109$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$238  = ch0_read_select_c2 ? { 17'h00000, \port$14113$0 [9:3], 1'h0, \port$14113$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$239  = \$237  | \$238 ;
-  assign \$240  = ch0_read_select_c3 ? \port$14032$0 [31:0] : 32'd0;
+  assign \$240  = ch0_read_select_c3 ? \port$14036$0 [31:0] : 32'd0;
   assign \$241  = \$239  | \$240 ;
-  assign \$242  = ch0_read_select_c4 ? \port$14032$0 [63:32] : 32'd0;
+  assign \$242  = ch0_read_select_c4 ? \port$14036$0 [63:32] : 32'd0;
   assign \$243  = \$241  | \$242 ;
-  assign \$244  = ch0_read_select_c5 ? { 16'h0000, \port$14032$0 [79:64] } : 32'd0;
+  assign \$244  = ch0_read_select_c5 ? { 16'h0000, \port$14036$0 [79:64] } : 32'd0;
   assign \$245  = \$243  | \$244 ;
   assign \$248  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$249  = \$247  | \$248 ;
@@ -4714,7 +4714,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$406  = \$404  | \$405 ;
   assign \$407  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$408  = \$406  | \$407 ;
-  assign \$413  = ch1_read_select_110 ? { 2'h0, \port$14572$0 [182:177], 4'h0, \port$14572$0 [186:183], 1'h0, \port$14572$0 [176:174], 1'h0, \port$14572$0 [133:131], 3'h0, \port$14572$0 [49], \port$14572$0 [3:0] } : 32'd0;
+  assign \$413  = ch1_read_select_110 ? { 2'h0, \port$14578$0 [182:177], 4'h0, \port$14578$0 [186:183], 1'h0, \port$14578$0 [176:174], 1'h0, \port$14578$0 [133:131], 3'h0, \port$14578$0 [49], \port$14578$0 [3:0] } : 32'd0;
   assign \$414  = \$412  | \$413 ;
   assign \$415  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$416  = \$414  | \$415 ;
@@ -4730,13 +4730,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$426  = \$424  | \$425 ;
   assign \$427  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$428  = \$426  | \$427 ;
-  assign \$473  = ch1_read_select_142 ? { 17'h00000, \port$14660$0 [9:3], 1'h0, \port$14660$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$473  = ch1_read_select_142 ? { 17'h00000, \port$14666$0 [9:3], 1'h0, \port$14666$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$474  = \$472  | \$473 ;
-  assign \$475  = ch1_read_select_143 ? \port$14583$0 [31:0] : 32'd0;
+  assign \$475  = ch1_read_select_143 ? \port$14589$0 [31:0] : 32'd0;
   assign \$476  = \$474  | \$475 ;
-  assign \$477  = ch1_read_select_144 ? \port$14583$0 [63:32] : 32'd0;
+  assign \$477  = ch1_read_select_144 ? \port$14589$0 [63:32] : 32'd0;
   assign \$478  = \$476  | \$477 ;
-  assign \$479  = ch1_read_select_145 ? { 16'h0000, \port$14583$0 [79:64] } : 32'd0;
+  assign \$479  = ch1_read_select_145 ? { 16'h0000, \port$14589$0 [79:64] } : 32'd0;
   assign \$480  = \$478  | \$479 ;
   assign \$483  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$484  = \$482  | \$483 ;
@@ -7170,7 +7170,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$856  = ch0_result_status_status_snapshot;
     if (\$157 ) begin
-      \$856  = \port$14021$0 [3:0];
+      \$856  = \port$14025$0 [3:0];
     end
     if (rst) begin
       \$856  = 4'h0;
@@ -7180,7 +7180,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$857  = ch0_result_status_cds_snapshot;
     if (\$157 ) begin
-      \$857  = \port$14021$0 [49];
+      \$857  = \port$14025$0 [49];
     end
     if (rst) begin
       \$857  = 1'h0;
@@ -7190,7 +7190,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$858  = ch0_result_status_w0_ne_snapshot;
     if (\$157 ) begin
-      \$858  = \port$14021$0 [131];
+      \$858  = \port$14025$0 [131];
     end
     if (rst) begin
       \$858  = 1'h0;
@@ -7200,7 +7200,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$859  = ch0_result_status_w0_nw_snapshot;
     if (\$157 ) begin
-      \$859  = \port$14021$0 [132];
+      \$859  = \port$14025$0 [132];
     end
     if (rst) begin
       \$859  = 1'h0;
@@ -7210,7 +7210,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$860  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$157 ) begin
-      \$860  = \port$14021$0 [133];
+      \$860  = \port$14025$0 [133];
     end
     if (rst) begin
       \$860  = 1'h0;
@@ -7220,7 +7220,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$861  = ch0_result_status_w1_ne_snapshot;
     if (\$157 ) begin
-      \$861  = \port$14021$0 [174];
+      \$861  = \port$14025$0 [174];
     end
     if (rst) begin
       \$861  = 1'h0;
@@ -7230,7 +7230,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$862  = ch0_result_status_w1_nw_snapshot;
     if (\$157 ) begin
-      \$862  = \port$14021$0 [175];
+      \$862  = \port$14025$0 [175];
     end
     if (rst) begin
       \$862  = 1'h0;
@@ -7240,7 +7240,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$863  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$157 ) begin
-      \$863  = \port$14021$0 [176];
+      \$863  = \port$14025$0 [176];
     end
     if (rst) begin
       \$863  = 1'h0;
@@ -7250,7 +7250,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$864  = ch0_result_status_lc_repeat_snapshot;
     if (\$157 ) begin
-      \$864  = \port$14021$0 [183];
+      \$864  = \port$14025$0 [183];
     end
     if (rst) begin
       \$864  = 1'h0;
@@ -7260,7 +7260,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$865  = ch0_result_status_lc_skip_snapshot;
     if (\$157 ) begin
-      \$865  = \port$14021$0 [184];
+      \$865  = \port$14025$0 [184];
     end
     if (rst) begin
       \$865  = 1'h0;
@@ -7270,7 +7270,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$866  = ch0_result_status_lc_zero_snapshot;
     if (\$157 ) begin
-      \$866  = \port$14021$0 [185];
+      \$866  = \port$14025$0 [185];
     end
     if (rst) begin
       \$866  = 1'h0;
@@ -7280,7 +7280,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$867  = ch0_result_status_spw_mismatch_snapshot;
     if (\$157 ) begin
-      \$867  = \port$14021$0 [186];
+      \$867  = \port$14025$0 [186];
     end
     if (rst) begin
       \$867  = 1'h0;
@@ -7290,7 +7290,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$868  = ch0_result_status_lc_snapshot;
     if (\$157 ) begin
-      \$868  = \port$14021$0 [182:177];
+      \$868  = \port$14025$0 [182:177];
     end
     if (rst) begin
       \$868  = 6'h00;
@@ -7310,7 +7310,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$870  = ch0_result_seq_line_delay_snapshot;
     if (\$157 ) begin
-      \$870  = \port$14021$0 [48:36];
+      \$870  = \port$14025$0 [48:36];
     end
     if (rst) begin
       \$870  = 13'h0000;
@@ -7320,7 +7320,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$871  = ch0_result_w0_lo_data_snapshot;
     if (\$157 ) begin
-      \$871  = \port$14021$0 [107:76];
+      \$871  = \port$14025$0 [107:76];
     end
     if (rst) begin
       \$871  = 32'd0;
@@ -7330,7 +7330,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$872  = ch0_result_w0_hi_data_snapshot;
     if (\$157 ) begin
-      \$872  = { 9'h000, \port$14021$0 [130:108] };
+      \$872  = { 9'h000, \port$14025$0 [130:108] };
     end
     if (rst) begin
       \$872  = 32'd0;
@@ -7340,7 +7340,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$873  = ch0_result_w1_lo_data_snapshot;
     if (\$157 ) begin
-      \$873  = \port$14021$0 [165:134];
+      \$873  = \port$14025$0 [165:134];
     end
     if (rst) begin
       \$873  = 32'd0;
@@ -7350,7 +7350,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$874  = ch0_result_w1_hi_data_snapshot;
     if (\$157 ) begin
-      \$874  = { 24'h000000, \port$14021$0 [173:166] };
+      \$874  = { 24'h000000, \port$14025$0 [173:166] };
     end
     if (rst) begin
       \$874  = 32'd0;
@@ -7360,7 +7360,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$875  = ch0_result_timestamp_time_snapshot;
     if (\$157 ) begin
-      \$875  = \port$14021$0 [35:4];
+      \$875  = \port$14025$0 [35:4];
     end
     if (rst) begin
       \$875  = 32'd0;
@@ -7370,7 +7370,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$876  = ch0_result_line_noise_events_snapshot;
     if (\$157 ) begin
-      \$876  = \port$14021$0 [53:50];
+      \$876  = \port$14025$0 [53:50];
     end
     if (rst) begin
       \$876  = 4'h0;
@@ -7380,7 +7380,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$877  = ch0_result_line_delay_settled_snapshot;
     if (\$157 ) begin
-      \$877  = \port$14021$0 [54];
+      \$877  = \port$14025$0 [54];
     end
     if (rst) begin
       \$877  = 1'h0;
@@ -7390,7 +7390,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$878  = ch0_result_line_delay_spread_snapshot;
     if (\$157 ) begin
-      \$878  = \port$14021$0 [75:68];
+      \$878  = \port$14025$0 [75:68];
     end
     if (rst) begin
       \$878  = 8'h00;
@@ -7400,7 +7400,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$879  = ch0_result_line_settled_delay_snapshot;
     if (\$157 ) begin
-      \$879  = \port$14021$0 [67:55];
+      \$879  = \port$14025$0 [67:55];
     end
     if (rst) begin
       \$879  = 13'h0000;
@@ -8696,7 +8696,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1016  = ch1_result_status_status_snapshot;
     if (\$392 ) begin
-      \$1016  = \port$14572$0 [3:0];
+      \$1016  = \port$14578$0 [3:0];
     end
     if (rst) begin
       \$1016  = 4'h0;
@@ -8706,7 +8706,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1017  = ch1_result_status_cds_snapshot;
     if (\$392 ) begin
-      \$1017  = \port$14572$0 [49];
+      \$1017  = \port$14578$0 [49];
     end
     if (rst) begin
       \$1017  = 1'h0;
@@ -8716,7 +8716,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1018  = ch1_result_status_w0_ne_snapshot;
     if (\$392 ) begin
-      \$1018  = \port$14572$0 [131];
+      \$1018  = \port$14578$0 [131];
     end
     if (rst) begin
       \$1018  = 1'h0;
@@ -8726,7 +8726,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1019  = ch1_result_status_w0_nw_snapshot;
     if (\$392 ) begin
-      \$1019  = \port$14572$0 [132];
+      \$1019  = \port$14578$0 [132];
     end
     if (rst) begin
       \$1019  = 1'h0;
@@ -8736,7 +8736,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1020  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$392 ) begin
-      \$1020  = \port$14572$0 [133];
+      \$1020  = \port$14578$0 [133];
     end
     if (rst) begin
       \$1020  = 1'h0;
@@ -8746,7 +8746,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1021  = ch1_result_status_w1_ne_snapshot;
     if (\$392 ) begin
-      \$1021  = \port$14572$0 [174];
+      \$1021  = \port$14578$0 [174];
     end
     if (rst) begin
       \$1021  = 1'h0;
@@ -8756,7 +8756,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1022  = ch1_result_status_w1_nw_snapshot;
     if (\$392 ) begin
-      \$1022  = \port$14572$0 [175];
+      \$1022  = \port$14578$0 [175];
     end
     if (rst) begin
       \$1022  = 1'h0;
@@ -8766,7 +8766,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1023  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$392 ) begin
-      \$1023  = \port$14572$0 [176];
+      \$1023  = \port$14578$0 [176];
     end
     if (rst) begin
       \$1023  = 1'h0;
@@ -8776,7 +8776,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1024  = ch1_result_status_lc_repeat_snapshot;
     if (\$392 ) begin
-      \$1024  = \port$14572$0 [183];
+      \$1024  = \port$14578$0 [183];
     end
     if (rst) begin
       \$1024  = 1'h0;
@@ -8786,7 +8786,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1025  = ch1_result_status_lc_skip_snapshot;
     if (\$392 ) begin
-      \$1025  = \port$14572$0 [184];
+      \$1025  = \port$14578$0 [184];
     end
     if (rst) begin
       \$1025  = 1'h0;
@@ -8796,7 +8796,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1026  = ch1_result_status_lc_zero_snapshot;
     if (\$392 ) begin
-      \$1026  = \port$14572$0 [185];
+      \$1026  = \port$14578$0 [185];
     end
     if (rst) begin
       \$1026  = 1'h0;
@@ -8806,7 +8806,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1027  = ch1_result_status_spw_mismatch_snapshot;
     if (\$392 ) begin
-      \$1027  = \port$14572$0 [186];
+      \$1027  = \port$14578$0 [186];
     end
     if (rst) begin
       \$1027  = 1'h0;
@@ -8816,7 +8816,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1028  = ch1_result_status_lc_snapshot;
     if (\$392 ) begin
-      \$1028  = \port$14572$0 [182:177];
+      \$1028  = \port$14578$0 [182:177];
     end
     if (rst) begin
       \$1028  = 6'h00;
@@ -8836,7 +8836,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1030  = ch1_result_seq_line_delay_snapshot;
     if (\$392 ) begin
-      \$1030  = \port$14572$0 [48:36];
+      \$1030  = \port$14578$0 [48:36];
     end
     if (rst) begin
       \$1030  = 13'h0000;
@@ -8846,7 +8846,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1031  = ch1_result_w0_lo_data_snapshot;
     if (\$392 ) begin
-      \$1031  = \port$14572$0 [107:76];
+      \$1031  = \port$14578$0 [107:76];
     end
     if (rst) begin
       \$1031  = 32'd0;
@@ -8856,7 +8856,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1032  = ch1_result_w0_hi_data_snapshot;
     if (\$392 ) begin
-      \$1032  = { 9'h000, \port$14572$0 [130:108] };
+      \$1032  = { 9'h000, \port$14578$0 [130:108] };
     end
     if (rst) begin
       \$1032  = 32'd0;
@@ -8866,7 +8866,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1033  = ch1_result_w1_lo_data_snapshot;
     if (\$392 ) begin
-      \$1033  = \port$14572$0 [165:134];
+      \$1033  = \port$14578$0 [165:134];
     end
     if (rst) begin
       \$1033  = 32'd0;
@@ -8876,7 +8876,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1034  = ch1_result_w1_hi_data_snapshot;
     if (\$392 ) begin
-      \$1034  = { 24'h000000, \port$14572$0 [173:166] };
+      \$1034  = { 24'h000000, \port$14578$0 [173:166] };
     end
     if (rst) begin
       \$1034  = 32'd0;
@@ -8886,7 +8886,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1035  = ch1_result_timestamp_time_snapshot;
     if (\$392 ) begin
-      \$1035  = \port$14572$0 [35:4];
+      \$1035  = \port$14578$0 [35:4];
     end
     if (rst) begin
       \$1035  = 32'd0;
@@ -8896,7 +8896,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1036  = ch1_result_line_noise_events_snapshot;
     if (\$392 ) begin
-      \$1036  = \port$14572$0 [53:50];
+      \$1036  = \port$14578$0 [53:50];
     end
     if (rst) begin
       \$1036  = 4'h0;
@@ -8906,7 +8906,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1037  = ch1_result_line_delay_settled_snapshot;
     if (\$392 ) begin
-      \$1037  = \port$14572$0 [54];
+      \$1037  = \port$14578$0 [54];
     end
     if (rst) begin
       \$1037  = 1'h0;
@@ -8916,7 +8916,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1038  = ch1_result_line_delay_spread_snapshot;
     if (\$392 ) begin
-      \$1038  = \port$14572$0 [75:68];
+      \$1038  = \port$14578$0 [75:68];
     end
     if (rst) begin
       \$1038  = 8'h00;
@@ -8926,7 +8926,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1039  = ch1_result_line_settled_delay_snapshot;
     if (\$392 ) begin
-      \$1039  = \port$14572$0 [67:55];
+      \$1039  = \port$14578$0 [67:55];
     end
     if (rst) begin
       \$1039  = 13'h0000;
@@ -9189,27 +9189,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$14021$0 [3:0];
-  assign ch0__cds = \port$14021$0 [49];
-  assign ch0__word0_ne = \port$14021$0 [131];
-  assign ch0__word0_nw = \port$14021$0 [132];
-  assign ch0__word0_crc_ok = \port$14021$0 [133];
-  assign ch0__word1_ne = \port$14021$0 [174];
-  assign ch0__word1_nw = \port$14021$0 [175];
-  assign ch0__word1_crc_ok = \port$14021$0 [176];
-  assign ch0__lc_repeat = \port$14021$0 [183];
-  assign ch0__lc_skip = \port$14021$0 [184];
-  assign ch0__lc_zero = \port$14021$0 [185];
-  assign ch0__spw_mismatch = \port$14021$0 [186];
-  assign ch0__lc = \port$14021$0 [182:177];
-  assign ch0__line_delay = \port$14021$0 [48:36];
-  assign ch0__word0_position = { 9'h000, \port$14021$0 [130:76] };
-  assign ch0__word1_position = { 24'h000000, \port$14021$0 [173:134] };
-  assign ch0__timestamp = \port$14021$0 [35:4];
-  assign ch0__noise_events = \port$14021$0 [53:50];
-  assign ch0__delay_settled = \port$14021$0 [54];
-  assign ch0__delay_spread = \port$14021$0 [75:68];
-  assign ch0__settled_delay = \port$14021$0 [67:55];
+  assign ch0__status = \port$14025$0 [3:0];
+  assign ch0__cds = \port$14025$0 [49];
+  assign ch0__word0_ne = \port$14025$0 [131];
+  assign ch0__word0_nw = \port$14025$0 [132];
+  assign ch0__word0_crc_ok = \port$14025$0 [133];
+  assign ch0__word1_ne = \port$14025$0 [174];
+  assign ch0__word1_nw = \port$14025$0 [175];
+  assign ch0__word1_crc_ok = \port$14025$0 [176];
+  assign ch0__lc_repeat = \port$14025$0 [183];
+  assign ch0__lc_skip = \port$14025$0 [184];
+  assign ch0__lc_zero = \port$14025$0 [185];
+  assign ch0__spw_mismatch = \port$14025$0 [186];
+  assign ch0__lc = \port$14025$0 [182:177];
+  assign ch0__line_delay = \port$14025$0 [48:36];
+  assign ch0__word0_position = { 9'h000, \port$14025$0 [130:76] };
+  assign ch0__word1_position = { 24'h000000, \port$14025$0 [173:134] };
+  assign ch0__timestamp = \port$14025$0 [35:4];
+  assign ch0__noise_events = \port$14025$0 [53:50];
+  assign ch0__delay_settled = \port$14025$0 [54];
+  assign ch0__delay_spread = \port$14025$0 [75:68];
+  assign ch0__settled_delay = \port$14025$0 [67:55];
   assign ch0__cap_data_bits_w0 = 7'h37;
   assign ch0__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9230,13 +9230,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$14109$0 [2:0];
-  assign ch0__ca_bytes_done = \port$14109$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$14032$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$14032$0 [31:16];
-  assign ch0__count_ca_refused = \port$14032$0 [47:32];
-  assign ch0__count_ca_aborted = \port$14032$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$14032$0 [79:64];
+  assign ch0__ca_status = \port$14113$0 [2:0];
+  assign ch0__ca_bytes_done = \port$14113$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$14036$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$14036$0 [31:16];
+  assign ch0__count_ca_refused = \port$14036$0 [47:32];
+  assign ch0__count_ca_aborted = \port$14036$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$14036$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9256,27 +9256,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$14572$0 [3:0];
-  assign ch1__cds = \port$14572$0 [49];
-  assign ch1__word0_ne = \port$14572$0 [131];
-  assign ch1__word0_nw = \port$14572$0 [132];
-  assign ch1__word0_crc_ok = \port$14572$0 [133];
-  assign ch1__word1_ne = \port$14572$0 [174];
-  assign ch1__word1_nw = \port$14572$0 [175];
-  assign ch1__word1_crc_ok = \port$14572$0 [176];
-  assign ch1__lc_repeat = \port$14572$0 [183];
-  assign ch1__lc_skip = \port$14572$0 [184];
-  assign ch1__lc_zero = \port$14572$0 [185];
-  assign ch1__spw_mismatch = \port$14572$0 [186];
-  assign ch1__lc = \port$14572$0 [182:177];
-  assign ch1__line_delay = \port$14572$0 [48:36];
-  assign ch1__word0_position = { 9'h000, \port$14572$0 [130:76] };
-  assign ch1__word1_position = { 24'h000000, \port$14572$0 [173:134] };
-  assign ch1__timestamp = \port$14572$0 [35:4];
-  assign ch1__noise_events = \port$14572$0 [53:50];
-  assign ch1__delay_settled = \port$14572$0 [54];
-  assign ch1__delay_spread = \port$14572$0 [75:68];
-  assign ch1__settled_delay = \port$14572$0 [67:55];
+  assign ch1__status = \port$14578$0 [3:0];
+  assign ch1__cds = \port$14578$0 [49];
+  assign ch1__word0_ne = \port$14578$0 [131];
+  assign ch1__word0_nw = \port$14578$0 [132];
+  assign ch1__word0_crc_ok = \port$14578$0 [133];
+  assign ch1__word1_ne = \port$14578$0 [174];
+  assign ch1__word1_nw = \port$14578$0 [175];
+  assign ch1__word1_crc_ok = \port$14578$0 [176];
+  assign ch1__lc_repeat = \port$14578$0 [183];
+  assign ch1__lc_skip = \port$14578$0 [184];
+  assign ch1__lc_zero = \port$14578$0 [185];
+  assign ch1__spw_mismatch = \port$14578$0 [186];
+  assign ch1__lc = \port$14578$0 [182:177];
+  assign ch1__line_delay = \port$14578$0 [48:36];
+  assign ch1__word0_position = { 9'h000, \port$14578$0 [130:76] };
+  assign ch1__word1_position = { 24'h000000, \port$14578$0 [173:134] };
+  assign ch1__timestamp = \port$14578$0 [35:4];
+  assign ch1__noise_events = \port$14578$0 [53:50];
+  assign ch1__delay_settled = \port$14578$0 [54];
+  assign ch1__delay_spread = \port$14578$0 [75:68];
+  assign ch1__settled_delay = \port$14578$0 [67:55];
   assign ch1__cap_data_bits_w0 = 7'h37;
   assign ch1__cap_data_bits_w1 = 7'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9297,13 +9297,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$14660$0 [2:0];
-  assign ch1__ca_bytes_done = \port$14660$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$14583$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$14583$0 [31:16];
-  assign ch1__count_ca_refused = \port$14583$0 [47:32];
-  assign ch1__count_ca_aborted = \port$14583$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$14583$0 [79:64];
+  assign ch1__ca_status = \port$14666$0 [2:0];
+  assign ch1__ca_bytes_done = \port$14666$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$14589$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$14589$0 [31:16];
+  assign ch1__count_ca_refused = \port$14589$0 [47:32];
+  assign ch1__count_ca_aborted = \port$14589$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$14589$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -11915,10 +11915,10 @@ module \biss_master_uart.bus.transmitter (rst, ready, tx, data, valid, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_rbuf_en, crc_table_data, regs__frame_error, cfg_free, regs__busy, regs__config_error, crc_table_addr, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle
-, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed
-, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14021$0 , \port$14032$0 , regs__ca_done, \port$14109$0 , slo);
+module \biss_master_uart.ch0 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_rbuf_en, crc_table_data, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters
+, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable
+, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, cfg_hold
+, regs__frame_done, regs__done_count, regs__result_updates, ma, crc_table_addr, \port$14025$0 , \port$14036$0 , regs__ca_done, \port$14113$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -12109,12 +12109,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$14021$0 ;
-  wire [186:0] \port$14021$0 ;
-  output [79:0] \port$14032$0 ;
-  wire [79:0] \port$14032$0 ;
-  output [9:0] \port$14109$0 ;
-  wire [9:0] \port$14109$0 ;
+  output [186:0] \port$14025$0 ;
+  wire [186:0] \port$14025$0 ;
+  output [79:0] \port$14036$0 ;
+  wire [79:0] \port$14036$0 ;
+  output [9:0] \port$14113$0 ;
+  wire [9:0] \port$14113$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -12596,9 +12596,9 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_
   assign \cfg_hold$199  = cfg_hold;
   assign \crc_table_addr$202  = crc_table_addr;
   assign \crc_table_data$204  = crc_table_data;
-  assign \port$14021$0  = \$24 ;
-  assign \port$14032$0  = \$25 ;
-  assign \port$14109$0  = \$26 ;
+  assign \port$14025$0  = \$24 ;
+  assign \port$14036$0  = \$25 ;
+  assign \port$14113$0  = \$26 ;
   assign \crc_table_data.poly  = crc_table_data[15:0];
   assign \crc_table_data.start  = crc_table_data[31:16];
   assign \crc_table_data.inverted  = crc_table_data[32];
@@ -12610,9 +12610,9 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_table_data, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$315 , config_error, crc_table_addr, count_busy, count_data, frames, ca_rbuf_data, now, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start
-, \clear$291 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
-, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$264 , \abort$266 , hold, abort, ma
+module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_table_data, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$315 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$291 
+, \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
+, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$264 , \abort$266 , hold, abort, ma, crc_table_addr
 , \done$318 , \valid$320 , \result$323 , counts, ca_done, result, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
@@ -13644,7 +13644,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13633$206 (live[208:206]),
+    .\port$13635$206 (live[208:206]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(sample),
@@ -13705,7 +13705,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13633$166 (live[166]),
+    .\port$13635$166 (live[166]),
     .rises(rises),
     .rst(rst),
     .ssi(live[193]),
@@ -13756,7 +13756,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .level(\slo$58 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13633$193 (live[205:193]),
+    .\port$13635$193 (live[205:193]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -13781,7 +13781,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13646$0 (\bit ),
+    .\port$13648$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -13849,7 +13849,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$6478$0 (\$28 ),
+    .\port$6479$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -17938,11 +17938,11 @@ module \biss_master_uart.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, lc_load, crc_table_addr, ssi, \port$13633$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne
-, nw, data1, lc, cpw_top, mismatch, crc_ok, clk);
+module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, lc_load, ssi, \port$13635$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+, data1, lc, cpw_top, crc_table_addr, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
-  wire [1:0] \$10 ;
+  wire \$10 ;
   wire \$100 ;
   wire \$101 ;
   wire \$102 ;
@@ -18030,7 +18030,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$177 ;
   wire \$178 ;
   wire \$179 ;
-  wire \$18 ;
+  wire [16:0] \$18 ;
   wire \$180 ;
   wire \$181 ;
   wire \$182 ;
@@ -18053,7 +18053,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$198 ;
   wire \$199 ;
   wire \$2 ;
-  wire [16:0] \$20 ;
+  wire \$20 ;
   wire \$200 ;
   wire \$201 ;
   wire \$202 ;
@@ -18086,7 +18086,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$227 ;
   wire \$228 ;
   wire \$229 ;
-  wire \$23 ;
+  reg [1:0] \$23 ;
   wire \$230 ;
   wire \$231 ;
   wire \$232 ;
@@ -18097,7 +18097,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$237 ;
   wire \$238 ;
   wire \$239 ;
-  wire \$24 ;
+  wire [6:0] \$24 ;
   wire \$240 ;
   wire \$241 ;
   wire \$242 ;
@@ -18108,7 +18108,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$247 ;
   wire \$248 ;
   wire \$249 ;
-  reg [1:0] \$25 ;
+  wire \$25 ;
   wire \$250 ;
   wire \$251 ;
   wire \$252 ;
@@ -18119,7 +18119,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$257 ;
   wire \$258 ;
   wire \$259 ;
-  wire [6:0] \$26 ;
+  wire \$26 ;
   wire \$260 ;
   wire \$261 ;
   wire \$262 ;
@@ -18130,7 +18130,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$267 ;
   wire \$268 ;
   wire \$269 ;
-  wire \$27 ;
+  reg [3:0] \$27 ;
   wire \$270 ;
   wire \$271 ;
   wire \$272 ;
@@ -18141,7 +18141,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$277 ;
   wire \$278 ;
   wire \$279 ;
-  wire \$28 ;
+  wire [6:0] \$28 ;
   wire \$280 ;
   wire \$281 ;
   wire \$282 ;
@@ -18152,7 +18152,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$287 ;
   wire \$288 ;
   wire \$289 ;
-  reg [3:0] \$29 ;
+  wire \$29 ;
   wire \$290 ;
   wire \$291 ;
   wire \$292 ;
@@ -18164,7 +18164,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$298 ;
   wire \$299 ;
   wire [2:0] \$3 ;
-  wire [6:0] \$30 ;
+  wire \$30 ;
   wire \$300 ;
   wire \$301 ;
   wire \$302 ;
@@ -18208,18 +18208,18 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$337 ;
   wire \$338 ;
   wire \$339 ;
-  wire \$34 ;
+  reg [1:0] \$34 ;
   wire \$340 ;
   wire \$341 ;
   wire \$342 ;
-  wire \$343 ;
+  wire [54:0] \$343 ;
   wire \$344 ;
-  wire [54:0] \$345 ;
+  wire \$345 ;
   wire \$346 ;
   wire \$347 ;
   wire \$348 ;
   wire \$349 ;
-  wire \$35 ;
+  wire [6:0] \$35 ;
   wire \$350 ;
   wire \$351 ;
   wire \$352 ;
@@ -18230,7 +18230,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$357 ;
   wire \$358 ;
   wire \$359 ;
-  reg [1:0] \$36 ;
+  wire \$36 ;
   wire \$360 ;
   wire \$361 ;
   wire \$362 ;
@@ -18241,7 +18241,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$367 ;
   wire \$368 ;
   wire \$369 ;
-  wire [6:0] \$37 ;
+  wire \$37 ;
   wire \$370 ;
   wire \$371 ;
   wire \$372 ;
@@ -18252,7 +18252,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$377 ;
   wire \$378 ;
   wire \$379 ;
-  wire \$38 ;
+  reg [3:0] \$38 ;
   wire \$380 ;
   wire \$381 ;
   wire \$382 ;
@@ -18263,7 +18263,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$387 ;
   wire \$388 ;
   wire \$389 ;
-  wire \$39 ;
+  wire [6:0] \$39 ;
   wire \$390 ;
   wire \$391 ;
   wire \$392 ;
@@ -18275,7 +18275,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$398 ;
   wire \$399 ;
   wire \$4 ;
-  reg [3:0] \$40 ;
+  wire \$40 ;
   wire \$400 ;
   wire \$401 ;
   wire \$402 ;
@@ -18286,7 +18286,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$407 ;
   wire \$408 ;
   wire \$409 ;
-  wire [6:0] \$41 ;
+  wire \$41 ;
   wire \$410 ;
   wire \$411 ;
   wire \$412 ;
@@ -18308,7 +18308,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$427 ;
   wire \$428 ;
   wire \$429 ;
-  wire \$43 ;
+  wire [7:0] \$43 ;
   wire \$430 ;
   wire \$431 ;
   wire \$432 ;
@@ -18330,7 +18330,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$447 ;
   wire \$448 ;
   wire \$449 ;
-  wire [7:0] \$45 ;
+  wire \$45 ;
   wire \$450 ;
   wire \$451 ;
   wire \$452 ;
@@ -18459,11 +18459,11 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$563 ;
   wire \$564 ;
   wire \$565 ;
-  wire \$566 ;
+  wire [39:0] \$566 ;
   wire \$567 ;
-  wire [39:0] \$568 ;
+  wire \$568 ;
   wire \$569 ;
-  wire \$57 ;
+  wire [2:0] \$57 ;
   wire \$570 ;
   wire \$571 ;
   wire \$572 ;
@@ -18473,36 +18473,36 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$576 ;
   wire \$577 ;
   wire \$578 ;
-  wire \$579 ;
+  wire [1:0] \$579 ;
   wire \$58 ;
-  wire \$580 ;
+  reg \$580 ;
   reg \$581 ;
-  reg \$582 ;
-  reg [15:0] \$583 ;
-  reg \$584 ;
-  reg [6:0] \$585 ;
+  reg [15:0] \$582 ;
+  reg \$583 ;
+  reg [6:0] \$584 ;
+  reg \$585 ;
   reg \$586 ;
   reg \$587 ;
   reg \$588 ;
   reg \$589 ;
-  wire [2:0] \$59 ;
-  reg \$590 ;
-  reg [2:0] \$591 ;
-  reg \$592 ;
-  reg [15:0] \$593 ;
+  wire \$59 ;
+  reg [2:0] \$590 ;
+  reg \$591 ;
+  reg [15:0] \$592 ;
+  reg \$593 ;
   reg \$594 ;
-  reg \$595 ;
-  reg [54:0] \$596 ;
+  reg [54:0] \$595 ;
+  reg [1:0] \$596 ;
   reg [1:0] \$597 ;
-  reg [1:0] \$598 ;
-  reg [39:0] \$599 ;
+  reg [39:0] \$598 ;
+  reg [5:0] \$599 ;
   wire \$6 ;
-  wire \$60 ;
-  reg [5:0] \$600 ;
-  reg [39:0] \$601 ;
-  wire \$61 ;
-  wire [1:0] \$62 ;
-  wire [7:0] \$63 ;
+  wire [1:0] \$60 ;
+  reg [39:0] \$600 ;
+  reg \$601 ;
+  wire [7:0] \$61 ;
+  wire \$62 ;
+  wire \$63 ;
   wire \$64 ;
   wire \$65 ;
   wire \$66 ;
@@ -18531,7 +18531,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
-  wire [1:0] \$9 ;
+  wire \$9 ;
   wire \$90 ;
   wire \$91 ;
   wire \$92 ;
@@ -18570,10 +18570,12 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \cover ;
   output [39:0] cpw_top;
   reg [39:0] cpw_top = 40'h0000000000;
+  (* init = 1'h0 *)
+  wire crc_next_word;
   output [1:0] crc_ok;
   wire [1:0] crc_ok;
   output crc_table_addr;
-  wire crc_table_addr;
+  reg crc_table_addr = 1'h0;
   wire [32:0] crc_table_data;
   wire \crc_table_data.inverted ;
   wire [15:0] \crc_table_data.poly ;
@@ -18627,6 +18629,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire lc_load;
   wire [5:0] lc_next;
   wire load;
+  (* init = 1'h0 *)
   wire load_index;
   output mismatch;
   wire mismatch;
@@ -18636,8 +18639,8 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13633$206 ;
-  wire [2:0] \port$13633$206 ;
+  input [2:0] \port$13635$206 ;
+  wire [2:0] \port$13635$206 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -18667,6 +18670,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \table.inverted ;
   wire [15:0] \table.poly ;
   wire [15:0] \table.start ;
+  (* init = 1'h0 *)
   wire table_index;
   wire [9:0] widths;
   wire [4:0] \widths[0] ;
@@ -18725,237 +18729,238 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$391  = \bit  ^ \$390 ;
-  assign \$392  = \$389  & \$391 ;
-  assign \$393  = ! idx;
-  assign \$394  = words[23] & \$393 ;
-  assign \$395  = words[22] & data1[0];
-  assign \$396  = \bit  ^ \$395 ;
-  assign \$397  = \$394  & \$396 ;
-  assign \$398  = ! idx;
-  assign \$399  = words[23] & \$398 ;
-  assign \$400  = words[22] & data1[0];
-  assign \$401  = \bit  ^ \$400 ;
-  assign \$402  = \$399  & \$401 ;
-  assign \$403  = ! idx;
-  assign \$404  = words[23] & \$403 ;
-  assign \$405  = words[22] & data1[0];
-  assign \$406  = \bit  ^ \$405 ;
-  assign \$407  = \$404  & \$406 ;
-  assign \$408  = ! idx;
-  assign \$409  = words[23] & \$408 ;
-  assign \$410  = words[22] & data1[0];
-  assign \$411  = \bit  ^ \$410 ;
-  assign \$412  = \$409  & \$411 ;
-  assign \$413  = ! idx;
-  assign \$414  = words[23] & \$413 ;
-  assign \$415  = words[22] & data1[0];
-  assign \$416  = \bit  ^ \$415 ;
-  assign \$417  = \$414  & \$416 ;
-  assign \$418  = ! idx;
-  assign \$419  = words[23] & \$418 ;
-  assign \$420  = words[22] & data1[0];
-  assign \$421  = \bit  ^ \$420 ;
-  assign \$422  = \$419  & \$421 ;
-  assign \$423  = ! idx;
-  assign \$424  = words[23] & \$423 ;
-  assign \$425  = words[22] & data1[0];
-  assign \$426  = \bit  ^ \$425 ;
-  assign \$427  = \$424  & \$426 ;
-  assign \$428  = ! idx;
-  assign \$429  = words[23] & \$428 ;
-  assign \$430  = words[22] & data1[0];
-  assign \$431  = \bit  ^ \$430 ;
-  assign \$432  = \$429  & \$431 ;
-  assign \$433  = ! idx;
-  assign \$434  = words[23] & \$433 ;
-  assign \$435  = words[22] & data1[0];
-  assign \$436  = \bit  ^ \$435 ;
-  assign \$437  = \$434  & \$436 ;
-  assign \$438  = ! idx;
-  assign \$439  = words[23] & \$438 ;
-  assign \$440  = words[22] & data1[0];
-  assign \$441  = \bit  ^ \$440 ;
-  assign \$442  = \$439  & \$441 ;
-  assign \$443  = ! idx;
-  assign \$444  = words[23] & \$443 ;
-  assign \$445  = words[22] & data1[0];
-  assign \$446  = \bit  ^ \$445 ;
-  assign \$447  = \$444  & \$446 ;
-  assign \$448  = ! idx;
-  assign \$449  = words[23] & \$448 ;
-  assign \$450  = words[22] & data1[0];
-  assign \$451  = \bit  ^ \$450 ;
-  assign \$452  = \$449  & \$451 ;
-  assign \$453  = ! idx;
-  assign \$454  = words[23] & \$453 ;
-  assign \$455  = words[22] & data1[0];
-  assign \$456  = \bit  ^ \$455 ;
-  assign \$457  = \$454  & \$456 ;
-  assign \$458  = ! idx;
-  assign \$459  = words[23] & \$458 ;
-  assign \$460  = words[22] & data1[0];
-  assign \$461  = \bit  ^ \$460 ;
-  assign \$462  = \$459  & \$461 ;
-  assign \$463  = ! idx;
-  assign \$464  = words[23] & \$463 ;
-  assign \$465  = words[22] & data1[0];
-  assign \$466  = \bit  ^ \$465 ;
-  assign \$467  = \$464  & \$466 ;
-  assign \$468  = ! idx;
-  assign \$469  = words[23] & \$468 ;
-  assign \$470  = words[22] & data1[0];
-  assign \$471  = \bit  ^ \$470 ;
-  assign \$472  = \$469  & \$471 ;
-  assign \$473  = ! idx;
-  assign \$474  = words[23] & \$473 ;
-  assign \$475  = words[22] & data1[0];
-  assign \$476  = \bit  ^ \$475 ;
-  assign \$477  = \$474  & \$476 ;
-  assign \$478  = ! idx;
-  assign \$479  = words[23] & \$478 ;
-  assign \$480  = words[22] & data1[0];
-  assign \$481  = \bit  ^ \$480 ;
-  assign \$482  = \$479  & \$481 ;
-  assign \$483  = ! idx;
-  assign \$484  = words[23] & \$483 ;
-  assign \$485  = words[22] & data1[0];
-  assign \$486  = \bit  ^ \$485 ;
-  assign \$487  = \$484  & \$486 ;
-  assign \$488  = ! idx;
-  assign \$489  = words[23] & \$488 ;
-  assign \$490  = words[22] & data1[0];
-  assign \$491  = \bit  ^ \$490 ;
-  assign \$492  = \$489  & \$491 ;
-  assign \$493  = ! idx;
-  assign \$494  = words[23] & \$493 ;
-  assign \$495  = words[22] & data1[0];
-  assign \$496  = \bit  ^ \$495 ;
-  assign \$497  = \$494  & \$496 ;
-  assign \$498  = ! idx;
-  assign \$499  = words[23] & \$498 ;
-  assign \$500  = words[22] & data1[0];
-  assign \$501  = \bit  ^ \$500 ;
-  assign \$502  = \$499  & \$501 ;
-  assign \$503  = ! idx;
-  assign \$504  = words[23] & \$503 ;
-  assign \$505  = words[22] & data1[0];
-  assign \$506  = \bit  ^ \$505 ;
-  assign \$507  = \$504  & \$506 ;
-  assign \$508  = ! idx;
-  assign \$509  = words[23] & \$508 ;
-  assign \$510  = words[22] & data1[0];
-  assign \$511  = \bit  ^ \$510 ;
-  assign \$512  = \$509  & \$511 ;
-  assign \$513  = ! idx;
-  assign \$514  = words[23] & \$513 ;
-  assign \$515  = words[22] & data1[0];
-  assign \$516  = \bit  ^ \$515 ;
-  assign \$517  = \$514  & \$516 ;
-  assign \$518  = ! idx;
-  assign \$519  = words[23] & \$518 ;
-  assign \$520  = words[22] & data1[0];
-  assign \$521  = \bit  ^ \$520 ;
-  assign \$522  = \$519  & \$521 ;
-  assign \$523  = ! idx;
-  assign \$524  = words[23] & \$523 ;
-  assign \$525  = words[22] & data1[0];
-  assign \$526  = \bit  ^ \$525 ;
-  assign \$527  = \$524  & \$526 ;
-  assign \$528  = ! idx;
-  assign \$529  = words[23] & \$528 ;
-  assign \$530  = words[22] & data1[0];
-  assign \$531  = \bit  ^ \$530 ;
-  assign \$532  = \$529  & \$531 ;
-  assign \$533  = ! idx;
-  assign \$534  = words[23] & \$533 ;
-  assign \$535  = words[22] & data1[0];
-  assign \$536  = \bit  ^ \$535 ;
-  assign \$537  = \$534  & \$536 ;
-  assign \$538  = ! idx;
-  assign \$539  = words[23] & \$538 ;
-  assign \$540  = words[22] & data1[0];
-  assign \$541  = \bit  ^ \$540 ;
-  assign \$542  = \$539  & \$541 ;
-  assign \$543  = ! idx;
-  assign \$544  = words[23] & \$543 ;
-  assign \$545  = words[22] & data1[0];
-  assign \$546  = \bit  ^ \$545 ;
-  assign \$547  = \$544  & \$546 ;
-  assign \$548  = ! idx;
-  assign \$549  = words[23] & \$548 ;
-  assign \$550  = words[22] & data1[0];
-  assign \$551  = \bit  ^ \$550 ;
-  assign \$552  = \$549  & \$551 ;
-  assign \$553  = ! idx;
-  assign \$554  = words[23] & \$553 ;
-  assign \$555  = words[22] & data1[0];
-  assign \$556  = \bit  ^ \$555 ;
-  assign \$557  = \$554  & \$556 ;
-  assign \$558  = ! idx;
-  assign \$559  = words[23] & \$558 ;
-  assign \$560  = words[22] & data1[0];
-  assign \$561  = \bit  ^ \$560 ;
-  assign \$562  = \$559  & \$561 ;
-  assign \$563  = ! idx;
-  assign \$564  = words[23] & \$563 ;
-  assign \$565  = words[22] & data1[0];
-  assign \$566  = \bit  ^ \$565 ;
-  assign \$567  = \$564  & \$566 ;
-  assign \$568  = { data1[38:0], \$367  } | { \$567 , \$562 , \$557 , \$552 , \$547 , \$542 , \$537 , \$532 , \$527 , \$522 , \$517 , \$512 , \$507 , \$502 , \$497 , \$492 , \$487 , \$482 , \$477 , \$472 , \$467 , \$462 , \$457 , \$452 , \$447 , \$442 , \$437 , \$432 , \$427 , \$422 , \$417 , \$412 , \$407 , \$402 , \$397 , \$392 , \$387 , \$382 , \$377 , \$372  };
-  assign \$569  = ~ words[18];
-  assign \$571  = in_word & \$570 ;
-  assign \$572  = idx == words[17:12];
-  assign \$573  = \$571  & \$572 ;
-  assign \$575  = in_word & \$574 ;
-  assign \$576  = idx == current[6:0];
-  assign \$577  = \$575  & \$576 ;
-  assign \$578  = in_word & in_top;
-  assign \$579  = words[10] & data0[0];
-  assign \$580  = \bit  ^ \$579 ;
+  assign \$391  = ! idx;
+  assign \$392  = words[23] & \$391 ;
+  assign \$393  = words[22] & data1[0];
+  assign \$394  = \bit  ^ \$393 ;
+  assign \$395  = \$392  & \$394 ;
+  assign \$396  = ! idx;
+  assign \$397  = words[23] & \$396 ;
+  assign \$398  = words[22] & data1[0];
+  assign \$399  = \bit  ^ \$398 ;
+  assign \$400  = \$397  & \$399 ;
+  assign \$401  = ! idx;
+  assign \$402  = words[23] & \$401 ;
+  assign \$403  = words[22] & data1[0];
+  assign \$404  = \bit  ^ \$403 ;
+  assign \$405  = \$402  & \$404 ;
+  assign \$406  = ! idx;
+  assign \$407  = words[23] & \$406 ;
+  assign \$408  = words[22] & data1[0];
+  assign \$409  = \bit  ^ \$408 ;
+  assign \$410  = \$407  & \$409 ;
+  assign \$411  = ! idx;
+  assign \$412  = words[23] & \$411 ;
+  assign \$413  = words[22] & data1[0];
+  assign \$414  = \bit  ^ \$413 ;
+  assign \$415  = \$412  & \$414 ;
+  assign \$416  = ! idx;
+  assign \$417  = words[23] & \$416 ;
+  assign \$418  = words[22] & data1[0];
+  assign \$419  = \bit  ^ \$418 ;
+  assign \$420  = \$417  & \$419 ;
+  assign \$421  = ! idx;
+  assign \$422  = words[23] & \$421 ;
+  assign \$423  = words[22] & data1[0];
+  assign \$424  = \bit  ^ \$423 ;
+  assign \$425  = \$422  & \$424 ;
+  assign \$426  = ! idx;
+  assign \$427  = words[23] & \$426 ;
+  assign \$428  = words[22] & data1[0];
+  assign \$429  = \bit  ^ \$428 ;
+  assign \$430  = \$427  & \$429 ;
+  assign \$431  = ! idx;
+  assign \$432  = words[23] & \$431 ;
+  assign \$433  = words[22] & data1[0];
+  assign \$434  = \bit  ^ \$433 ;
+  assign \$435  = \$432  & \$434 ;
+  assign \$436  = ! idx;
+  assign \$437  = words[23] & \$436 ;
+  assign \$438  = words[22] & data1[0];
+  assign \$439  = \bit  ^ \$438 ;
+  assign \$440  = \$437  & \$439 ;
+  assign \$441  = ! idx;
+  assign \$442  = words[23] & \$441 ;
+  assign \$443  = words[22] & data1[0];
+  assign \$444  = \bit  ^ \$443 ;
+  assign \$445  = \$442  & \$444 ;
+  assign \$446  = ! idx;
+  assign \$447  = words[23] & \$446 ;
+  assign \$448  = words[22] & data1[0];
+  assign \$449  = \bit  ^ \$448 ;
+  assign \$450  = \$447  & \$449 ;
+  assign \$451  = ! idx;
+  assign \$452  = words[23] & \$451 ;
+  assign \$453  = words[22] & data1[0];
+  assign \$454  = \bit  ^ \$453 ;
+  assign \$455  = \$452  & \$454 ;
+  assign \$456  = ! idx;
+  assign \$457  = words[23] & \$456 ;
+  assign \$458  = words[22] & data1[0];
+  assign \$459  = \bit  ^ \$458 ;
+  assign \$460  = \$457  & \$459 ;
+  assign \$461  = ! idx;
+  assign \$462  = words[23] & \$461 ;
+  assign \$463  = words[22] & data1[0];
+  assign \$464  = \bit  ^ \$463 ;
+  assign \$465  = \$462  & \$464 ;
+  assign \$466  = ! idx;
+  assign \$467  = words[23] & \$466 ;
+  assign \$468  = words[22] & data1[0];
+  assign \$469  = \bit  ^ \$468 ;
+  assign \$470  = \$467  & \$469 ;
+  assign \$471  = ! idx;
+  assign \$472  = words[23] & \$471 ;
+  assign \$473  = words[22] & data1[0];
+  assign \$474  = \bit  ^ \$473 ;
+  assign \$475  = \$472  & \$474 ;
+  assign \$476  = ! idx;
+  assign \$477  = words[23] & \$476 ;
+  assign \$478  = words[22] & data1[0];
+  assign \$479  = \bit  ^ \$478 ;
+  assign \$480  = \$477  & \$479 ;
+  assign \$481  = ! idx;
+  assign \$482  = words[23] & \$481 ;
+  assign \$483  = words[22] & data1[0];
+  assign \$484  = \bit  ^ \$483 ;
+  assign \$485  = \$482  & \$484 ;
+  assign \$486  = ! idx;
+  assign \$487  = words[23] & \$486 ;
+  assign \$488  = words[22] & data1[0];
+  assign \$489  = \bit  ^ \$488 ;
+  assign \$490  = \$487  & \$489 ;
+  assign \$491  = ! idx;
+  assign \$492  = words[23] & \$491 ;
+  assign \$493  = words[22] & data1[0];
+  assign \$494  = \bit  ^ \$493 ;
+  assign \$495  = \$492  & \$494 ;
+  assign \$496  = ! idx;
+  assign \$497  = words[23] & \$496 ;
+  assign \$498  = words[22] & data1[0];
+  assign \$499  = \bit  ^ \$498 ;
+  assign \$500  = \$497  & \$499 ;
+  assign \$501  = ! idx;
+  assign \$502  = words[23] & \$501 ;
+  assign \$503  = words[22] & data1[0];
+  assign \$504  = \bit  ^ \$503 ;
+  assign \$505  = \$502  & \$504 ;
+  assign \$506  = ! idx;
+  assign \$507  = words[23] & \$506 ;
+  assign \$508  = words[22] & data1[0];
+  assign \$509  = \bit  ^ \$508 ;
+  assign \$510  = \$507  & \$509 ;
+  assign \$511  = ! idx;
+  assign \$512  = words[23] & \$511 ;
+  assign \$513  = words[22] & data1[0];
+  assign \$514  = \bit  ^ \$513 ;
+  assign \$515  = \$512  & \$514 ;
+  assign \$516  = ! idx;
+  assign \$517  = words[23] & \$516 ;
+  assign \$518  = words[22] & data1[0];
+  assign \$519  = \bit  ^ \$518 ;
+  assign \$520  = \$517  & \$519 ;
+  assign \$521  = ! idx;
+  assign \$522  = words[23] & \$521 ;
+  assign \$523  = words[22] & data1[0];
+  assign \$524  = \bit  ^ \$523 ;
+  assign \$525  = \$522  & \$524 ;
+  assign \$526  = ! idx;
+  assign \$527  = words[23] & \$526 ;
+  assign \$528  = words[22] & data1[0];
+  assign \$529  = \bit  ^ \$528 ;
+  assign \$530  = \$527  & \$529 ;
+  assign \$531  = ! idx;
+  assign \$532  = words[23] & \$531 ;
+  assign \$533  = words[22] & data1[0];
+  assign \$534  = \bit  ^ \$533 ;
+  assign \$535  = \$532  & \$534 ;
+  assign \$536  = ! idx;
+  assign \$537  = words[23] & \$536 ;
+  assign \$538  = words[22] & data1[0];
+  assign \$539  = \bit  ^ \$538 ;
+  assign \$540  = \$537  & \$539 ;
+  assign \$541  = ! idx;
+  assign \$542  = words[23] & \$541 ;
+  assign \$543  = words[22] & data1[0];
+  assign \$544  = \bit  ^ \$543 ;
+  assign \$545  = \$542  & \$544 ;
+  assign \$546  = ! idx;
+  assign \$547  = words[23] & \$546 ;
+  assign \$548  = words[22] & data1[0];
+  assign \$549  = \bit  ^ \$548 ;
+  assign \$550  = \$547  & \$549 ;
+  assign \$551  = ! idx;
+  assign \$552  = words[23] & \$551 ;
+  assign \$553  = words[22] & data1[0];
+  assign \$554  = \bit  ^ \$553 ;
+  assign \$555  = \$552  & \$554 ;
+  assign \$556  = ! idx;
+  assign \$557  = words[23] & \$556 ;
+  assign \$558  = words[22] & data1[0];
+  assign \$559  = \bit  ^ \$558 ;
+  assign \$560  = \$557  & \$559 ;
+  assign \$561  = ! idx;
+  assign \$562  = words[23] & \$561 ;
+  assign \$563  = words[22] & data1[0];
+  assign \$564  = \bit  ^ \$563 ;
+  assign \$565  = \$562  & \$564 ;
+  assign \$566  = { data1[38:0], \$365  } | { \$565 , \$560 , \$555 , \$550 , \$545 , \$540 , \$535 , \$530 , \$525 , \$520 , \$515 , \$510 , \$505 , \$500 , \$495 , \$490 , \$485 , \$480 , \$475 , \$470 , \$465 , \$460 , \$455 , \$450 , \$445 , \$440 , \$435 , \$430 , \$425 , \$420 , \$415 , \$410 , \$405 , \$400 , \$395 , \$390 , \$385 , \$380 , \$375 , \$370  };
+  assign \$567  = ~ words[18];
+  assign \$569  = in_word & \$568 ;
+  assign \$570  = idx == words[17:12];
+  assign \$571  = \$569  & \$570 ;
+  assign \$573  = in_word & \$572 ;
+  assign \$574  = idx == current[6:0];
+  assign \$575  = \$573  & \$574 ;
+  assign \$576  = in_word & in_top;
+  assign \$577  = words[10] & data0[0];
+  assign \$578  = \bit  ^ \$577 ;
+  assign \$579  = crc_table_addr + 1'h1;
   always @(posedge clk)
-    done <= \$581 ;
+    done <= \$580 ;
   always @(posedge clk)
-    stopped <= \$582 ;
+    stopped <= \$581 ;
   always @(posedge clk)
-    slots <= \$583 ;
+    slots <= \$582 ;
   always @(posedge clk)
-    slots_full <= \$584 ;
+    slots_full <= \$583 ;
   always @(posedge clk)
-    idx <= \$585 ;
+    idx <= \$584 ;
   always @(posedge clk)
-    in_data <= \$586 ;
+    in_data <= \$585 ;
   always @(posedge clk)
-    in_lc <= \$587 ;
+    in_lc <= \$586 ;
   always @(posedge clk)
-    in_crc <= \$588 ;
+    in_crc <= \$587 ;
   always @(posedge clk)
-    in_top <= \$589 ;
+    in_top <= \$588 ;
   always @(posedge clk)
-    word <= \$590 ;
+    word <= \$589 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$591 ;
+    decoder_fsm_state <= \$590 ;
   always @(posedge clk)
-    started <= \$592 ;
+    started <= \$591 ;
   always @(posedge clk)
-    start_slot <= \$593 ;
+    start_slot <= \$592 ;
   always @(posedge clk)
-    cds <= \$594 ;
+    cds <= \$593 ;
   always @(posedge clk)
-    stop_bit <= \$595 ;
+    stop_bit <= \$594 ;
   always @(posedge clk)
-    data0 <= \$596 ;
+    data0 <= \$595 ;
   always @(posedge clk)
-    ne <= \$597 ;
+    ne <= \$596 ;
   always @(posedge clk)
-    nw <= \$598 ;
+    nw <= \$597 ;
   always @(posedge clk)
-    data1 <= \$599 ;
+    data1 <= \$598 ;
   always @(posedge clk)
-    lc <= \$600 ;
+    lc <= \$599 ;
   always @(posedge clk)
-    cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$13633$206 [0];
+    cpw_top <= \$600 ;
+  always @(posedge clk)
+    crc_table_addr <= \$601 ;
+  assign error_bit = ssi & \port$13635$206 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -18971,383 +18976,383 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign check = in_word & in_crc;
   assign \$8  = idx == current[34:28];
   assign last = in_word & \$8 ;
-  assign \$9  = word + 1'h1;
-  assign \$10  = at_cds ? 2'h0 : \$9 ;
-  assign \$11  = ! decoder_fsm_state;
-  assign \$12  = decoder_fsm_state == 1'h1;
-  assign \$13  = decoder_fsm_state == 2'h2;
-  assign \$14  = decoder_fsm_state == 2'h3;
-  assign \$15  = decoder_fsm_state == 3'h4;
-  assign \$16  = decoder_fsm_state == 3'h5;
-  assign \$17  = decoder_fsm_state == 3'h6;
-  assign \$18  = ~ slots_full;
-  assign \$19  = sample & \$18 ;
-  assign \$20  = slots + 1'h1;
-  assign \$21  = slots == 16'hfffe;
-  assign \$22  = sample & \bit ;
-  assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$13633$206 [0];
-  assign \$26  = words[5:0] + \$25 ;
-  assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$13633$206 [0];
-  assign \$30  = words[5:0] + \$29 ;
-  assign \$31  = | \$30 ;
-  assign \$32  = \$27  & \$31 ;
-  assign \$33  = | words[17:12];
-  assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$13633$206 [0];
-  assign \$37  = words[5:0] + \$36 ;
-  assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$13633$206 [0];
-  assign \$41  = words[5:0] + \$40 ;
-  assign \$42  = | \$41 ;
-  assign \$43  = \$38  & \$42 ;
-  assign \$44  = | words[17:12];
-  assign \$45  = idx + 1'h1;
-  assign \$46  = idx != current[13:7];
-  assign \$47  = in_data & \$46 ;
-  assign \$48  = idx == current[20:14];
-  assign \$49  = in_lc | \$48 ;
-  assign \$50  = idx != current[27:21];
-  assign \$51  = \$49  & \$50 ;
-  assign \$52  = idx == current[27:21];
-  assign \$53  = in_crc | \$52 ;
-  assign \$54  = idx != current[34:28];
-  assign \$55  = \$53  & \$54 ;
-  assign \$56  = idx != following[13:7];
-  assign \$57  = in_top & \$56 ;
-  assign \$58  = idx == current[34:28];
-  assign \$59  = word_count - 1'h1;
-  assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$13633$206 [2];
-  assign \$62  = word + 1'h1;
-  assign \$63  = idx + 1'h1;
-  assign \$64  = idx == current[34:28];
-  assign \$65  = ! word;
-  assign \$66  = in_word & \$65 ;
-  assign \$67  = \$66  & in_data;
-  assign \$68  = words[10] & data0[0];
-  assign \$69  = \bit  ^ \$68 ;
-  assign \$70  = ! idx;
-  assign \$71  = words[11] & \$70 ;
-  assign \$72  = words[10] & data0[0];
-  assign \$73  = \bit  ^ \$72 ;
-  assign \$74  = \$71  & \$73 ;
-  assign \$75  = ! idx;
-  assign \$76  = words[11] & \$75 ;
-  assign \$77  = words[10] & data0[0];
-  assign \$78  = \bit  ^ \$77 ;
-  assign \$79  = \$76  & \$78 ;
-  assign \$80  = ! idx;
-  assign \$81  = words[11] & \$80 ;
-  assign \$82  = words[10] & data0[0];
-  assign \$83  = \bit  ^ \$82 ;
-  assign \$84  = \$81  & \$83 ;
-  assign \$85  = ! idx;
-  assign \$86  = words[11] & \$85 ;
-  assign \$87  = words[10] & data0[0];
-  assign \$88  = \bit  ^ \$87 ;
-  assign \$89  = \$86  & \$88 ;
-  assign \$90  = ! idx;
-  assign \$91  = words[11] & \$90 ;
-  assign \$92  = words[10] & data0[0];
-  assign \$93  = \bit  ^ \$92 ;
-  assign \$94  = \$91  & \$93 ;
-  assign \$95  = ! idx;
-  assign \$96  = words[11] & \$95 ;
-  assign \$97  = words[10] & data0[0];
-  assign \$98  = \bit  ^ \$97 ;
-  assign \$99  = \$96  & \$98 ;
-  assign \$100  = ! idx;
-  assign \$101  = words[11] & \$100 ;
-  assign \$102  = words[10] & data0[0];
-  assign \$103  = \bit  ^ \$102 ;
-  assign \$104  = \$101  & \$103 ;
-  assign \$105  = ! idx;
-  assign \$106  = words[11] & \$105 ;
-  assign \$107  = words[10] & data0[0];
-  assign \$108  = \bit  ^ \$107 ;
-  assign \$109  = \$106  & \$108 ;
-  assign \$110  = ! idx;
-  assign \$111  = words[11] & \$110 ;
-  assign \$112  = words[10] & data0[0];
-  assign \$113  = \bit  ^ \$112 ;
-  assign \$114  = \$111  & \$113 ;
-  assign \$115  = ! idx;
-  assign \$116  = words[11] & \$115 ;
-  assign \$117  = words[10] & data0[0];
-  assign \$118  = \bit  ^ \$117 ;
-  assign \$119  = \$116  & \$118 ;
-  assign \$120  = ! idx;
-  assign \$121  = words[11] & \$120 ;
-  assign \$122  = words[10] & data0[0];
-  assign \$123  = \bit  ^ \$122 ;
-  assign \$124  = \$121  & \$123 ;
-  assign \$125  = ! idx;
-  assign \$126  = words[11] & \$125 ;
-  assign \$127  = words[10] & data0[0];
-  assign \$128  = \bit  ^ \$127 ;
-  assign \$129  = \$126  & \$128 ;
-  assign \$130  = ! idx;
-  assign \$131  = words[11] & \$130 ;
-  assign \$132  = words[10] & data0[0];
-  assign \$133  = \bit  ^ \$132 ;
-  assign \$134  = \$131  & \$133 ;
-  assign \$135  = ! idx;
-  assign \$136  = words[11] & \$135 ;
-  assign \$137  = words[10] & data0[0];
-  assign \$138  = \bit  ^ \$137 ;
-  assign \$139  = \$136  & \$138 ;
-  assign \$140  = ! idx;
-  assign \$141  = words[11] & \$140 ;
-  assign \$142  = words[10] & data0[0];
-  assign \$143  = \bit  ^ \$142 ;
-  assign \$144  = \$141  & \$143 ;
-  assign \$145  = ! idx;
-  assign \$146  = words[11] & \$145 ;
-  assign \$147  = words[10] & data0[0];
-  assign \$148  = \bit  ^ \$147 ;
-  assign \$149  = \$146  & \$148 ;
-  assign \$150  = ! idx;
-  assign \$151  = words[11] & \$150 ;
-  assign \$152  = words[10] & data0[0];
-  assign \$153  = \bit  ^ \$152 ;
-  assign \$154  = \$151  & \$153 ;
-  assign \$155  = ! idx;
-  assign \$156  = words[11] & \$155 ;
-  assign \$157  = words[10] & data0[0];
-  assign \$158  = \bit  ^ \$157 ;
-  assign \$159  = \$156  & \$158 ;
-  assign \$160  = ! idx;
-  assign \$161  = words[11] & \$160 ;
-  assign \$162  = words[10] & data0[0];
-  assign \$163  = \bit  ^ \$162 ;
-  assign \$164  = \$161  & \$163 ;
-  assign \$165  = ! idx;
-  assign \$166  = words[11] & \$165 ;
-  assign \$167  = words[10] & data0[0];
-  assign \$168  = \bit  ^ \$167 ;
-  assign \$169  = \$166  & \$168 ;
-  assign \$170  = ! idx;
-  assign \$171  = words[11] & \$170 ;
-  assign \$172  = words[10] & data0[0];
-  assign \$173  = \bit  ^ \$172 ;
-  assign \$174  = \$171  & \$173 ;
-  assign \$175  = ! idx;
-  assign \$176  = words[11] & \$175 ;
-  assign \$177  = words[10] & data0[0];
-  assign \$178  = \bit  ^ \$177 ;
-  assign \$179  = \$176  & \$178 ;
-  assign \$180  = ! idx;
-  assign \$181  = words[11] & \$180 ;
-  assign \$182  = words[10] & data0[0];
-  assign \$183  = \bit  ^ \$182 ;
-  assign \$184  = \$181  & \$183 ;
-  assign \$185  = ! idx;
-  assign \$186  = words[11] & \$185 ;
-  assign \$187  = words[10] & data0[0];
-  assign \$188  = \bit  ^ \$187 ;
-  assign \$189  = \$186  & \$188 ;
-  assign \$190  = ! idx;
-  assign \$191  = words[11] & \$190 ;
-  assign \$192  = words[10] & data0[0];
-  assign \$193  = \bit  ^ \$192 ;
-  assign \$194  = \$191  & \$193 ;
-  assign \$195  = ! idx;
-  assign \$196  = words[11] & \$195 ;
-  assign \$197  = words[10] & data0[0];
-  assign \$198  = \bit  ^ \$197 ;
-  assign \$199  = \$196  & \$198 ;
-  assign \$200  = ! idx;
-  assign \$201  = words[11] & \$200 ;
-  assign \$202  = words[10] & data0[0];
-  assign \$203  = \bit  ^ \$202 ;
-  assign \$204  = \$201  & \$203 ;
-  assign \$205  = ! idx;
-  assign \$206  = words[11] & \$205 ;
-  assign \$207  = words[10] & data0[0];
-  assign \$208  = \bit  ^ \$207 ;
-  assign \$209  = \$206  & \$208 ;
-  assign \$210  = ! idx;
-  assign \$211  = words[11] & \$210 ;
-  assign \$212  = words[10] & data0[0];
-  assign \$213  = \bit  ^ \$212 ;
-  assign \$214  = \$211  & \$213 ;
-  assign \$215  = ! idx;
-  assign \$216  = words[11] & \$215 ;
-  assign \$217  = words[10] & data0[0];
-  assign \$218  = \bit  ^ \$217 ;
-  assign \$219  = \$216  & \$218 ;
-  assign \$220  = ! idx;
-  assign \$221  = words[11] & \$220 ;
-  assign \$222  = words[10] & data0[0];
-  assign \$223  = \bit  ^ \$222 ;
-  assign \$224  = \$221  & \$223 ;
-  assign \$225  = ! idx;
-  assign \$226  = words[11] & \$225 ;
-  assign \$227  = words[10] & data0[0];
-  assign \$228  = \bit  ^ \$227 ;
-  assign \$229  = \$226  & \$228 ;
-  assign \$230  = ! idx;
-  assign \$231  = words[11] & \$230 ;
-  assign \$232  = words[10] & data0[0];
-  assign \$233  = \bit  ^ \$232 ;
-  assign \$234  = \$231  & \$233 ;
-  assign \$235  = ! idx;
-  assign \$236  = words[11] & \$235 ;
-  assign \$237  = words[10] & data0[0];
-  assign \$238  = \bit  ^ \$237 ;
-  assign \$239  = \$236  & \$238 ;
-  assign \$240  = ! idx;
-  assign \$241  = words[11] & \$240 ;
-  assign \$242  = words[10] & data0[0];
-  assign \$243  = \bit  ^ \$242 ;
-  assign \$244  = \$241  & \$243 ;
-  assign \$245  = ! idx;
-  assign \$246  = words[11] & \$245 ;
-  assign \$247  = words[10] & data0[0];
-  assign \$248  = \bit  ^ \$247 ;
-  assign \$249  = \$246  & \$248 ;
-  assign \$250  = ! idx;
-  assign \$251  = words[11] & \$250 ;
-  assign \$252  = words[10] & data0[0];
-  assign \$253  = \bit  ^ \$252 ;
-  assign \$254  = \$251  & \$253 ;
-  assign \$255  = ! idx;
-  assign \$256  = words[11] & \$255 ;
-  assign \$257  = words[10] & data0[0];
-  assign \$258  = \bit  ^ \$257 ;
-  assign \$259  = \$256  & \$258 ;
-  assign \$260  = ! idx;
-  assign \$261  = words[11] & \$260 ;
-  assign \$262  = words[10] & data0[0];
-  assign \$263  = \bit  ^ \$262 ;
-  assign \$264  = \$261  & \$263 ;
-  assign \$265  = ! idx;
-  assign \$266  = words[11] & \$265 ;
-  assign \$267  = words[10] & data0[0];
-  assign \$268  = \bit  ^ \$267 ;
-  assign \$269  = \$266  & \$268 ;
-  assign \$270  = ! idx;
-  assign \$271  = words[11] & \$270 ;
-  assign \$272  = words[10] & data0[0];
-  assign \$273  = \bit  ^ \$272 ;
-  assign \$274  = \$271  & \$273 ;
-  assign \$275  = ! idx;
-  assign \$276  = words[11] & \$275 ;
-  assign \$277  = words[10] & data0[0];
-  assign \$278  = \bit  ^ \$277 ;
-  assign \$279  = \$276  & \$278 ;
-  assign \$280  = ! idx;
-  assign \$281  = words[11] & \$280 ;
-  assign \$282  = words[10] & data0[0];
-  assign \$283  = \bit  ^ \$282 ;
-  assign \$284  = \$281  & \$283 ;
-  assign \$285  = ! idx;
-  assign \$286  = words[11] & \$285 ;
-  assign \$287  = words[10] & data0[0];
-  assign \$288  = \bit  ^ \$287 ;
-  assign \$289  = \$286  & \$288 ;
-  assign \$290  = ! idx;
-  assign \$291  = words[11] & \$290 ;
-  assign \$292  = words[10] & data0[0];
-  assign \$293  = \bit  ^ \$292 ;
-  assign \$294  = \$291  & \$293 ;
-  assign \$295  = ! idx;
-  assign \$296  = words[11] & \$295 ;
-  assign \$297  = words[10] & data0[0];
-  assign \$298  = \bit  ^ \$297 ;
-  assign \$299  = \$296  & \$298 ;
-  assign \$300  = ! idx;
-  assign \$301  = words[11] & \$300 ;
-  assign \$302  = words[10] & data0[0];
-  assign \$303  = \bit  ^ \$302 ;
-  assign \$304  = \$301  & \$303 ;
-  assign \$305  = ! idx;
-  assign \$306  = words[11] & \$305 ;
-  assign \$307  = words[10] & data0[0];
-  assign \$308  = \bit  ^ \$307 ;
-  assign \$309  = \$306  & \$308 ;
-  assign \$310  = ! idx;
-  assign \$311  = words[11] & \$310 ;
-  assign \$312  = words[10] & data0[0];
-  assign \$313  = \bit  ^ \$312 ;
-  assign \$314  = \$311  & \$313 ;
-  assign \$315  = ! idx;
-  assign \$316  = words[11] & \$315 ;
-  assign \$317  = words[10] & data0[0];
-  assign \$318  = \bit  ^ \$317 ;
-  assign \$319  = \$316  & \$318 ;
-  assign \$320  = ! idx;
-  assign \$321  = words[11] & \$320 ;
-  assign \$322  = words[10] & data0[0];
-  assign \$323  = \bit  ^ \$322 ;
-  assign \$324  = \$321  & \$323 ;
-  assign \$325  = ! idx;
-  assign \$326  = words[11] & \$325 ;
-  assign \$327  = words[10] & data0[0];
-  assign \$328  = \bit  ^ \$327 ;
-  assign \$329  = \$326  & \$328 ;
-  assign \$330  = ! idx;
-  assign \$331  = words[11] & \$330 ;
-  assign \$332  = words[10] & data0[0];
-  assign \$333  = \bit  ^ \$332 ;
-  assign \$334  = \$331  & \$333 ;
-  assign \$335  = ! idx;
-  assign \$336  = words[11] & \$335 ;
-  assign \$337  = words[10] & data0[0];
-  assign \$338  = \bit  ^ \$337 ;
-  assign \$339  = \$336  & \$338 ;
-  assign \$340  = ! idx;
-  assign \$341  = words[11] & \$340 ;
-  assign \$342  = words[10] & data0[0];
-  assign \$343  = \bit  ^ \$342 ;
-  assign \$344  = \$341  & \$343 ;
-  assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
-  assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$13633$206 [0];
-  assign \$348  = ~ \$347 ;
-  assign \$349  = \$346  & \$348 ;
-  assign \$350  = ! word;
-  assign \$351  = in_word & \$350 ;
-  assign \$352  = idx == words[5:0];
-  assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$13633$206 [0];
-  assign \$355  = ~ \port$13633$206 [1];
-  assign \$356  = \$354  & \$355 ;
-  assign \$357  = \bit  ^ \$356 ;
-  assign \$358  = ~ words[6];
-  assign \$359  = ! word;
-  assign \$360  = in_word & \$359 ;
-  assign \$361  = idx == current[6:0];
-  assign \$362  = \$360  & \$361 ;
-  assign \$364  = in_word & \$363 ;
-  assign \$365  = \$364  & in_data;
-  assign \$366  = words[22] & data1[0];
-  assign \$367  = \bit  ^ \$366 ;
-  assign \$368  = ! idx;
-  assign \$369  = words[23] & \$368 ;
-  assign \$370  = words[22] & data1[0];
-  assign \$371  = \bit  ^ \$370 ;
-  assign \$372  = \$369  & \$371 ;
-  assign \$373  = ! idx;
-  assign \$374  = words[23] & \$373 ;
-  assign \$375  = words[22] & data1[0];
-  assign \$376  = \bit  ^ \$375 ;
-  assign \$377  = \$374  & \$376 ;
-  assign \$378  = ! idx;
-  assign \$379  = words[23] & \$378 ;
-  assign \$380  = words[22] & data1[0];
-  assign \$381  = \bit  ^ \$380 ;
-  assign \$382  = \$379  & \$381 ;
-  assign \$383  = ! idx;
-  assign \$384  = words[23] & \$383 ;
-  assign \$385  = words[22] & data1[0];
-  assign \$386  = \bit  ^ \$385 ;
-  assign \$387  = \$384  & \$386 ;
-  assign \$388  = ! idx;
-  assign \$389  = words[23] & \$388 ;
-  assign \$390  = words[22] & data1[0];
+  assign \$9  = ! decoder_fsm_state;
+  assign \$10  = decoder_fsm_state == 1'h1;
+  assign \$11  = decoder_fsm_state == 2'h2;
+  assign \$12  = decoder_fsm_state == 2'h3;
+  assign \$13  = decoder_fsm_state == 3'h4;
+  assign \$14  = decoder_fsm_state == 3'h5;
+  assign \$15  = decoder_fsm_state == 3'h6;
+  assign \$16  = ~ slots_full;
+  assign \$17  = sample & \$16 ;
+  assign \$18  = slots + 1'h1;
+  assign \$19  = slots == 16'hfffe;
+  assign \$20  = sample & \bit ;
+  assign \$21  = | words[5:0];
+  assign \$22  = ssi & \port$13635$206 [0];
+  assign \$24  = words[5:0] + \$23 ;
+  assign \$25  = ! \$24 ;
+  assign \$26  = ssi & \port$13635$206 [0];
+  assign \$28  = words[5:0] + \$27 ;
+  assign \$29  = | \$28 ;
+  assign \$30  = \$25  & \$29 ;
+  assign \$31  = | words[17:12];
+  assign \$32  = | words[5:0];
+  assign \$33  = ssi & \port$13635$206 [0];
+  assign \$35  = words[5:0] + \$34 ;
+  assign \$36  = ! \$35 ;
+  assign \$37  = ssi & \port$13635$206 [0];
+  assign \$39  = words[5:0] + \$38 ;
+  assign \$40  = | \$39 ;
+  assign \$41  = \$36  & \$40 ;
+  assign \$42  = | words[17:12];
+  assign \$43  = idx + 1'h1;
+  assign \$44  = idx != current[13:7];
+  assign \$45  = in_data & \$44 ;
+  assign \$46  = idx == current[20:14];
+  assign \$47  = in_lc | \$46 ;
+  assign \$48  = idx != current[27:21];
+  assign \$49  = \$47  & \$48 ;
+  assign \$50  = idx == current[27:21];
+  assign \$51  = in_crc | \$50 ;
+  assign \$52  = idx != current[34:28];
+  assign \$53  = \$51  & \$52 ;
+  assign \$54  = idx != following[13:7];
+  assign \$55  = in_top & \$54 ;
+  assign \$56  = idx == current[34:28];
+  assign \$57  = word_count - 1'h1;
+  assign \$58  = word == \$57 ;
+  assign \$59  = ssi & \port$13635$206 [2];
+  assign \$60  = word + 1'h1;
+  assign \$61  = idx + 1'h1;
+  assign \$62  = idx == current[34:28];
+  assign \$63  = ! word;
+  assign \$64  = in_word & \$63 ;
+  assign \$65  = \$64  & in_data;
+  assign \$66  = words[10] & data0[0];
+  assign \$67  = \bit  ^ \$66 ;
+  assign \$68  = ! idx;
+  assign \$69  = words[11] & \$68 ;
+  assign \$70  = words[10] & data0[0];
+  assign \$71  = \bit  ^ \$70 ;
+  assign \$72  = \$69  & \$71 ;
+  assign \$73  = ! idx;
+  assign \$74  = words[11] & \$73 ;
+  assign \$75  = words[10] & data0[0];
+  assign \$76  = \bit  ^ \$75 ;
+  assign \$77  = \$74  & \$76 ;
+  assign \$78  = ! idx;
+  assign \$79  = words[11] & \$78 ;
+  assign \$80  = words[10] & data0[0];
+  assign \$81  = \bit  ^ \$80 ;
+  assign \$82  = \$79  & \$81 ;
+  assign \$83  = ! idx;
+  assign \$84  = words[11] & \$83 ;
+  assign \$85  = words[10] & data0[0];
+  assign \$86  = \bit  ^ \$85 ;
+  assign \$87  = \$84  & \$86 ;
+  assign \$88  = ! idx;
+  assign \$89  = words[11] & \$88 ;
+  assign \$90  = words[10] & data0[0];
+  assign \$91  = \bit  ^ \$90 ;
+  assign \$92  = \$89  & \$91 ;
+  assign \$93  = ! idx;
+  assign \$94  = words[11] & \$93 ;
+  assign \$95  = words[10] & data0[0];
+  assign \$96  = \bit  ^ \$95 ;
+  assign \$97  = \$94  & \$96 ;
+  assign \$98  = ! idx;
+  assign \$99  = words[11] & \$98 ;
+  assign \$100  = words[10] & data0[0];
+  assign \$101  = \bit  ^ \$100 ;
+  assign \$102  = \$99  & \$101 ;
+  assign \$103  = ! idx;
+  assign \$104  = words[11] & \$103 ;
+  assign \$105  = words[10] & data0[0];
+  assign \$106  = \bit  ^ \$105 ;
+  assign \$107  = \$104  & \$106 ;
+  assign \$108  = ! idx;
+  assign \$109  = words[11] & \$108 ;
+  assign \$110  = words[10] & data0[0];
+  assign \$111  = \bit  ^ \$110 ;
+  assign \$112  = \$109  & \$111 ;
+  assign \$113  = ! idx;
+  assign \$114  = words[11] & \$113 ;
+  assign \$115  = words[10] & data0[0];
+  assign \$116  = \bit  ^ \$115 ;
+  assign \$117  = \$114  & \$116 ;
+  assign \$118  = ! idx;
+  assign \$119  = words[11] & \$118 ;
+  assign \$120  = words[10] & data0[0];
+  assign \$121  = \bit  ^ \$120 ;
+  assign \$122  = \$119  & \$121 ;
+  assign \$123  = ! idx;
+  assign \$124  = words[11] & \$123 ;
+  assign \$125  = words[10] & data0[0];
+  assign \$126  = \bit  ^ \$125 ;
+  assign \$127  = \$124  & \$126 ;
+  assign \$128  = ! idx;
+  assign \$129  = words[11] & \$128 ;
+  assign \$130  = words[10] & data0[0];
+  assign \$131  = \bit  ^ \$130 ;
+  assign \$132  = \$129  & \$131 ;
+  assign \$133  = ! idx;
+  assign \$134  = words[11] & \$133 ;
+  assign \$135  = words[10] & data0[0];
+  assign \$136  = \bit  ^ \$135 ;
+  assign \$137  = \$134  & \$136 ;
+  assign \$138  = ! idx;
+  assign \$139  = words[11] & \$138 ;
+  assign \$140  = words[10] & data0[0];
+  assign \$141  = \bit  ^ \$140 ;
+  assign \$142  = \$139  & \$141 ;
+  assign \$143  = ! idx;
+  assign \$144  = words[11] & \$143 ;
+  assign \$145  = words[10] & data0[0];
+  assign \$146  = \bit  ^ \$145 ;
+  assign \$147  = \$144  & \$146 ;
+  assign \$148  = ! idx;
+  assign \$149  = words[11] & \$148 ;
+  assign \$150  = words[10] & data0[0];
+  assign \$151  = \bit  ^ \$150 ;
+  assign \$152  = \$149  & \$151 ;
+  assign \$153  = ! idx;
+  assign \$154  = words[11] & \$153 ;
+  assign \$155  = words[10] & data0[0];
+  assign \$156  = \bit  ^ \$155 ;
+  assign \$157  = \$154  & \$156 ;
+  assign \$158  = ! idx;
+  assign \$159  = words[11] & \$158 ;
+  assign \$160  = words[10] & data0[0];
+  assign \$161  = \bit  ^ \$160 ;
+  assign \$162  = \$159  & \$161 ;
+  assign \$163  = ! idx;
+  assign \$164  = words[11] & \$163 ;
+  assign \$165  = words[10] & data0[0];
+  assign \$166  = \bit  ^ \$165 ;
+  assign \$167  = \$164  & \$166 ;
+  assign \$168  = ! idx;
+  assign \$169  = words[11] & \$168 ;
+  assign \$170  = words[10] & data0[0];
+  assign \$171  = \bit  ^ \$170 ;
+  assign \$172  = \$169  & \$171 ;
+  assign \$173  = ! idx;
+  assign \$174  = words[11] & \$173 ;
+  assign \$175  = words[10] & data0[0];
+  assign \$176  = \bit  ^ \$175 ;
+  assign \$177  = \$174  & \$176 ;
+  assign \$178  = ! idx;
+  assign \$179  = words[11] & \$178 ;
+  assign \$180  = words[10] & data0[0];
+  assign \$181  = \bit  ^ \$180 ;
+  assign \$182  = \$179  & \$181 ;
+  assign \$183  = ! idx;
+  assign \$184  = words[11] & \$183 ;
+  assign \$185  = words[10] & data0[0];
+  assign \$186  = \bit  ^ \$185 ;
+  assign \$187  = \$184  & \$186 ;
+  assign \$188  = ! idx;
+  assign \$189  = words[11] & \$188 ;
+  assign \$190  = words[10] & data0[0];
+  assign \$191  = \bit  ^ \$190 ;
+  assign \$192  = \$189  & \$191 ;
+  assign \$193  = ! idx;
+  assign \$194  = words[11] & \$193 ;
+  assign \$195  = words[10] & data0[0];
+  assign \$196  = \bit  ^ \$195 ;
+  assign \$197  = \$194  & \$196 ;
+  assign \$198  = ! idx;
+  assign \$199  = words[11] & \$198 ;
+  assign \$200  = words[10] & data0[0];
+  assign \$201  = \bit  ^ \$200 ;
+  assign \$202  = \$199  & \$201 ;
+  assign \$203  = ! idx;
+  assign \$204  = words[11] & \$203 ;
+  assign \$205  = words[10] & data0[0];
+  assign \$206  = \bit  ^ \$205 ;
+  assign \$207  = \$204  & \$206 ;
+  assign \$208  = ! idx;
+  assign \$209  = words[11] & \$208 ;
+  assign \$210  = words[10] & data0[0];
+  assign \$211  = \bit  ^ \$210 ;
+  assign \$212  = \$209  & \$211 ;
+  assign \$213  = ! idx;
+  assign \$214  = words[11] & \$213 ;
+  assign \$215  = words[10] & data0[0];
+  assign \$216  = \bit  ^ \$215 ;
+  assign \$217  = \$214  & \$216 ;
+  assign \$218  = ! idx;
+  assign \$219  = words[11] & \$218 ;
+  assign \$220  = words[10] & data0[0];
+  assign \$221  = \bit  ^ \$220 ;
+  assign \$222  = \$219  & \$221 ;
+  assign \$223  = ! idx;
+  assign \$224  = words[11] & \$223 ;
+  assign \$225  = words[10] & data0[0];
+  assign \$226  = \bit  ^ \$225 ;
+  assign \$227  = \$224  & \$226 ;
+  assign \$228  = ! idx;
+  assign \$229  = words[11] & \$228 ;
+  assign \$230  = words[10] & data0[0];
+  assign \$231  = \bit  ^ \$230 ;
+  assign \$232  = \$229  & \$231 ;
+  assign \$233  = ! idx;
+  assign \$234  = words[11] & \$233 ;
+  assign \$235  = words[10] & data0[0];
+  assign \$236  = \bit  ^ \$235 ;
+  assign \$237  = \$234  & \$236 ;
+  assign \$238  = ! idx;
+  assign \$239  = words[11] & \$238 ;
+  assign \$240  = words[10] & data0[0];
+  assign \$241  = \bit  ^ \$240 ;
+  assign \$242  = \$239  & \$241 ;
+  assign \$243  = ! idx;
+  assign \$244  = words[11] & \$243 ;
+  assign \$245  = words[10] & data0[0];
+  assign \$246  = \bit  ^ \$245 ;
+  assign \$247  = \$244  & \$246 ;
+  assign \$248  = ! idx;
+  assign \$249  = words[11] & \$248 ;
+  assign \$250  = words[10] & data0[0];
+  assign \$251  = \bit  ^ \$250 ;
+  assign \$252  = \$249  & \$251 ;
+  assign \$253  = ! idx;
+  assign \$254  = words[11] & \$253 ;
+  assign \$255  = words[10] & data0[0];
+  assign \$256  = \bit  ^ \$255 ;
+  assign \$257  = \$254  & \$256 ;
+  assign \$258  = ! idx;
+  assign \$259  = words[11] & \$258 ;
+  assign \$260  = words[10] & data0[0];
+  assign \$261  = \bit  ^ \$260 ;
+  assign \$262  = \$259  & \$261 ;
+  assign \$263  = ! idx;
+  assign \$264  = words[11] & \$263 ;
+  assign \$265  = words[10] & data0[0];
+  assign \$266  = \bit  ^ \$265 ;
+  assign \$267  = \$264  & \$266 ;
+  assign \$268  = ! idx;
+  assign \$269  = words[11] & \$268 ;
+  assign \$270  = words[10] & data0[0];
+  assign \$271  = \bit  ^ \$270 ;
+  assign \$272  = \$269  & \$271 ;
+  assign \$273  = ! idx;
+  assign \$274  = words[11] & \$273 ;
+  assign \$275  = words[10] & data0[0];
+  assign \$276  = \bit  ^ \$275 ;
+  assign \$277  = \$274  & \$276 ;
+  assign \$278  = ! idx;
+  assign \$279  = words[11] & \$278 ;
+  assign \$280  = words[10] & data0[0];
+  assign \$281  = \bit  ^ \$280 ;
+  assign \$282  = \$279  & \$281 ;
+  assign \$283  = ! idx;
+  assign \$284  = words[11] & \$283 ;
+  assign \$285  = words[10] & data0[0];
+  assign \$286  = \bit  ^ \$285 ;
+  assign \$287  = \$284  & \$286 ;
+  assign \$288  = ! idx;
+  assign \$289  = words[11] & \$288 ;
+  assign \$290  = words[10] & data0[0];
+  assign \$291  = \bit  ^ \$290 ;
+  assign \$292  = \$289  & \$291 ;
+  assign \$293  = ! idx;
+  assign \$294  = words[11] & \$293 ;
+  assign \$295  = words[10] & data0[0];
+  assign \$296  = \bit  ^ \$295 ;
+  assign \$297  = \$294  & \$296 ;
+  assign \$298  = ! idx;
+  assign \$299  = words[11] & \$298 ;
+  assign \$300  = words[10] & data0[0];
+  assign \$301  = \bit  ^ \$300 ;
+  assign \$302  = \$299  & \$301 ;
+  assign \$303  = ! idx;
+  assign \$304  = words[11] & \$303 ;
+  assign \$305  = words[10] & data0[0];
+  assign \$306  = \bit  ^ \$305 ;
+  assign \$307  = \$304  & \$306 ;
+  assign \$308  = ! idx;
+  assign \$309  = words[11] & \$308 ;
+  assign \$310  = words[10] & data0[0];
+  assign \$311  = \bit  ^ \$310 ;
+  assign \$312  = \$309  & \$311 ;
+  assign \$313  = ! idx;
+  assign \$314  = words[11] & \$313 ;
+  assign \$315  = words[10] & data0[0];
+  assign \$316  = \bit  ^ \$315 ;
+  assign \$317  = \$314  & \$316 ;
+  assign \$318  = ! idx;
+  assign \$319  = words[11] & \$318 ;
+  assign \$320  = words[10] & data0[0];
+  assign \$321  = \bit  ^ \$320 ;
+  assign \$322  = \$319  & \$321 ;
+  assign \$323  = ! idx;
+  assign \$324  = words[11] & \$323 ;
+  assign \$325  = words[10] & data0[0];
+  assign \$326  = \bit  ^ \$325 ;
+  assign \$327  = \$324  & \$326 ;
+  assign \$328  = ! idx;
+  assign \$329  = words[11] & \$328 ;
+  assign \$330  = words[10] & data0[0];
+  assign \$331  = \bit  ^ \$330 ;
+  assign \$332  = \$329  & \$331 ;
+  assign \$333  = ! idx;
+  assign \$334  = words[11] & \$333 ;
+  assign \$335  = words[10] & data0[0];
+  assign \$336  = \bit  ^ \$335 ;
+  assign \$337  = \$334  & \$336 ;
+  assign \$338  = ! idx;
+  assign \$339  = words[11] & \$338 ;
+  assign \$340  = words[10] & data0[0];
+  assign \$341  = \bit  ^ \$340 ;
+  assign \$342  = \$339  & \$341 ;
+  assign \$343  = { data0[53:0], \$67  } | { \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72  };
+  assign \$344  = ~ words[6];
+  assign \$345  = ssi & \port$13635$206 [0];
+  assign \$346  = ~ \$345 ;
+  assign \$347  = \$344  & \$346 ;
+  assign \$348  = ! word;
+  assign \$349  = in_word & \$348 ;
+  assign \$350  = idx == words[5:0];
+  assign \$351  = \$349  & \$350 ;
+  assign \$352  = ssi & \port$13635$206 [0];
+  assign \$353  = ~ \port$13635$206 [1];
+  assign \$354  = \$352  & \$353 ;
+  assign \$355  = \bit  ^ \$354 ;
+  assign \$356  = ~ words[6];
+  assign \$357  = ! word;
+  assign \$358  = in_word & \$357 ;
+  assign \$359  = idx == current[6:0];
+  assign \$360  = \$358  & \$359 ;
+  assign \$362  = in_word & \$361 ;
+  assign \$363  = \$362  & in_data;
+  assign \$364  = words[22] & data1[0];
+  assign \$365  = \bit  ^ \$364 ;
+  assign \$366  = ! idx;
+  assign \$367  = words[23] & \$366 ;
+  assign \$368  = words[22] & data1[0];
+  assign \$369  = \bit  ^ \$368 ;
+  assign \$370  = \$367  & \$369 ;
+  assign \$371  = ! idx;
+  assign \$372  = words[23] & \$371 ;
+  assign \$373  = words[22] & data1[0];
+  assign \$374  = \bit  ^ \$373 ;
+  assign \$375  = \$372  & \$374 ;
+  assign \$376  = ! idx;
+  assign \$377  = words[23] & \$376 ;
+  assign \$378  = words[22] & data1[0];
+  assign \$379  = \bit  ^ \$378 ;
+  assign \$380  = \$377  & \$379 ;
+  assign \$381  = ! idx;
+  assign \$382  = words[23] & \$381 ;
+  assign \$383  = words[22] & data1[0];
+  assign \$384  = \bit  ^ \$383 ;
+  assign \$385  = \$382  & \$384 ;
+  assign \$386  = ! idx;
+  assign \$387  = words[23] & \$386 ;
+  assign \$388  = words[22] & data1[0];
+  assign \$389  = \bit  ^ \$388 ;
+  assign \$390  = \$387  & \$389 ;
   \biss_master_uart.ch0.core.decoder.copy  copy (
     .\bit (\bit ),
     .clk(clk),
@@ -19372,7 +19377,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
     .receiver_clear(receiver_clear),
     .rst(rst),
     .\table (\table ),
-    .table_index(\$10 [0]),
+    .table_index(crc_table_addr),
     .widths(crc_widths)
   );
   \biss_master_uart.ch0.core.decoder.field_ends  field_ends (
@@ -19479,6 +19484,42 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$580  = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            if (\$56 ) begin
+              if (\$58 ) begin
+                (* full_case = 32'd1 *)
+                if (\$59 ) begin
+                end else begin
+                  \$580  = 1'h1;
+                end
+              end
+            end
+          end
+      3'h3:
+          /* empty */;
+      3'h5:
+          if (sample) begin
+            if (\$62 ) begin
+              \$580  = 1'h1;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$580  = 1'h0;
+    end
+    if (rst) begin
+      \$580  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$581  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -19486,42 +19527,6 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
       3'h2:
           /* empty */;
       3'h1:
-          if (sample) begin
-            if (\$58 ) begin
-              if (\$60 ) begin
-                (* full_case = 32'd1 *)
-                if (\$61 ) begin
-                end else begin
-                  \$581  = 1'h1;
-                end
-              end
-            end
-          end
-      3'h3:
-          /* empty */;
-      3'h5:
-          if (sample) begin
-            if (\$64 ) begin
-              \$581  = 1'h1;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$581  = 1'h0;
-    end
-    if (rst) begin
-      \$581  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$582  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h1:
           /* empty */;
       3'h3:
           /* empty */;
@@ -19529,92 +19534,119 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
           /* empty */;
       3'h4:
           if (sample) begin
-            \$582  = 1'h1;
+            \$581  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$582  = 1'h0;
+      \$581  = 1'h0;
     end
     if (rst) begin
-      \$582  = 1'h0;
+      \$581  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$583  = slots;
-    if (\$19 ) begin
-      \$583  = \$20 [15:0];
+    \$582  = slots;
+    if (\$17 ) begin
+      \$582  = \$18 [15:0];
     end
     if (receiver_clear) begin
-      \$583  = 16'h0000;
+      \$582  = 16'h0000;
     end
     if (rst) begin
-      \$583  = 16'h0000;
+      \$582  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$584  = slots_full;
-    if (\$19 ) begin
-      \$584  = \$21 ;
+    \$583  = slots_full;
+    if (\$17 ) begin
+      \$583  = \$19 ;
     end
     if (receiver_clear) begin
-      \$584  = 1'h0;
+      \$583  = 1'h0;
     end
     if (rst) begin
-      \$584  = 1'h0;
+      \$583  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$585  = idx;
+    \$584  = idx;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$585  = 7'h00;
+            \$584  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$585  = 7'h00;
+            \$584  = 7'h00;
           end
       3'h1:
           if (sample) begin
-            \$585  = \$45 [6:0];
-            if (\$58 ) begin
-              \$585  = 7'h00;
+            \$584  = \$43 [6:0];
+            if (\$56 ) begin
+              \$584  = 7'h00;
             end
           end
       3'h3:
           /* empty */;
       3'h5:
           if (sample) begin
-            \$585  = \$63 [6:0];
+            \$584  = \$61 [6:0];
           end
     endcase
     if (receiver_clear) begin
-      \$585  = 7'h00;
+      \$584  = 7'h00;
     end
     if (rst) begin
-      \$585  = 7'h00;
+      \$584  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$586  = in_data;
+    \$585  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$586  = \$23 ;
+            \$585  = \$21 ;
           end
       3'h2:
           if (sample) begin
-            \$586  = \$34 ;
+            \$585  = \$32 ;
           end
       3'h1:
           if (sample) begin
-            \$586  = \$47 ;
-            if (\$58 ) begin
-              \$586  = following[35];
+            \$585  = \$45 ;
+            if (\$56 ) begin
+              \$585  = following[35];
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$585  = 1'h0;
+    end
+    if (rst) begin
+      \$585  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$586  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$586  = \$30 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$586  = \$41 ;
+          end
+      3'h1:
+          if (sample) begin
+            \$586  = \$49 ;
+            if (\$56 ) begin
+              \$586  = following[36];
             end
           end
     endcase
@@ -19627,22 +19659,19 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$587  = in_lc;
+    \$587  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$587  = \$32 ;
+            \$587  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$587  = \$43 ;
+            \$587  = 1'h0;
           end
       3'h1:
           if (sample) begin
-            \$587  = \$51 ;
-            if (\$58 ) begin
-              \$587  = following[36];
-            end
+            \$587  = \$53 ;
           end
     endcase
     if (receiver_clear) begin
@@ -19654,181 +19683,183 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$588  = in_crc;
+    \$588  = in_top;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$588  = 1'h0;
+            \$588  = \$31 ;
           end
       3'h2:
           if (sample) begin
-            \$588  = 1'h0;
+            \$588  = \$42 ;
           end
       3'h1:
           if (sample) begin
             \$588  = \$55 ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$588  = 1'h0;
-    end
-    if (rst) begin
-      \$588  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$589  = in_top;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$589  = \$33 ;
-          end
-      3'h2:
-          if (sample) begin
-            \$589  = \$44 ;
-          end
-      3'h1:
-          if (sample) begin
-            \$589  = \$57 ;
-            if (\$58 ) begin
-              \$589  = 1'h0;
+            if (\$56 ) begin
+              \$588  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$589  = 1'h0;
+      \$588  = 1'h0;
     end
     if (rst) begin
-      \$589  = 1'h0;
+      \$588  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$590  = word;
+    \$589  = word;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$590  = 1'h0;
+            \$589  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$590  = 1'h0;
+            \$589  = 1'h0;
           end
       3'h1:
           if (sample) begin
-            if (\$58 ) begin
+            if (\$56 ) begin
               (* full_case = 32'd1 *)
-              if (\$60 ) begin
+              if (\$58 ) begin
               end else begin
-                \$590  = \$62 [0];
+                \$589  = \$60 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$590  = 1'h0;
+      \$589  = 1'h0;
     end
     if (rst) begin
-      \$590  = 1'h0;
+      \$589  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$591  = decoder_fsm_state;
+    \$590  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$591  = 3'h1;
-          end else if (\$22 ) begin
-            \$591  = 3'h2;
+            \$590  = 3'h1;
+          end else if (\$20 ) begin
+            \$590  = 3'h2;
           end
       3'h2:
           if (sample) begin
-            \$591  = 3'h1;
+            \$590  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            if (\$58 ) begin
-              if (\$60 ) begin
+            if (\$56 ) begin
+              if (\$58 ) begin
                 (* full_case = 32'd1 *)
-                if (\$61 ) begin
-                  \$591  = 3'h3;
+                if (\$59 ) begin
+                  \$590  = 3'h3;
                 end else begin
-                  \$591  = 3'h4;
+                  \$590  = 3'h4;
                 end
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$591  = 3'h5;
+            \$590  = 3'h5;
           end
       3'h5:
           if (sample) begin
-            if (\$64 ) begin
-              \$591  = 3'h4;
+            if (\$62 ) begin
+              \$590  = 3'h4;
             end
           end
       3'h4:
           if (sample) begin
-            \$591  = 3'h6;
+            \$590  = 3'h6;
           end
     endcase
     if (receiver_clear) begin
-      \$591  = 3'h0;
+      \$590  = 3'h0;
     end
     if (rst) begin
-      \$591  = 3'h0;
+      \$590  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$592  = started;
+    \$591  = started;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-          end else if (\$22 ) begin
-            \$592  = 1'h1;
+          end else if (\$20 ) begin
+            \$591  = 1'h1;
           end
       3'h2:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$592  = 1'h1;
+            \$591  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$592  = 1'h0;
+      \$591  = 1'h0;
     end
     if (rst) begin
-      \$592  = 1'h0;
+      \$591  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$593  = start_slot;
+    \$592  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-          end else if (\$22 ) begin
-            \$593  = slots;
+          end else if (\$20 ) begin
+            \$592  = slots;
           end
     endcase
     if (receiver_clear) begin
-      \$593  = 16'h0000;
+      \$592  = 16'h0000;
     end
     if (rst) begin
-      \$593  = 16'h0000;
+      \$592  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$594  = cds;
+    \$593  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h2:
+          if (sample) begin
+            \$593  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$593  = 1'h0;
+    end
+    if (rst) begin
+      \$593  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$594  = stop_bit;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h4:
           if (sample) begin
             \$594  = \bit ;
           end
@@ -19842,54 +19873,49 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$595  = stop_bit;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h3:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h4:
-          if (sample) begin
-            \$595  = \bit ;
-          end
-    endcase
+    \$595  = data0;
+    if (\$65 ) begin
+      \$595  = \$343 ;
+    end
     if (receiver_clear) begin
-      \$595  = 1'h0;
+      \$595  = 55'h00000000000000;
     end
     if (rst) begin
-      \$595  = 1'h0;
+      \$595  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$596  = data0;
-    if (\$67 ) begin
-      \$596  = \$345 ;
+    \$596  = ne;
+    if (\$347 ) begin
+      \$596 [0] = 1'h1;
+    end else if (\$351 ) begin
+      \$596 [0] = \$355 ;
+    end
+    if (\$567 ) begin
+      \$596 [1] = 1'h1;
+    end else if (\$571 ) begin
+      \$596 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$596  = 55'h00000000000000;
+      \$596  = 2'h0;
     end
     if (rst) begin
-      \$596  = 55'h00000000000000;
+      \$596  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$597  = ne;
-    if (\$349 ) begin
+    \$597  = nw;
+    if (\$356 ) begin
       \$597 [0] = 1'h1;
-    end else if (\$353 ) begin
-      \$597 [0] = \$357 ;
+    end else if (\$360 ) begin
+      \$597 [0] = \bit ;
     end
-    if (\$569 ) begin
+    if (\$567 ) begin
       \$597 [1] = 1'h1;
-    end else if (\$573 ) begin
+    end else if (\$571 ) begin
+    end else if (\$575 ) begin
       \$597 [1] = \bit ;
     end
     if (receiver_clear) begin
@@ -19901,169 +19927,161 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$598  = nw;
-    if (\$358 ) begin
-      \$598 [0] = 1'h1;
-    end else if (\$362 ) begin
-      \$598 [0] = \bit ;
-    end
-    if (\$569 ) begin
-      \$598 [1] = 1'h1;
-    end else if (\$573 ) begin
-    end else if (\$577 ) begin
-      \$598 [1] = \bit ;
+    \$598  = data1;
+    if (\$363 ) begin
+      \$598  = \$566 ;
     end
     if (receiver_clear) begin
-      \$598  = 2'h0;
+      \$598  = 40'h0000000000;
     end
     if (rst) begin
-      \$598  = 2'h0;
+      \$598  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$599  = data1;
-    if (\$365 ) begin
-      \$599  = \$568 ;
-    end
-    if (receiver_clear) begin
-      \$599  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$599  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$600  = lc;
+    \$599  = lc;
     if (lc_load) begin
-      \$600  = { lc[4:0], \bit  };
+      \$599  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$600  = 6'h00;
+      \$599  = 6'h00;
     end
     if (rst) begin
-      \$600  = 6'h00;
+      \$599  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$601  = cpw_top;
-    if (\$578 ) begin
-      \$601  = { cpw_top[38:0], \$580  };
+    \$600  = cpw_top;
+    if (\$576 ) begin
+      \$600  = { cpw_top[38:0], \$578  };
     end
     if (receiver_clear) begin
-      \$601  = 40'h0000000000;
+      \$600  = 40'h0000000000;
     end
     if (rst) begin
-      \$601  = 40'h0000000000;
+      \$600  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$601  = crc_table_addr;
+    if (load) begin
+      \$601  = \$579 [0];
+    end
+    if (receiver_clear) begin
+      \$601  = 1'h0;
+    end
+    if (rst) begin
+      \$601  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$24 , words[7:6] })
+    casez ({ \$22 , words[7:6] })
       3'h0:
-          \$25  = 2'h0;
+          \$23  = 2'h0;
       3'h1:
-          \$25  = 2'h2;
+          \$23  = 2'h2;
       3'h2:
-          \$25  = 2'h0;
+          \$23  = 2'h0;
       3'h3:
-          \$25  = 2'h2;
+          \$23  = 2'h2;
       3'h4:
-          \$25  = 2'h1;
+          \$23  = 2'h1;
       3'h5:
-          \$25  = 2'h3;
+          \$23  = 2'h3;
       3'h6:
-          \$25  = 2'h1;
+          \$23  = 2'h1;
       3'h7:
-          \$25  = 2'h3;
+          \$23  = 2'h3;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$28 , words[7:6] })
+    casez ({ \$26 , words[7:6] })
       3'h0:
-          \$29  = 4'h0;
+          \$27  = 4'h0;
       3'h1:
-          \$29  = 4'h2;
+          \$27  = 4'h2;
       3'h2:
-          \$29  = 4'h6;
+          \$27  = 4'h6;
       3'h3:
-          \$29  = 4'h8;
+          \$27  = 4'h8;
       3'h4:
-          \$29  = 4'h1;
+          \$27  = 4'h1;
       3'h5:
-          \$29  = 4'h3;
+          \$27  = 4'h3;
       3'h6:
-          \$29  = 4'h7;
+          \$27  = 4'h7;
       3'h7:
-          \$29  = 4'h9;
+          \$27  = 4'h9;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$35 , words[7:6] })
+    casez ({ \$33 , words[7:6] })
       3'h0:
-          \$36  = 2'h0;
+          \$34  = 2'h0;
       3'h1:
-          \$36  = 2'h2;
+          \$34  = 2'h2;
       3'h2:
-          \$36  = 2'h0;
+          \$34  = 2'h0;
       3'h3:
-          \$36  = 2'h2;
+          \$34  = 2'h2;
       3'h4:
-          \$36  = 2'h1;
+          \$34  = 2'h1;
       3'h5:
-          \$36  = 2'h3;
+          \$34  = 2'h3;
       3'h6:
-          \$36  = 2'h1;
+          \$34  = 2'h1;
       3'h7:
-          \$36  = 2'h3;
+          \$34  = 2'h3;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$39 , words[7:6] })
+    casez ({ \$37 , words[7:6] })
       3'h0:
-          \$40  = 4'h0;
+          \$38  = 4'h0;
       3'h1:
-          \$40  = 4'h2;
+          \$38  = 4'h2;
       3'h2:
-          \$40  = 4'h6;
+          \$38  = 4'h6;
       3'h3:
-          \$40  = 4'h8;
+          \$38  = 4'h8;
       3'h4:
-          \$40  = 4'h1;
+          \$38  = 4'h1;
       3'h5:
-          \$40  = 4'h3;
+          \$38  = 4'h3;
       3'h6:
-          \$40  = 4'h7;
+          \$38  = 4'h7;
       3'h7:
-          \$40  = 4'h9;
+          \$38  = 4'h9;
     endcase
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13633$206 [0];
+  assign ssi_error = \port$13635$206 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
   assign widths = crc_widths;
-  assign table_index = \$10 [0];
+  assign table_index = crc_table_addr;
   assign crc_table_data = \table ;
   assign \bit$43  = \bit ;
   assign ok = crc_ok;
   assign \index$46  = word;
-  assign load_index = \$10 [0];
-  assign ssi_double = \port$13633$206 [2];
-  assign ssi_error_low = \port$13633$206 [1];
-  assign crc_table_addr = \$10 [0];
+  assign load_index = crc_table_addr;
+  assign crc_next_word = crc_table_addr;
+  assign ssi_double = \port$13635$206 [2];
+  assign ssi_error_low = \port$13635$206 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -20122,9 +20140,9 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \following.lc_at0  = following[36];
   assign codes[3:2] = words[21:20];
   assign codes[1:0] = words[9:8];
-  assign \$363  = word;
-  assign \$570  = word;
-  assign \$574  = word;
+  assign \$361  = word;
+  assign \$568  = word;
+  assign \$572  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -20195,7 +20213,7 @@ module \biss_master_uart.ch0.core.decoder.copy (rst, first, \bit , receiver_clea
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.decoder.crc (rst, \table , load, \cover , check, last, table_index, \bit , widths, receiver_clear, codes, index, ok, clk);
+module \biss_master_uart.ch0.core.decoder.crc (rst, \table , load, \cover , check, last, \bit , widths, receiver_clear, codes, index, table_index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   wire [1:0] \$10 ;
@@ -22342,7 +22360,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.ma_stop (rst, \port$13633$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_uart.ch0.core.ma_stop (rst, \port$13635$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -22431,8 +22449,8 @@ module \biss_master_uart.ch0.core.ma_stop (rst, \port$13633$166 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13633$166 ;
-  wire \port$13633$166 ;
+  input \port$13635$166 ;
+  wire \port$13635$166 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -22552,7 +22570,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, \port$13633$166 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13633$166  : 1'h0;
+  assign \$13  = \$12  ? \port$13635$166  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -22720,7 +22738,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, \port$13633$166 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13633$166 , 1'h1 };
+  assign enables = { \port$13635$166 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -24860,7 +24878,7 @@ module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13633$193 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13635$193 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -25443,8 +25461,8 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13633$193 ;
-  wire [12:0] \port$13633$193 ;
+  input [12:0] \port$13635$193 ;
+  wire [12:0] \port$13635$193 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -25467,7 +25485,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13633$193 [12:1] + 1'h1;
+  assign \$460  = \port$13635$193 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -26043,7 +26061,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13633$193 [0]),
+    .clear_high(\port$13635$193 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -26186,7 +26204,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13633$193 [0]) begin
+            if (\port$13635$193 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -26271,7 +26289,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13633$193 [0]) begin
+            if (\port$13635$193 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -26310,7 +26328,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13633$193 [12:1] };
+            \$534  = { 1'h0, \port$13635$193 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -26695,11 +26713,11 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13633$193 [12:1] };
-  assign fixed = \port$13633$193 [0];
+  assign fixed_delay = { 1'h0, \port$13635$193 [12:1] };
+  assign fixed = \port$13635$193 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13633$193 [0];
+  assign clear_high = \port$13635$193 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -29276,7 +29294,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13646$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13648$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -29318,8 +29336,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13646$0 ;
-  wire \port$13646$0 ;
+  input \port$13648$0 ;
+  wire \port$13648$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -29333,9 +29351,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13646$0  };
-  assign \$2  = { lc[4:0], \port$13646$0  } == last;
-  assign \$3  = { lc[4:0], \port$13646$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13648$0  };
+  assign \$2  = { lc[4:0], \port$13648$0  } == last;
+  assign \$3  = { lc[4:0], \port$13648$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -29445,7 +29463,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13646$0  };
+  assign lc_next = { lc[4:0], \port$13648$0  };
   assign zero = is_zero;
 endmodule
 
@@ -32242,7 +32260,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$6478$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$6479$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
@@ -32414,8 +32432,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$6478$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$6478$0 ;
-  wire \port$6478$0 ;
+  output \port$6479$0 ;
+  wire \port$6479$0 ;
   output report;
   wire report;
   input report_frame;
@@ -32533,7 +32551,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$6478$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$6478$0  = \$2 ;
+  assign \port$6479$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -32581,10 +32599,10 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$6478$0 , l
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_rbuf_en, crc_table_data, regs__frame_error, cfg_free, regs__busy, regs__config_error, crc_table_addr, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle
-, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed
-, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort
-, cfg_hold, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$14572$0 , \port$14583$0 , regs__ca_done, \port$14660$0 , slo);
+module \biss_master_uart.ch1 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_rbuf_en, crc_table_data, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters
+, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable
+, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, cfg_hold
+, regs__frame_done, regs__done_count, regs__result_updates, ma, crc_table_addr, \port$14578$0 , \port$14589$0 , regs__ca_done, \port$14666$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -32775,12 +32793,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$14572$0 ;
-  wire [186:0] \port$14572$0 ;
-  output [79:0] \port$14583$0 ;
-  wire [79:0] \port$14583$0 ;
-  output [9:0] \port$14660$0 ;
-  wire [9:0] \port$14660$0 ;
+  output [186:0] \port$14578$0 ;
+  wire [186:0] \port$14578$0 ;
+  output [79:0] \port$14589$0 ;
+  wire [79:0] \port$14589$0 ;
+  output [9:0] \port$14666$0 ;
+  wire [9:0] \port$14666$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -33262,9 +33280,9 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_
   assign \cfg_hold$199  = cfg_hold;
   assign \crc_table_addr$202  = crc_table_addr;
   assign \crc_table_data$204  = crc_table_data;
-  assign \port$14572$0  = \$24 ;
-  assign \port$14583$0  = \$25 ;
-  assign \port$14660$0  = \$26 ;
+  assign \port$14578$0  = \$24 ;
+  assign \port$14589$0  = \$25 ;
+  assign \port$14666$0  = \$26 ;
   assign \crc_table_data.poly  = crc_table_data[15:0];
   assign \crc_table_data.start  = crc_table_data[31:16];
   assign \crc_table_data.inverted  = crc_table_data[32];
@@ -33276,9 +33294,9 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_table_data, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$315 , config_error, crc_table_addr, count_busy, count_data, frames, ca_rbuf_data, now, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start
-, \clear$291 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
-, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$264 , \abort$266 , hold, abort, ma
+module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_table_data, cfg_w0_data_bits, cfg_w1_data_bits, trigger, \busy$315 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$291 
+, \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
+, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$264 , \abort$266 , hold, abort, ma, crc_table_addr
 , \done$318 , \valid$320 , \result$323 , counts, ca_done, result, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
   wire \$1 ;
@@ -34310,7 +34328,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$14184$206 (live[208:206]),
+    .\port$14188$206 (live[208:206]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(sample),
@@ -34371,7 +34389,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$14184$166 (live[166]),
+    .\port$14188$166 (live[166]),
     .rises(rises),
     .rst(rst),
     .ssi(live[193]),
@@ -34422,7 +34440,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .level(\slo$58 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$14184$193 (live[205:193]),
+    .\port$14188$193 (live[205:193]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -34447,7 +34465,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$14197$0 (\bit ),
+    .\port$14201$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -34515,7 +34533,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$12034$0 (\$28 ),
+    .\port$12036$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -38604,11 +38622,11 @@ module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, lc_load, crc_table_addr, ssi, \port$14184$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne
-, nw, data1, lc, cpw_top, mismatch, crc_ok, clk);
+module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, lc_load, ssi, \port$14188$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+, data1, lc, cpw_top, crc_table_addr, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
-  wire [1:0] \$10 ;
+  wire \$10 ;
   wire \$100 ;
   wire \$101 ;
   wire \$102 ;
@@ -38696,7 +38714,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$177 ;
   wire \$178 ;
   wire \$179 ;
-  wire \$18 ;
+  wire [16:0] \$18 ;
   wire \$180 ;
   wire \$181 ;
   wire \$182 ;
@@ -38719,7 +38737,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$198 ;
   wire \$199 ;
   wire \$2 ;
-  wire [16:0] \$20 ;
+  wire \$20 ;
   wire \$200 ;
   wire \$201 ;
   wire \$202 ;
@@ -38752,7 +38770,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$227 ;
   wire \$228 ;
   wire \$229 ;
-  wire \$23 ;
+  reg [1:0] \$23 ;
   wire \$230 ;
   wire \$231 ;
   wire \$232 ;
@@ -38763,7 +38781,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$237 ;
   wire \$238 ;
   wire \$239 ;
-  wire \$24 ;
+  wire [6:0] \$24 ;
   wire \$240 ;
   wire \$241 ;
   wire \$242 ;
@@ -38774,7 +38792,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$247 ;
   wire \$248 ;
   wire \$249 ;
-  reg [1:0] \$25 ;
+  wire \$25 ;
   wire \$250 ;
   wire \$251 ;
   wire \$252 ;
@@ -38785,7 +38803,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$257 ;
   wire \$258 ;
   wire \$259 ;
-  wire [6:0] \$26 ;
+  wire \$26 ;
   wire \$260 ;
   wire \$261 ;
   wire \$262 ;
@@ -38796,7 +38814,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$267 ;
   wire \$268 ;
   wire \$269 ;
-  wire \$27 ;
+  reg [3:0] \$27 ;
   wire \$270 ;
   wire \$271 ;
   wire \$272 ;
@@ -38807,7 +38825,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$277 ;
   wire \$278 ;
   wire \$279 ;
-  wire \$28 ;
+  wire [6:0] \$28 ;
   wire \$280 ;
   wire \$281 ;
   wire \$282 ;
@@ -38818,7 +38836,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$287 ;
   wire \$288 ;
   wire \$289 ;
-  reg [3:0] \$29 ;
+  wire \$29 ;
   wire \$290 ;
   wire \$291 ;
   wire \$292 ;
@@ -38830,7 +38848,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$298 ;
   wire \$299 ;
   wire [2:0] \$3 ;
-  wire [6:0] \$30 ;
+  wire \$30 ;
   wire \$300 ;
   wire \$301 ;
   wire \$302 ;
@@ -38874,18 +38892,18 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$337 ;
   wire \$338 ;
   wire \$339 ;
-  wire \$34 ;
+  reg [1:0] \$34 ;
   wire \$340 ;
   wire \$341 ;
   wire \$342 ;
-  wire \$343 ;
+  wire [54:0] \$343 ;
   wire \$344 ;
-  wire [54:0] \$345 ;
+  wire \$345 ;
   wire \$346 ;
   wire \$347 ;
   wire \$348 ;
   wire \$349 ;
-  wire \$35 ;
+  wire [6:0] \$35 ;
   wire \$350 ;
   wire \$351 ;
   wire \$352 ;
@@ -38896,7 +38914,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$357 ;
   wire \$358 ;
   wire \$359 ;
-  reg [1:0] \$36 ;
+  wire \$36 ;
   wire \$360 ;
   wire \$361 ;
   wire \$362 ;
@@ -38907,7 +38925,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$367 ;
   wire \$368 ;
   wire \$369 ;
-  wire [6:0] \$37 ;
+  wire \$37 ;
   wire \$370 ;
   wire \$371 ;
   wire \$372 ;
@@ -38918,7 +38936,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$377 ;
   wire \$378 ;
   wire \$379 ;
-  wire \$38 ;
+  reg [3:0] \$38 ;
   wire \$380 ;
   wire \$381 ;
   wire \$382 ;
@@ -38929,7 +38947,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$387 ;
   wire \$388 ;
   wire \$389 ;
-  wire \$39 ;
+  wire [6:0] \$39 ;
   wire \$390 ;
   wire \$391 ;
   wire \$392 ;
@@ -38941,7 +38959,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$398 ;
   wire \$399 ;
   wire \$4 ;
-  reg [3:0] \$40 ;
+  wire \$40 ;
   wire \$400 ;
   wire \$401 ;
   wire \$402 ;
@@ -38952,7 +38970,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$407 ;
   wire \$408 ;
   wire \$409 ;
-  wire [6:0] \$41 ;
+  wire \$41 ;
   wire \$410 ;
   wire \$411 ;
   wire \$412 ;
@@ -38974,7 +38992,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$427 ;
   wire \$428 ;
   wire \$429 ;
-  wire \$43 ;
+  wire [7:0] \$43 ;
   wire \$430 ;
   wire \$431 ;
   wire \$432 ;
@@ -38996,7 +39014,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$447 ;
   wire \$448 ;
   wire \$449 ;
-  wire [7:0] \$45 ;
+  wire \$45 ;
   wire \$450 ;
   wire \$451 ;
   wire \$452 ;
@@ -39125,11 +39143,11 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$563 ;
   wire \$564 ;
   wire \$565 ;
-  wire \$566 ;
+  wire [39:0] \$566 ;
   wire \$567 ;
-  wire [39:0] \$568 ;
+  wire \$568 ;
   wire \$569 ;
-  wire \$57 ;
+  wire [2:0] \$57 ;
   wire \$570 ;
   wire \$571 ;
   wire \$572 ;
@@ -39139,36 +39157,36 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$576 ;
   wire \$577 ;
   wire \$578 ;
-  wire \$579 ;
+  wire [1:0] \$579 ;
   wire \$58 ;
-  wire \$580 ;
+  reg \$580 ;
   reg \$581 ;
-  reg \$582 ;
-  reg [15:0] \$583 ;
-  reg \$584 ;
-  reg [6:0] \$585 ;
+  reg [15:0] \$582 ;
+  reg \$583 ;
+  reg [6:0] \$584 ;
+  reg \$585 ;
   reg \$586 ;
   reg \$587 ;
   reg \$588 ;
   reg \$589 ;
-  wire [2:0] \$59 ;
-  reg \$590 ;
-  reg [2:0] \$591 ;
-  reg \$592 ;
-  reg [15:0] \$593 ;
+  wire \$59 ;
+  reg [2:0] \$590 ;
+  reg \$591 ;
+  reg [15:0] \$592 ;
+  reg \$593 ;
   reg \$594 ;
-  reg \$595 ;
-  reg [54:0] \$596 ;
+  reg [54:0] \$595 ;
+  reg [1:0] \$596 ;
   reg [1:0] \$597 ;
-  reg [1:0] \$598 ;
-  reg [39:0] \$599 ;
+  reg [39:0] \$598 ;
+  reg [5:0] \$599 ;
   wire \$6 ;
-  wire \$60 ;
-  reg [5:0] \$600 ;
-  reg [39:0] \$601 ;
-  wire \$61 ;
-  wire [1:0] \$62 ;
-  wire [7:0] \$63 ;
+  wire [1:0] \$60 ;
+  reg [39:0] \$600 ;
+  reg \$601 ;
+  wire [7:0] \$61 ;
+  wire \$62 ;
+  wire \$63 ;
   wire \$64 ;
   wire \$65 ;
   wire \$66 ;
@@ -39197,7 +39215,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
-  wire [1:0] \$9 ;
+  wire \$9 ;
   wire \$90 ;
   wire \$91 ;
   wire \$92 ;
@@ -39236,10 +39254,12 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \cover ;
   output [39:0] cpw_top;
   reg [39:0] cpw_top = 40'h0000000000;
+  (* init = 1'h0 *)
+  wire crc_next_word;
   output [1:0] crc_ok;
   wire [1:0] crc_ok;
   output crc_table_addr;
-  wire crc_table_addr;
+  reg crc_table_addr = 1'h0;
   wire [32:0] crc_table_data;
   wire \crc_table_data.inverted ;
   wire [15:0] \crc_table_data.poly ;
@@ -39293,6 +39313,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire lc_load;
   wire [5:0] lc_next;
   wire load;
+  (* init = 1'h0 *)
   wire load_index;
   output mismatch;
   wire mismatch;
@@ -39302,8 +39323,8 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$14184$206 ;
-  wire [2:0] \port$14184$206 ;
+  input [2:0] \port$14188$206 ;
+  wire [2:0] \port$14188$206 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -39333,6 +39354,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \table.inverted ;
   wire [15:0] \table.poly ;
   wire [15:0] \table.start ;
+  (* init = 1'h0 *)
   wire table_index;
   wire [9:0] widths;
   wire [4:0] \widths[0] ;
@@ -39391,237 +39413,238 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$391  = \bit  ^ \$390 ;
-  assign \$392  = \$389  & \$391 ;
-  assign \$393  = ! idx;
-  assign \$394  = words[23] & \$393 ;
-  assign \$395  = words[22] & data1[0];
-  assign \$396  = \bit  ^ \$395 ;
-  assign \$397  = \$394  & \$396 ;
-  assign \$398  = ! idx;
-  assign \$399  = words[23] & \$398 ;
-  assign \$400  = words[22] & data1[0];
-  assign \$401  = \bit  ^ \$400 ;
-  assign \$402  = \$399  & \$401 ;
-  assign \$403  = ! idx;
-  assign \$404  = words[23] & \$403 ;
-  assign \$405  = words[22] & data1[0];
-  assign \$406  = \bit  ^ \$405 ;
-  assign \$407  = \$404  & \$406 ;
-  assign \$408  = ! idx;
-  assign \$409  = words[23] & \$408 ;
-  assign \$410  = words[22] & data1[0];
-  assign \$411  = \bit  ^ \$410 ;
-  assign \$412  = \$409  & \$411 ;
-  assign \$413  = ! idx;
-  assign \$414  = words[23] & \$413 ;
-  assign \$415  = words[22] & data1[0];
-  assign \$416  = \bit  ^ \$415 ;
-  assign \$417  = \$414  & \$416 ;
-  assign \$418  = ! idx;
-  assign \$419  = words[23] & \$418 ;
-  assign \$420  = words[22] & data1[0];
-  assign \$421  = \bit  ^ \$420 ;
-  assign \$422  = \$419  & \$421 ;
-  assign \$423  = ! idx;
-  assign \$424  = words[23] & \$423 ;
-  assign \$425  = words[22] & data1[0];
-  assign \$426  = \bit  ^ \$425 ;
-  assign \$427  = \$424  & \$426 ;
-  assign \$428  = ! idx;
-  assign \$429  = words[23] & \$428 ;
-  assign \$430  = words[22] & data1[0];
-  assign \$431  = \bit  ^ \$430 ;
-  assign \$432  = \$429  & \$431 ;
-  assign \$433  = ! idx;
-  assign \$434  = words[23] & \$433 ;
-  assign \$435  = words[22] & data1[0];
-  assign \$436  = \bit  ^ \$435 ;
-  assign \$437  = \$434  & \$436 ;
-  assign \$438  = ! idx;
-  assign \$439  = words[23] & \$438 ;
-  assign \$440  = words[22] & data1[0];
-  assign \$441  = \bit  ^ \$440 ;
-  assign \$442  = \$439  & \$441 ;
-  assign \$443  = ! idx;
-  assign \$444  = words[23] & \$443 ;
-  assign \$445  = words[22] & data1[0];
-  assign \$446  = \bit  ^ \$445 ;
-  assign \$447  = \$444  & \$446 ;
-  assign \$448  = ! idx;
-  assign \$449  = words[23] & \$448 ;
-  assign \$450  = words[22] & data1[0];
-  assign \$451  = \bit  ^ \$450 ;
-  assign \$452  = \$449  & \$451 ;
-  assign \$453  = ! idx;
-  assign \$454  = words[23] & \$453 ;
-  assign \$455  = words[22] & data1[0];
-  assign \$456  = \bit  ^ \$455 ;
-  assign \$457  = \$454  & \$456 ;
-  assign \$458  = ! idx;
-  assign \$459  = words[23] & \$458 ;
-  assign \$460  = words[22] & data1[0];
-  assign \$461  = \bit  ^ \$460 ;
-  assign \$462  = \$459  & \$461 ;
-  assign \$463  = ! idx;
-  assign \$464  = words[23] & \$463 ;
-  assign \$465  = words[22] & data1[0];
-  assign \$466  = \bit  ^ \$465 ;
-  assign \$467  = \$464  & \$466 ;
-  assign \$468  = ! idx;
-  assign \$469  = words[23] & \$468 ;
-  assign \$470  = words[22] & data1[0];
-  assign \$471  = \bit  ^ \$470 ;
-  assign \$472  = \$469  & \$471 ;
-  assign \$473  = ! idx;
-  assign \$474  = words[23] & \$473 ;
-  assign \$475  = words[22] & data1[0];
-  assign \$476  = \bit  ^ \$475 ;
-  assign \$477  = \$474  & \$476 ;
-  assign \$478  = ! idx;
-  assign \$479  = words[23] & \$478 ;
-  assign \$480  = words[22] & data1[0];
-  assign \$481  = \bit  ^ \$480 ;
-  assign \$482  = \$479  & \$481 ;
-  assign \$483  = ! idx;
-  assign \$484  = words[23] & \$483 ;
-  assign \$485  = words[22] & data1[0];
-  assign \$486  = \bit  ^ \$485 ;
-  assign \$487  = \$484  & \$486 ;
-  assign \$488  = ! idx;
-  assign \$489  = words[23] & \$488 ;
-  assign \$490  = words[22] & data1[0];
-  assign \$491  = \bit  ^ \$490 ;
-  assign \$492  = \$489  & \$491 ;
-  assign \$493  = ! idx;
-  assign \$494  = words[23] & \$493 ;
-  assign \$495  = words[22] & data1[0];
-  assign \$496  = \bit  ^ \$495 ;
-  assign \$497  = \$494  & \$496 ;
-  assign \$498  = ! idx;
-  assign \$499  = words[23] & \$498 ;
-  assign \$500  = words[22] & data1[0];
-  assign \$501  = \bit  ^ \$500 ;
-  assign \$502  = \$499  & \$501 ;
-  assign \$503  = ! idx;
-  assign \$504  = words[23] & \$503 ;
-  assign \$505  = words[22] & data1[0];
-  assign \$506  = \bit  ^ \$505 ;
-  assign \$507  = \$504  & \$506 ;
-  assign \$508  = ! idx;
-  assign \$509  = words[23] & \$508 ;
-  assign \$510  = words[22] & data1[0];
-  assign \$511  = \bit  ^ \$510 ;
-  assign \$512  = \$509  & \$511 ;
-  assign \$513  = ! idx;
-  assign \$514  = words[23] & \$513 ;
-  assign \$515  = words[22] & data1[0];
-  assign \$516  = \bit  ^ \$515 ;
-  assign \$517  = \$514  & \$516 ;
-  assign \$518  = ! idx;
-  assign \$519  = words[23] & \$518 ;
-  assign \$520  = words[22] & data1[0];
-  assign \$521  = \bit  ^ \$520 ;
-  assign \$522  = \$519  & \$521 ;
-  assign \$523  = ! idx;
-  assign \$524  = words[23] & \$523 ;
-  assign \$525  = words[22] & data1[0];
-  assign \$526  = \bit  ^ \$525 ;
-  assign \$527  = \$524  & \$526 ;
-  assign \$528  = ! idx;
-  assign \$529  = words[23] & \$528 ;
-  assign \$530  = words[22] & data1[0];
-  assign \$531  = \bit  ^ \$530 ;
-  assign \$532  = \$529  & \$531 ;
-  assign \$533  = ! idx;
-  assign \$534  = words[23] & \$533 ;
-  assign \$535  = words[22] & data1[0];
-  assign \$536  = \bit  ^ \$535 ;
-  assign \$537  = \$534  & \$536 ;
-  assign \$538  = ! idx;
-  assign \$539  = words[23] & \$538 ;
-  assign \$540  = words[22] & data1[0];
-  assign \$541  = \bit  ^ \$540 ;
-  assign \$542  = \$539  & \$541 ;
-  assign \$543  = ! idx;
-  assign \$544  = words[23] & \$543 ;
-  assign \$545  = words[22] & data1[0];
-  assign \$546  = \bit  ^ \$545 ;
-  assign \$547  = \$544  & \$546 ;
-  assign \$548  = ! idx;
-  assign \$549  = words[23] & \$548 ;
-  assign \$550  = words[22] & data1[0];
-  assign \$551  = \bit  ^ \$550 ;
-  assign \$552  = \$549  & \$551 ;
-  assign \$553  = ! idx;
-  assign \$554  = words[23] & \$553 ;
-  assign \$555  = words[22] & data1[0];
-  assign \$556  = \bit  ^ \$555 ;
-  assign \$557  = \$554  & \$556 ;
-  assign \$558  = ! idx;
-  assign \$559  = words[23] & \$558 ;
-  assign \$560  = words[22] & data1[0];
-  assign \$561  = \bit  ^ \$560 ;
-  assign \$562  = \$559  & \$561 ;
-  assign \$563  = ! idx;
-  assign \$564  = words[23] & \$563 ;
-  assign \$565  = words[22] & data1[0];
-  assign \$566  = \bit  ^ \$565 ;
-  assign \$567  = \$564  & \$566 ;
-  assign \$568  = { data1[38:0], \$367  } | { \$567 , \$562 , \$557 , \$552 , \$547 , \$542 , \$537 , \$532 , \$527 , \$522 , \$517 , \$512 , \$507 , \$502 , \$497 , \$492 , \$487 , \$482 , \$477 , \$472 , \$467 , \$462 , \$457 , \$452 , \$447 , \$442 , \$437 , \$432 , \$427 , \$422 , \$417 , \$412 , \$407 , \$402 , \$397 , \$392 , \$387 , \$382 , \$377 , \$372  };
-  assign \$569  = ~ words[18];
-  assign \$571  = in_word & \$570 ;
-  assign \$572  = idx == words[17:12];
-  assign \$573  = \$571  & \$572 ;
-  assign \$575  = in_word & \$574 ;
-  assign \$576  = idx == current[6:0];
-  assign \$577  = \$575  & \$576 ;
-  assign \$578  = in_word & in_top;
-  assign \$579  = words[10] & data0[0];
-  assign \$580  = \bit  ^ \$579 ;
+  assign \$391  = ! idx;
+  assign \$392  = words[23] & \$391 ;
+  assign \$393  = words[22] & data1[0];
+  assign \$394  = \bit  ^ \$393 ;
+  assign \$395  = \$392  & \$394 ;
+  assign \$396  = ! idx;
+  assign \$397  = words[23] & \$396 ;
+  assign \$398  = words[22] & data1[0];
+  assign \$399  = \bit  ^ \$398 ;
+  assign \$400  = \$397  & \$399 ;
+  assign \$401  = ! idx;
+  assign \$402  = words[23] & \$401 ;
+  assign \$403  = words[22] & data1[0];
+  assign \$404  = \bit  ^ \$403 ;
+  assign \$405  = \$402  & \$404 ;
+  assign \$406  = ! idx;
+  assign \$407  = words[23] & \$406 ;
+  assign \$408  = words[22] & data1[0];
+  assign \$409  = \bit  ^ \$408 ;
+  assign \$410  = \$407  & \$409 ;
+  assign \$411  = ! idx;
+  assign \$412  = words[23] & \$411 ;
+  assign \$413  = words[22] & data1[0];
+  assign \$414  = \bit  ^ \$413 ;
+  assign \$415  = \$412  & \$414 ;
+  assign \$416  = ! idx;
+  assign \$417  = words[23] & \$416 ;
+  assign \$418  = words[22] & data1[0];
+  assign \$419  = \bit  ^ \$418 ;
+  assign \$420  = \$417  & \$419 ;
+  assign \$421  = ! idx;
+  assign \$422  = words[23] & \$421 ;
+  assign \$423  = words[22] & data1[0];
+  assign \$424  = \bit  ^ \$423 ;
+  assign \$425  = \$422  & \$424 ;
+  assign \$426  = ! idx;
+  assign \$427  = words[23] & \$426 ;
+  assign \$428  = words[22] & data1[0];
+  assign \$429  = \bit  ^ \$428 ;
+  assign \$430  = \$427  & \$429 ;
+  assign \$431  = ! idx;
+  assign \$432  = words[23] & \$431 ;
+  assign \$433  = words[22] & data1[0];
+  assign \$434  = \bit  ^ \$433 ;
+  assign \$435  = \$432  & \$434 ;
+  assign \$436  = ! idx;
+  assign \$437  = words[23] & \$436 ;
+  assign \$438  = words[22] & data1[0];
+  assign \$439  = \bit  ^ \$438 ;
+  assign \$440  = \$437  & \$439 ;
+  assign \$441  = ! idx;
+  assign \$442  = words[23] & \$441 ;
+  assign \$443  = words[22] & data1[0];
+  assign \$444  = \bit  ^ \$443 ;
+  assign \$445  = \$442  & \$444 ;
+  assign \$446  = ! idx;
+  assign \$447  = words[23] & \$446 ;
+  assign \$448  = words[22] & data1[0];
+  assign \$449  = \bit  ^ \$448 ;
+  assign \$450  = \$447  & \$449 ;
+  assign \$451  = ! idx;
+  assign \$452  = words[23] & \$451 ;
+  assign \$453  = words[22] & data1[0];
+  assign \$454  = \bit  ^ \$453 ;
+  assign \$455  = \$452  & \$454 ;
+  assign \$456  = ! idx;
+  assign \$457  = words[23] & \$456 ;
+  assign \$458  = words[22] & data1[0];
+  assign \$459  = \bit  ^ \$458 ;
+  assign \$460  = \$457  & \$459 ;
+  assign \$461  = ! idx;
+  assign \$462  = words[23] & \$461 ;
+  assign \$463  = words[22] & data1[0];
+  assign \$464  = \bit  ^ \$463 ;
+  assign \$465  = \$462  & \$464 ;
+  assign \$466  = ! idx;
+  assign \$467  = words[23] & \$466 ;
+  assign \$468  = words[22] & data1[0];
+  assign \$469  = \bit  ^ \$468 ;
+  assign \$470  = \$467  & \$469 ;
+  assign \$471  = ! idx;
+  assign \$472  = words[23] & \$471 ;
+  assign \$473  = words[22] & data1[0];
+  assign \$474  = \bit  ^ \$473 ;
+  assign \$475  = \$472  & \$474 ;
+  assign \$476  = ! idx;
+  assign \$477  = words[23] & \$476 ;
+  assign \$478  = words[22] & data1[0];
+  assign \$479  = \bit  ^ \$478 ;
+  assign \$480  = \$477  & \$479 ;
+  assign \$481  = ! idx;
+  assign \$482  = words[23] & \$481 ;
+  assign \$483  = words[22] & data1[0];
+  assign \$484  = \bit  ^ \$483 ;
+  assign \$485  = \$482  & \$484 ;
+  assign \$486  = ! idx;
+  assign \$487  = words[23] & \$486 ;
+  assign \$488  = words[22] & data1[0];
+  assign \$489  = \bit  ^ \$488 ;
+  assign \$490  = \$487  & \$489 ;
+  assign \$491  = ! idx;
+  assign \$492  = words[23] & \$491 ;
+  assign \$493  = words[22] & data1[0];
+  assign \$494  = \bit  ^ \$493 ;
+  assign \$495  = \$492  & \$494 ;
+  assign \$496  = ! idx;
+  assign \$497  = words[23] & \$496 ;
+  assign \$498  = words[22] & data1[0];
+  assign \$499  = \bit  ^ \$498 ;
+  assign \$500  = \$497  & \$499 ;
+  assign \$501  = ! idx;
+  assign \$502  = words[23] & \$501 ;
+  assign \$503  = words[22] & data1[0];
+  assign \$504  = \bit  ^ \$503 ;
+  assign \$505  = \$502  & \$504 ;
+  assign \$506  = ! idx;
+  assign \$507  = words[23] & \$506 ;
+  assign \$508  = words[22] & data1[0];
+  assign \$509  = \bit  ^ \$508 ;
+  assign \$510  = \$507  & \$509 ;
+  assign \$511  = ! idx;
+  assign \$512  = words[23] & \$511 ;
+  assign \$513  = words[22] & data1[0];
+  assign \$514  = \bit  ^ \$513 ;
+  assign \$515  = \$512  & \$514 ;
+  assign \$516  = ! idx;
+  assign \$517  = words[23] & \$516 ;
+  assign \$518  = words[22] & data1[0];
+  assign \$519  = \bit  ^ \$518 ;
+  assign \$520  = \$517  & \$519 ;
+  assign \$521  = ! idx;
+  assign \$522  = words[23] & \$521 ;
+  assign \$523  = words[22] & data1[0];
+  assign \$524  = \bit  ^ \$523 ;
+  assign \$525  = \$522  & \$524 ;
+  assign \$526  = ! idx;
+  assign \$527  = words[23] & \$526 ;
+  assign \$528  = words[22] & data1[0];
+  assign \$529  = \bit  ^ \$528 ;
+  assign \$530  = \$527  & \$529 ;
+  assign \$531  = ! idx;
+  assign \$532  = words[23] & \$531 ;
+  assign \$533  = words[22] & data1[0];
+  assign \$534  = \bit  ^ \$533 ;
+  assign \$535  = \$532  & \$534 ;
+  assign \$536  = ! idx;
+  assign \$537  = words[23] & \$536 ;
+  assign \$538  = words[22] & data1[0];
+  assign \$539  = \bit  ^ \$538 ;
+  assign \$540  = \$537  & \$539 ;
+  assign \$541  = ! idx;
+  assign \$542  = words[23] & \$541 ;
+  assign \$543  = words[22] & data1[0];
+  assign \$544  = \bit  ^ \$543 ;
+  assign \$545  = \$542  & \$544 ;
+  assign \$546  = ! idx;
+  assign \$547  = words[23] & \$546 ;
+  assign \$548  = words[22] & data1[0];
+  assign \$549  = \bit  ^ \$548 ;
+  assign \$550  = \$547  & \$549 ;
+  assign \$551  = ! idx;
+  assign \$552  = words[23] & \$551 ;
+  assign \$553  = words[22] & data1[0];
+  assign \$554  = \bit  ^ \$553 ;
+  assign \$555  = \$552  & \$554 ;
+  assign \$556  = ! idx;
+  assign \$557  = words[23] & \$556 ;
+  assign \$558  = words[22] & data1[0];
+  assign \$559  = \bit  ^ \$558 ;
+  assign \$560  = \$557  & \$559 ;
+  assign \$561  = ! idx;
+  assign \$562  = words[23] & \$561 ;
+  assign \$563  = words[22] & data1[0];
+  assign \$564  = \bit  ^ \$563 ;
+  assign \$565  = \$562  & \$564 ;
+  assign \$566  = { data1[38:0], \$365  } | { \$565 , \$560 , \$555 , \$550 , \$545 , \$540 , \$535 , \$530 , \$525 , \$520 , \$515 , \$510 , \$505 , \$500 , \$495 , \$490 , \$485 , \$480 , \$475 , \$470 , \$465 , \$460 , \$455 , \$450 , \$445 , \$440 , \$435 , \$430 , \$425 , \$420 , \$415 , \$410 , \$405 , \$400 , \$395 , \$390 , \$385 , \$380 , \$375 , \$370  };
+  assign \$567  = ~ words[18];
+  assign \$569  = in_word & \$568 ;
+  assign \$570  = idx == words[17:12];
+  assign \$571  = \$569  & \$570 ;
+  assign \$573  = in_word & \$572 ;
+  assign \$574  = idx == current[6:0];
+  assign \$575  = \$573  & \$574 ;
+  assign \$576  = in_word & in_top;
+  assign \$577  = words[10] & data0[0];
+  assign \$578  = \bit  ^ \$577 ;
+  assign \$579  = crc_table_addr + 1'h1;
   always @(posedge clk)
-    done <= \$581 ;
+    done <= \$580 ;
   always @(posedge clk)
-    stopped <= \$582 ;
+    stopped <= \$581 ;
   always @(posedge clk)
-    slots <= \$583 ;
+    slots <= \$582 ;
   always @(posedge clk)
-    slots_full <= \$584 ;
+    slots_full <= \$583 ;
   always @(posedge clk)
-    idx <= \$585 ;
+    idx <= \$584 ;
   always @(posedge clk)
-    in_data <= \$586 ;
+    in_data <= \$585 ;
   always @(posedge clk)
-    in_lc <= \$587 ;
+    in_lc <= \$586 ;
   always @(posedge clk)
-    in_crc <= \$588 ;
+    in_crc <= \$587 ;
   always @(posedge clk)
-    in_top <= \$589 ;
+    in_top <= \$588 ;
   always @(posedge clk)
-    word <= \$590 ;
+    word <= \$589 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$591 ;
+    decoder_fsm_state <= \$590 ;
   always @(posedge clk)
-    started <= \$592 ;
+    started <= \$591 ;
   always @(posedge clk)
-    start_slot <= \$593 ;
+    start_slot <= \$592 ;
   always @(posedge clk)
-    cds <= \$594 ;
+    cds <= \$593 ;
   always @(posedge clk)
-    stop_bit <= \$595 ;
+    stop_bit <= \$594 ;
   always @(posedge clk)
-    data0 <= \$596 ;
+    data0 <= \$595 ;
   always @(posedge clk)
-    ne <= \$597 ;
+    ne <= \$596 ;
   always @(posedge clk)
-    nw <= \$598 ;
+    nw <= \$597 ;
   always @(posedge clk)
-    data1 <= \$599 ;
+    data1 <= \$598 ;
   always @(posedge clk)
-    lc <= \$600 ;
+    lc <= \$599 ;
   always @(posedge clk)
-    cpw_top <= \$601 ;
-  assign error_bit = ssi & \port$14184$206 [0];
+    cpw_top <= \$600 ;
+  always @(posedge clk)
+    crc_table_addr <= \$601 ;
+  assign error_bit = ssi & \port$14188$206 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -39637,383 +39660,383 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign check = in_word & in_crc;
   assign \$8  = idx == current[34:28];
   assign last = in_word & \$8 ;
-  assign \$9  = word + 1'h1;
-  assign \$10  = at_cds ? 2'h0 : \$9 ;
-  assign \$11  = ! decoder_fsm_state;
-  assign \$12  = decoder_fsm_state == 1'h1;
-  assign \$13  = decoder_fsm_state == 2'h2;
-  assign \$14  = decoder_fsm_state == 2'h3;
-  assign \$15  = decoder_fsm_state == 3'h4;
-  assign \$16  = decoder_fsm_state == 3'h5;
-  assign \$17  = decoder_fsm_state == 3'h6;
-  assign \$18  = ~ slots_full;
-  assign \$19  = sample & \$18 ;
-  assign \$20  = slots + 1'h1;
-  assign \$21  = slots == 16'hfffe;
-  assign \$22  = sample & \bit ;
-  assign \$23  = | words[5:0];
-  assign \$24  = ssi & \port$14184$206 [0];
-  assign \$26  = words[5:0] + \$25 ;
-  assign \$27  = ! \$26 ;
-  assign \$28  = ssi & \port$14184$206 [0];
-  assign \$30  = words[5:0] + \$29 ;
-  assign \$31  = | \$30 ;
-  assign \$32  = \$27  & \$31 ;
-  assign \$33  = | words[17:12];
-  assign \$34  = | words[5:0];
-  assign \$35  = ssi & \port$14184$206 [0];
-  assign \$37  = words[5:0] + \$36 ;
-  assign \$38  = ! \$37 ;
-  assign \$39  = ssi & \port$14184$206 [0];
-  assign \$41  = words[5:0] + \$40 ;
-  assign \$42  = | \$41 ;
-  assign \$43  = \$38  & \$42 ;
-  assign \$44  = | words[17:12];
-  assign \$45  = idx + 1'h1;
-  assign \$46  = idx != current[13:7];
-  assign \$47  = in_data & \$46 ;
-  assign \$48  = idx == current[20:14];
-  assign \$49  = in_lc | \$48 ;
-  assign \$50  = idx != current[27:21];
-  assign \$51  = \$49  & \$50 ;
-  assign \$52  = idx == current[27:21];
-  assign \$53  = in_crc | \$52 ;
-  assign \$54  = idx != current[34:28];
-  assign \$55  = \$53  & \$54 ;
-  assign \$56  = idx != following[13:7];
-  assign \$57  = in_top & \$56 ;
-  assign \$58  = idx == current[34:28];
-  assign \$59  = word_count - 1'h1;
-  assign \$60  = word == \$59 ;
-  assign \$61  = ssi & \port$14184$206 [2];
-  assign \$62  = word + 1'h1;
-  assign \$63  = idx + 1'h1;
-  assign \$64  = idx == current[34:28];
-  assign \$65  = ! word;
-  assign \$66  = in_word & \$65 ;
-  assign \$67  = \$66  & in_data;
-  assign \$68  = words[10] & data0[0];
-  assign \$69  = \bit  ^ \$68 ;
-  assign \$70  = ! idx;
-  assign \$71  = words[11] & \$70 ;
-  assign \$72  = words[10] & data0[0];
-  assign \$73  = \bit  ^ \$72 ;
-  assign \$74  = \$71  & \$73 ;
-  assign \$75  = ! idx;
-  assign \$76  = words[11] & \$75 ;
-  assign \$77  = words[10] & data0[0];
-  assign \$78  = \bit  ^ \$77 ;
-  assign \$79  = \$76  & \$78 ;
-  assign \$80  = ! idx;
-  assign \$81  = words[11] & \$80 ;
-  assign \$82  = words[10] & data0[0];
-  assign \$83  = \bit  ^ \$82 ;
-  assign \$84  = \$81  & \$83 ;
-  assign \$85  = ! idx;
-  assign \$86  = words[11] & \$85 ;
-  assign \$87  = words[10] & data0[0];
-  assign \$88  = \bit  ^ \$87 ;
-  assign \$89  = \$86  & \$88 ;
-  assign \$90  = ! idx;
-  assign \$91  = words[11] & \$90 ;
-  assign \$92  = words[10] & data0[0];
-  assign \$93  = \bit  ^ \$92 ;
-  assign \$94  = \$91  & \$93 ;
-  assign \$95  = ! idx;
-  assign \$96  = words[11] & \$95 ;
-  assign \$97  = words[10] & data0[0];
-  assign \$98  = \bit  ^ \$97 ;
-  assign \$99  = \$96  & \$98 ;
-  assign \$100  = ! idx;
-  assign \$101  = words[11] & \$100 ;
-  assign \$102  = words[10] & data0[0];
-  assign \$103  = \bit  ^ \$102 ;
-  assign \$104  = \$101  & \$103 ;
-  assign \$105  = ! idx;
-  assign \$106  = words[11] & \$105 ;
-  assign \$107  = words[10] & data0[0];
-  assign \$108  = \bit  ^ \$107 ;
-  assign \$109  = \$106  & \$108 ;
-  assign \$110  = ! idx;
-  assign \$111  = words[11] & \$110 ;
-  assign \$112  = words[10] & data0[0];
-  assign \$113  = \bit  ^ \$112 ;
-  assign \$114  = \$111  & \$113 ;
-  assign \$115  = ! idx;
-  assign \$116  = words[11] & \$115 ;
-  assign \$117  = words[10] & data0[0];
-  assign \$118  = \bit  ^ \$117 ;
-  assign \$119  = \$116  & \$118 ;
-  assign \$120  = ! idx;
-  assign \$121  = words[11] & \$120 ;
-  assign \$122  = words[10] & data0[0];
-  assign \$123  = \bit  ^ \$122 ;
-  assign \$124  = \$121  & \$123 ;
-  assign \$125  = ! idx;
-  assign \$126  = words[11] & \$125 ;
-  assign \$127  = words[10] & data0[0];
-  assign \$128  = \bit  ^ \$127 ;
-  assign \$129  = \$126  & \$128 ;
-  assign \$130  = ! idx;
-  assign \$131  = words[11] & \$130 ;
-  assign \$132  = words[10] & data0[0];
-  assign \$133  = \bit  ^ \$132 ;
-  assign \$134  = \$131  & \$133 ;
-  assign \$135  = ! idx;
-  assign \$136  = words[11] & \$135 ;
-  assign \$137  = words[10] & data0[0];
-  assign \$138  = \bit  ^ \$137 ;
-  assign \$139  = \$136  & \$138 ;
-  assign \$140  = ! idx;
-  assign \$141  = words[11] & \$140 ;
-  assign \$142  = words[10] & data0[0];
-  assign \$143  = \bit  ^ \$142 ;
-  assign \$144  = \$141  & \$143 ;
-  assign \$145  = ! idx;
-  assign \$146  = words[11] & \$145 ;
-  assign \$147  = words[10] & data0[0];
-  assign \$148  = \bit  ^ \$147 ;
-  assign \$149  = \$146  & \$148 ;
-  assign \$150  = ! idx;
-  assign \$151  = words[11] & \$150 ;
-  assign \$152  = words[10] & data0[0];
-  assign \$153  = \bit  ^ \$152 ;
-  assign \$154  = \$151  & \$153 ;
-  assign \$155  = ! idx;
-  assign \$156  = words[11] & \$155 ;
-  assign \$157  = words[10] & data0[0];
-  assign \$158  = \bit  ^ \$157 ;
-  assign \$159  = \$156  & \$158 ;
-  assign \$160  = ! idx;
-  assign \$161  = words[11] & \$160 ;
-  assign \$162  = words[10] & data0[0];
-  assign \$163  = \bit  ^ \$162 ;
-  assign \$164  = \$161  & \$163 ;
-  assign \$165  = ! idx;
-  assign \$166  = words[11] & \$165 ;
-  assign \$167  = words[10] & data0[0];
-  assign \$168  = \bit  ^ \$167 ;
-  assign \$169  = \$166  & \$168 ;
-  assign \$170  = ! idx;
-  assign \$171  = words[11] & \$170 ;
-  assign \$172  = words[10] & data0[0];
-  assign \$173  = \bit  ^ \$172 ;
-  assign \$174  = \$171  & \$173 ;
-  assign \$175  = ! idx;
-  assign \$176  = words[11] & \$175 ;
-  assign \$177  = words[10] & data0[0];
-  assign \$178  = \bit  ^ \$177 ;
-  assign \$179  = \$176  & \$178 ;
-  assign \$180  = ! idx;
-  assign \$181  = words[11] & \$180 ;
-  assign \$182  = words[10] & data0[0];
-  assign \$183  = \bit  ^ \$182 ;
-  assign \$184  = \$181  & \$183 ;
-  assign \$185  = ! idx;
-  assign \$186  = words[11] & \$185 ;
-  assign \$187  = words[10] & data0[0];
-  assign \$188  = \bit  ^ \$187 ;
-  assign \$189  = \$186  & \$188 ;
-  assign \$190  = ! idx;
-  assign \$191  = words[11] & \$190 ;
-  assign \$192  = words[10] & data0[0];
-  assign \$193  = \bit  ^ \$192 ;
-  assign \$194  = \$191  & \$193 ;
-  assign \$195  = ! idx;
-  assign \$196  = words[11] & \$195 ;
-  assign \$197  = words[10] & data0[0];
-  assign \$198  = \bit  ^ \$197 ;
-  assign \$199  = \$196  & \$198 ;
-  assign \$200  = ! idx;
-  assign \$201  = words[11] & \$200 ;
-  assign \$202  = words[10] & data0[0];
-  assign \$203  = \bit  ^ \$202 ;
-  assign \$204  = \$201  & \$203 ;
-  assign \$205  = ! idx;
-  assign \$206  = words[11] & \$205 ;
-  assign \$207  = words[10] & data0[0];
-  assign \$208  = \bit  ^ \$207 ;
-  assign \$209  = \$206  & \$208 ;
-  assign \$210  = ! idx;
-  assign \$211  = words[11] & \$210 ;
-  assign \$212  = words[10] & data0[0];
-  assign \$213  = \bit  ^ \$212 ;
-  assign \$214  = \$211  & \$213 ;
-  assign \$215  = ! idx;
-  assign \$216  = words[11] & \$215 ;
-  assign \$217  = words[10] & data0[0];
-  assign \$218  = \bit  ^ \$217 ;
-  assign \$219  = \$216  & \$218 ;
-  assign \$220  = ! idx;
-  assign \$221  = words[11] & \$220 ;
-  assign \$222  = words[10] & data0[0];
-  assign \$223  = \bit  ^ \$222 ;
-  assign \$224  = \$221  & \$223 ;
-  assign \$225  = ! idx;
-  assign \$226  = words[11] & \$225 ;
-  assign \$227  = words[10] & data0[0];
-  assign \$228  = \bit  ^ \$227 ;
-  assign \$229  = \$226  & \$228 ;
-  assign \$230  = ! idx;
-  assign \$231  = words[11] & \$230 ;
-  assign \$232  = words[10] & data0[0];
-  assign \$233  = \bit  ^ \$232 ;
-  assign \$234  = \$231  & \$233 ;
-  assign \$235  = ! idx;
-  assign \$236  = words[11] & \$235 ;
-  assign \$237  = words[10] & data0[0];
-  assign \$238  = \bit  ^ \$237 ;
-  assign \$239  = \$236  & \$238 ;
-  assign \$240  = ! idx;
-  assign \$241  = words[11] & \$240 ;
-  assign \$242  = words[10] & data0[0];
-  assign \$243  = \bit  ^ \$242 ;
-  assign \$244  = \$241  & \$243 ;
-  assign \$245  = ! idx;
-  assign \$246  = words[11] & \$245 ;
-  assign \$247  = words[10] & data0[0];
-  assign \$248  = \bit  ^ \$247 ;
-  assign \$249  = \$246  & \$248 ;
-  assign \$250  = ! idx;
-  assign \$251  = words[11] & \$250 ;
-  assign \$252  = words[10] & data0[0];
-  assign \$253  = \bit  ^ \$252 ;
-  assign \$254  = \$251  & \$253 ;
-  assign \$255  = ! idx;
-  assign \$256  = words[11] & \$255 ;
-  assign \$257  = words[10] & data0[0];
-  assign \$258  = \bit  ^ \$257 ;
-  assign \$259  = \$256  & \$258 ;
-  assign \$260  = ! idx;
-  assign \$261  = words[11] & \$260 ;
-  assign \$262  = words[10] & data0[0];
-  assign \$263  = \bit  ^ \$262 ;
-  assign \$264  = \$261  & \$263 ;
-  assign \$265  = ! idx;
-  assign \$266  = words[11] & \$265 ;
-  assign \$267  = words[10] & data0[0];
-  assign \$268  = \bit  ^ \$267 ;
-  assign \$269  = \$266  & \$268 ;
-  assign \$270  = ! idx;
-  assign \$271  = words[11] & \$270 ;
-  assign \$272  = words[10] & data0[0];
-  assign \$273  = \bit  ^ \$272 ;
-  assign \$274  = \$271  & \$273 ;
-  assign \$275  = ! idx;
-  assign \$276  = words[11] & \$275 ;
-  assign \$277  = words[10] & data0[0];
-  assign \$278  = \bit  ^ \$277 ;
-  assign \$279  = \$276  & \$278 ;
-  assign \$280  = ! idx;
-  assign \$281  = words[11] & \$280 ;
-  assign \$282  = words[10] & data0[0];
-  assign \$283  = \bit  ^ \$282 ;
-  assign \$284  = \$281  & \$283 ;
-  assign \$285  = ! idx;
-  assign \$286  = words[11] & \$285 ;
-  assign \$287  = words[10] & data0[0];
-  assign \$288  = \bit  ^ \$287 ;
-  assign \$289  = \$286  & \$288 ;
-  assign \$290  = ! idx;
-  assign \$291  = words[11] & \$290 ;
-  assign \$292  = words[10] & data0[0];
-  assign \$293  = \bit  ^ \$292 ;
-  assign \$294  = \$291  & \$293 ;
-  assign \$295  = ! idx;
-  assign \$296  = words[11] & \$295 ;
-  assign \$297  = words[10] & data0[0];
-  assign \$298  = \bit  ^ \$297 ;
-  assign \$299  = \$296  & \$298 ;
-  assign \$300  = ! idx;
-  assign \$301  = words[11] & \$300 ;
-  assign \$302  = words[10] & data0[0];
-  assign \$303  = \bit  ^ \$302 ;
-  assign \$304  = \$301  & \$303 ;
-  assign \$305  = ! idx;
-  assign \$306  = words[11] & \$305 ;
-  assign \$307  = words[10] & data0[0];
-  assign \$308  = \bit  ^ \$307 ;
-  assign \$309  = \$306  & \$308 ;
-  assign \$310  = ! idx;
-  assign \$311  = words[11] & \$310 ;
-  assign \$312  = words[10] & data0[0];
-  assign \$313  = \bit  ^ \$312 ;
-  assign \$314  = \$311  & \$313 ;
-  assign \$315  = ! idx;
-  assign \$316  = words[11] & \$315 ;
-  assign \$317  = words[10] & data0[0];
-  assign \$318  = \bit  ^ \$317 ;
-  assign \$319  = \$316  & \$318 ;
-  assign \$320  = ! idx;
-  assign \$321  = words[11] & \$320 ;
-  assign \$322  = words[10] & data0[0];
-  assign \$323  = \bit  ^ \$322 ;
-  assign \$324  = \$321  & \$323 ;
-  assign \$325  = ! idx;
-  assign \$326  = words[11] & \$325 ;
-  assign \$327  = words[10] & data0[0];
-  assign \$328  = \bit  ^ \$327 ;
-  assign \$329  = \$326  & \$328 ;
-  assign \$330  = ! idx;
-  assign \$331  = words[11] & \$330 ;
-  assign \$332  = words[10] & data0[0];
-  assign \$333  = \bit  ^ \$332 ;
-  assign \$334  = \$331  & \$333 ;
-  assign \$335  = ! idx;
-  assign \$336  = words[11] & \$335 ;
-  assign \$337  = words[10] & data0[0];
-  assign \$338  = \bit  ^ \$337 ;
-  assign \$339  = \$336  & \$338 ;
-  assign \$340  = ! idx;
-  assign \$341  = words[11] & \$340 ;
-  assign \$342  = words[10] & data0[0];
-  assign \$343  = \bit  ^ \$342 ;
-  assign \$344  = \$341  & \$343 ;
-  assign \$345  = { data0[53:0], \$69  } | { \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89 , \$84 , \$79 , \$74  };
-  assign \$346  = ~ words[6];
-  assign \$347  = ssi & \port$14184$206 [0];
-  assign \$348  = ~ \$347 ;
-  assign \$349  = \$346  & \$348 ;
-  assign \$350  = ! word;
-  assign \$351  = in_word & \$350 ;
-  assign \$352  = idx == words[5:0];
-  assign \$353  = \$351  & \$352 ;
-  assign \$354  = ssi & \port$14184$206 [0];
-  assign \$355  = ~ \port$14184$206 [1];
-  assign \$356  = \$354  & \$355 ;
-  assign \$357  = \bit  ^ \$356 ;
-  assign \$358  = ~ words[6];
-  assign \$359  = ! word;
-  assign \$360  = in_word & \$359 ;
-  assign \$361  = idx == current[6:0];
-  assign \$362  = \$360  & \$361 ;
-  assign \$364  = in_word & \$363 ;
-  assign \$365  = \$364  & in_data;
-  assign \$366  = words[22] & data1[0];
-  assign \$367  = \bit  ^ \$366 ;
-  assign \$368  = ! idx;
-  assign \$369  = words[23] & \$368 ;
-  assign \$370  = words[22] & data1[0];
-  assign \$371  = \bit  ^ \$370 ;
-  assign \$372  = \$369  & \$371 ;
-  assign \$373  = ! idx;
-  assign \$374  = words[23] & \$373 ;
-  assign \$375  = words[22] & data1[0];
-  assign \$376  = \bit  ^ \$375 ;
-  assign \$377  = \$374  & \$376 ;
-  assign \$378  = ! idx;
-  assign \$379  = words[23] & \$378 ;
-  assign \$380  = words[22] & data1[0];
-  assign \$381  = \bit  ^ \$380 ;
-  assign \$382  = \$379  & \$381 ;
-  assign \$383  = ! idx;
-  assign \$384  = words[23] & \$383 ;
-  assign \$385  = words[22] & data1[0];
-  assign \$386  = \bit  ^ \$385 ;
-  assign \$387  = \$384  & \$386 ;
-  assign \$388  = ! idx;
-  assign \$389  = words[23] & \$388 ;
-  assign \$390  = words[22] & data1[0];
+  assign \$9  = ! decoder_fsm_state;
+  assign \$10  = decoder_fsm_state == 1'h1;
+  assign \$11  = decoder_fsm_state == 2'h2;
+  assign \$12  = decoder_fsm_state == 2'h3;
+  assign \$13  = decoder_fsm_state == 3'h4;
+  assign \$14  = decoder_fsm_state == 3'h5;
+  assign \$15  = decoder_fsm_state == 3'h6;
+  assign \$16  = ~ slots_full;
+  assign \$17  = sample & \$16 ;
+  assign \$18  = slots + 1'h1;
+  assign \$19  = slots == 16'hfffe;
+  assign \$20  = sample & \bit ;
+  assign \$21  = | words[5:0];
+  assign \$22  = ssi & \port$14188$206 [0];
+  assign \$24  = words[5:0] + \$23 ;
+  assign \$25  = ! \$24 ;
+  assign \$26  = ssi & \port$14188$206 [0];
+  assign \$28  = words[5:0] + \$27 ;
+  assign \$29  = | \$28 ;
+  assign \$30  = \$25  & \$29 ;
+  assign \$31  = | words[17:12];
+  assign \$32  = | words[5:0];
+  assign \$33  = ssi & \port$14188$206 [0];
+  assign \$35  = words[5:0] + \$34 ;
+  assign \$36  = ! \$35 ;
+  assign \$37  = ssi & \port$14188$206 [0];
+  assign \$39  = words[5:0] + \$38 ;
+  assign \$40  = | \$39 ;
+  assign \$41  = \$36  & \$40 ;
+  assign \$42  = | words[17:12];
+  assign \$43  = idx + 1'h1;
+  assign \$44  = idx != current[13:7];
+  assign \$45  = in_data & \$44 ;
+  assign \$46  = idx == current[20:14];
+  assign \$47  = in_lc | \$46 ;
+  assign \$48  = idx != current[27:21];
+  assign \$49  = \$47  & \$48 ;
+  assign \$50  = idx == current[27:21];
+  assign \$51  = in_crc | \$50 ;
+  assign \$52  = idx != current[34:28];
+  assign \$53  = \$51  & \$52 ;
+  assign \$54  = idx != following[13:7];
+  assign \$55  = in_top & \$54 ;
+  assign \$56  = idx == current[34:28];
+  assign \$57  = word_count - 1'h1;
+  assign \$58  = word == \$57 ;
+  assign \$59  = ssi & \port$14188$206 [2];
+  assign \$60  = word + 1'h1;
+  assign \$61  = idx + 1'h1;
+  assign \$62  = idx == current[34:28];
+  assign \$63  = ! word;
+  assign \$64  = in_word & \$63 ;
+  assign \$65  = \$64  & in_data;
+  assign \$66  = words[10] & data0[0];
+  assign \$67  = \bit  ^ \$66 ;
+  assign \$68  = ! idx;
+  assign \$69  = words[11] & \$68 ;
+  assign \$70  = words[10] & data0[0];
+  assign \$71  = \bit  ^ \$70 ;
+  assign \$72  = \$69  & \$71 ;
+  assign \$73  = ! idx;
+  assign \$74  = words[11] & \$73 ;
+  assign \$75  = words[10] & data0[0];
+  assign \$76  = \bit  ^ \$75 ;
+  assign \$77  = \$74  & \$76 ;
+  assign \$78  = ! idx;
+  assign \$79  = words[11] & \$78 ;
+  assign \$80  = words[10] & data0[0];
+  assign \$81  = \bit  ^ \$80 ;
+  assign \$82  = \$79  & \$81 ;
+  assign \$83  = ! idx;
+  assign \$84  = words[11] & \$83 ;
+  assign \$85  = words[10] & data0[0];
+  assign \$86  = \bit  ^ \$85 ;
+  assign \$87  = \$84  & \$86 ;
+  assign \$88  = ! idx;
+  assign \$89  = words[11] & \$88 ;
+  assign \$90  = words[10] & data0[0];
+  assign \$91  = \bit  ^ \$90 ;
+  assign \$92  = \$89  & \$91 ;
+  assign \$93  = ! idx;
+  assign \$94  = words[11] & \$93 ;
+  assign \$95  = words[10] & data0[0];
+  assign \$96  = \bit  ^ \$95 ;
+  assign \$97  = \$94  & \$96 ;
+  assign \$98  = ! idx;
+  assign \$99  = words[11] & \$98 ;
+  assign \$100  = words[10] & data0[0];
+  assign \$101  = \bit  ^ \$100 ;
+  assign \$102  = \$99  & \$101 ;
+  assign \$103  = ! idx;
+  assign \$104  = words[11] & \$103 ;
+  assign \$105  = words[10] & data0[0];
+  assign \$106  = \bit  ^ \$105 ;
+  assign \$107  = \$104  & \$106 ;
+  assign \$108  = ! idx;
+  assign \$109  = words[11] & \$108 ;
+  assign \$110  = words[10] & data0[0];
+  assign \$111  = \bit  ^ \$110 ;
+  assign \$112  = \$109  & \$111 ;
+  assign \$113  = ! idx;
+  assign \$114  = words[11] & \$113 ;
+  assign \$115  = words[10] & data0[0];
+  assign \$116  = \bit  ^ \$115 ;
+  assign \$117  = \$114  & \$116 ;
+  assign \$118  = ! idx;
+  assign \$119  = words[11] & \$118 ;
+  assign \$120  = words[10] & data0[0];
+  assign \$121  = \bit  ^ \$120 ;
+  assign \$122  = \$119  & \$121 ;
+  assign \$123  = ! idx;
+  assign \$124  = words[11] & \$123 ;
+  assign \$125  = words[10] & data0[0];
+  assign \$126  = \bit  ^ \$125 ;
+  assign \$127  = \$124  & \$126 ;
+  assign \$128  = ! idx;
+  assign \$129  = words[11] & \$128 ;
+  assign \$130  = words[10] & data0[0];
+  assign \$131  = \bit  ^ \$130 ;
+  assign \$132  = \$129  & \$131 ;
+  assign \$133  = ! idx;
+  assign \$134  = words[11] & \$133 ;
+  assign \$135  = words[10] & data0[0];
+  assign \$136  = \bit  ^ \$135 ;
+  assign \$137  = \$134  & \$136 ;
+  assign \$138  = ! idx;
+  assign \$139  = words[11] & \$138 ;
+  assign \$140  = words[10] & data0[0];
+  assign \$141  = \bit  ^ \$140 ;
+  assign \$142  = \$139  & \$141 ;
+  assign \$143  = ! idx;
+  assign \$144  = words[11] & \$143 ;
+  assign \$145  = words[10] & data0[0];
+  assign \$146  = \bit  ^ \$145 ;
+  assign \$147  = \$144  & \$146 ;
+  assign \$148  = ! idx;
+  assign \$149  = words[11] & \$148 ;
+  assign \$150  = words[10] & data0[0];
+  assign \$151  = \bit  ^ \$150 ;
+  assign \$152  = \$149  & \$151 ;
+  assign \$153  = ! idx;
+  assign \$154  = words[11] & \$153 ;
+  assign \$155  = words[10] & data0[0];
+  assign \$156  = \bit  ^ \$155 ;
+  assign \$157  = \$154  & \$156 ;
+  assign \$158  = ! idx;
+  assign \$159  = words[11] & \$158 ;
+  assign \$160  = words[10] & data0[0];
+  assign \$161  = \bit  ^ \$160 ;
+  assign \$162  = \$159  & \$161 ;
+  assign \$163  = ! idx;
+  assign \$164  = words[11] & \$163 ;
+  assign \$165  = words[10] & data0[0];
+  assign \$166  = \bit  ^ \$165 ;
+  assign \$167  = \$164  & \$166 ;
+  assign \$168  = ! idx;
+  assign \$169  = words[11] & \$168 ;
+  assign \$170  = words[10] & data0[0];
+  assign \$171  = \bit  ^ \$170 ;
+  assign \$172  = \$169  & \$171 ;
+  assign \$173  = ! idx;
+  assign \$174  = words[11] & \$173 ;
+  assign \$175  = words[10] & data0[0];
+  assign \$176  = \bit  ^ \$175 ;
+  assign \$177  = \$174  & \$176 ;
+  assign \$178  = ! idx;
+  assign \$179  = words[11] & \$178 ;
+  assign \$180  = words[10] & data0[0];
+  assign \$181  = \bit  ^ \$180 ;
+  assign \$182  = \$179  & \$181 ;
+  assign \$183  = ! idx;
+  assign \$184  = words[11] & \$183 ;
+  assign \$185  = words[10] & data0[0];
+  assign \$186  = \bit  ^ \$185 ;
+  assign \$187  = \$184  & \$186 ;
+  assign \$188  = ! idx;
+  assign \$189  = words[11] & \$188 ;
+  assign \$190  = words[10] & data0[0];
+  assign \$191  = \bit  ^ \$190 ;
+  assign \$192  = \$189  & \$191 ;
+  assign \$193  = ! idx;
+  assign \$194  = words[11] & \$193 ;
+  assign \$195  = words[10] & data0[0];
+  assign \$196  = \bit  ^ \$195 ;
+  assign \$197  = \$194  & \$196 ;
+  assign \$198  = ! idx;
+  assign \$199  = words[11] & \$198 ;
+  assign \$200  = words[10] & data0[0];
+  assign \$201  = \bit  ^ \$200 ;
+  assign \$202  = \$199  & \$201 ;
+  assign \$203  = ! idx;
+  assign \$204  = words[11] & \$203 ;
+  assign \$205  = words[10] & data0[0];
+  assign \$206  = \bit  ^ \$205 ;
+  assign \$207  = \$204  & \$206 ;
+  assign \$208  = ! idx;
+  assign \$209  = words[11] & \$208 ;
+  assign \$210  = words[10] & data0[0];
+  assign \$211  = \bit  ^ \$210 ;
+  assign \$212  = \$209  & \$211 ;
+  assign \$213  = ! idx;
+  assign \$214  = words[11] & \$213 ;
+  assign \$215  = words[10] & data0[0];
+  assign \$216  = \bit  ^ \$215 ;
+  assign \$217  = \$214  & \$216 ;
+  assign \$218  = ! idx;
+  assign \$219  = words[11] & \$218 ;
+  assign \$220  = words[10] & data0[0];
+  assign \$221  = \bit  ^ \$220 ;
+  assign \$222  = \$219  & \$221 ;
+  assign \$223  = ! idx;
+  assign \$224  = words[11] & \$223 ;
+  assign \$225  = words[10] & data0[0];
+  assign \$226  = \bit  ^ \$225 ;
+  assign \$227  = \$224  & \$226 ;
+  assign \$228  = ! idx;
+  assign \$229  = words[11] & \$228 ;
+  assign \$230  = words[10] & data0[0];
+  assign \$231  = \bit  ^ \$230 ;
+  assign \$232  = \$229  & \$231 ;
+  assign \$233  = ! idx;
+  assign \$234  = words[11] & \$233 ;
+  assign \$235  = words[10] & data0[0];
+  assign \$236  = \bit  ^ \$235 ;
+  assign \$237  = \$234  & \$236 ;
+  assign \$238  = ! idx;
+  assign \$239  = words[11] & \$238 ;
+  assign \$240  = words[10] & data0[0];
+  assign \$241  = \bit  ^ \$240 ;
+  assign \$242  = \$239  & \$241 ;
+  assign \$243  = ! idx;
+  assign \$244  = words[11] & \$243 ;
+  assign \$245  = words[10] & data0[0];
+  assign \$246  = \bit  ^ \$245 ;
+  assign \$247  = \$244  & \$246 ;
+  assign \$248  = ! idx;
+  assign \$249  = words[11] & \$248 ;
+  assign \$250  = words[10] & data0[0];
+  assign \$251  = \bit  ^ \$250 ;
+  assign \$252  = \$249  & \$251 ;
+  assign \$253  = ! idx;
+  assign \$254  = words[11] & \$253 ;
+  assign \$255  = words[10] & data0[0];
+  assign \$256  = \bit  ^ \$255 ;
+  assign \$257  = \$254  & \$256 ;
+  assign \$258  = ! idx;
+  assign \$259  = words[11] & \$258 ;
+  assign \$260  = words[10] & data0[0];
+  assign \$261  = \bit  ^ \$260 ;
+  assign \$262  = \$259  & \$261 ;
+  assign \$263  = ! idx;
+  assign \$264  = words[11] & \$263 ;
+  assign \$265  = words[10] & data0[0];
+  assign \$266  = \bit  ^ \$265 ;
+  assign \$267  = \$264  & \$266 ;
+  assign \$268  = ! idx;
+  assign \$269  = words[11] & \$268 ;
+  assign \$270  = words[10] & data0[0];
+  assign \$271  = \bit  ^ \$270 ;
+  assign \$272  = \$269  & \$271 ;
+  assign \$273  = ! idx;
+  assign \$274  = words[11] & \$273 ;
+  assign \$275  = words[10] & data0[0];
+  assign \$276  = \bit  ^ \$275 ;
+  assign \$277  = \$274  & \$276 ;
+  assign \$278  = ! idx;
+  assign \$279  = words[11] & \$278 ;
+  assign \$280  = words[10] & data0[0];
+  assign \$281  = \bit  ^ \$280 ;
+  assign \$282  = \$279  & \$281 ;
+  assign \$283  = ! idx;
+  assign \$284  = words[11] & \$283 ;
+  assign \$285  = words[10] & data0[0];
+  assign \$286  = \bit  ^ \$285 ;
+  assign \$287  = \$284  & \$286 ;
+  assign \$288  = ! idx;
+  assign \$289  = words[11] & \$288 ;
+  assign \$290  = words[10] & data0[0];
+  assign \$291  = \bit  ^ \$290 ;
+  assign \$292  = \$289  & \$291 ;
+  assign \$293  = ! idx;
+  assign \$294  = words[11] & \$293 ;
+  assign \$295  = words[10] & data0[0];
+  assign \$296  = \bit  ^ \$295 ;
+  assign \$297  = \$294  & \$296 ;
+  assign \$298  = ! idx;
+  assign \$299  = words[11] & \$298 ;
+  assign \$300  = words[10] & data0[0];
+  assign \$301  = \bit  ^ \$300 ;
+  assign \$302  = \$299  & \$301 ;
+  assign \$303  = ! idx;
+  assign \$304  = words[11] & \$303 ;
+  assign \$305  = words[10] & data0[0];
+  assign \$306  = \bit  ^ \$305 ;
+  assign \$307  = \$304  & \$306 ;
+  assign \$308  = ! idx;
+  assign \$309  = words[11] & \$308 ;
+  assign \$310  = words[10] & data0[0];
+  assign \$311  = \bit  ^ \$310 ;
+  assign \$312  = \$309  & \$311 ;
+  assign \$313  = ! idx;
+  assign \$314  = words[11] & \$313 ;
+  assign \$315  = words[10] & data0[0];
+  assign \$316  = \bit  ^ \$315 ;
+  assign \$317  = \$314  & \$316 ;
+  assign \$318  = ! idx;
+  assign \$319  = words[11] & \$318 ;
+  assign \$320  = words[10] & data0[0];
+  assign \$321  = \bit  ^ \$320 ;
+  assign \$322  = \$319  & \$321 ;
+  assign \$323  = ! idx;
+  assign \$324  = words[11] & \$323 ;
+  assign \$325  = words[10] & data0[0];
+  assign \$326  = \bit  ^ \$325 ;
+  assign \$327  = \$324  & \$326 ;
+  assign \$328  = ! idx;
+  assign \$329  = words[11] & \$328 ;
+  assign \$330  = words[10] & data0[0];
+  assign \$331  = \bit  ^ \$330 ;
+  assign \$332  = \$329  & \$331 ;
+  assign \$333  = ! idx;
+  assign \$334  = words[11] & \$333 ;
+  assign \$335  = words[10] & data0[0];
+  assign \$336  = \bit  ^ \$335 ;
+  assign \$337  = \$334  & \$336 ;
+  assign \$338  = ! idx;
+  assign \$339  = words[11] & \$338 ;
+  assign \$340  = words[10] & data0[0];
+  assign \$341  = \bit  ^ \$340 ;
+  assign \$342  = \$339  & \$341 ;
+  assign \$343  = { data0[53:0], \$67  } | { \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72  };
+  assign \$344  = ~ words[6];
+  assign \$345  = ssi & \port$14188$206 [0];
+  assign \$346  = ~ \$345 ;
+  assign \$347  = \$344  & \$346 ;
+  assign \$348  = ! word;
+  assign \$349  = in_word & \$348 ;
+  assign \$350  = idx == words[5:0];
+  assign \$351  = \$349  & \$350 ;
+  assign \$352  = ssi & \port$14188$206 [0];
+  assign \$353  = ~ \port$14188$206 [1];
+  assign \$354  = \$352  & \$353 ;
+  assign \$355  = \bit  ^ \$354 ;
+  assign \$356  = ~ words[6];
+  assign \$357  = ! word;
+  assign \$358  = in_word & \$357 ;
+  assign \$359  = idx == current[6:0];
+  assign \$360  = \$358  & \$359 ;
+  assign \$362  = in_word & \$361 ;
+  assign \$363  = \$362  & in_data;
+  assign \$364  = words[22] & data1[0];
+  assign \$365  = \bit  ^ \$364 ;
+  assign \$366  = ! idx;
+  assign \$367  = words[23] & \$366 ;
+  assign \$368  = words[22] & data1[0];
+  assign \$369  = \bit  ^ \$368 ;
+  assign \$370  = \$367  & \$369 ;
+  assign \$371  = ! idx;
+  assign \$372  = words[23] & \$371 ;
+  assign \$373  = words[22] & data1[0];
+  assign \$374  = \bit  ^ \$373 ;
+  assign \$375  = \$372  & \$374 ;
+  assign \$376  = ! idx;
+  assign \$377  = words[23] & \$376 ;
+  assign \$378  = words[22] & data1[0];
+  assign \$379  = \bit  ^ \$378 ;
+  assign \$380  = \$377  & \$379 ;
+  assign \$381  = ! idx;
+  assign \$382  = words[23] & \$381 ;
+  assign \$383  = words[22] & data1[0];
+  assign \$384  = \bit  ^ \$383 ;
+  assign \$385  = \$382  & \$384 ;
+  assign \$386  = ! idx;
+  assign \$387  = words[23] & \$386 ;
+  assign \$388  = words[22] & data1[0];
+  assign \$389  = \bit  ^ \$388 ;
+  assign \$390  = \$387  & \$389 ;
   \biss_master_uart.ch1.core.decoder.copy  copy (
     .\bit (\bit ),
     .clk(clk),
@@ -40038,7 +40061,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
     .receiver_clear(receiver_clear),
     .rst(rst),
     .\table (\table ),
-    .table_index(\$10 [0]),
+    .table_index(crc_table_addr),
     .widths(crc_widths)
   );
   \biss_master_uart.ch1.core.decoder.field_ends  field_ends (
@@ -40145,6 +40168,42 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    \$580  = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            if (\$56 ) begin
+              if (\$58 ) begin
+                (* full_case = 32'd1 *)
+                if (\$59 ) begin
+                end else begin
+                  \$580  = 1'h1;
+                end
+              end
+            end
+          end
+      3'h3:
+          /* empty */;
+      3'h5:
+          if (sample) begin
+            if (\$62 ) begin
+              \$580  = 1'h1;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$580  = 1'h0;
+    end
+    if (rst) begin
+      \$580  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$581  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -40152,42 +40211,6 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
       3'h2:
           /* empty */;
       3'h1:
-          if (sample) begin
-            if (\$58 ) begin
-              if (\$60 ) begin
-                (* full_case = 32'd1 *)
-                if (\$61 ) begin
-                end else begin
-                  \$581  = 1'h1;
-                end
-              end
-            end
-          end
-      3'h3:
-          /* empty */;
-      3'h5:
-          if (sample) begin
-            if (\$64 ) begin
-              \$581  = 1'h1;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$581  = 1'h0;
-    end
-    if (rst) begin
-      \$581  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$582  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h1:
           /* empty */;
       3'h3:
           /* empty */;
@@ -40195,92 +40218,119 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
           /* empty */;
       3'h4:
           if (sample) begin
-            \$582  = 1'h1;
+            \$581  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$582  = 1'h0;
+      \$581  = 1'h0;
     end
     if (rst) begin
-      \$582  = 1'h0;
+      \$581  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$583  = slots;
-    if (\$19 ) begin
-      \$583  = \$20 [15:0];
+    \$582  = slots;
+    if (\$17 ) begin
+      \$582  = \$18 [15:0];
     end
     if (receiver_clear) begin
-      \$583  = 16'h0000;
+      \$582  = 16'h0000;
     end
     if (rst) begin
-      \$583  = 16'h0000;
+      \$582  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$584  = slots_full;
-    if (\$19 ) begin
-      \$584  = \$21 ;
+    \$583  = slots_full;
+    if (\$17 ) begin
+      \$583  = \$19 ;
     end
     if (receiver_clear) begin
-      \$584  = 1'h0;
+      \$583  = 1'h0;
     end
     if (rst) begin
-      \$584  = 1'h0;
+      \$583  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$585  = idx;
+    \$584  = idx;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$585  = 7'h00;
+            \$584  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$585  = 7'h00;
+            \$584  = 7'h00;
           end
       3'h1:
           if (sample) begin
-            \$585  = \$45 [6:0];
-            if (\$58 ) begin
-              \$585  = 7'h00;
+            \$584  = \$43 [6:0];
+            if (\$56 ) begin
+              \$584  = 7'h00;
             end
           end
       3'h3:
           /* empty */;
       3'h5:
           if (sample) begin
-            \$585  = \$63 [6:0];
+            \$584  = \$61 [6:0];
           end
     endcase
     if (receiver_clear) begin
-      \$585  = 7'h00;
+      \$584  = 7'h00;
     end
     if (rst) begin
-      \$585  = 7'h00;
+      \$584  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$586  = in_data;
+    \$585  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$586  = \$23 ;
+            \$585  = \$21 ;
           end
       3'h2:
           if (sample) begin
-            \$586  = \$34 ;
+            \$585  = \$32 ;
           end
       3'h1:
           if (sample) begin
-            \$586  = \$47 ;
-            if (\$58 ) begin
-              \$586  = following[35];
+            \$585  = \$45 ;
+            if (\$56 ) begin
+              \$585  = following[35];
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$585  = 1'h0;
+    end
+    if (rst) begin
+      \$585  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    \$586  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$586  = \$30 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$586  = \$41 ;
+          end
+      3'h1:
+          if (sample) begin
+            \$586  = \$49 ;
+            if (\$56 ) begin
+              \$586  = following[36];
             end
           end
     endcase
@@ -40293,22 +40343,19 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$587  = in_lc;
+    \$587  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$587  = \$32 ;
+            \$587  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$587  = \$43 ;
+            \$587  = 1'h0;
           end
       3'h1:
           if (sample) begin
-            \$587  = \$51 ;
-            if (\$58 ) begin
-              \$587  = following[36];
-            end
+            \$587  = \$53 ;
           end
     endcase
     if (receiver_clear) begin
@@ -40320,181 +40367,183 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$588  = in_crc;
+    \$588  = in_top;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$588  = 1'h0;
+            \$588  = \$31 ;
           end
       3'h2:
           if (sample) begin
-            \$588  = 1'h0;
+            \$588  = \$42 ;
           end
       3'h1:
           if (sample) begin
             \$588  = \$55 ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$588  = 1'h0;
-    end
-    if (rst) begin
-      \$588  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$589  = in_top;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$589  = \$33 ;
-          end
-      3'h2:
-          if (sample) begin
-            \$589  = \$44 ;
-          end
-      3'h1:
-          if (sample) begin
-            \$589  = \$57 ;
-            if (\$58 ) begin
-              \$589  = 1'h0;
+            if (\$56 ) begin
+              \$588  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$589  = 1'h0;
+      \$588  = 1'h0;
     end
     if (rst) begin
-      \$589  = 1'h0;
+      \$588  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$590  = word;
+    \$589  = word;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$590  = 1'h0;
+            \$589  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$590  = 1'h0;
+            \$589  = 1'h0;
           end
       3'h1:
           if (sample) begin
-            if (\$58 ) begin
+            if (\$56 ) begin
               (* full_case = 32'd1 *)
-              if (\$60 ) begin
+              if (\$58 ) begin
               end else begin
-                \$590  = \$62 [0];
+                \$589  = \$60 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$590  = 1'h0;
+      \$589  = 1'h0;
     end
     if (rst) begin
-      \$590  = 1'h0;
+      \$589  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$591  = decoder_fsm_state;
+    \$590  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$591  = 3'h1;
-          end else if (\$22 ) begin
-            \$591  = 3'h2;
+            \$590  = 3'h1;
+          end else if (\$20 ) begin
+            \$590  = 3'h2;
           end
       3'h2:
           if (sample) begin
-            \$591  = 3'h1;
+            \$590  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            if (\$58 ) begin
-              if (\$60 ) begin
+            if (\$56 ) begin
+              if (\$58 ) begin
                 (* full_case = 32'd1 *)
-                if (\$61 ) begin
-                  \$591  = 3'h3;
+                if (\$59 ) begin
+                  \$590  = 3'h3;
                 end else begin
-                  \$591  = 3'h4;
+                  \$590  = 3'h4;
                 end
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$591  = 3'h5;
+            \$590  = 3'h5;
           end
       3'h5:
           if (sample) begin
-            if (\$64 ) begin
-              \$591  = 3'h4;
+            if (\$62 ) begin
+              \$590  = 3'h4;
             end
           end
       3'h4:
           if (sample) begin
-            \$591  = 3'h6;
+            \$590  = 3'h6;
           end
     endcase
     if (receiver_clear) begin
-      \$591  = 3'h0;
+      \$590  = 3'h0;
     end
     if (rst) begin
-      \$591  = 3'h0;
+      \$590  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$592  = started;
+    \$591  = started;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-          end else if (\$22 ) begin
-            \$592  = 1'h1;
+          end else if (\$20 ) begin
+            \$591  = 1'h1;
           end
       3'h2:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$592  = 1'h1;
+            \$591  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$592  = 1'h0;
+      \$591  = 1'h0;
     end
     if (rst) begin
-      \$592  = 1'h0;
+      \$591  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$593  = start_slot;
+    \$592  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-          end else if (\$22 ) begin
-            \$593  = slots;
+          end else if (\$20 ) begin
+            \$592  = slots;
           end
     endcase
     if (receiver_clear) begin
-      \$593  = 16'h0000;
+      \$592  = 16'h0000;
     end
     if (rst) begin
-      \$593  = 16'h0000;
+      \$592  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$594  = cds;
+    \$593  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h2:
+          if (sample) begin
+            \$593  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$593  = 1'h0;
+    end
+    if (rst) begin
+      \$593  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    \$594  = stop_bit;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h4:
           if (sample) begin
             \$594  = \bit ;
           end
@@ -40508,54 +40557,49 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$595  = stop_bit;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h3:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h4:
-          if (sample) begin
-            \$595  = \bit ;
-          end
-    endcase
+    \$595  = data0;
+    if (\$65 ) begin
+      \$595  = \$343 ;
+    end
     if (receiver_clear) begin
-      \$595  = 1'h0;
+      \$595  = 55'h00000000000000;
     end
     if (rst) begin
-      \$595  = 1'h0;
+      \$595  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$596  = data0;
-    if (\$67 ) begin
-      \$596  = \$345 ;
+    \$596  = ne;
+    if (\$347 ) begin
+      \$596 [0] = 1'h1;
+    end else if (\$351 ) begin
+      \$596 [0] = \$355 ;
+    end
+    if (\$567 ) begin
+      \$596 [1] = 1'h1;
+    end else if (\$571 ) begin
+      \$596 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$596  = 55'h00000000000000;
+      \$596  = 2'h0;
     end
     if (rst) begin
-      \$596  = 55'h00000000000000;
+      \$596  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$597  = ne;
-    if (\$349 ) begin
+    \$597  = nw;
+    if (\$356 ) begin
       \$597 [0] = 1'h1;
-    end else if (\$353 ) begin
-      \$597 [0] = \$357 ;
+    end else if (\$360 ) begin
+      \$597 [0] = \bit ;
     end
-    if (\$569 ) begin
+    if (\$567 ) begin
       \$597 [1] = 1'h1;
-    end else if (\$573 ) begin
+    end else if (\$571 ) begin
+    end else if (\$575 ) begin
       \$597 [1] = \bit ;
     end
     if (receiver_clear) begin
@@ -40567,169 +40611,161 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$598  = nw;
-    if (\$358 ) begin
-      \$598 [0] = 1'h1;
-    end else if (\$362 ) begin
-      \$598 [0] = \bit ;
-    end
-    if (\$569 ) begin
-      \$598 [1] = 1'h1;
-    end else if (\$573 ) begin
-    end else if (\$577 ) begin
-      \$598 [1] = \bit ;
+    \$598  = data1;
+    if (\$363 ) begin
+      \$598  = \$566 ;
     end
     if (receiver_clear) begin
-      \$598  = 2'h0;
+      \$598  = 40'h0000000000;
     end
     if (rst) begin
-      \$598  = 2'h0;
+      \$598  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$599  = data1;
-    if (\$365 ) begin
-      \$599  = \$568 ;
-    end
-    if (receiver_clear) begin
-      \$599  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$599  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$600  = lc;
+    \$599  = lc;
     if (lc_load) begin
-      \$600  = { lc[4:0], \bit  };
+      \$599  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$600  = 6'h00;
+      \$599  = 6'h00;
     end
     if (rst) begin
-      \$600  = 6'h00;
+      \$599  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
-    \$601  = cpw_top;
-    if (\$578 ) begin
-      \$601  = { cpw_top[38:0], \$580  };
+    \$600  = cpw_top;
+    if (\$576 ) begin
+      \$600  = { cpw_top[38:0], \$578  };
     end
     if (receiver_clear) begin
-      \$601  = 40'h0000000000;
+      \$600  = 40'h0000000000;
     end
     if (rst) begin
-      \$601  = 40'h0000000000;
+      \$600  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    \$601  = crc_table_addr;
+    if (load) begin
+      \$601  = \$579 [0];
+    end
+    if (receiver_clear) begin
+      \$601  = 1'h0;
+    end
+    if (rst) begin
+      \$601  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$24 , words[7:6] })
+    casez ({ \$22 , words[7:6] })
       3'h0:
-          \$25  = 2'h0;
+          \$23  = 2'h0;
       3'h1:
-          \$25  = 2'h2;
+          \$23  = 2'h2;
       3'h2:
-          \$25  = 2'h0;
+          \$23  = 2'h0;
       3'h3:
-          \$25  = 2'h2;
+          \$23  = 2'h2;
       3'h4:
-          \$25  = 2'h1;
+          \$23  = 2'h1;
       3'h5:
-          \$25  = 2'h3;
+          \$23  = 2'h3;
       3'h6:
-          \$25  = 2'h1;
+          \$23  = 2'h1;
       3'h7:
-          \$25  = 2'h3;
+          \$23  = 2'h3;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$28 , words[7:6] })
+    casez ({ \$26 , words[7:6] })
       3'h0:
-          \$29  = 4'h0;
+          \$27  = 4'h0;
       3'h1:
-          \$29  = 4'h2;
+          \$27  = 4'h2;
       3'h2:
-          \$29  = 4'h6;
+          \$27  = 4'h6;
       3'h3:
-          \$29  = 4'h8;
+          \$27  = 4'h8;
       3'h4:
-          \$29  = 4'h1;
+          \$27  = 4'h1;
       3'h5:
-          \$29  = 4'h3;
+          \$27  = 4'h3;
       3'h6:
-          \$29  = 4'h7;
+          \$27  = 4'h7;
       3'h7:
-          \$29  = 4'h9;
+          \$27  = 4'h9;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$35 , words[7:6] })
+    casez ({ \$33 , words[7:6] })
       3'h0:
-          \$36  = 2'h0;
+          \$34  = 2'h0;
       3'h1:
-          \$36  = 2'h2;
+          \$34  = 2'h2;
       3'h2:
-          \$36  = 2'h0;
+          \$34  = 2'h0;
       3'h3:
-          \$36  = 2'h2;
+          \$34  = 2'h2;
       3'h4:
-          \$36  = 2'h1;
+          \$34  = 2'h1;
       3'h5:
-          \$36  = 2'h3;
+          \$34  = 2'h3;
       3'h6:
-          \$36  = 2'h1;
+          \$34  = 2'h1;
       3'h7:
-          \$36  = 2'h3;
+          \$34  = 2'h3;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$39 , words[7:6] })
+    casez ({ \$37 , words[7:6] })
       3'h0:
-          \$40  = 4'h0;
+          \$38  = 4'h0;
       3'h1:
-          \$40  = 4'h2;
+          \$38  = 4'h2;
       3'h2:
-          \$40  = 4'h6;
+          \$38  = 4'h6;
       3'h3:
-          \$40  = 4'h8;
+          \$38  = 4'h8;
       3'h4:
-          \$40  = 4'h1;
+          \$38  = 4'h1;
       3'h5:
-          \$40  = 4'h3;
+          \$38  = 4'h3;
       3'h6:
-          \$40  = 4'h7;
+          \$38  = 4'h7;
       3'h7:
-          \$40  = 4'h9;
+          \$38  = 4'h9;
     endcase
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$14184$206 [0];
+  assign ssi_error = \port$14188$206 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
   assign widths = crc_widths;
-  assign table_index = \$10 [0];
+  assign table_index = crc_table_addr;
   assign crc_table_data = \table ;
   assign \bit$43  = \bit ;
   assign ok = crc_ok;
   assign \index$46  = word;
-  assign load_index = \$10 [0];
-  assign ssi_double = \port$14184$206 [2];
-  assign ssi_error_low = \port$14184$206 [1];
-  assign crc_table_addr = \$10 [0];
+  assign load_index = crc_table_addr;
+  assign crc_next_word = crc_table_addr;
+  assign ssi_double = \port$14188$206 [2];
+  assign ssi_error_low = \port$14188$206 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -40788,9 +40824,9 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \following.lc_at0  = following[36];
   assign codes[3:2] = words[21:20];
   assign codes[1:0] = words[9:8];
-  assign \$363  = word;
-  assign \$570  = word;
-  assign \$574  = word;
+  assign \$361  = word;
+  assign \$568  = word;
+  assign \$572  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -40861,7 +40897,7 @@ module \biss_master_uart.ch1.core.decoder.copy (rst, first, \bit , receiver_clea
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.decoder.crc (rst, \table , load, \cover , check, last, table_index, \bit , widths, receiver_clear, codes, index, ok, clk);
+module \biss_master_uart.ch1.core.decoder.crc (rst, \table , load, \cover , check, last, \bit , widths, receiver_clear, codes, index, table_index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire \$1 ;
   wire [1:0] \$10 ;
@@ -43008,7 +43044,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.ma_stop (rst, \port$14184$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_uart.ch1.core.ma_stop (rst, \port$14188$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -43097,8 +43133,8 @@ module \biss_master_uart.ch1.core.ma_stop (rst, \port$14184$166 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$14184$166 ;
-  wire \port$14184$166 ;
+  input \port$14188$166 ;
+  wire \port$14188$166 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -43218,7 +43254,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, \port$14184$166 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$14184$166  : 1'h0;
+  assign \$13  = \$12  ? \port$14188$166  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -43386,7 +43422,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, \port$14184$166 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$14184$166 , 1'h1 };
+  assign enables = { \port$14188$166 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -45526,7 +45562,7 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$14184$193 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$14188$193 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -46109,8 +46145,8 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$14184$193 ;
-  wire [12:0] \port$14184$193 ;
+  input [12:0] \port$14188$193 ;
+  wire [12:0] \port$14188$193 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -46133,7 +46169,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$14184$193 [12:1] + 1'h1;
+  assign \$460  = \port$14188$193 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -46709,7 +46745,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$14184$193 [0]),
+    .clear_high(\port$14188$193 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -46852,7 +46888,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$14184$193 [0]) begin
+            if (\port$14188$193 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -46937,7 +46973,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$14184$193 [0]) begin
+            if (\port$14188$193 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -46976,7 +47012,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$14184$193 [12:1] };
+            \$534  = { 1'h0, \port$14188$193 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -47361,11 +47397,11 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$14184$193 [12:1] };
-  assign fixed = \port$14184$193 [0];
+  assign fixed_delay = { 1'h0, \port$14188$193 [12:1] };
+  assign fixed = \port$14188$193 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$14184$193 [0];
+  assign clear_high = \port$14188$193 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -49942,7 +49978,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$14197$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$14201$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -49984,8 +50020,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$14197$0 ;
-  wire \port$14197$0 ;
+  input \port$14201$0 ;
+  wire \port$14201$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -49999,9 +50035,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$14197$0  };
-  assign \$2  = { lc[4:0], \port$14197$0  } == last;
-  assign \$3  = { lc[4:0], \port$14197$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$14201$0  };
+  assign \$2  = { lc[4:0], \port$14201$0  } == last;
+  assign \$3  = { lc[4:0], \port$14201$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -50111,7 +50147,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$14197$0  };
+  assign lc_next = { lc[4:0], \port$14201$0  };
   assign zero = is_zero;
 endmodule
 
@@ -52908,7 +52944,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$12034$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$12036$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire \$1 ;
@@ -53080,8 +53116,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$12034$0 , 
   wire noisy;
   output passed;
   wire passed;
-  output \port$12034$0 ;
-  wire \port$12034$0 ;
+  output \port$12036$0 ;
+  wire \port$12036$0 ;
   output report;
   wire report;
   input report_frame;
@@ -53199,7 +53235,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$12034$0 , 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$12034$0  = \$2 ;
+  assign \port$12036$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

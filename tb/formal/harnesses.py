@@ -90,6 +90,7 @@ INTERNALS = {
     "decoder.crc_reg": ("signal", "crc", "reg"),                # the CrcEngine's shift register
     "decoder.crc_mismatch": ("signal", "crc", "mismatch"),      # a received CRC bit differed
     "decoder.crc_settings": ("signal", "crc", "settings"),      # the current word's CRC
+    "decoder.crc_next": ("signal", "", "crc_next_word"),        # the word the engine loads next
     "decoder.ends_current": ("signal", "field_ends", "current_ends"),      # its field ends ...
     "decoder.ends_following": ("signal", "field_ends", "following_ends"),  # ... the next word's
     "decoder.ends_pick": ("signal", "field_ends", "following_word"),  # ... the word loaded next
@@ -1240,6 +1241,15 @@ class DecoderCrcHarness(Harness):
                     m.d.comb += Assert(~(state["WORD"] & (parse.word == w))
                                        | (held == ends[w + 1]),
                                        "lemma: the following word's field ends")
+                # The word the CRC engine loads next: word 0 until the frame's words begin,
+                # then the one after the current one.
+                load_next = inside("decoder.crc_next")
+                m.d.comb += [
+                    Assert(~(state["ACK"] | state["CDS"]) | (load_next == 0),
+                           "lemma: the engine loads word 0 first"),
+                    Assert(~state["WORD"] | (load_next == (parse.word + 1)[:len(load_next)]),
+                           "lemma: the engine loads the word after the current one next"),
+                ]
                 # The word the field ends load next: word 1 until the frame's words begin
                 # (the decoder is reset before every frame), then two after the current one.
                 pick = inside("decoder.ends_pick")

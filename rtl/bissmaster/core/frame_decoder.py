@@ -347,8 +347,15 @@ class FrameDecoder(wiring.Component):
             self.crc_ok.eq(engine.ok),
         ]
         if p.words > 1:
-            m.d.comb += [engine.index.eq(s.word),
-                         engine.load_index.eq(Mux(s.at_cds, 0, s.word + 1))]
+            # The word the engine loads next: word 0 at CDS, then the one after the current
+            # word. A register counting the loads from 0 (the decoder is reset before every
+            # frame), not the decoder's state: the word's CRC settings (its code, width and
+            # the CRC table's asynchronous read) are then settled long before the load, and
+            # only the load itself comes from the sampled bit.
+            next_word = Signal(range(p.words), name="crc_next_word")
+            with m.If(engine.load):
+                m.d.sync += next_word.eq((next_word + 1)[:len(next_word)])
+            m.d.comb += [engine.index.eq(s.word), engine.load_index.eq(next_word)]
 
     def _chain_register(self, m, word, first_bit, data_bit, word_last_bit):
         """Words 2..7 through one register (``chain_data``), for the chain memory: each
