@@ -268,11 +268,13 @@ class RegisterBank(wiring.Component):
         (``waiting`` gets the block's wait flag). Returns the block's interrupt request."""
         held = frozenset() if channel is None else self.held[channel] - absent
         tables = {} if channel is None else {
-            signal: place for signal, place in self.tables[channel].items() if signal not in absent}
+            signal: place for signal, place in self.tables[channel].items()
+            if signal not in absent}
         held_regs = [reg for reg in registers
                      if not reg.window and not reg.memory
                      and not any(f.kind == Kind.PULSE for f in reg.fields)
                      and any(f.kind == Kind.CONFIG and f.signal in held for f in reg.fields)]
+        clearing = C(0)                # the tables' clear after reset (``_tables``)
         if held_regs:
             # A held write waits from its second stage until the core is idle, then acts in
             # the next clock (``go``, one clock, a flip-flop: no path from the core's state
