@@ -172,8 +172,9 @@ class RegisterBank(wiring.Component):
         if len(self.tables) != channels:
             raise ValueError(f"tables must give one mapping per channel ({channels})")
         table_members = {}
+        kinds = regmap.signals(regmap.channel) if any(self.tables) else {}
         for n, table in enumerate(self.tables):
-            kinds, signals = regmap.signals(regmap.channel), {}
+            signals = {}
             for signal, (name, entry, lsb) in table.items():
                 kind, width = kinds.get(signal, (None, 0))
                 if kind != Kind.CONFIG or signal not in self.held[n]:
