@@ -17,6 +17,7 @@ without it they are refused in one line, and the core needs nothing more.
 
 import argparse
 import importlib.util
+import re
 import sys
 from dataclasses import dataclass, field, replace
 from importlib import metadata
@@ -137,6 +138,28 @@ class Family:
 FAMILIES = {"any": None, "ice40": "iCE40"}
 
 
+#: A memory's ``initial`` block as Yosys writes it for Amaranth 0.5, whose RTLIL backend gives
+#: every memory an initial value (zeros when it is given none: ``Memory(init=[])``): every row
+#: set to zero, nothing else. A row of another value (a ROM's) does not match and stays.
+_ZERO_MEMORY_INIT = re.compile(
+    r"^  initial begin\n(?:    (?:\\\S+ |\w+)\[\d+\] = \d+'[dhb]0+;\n)+  end\n", re.M)
+
+
+def drop_zero_memory_inits(text):
+    """``text`` without its memories' all-zero ``initial`` blocks.
+
+    No block of the design reads a memory word it has not written since the last reset: each
+    memory is either cleared after reset by its block (the counter memory, the CRC table) or
+    read behind a flag that is reset (the configuration read-back's written flags, the chain
+    memory's published count), or documented as undefined until written (the access buffers,
+    docs/ports.md, "Clock and reset"). A memory keeps its contents through a reset anyway, so
+    an initial value would hold only after power-up. What the initial value does do is keep
+    Yosys's ``synth_intel_alm`` from mapping the memory to Cyclone V MLABs (it cannot
+    initialize them): with it, every memory of the bus tops became flip-flops there
+    (``axil-chain-8``: 4,840 FF, 2,494 without it; docs/performance.md, "Other families")."""
+    return _ZERO_MEMORY_INIT.sub("", text)
+
+
 def generate(params=None, name=None, top="core", family="any", **options):
     """The Verilog text of ``top`` (a :data:`TOPS` name) built from cores of ``params`` (default:
     :class:`MasterParams`), module ``name`` (default: the top's), with the top's ``options``,
@@ -144,8 +167,9 @@ def generate(params=None, name=None, top="core", family="any", **options):
     params = params or MasterParams()
     spec = TOPS[top]
     platform = Family(FAMILIES[family]) if FAMILIES[family] else None
-    body = verilog.convert(spec.build(params, **options), name=name or spec.module,
-                           platform=platform, emit_src=False)
+    body = drop_zero_memory_inits(verilog.convert(spec.build(params, **options),
+                                                  name=name or spec.module,
+                                                  platform=platform, emit_src=False))
     lines = spec.describe(**options)
     if platform:
         lines = [*lines, f"family          = {FAMILIES[family]} (--family {family})"]

@@ -1124,7 +1124,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$5312$272 (cycle[274:272]),
+    .\port$5317$272 (cycle[274:272]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(sample),
@@ -1184,7 +1184,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$5312$199 (cycle[199]),
+    .\port$5317$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -1235,7 +1235,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$5312$259 (cycle[271:259]),
+    .\port$5317$259 (cycle[271:259]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(\sample$349 ),
@@ -1258,7 +1258,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$213 ),
     .load(load),
-    .\port$5300$0 (\bit ),
+    .\port$5305$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -5657,7 +5657,7 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$5312$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs, sample, \bit , ssi, \port$5317$272 , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
@@ -6374,8 +6374,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$5312$272 ;
-  wire [2:0] \port$5312$272 ;
+  input [2:0] \port$5317$272 ;
+  wire [2:0] \port$5317$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -6685,7 +6685,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
     cpw_top <= \$600 ;
   always @(posedge clk)
     load_index <= \$601 ;
-  assign error_bit = ssi & \port$5312$272 [0];
+  assign error_bit = ssi & \port$5317$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -6714,19 +6714,19 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$19  = slots == 16'hfffe;
   assign \$20  = sample & \bit ;
   assign \$21  = | words[5:0];
-  assign \$22  = ssi & \port$5312$272 [0];
+  assign \$22  = ssi & \port$5317$272 [0];
   assign \$24  = words[5:0] + \$23 ;
   assign \$25  = ! \$24 ;
-  assign \$26  = ssi & \port$5312$272 [0];
+  assign \$26  = ssi & \port$5317$272 [0];
   assign \$28  = words[5:0] + \$27 ;
   assign \$29  = | \$28 ;
   assign \$30  = \$25  & \$29 ;
   assign \$31  = | words[17:12];
   assign \$32  = | words[5:0];
-  assign \$33  = ssi & \port$5312$272 [0];
+  assign \$33  = ssi & \port$5317$272 [0];
   assign \$35  = words[5:0] + \$34 ;
   assign \$36  = ! \$35 ;
-  assign \$37  = ssi & \port$5312$272 [0];
+  assign \$37  = ssi & \port$5317$272 [0];
   assign \$39  = words[5:0] + \$38 ;
   assign \$40  = | \$39 ;
   assign \$41  = \$36  & \$40 ;
@@ -6747,7 +6747,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$56  = idx == current[34:28];
   assign \$57  = word_count - 1'h1;
   assign \$58  = word == \$57 ;
-  assign \$59  = ssi & \port$5312$272 [2];
+  assign \$59  = ssi & \port$5317$272 [2];
   assign \$60  = word + 1'h1;
   assign \$61  = idx + 1'h1;
   assign \$62  = idx == current[34:28];
@@ -7033,15 +7033,15 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign \$342  = \$339  & \$341 ;
   assign \$343  = { data0[53:0], \$67  } | { \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72  };
   assign \$344  = ~ words[6];
-  assign \$345  = ssi & \port$5312$272 [0];
+  assign \$345  = ssi & \port$5317$272 [0];
   assign \$346  = ~ \$345 ;
   assign \$347  = \$344  & \$346 ;
   assign \$348  = ! word;
   assign \$349  = in_word & \$348 ;
   assign \$350  = idx == words[5:0];
   assign \$351  = \$349  & \$350 ;
-  assign \$352  = ssi & \port$5312$272 [0];
-  assign \$353  = ~ \port$5312$272 [1];
+  assign \$352  = ssi & \port$5317$272 [0];
+  assign \$353  = ~ \port$5317$272 [1];
   assign \$354  = \$352  & \$353 ;
   assign \$355  = \bit  ^ \$354 ;
   assign \$356  = ~ words[6];
@@ -7791,7 +7791,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$5312$272 [0];
+  assign ssi_error = \port$5317$272 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -7801,8 +7801,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, customs
   assign ok = crc_ok;
   assign \index$43  = word;
   assign crc_next_word = load_index;
-  assign ssi_double = \port$5312$272 [2];
-  assign ssi_error_low = \port$5312$272 [1];
+  assign ssi_double = \port$5317$272 [2];
+  assign ssi_error_low = \port$5317$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -10116,7 +10116,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_stop (rst, words, \port$5312$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master.ma_stop (rst, words, \port$5317$199 , ssi, ssi_error, ssi_double, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10205,8 +10205,8 @@ module \biss_master.ma_stop (rst, words, \port$5312$199 , ssi, ssi_error, ssi_do
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$5312$199 ;
-  wire \port$5312$199 ;
+  input \port$5317$199 ;
+  wire \port$5317$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -10326,7 +10326,7 @@ module \biss_master.ma_stop (rst, words, \port$5312$199 , ssi, ssi_error, ssi_do
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$5312$199  : 1'h0;
+  assign \$13  = \$12  ? \port$5317$199  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -10494,7 +10494,7 @@ module \biss_master.ma_stop (rst, words, \port$5312$199 , ssi, ssi_error, ssi_do
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$5312$199 , 1'h1 };
+  assign enables = { \port$5317$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -10819,7 +10819,11 @@ module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_se
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
-  wire [5:0] \$5 ;
+  wire [4:0] \$5 ;
+  wire \$6 ;
+  reg [3:0] \$7 ;
+  reg \$8 ;
+  wire [5:0] \$9 ;
   input [7:0] byte_received;
   wire [7:0] byte_received;
   reg [3:0] byte_received__addr;
@@ -10827,6 +10831,8 @@ module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_se
   reg [3:0] byte_received__en;
   output [7:0] byte_to_send;
   wire [7:0] byte_to_send;
+  reg [3:0] cleared = 4'h0;
+  reg clearing = 1'h1;
   input clk;
   wire clk;
   input [3:0] host_read__addr;
@@ -10855,24 +10861,6 @@ module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_se
   wire [3:0] word_to_send__addr;
   wire [31:0] word_to_send__data;
   reg [31:0] rbuf [15:0];
-  initial begin
-    rbuf[0] = 32'd0;
-    rbuf[1] = 32'd0;
-    rbuf[2] = 32'd0;
-    rbuf[3] = 32'd0;
-    rbuf[4] = 32'd0;
-    rbuf[5] = 32'd0;
-    rbuf[6] = 32'd0;
-    rbuf[7] = 32'd0;
-    rbuf[8] = 32'd0;
-    rbuf[9] = 32'd0;
-    rbuf[10] = 32'd0;
-    rbuf[11] = 32'd0;
-    rbuf[12] = 32'd0;
-    rbuf[13] = 32'd0;
-    rbuf[14] = 32'd0;
-    rbuf[15] = 32'd0;
-  end
   always @(posedge clk) begin
     if (byte_received__en[0])
       rbuf[byte_received__addr][7:0] <= byte_received__data[7:0];
@@ -10890,65 +10878,81 @@ module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_se
     end
   end
   assign rbuf_data = _0_;
-  reg [31:0] \wbuf$21  [15:0];
-  initial begin
-    \wbuf$21 [0] = 32'd0;
-    \wbuf$21 [1] = 32'd0;
-    \wbuf$21 [2] = 32'd0;
-    \wbuf$21 [3] = 32'd0;
-    \wbuf$21 [4] = 32'd0;
-    \wbuf$21 [5] = 32'd0;
-    \wbuf$21 [6] = 32'd0;
-    \wbuf$21 [7] = 32'd0;
-    \wbuf$21 [8] = 32'd0;
-    \wbuf$21 [9] = 32'd0;
-    \wbuf$21 [10] = 32'd0;
-    \wbuf$21 [11] = 32'd0;
-    \wbuf$21 [12] = 32'd0;
-    \wbuf$21 [13] = 32'd0;
-    \wbuf$21 [14] = 32'd0;
-    \wbuf$21 [15] = 32'd0;
-  end
+  reg [31:0] \wbuf$23  [15:0];
   always @(posedge clk) begin
     if (wbuf[36])
-      \wbuf$21 [wbuf[3:0]][7:0] <= wbuf[11:4];
+      \wbuf$23 [wbuf[3:0]][7:0] <= wbuf[11:4];
     if (wbuf[37])
-      \wbuf$21 [wbuf[3:0]][15:8] <= wbuf[19:12];
+      \wbuf$23 [wbuf[3:0]][15:8] <= wbuf[19:12];
     if (wbuf[38])
-      \wbuf$21 [wbuf[3:0]][23:16] <= wbuf[27:20];
+      \wbuf$23 [wbuf[3:0]][23:16] <= wbuf[27:20];
     if (wbuf[39])
-      \wbuf$21 [wbuf[3:0]][31:24] <= wbuf[35:28];
+      \wbuf$23 [wbuf[3:0]][31:24] <= wbuf[35:28];
   end
   reg [31:0] _1_;
   always @(posedge clk) begin
-    _1_ <= \wbuf$21 [index[5:2]];
+    _1_ <= \wbuf$23 [index[5:2]];
   end
   assign word_to_send__data = _1_;
-  assign \$3  = index[1:0] == 2'h2;
-  assign \$4  = index[1:0] == 2'h3;
-  assign \$5  = index[1:0] * 4'h8;
-  assign byte_to_send = word_to_send__data >> \$5 ;
+  assign \$9  = index[1:0] * 4'h8;
+  assign byte_to_send = word_to_send__data >> \$9 ;
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
+  assign \$3  = index[1:0] == 2'h2;
+  assign \$4  = index[1:0] == 2'h3;
+  assign \$5  = cleared + 1'h1;
+  assign \$6  = cleared == 4'hf;
+  always @(posedge clk)
+    cleared <= \$7 ;
+  always @(posedge clk)
+    clearing <= \$8 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     byte_received__addr = 4'h0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__addr = cleared;
+    end else if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     byte_received__data = 32'd0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__data = 32'd0;
+    end else if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     byte_received__en = 4'h0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__en = 4'hf;
+    end else if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    \$7  = cleared;
+    if (clearing) begin
+      \$7  = \$5 [3:0];
+    end
+    if (rst) begin
+      \$7  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    \$8  = clearing;
+    if (clearing) begin
+      if (\$6 ) begin
+        \$8  = 1'h0;
+      end
+    end
+    if (rst) begin
+      \$8  = 1'h1;
     end
   end
   assign host_write__addr = wbuf[3:0];
@@ -12634,7 +12638,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$5312$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$5317$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -13217,8 +13221,8 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$531
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$5312$259 ;
-  wire [12:0] \port$5312$259 ;
+  input [12:0] \port$5317$259 ;
+  wire [12:0] \port$5317$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -13241,7 +13245,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$531
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$5312$259 [12:1] + 1'h1;
+  assign \$460  = \port$5317$259 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -13817,7 +13821,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$531
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$5312$259 [0]),
+    .clear_high(\port$5317$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -13960,7 +13964,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$531
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$5312$259 [0]) begin
+            if (\port$5317$259 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -14045,7 +14049,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$531
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$5312$259 [0]) begin
+            if (\port$5317$259 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -14084,7 +14088,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$531
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$5312$259 [12:1] };
+            \$534  = { 1'h0, \port$5317$259 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -14469,11 +14473,11 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$531
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$5312$259 [12:1] };
-  assign fixed = \port$5312$259 [0];
+  assign fixed_delay = { 1'h0, \port$5317$259 [12:1] };
+  assign fixed = \port$5317$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$5312$259 [0];
+  assign clear_high = \port$5317$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -17008,7 +17012,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5300$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5305$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -17050,8 +17054,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5300$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5300$0 ;
-  wire \port$5300$0 ;
+  input \port$5305$0 ;
+  wire \port$5305$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -17065,9 +17069,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5300$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5300$0  };
-  assign \$2  = { lc[4:0], \port$5300$0  } == last;
-  assign \$3  = { lc[4:0], \port$5300$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5305$0  };
+  assign \$2  = { lc[4:0], \port$5305$0  } == last;
+  assign \$3  = { lc[4:0], \port$5305$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -17177,7 +17181,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$5300$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5300$0  };
+  assign lc_next = { lc[4:0], \port$5305$0  };
   assign zero = is_zero;
 endmodule
 

@@ -1113,12 +1113,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$13519$0 (\$10 ),
-    .\port$13530$0 (\$11 ),
-    .\port$13607$0 (\$12 ),
-    .\port$14072$0 (\$13 ),
-    .\port$14083$0 (\$14 ),
-    .\port$14160$0 (\$15 ),
+    .\port$13529$0 (\$10 ),
+    .\port$13540$0 (\$11 ),
+    .\port$13617$0 (\$12 ),
+    .\port$14088$0 (\$13 ),
+    .\port$14099$0 (\$14 ),
+    .\port$14176$0 (\$15 ),
     .\rd__addr$763 (ch0_crc_table_addr),
     .\rd__addr$929 (ch1_crc_table_addr),
     .rst(rst),
@@ -1202,9 +1202,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .crc_table_data(crc_table_data),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$13519$0 (\$10 ),
-    .\port$13530$0 (\$11 ),
-    .\port$13607$0 (\$12 ),
+    .\port$13529$0 (\$10 ),
+    .\port$13540$0 (\$11 ),
+    .\port$13617$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1277,9 +1277,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .crc_table_data(\crc_table_data$892 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$817 ),
-    .\port$14072$0 (\$13 ),
-    .\port$14083$0 (\$14 ),
-    .\port$14160$0 (\$15 ),
+    .\port$14088$0 (\$13 ),
+    .\port$14099$0 (\$14 ),
+    .\port$14176$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$481 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -2075,7 +2075,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc1_w1_crc_width, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$145 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort
 , ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed
 , ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc1_w1_crc_width, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$437 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort
-, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \rd__addr$763 , \port$13519$0 , \port$13530$0 , ch0__ca_done, \port$13607$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \rd__addr$929 , \port$14072$0 , \port$14083$0 , ch1__ca_done, \port$14160$0 , bus__r_addr);
+, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \rd__addr$763 , \port$13529$0 , \port$13540$0 , ch0__ca_done, \port$13617$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \rd__addr$929 , \port$14088$0 , \port$14099$0 , ch1__ca_done, \port$14176$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -4250,18 +4250,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$13519$0 ;
-  wire [186:0] \port$13519$0 ;
-  input [79:0] \port$13530$0 ;
-  wire [79:0] \port$13530$0 ;
-  input [9:0] \port$13607$0 ;
-  wire [9:0] \port$13607$0 ;
-  input [186:0] \port$14072$0 ;
-  wire [186:0] \port$14072$0 ;
-  input [79:0] \port$14083$0 ;
-  wire [79:0] \port$14083$0 ;
-  input [9:0] \port$14160$0 ;
-  wire [9:0] \port$14160$0 ;
+  input [186:0] \port$13529$0 ;
+  wire [186:0] \port$13529$0 ;
+  input [79:0] \port$13540$0 ;
+  wire [79:0] \port$13540$0 ;
+  input [9:0] \port$13617$0 ;
+  wire [9:0] \port$13617$0 ;
+  input [186:0] \port$14088$0 ;
+  wire [186:0] \port$14088$0 ;
+  input [79:0] \port$14099$0 ;
+  wire [79:0] \port$14099$0 ;
+  input [9:0] \port$14176$0 ;
+  wire [9:0] \port$14176$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   input \rd__addr$763 ;
@@ -4316,23 +4316,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
   reg [31:0] ch0_config_memory [14:0];
-  initial begin
-    ch0_config_memory[0] = 32'd0;
-    ch0_config_memory[1] = 32'd0;
-    ch0_config_memory[2] = 32'd0;
-    ch0_config_memory[3] = 32'd0;
-    ch0_config_memory[4] = 32'd0;
-    ch0_config_memory[5] = 32'd0;
-    ch0_config_memory[6] = 32'd0;
-    ch0_config_memory[7] = 32'd0;
-    ch0_config_memory[8] = 32'd0;
-    ch0_config_memory[9] = 32'd0;
-    ch0_config_memory[10] = 32'd0;
-    ch0_config_memory[11] = 32'd0;
-    ch0_config_memory[12] = 32'd0;
-    ch0_config_memory[13] = 32'd0;
-    ch0_config_memory[14] = 32'd0;
-  end
   always @(posedge clk) begin
     if (wr__en[0])
       ch0_config_memory[{ \$566 , \$565 , \$564 , \$563  }][7:0] <= config_memory0_write_data[7:0];
@@ -4345,10 +4328,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign rd__data = ch0_config_memory[ch0_config_read_index];
   reg [15:0] ch0_crc_table_0_table [1:0];
-  initial begin
-    ch0_crc_table_0_table[0] = 16'h0000;
-    ch0_crc_table_0_table[1] = 16'h0000;
-  end
   always @(posedge clk) begin
     if (\wr__en$762 [0])
       ch0_crc_table_0_table[\wr__addr$760 ][7:0] <= \wr__data$761 [7:0];
@@ -4357,10 +4336,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign \rd__data$776  = ch0_crc_table_0_table[\rd__addr$763 ];
   reg [15:0] ch0_crc_table_16_table [1:0];
-  initial begin
-    ch0_crc_table_16_table[0] = 16'h0000;
-    ch0_crc_table_16_table[1] = 16'h0000;
-  end
   always @(posedge clk) begin
     if (\wr__en$768 [0])
       ch0_crc_table_16_table[\wr__addr$766 ][7:0] <= \wr__data$767 [7:0];
@@ -4369,33 +4344,12 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign \rd__data$777  = ch0_crc_table_16_table[\rd__addr$763 ];
   reg [0:0] ch0_crc_table_32_table [1:0];
-  initial begin
-    ch0_crc_table_32_table[0] = 1'h0;
-    ch0_crc_table_32_table[1] = 1'h0;
-  end
   always @(posedge clk) begin
     if (\wr__en$773 )
       ch0_crc_table_32_table[\wr__addr$771 ] <= \wr__data$772 ;
   end
   assign \rd__data$778  = ch0_crc_table_32_table[\rd__addr$763 ];
   reg [31:0] ch1_config_memory [14:0];
-  initial begin
-    ch1_config_memory[0] = 32'd0;
-    ch1_config_memory[1] = 32'd0;
-    ch1_config_memory[2] = 32'd0;
-    ch1_config_memory[3] = 32'd0;
-    ch1_config_memory[4] = 32'd0;
-    ch1_config_memory[5] = 32'd0;
-    ch1_config_memory[6] = 32'd0;
-    ch1_config_memory[7] = 32'd0;
-    ch1_config_memory[8] = 32'd0;
-    ch1_config_memory[9] = 32'd0;
-    ch1_config_memory[10] = 32'd0;
-    ch1_config_memory[11] = 32'd0;
-    ch1_config_memory[12] = 32'd0;
-    ch1_config_memory[13] = 32'd0;
-    ch1_config_memory[14] = 32'd0;
-  end
   always @(posedge clk) begin
     if (\wr__en$922 [0])
       ch1_config_memory[{ \$671 , \$670 , \$669 , \$668  }][7:0] <= config_memory0_write_data[7:0];
@@ -4408,10 +4362,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign \rd__data$924  = ch1_config_memory[ch1_config_read_index];
   reg [15:0] ch1_crc_table_0_table [1:0];
-  initial begin
-    ch1_crc_table_0_table[0] = 16'h0000;
-    ch1_crc_table_0_table[1] = 16'h0000;
-  end
   always @(posedge clk) begin
     if (\wr__en$928 [0])
       ch1_crc_table_0_table[\wr__addr$926 ][7:0] <= \wr__data$927 [7:0];
@@ -4420,10 +4370,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign \rd__data$942  = ch1_crc_table_0_table[\rd__addr$929 ];
   reg [15:0] ch1_crc_table_16_table [1:0];
-  initial begin
-    ch1_crc_table_16_table[0] = 16'h0000;
-    ch1_crc_table_16_table[1] = 16'h0000;
-  end
   always @(posedge clk) begin
     if (\wr__en$934 [0])
       ch1_crc_table_16_table[\wr__addr$932 ][7:0] <= \wr__data$933 [7:0];
@@ -4432,10 +4378,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign \rd__data$943  = ch1_crc_table_16_table[\rd__addr$929 ];
   reg [0:0] ch1_crc_table_32_table [1:0];
-  initial begin
-    ch1_crc_table_32_table[0] = 1'h0;
-    ch1_crc_table_32_table[1] = 1'h0;
-  end
   always @(posedge clk) begin
     if (\wr__en$939 )
       ch1_crc_table_32_table[\wr__addr$937 ] <= \wr__data$938 ;
@@ -4609,7 +4551,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$171  = \$169  | \$170 ;
   assign \$172  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$173  = \$171  | \$172 ;
-  assign \$178  = ch0_read_select_90 ? { 2'h0, \port$13519$0 [182:177], 4'h0, \port$13519$0 [186:183], 1'h0, \port$13519$0 [176:174], 1'h0, \port$13519$0 [133:131], 3'h0, \port$13519$0 [49], \port$13519$0 [3:0] } : 32'd0;
+  assign \$178  = ch0_read_select_90 ? { 2'h0, \port$13529$0 [182:177], 4'h0, \port$13529$0 [186:183], 1'h0, \port$13529$0 [176:174], 1'h0, \port$13529$0 [133:131], 3'h0, \port$13529$0 [49], \port$13529$0 [3:0] } : 32'd0;
   assign \$179  = \$177  | \$178 ;
   assign \$180  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$181  = \$179  | \$180 ;
@@ -4625,13 +4567,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$191  = \$189  | \$190 ;
   assign \$192  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$193  = \$191  | \$192 ;
-  assign \$238  = ch0_read_select_c2 ? { 17'h00000, \port$13607$0 [9:3], 1'h0, \port$13607$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$238  = ch0_read_select_c2 ? { 17'h00000, \port$13617$0 [9:3], 1'h0, \port$13617$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$239  = \$237  | \$238 ;
-  assign \$240  = ch0_read_select_c3 ? \port$13530$0 [31:0] : 32'd0;
+  assign \$240  = ch0_read_select_c3 ? \port$13540$0 [31:0] : 32'd0;
   assign \$241  = \$239  | \$240 ;
-  assign \$242  = ch0_read_select_c4 ? \port$13530$0 [63:32] : 32'd0;
+  assign \$242  = ch0_read_select_c4 ? \port$13540$0 [63:32] : 32'd0;
   assign \$243  = \$241  | \$242 ;
-  assign \$244  = ch0_read_select_c5 ? { 16'h0000, \port$13530$0 [79:64] } : 32'd0;
+  assign \$244  = ch0_read_select_c5 ? { 16'h0000, \port$13540$0 [79:64] } : 32'd0;
   assign \$245  = \$243  | \$244 ;
   assign \$248  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$249  = \$247  | \$248 ;
@@ -4790,7 +4732,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$406  = \$404  | \$405 ;
   assign \$407  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$408  = \$406  | \$407 ;
-  assign \$413  = ch1_read_select_110 ? { 2'h0, \port$14072$0 [182:177], 4'h0, \port$14072$0 [186:183], 1'h0, \port$14072$0 [176:174], 1'h0, \port$14072$0 [133:131], 3'h0, \port$14072$0 [49], \port$14072$0 [3:0] } : 32'd0;
+  assign \$413  = ch1_read_select_110 ? { 2'h0, \port$14088$0 [182:177], 4'h0, \port$14088$0 [186:183], 1'h0, \port$14088$0 [176:174], 1'h0, \port$14088$0 [133:131], 3'h0, \port$14088$0 [49], \port$14088$0 [3:0] } : 32'd0;
   assign \$414  = \$412  | \$413 ;
   assign \$415  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$416  = \$414  | \$415 ;
@@ -4806,13 +4748,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$426  = \$424  | \$425 ;
   assign \$427  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$428  = \$426  | \$427 ;
-  assign \$473  = ch1_read_select_142 ? { 17'h00000, \port$14160$0 [9:3], 1'h0, \port$14160$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$473  = ch1_read_select_142 ? { 17'h00000, \port$14176$0 [9:3], 1'h0, \port$14176$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$474  = \$472  | \$473 ;
-  assign \$475  = ch1_read_select_143 ? \port$14083$0 [31:0] : 32'd0;
+  assign \$475  = ch1_read_select_143 ? \port$14099$0 [31:0] : 32'd0;
   assign \$476  = \$474  | \$475 ;
-  assign \$477  = ch1_read_select_144 ? \port$14083$0 [63:32] : 32'd0;
+  assign \$477  = ch1_read_select_144 ? \port$14099$0 [63:32] : 32'd0;
   assign \$478  = \$476  | \$477 ;
-  assign \$479  = ch1_read_select_145 ? { 16'h0000, \port$14083$0 [79:64] } : 32'd0;
+  assign \$479  = ch1_read_select_145 ? { 16'h0000, \port$14099$0 [79:64] } : 32'd0;
   assign \$480  = \$478  | \$479 ;
   assign \$483  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$484  = \$482  | \$483 ;
@@ -7246,7 +7188,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$856  = ch0_result_status_status_snapshot;
     if (\$157 ) begin
-      \$856  = \port$13519$0 [3:0];
+      \$856  = \port$13529$0 [3:0];
     end
     if (rst) begin
       \$856  = 4'h0;
@@ -7256,7 +7198,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$857  = ch0_result_status_cds_snapshot;
     if (\$157 ) begin
-      \$857  = \port$13519$0 [49];
+      \$857  = \port$13529$0 [49];
     end
     if (rst) begin
       \$857  = 1'h0;
@@ -7266,7 +7208,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$858  = ch0_result_status_w0_ne_snapshot;
     if (\$157 ) begin
-      \$858  = \port$13519$0 [131];
+      \$858  = \port$13529$0 [131];
     end
     if (rst) begin
       \$858  = 1'h0;
@@ -7276,7 +7218,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$859  = ch0_result_status_w0_nw_snapshot;
     if (\$157 ) begin
-      \$859  = \port$13519$0 [132];
+      \$859  = \port$13529$0 [132];
     end
     if (rst) begin
       \$859  = 1'h0;
@@ -7286,7 +7228,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$860  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$157 ) begin
-      \$860  = \port$13519$0 [133];
+      \$860  = \port$13529$0 [133];
     end
     if (rst) begin
       \$860  = 1'h0;
@@ -7296,7 +7238,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$861  = ch0_result_status_w1_ne_snapshot;
     if (\$157 ) begin
-      \$861  = \port$13519$0 [174];
+      \$861  = \port$13529$0 [174];
     end
     if (rst) begin
       \$861  = 1'h0;
@@ -7306,7 +7248,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$862  = ch0_result_status_w1_nw_snapshot;
     if (\$157 ) begin
-      \$862  = \port$13519$0 [175];
+      \$862  = \port$13529$0 [175];
     end
     if (rst) begin
       \$862  = 1'h0;
@@ -7316,7 +7258,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$863  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$157 ) begin
-      \$863  = \port$13519$0 [176];
+      \$863  = \port$13529$0 [176];
     end
     if (rst) begin
       \$863  = 1'h0;
@@ -7326,7 +7268,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$864  = ch0_result_status_lc_repeat_snapshot;
     if (\$157 ) begin
-      \$864  = \port$13519$0 [183];
+      \$864  = \port$13529$0 [183];
     end
     if (rst) begin
       \$864  = 1'h0;
@@ -7336,7 +7278,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$865  = ch0_result_status_lc_skip_snapshot;
     if (\$157 ) begin
-      \$865  = \port$13519$0 [184];
+      \$865  = \port$13529$0 [184];
     end
     if (rst) begin
       \$865  = 1'h0;
@@ -7346,7 +7288,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$866  = ch0_result_status_lc_zero_snapshot;
     if (\$157 ) begin
-      \$866  = \port$13519$0 [185];
+      \$866  = \port$13529$0 [185];
     end
     if (rst) begin
       \$866  = 1'h0;
@@ -7356,7 +7298,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$867  = ch0_result_status_spw_mismatch_snapshot;
     if (\$157 ) begin
-      \$867  = \port$13519$0 [186];
+      \$867  = \port$13529$0 [186];
     end
     if (rst) begin
       \$867  = 1'h0;
@@ -7366,7 +7308,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$868  = ch0_result_status_lc_snapshot;
     if (\$157 ) begin
-      \$868  = \port$13519$0 [182:177];
+      \$868  = \port$13529$0 [182:177];
     end
     if (rst) begin
       \$868  = 6'h00;
@@ -7386,7 +7328,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$870  = ch0_result_seq_line_delay_snapshot;
     if (\$157 ) begin
-      \$870  = \port$13519$0 [48:36];
+      \$870  = \port$13529$0 [48:36];
     end
     if (rst) begin
       \$870  = 13'h0000;
@@ -7396,7 +7338,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$871  = ch0_result_w0_lo_data_snapshot;
     if (\$157 ) begin
-      \$871  = \port$13519$0 [107:76];
+      \$871  = \port$13529$0 [107:76];
     end
     if (rst) begin
       \$871  = 32'd0;
@@ -7406,7 +7348,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$872  = ch0_result_w0_hi_data_snapshot;
     if (\$157 ) begin
-      \$872  = { 9'h000, \port$13519$0 [130:108] };
+      \$872  = { 9'h000, \port$13529$0 [130:108] };
     end
     if (rst) begin
       \$872  = 32'd0;
@@ -7416,7 +7358,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$873  = ch0_result_w1_lo_data_snapshot;
     if (\$157 ) begin
-      \$873  = \port$13519$0 [165:134];
+      \$873  = \port$13529$0 [165:134];
     end
     if (rst) begin
       \$873  = 32'd0;
@@ -7426,7 +7368,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$874  = ch0_result_w1_hi_data_snapshot;
     if (\$157 ) begin
-      \$874  = { 24'h000000, \port$13519$0 [173:166] };
+      \$874  = { 24'h000000, \port$13529$0 [173:166] };
     end
     if (rst) begin
       \$874  = 32'd0;
@@ -7436,7 +7378,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$875  = ch0_result_timestamp_time_snapshot;
     if (\$157 ) begin
-      \$875  = \port$13519$0 [35:4];
+      \$875  = \port$13529$0 [35:4];
     end
     if (rst) begin
       \$875  = 32'd0;
@@ -7446,7 +7388,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$876  = ch0_result_line_noise_events_snapshot;
     if (\$157 ) begin
-      \$876  = \port$13519$0 [53:50];
+      \$876  = \port$13529$0 [53:50];
     end
     if (rst) begin
       \$876  = 4'h0;
@@ -7456,7 +7398,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$877  = ch0_result_line_delay_settled_snapshot;
     if (\$157 ) begin
-      \$877  = \port$13519$0 [54];
+      \$877  = \port$13529$0 [54];
     end
     if (rst) begin
       \$877  = 1'h0;
@@ -7466,7 +7408,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$878  = ch0_result_line_delay_spread_snapshot;
     if (\$157 ) begin
-      \$878  = \port$13519$0 [75:68];
+      \$878  = \port$13529$0 [75:68];
     end
     if (rst) begin
       \$878  = 8'h00;
@@ -7476,7 +7418,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$879  = ch0_result_line_settled_delay_snapshot;
     if (\$157 ) begin
-      \$879  = \port$13519$0 [67:55];
+      \$879  = \port$13529$0 [67:55];
     end
     if (rst) begin
       \$879  = 13'h0000;
@@ -8772,7 +8714,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1016  = ch1_result_status_status_snapshot;
     if (\$392 ) begin
-      \$1016  = \port$14072$0 [3:0];
+      \$1016  = \port$14088$0 [3:0];
     end
     if (rst) begin
       \$1016  = 4'h0;
@@ -8782,7 +8724,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1017  = ch1_result_status_cds_snapshot;
     if (\$392 ) begin
-      \$1017  = \port$14072$0 [49];
+      \$1017  = \port$14088$0 [49];
     end
     if (rst) begin
       \$1017  = 1'h0;
@@ -8792,7 +8734,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1018  = ch1_result_status_w0_ne_snapshot;
     if (\$392 ) begin
-      \$1018  = \port$14072$0 [131];
+      \$1018  = \port$14088$0 [131];
     end
     if (rst) begin
       \$1018  = 1'h0;
@@ -8802,7 +8744,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1019  = ch1_result_status_w0_nw_snapshot;
     if (\$392 ) begin
-      \$1019  = \port$14072$0 [132];
+      \$1019  = \port$14088$0 [132];
     end
     if (rst) begin
       \$1019  = 1'h0;
@@ -8812,7 +8754,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1020  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$392 ) begin
-      \$1020  = \port$14072$0 [133];
+      \$1020  = \port$14088$0 [133];
     end
     if (rst) begin
       \$1020  = 1'h0;
@@ -8822,7 +8764,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1021  = ch1_result_status_w1_ne_snapshot;
     if (\$392 ) begin
-      \$1021  = \port$14072$0 [174];
+      \$1021  = \port$14088$0 [174];
     end
     if (rst) begin
       \$1021  = 1'h0;
@@ -8832,7 +8774,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1022  = ch1_result_status_w1_nw_snapshot;
     if (\$392 ) begin
-      \$1022  = \port$14072$0 [175];
+      \$1022  = \port$14088$0 [175];
     end
     if (rst) begin
       \$1022  = 1'h0;
@@ -8842,7 +8784,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1023  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$392 ) begin
-      \$1023  = \port$14072$0 [176];
+      \$1023  = \port$14088$0 [176];
     end
     if (rst) begin
       \$1023  = 1'h0;
@@ -8852,7 +8794,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1024  = ch1_result_status_lc_repeat_snapshot;
     if (\$392 ) begin
-      \$1024  = \port$14072$0 [183];
+      \$1024  = \port$14088$0 [183];
     end
     if (rst) begin
       \$1024  = 1'h0;
@@ -8862,7 +8804,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1025  = ch1_result_status_lc_skip_snapshot;
     if (\$392 ) begin
-      \$1025  = \port$14072$0 [184];
+      \$1025  = \port$14088$0 [184];
     end
     if (rst) begin
       \$1025  = 1'h0;
@@ -8872,7 +8814,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1026  = ch1_result_status_lc_zero_snapshot;
     if (\$392 ) begin
-      \$1026  = \port$14072$0 [185];
+      \$1026  = \port$14088$0 [185];
     end
     if (rst) begin
       \$1026  = 1'h0;
@@ -8882,7 +8824,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1027  = ch1_result_status_spw_mismatch_snapshot;
     if (\$392 ) begin
-      \$1027  = \port$14072$0 [186];
+      \$1027  = \port$14088$0 [186];
     end
     if (rst) begin
       \$1027  = 1'h0;
@@ -8892,7 +8834,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1028  = ch1_result_status_lc_snapshot;
     if (\$392 ) begin
-      \$1028  = \port$14072$0 [182:177];
+      \$1028  = \port$14088$0 [182:177];
     end
     if (rst) begin
       \$1028  = 6'h00;
@@ -8912,7 +8854,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1030  = ch1_result_seq_line_delay_snapshot;
     if (\$392 ) begin
-      \$1030  = \port$14072$0 [48:36];
+      \$1030  = \port$14088$0 [48:36];
     end
     if (rst) begin
       \$1030  = 13'h0000;
@@ -8922,7 +8864,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1031  = ch1_result_w0_lo_data_snapshot;
     if (\$392 ) begin
-      \$1031  = \port$14072$0 [107:76];
+      \$1031  = \port$14088$0 [107:76];
     end
     if (rst) begin
       \$1031  = 32'd0;
@@ -8932,7 +8874,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1032  = ch1_result_w0_hi_data_snapshot;
     if (\$392 ) begin
-      \$1032  = { 9'h000, \port$14072$0 [130:108] };
+      \$1032  = { 9'h000, \port$14088$0 [130:108] };
     end
     if (rst) begin
       \$1032  = 32'd0;
@@ -8942,7 +8884,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1033  = ch1_result_w1_lo_data_snapshot;
     if (\$392 ) begin
-      \$1033  = \port$14072$0 [165:134];
+      \$1033  = \port$14088$0 [165:134];
     end
     if (rst) begin
       \$1033  = 32'd0;
@@ -8952,7 +8894,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1034  = ch1_result_w1_hi_data_snapshot;
     if (\$392 ) begin
-      \$1034  = { 24'h000000, \port$14072$0 [173:166] };
+      \$1034  = { 24'h000000, \port$14088$0 [173:166] };
     end
     if (rst) begin
       \$1034  = 32'd0;
@@ -8962,7 +8904,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1035  = ch1_result_timestamp_time_snapshot;
     if (\$392 ) begin
-      \$1035  = \port$14072$0 [35:4];
+      \$1035  = \port$14088$0 [35:4];
     end
     if (rst) begin
       \$1035  = 32'd0;
@@ -8972,7 +8914,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1036  = ch1_result_line_noise_events_snapshot;
     if (\$392 ) begin
-      \$1036  = \port$14072$0 [53:50];
+      \$1036  = \port$14088$0 [53:50];
     end
     if (rst) begin
       \$1036  = 4'h0;
@@ -8982,7 +8924,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1037  = ch1_result_line_delay_settled_snapshot;
     if (\$392 ) begin
-      \$1037  = \port$14072$0 [54];
+      \$1037  = \port$14088$0 [54];
     end
     if (rst) begin
       \$1037  = 1'h0;
@@ -8992,7 +8934,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1038  = ch1_result_line_delay_spread_snapshot;
     if (\$392 ) begin
-      \$1038  = \port$14072$0 [75:68];
+      \$1038  = \port$14088$0 [75:68];
     end
     if (rst) begin
       \$1038  = 8'h00;
@@ -9002,7 +8944,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1039  = ch1_result_line_settled_delay_snapshot;
     if (\$392 ) begin
-      \$1039  = \port$14072$0 [67:55];
+      \$1039  = \port$14088$0 [67:55];
     end
     if (rst) begin
       \$1039  = 13'h0000;
@@ -9264,27 +9206,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$13519$0 [3:0];
-  assign ch0__cds = \port$13519$0 [49];
-  assign ch0__word0_ne = \port$13519$0 [131];
-  assign ch0__word0_nw = \port$13519$0 [132];
-  assign ch0__word0_crc_ok = \port$13519$0 [133];
-  assign ch0__word1_ne = \port$13519$0 [174];
-  assign ch0__word1_nw = \port$13519$0 [175];
-  assign ch0__word1_crc_ok = \port$13519$0 [176];
-  assign ch0__lc_repeat = \port$13519$0 [183];
-  assign ch0__lc_skip = \port$13519$0 [184];
-  assign ch0__lc_zero = \port$13519$0 [185];
-  assign ch0__spw_mismatch = \port$13519$0 [186];
-  assign ch0__lc = \port$13519$0 [182:177];
-  assign ch0__line_delay = \port$13519$0 [48:36];
-  assign ch0__word0_position = { 9'h000, \port$13519$0 [130:76] };
-  assign ch0__word1_position = { 24'h000000, \port$13519$0 [173:134] };
-  assign ch0__timestamp = \port$13519$0 [35:4];
-  assign ch0__noise_events = \port$13519$0 [53:50];
-  assign ch0__delay_settled = \port$13519$0 [54];
-  assign ch0__delay_spread = \port$13519$0 [75:68];
-  assign ch0__settled_delay = \port$13519$0 [67:55];
+  assign ch0__status = \port$13529$0 [3:0];
+  assign ch0__cds = \port$13529$0 [49];
+  assign ch0__word0_ne = \port$13529$0 [131];
+  assign ch0__word0_nw = \port$13529$0 [132];
+  assign ch0__word0_crc_ok = \port$13529$0 [133];
+  assign ch0__word1_ne = \port$13529$0 [174];
+  assign ch0__word1_nw = \port$13529$0 [175];
+  assign ch0__word1_crc_ok = \port$13529$0 [176];
+  assign ch0__lc_repeat = \port$13529$0 [183];
+  assign ch0__lc_skip = \port$13529$0 [184];
+  assign ch0__lc_zero = \port$13529$0 [185];
+  assign ch0__spw_mismatch = \port$13529$0 [186];
+  assign ch0__lc = \port$13529$0 [182:177];
+  assign ch0__line_delay = \port$13529$0 [48:36];
+  assign ch0__word0_position = { 9'h000, \port$13529$0 [130:76] };
+  assign ch0__word1_position = { 24'h000000, \port$13529$0 [173:134] };
+  assign ch0__timestamp = \port$13529$0 [35:4];
+  assign ch0__noise_events = \port$13529$0 [53:50];
+  assign ch0__delay_settled = \port$13529$0 [54];
+  assign ch0__delay_spread = \port$13529$0 [75:68];
+  assign ch0__settled_delay = \port$13529$0 [67:55];
   assign ch0__cap_data_bits_w0 = 7'h37;
   assign ch0__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9305,13 +9247,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$13607$0 [2:0];
-  assign ch0__ca_bytes_done = \port$13607$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$13530$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$13530$0 [31:16];
-  assign ch0__count_ca_refused = \port$13530$0 [47:32];
-  assign ch0__count_ca_aborted = \port$13530$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$13530$0 [79:64];
+  assign ch0__ca_status = \port$13617$0 [2:0];
+  assign ch0__ca_bytes_done = \port$13617$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$13540$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$13540$0 [31:16];
+  assign ch0__count_ca_refused = \port$13540$0 [47:32];
+  assign ch0__count_ca_aborted = \port$13540$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$13540$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9331,27 +9273,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$14072$0 [3:0];
-  assign ch1__cds = \port$14072$0 [49];
-  assign ch1__word0_ne = \port$14072$0 [131];
-  assign ch1__word0_nw = \port$14072$0 [132];
-  assign ch1__word0_crc_ok = \port$14072$0 [133];
-  assign ch1__word1_ne = \port$14072$0 [174];
-  assign ch1__word1_nw = \port$14072$0 [175];
-  assign ch1__word1_crc_ok = \port$14072$0 [176];
-  assign ch1__lc_repeat = \port$14072$0 [183];
-  assign ch1__lc_skip = \port$14072$0 [184];
-  assign ch1__lc_zero = \port$14072$0 [185];
-  assign ch1__spw_mismatch = \port$14072$0 [186];
-  assign ch1__lc = \port$14072$0 [182:177];
-  assign ch1__line_delay = \port$14072$0 [48:36];
-  assign ch1__word0_position = { 9'h000, \port$14072$0 [130:76] };
-  assign ch1__word1_position = { 24'h000000, \port$14072$0 [173:134] };
-  assign ch1__timestamp = \port$14072$0 [35:4];
-  assign ch1__noise_events = \port$14072$0 [53:50];
-  assign ch1__delay_settled = \port$14072$0 [54];
-  assign ch1__delay_spread = \port$14072$0 [75:68];
-  assign ch1__settled_delay = \port$14072$0 [67:55];
+  assign ch1__status = \port$14088$0 [3:0];
+  assign ch1__cds = \port$14088$0 [49];
+  assign ch1__word0_ne = \port$14088$0 [131];
+  assign ch1__word0_nw = \port$14088$0 [132];
+  assign ch1__word0_crc_ok = \port$14088$0 [133];
+  assign ch1__word1_ne = \port$14088$0 [174];
+  assign ch1__word1_nw = \port$14088$0 [175];
+  assign ch1__word1_crc_ok = \port$14088$0 [176];
+  assign ch1__lc_repeat = \port$14088$0 [183];
+  assign ch1__lc_skip = \port$14088$0 [184];
+  assign ch1__lc_zero = \port$14088$0 [185];
+  assign ch1__spw_mismatch = \port$14088$0 [186];
+  assign ch1__lc = \port$14088$0 [182:177];
+  assign ch1__line_delay = \port$14088$0 [48:36];
+  assign ch1__word0_position = { 9'h000, \port$14088$0 [130:76] };
+  assign ch1__word1_position = { 24'h000000, \port$14088$0 [173:134] };
+  assign ch1__timestamp = \port$14088$0 [35:4];
+  assign ch1__noise_events = \port$14088$0 [53:50];
+  assign ch1__delay_settled = \port$14088$0 [54];
+  assign ch1__delay_spread = \port$14088$0 [75:68];
+  assign ch1__settled_delay = \port$14088$0 [67:55];
   assign ch1__cap_data_bits_w0 = 7'h37;
   assign ch1__cap_data_bits_w1 = 7'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9372,13 +9314,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$14160$0 [2:0];
-  assign ch1__ca_bytes_done = \port$14160$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$14083$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$14083$0 [31:16];
-  assign ch1__count_ca_refused = \port$14083$0 [47:32];
-  assign ch1__count_ca_aborted = \port$14083$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$14083$0 [79:64];
+  assign ch1__ca_status = \port$14176$0 [2:0];
+  assign ch1__ca_bytes_done = \port$14176$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$14099$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$14099$0 [31:16];
+  assign ch1__count_ca_refused = \port$14099$0 [47:32];
+  assign ch1__count_ca_aborted = \port$14099$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$14099$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -10056,7 +9998,7 @@ endmodule
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_rbuf_en, crc_table_data, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters
 , periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable
 , cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, cfg_hold
-, regs__frame_done, regs__done_count, regs__result_updates, ma, crc_table_addr, \port$13519$0 , \port$13530$0 , regs__ca_done, \port$13607$0 , ca_rbuf_addr);
+, regs__frame_done, regs__done_count, regs__result_updates, ma, crc_table_addr, \port$13529$0 , \port$13540$0 , regs__ca_done, \port$13617$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10247,12 +10189,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$13519$0 ;
-  wire [186:0] \port$13519$0 ;
-  output [79:0] \port$13530$0 ;
-  wire [79:0] \port$13530$0 ;
-  output [9:0] \port$13607$0 ;
-  wire [9:0] \port$13607$0 ;
+  output [186:0] \port$13529$0 ;
+  wire [186:0] \port$13529$0 ;
+  output [79:0] \port$13540$0 ;
+  wire [79:0] \port$13540$0 ;
+  output [9:0] \port$13617$0 ;
+  wire [9:0] \port$13617$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10734,9 +10676,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en
   assign \cfg_hold$199  = cfg_hold;
   assign \crc_table_addr$202  = crc_table_addr;
   assign \crc_table_data$204  = crc_table_data;
-  assign \port$13519$0  = \$24 ;
-  assign \port$13530$0  = \$25 ;
-  assign \port$13607$0  = \$26 ;
+  assign \port$13529$0  = \$24 ;
+  assign \port$13540$0  = \$25 ;
+  assign \port$13617$0  = \$26 ;
   assign \crc_table_data.poly  = crc_table_data[15:0];
   assign \crc_table_data.start  = crc_table_data[31:16];
   assign \crc_table_data.inverted  = crc_table_data[32];
@@ -11782,7 +11724,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13129$206 (live[208:206]),
+    .\port$13139$206 (live[208:206]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(sample),
@@ -11843,7 +11785,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13129$166 (live[166]),
+    .\port$13139$166 (live[166]),
     .rises(rises),
     .rst(rst),
     .ssi(live[193]),
@@ -11894,7 +11836,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$58 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13129$193 (live[205:193]),
+    .\port$13139$193 (live[205:193]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -11919,7 +11861,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13142$0 (\bit ),
+    .\port$13152$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -15045,16 +14987,6 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_da
   reg [7:0] writing = 8'h00;
   reg [1:0] zero = 2'h0;
   reg [31:0] memory [7:0];
-  initial begin
-    memory[0] = 32'd0;
-    memory[1] = 32'd0;
-    memory[2] = 32'd0;
-    memory[3] = 32'd0;
-    memory[4] = 32'd0;
-    memory[5] = 32'd0;
-    memory[6] = 32'd0;
-    memory[7] = 32'd0;
-  end
   always @(posedge clk) begin
     if (write__en)
       memory[write__addr] <= { \$102 , \$85  };
@@ -16076,7 +16008,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, lc_load, ssi, \port$13129$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, lc_load, ssi, \port$13139$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_table_addr, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -16777,8 +16709,8 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13129$206 ;
-  wire [2:0] \port$13129$206 ;
+  input [2:0] \port$13139$206 ;
+  wire [2:0] \port$13139$206 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -17098,7 +17030,7 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
     cpw_top <= \$600 ;
   always @(posedge clk)
     crc_table_addr <= \$601 ;
-  assign error_bit = ssi & \port$13129$206 [0];
+  assign error_bit = ssi & \port$13139$206 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -17127,19 +17059,19 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \$19  = slots == 16'hfffe;
   assign \$20  = sample & \bit ;
   assign \$21  = | words[5:0];
-  assign \$22  = ssi & \port$13129$206 [0];
+  assign \$22  = ssi & \port$13139$206 [0];
   assign \$24  = words[5:0] + \$23 ;
   assign \$25  = ! \$24 ;
-  assign \$26  = ssi & \port$13129$206 [0];
+  assign \$26  = ssi & \port$13139$206 [0];
   assign \$28  = words[5:0] + \$27 ;
   assign \$29  = | \$28 ;
   assign \$30  = \$25  & \$29 ;
   assign \$31  = | words[17:12];
   assign \$32  = | words[5:0];
-  assign \$33  = ssi & \port$13129$206 [0];
+  assign \$33  = ssi & \port$13139$206 [0];
   assign \$35  = words[5:0] + \$34 ;
   assign \$36  = ! \$35 ;
-  assign \$37  = ssi & \port$13129$206 [0];
+  assign \$37  = ssi & \port$13139$206 [0];
   assign \$39  = words[5:0] + \$38 ;
   assign \$40  = | \$39 ;
   assign \$41  = \$36  & \$40 ;
@@ -17160,7 +17092,7 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \$56  = idx == current[34:28];
   assign \$57  = word_count - 1'h1;
   assign \$58  = word == \$57 ;
-  assign \$59  = ssi & \port$13129$206 [2];
+  assign \$59  = ssi & \port$13139$206 [2];
   assign \$60  = word + 1'h1;
   assign \$61  = idx + 1'h1;
   assign \$62  = idx == current[34:28];
@@ -17446,15 +17378,15 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \$342  = \$339  & \$341 ;
   assign \$343  = { data0[53:0], \$67  } | { \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72  };
   assign \$344  = ~ words[6];
-  assign \$345  = ssi & \port$13129$206 [0];
+  assign \$345  = ssi & \port$13139$206 [0];
   assign \$346  = ~ \$345 ;
   assign \$347  = \$344  & \$346 ;
   assign \$348  = ! word;
   assign \$349  = in_word & \$348 ;
   assign \$350  = idx == words[5:0];
   assign \$351  = \$349  & \$350 ;
-  assign \$352  = ssi & \port$13129$206 [0];
-  assign \$353  = ~ \port$13129$206 [1];
+  assign \$352  = ssi & \port$13139$206 [0];
+  assign \$353  = ~ \port$13139$206 [1];
   assign \$354  = \$352  & \$353 ;
   assign \$355  = \bit  ^ \$354 ;
   assign \$356  = ~ words[6];
@@ -18205,7 +18137,7 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13129$206 [0];
+  assign ssi_error = \port$13139$206 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -18218,8 +18150,8 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \index$46  = word;
   assign load_index = crc_table_addr;
   assign crc_next_word = crc_table_addr;
-  assign ssi_double = \port$13129$206 [2];
-  assign ssi_error_low = \port$13129$206 [1];
+  assign ssi_double = \port$13139$206 [2];
+  assign ssi_error_low = \port$13139$206 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -20498,7 +20430,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.ma_stop (rst, \port$13129$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_axil.ch0.core.ma_stop (rst, \port$13139$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20587,8 +20519,8 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13129$166 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13129$166 ;
-  wire \port$13129$166 ;
+  input \port$13139$166 ;
+  wire \port$13139$166 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20708,7 +20640,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13129$166 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13129$166  : 1'h0;
+  assign \$13  = \$12  ? \port$13139$166  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -20876,7 +20808,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13129$166 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13129$166 , 1'h1 };
+  assign enables = { \port$13139$166 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -21201,7 +21133,11 @@ module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
-  wire [5:0] \$5 ;
+  wire [4:0] \$5 ;
+  wire \$6 ;
+  reg [3:0] \$7 ;
+  reg \$8 ;
+  wire [5:0] \$9 ;
   input [7:0] byte_received;
   wire [7:0] byte_received;
   reg [3:0] byte_received__addr;
@@ -21209,6 +21145,8 @@ module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__
   reg [3:0] byte_received__en;
   output [7:0] byte_to_send;
   wire [7:0] byte_to_send;
+  reg [3:0] cleared = 4'h0;
+  reg clearing = 1'h1;
   input clk;
   wire clk;
   input [3:0] host_read__addr;
@@ -21237,24 +21175,6 @@ module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__
   wire [3:0] word_to_send__addr;
   wire [31:0] word_to_send__data;
   reg [31:0] rbuf [15:0];
-  initial begin
-    rbuf[0] = 32'd0;
-    rbuf[1] = 32'd0;
-    rbuf[2] = 32'd0;
-    rbuf[3] = 32'd0;
-    rbuf[4] = 32'd0;
-    rbuf[5] = 32'd0;
-    rbuf[6] = 32'd0;
-    rbuf[7] = 32'd0;
-    rbuf[8] = 32'd0;
-    rbuf[9] = 32'd0;
-    rbuf[10] = 32'd0;
-    rbuf[11] = 32'd0;
-    rbuf[12] = 32'd0;
-    rbuf[13] = 32'd0;
-    rbuf[14] = 32'd0;
-    rbuf[15] = 32'd0;
-  end
   always @(posedge clk) begin
     if (byte_received__en[0])
       rbuf[byte_received__addr][7:0] <= byte_received__data[7:0];
@@ -21272,65 +21192,81 @@ module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__
     end
   end
   assign rbuf_data = _0_;
-  reg [31:0] \wbuf$21  [15:0];
-  initial begin
-    \wbuf$21 [0] = 32'd0;
-    \wbuf$21 [1] = 32'd0;
-    \wbuf$21 [2] = 32'd0;
-    \wbuf$21 [3] = 32'd0;
-    \wbuf$21 [4] = 32'd0;
-    \wbuf$21 [5] = 32'd0;
-    \wbuf$21 [6] = 32'd0;
-    \wbuf$21 [7] = 32'd0;
-    \wbuf$21 [8] = 32'd0;
-    \wbuf$21 [9] = 32'd0;
-    \wbuf$21 [10] = 32'd0;
-    \wbuf$21 [11] = 32'd0;
-    \wbuf$21 [12] = 32'd0;
-    \wbuf$21 [13] = 32'd0;
-    \wbuf$21 [14] = 32'd0;
-    \wbuf$21 [15] = 32'd0;
-  end
+  reg [31:0] \wbuf$23  [15:0];
   always @(posedge clk) begin
     if (wbuf[36])
-      \wbuf$21 [wbuf[3:0]][7:0] <= wbuf[11:4];
+      \wbuf$23 [wbuf[3:0]][7:0] <= wbuf[11:4];
     if (wbuf[37])
-      \wbuf$21 [wbuf[3:0]][15:8] <= wbuf[19:12];
+      \wbuf$23 [wbuf[3:0]][15:8] <= wbuf[19:12];
     if (wbuf[38])
-      \wbuf$21 [wbuf[3:0]][23:16] <= wbuf[27:20];
+      \wbuf$23 [wbuf[3:0]][23:16] <= wbuf[27:20];
     if (wbuf[39])
-      \wbuf$21 [wbuf[3:0]][31:24] <= wbuf[35:28];
+      \wbuf$23 [wbuf[3:0]][31:24] <= wbuf[35:28];
   end
   reg [31:0] _1_;
   always @(posedge clk) begin
-    _1_ <= \wbuf$21 [index[5:2]];
+    _1_ <= \wbuf$23 [index[5:2]];
   end
   assign word_to_send__data = _1_;
-  assign \$3  = index[1:0] == 2'h2;
-  assign \$4  = index[1:0] == 2'h3;
-  assign \$5  = index[1:0] * 4'h8;
-  assign byte_to_send = word_to_send__data >> \$5 ;
+  assign \$9  = index[1:0] * 4'h8;
+  assign byte_to_send = word_to_send__data >> \$9 ;
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
+  assign \$3  = index[1:0] == 2'h2;
+  assign \$4  = index[1:0] == 2'h3;
+  assign \$5  = cleared + 1'h1;
+  assign \$6  = cleared == 4'hf;
+  always @(posedge clk)
+    cleared <= \$7 ;
+  always @(posedge clk)
+    clearing <= \$8 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     byte_received__addr = 4'h0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__addr = cleared;
+    end else if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     byte_received__data = 32'd0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__data = 32'd0;
+    end else if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     byte_received__en = 4'h0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__en = 4'hf;
+    end else if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$7  = cleared;
+    if (clearing) begin
+      \$7  = \$5 [3:0];
+    end
+    if (rst) begin
+      \$7  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$8  = clearing;
+    if (clearing) begin
+      if (\$6 ) begin
+        \$8  = 1'h0;
+      end
+    end
+    if (rst) begin
+      \$8  = 1'h1;
     end
   end
   assign host_write__addr = wbuf[3:0];
@@ -23016,7 +22952,7 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13129$193 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13139$193 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -23599,8 +23535,8 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13129$193 ;
-  wire [12:0] \port$13129$193 ;
+  input [12:0] \port$13139$193 ;
+  wire [12:0] \port$13139$193 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -23623,7 +23559,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13129$193 [12:1] + 1'h1;
+  assign \$460  = \port$13139$193 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -24199,7 +24135,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13129$193 [0]),
+    .clear_high(\port$13139$193 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -24342,7 +24278,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13129$193 [0]) begin
+            if (\port$13139$193 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -24427,7 +24363,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13129$193 [0]) begin
+            if (\port$13139$193 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -24466,7 +24402,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13129$193 [12:1] };
+            \$534  = { 1'h0, \port$13139$193 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -24851,11 +24787,11 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13129$193 [12:1] };
-  assign fixed = \port$13129$193 [0];
+  assign fixed_delay = { 1'h0, \port$13139$193 [12:1] };
+  assign fixed = \port$13139$193 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13129$193 [0];
+  assign clear_high = \port$13139$193 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -27432,7 +27368,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13142$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13152$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -27474,8 +27410,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13142$0 ;
-  wire \port$13142$0 ;
+  input \port$13152$0 ;
+  wire \port$13152$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -27489,9 +27425,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13142$0  };
-  assign \$2  = { lc[4:0], \port$13142$0  } == last;
-  assign \$3  = { lc[4:0], \port$13142$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13152$0  };
+  assign \$2  = { lc[4:0], \port$13152$0  } == last;
+  assign \$3  = { lc[4:0], \port$13152$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -27601,7 +27537,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13142$0  };
+  assign lc_next = { lc[4:0], \port$13152$0  };
   assign zero = is_zero;
 endmodule
 
@@ -30740,7 +30676,7 @@ endmodule
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_rbuf_en, crc_table_data, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters
 , periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable
 , cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, cfg_hold
-, regs__frame_done, regs__done_count, regs__result_updates, ma, crc_table_addr, \port$14072$0 , \port$14083$0 , regs__ca_done, \port$14160$0 , ca_rbuf_addr);
+, regs__frame_done, regs__done_count, regs__result_updates, ma, crc_table_addr, \port$14088$0 , \port$14099$0 , regs__ca_done, \port$14176$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -30931,12 +30867,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$14072$0 ;
-  wire [186:0] \port$14072$0 ;
-  output [79:0] \port$14083$0 ;
-  wire [79:0] \port$14083$0 ;
-  output [9:0] \port$14160$0 ;
-  wire [9:0] \port$14160$0 ;
+  output [186:0] \port$14088$0 ;
+  wire [186:0] \port$14088$0 ;
+  output [79:0] \port$14099$0 ;
+  wire [79:0] \port$14099$0 ;
+  output [9:0] \port$14176$0 ;
+  wire [9:0] \port$14176$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -31418,9 +31354,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en
   assign \cfg_hold$199  = cfg_hold;
   assign \crc_table_addr$202  = crc_table_addr;
   assign \crc_table_data$204  = crc_table_data;
-  assign \port$14072$0  = \$24 ;
-  assign \port$14083$0  = \$25 ;
-  assign \port$14160$0  = \$26 ;
+  assign \port$14088$0  = \$24 ;
+  assign \port$14099$0  = \$25 ;
+  assign \port$14176$0  = \$26 ;
   assign \crc_table_data.poly  = crc_table_data[15:0];
   assign \crc_table_data.start  = crc_table_data[31:16];
   assign \crc_table_data.inverted  = crc_table_data[32];
@@ -32466,7 +32402,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13682$206 (live[208:206]),
+    .\port$13698$206 (live[208:206]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(sample),
@@ -32527,7 +32463,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13682$166 (live[166]),
+    .\port$13698$166 (live[166]),
     .rises(rises),
     .rst(rst),
     .ssi(live[193]),
@@ -32578,7 +32514,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$58 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13682$193 (live[205:193]),
+    .\port$13698$193 (live[205:193]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -32603,7 +32539,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13695$0 (\bit ),
+    .\port$13711$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -32671,7 +32607,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$11600$0 (\$28 ),
+    .\port$11605$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -35729,16 +35665,6 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_da
   reg [7:0] writing = 8'h00;
   reg [1:0] zero = 2'h0;
   reg [31:0] memory [7:0];
-  initial begin
-    memory[0] = 32'd0;
-    memory[1] = 32'd0;
-    memory[2] = 32'd0;
-    memory[3] = 32'd0;
-    memory[4] = 32'd0;
-    memory[5] = 32'd0;
-    memory[6] = 32'd0;
-    memory[7] = 32'd0;
-  end
   always @(posedge clk) begin
     if (write__en)
       memory[write__addr] <= { \$102 , \$85  };
@@ -36760,7 +36686,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, lc_load, ssi, \port$13682$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, lc_load, ssi, \port$13698$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_table_addr, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -37461,8 +37387,8 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13682$206 ;
-  wire [2:0] \port$13682$206 ;
+  input [2:0] \port$13698$206 ;
+  wire [2:0] \port$13698$206 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -37782,7 +37708,7 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
     cpw_top <= \$600 ;
   always @(posedge clk)
     crc_table_addr <= \$601 ;
-  assign error_bit = ssi & \port$13682$206 [0];
+  assign error_bit = ssi & \port$13698$206 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -37811,19 +37737,19 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \$19  = slots == 16'hfffe;
   assign \$20  = sample & \bit ;
   assign \$21  = | words[5:0];
-  assign \$22  = ssi & \port$13682$206 [0];
+  assign \$22  = ssi & \port$13698$206 [0];
   assign \$24  = words[5:0] + \$23 ;
   assign \$25  = ! \$24 ;
-  assign \$26  = ssi & \port$13682$206 [0];
+  assign \$26  = ssi & \port$13698$206 [0];
   assign \$28  = words[5:0] + \$27 ;
   assign \$29  = | \$28 ;
   assign \$30  = \$25  & \$29 ;
   assign \$31  = | words[17:12];
   assign \$32  = | words[5:0];
-  assign \$33  = ssi & \port$13682$206 [0];
+  assign \$33  = ssi & \port$13698$206 [0];
   assign \$35  = words[5:0] + \$34 ;
   assign \$36  = ! \$35 ;
-  assign \$37  = ssi & \port$13682$206 [0];
+  assign \$37  = ssi & \port$13698$206 [0];
   assign \$39  = words[5:0] + \$38 ;
   assign \$40  = | \$39 ;
   assign \$41  = \$36  & \$40 ;
@@ -37844,7 +37770,7 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \$56  = idx == current[34:28];
   assign \$57  = word_count - 1'h1;
   assign \$58  = word == \$57 ;
-  assign \$59  = ssi & \port$13682$206 [2];
+  assign \$59  = ssi & \port$13698$206 [2];
   assign \$60  = word + 1'h1;
   assign \$61  = idx + 1'h1;
   assign \$62  = idx == current[34:28];
@@ -38130,15 +38056,15 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \$342  = \$339  & \$341 ;
   assign \$343  = { data0[53:0], \$67  } | { \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72  };
   assign \$344  = ~ words[6];
-  assign \$345  = ssi & \port$13682$206 [0];
+  assign \$345  = ssi & \port$13698$206 [0];
   assign \$346  = ~ \$345 ;
   assign \$347  = \$344  & \$346 ;
   assign \$348  = ! word;
   assign \$349  = in_word & \$348 ;
   assign \$350  = idx == words[5:0];
   assign \$351  = \$349  & \$350 ;
-  assign \$352  = ssi & \port$13682$206 [0];
-  assign \$353  = ~ \port$13682$206 [1];
+  assign \$352  = ssi & \port$13698$206 [0];
+  assign \$353  = ~ \port$13698$206 [1];
   assign \$354  = \$352  & \$353 ;
   assign \$355  = \bit  ^ \$354 ;
   assign \$356  = ~ words[6];
@@ -38889,7 +38815,7 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13682$206 [0];
+  assign ssi_error = \port$13698$206 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -38902,8 +38828,8 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \index$46  = word;
   assign load_index = crc_table_addr;
   assign crc_next_word = crc_table_addr;
-  assign ssi_double = \port$13682$206 [2];
-  assign ssi_error_low = \port$13682$206 [1];
+  assign ssi_double = \port$13698$206 [2];
+  assign ssi_error_low = \port$13698$206 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -41182,7 +41108,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.ma_stop (rst, \port$13682$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_axil.ch1.core.ma_stop (rst, \port$13698$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -41271,8 +41197,8 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13682$166 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13682$166 ;
-  wire \port$13682$166 ;
+  input \port$13698$166 ;
+  wire \port$13698$166 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -41392,7 +41318,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13682$166 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13682$166  : 1'h0;
+  assign \$13  = \$12  ? \port$13698$166  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -41560,7 +41486,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13682$166 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13682$166 , 1'h1 };
+  assign enables = { \port$13698$166 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -41885,7 +41811,11 @@ module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
-  wire [5:0] \$5 ;
+  wire [4:0] \$5 ;
+  wire \$6 ;
+  reg [3:0] \$7 ;
+  reg \$8 ;
+  wire [5:0] \$9 ;
   input [7:0] byte_received;
   wire [7:0] byte_received;
   reg [3:0] byte_received__addr;
@@ -41893,6 +41823,8 @@ module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__
   reg [3:0] byte_received__en;
   output [7:0] byte_to_send;
   wire [7:0] byte_to_send;
+  reg [3:0] cleared = 4'h0;
+  reg clearing = 1'h1;
   input clk;
   wire clk;
   input [3:0] host_read__addr;
@@ -41921,24 +41853,6 @@ module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__
   wire [3:0] word_to_send__addr;
   wire [31:0] word_to_send__data;
   reg [31:0] rbuf [15:0];
-  initial begin
-    rbuf[0] = 32'd0;
-    rbuf[1] = 32'd0;
-    rbuf[2] = 32'd0;
-    rbuf[3] = 32'd0;
-    rbuf[4] = 32'd0;
-    rbuf[5] = 32'd0;
-    rbuf[6] = 32'd0;
-    rbuf[7] = 32'd0;
-    rbuf[8] = 32'd0;
-    rbuf[9] = 32'd0;
-    rbuf[10] = 32'd0;
-    rbuf[11] = 32'd0;
-    rbuf[12] = 32'd0;
-    rbuf[13] = 32'd0;
-    rbuf[14] = 32'd0;
-    rbuf[15] = 32'd0;
-  end
   always @(posedge clk) begin
     if (byte_received__en[0])
       rbuf[byte_received__addr][7:0] <= byte_received__data[7:0];
@@ -41956,65 +41870,81 @@ module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__
     end
   end
   assign rbuf_data = _0_;
-  reg [31:0] \wbuf$21  [15:0];
-  initial begin
-    \wbuf$21 [0] = 32'd0;
-    \wbuf$21 [1] = 32'd0;
-    \wbuf$21 [2] = 32'd0;
-    \wbuf$21 [3] = 32'd0;
-    \wbuf$21 [4] = 32'd0;
-    \wbuf$21 [5] = 32'd0;
-    \wbuf$21 [6] = 32'd0;
-    \wbuf$21 [7] = 32'd0;
-    \wbuf$21 [8] = 32'd0;
-    \wbuf$21 [9] = 32'd0;
-    \wbuf$21 [10] = 32'd0;
-    \wbuf$21 [11] = 32'd0;
-    \wbuf$21 [12] = 32'd0;
-    \wbuf$21 [13] = 32'd0;
-    \wbuf$21 [14] = 32'd0;
-    \wbuf$21 [15] = 32'd0;
-  end
+  reg [31:0] \wbuf$23  [15:0];
   always @(posedge clk) begin
     if (wbuf[36])
-      \wbuf$21 [wbuf[3:0]][7:0] <= wbuf[11:4];
+      \wbuf$23 [wbuf[3:0]][7:0] <= wbuf[11:4];
     if (wbuf[37])
-      \wbuf$21 [wbuf[3:0]][15:8] <= wbuf[19:12];
+      \wbuf$23 [wbuf[3:0]][15:8] <= wbuf[19:12];
     if (wbuf[38])
-      \wbuf$21 [wbuf[3:0]][23:16] <= wbuf[27:20];
+      \wbuf$23 [wbuf[3:0]][23:16] <= wbuf[27:20];
     if (wbuf[39])
-      \wbuf$21 [wbuf[3:0]][31:24] <= wbuf[35:28];
+      \wbuf$23 [wbuf[3:0]][31:24] <= wbuf[35:28];
   end
   reg [31:0] _1_;
   always @(posedge clk) begin
-    _1_ <= \wbuf$21 [index[5:2]];
+    _1_ <= \wbuf$23 [index[5:2]];
   end
   assign word_to_send__data = _1_;
-  assign \$3  = index[1:0] == 2'h2;
-  assign \$4  = index[1:0] == 2'h3;
-  assign \$5  = index[1:0] * 4'h8;
-  assign byte_to_send = word_to_send__data >> \$5 ;
+  assign \$9  = index[1:0] * 4'h8;
+  assign byte_to_send = word_to_send__data >> \$9 ;
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
+  assign \$3  = index[1:0] == 2'h2;
+  assign \$4  = index[1:0] == 2'h3;
+  assign \$5  = cleared + 1'h1;
+  assign \$6  = cleared == 4'hf;
+  always @(posedge clk)
+    cleared <= \$7 ;
+  always @(posedge clk)
+    clearing <= \$8 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     byte_received__addr = 4'h0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__addr = cleared;
+    end else if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     byte_received__data = 32'd0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__data = 32'd0;
+    end else if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     byte_received__en = 4'h0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__en = 4'hf;
+    end else if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    \$7  = cleared;
+    if (clearing) begin
+      \$7  = \$5 [3:0];
+    end
+    if (rst) begin
+      \$7  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    \$8  = clearing;
+    if (clearing) begin
+      if (\$6 ) begin
+        \$8  = 1'h0;
+      end
+    end
+    if (rst) begin
+      \$8  = 1'h1;
     end
   end
   assign host_write__addr = wbuf[3:0];
@@ -43700,7 +43630,7 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13682$193 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13698$193 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -44283,8 +44213,8 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13682$193 ;
-  wire [12:0] \port$13682$193 ;
+  input [12:0] \port$13698$193 ;
+  wire [12:0] \port$13698$193 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -44307,7 +44237,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13682$193 [12:1] + 1'h1;
+  assign \$460  = \port$13698$193 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -44883,7 +44813,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13682$193 [0]),
+    .clear_high(\port$13698$193 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -45026,7 +44956,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13682$193 [0]) begin
+            if (\port$13698$193 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -45111,7 +45041,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13682$193 [0]) begin
+            if (\port$13698$193 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -45150,7 +45080,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13682$193 [12:1] };
+            \$534  = { 1'h0, \port$13698$193 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -45535,11 +45465,11 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13682$193 [12:1] };
-  assign fixed = \port$13682$193 [0];
+  assign fixed_delay = { 1'h0, \port$13698$193 [12:1] };
+  assign fixed = \port$13698$193 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13682$193 [0];
+  assign clear_high = \port$13698$193 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -48116,7 +48046,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13695$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13711$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -48158,8 +48088,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13695$0 ;
-  wire \port$13695$0 ;
+  input \port$13711$0 ;
+  wire \port$13711$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -48173,9 +48103,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13695$0  };
-  assign \$2  = { lc[4:0], \port$13695$0  } == last;
-  assign \$3  = { lc[4:0], \port$13695$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13711$0  };
+  assign \$2  = { lc[4:0], \port$13711$0  } == last;
+  assign \$3  = { lc[4:0], \port$13711$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -48285,7 +48215,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13695$0  };
+  assign lc_next = { lc[4:0], \port$13711$0  };
   assign zero = is_zero;
 endmodule
 
@@ -51082,7 +51012,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11600$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11605$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -51254,8 +51184,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11600$0 , 
   wire noisy;
   output passed;
   wire passed;
-  output \port$11600$0 ;
-  wire \port$11600$0 ;
+  output \port$11605$0 ;
+  wire \port$11605$0 ;
   output report;
   wire report;
   input report_frame;
@@ -51373,7 +51303,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11600$0 , 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$11600$0  = \$2 ;
+  assign \port$11605$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

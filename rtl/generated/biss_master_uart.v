@@ -1068,12 +1068,12 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$14025$0 (\$10 ),
-    .\port$14036$0 (\$11 ),
-    .\port$14113$0 (\$12 ),
-    .\port$14578$0 (\$13 ),
-    .\port$14589$0 (\$14 ),
-    .\port$14666$0 (\$15 ),
+    .\port$14035$0 (\$10 ),
+    .\port$14046$0 (\$11 ),
+    .\port$14123$0 (\$12 ),
+    .\port$14594$0 (\$13 ),
+    .\port$14605$0 (\$14 ),
+    .\port$14682$0 (\$15 ),
     .\rd__addr$763 (ch0_crc_table_addr),
     .\rd__addr$929 (ch1_crc_table_addr),
     .rst(rst),
@@ -1145,9 +1145,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .crc_table_data(crc_table_data),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$14025$0 (\$10 ),
-    .\port$14036$0 (\$11 ),
-    .\port$14113$0 (\$12 ),
+    .\port$14035$0 (\$10 ),
+    .\port$14046$0 (\$11 ),
+    .\port$14123$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1220,9 +1220,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .crc_table_data(\crc_table_data$862 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$787 ),
-    .\port$14578$0 (\$13 ),
-    .\port$14589$0 (\$14 ),
-    .\port$14666$0 (\$15 ),
+    .\port$14594$0 (\$13 ),
+    .\port$14605$0 (\$14 ),
+    .\port$14682$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$451 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -2000,7 +2000,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
 , ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc1_w1_crc_width, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$145 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
 , ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
 , ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc1_w1_crc_width, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$437 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, cfg_hold
-, ch0__frame_done, ch0__done_count, ch0__result_updates, \rd__addr$763 , \port$14025$0 , \port$14036$0 , ch0__ca_done, \port$14113$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \rd__addr$929 , \port$14578$0 , \port$14589$0 , ch1__ca_done, \port$14666$0 , clk);
+, ch0__frame_done, ch0__done_count, ch0__result_updates, \rd__addr$763 , \port$14035$0 , \port$14046$0 , ch0__ca_done, \port$14123$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \rd__addr$929 , \port$14594$0 , \port$14605$0 , ch1__ca_done, \port$14682$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -4174,18 +4174,18 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$14025$0 ;
-  wire [186:0] \port$14025$0 ;
-  input [79:0] \port$14036$0 ;
-  wire [79:0] \port$14036$0 ;
-  input [9:0] \port$14113$0 ;
-  wire [9:0] \port$14113$0 ;
-  input [186:0] \port$14578$0 ;
-  wire [186:0] \port$14578$0 ;
-  input [79:0] \port$14589$0 ;
-  wire [79:0] \port$14589$0 ;
-  input [9:0] \port$14666$0 ;
-  wire [9:0] \port$14666$0 ;
+  input [186:0] \port$14035$0 ;
+  wire [186:0] \port$14035$0 ;
+  input [79:0] \port$14046$0 ;
+  wire [79:0] \port$14046$0 ;
+  input [9:0] \port$14123$0 ;
+  wire [9:0] \port$14123$0 ;
+  input [186:0] \port$14594$0 ;
+  wire [186:0] \port$14594$0 ;
+  input [79:0] \port$14605$0 ;
+  wire [79:0] \port$14605$0 ;
+  input [9:0] \port$14682$0 ;
+  wire [9:0] \port$14682$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   input \rd__addr$763 ;
@@ -4240,23 +4240,6 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
   reg [31:0] ch0_config_memory [14:0];
-  initial begin
-    ch0_config_memory[0] = 32'd0;
-    ch0_config_memory[1] = 32'd0;
-    ch0_config_memory[2] = 32'd0;
-    ch0_config_memory[3] = 32'd0;
-    ch0_config_memory[4] = 32'd0;
-    ch0_config_memory[5] = 32'd0;
-    ch0_config_memory[6] = 32'd0;
-    ch0_config_memory[7] = 32'd0;
-    ch0_config_memory[8] = 32'd0;
-    ch0_config_memory[9] = 32'd0;
-    ch0_config_memory[10] = 32'd0;
-    ch0_config_memory[11] = 32'd0;
-    ch0_config_memory[12] = 32'd0;
-    ch0_config_memory[13] = 32'd0;
-    ch0_config_memory[14] = 32'd0;
-  end
   always @(posedge clk) begin
     if (wr__en[0])
       ch0_config_memory[{ \$566 , \$565 , \$564 , \$563  }][7:0] <= config_memory0_write_data[7:0];
@@ -4269,10 +4252,6 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   end
   assign rd__data = ch0_config_memory[ch0_config_read_index];
   reg [15:0] ch0_crc_table_0_table [1:0];
-  initial begin
-    ch0_crc_table_0_table[0] = 16'h0000;
-    ch0_crc_table_0_table[1] = 16'h0000;
-  end
   always @(posedge clk) begin
     if (\wr__en$762 [0])
       ch0_crc_table_0_table[\wr__addr$760 ][7:0] <= \wr__data$761 [7:0];
@@ -4281,10 +4260,6 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   end
   assign \rd__data$776  = ch0_crc_table_0_table[\rd__addr$763 ];
   reg [15:0] ch0_crc_table_16_table [1:0];
-  initial begin
-    ch0_crc_table_16_table[0] = 16'h0000;
-    ch0_crc_table_16_table[1] = 16'h0000;
-  end
   always @(posedge clk) begin
     if (\wr__en$768 [0])
       ch0_crc_table_16_table[\wr__addr$766 ][7:0] <= \wr__data$767 [7:0];
@@ -4293,33 +4268,12 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   end
   assign \rd__data$777  = ch0_crc_table_16_table[\rd__addr$763 ];
   reg [0:0] ch0_crc_table_32_table [1:0];
-  initial begin
-    ch0_crc_table_32_table[0] = 1'h0;
-    ch0_crc_table_32_table[1] = 1'h0;
-  end
   always @(posedge clk) begin
     if (\wr__en$773 )
       ch0_crc_table_32_table[\wr__addr$771 ] <= \wr__data$772 ;
   end
   assign \rd__data$778  = ch0_crc_table_32_table[\rd__addr$763 ];
   reg [31:0] ch1_config_memory [14:0];
-  initial begin
-    ch1_config_memory[0] = 32'd0;
-    ch1_config_memory[1] = 32'd0;
-    ch1_config_memory[2] = 32'd0;
-    ch1_config_memory[3] = 32'd0;
-    ch1_config_memory[4] = 32'd0;
-    ch1_config_memory[5] = 32'd0;
-    ch1_config_memory[6] = 32'd0;
-    ch1_config_memory[7] = 32'd0;
-    ch1_config_memory[8] = 32'd0;
-    ch1_config_memory[9] = 32'd0;
-    ch1_config_memory[10] = 32'd0;
-    ch1_config_memory[11] = 32'd0;
-    ch1_config_memory[12] = 32'd0;
-    ch1_config_memory[13] = 32'd0;
-    ch1_config_memory[14] = 32'd0;
-  end
   always @(posedge clk) begin
     if (\wr__en$922 [0])
       ch1_config_memory[{ \$671 , \$670 , \$669 , \$668  }][7:0] <= config_memory0_write_data[7:0];
@@ -4332,10 +4286,6 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   end
   assign \rd__data$924  = ch1_config_memory[ch1_config_read_index];
   reg [15:0] ch1_crc_table_0_table [1:0];
-  initial begin
-    ch1_crc_table_0_table[0] = 16'h0000;
-    ch1_crc_table_0_table[1] = 16'h0000;
-  end
   always @(posedge clk) begin
     if (\wr__en$928 [0])
       ch1_crc_table_0_table[\wr__addr$926 ][7:0] <= \wr__data$927 [7:0];
@@ -4344,10 +4294,6 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   end
   assign \rd__data$942  = ch1_crc_table_0_table[\rd__addr$929 ];
   reg [15:0] ch1_crc_table_16_table [1:0];
-  initial begin
-    ch1_crc_table_16_table[0] = 16'h0000;
-    ch1_crc_table_16_table[1] = 16'h0000;
-  end
   always @(posedge clk) begin
     if (\wr__en$934 [0])
       ch1_crc_table_16_table[\wr__addr$932 ][7:0] <= \wr__data$933 [7:0];
@@ -4356,10 +4302,6 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   end
   assign \rd__data$943  = ch1_crc_table_16_table[\rd__addr$929 ];
   reg [0:0] ch1_crc_table_32_table [1:0];
-  initial begin
-    ch1_crc_table_32_table[0] = 1'h0;
-    ch1_crc_table_32_table[1] = 1'h0;
-  end
   always @(posedge clk) begin
     if (\wr__en$939 )
       ch1_crc_table_32_table[\wr__addr$937 ] <= \wr__data$938 ;
@@ -4533,7 +4475,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$171  = \$169  | \$170 ;
   assign \$172  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$173  = \$171  | \$172 ;
-  assign \$178  = ch0_read_select_90 ? { 2'h0, \port$14025$0 [182:177], 4'h0, \port$14025$0 [186:183], 1'h0, \port$14025$0 [176:174], 1'h0, \port$14025$0 [133:131], 3'h0, \port$14025$0 [49], \port$14025$0 [3:0] } : 32'd0;
+  assign \$178  = ch0_read_select_90 ? { 2'h0, \port$14035$0 [182:177], 4'h0, \port$14035$0 [186:183], 1'h0, \port$14035$0 [176:174], 1'h0, \port$14035$0 [133:131], 3'h0, \port$14035$0 [49], \port$14035$0 [3:0] } : 32'd0;
   assign \$179  = \$177  | \$178 ;
   assign \$180  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$181  = \$179  | \$180 ;
@@ -4549,13 +4491,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$191  = \$189  | \$190 ;
   assign \$192  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$193  = \$191  | \$192 ;
-  assign \$238  = ch0_read_select_c2 ? { 17'h00000, \port$14113$0 [9:3], 1'h0, \port$14113$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$238  = ch0_read_select_c2 ? { 17'h00000, \port$14123$0 [9:3], 1'h0, \port$14123$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$239  = \$237  | \$238 ;
-  assign \$240  = ch0_read_select_c3 ? \port$14036$0 [31:0] : 32'd0;
+  assign \$240  = ch0_read_select_c3 ? \port$14046$0 [31:0] : 32'd0;
   assign \$241  = \$239  | \$240 ;
-  assign \$242  = ch0_read_select_c4 ? \port$14036$0 [63:32] : 32'd0;
+  assign \$242  = ch0_read_select_c4 ? \port$14046$0 [63:32] : 32'd0;
   assign \$243  = \$241  | \$242 ;
-  assign \$244  = ch0_read_select_c5 ? { 16'h0000, \port$14036$0 [79:64] } : 32'd0;
+  assign \$244  = ch0_read_select_c5 ? { 16'h0000, \port$14046$0 [79:64] } : 32'd0;
   assign \$245  = \$243  | \$244 ;
   assign \$248  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$249  = \$247  | \$248 ;
@@ -4714,7 +4656,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$406  = \$404  | \$405 ;
   assign \$407  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$408  = \$406  | \$407 ;
-  assign \$413  = ch1_read_select_110 ? { 2'h0, \port$14578$0 [182:177], 4'h0, \port$14578$0 [186:183], 1'h0, \port$14578$0 [176:174], 1'h0, \port$14578$0 [133:131], 3'h0, \port$14578$0 [49], \port$14578$0 [3:0] } : 32'd0;
+  assign \$413  = ch1_read_select_110 ? { 2'h0, \port$14594$0 [182:177], 4'h0, \port$14594$0 [186:183], 1'h0, \port$14594$0 [176:174], 1'h0, \port$14594$0 [133:131], 3'h0, \port$14594$0 [49], \port$14594$0 [3:0] } : 32'd0;
   assign \$414  = \$412  | \$413 ;
   assign \$415  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$416  = \$414  | \$415 ;
@@ -4730,13 +4672,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign \$426  = \$424  | \$425 ;
   assign \$427  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$428  = \$426  | \$427 ;
-  assign \$473  = ch1_read_select_142 ? { 17'h00000, \port$14666$0 [9:3], 1'h0, \port$14666$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$473  = ch1_read_select_142 ? { 17'h00000, \port$14682$0 [9:3], 1'h0, \port$14682$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$474  = \$472  | \$473 ;
-  assign \$475  = ch1_read_select_143 ? \port$14589$0 [31:0] : 32'd0;
+  assign \$475  = ch1_read_select_143 ? \port$14605$0 [31:0] : 32'd0;
   assign \$476  = \$474  | \$475 ;
-  assign \$477  = ch1_read_select_144 ? \port$14589$0 [63:32] : 32'd0;
+  assign \$477  = ch1_read_select_144 ? \port$14605$0 [63:32] : 32'd0;
   assign \$478  = \$476  | \$477 ;
-  assign \$479  = ch1_read_select_145 ? { 16'h0000, \port$14589$0 [79:64] } : 32'd0;
+  assign \$479  = ch1_read_select_145 ? { 16'h0000, \port$14605$0 [79:64] } : 32'd0;
   assign \$480  = \$478  | \$479 ;
   assign \$483  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$484  = \$482  | \$483 ;
@@ -7170,7 +7112,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$856  = ch0_result_status_status_snapshot;
     if (\$157 ) begin
-      \$856  = \port$14025$0 [3:0];
+      \$856  = \port$14035$0 [3:0];
     end
     if (rst) begin
       \$856  = 4'h0;
@@ -7180,7 +7122,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$857  = ch0_result_status_cds_snapshot;
     if (\$157 ) begin
-      \$857  = \port$14025$0 [49];
+      \$857  = \port$14035$0 [49];
     end
     if (rst) begin
       \$857  = 1'h0;
@@ -7190,7 +7132,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$858  = ch0_result_status_w0_ne_snapshot;
     if (\$157 ) begin
-      \$858  = \port$14025$0 [131];
+      \$858  = \port$14035$0 [131];
     end
     if (rst) begin
       \$858  = 1'h0;
@@ -7200,7 +7142,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$859  = ch0_result_status_w0_nw_snapshot;
     if (\$157 ) begin
-      \$859  = \port$14025$0 [132];
+      \$859  = \port$14035$0 [132];
     end
     if (rst) begin
       \$859  = 1'h0;
@@ -7210,7 +7152,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$860  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$157 ) begin
-      \$860  = \port$14025$0 [133];
+      \$860  = \port$14035$0 [133];
     end
     if (rst) begin
       \$860  = 1'h0;
@@ -7220,7 +7162,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$861  = ch0_result_status_w1_ne_snapshot;
     if (\$157 ) begin
-      \$861  = \port$14025$0 [174];
+      \$861  = \port$14035$0 [174];
     end
     if (rst) begin
       \$861  = 1'h0;
@@ -7230,7 +7172,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$862  = ch0_result_status_w1_nw_snapshot;
     if (\$157 ) begin
-      \$862  = \port$14025$0 [175];
+      \$862  = \port$14035$0 [175];
     end
     if (rst) begin
       \$862  = 1'h0;
@@ -7240,7 +7182,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$863  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$157 ) begin
-      \$863  = \port$14025$0 [176];
+      \$863  = \port$14035$0 [176];
     end
     if (rst) begin
       \$863  = 1'h0;
@@ -7250,7 +7192,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$864  = ch0_result_status_lc_repeat_snapshot;
     if (\$157 ) begin
-      \$864  = \port$14025$0 [183];
+      \$864  = \port$14035$0 [183];
     end
     if (rst) begin
       \$864  = 1'h0;
@@ -7260,7 +7202,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$865  = ch0_result_status_lc_skip_snapshot;
     if (\$157 ) begin
-      \$865  = \port$14025$0 [184];
+      \$865  = \port$14035$0 [184];
     end
     if (rst) begin
       \$865  = 1'h0;
@@ -7270,7 +7212,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$866  = ch0_result_status_lc_zero_snapshot;
     if (\$157 ) begin
-      \$866  = \port$14025$0 [185];
+      \$866  = \port$14035$0 [185];
     end
     if (rst) begin
       \$866  = 1'h0;
@@ -7280,7 +7222,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$867  = ch0_result_status_spw_mismatch_snapshot;
     if (\$157 ) begin
-      \$867  = \port$14025$0 [186];
+      \$867  = \port$14035$0 [186];
     end
     if (rst) begin
       \$867  = 1'h0;
@@ -7290,7 +7232,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$868  = ch0_result_status_lc_snapshot;
     if (\$157 ) begin
-      \$868  = \port$14025$0 [182:177];
+      \$868  = \port$14035$0 [182:177];
     end
     if (rst) begin
       \$868  = 6'h00;
@@ -7310,7 +7252,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$870  = ch0_result_seq_line_delay_snapshot;
     if (\$157 ) begin
-      \$870  = \port$14025$0 [48:36];
+      \$870  = \port$14035$0 [48:36];
     end
     if (rst) begin
       \$870  = 13'h0000;
@@ -7320,7 +7262,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$871  = ch0_result_w0_lo_data_snapshot;
     if (\$157 ) begin
-      \$871  = \port$14025$0 [107:76];
+      \$871  = \port$14035$0 [107:76];
     end
     if (rst) begin
       \$871  = 32'd0;
@@ -7330,7 +7272,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$872  = ch0_result_w0_hi_data_snapshot;
     if (\$157 ) begin
-      \$872  = { 9'h000, \port$14025$0 [130:108] };
+      \$872  = { 9'h000, \port$14035$0 [130:108] };
     end
     if (rst) begin
       \$872  = 32'd0;
@@ -7340,7 +7282,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$873  = ch0_result_w1_lo_data_snapshot;
     if (\$157 ) begin
-      \$873  = \port$14025$0 [165:134];
+      \$873  = \port$14035$0 [165:134];
     end
     if (rst) begin
       \$873  = 32'd0;
@@ -7350,7 +7292,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$874  = ch0_result_w1_hi_data_snapshot;
     if (\$157 ) begin
-      \$874  = { 24'h000000, \port$14025$0 [173:166] };
+      \$874  = { 24'h000000, \port$14035$0 [173:166] };
     end
     if (rst) begin
       \$874  = 32'd0;
@@ -7360,7 +7302,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$875  = ch0_result_timestamp_time_snapshot;
     if (\$157 ) begin
-      \$875  = \port$14025$0 [35:4];
+      \$875  = \port$14035$0 [35:4];
     end
     if (rst) begin
       \$875  = 32'd0;
@@ -7370,7 +7312,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$876  = ch0_result_line_noise_events_snapshot;
     if (\$157 ) begin
-      \$876  = \port$14025$0 [53:50];
+      \$876  = \port$14035$0 [53:50];
     end
     if (rst) begin
       \$876  = 4'h0;
@@ -7380,7 +7322,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$877  = ch0_result_line_delay_settled_snapshot;
     if (\$157 ) begin
-      \$877  = \port$14025$0 [54];
+      \$877  = \port$14035$0 [54];
     end
     if (rst) begin
       \$877  = 1'h0;
@@ -7390,7 +7332,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$878  = ch0_result_line_delay_spread_snapshot;
     if (\$157 ) begin
-      \$878  = \port$14025$0 [75:68];
+      \$878  = \port$14035$0 [75:68];
     end
     if (rst) begin
       \$878  = 8'h00;
@@ -7400,7 +7342,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$879  = ch0_result_line_settled_delay_snapshot;
     if (\$157 ) begin
-      \$879  = \port$14025$0 [67:55];
+      \$879  = \port$14035$0 [67:55];
     end
     if (rst) begin
       \$879  = 13'h0000;
@@ -8696,7 +8638,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1016  = ch1_result_status_status_snapshot;
     if (\$392 ) begin
-      \$1016  = \port$14578$0 [3:0];
+      \$1016  = \port$14594$0 [3:0];
     end
     if (rst) begin
       \$1016  = 4'h0;
@@ -8706,7 +8648,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1017  = ch1_result_status_cds_snapshot;
     if (\$392 ) begin
-      \$1017  = \port$14578$0 [49];
+      \$1017  = \port$14594$0 [49];
     end
     if (rst) begin
       \$1017  = 1'h0;
@@ -8716,7 +8658,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1018  = ch1_result_status_w0_ne_snapshot;
     if (\$392 ) begin
-      \$1018  = \port$14578$0 [131];
+      \$1018  = \port$14594$0 [131];
     end
     if (rst) begin
       \$1018  = 1'h0;
@@ -8726,7 +8668,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1019  = ch1_result_status_w0_nw_snapshot;
     if (\$392 ) begin
-      \$1019  = \port$14578$0 [132];
+      \$1019  = \port$14594$0 [132];
     end
     if (rst) begin
       \$1019  = 1'h0;
@@ -8736,7 +8678,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1020  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$392 ) begin
-      \$1020  = \port$14578$0 [133];
+      \$1020  = \port$14594$0 [133];
     end
     if (rst) begin
       \$1020  = 1'h0;
@@ -8746,7 +8688,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1021  = ch1_result_status_w1_ne_snapshot;
     if (\$392 ) begin
-      \$1021  = \port$14578$0 [174];
+      \$1021  = \port$14594$0 [174];
     end
     if (rst) begin
       \$1021  = 1'h0;
@@ -8756,7 +8698,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1022  = ch1_result_status_w1_nw_snapshot;
     if (\$392 ) begin
-      \$1022  = \port$14578$0 [175];
+      \$1022  = \port$14594$0 [175];
     end
     if (rst) begin
       \$1022  = 1'h0;
@@ -8766,7 +8708,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1023  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$392 ) begin
-      \$1023  = \port$14578$0 [176];
+      \$1023  = \port$14594$0 [176];
     end
     if (rst) begin
       \$1023  = 1'h0;
@@ -8776,7 +8718,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1024  = ch1_result_status_lc_repeat_snapshot;
     if (\$392 ) begin
-      \$1024  = \port$14578$0 [183];
+      \$1024  = \port$14594$0 [183];
     end
     if (rst) begin
       \$1024  = 1'h0;
@@ -8786,7 +8728,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1025  = ch1_result_status_lc_skip_snapshot;
     if (\$392 ) begin
-      \$1025  = \port$14578$0 [184];
+      \$1025  = \port$14594$0 [184];
     end
     if (rst) begin
       \$1025  = 1'h0;
@@ -8796,7 +8738,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1026  = ch1_result_status_lc_zero_snapshot;
     if (\$392 ) begin
-      \$1026  = \port$14578$0 [185];
+      \$1026  = \port$14594$0 [185];
     end
     if (rst) begin
       \$1026  = 1'h0;
@@ -8806,7 +8748,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1027  = ch1_result_status_spw_mismatch_snapshot;
     if (\$392 ) begin
-      \$1027  = \port$14578$0 [186];
+      \$1027  = \port$14594$0 [186];
     end
     if (rst) begin
       \$1027  = 1'h0;
@@ -8816,7 +8758,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1028  = ch1_result_status_lc_snapshot;
     if (\$392 ) begin
-      \$1028  = \port$14578$0 [182:177];
+      \$1028  = \port$14594$0 [182:177];
     end
     if (rst) begin
       \$1028  = 6'h00;
@@ -8836,7 +8778,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1030  = ch1_result_seq_line_delay_snapshot;
     if (\$392 ) begin
-      \$1030  = \port$14578$0 [48:36];
+      \$1030  = \port$14594$0 [48:36];
     end
     if (rst) begin
       \$1030  = 13'h0000;
@@ -8846,7 +8788,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1031  = ch1_result_w0_lo_data_snapshot;
     if (\$392 ) begin
-      \$1031  = \port$14578$0 [107:76];
+      \$1031  = \port$14594$0 [107:76];
     end
     if (rst) begin
       \$1031  = 32'd0;
@@ -8856,7 +8798,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1032  = ch1_result_w0_hi_data_snapshot;
     if (\$392 ) begin
-      \$1032  = { 9'h000, \port$14578$0 [130:108] };
+      \$1032  = { 9'h000, \port$14594$0 [130:108] };
     end
     if (rst) begin
       \$1032  = 32'd0;
@@ -8866,7 +8808,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1033  = ch1_result_w1_lo_data_snapshot;
     if (\$392 ) begin
-      \$1033  = \port$14578$0 [165:134];
+      \$1033  = \port$14594$0 [165:134];
     end
     if (rst) begin
       \$1033  = 32'd0;
@@ -8876,7 +8818,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1034  = ch1_result_w1_hi_data_snapshot;
     if (\$392 ) begin
-      \$1034  = { 24'h000000, \port$14578$0 [173:166] };
+      \$1034  = { 24'h000000, \port$14594$0 [173:166] };
     end
     if (rst) begin
       \$1034  = 32'd0;
@@ -8886,7 +8828,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1035  = ch1_result_timestamp_time_snapshot;
     if (\$392 ) begin
-      \$1035  = \port$14578$0 [35:4];
+      \$1035  = \port$14594$0 [35:4];
     end
     if (rst) begin
       \$1035  = 32'd0;
@@ -8896,7 +8838,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1036  = ch1_result_line_noise_events_snapshot;
     if (\$392 ) begin
-      \$1036  = \port$14578$0 [53:50];
+      \$1036  = \port$14594$0 [53:50];
     end
     if (rst) begin
       \$1036  = 4'h0;
@@ -8906,7 +8848,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1037  = ch1_result_line_delay_settled_snapshot;
     if (\$392 ) begin
-      \$1037  = \port$14578$0 [54];
+      \$1037  = \port$14594$0 [54];
     end
     if (rst) begin
       \$1037  = 1'h0;
@@ -8916,7 +8858,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1038  = ch1_result_line_delay_spread_snapshot;
     if (\$392 ) begin
-      \$1038  = \port$14578$0 [75:68];
+      \$1038  = \port$14594$0 [75:68];
     end
     if (rst) begin
       \$1038  = 8'h00;
@@ -8926,7 +8868,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$1039  = ch1_result_line_settled_delay_snapshot;
     if (\$392 ) begin
-      \$1039  = \port$14578$0 [67:55];
+      \$1039  = \port$14594$0 [67:55];
     end
     if (rst) begin
       \$1039  = 13'h0000;
@@ -9189,27 +9131,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$14025$0 [3:0];
-  assign ch0__cds = \port$14025$0 [49];
-  assign ch0__word0_ne = \port$14025$0 [131];
-  assign ch0__word0_nw = \port$14025$0 [132];
-  assign ch0__word0_crc_ok = \port$14025$0 [133];
-  assign ch0__word1_ne = \port$14025$0 [174];
-  assign ch0__word1_nw = \port$14025$0 [175];
-  assign ch0__word1_crc_ok = \port$14025$0 [176];
-  assign ch0__lc_repeat = \port$14025$0 [183];
-  assign ch0__lc_skip = \port$14025$0 [184];
-  assign ch0__lc_zero = \port$14025$0 [185];
-  assign ch0__spw_mismatch = \port$14025$0 [186];
-  assign ch0__lc = \port$14025$0 [182:177];
-  assign ch0__line_delay = \port$14025$0 [48:36];
-  assign ch0__word0_position = { 9'h000, \port$14025$0 [130:76] };
-  assign ch0__word1_position = { 24'h000000, \port$14025$0 [173:134] };
-  assign ch0__timestamp = \port$14025$0 [35:4];
-  assign ch0__noise_events = \port$14025$0 [53:50];
-  assign ch0__delay_settled = \port$14025$0 [54];
-  assign ch0__delay_spread = \port$14025$0 [75:68];
-  assign ch0__settled_delay = \port$14025$0 [67:55];
+  assign ch0__status = \port$14035$0 [3:0];
+  assign ch0__cds = \port$14035$0 [49];
+  assign ch0__word0_ne = \port$14035$0 [131];
+  assign ch0__word0_nw = \port$14035$0 [132];
+  assign ch0__word0_crc_ok = \port$14035$0 [133];
+  assign ch0__word1_ne = \port$14035$0 [174];
+  assign ch0__word1_nw = \port$14035$0 [175];
+  assign ch0__word1_crc_ok = \port$14035$0 [176];
+  assign ch0__lc_repeat = \port$14035$0 [183];
+  assign ch0__lc_skip = \port$14035$0 [184];
+  assign ch0__lc_zero = \port$14035$0 [185];
+  assign ch0__spw_mismatch = \port$14035$0 [186];
+  assign ch0__lc = \port$14035$0 [182:177];
+  assign ch0__line_delay = \port$14035$0 [48:36];
+  assign ch0__word0_position = { 9'h000, \port$14035$0 [130:76] };
+  assign ch0__word1_position = { 24'h000000, \port$14035$0 [173:134] };
+  assign ch0__timestamp = \port$14035$0 [35:4];
+  assign ch0__noise_events = \port$14035$0 [53:50];
+  assign ch0__delay_settled = \port$14035$0 [54];
+  assign ch0__delay_spread = \port$14035$0 [75:68];
+  assign ch0__settled_delay = \port$14035$0 [67:55];
   assign ch0__cap_data_bits_w0 = 7'h37;
   assign ch0__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9230,13 +9172,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$14113$0 [2:0];
-  assign ch0__ca_bytes_done = \port$14113$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$14036$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$14036$0 [31:16];
-  assign ch0__count_ca_refused = \port$14036$0 [47:32];
-  assign ch0__count_ca_aborted = \port$14036$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$14036$0 [79:64];
+  assign ch0__ca_status = \port$14123$0 [2:0];
+  assign ch0__ca_bytes_done = \port$14123$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$14046$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$14046$0 [31:16];
+  assign ch0__count_ca_refused = \port$14046$0 [47:32];
+  assign ch0__count_ca_aborted = \port$14046$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$14046$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9256,27 +9198,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$14578$0 [3:0];
-  assign ch1__cds = \port$14578$0 [49];
-  assign ch1__word0_ne = \port$14578$0 [131];
-  assign ch1__word0_nw = \port$14578$0 [132];
-  assign ch1__word0_crc_ok = \port$14578$0 [133];
-  assign ch1__word1_ne = \port$14578$0 [174];
-  assign ch1__word1_nw = \port$14578$0 [175];
-  assign ch1__word1_crc_ok = \port$14578$0 [176];
-  assign ch1__lc_repeat = \port$14578$0 [183];
-  assign ch1__lc_skip = \port$14578$0 [184];
-  assign ch1__lc_zero = \port$14578$0 [185];
-  assign ch1__spw_mismatch = \port$14578$0 [186];
-  assign ch1__lc = \port$14578$0 [182:177];
-  assign ch1__line_delay = \port$14578$0 [48:36];
-  assign ch1__word0_position = { 9'h000, \port$14578$0 [130:76] };
-  assign ch1__word1_position = { 24'h000000, \port$14578$0 [173:134] };
-  assign ch1__timestamp = \port$14578$0 [35:4];
-  assign ch1__noise_events = \port$14578$0 [53:50];
-  assign ch1__delay_settled = \port$14578$0 [54];
-  assign ch1__delay_spread = \port$14578$0 [75:68];
-  assign ch1__settled_delay = \port$14578$0 [67:55];
+  assign ch1__status = \port$14594$0 [3:0];
+  assign ch1__cds = \port$14594$0 [49];
+  assign ch1__word0_ne = \port$14594$0 [131];
+  assign ch1__word0_nw = \port$14594$0 [132];
+  assign ch1__word0_crc_ok = \port$14594$0 [133];
+  assign ch1__word1_ne = \port$14594$0 [174];
+  assign ch1__word1_nw = \port$14594$0 [175];
+  assign ch1__word1_crc_ok = \port$14594$0 [176];
+  assign ch1__lc_repeat = \port$14594$0 [183];
+  assign ch1__lc_skip = \port$14594$0 [184];
+  assign ch1__lc_zero = \port$14594$0 [185];
+  assign ch1__spw_mismatch = \port$14594$0 [186];
+  assign ch1__lc = \port$14594$0 [182:177];
+  assign ch1__line_delay = \port$14594$0 [48:36];
+  assign ch1__word0_position = { 9'h000, \port$14594$0 [130:76] };
+  assign ch1__word1_position = { 24'h000000, \port$14594$0 [173:134] };
+  assign ch1__timestamp = \port$14594$0 [35:4];
+  assign ch1__noise_events = \port$14594$0 [53:50];
+  assign ch1__delay_settled = \port$14594$0 [54];
+  assign ch1__delay_spread = \port$14594$0 [75:68];
+  assign ch1__settled_delay = \port$14594$0 [67:55];
   assign ch1__cap_data_bits_w0 = 7'h37;
   assign ch1__cap_data_bits_w1 = 7'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9297,13 +9239,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__chain_en, ch0__ca_wbuf_e
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$14666$0 [2:0];
-  assign ch1__ca_bytes_done = \port$14666$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$14589$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$14589$0 [31:16];
-  assign ch1__count_ca_refused = \port$14589$0 [47:32];
-  assign ch1__count_ca_aborted = \port$14589$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$14589$0 [79:64];
+  assign ch1__ca_status = \port$14682$0 [2:0];
+  assign ch1__ca_bytes_done = \port$14682$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$14605$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$14605$0 [31:16];
+  assign ch1__count_ca_refused = \port$14605$0 [47:32];
+  assign ch1__count_ca_aborted = \port$14605$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$14605$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -11918,7 +11860,7 @@ endmodule
 module \biss_master_uart.ch0 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_rbuf_en, crc_table_data, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters
 , periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable
 , cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, cfg_hold
-, regs__frame_done, regs__done_count, regs__result_updates, ma, crc_table_addr, \port$14025$0 , \port$14036$0 , regs__ca_done, \port$14113$0 , slo);
+, regs__frame_done, regs__done_count, regs__result_updates, ma, crc_table_addr, \port$14035$0 , \port$14046$0 , regs__ca_done, \port$14123$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -12109,12 +12051,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$14025$0 ;
-  wire [186:0] \port$14025$0 ;
-  output [79:0] \port$14036$0 ;
-  wire [79:0] \port$14036$0 ;
-  output [9:0] \port$14113$0 ;
-  wire [9:0] \port$14113$0 ;
+  output [186:0] \port$14035$0 ;
+  wire [186:0] \port$14035$0 ;
+  output [79:0] \port$14046$0 ;
+  wire [79:0] \port$14046$0 ;
+  output [9:0] \port$14123$0 ;
+  wire [9:0] \port$14123$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -12596,9 +12538,9 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_
   assign \cfg_hold$199  = cfg_hold;
   assign \crc_table_addr$202  = crc_table_addr;
   assign \crc_table_data$204  = crc_table_data;
-  assign \port$14025$0  = \$24 ;
-  assign \port$14036$0  = \$25 ;
-  assign \port$14113$0  = \$26 ;
+  assign \port$14035$0  = \$24 ;
+  assign \port$14046$0  = \$25 ;
+  assign \port$14123$0  = \$26 ;
   assign \crc_table_data.poly  = crc_table_data[15:0];
   assign \crc_table_data.start  = crc_table_data[31:16];
   assign \crc_table_data.inverted  = crc_table_data[32];
@@ -13644,7 +13586,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13635$206 (live[208:206]),
+    .\port$13645$206 (live[208:206]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(sample),
@@ -13705,7 +13647,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13635$166 (live[166]),
+    .\port$13645$166 (live[166]),
     .rises(rises),
     .rst(rst),
     .ssi(live[193]),
@@ -13756,7 +13698,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .level(\slo$58 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13635$193 (live[205:193]),
+    .\port$13645$193 (live[205:193]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -13781,7 +13723,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13648$0 (\bit ),
+    .\port$13658$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -16907,16 +16849,6 @@ module \biss_master_uart.ch0.core.counter_ram (rst, host__en, busy, read_data, h
   reg [7:0] writing = 8'h00;
   reg [1:0] zero = 2'h0;
   reg [31:0] memory [7:0];
-  initial begin
-    memory[0] = 32'd0;
-    memory[1] = 32'd0;
-    memory[2] = 32'd0;
-    memory[3] = 32'd0;
-    memory[4] = 32'd0;
-    memory[5] = 32'd0;
-    memory[6] = 32'd0;
-    memory[7] = 32'd0;
-  end
   always @(posedge clk) begin
     if (write__en)
       memory[write__addr] <= { \$102 , \$85  };
@@ -17938,7 +17870,7 @@ module \biss_master_uart.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, lc_load, ssi, \port$13635$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, lc_load, ssi, \port$13645$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_table_addr, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
@@ -18639,8 +18571,8 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13635$206 ;
-  wire [2:0] \port$13635$206 ;
+  input [2:0] \port$13645$206 ;
+  wire [2:0] \port$13645$206 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -18960,7 +18892,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
     cpw_top <= \$600 ;
   always @(posedge clk)
     crc_table_addr <= \$601 ;
-  assign error_bit = ssi & \port$13635$206 [0];
+  assign error_bit = ssi & \port$13645$206 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -18989,19 +18921,19 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \$19  = slots == 16'hfffe;
   assign \$20  = sample & \bit ;
   assign \$21  = | words[5:0];
-  assign \$22  = ssi & \port$13635$206 [0];
+  assign \$22  = ssi & \port$13645$206 [0];
   assign \$24  = words[5:0] + \$23 ;
   assign \$25  = ! \$24 ;
-  assign \$26  = ssi & \port$13635$206 [0];
+  assign \$26  = ssi & \port$13645$206 [0];
   assign \$28  = words[5:0] + \$27 ;
   assign \$29  = | \$28 ;
   assign \$30  = \$25  & \$29 ;
   assign \$31  = | words[17:12];
   assign \$32  = | words[5:0];
-  assign \$33  = ssi & \port$13635$206 [0];
+  assign \$33  = ssi & \port$13645$206 [0];
   assign \$35  = words[5:0] + \$34 ;
   assign \$36  = ! \$35 ;
-  assign \$37  = ssi & \port$13635$206 [0];
+  assign \$37  = ssi & \port$13645$206 [0];
   assign \$39  = words[5:0] + \$38 ;
   assign \$40  = | \$39 ;
   assign \$41  = \$36  & \$40 ;
@@ -19022,7 +18954,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \$56  = idx == current[34:28];
   assign \$57  = word_count - 1'h1;
   assign \$58  = word == \$57 ;
-  assign \$59  = ssi & \port$13635$206 [2];
+  assign \$59  = ssi & \port$13645$206 [2];
   assign \$60  = word + 1'h1;
   assign \$61  = idx + 1'h1;
   assign \$62  = idx == current[34:28];
@@ -19308,15 +19240,15 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \$342  = \$339  & \$341 ;
   assign \$343  = { data0[53:0], \$67  } | { \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72  };
   assign \$344  = ~ words[6];
-  assign \$345  = ssi & \port$13635$206 [0];
+  assign \$345  = ssi & \port$13645$206 [0];
   assign \$346  = ~ \$345 ;
   assign \$347  = \$344  & \$346 ;
   assign \$348  = ! word;
   assign \$349  = in_word & \$348 ;
   assign \$350  = idx == words[5:0];
   assign \$351  = \$349  & \$350 ;
-  assign \$352  = ssi & \port$13635$206 [0];
-  assign \$353  = ~ \port$13635$206 [1];
+  assign \$352  = ssi & \port$13645$206 [0];
+  assign \$353  = ~ \port$13645$206 [1];
   assign \$354  = \$352  & \$353 ;
   assign \$355  = \bit  ^ \$354 ;
   assign \$356  = ~ words[6];
@@ -20067,7 +19999,7 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13635$206 [0];
+  assign ssi_error = \port$13645$206 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -20080,8 +20012,8 @@ module \biss_master_uart.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \index$46  = word;
   assign load_index = crc_table_addr;
   assign crc_next_word = crc_table_addr;
-  assign ssi_double = \port$13635$206 [2];
-  assign ssi_error_low = \port$13635$206 [1];
+  assign ssi_double = \port$13645$206 [2];
+  assign ssi_error_low = \port$13645$206 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22360,7 +22292,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.ma_stop (rst, \port$13635$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_uart.ch0.core.ma_stop (rst, \port$13645$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -22449,8 +22381,8 @@ module \biss_master_uart.ch0.core.ma_stop (rst, \port$13635$166 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13635$166 ;
-  wire \port$13635$166 ;
+  input \port$13645$166 ;
+  wire \port$13645$166 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -22570,7 +22502,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, \port$13635$166 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13635$166  : 1'h0;
+  assign \$13  = \$12  ? \port$13645$166  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -22738,7 +22670,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, \port$13635$166 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13635$166 , 1'h1 };
+  assign enables = { \port$13645$166 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -23063,7 +22995,11 @@ module \biss_master_uart.ch0.core.register_access.buffers (rst, host_read__en, b
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
-  wire [5:0] \$5 ;
+  wire [4:0] \$5 ;
+  wire \$6 ;
+  reg [3:0] \$7 ;
+  reg \$8 ;
+  wire [5:0] \$9 ;
   input [7:0] byte_received;
   wire [7:0] byte_received;
   reg [3:0] byte_received__addr;
@@ -23071,6 +23007,8 @@ module \biss_master_uart.ch0.core.register_access.buffers (rst, host_read__en, b
   reg [3:0] byte_received__en;
   output [7:0] byte_to_send;
   wire [7:0] byte_to_send;
+  reg [3:0] cleared = 4'h0;
+  reg clearing = 1'h1;
   input clk;
   wire clk;
   input [3:0] host_read__addr;
@@ -23099,24 +23037,6 @@ module \biss_master_uart.ch0.core.register_access.buffers (rst, host_read__en, b
   wire [3:0] word_to_send__addr;
   wire [31:0] word_to_send__data;
   reg [31:0] rbuf [15:0];
-  initial begin
-    rbuf[0] = 32'd0;
-    rbuf[1] = 32'd0;
-    rbuf[2] = 32'd0;
-    rbuf[3] = 32'd0;
-    rbuf[4] = 32'd0;
-    rbuf[5] = 32'd0;
-    rbuf[6] = 32'd0;
-    rbuf[7] = 32'd0;
-    rbuf[8] = 32'd0;
-    rbuf[9] = 32'd0;
-    rbuf[10] = 32'd0;
-    rbuf[11] = 32'd0;
-    rbuf[12] = 32'd0;
-    rbuf[13] = 32'd0;
-    rbuf[14] = 32'd0;
-    rbuf[15] = 32'd0;
-  end
   always @(posedge clk) begin
     if (byte_received__en[0])
       rbuf[byte_received__addr][7:0] <= byte_received__data[7:0];
@@ -23134,65 +23054,81 @@ module \biss_master_uart.ch0.core.register_access.buffers (rst, host_read__en, b
     end
   end
   assign rbuf_data = _0_;
-  reg [31:0] \wbuf$21  [15:0];
-  initial begin
-    \wbuf$21 [0] = 32'd0;
-    \wbuf$21 [1] = 32'd0;
-    \wbuf$21 [2] = 32'd0;
-    \wbuf$21 [3] = 32'd0;
-    \wbuf$21 [4] = 32'd0;
-    \wbuf$21 [5] = 32'd0;
-    \wbuf$21 [6] = 32'd0;
-    \wbuf$21 [7] = 32'd0;
-    \wbuf$21 [8] = 32'd0;
-    \wbuf$21 [9] = 32'd0;
-    \wbuf$21 [10] = 32'd0;
-    \wbuf$21 [11] = 32'd0;
-    \wbuf$21 [12] = 32'd0;
-    \wbuf$21 [13] = 32'd0;
-    \wbuf$21 [14] = 32'd0;
-    \wbuf$21 [15] = 32'd0;
-  end
+  reg [31:0] \wbuf$23  [15:0];
   always @(posedge clk) begin
     if (wbuf[36])
-      \wbuf$21 [wbuf[3:0]][7:0] <= wbuf[11:4];
+      \wbuf$23 [wbuf[3:0]][7:0] <= wbuf[11:4];
     if (wbuf[37])
-      \wbuf$21 [wbuf[3:0]][15:8] <= wbuf[19:12];
+      \wbuf$23 [wbuf[3:0]][15:8] <= wbuf[19:12];
     if (wbuf[38])
-      \wbuf$21 [wbuf[3:0]][23:16] <= wbuf[27:20];
+      \wbuf$23 [wbuf[3:0]][23:16] <= wbuf[27:20];
     if (wbuf[39])
-      \wbuf$21 [wbuf[3:0]][31:24] <= wbuf[35:28];
+      \wbuf$23 [wbuf[3:0]][31:24] <= wbuf[35:28];
   end
   reg [31:0] _1_;
   always @(posedge clk) begin
-    _1_ <= \wbuf$21 [index[5:2]];
+    _1_ <= \wbuf$23 [index[5:2]];
   end
   assign word_to_send__data = _1_;
-  assign \$3  = index[1:0] == 2'h2;
-  assign \$4  = index[1:0] == 2'h3;
-  assign \$5  = index[1:0] * 4'h8;
-  assign byte_to_send = word_to_send__data >> \$5 ;
+  assign \$9  = index[1:0] * 4'h8;
+  assign byte_to_send = word_to_send__data >> \$9 ;
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
+  assign \$3  = index[1:0] == 2'h2;
+  assign \$4  = index[1:0] == 2'h3;
+  assign \$5  = cleared + 1'h1;
+  assign \$6  = cleared == 4'hf;
+  always @(posedge clk)
+    cleared <= \$7 ;
+  always @(posedge clk)
+    clearing <= \$8 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     byte_received__addr = 4'h0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__addr = cleared;
+    end else if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     byte_received__data = 32'd0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__data = 32'd0;
+    end else if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     byte_received__en = 4'h0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__en = 4'hf;
+    end else if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    \$7  = cleared;
+    if (clearing) begin
+      \$7  = \$5 [3:0];
+    end
+    if (rst) begin
+      \$7  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    \$8  = clearing;
+    if (clearing) begin
+      if (\$6 ) begin
+        \$8  = 1'h0;
+      end
+    end
+    if (rst) begin
+      \$8  = 1'h1;
     end
   end
   assign host_write__addr = wbuf[3:0];
@@ -24878,7 +24814,7 @@ module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13635$193 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13645$193 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -25461,8 +25397,8 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13635$193 ;
-  wire [12:0] \port$13635$193 ;
+  input [12:0] \port$13645$193 ;
+  wire [12:0] \port$13645$193 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -25485,7 +25421,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13635$193 [12:1] + 1'h1;
+  assign \$460  = \port$13645$193 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -26061,7 +25997,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13635$193 [0]),
+    .clear_high(\port$13645$193 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -26204,7 +26140,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13635$193 [0]) begin
+            if (\port$13645$193 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -26289,7 +26225,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13635$193 [0]) begin
+            if (\port$13645$193 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -26328,7 +26264,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13635$193 [12:1] };
+            \$534  = { 1'h0, \port$13645$193 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -26713,11 +26649,11 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13635$193 [12:1] };
-  assign fixed = \port$13635$193 [0];
+  assign fixed_delay = { 1'h0, \port$13645$193 [12:1] };
+  assign fixed = \port$13645$193 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13635$193 [0];
+  assign clear_high = \port$13645$193 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -29294,7 +29230,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13648$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13658$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -29336,8 +29272,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13648$0 ;
-  wire \port$13648$0 ;
+  input \port$13658$0 ;
+  wire \port$13658$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -29351,9 +29287,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13648$0  };
-  assign \$2  = { lc[4:0], \port$13648$0  } == last;
-  assign \$3  = { lc[4:0], \port$13648$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13658$0  };
+  assign \$2  = { lc[4:0], \port$13658$0  } == last;
+  assign \$3  = { lc[4:0], \port$13658$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -29463,7 +29399,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13648$0  };
+  assign lc_next = { lc[4:0], \port$13658$0  };
   assign zero = is_zero;
 endmodule
 
@@ -32602,7 +32538,7 @@ endmodule
 module \biss_master_uart.ch1 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_rbuf_en, crc_table_data, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters
 , periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable
 , cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, cfg_hold
-, regs__frame_done, regs__done_count, regs__result_updates, ma, crc_table_addr, \port$14578$0 , \port$14589$0 , regs__ca_done, \port$14666$0 , slo);
+, regs__frame_done, regs__done_count, regs__result_updates, ma, crc_table_addr, \port$14594$0 , \port$14605$0 , regs__ca_done, \port$14682$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -32793,12 +32729,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$14578$0 ;
-  wire [186:0] \port$14578$0 ;
-  output [79:0] \port$14589$0 ;
-  wire [79:0] \port$14589$0 ;
-  output [9:0] \port$14666$0 ;
-  wire [9:0] \port$14666$0 ;
+  output [186:0] \port$14594$0 ;
+  wire [186:0] \port$14594$0 ;
+  output [79:0] \port$14605$0 ;
+  wire [79:0] \port$14605$0 ;
+  output [9:0] \port$14682$0 ;
+  wire [9:0] \port$14682$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -33280,9 +33216,9 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_
   assign \cfg_hold$199  = cfg_hold;
   assign \crc_table_addr$202  = crc_table_addr;
   assign \crc_table_data$204  = crc_table_data;
-  assign \port$14578$0  = \$24 ;
-  assign \port$14589$0  = \$25 ;
-  assign \port$14666$0  = \$26 ;
+  assign \port$14594$0  = \$24 ;
+  assign \port$14605$0  = \$25 ;
+  assign \port$14682$0  = \$26 ;
   assign \crc_table_data.poly  = crc_table_data[15:0];
   assign \crc_table_data.start  = crc_table_data[31:16];
   assign \crc_table_data.inverted  = crc_table_data[32];
@@ -34328,7 +34264,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$14188$206 (live[208:206]),
+    .\port$14204$206 (live[208:206]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(sample),
@@ -34389,7 +34325,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$14188$166 (live[166]),
+    .\port$14204$166 (live[166]),
     .rises(rises),
     .rst(rst),
     .ssi(live[193]),
@@ -34440,7 +34376,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .level(\slo$58 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$14188$193 (live[205:193]),
+    .\port$14204$193 (live[205:193]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -34465,7 +34401,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$14201$0 (\bit ),
+    .\port$14217$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -34533,7 +34469,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, crc_t
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$12036$0 (\$28 ),
+    .\port$12041$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -37591,16 +37527,6 @@ module \biss_master_uart.ch1.core.counter_ram (rst, host__en, busy, read_data, h
   reg [7:0] writing = 8'h00;
   reg [1:0] zero = 2'h0;
   reg [31:0] memory [7:0];
-  initial begin
-    memory[0] = 32'd0;
-    memory[1] = 32'd0;
-    memory[2] = 32'd0;
-    memory[3] = 32'd0;
-    memory[4] = 32'd0;
-    memory[5] = 32'd0;
-    memory[6] = 32'd0;
-    memory[7] = 32'd0;
-  end
   always @(posedge clk) begin
     if (write__en)
       memory[write__addr] <= { \$102 , \$85  };
@@ -38622,7 +38548,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, lc_load, ssi, \port$14188$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, lc_load, ssi, \port$14204$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_table_addr, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
@@ -39323,8 +39249,8 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$14188$206 ;
-  wire [2:0] \port$14188$206 ;
+  input [2:0] \port$14204$206 ;
+  wire [2:0] \port$14204$206 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -39644,7 +39570,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
     cpw_top <= \$600 ;
   always @(posedge clk)
     crc_table_addr <= \$601 ;
-  assign error_bit = ssi & \port$14188$206 [0];
+  assign error_bit = ssi & \port$14204$206 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -39673,19 +39599,19 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \$19  = slots == 16'hfffe;
   assign \$20  = sample & \bit ;
   assign \$21  = | words[5:0];
-  assign \$22  = ssi & \port$14188$206 [0];
+  assign \$22  = ssi & \port$14204$206 [0];
   assign \$24  = words[5:0] + \$23 ;
   assign \$25  = ! \$24 ;
-  assign \$26  = ssi & \port$14188$206 [0];
+  assign \$26  = ssi & \port$14204$206 [0];
   assign \$28  = words[5:0] + \$27 ;
   assign \$29  = | \$28 ;
   assign \$30  = \$25  & \$29 ;
   assign \$31  = | words[17:12];
   assign \$32  = | words[5:0];
-  assign \$33  = ssi & \port$14188$206 [0];
+  assign \$33  = ssi & \port$14204$206 [0];
   assign \$35  = words[5:0] + \$34 ;
   assign \$36  = ! \$35 ;
-  assign \$37  = ssi & \port$14188$206 [0];
+  assign \$37  = ssi & \port$14204$206 [0];
   assign \$39  = words[5:0] + \$38 ;
   assign \$40  = | \$39 ;
   assign \$41  = \$36  & \$40 ;
@@ -39706,7 +39632,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \$56  = idx == current[34:28];
   assign \$57  = word_count - 1'h1;
   assign \$58  = word == \$57 ;
-  assign \$59  = ssi & \port$14188$206 [2];
+  assign \$59  = ssi & \port$14204$206 [2];
   assign \$60  = word + 1'h1;
   assign \$61  = idx + 1'h1;
   assign \$62  = idx == current[34:28];
@@ -39992,15 +39918,15 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \$342  = \$339  & \$341 ;
   assign \$343  = { data0[53:0], \$67  } | { \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72  };
   assign \$344  = ~ words[6];
-  assign \$345  = ssi & \port$14188$206 [0];
+  assign \$345  = ssi & \port$14204$206 [0];
   assign \$346  = ~ \$345 ;
   assign \$347  = \$344  & \$346 ;
   assign \$348  = ! word;
   assign \$349  = in_word & \$348 ;
   assign \$350  = idx == words[5:0];
   assign \$351  = \$349  & \$350 ;
-  assign \$352  = ssi & \port$14188$206 [0];
-  assign \$353  = ~ \port$14188$206 [1];
+  assign \$352  = ssi & \port$14204$206 [0];
+  assign \$353  = ~ \port$14204$206 [1];
   assign \$354  = \$352  & \$353 ;
   assign \$355  = \bit  ^ \$354 ;
   assign \$356  = ~ words[6];
@@ -40751,7 +40677,7 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$14188$206 [0];
+  assign ssi_error = \port$14204$206 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -40764,8 +40690,8 @@ module \biss_master_uart.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \index$46  = word;
   assign load_index = crc_table_addr;
   assign crc_next_word = crc_table_addr;
-  assign ssi_double = \port$14188$206 [2];
-  assign ssi_error_low = \port$14188$206 [1];
+  assign ssi_double = \port$14204$206 [2];
+  assign ssi_error_low = \port$14204$206 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -43044,7 +42970,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.ma_stop (rst, \port$14188$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_uart.ch1.core.ma_stop (rst, \port$14204$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -43133,8 +43059,8 @@ module \biss_master_uart.ch1.core.ma_stop (rst, \port$14188$166 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$14188$166 ;
-  wire \port$14188$166 ;
+  input \port$14204$166 ;
+  wire \port$14204$166 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -43254,7 +43180,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, \port$14188$166 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$14188$166  : 1'h0;
+  assign \$13  = \$12  ? \port$14204$166  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -43422,7 +43348,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, \port$14188$166 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$14188$166 , 1'h1 };
+  assign enables = { \port$14204$166 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -43747,7 +43673,11 @@ module \biss_master_uart.ch1.core.register_access.buffers (rst, host_read__en, b
   wire \$2 ;
   wire \$3 ;
   wire \$4 ;
-  wire [5:0] \$5 ;
+  wire [4:0] \$5 ;
+  wire \$6 ;
+  reg [3:0] \$7 ;
+  reg \$8 ;
+  wire [5:0] \$9 ;
   input [7:0] byte_received;
   wire [7:0] byte_received;
   reg [3:0] byte_received__addr;
@@ -43755,6 +43685,8 @@ module \biss_master_uart.ch1.core.register_access.buffers (rst, host_read__en, b
   reg [3:0] byte_received__en;
   output [7:0] byte_to_send;
   wire [7:0] byte_to_send;
+  reg [3:0] cleared = 4'h0;
+  reg clearing = 1'h1;
   input clk;
   wire clk;
   input [3:0] host_read__addr;
@@ -43783,24 +43715,6 @@ module \biss_master_uart.ch1.core.register_access.buffers (rst, host_read__en, b
   wire [3:0] word_to_send__addr;
   wire [31:0] word_to_send__data;
   reg [31:0] rbuf [15:0];
-  initial begin
-    rbuf[0] = 32'd0;
-    rbuf[1] = 32'd0;
-    rbuf[2] = 32'd0;
-    rbuf[3] = 32'd0;
-    rbuf[4] = 32'd0;
-    rbuf[5] = 32'd0;
-    rbuf[6] = 32'd0;
-    rbuf[7] = 32'd0;
-    rbuf[8] = 32'd0;
-    rbuf[9] = 32'd0;
-    rbuf[10] = 32'd0;
-    rbuf[11] = 32'd0;
-    rbuf[12] = 32'd0;
-    rbuf[13] = 32'd0;
-    rbuf[14] = 32'd0;
-    rbuf[15] = 32'd0;
-  end
   always @(posedge clk) begin
     if (byte_received__en[0])
       rbuf[byte_received__addr][7:0] <= byte_received__data[7:0];
@@ -43818,65 +43732,81 @@ module \biss_master_uart.ch1.core.register_access.buffers (rst, host_read__en, b
     end
   end
   assign rbuf_data = _0_;
-  reg [31:0] \wbuf$21  [15:0];
-  initial begin
-    \wbuf$21 [0] = 32'd0;
-    \wbuf$21 [1] = 32'd0;
-    \wbuf$21 [2] = 32'd0;
-    \wbuf$21 [3] = 32'd0;
-    \wbuf$21 [4] = 32'd0;
-    \wbuf$21 [5] = 32'd0;
-    \wbuf$21 [6] = 32'd0;
-    \wbuf$21 [7] = 32'd0;
-    \wbuf$21 [8] = 32'd0;
-    \wbuf$21 [9] = 32'd0;
-    \wbuf$21 [10] = 32'd0;
-    \wbuf$21 [11] = 32'd0;
-    \wbuf$21 [12] = 32'd0;
-    \wbuf$21 [13] = 32'd0;
-    \wbuf$21 [14] = 32'd0;
-    \wbuf$21 [15] = 32'd0;
-  end
+  reg [31:0] \wbuf$23  [15:0];
   always @(posedge clk) begin
     if (wbuf[36])
-      \wbuf$21 [wbuf[3:0]][7:0] <= wbuf[11:4];
+      \wbuf$23 [wbuf[3:0]][7:0] <= wbuf[11:4];
     if (wbuf[37])
-      \wbuf$21 [wbuf[3:0]][15:8] <= wbuf[19:12];
+      \wbuf$23 [wbuf[3:0]][15:8] <= wbuf[19:12];
     if (wbuf[38])
-      \wbuf$21 [wbuf[3:0]][23:16] <= wbuf[27:20];
+      \wbuf$23 [wbuf[3:0]][23:16] <= wbuf[27:20];
     if (wbuf[39])
-      \wbuf$21 [wbuf[3:0]][31:24] <= wbuf[35:28];
+      \wbuf$23 [wbuf[3:0]][31:24] <= wbuf[35:28];
   end
   reg [31:0] _1_;
   always @(posedge clk) begin
-    _1_ <= \wbuf$21 [index[5:2]];
+    _1_ <= \wbuf$23 [index[5:2]];
   end
   assign word_to_send__data = _1_;
-  assign \$3  = index[1:0] == 2'h2;
-  assign \$4  = index[1:0] == 2'h3;
-  assign \$5  = index[1:0] * 4'h8;
-  assign byte_to_send = word_to_send__data >> \$5 ;
+  assign \$9  = index[1:0] * 4'h8;
+  assign byte_to_send = word_to_send__data >> \$9 ;
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
+  assign \$3  = index[1:0] == 2'h2;
+  assign \$4  = index[1:0] == 2'h3;
+  assign \$5  = cleared + 1'h1;
+  assign \$6  = cleared == 4'hf;
+  always @(posedge clk)
+    cleared <= \$7 ;
+  always @(posedge clk)
+    clearing <= \$8 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     byte_received__addr = 4'h0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__addr = cleared;
+    end else if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     byte_received__data = 32'd0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__data = 32'd0;
+    end else if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     byte_received__en = 4'h0;
-    if (store) begin
+    if (clearing) begin
+      byte_received__en = 4'hf;
+    end else if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    \$7  = cleared;
+    if (clearing) begin
+      \$7  = \$5 [3:0];
+    end
+    if (rst) begin
+      \$7  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    \$8  = clearing;
+    if (clearing) begin
+      if (\$6 ) begin
+        \$8  = 1'h0;
+      end
+    end
+    if (rst) begin
+      \$8  = 1'h1;
     end
   end
   assign host_write__addr = wbuf[3:0];
@@ -45562,7 +45492,7 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$14188$193 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$14204$193 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -46145,8 +46075,8 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$14188$193 ;
-  wire [12:0] \port$14188$193 ;
+  input [12:0] \port$14204$193 ;
+  wire [12:0] \port$14204$193 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -46169,7 +46099,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$14188$193 [12:1] + 1'h1;
+  assign \$460  = \port$14204$193 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -46745,7 +46675,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$14188$193 [0]),
+    .clear_high(\port$14204$193 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -46888,7 +46818,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$14188$193 [0]) begin
+            if (\port$14204$193 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -46973,7 +46903,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$14188$193 [0]) begin
+            if (\port$14204$193 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -47012,7 +46942,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$14188$193 [12:1] };
+            \$534  = { 1'h0, \port$14204$193 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -47397,11 +47327,11 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$14188$193 [12:1] };
-  assign fixed = \port$14188$193 [0];
+  assign fixed_delay = { 1'h0, \port$14204$193 [12:1] };
+  assign fixed = \port$14204$193 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$14188$193 [0];
+  assign clear_high = \port$14204$193 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -49978,7 +49908,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$14201$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$14217$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -50020,8 +49950,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$14201$0 ;
-  wire \port$14201$0 ;
+  input \port$14217$0 ;
+  wire \port$14217$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -50035,9 +49965,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$14201$0  };
-  assign \$2  = { lc[4:0], \port$14201$0  } == last;
-  assign \$3  = { lc[4:0], \port$14201$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$14217$0  };
+  assign \$2  = { lc[4:0], \port$14217$0  } == last;
+  assign \$3  = { lc[4:0], \port$14217$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -50147,7 +50077,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$14201$0  };
+  assign lc_next = { lc[4:0], \port$14217$0  };
   assign zero = is_zero;
 endmodule
 
@@ -52944,7 +52874,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$12036$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$12041$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire \$1 ;
@@ -53116,8 +53046,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$12036$0 , 
   wire noisy;
   output passed;
   wire passed;
-  output \port$12036$0 ;
-  wire \port$12036$0 ;
+  output \port$12041$0 ;
+  wire \port$12041$0 ;
   output report;
   wire report;
   input report_frame;
@@ -53235,7 +53165,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$12036$0 , 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$12036$0  = \$2 ;
+  assign \port$12041$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -19,6 +19,13 @@ class AccessBuffers(wiring.Component):
     ``rbuf_en`` high the word at ``rbuf_addr`` is read, ``rbuf_data`` holds it from the next
     clock until the next read). The engine takes and stores one byte, ``index``, at a time.
 
+    After every reset the read buffer is cleared, a word per clock: a host read from the
+    ``BUFFER_WORDS + 1``-th clock after the reset on returns 0 for every byte no read access
+    has stored since. (The memories have no initial value in the generated Verilog, and a
+    reset does not clear a memory: without this, a word read before the bytes of a read came
+    in would be undefined, X in Icarus, where a bus model that reads it stops.) The write
+    buffer is not cleared: the engine sends only the bytes the host wrote for the access.
+
     Attributes
     ----------
     wbuf : In(buffer_write_layout)
@@ -70,7 +77,19 @@ class AccessBuffers(wiring.Component):
         m.submodules.rbuf = rbuf = Memory(shape=width, depth=BUFFER_WORDS, init=[])
         byte_received = rbuf.write_port(granularity=8)
         host_read = rbuf.read_port()
-        with m.If(self.store):
+        # The clear after reset, through the engine's write port: word ``cleared`` in each clock
+        # while ``clearing``. No byte is stored meanwhile: a read stores its first byte after
+        # the frames of its address and of the byte (at least 14), and the first frame after
+        # a reset comes after the power-up break.
+        clearing = Signal(init=1)
+        cleared = Signal(BUFFER_WORD_BITS)
+        with m.If(clearing):
+            m.d.sync += cleared.eq(cleared + 1)
+            with m.If(cleared == BUFFER_WORDS - 1):
+                m.d.sync += clearing.eq(0)
+            m.d.comb += [byte_received.addr.eq(cleared), byte_received.data.eq(0),
+                         byte_received.en.eq(Const(-1, BUFFER_LANES))]
+        with m.Elif(self.store):
             m.d.comb += [byte_received.addr.eq(word),
                          byte_received.data.eq(self.byte_received.replicate(BUFFER_LANES)),
                          byte_received.en.eq(Cat(lane == k for k in range(BUFFER_LANES)))]
