@@ -43,6 +43,22 @@ def simulate(dut, testbench):
     sim.run()
 
 
+def simulate_with_reset(dut, testbench):
+    """As :func:`simulate`, for a testbench that drives the ``sync`` domain's reset as well:
+    it is called as ``testbench(ctx, rst)``."""
+    top = Module()
+    top.domains.sync = sync = ClockDomain()
+    top.submodules.dut = dut
+    sim = Simulator(top)
+    sim.add_clock(CLOCK_PERIOD_S)
+
+    async def bench(ctx):
+        await testbench(ctx, sync.rst)
+
+    sim.add_testbench(bench)
+    sim.run()
+
+
 def member(obj, path):
     """The member of a component or view at a dotted path: ``"live.w0.data_bits"``, ``"words.1"``."""
     for name in path.split("."):

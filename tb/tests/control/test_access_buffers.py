@@ -3,11 +3,8 @@ the read buffer holds the bytes a read stored, byte ``i`` in lane ``i % 4`` of w
 and is cleared after every reset (a memory keeps its contents through a reset, and the
 generated Verilog gives it no initial value), so a host never reads an undefined word."""
 
-from amaranth.hdl import ClockDomain, Module
-from amaranth.sim import Simulator
-
 from bissmaster.control.access_buffers import AccessBuffers
-from testkit.block_sim import CLOCK_PERIOD_S
+from testkit.block_sim import simulate_with_reset
 
 WORDS = 16            # 64 bytes (docs/control.md)
 CLEAR_CLOCKS = WORDS  # a word per clock after reset; a read issued after them reads 0
@@ -18,15 +15,12 @@ def run(steps):
     Returns, per step, the word the previous step's read returned (``rbuf_data`` in the clock
     after the read), or None."""
     dut = AccessBuffers()
-    top = Module()
-    top.domains.sync = sync = ClockDomain()
-    top.submodules.dut = dut
     got = []
 
-    async def tb(ctx):
+    async def tb(ctx, rst):
         pending = False
         for step in steps:
-            ctx.set(sync.rst, step.get("rst", 0))
+            ctx.set(rst, step.get("rst", 0))
             store = step.get("store")
             ctx.set(dut.store, store is not None)
             if store is not None:
@@ -39,10 +33,7 @@ def run(steps):
             pending = read is not None
             await ctx.tick()
 
-    sim = Simulator(top)
-    sim.add_clock(CLOCK_PERIOD_S)
-    sim.add_testbench(tb)
-    sim.run()
+    simulate_with_reset(dut, tb)
     return got
 
 

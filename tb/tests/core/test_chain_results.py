@@ -22,10 +22,9 @@ bits) and an 8-word one (64-bit words).
 import random
 
 import pytest
-from amaranth.hdl import ClockDomain, Module
-from amaranth.sim import Simulator
 
 from bissmaster.core.chain_results import ChainResults
+from testkit.block_sim import simulate_with_reset
 
 #: Words of the register map's read address: words 2..7, two 32-bit halves each.
 ADDRESSES = 12
@@ -44,13 +43,10 @@ def run(words, data_bits, frames, seed, reset_at=None):
     between every step; ``reset_at``: frame index before which the design is reset. Returns the
     number of checked reads."""
     dut = ChainResults(words, data_bits)
-    top = Module()
-    top.domains.sync = sync = ClockDomain()
-    top.submodules.dut = dut
     rng = random.Random(seed)
     checked = [0]
 
-    async def bench(ctx):
+    async def bench(ctx, rst):
         shown = {}                          # the published frame as a reader must see it
 
         async def tick(new_shown=None):
@@ -72,9 +68,9 @@ def run(words, data_bits, frames, seed, reset_at=None):
 
         for n, (publish, frame) in enumerate(frames):
             if n == reset_at:
-                ctx.set(sync.rst, 1)
+                ctx.set(rst, 1)
                 await ctx.tick()
-                ctx.set(sync.rst, 0)
+                ctx.set(rst, 0)
                 shown = {}
             for k, (word, value) in enumerate(sorted(frame.items())):
                 # The word's last bit: word_end; its data from the next clock for 4 clocks,
@@ -111,10 +107,7 @@ def run(words, data_bits, frames, seed, reset_at=None):
                 checked[0] += 1
                 await ctx.tick()
 
-    sim = Simulator(top)
-    sim.add_clock(1e-8)
-    sim.add_testbench(bench)
-    sim.run()
+    simulate_with_reset(dut, bench)
     return checked[0]
 
 

@@ -13,12 +13,10 @@ Cycle conventions: ``block_sim.py``.
 import random
 
 import pytest
-from amaranth.hdl import ClockDomain, Module
-from amaranth.sim import Simulator
 
 from bissmaster.core.counter_ram import CounterRam
 
-from testkit.block_sim import CLOCK_PERIOD_S
+from testkit.block_sim import simulate_with_reset
 
 #: Sixteen counters, two per word, one slot left without a counter (it must read 0).
 SLOTS = tuple(f"c{i}" for i in range(15)) + (None,)
@@ -39,20 +37,17 @@ def run(events, clears, width=16, slots=SLOTS, reads=None, resets=(), busy=None)
     each cycle issue a read (``reads[t]``: a word, default the words in turn). Returns
     ``[(cycle issued, word, data)]``; ``busy``, a list, gets ``busy`` of each cycle."""
     dut = CounterRam(slots, width)
-    top = Module()
-    top.domains.sync = sync = ClockDomain()
-    top.submodules.dut = dut
     words = (len(slots) + 1) // 2
     reads = reads or [t % words for t in range(len(events))]
     got = []
 
-    async def tb(ctx):
+    async def tb(ctx, rst):
         issued = None
         for t, (ev, clear) in enumerate(zip(events, clears)):
             for name in (s for s in slots if s is not None):
                 ctx.set(dut.events[name], ev.get(name, 0))
             ctx.set(dut.clear, clear)
-            ctx.set(sync.rst, t in resets)
+            ctx.set(rst, t in resets)
             ctx.set(dut.read_en, 1)
             ctx.set(dut.read_addr, reads[t])
             if issued is not None:
@@ -62,10 +57,7 @@ def run(events, clears, width=16, slots=SLOTS, reads=None, resets=(), busy=None)
                 busy.append(ctx.get(dut.busy))
             await ctx.tick()
 
-    sim = Simulator(top)
-    sim.add_clock(CLOCK_PERIOD_S)
-    sim.add_testbench(tb)
-    sim.run()
+    simulate_with_reset(dut, tb)
     return got
 
 
