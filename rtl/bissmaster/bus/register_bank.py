@@ -513,8 +513,8 @@ class RegisterBank(wiring.Component):
         asynchronous port at ``r_load``, addressed by a register set at ``r_en``, so it
         returns the value of its ``r_load`` clock as a flip-flop's word does. Yosys maps it to
         distributed RAM and no LUT on ECP5 (an address register and an asynchronous read is
-        its 16x4 RAM's read port), as Vivado and Quartus do; not built for iCE40 (no
-        distributed RAM; ``elaborate``).
+        its 16x4 RAM's read port), and to RAM32M on Xilinx and MLABs on Cyclone V; not built
+        for iCE40 (no distributed RAM; ``elaborate``).
 
         A memory keeps its contents through a reset, the flip-flops do not: one flag per
         register says it was written since reset. Until then it reads its reset value, and
