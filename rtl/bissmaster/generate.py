@@ -149,10 +149,10 @@ def drop_zero_memory_inits(text):
     """``text`` without its memories' all-zero ``initial`` blocks.
 
     No block of the design reads a memory word it has not written since the last reset: each
-    memory is either cleared after reset by its block (the counter memory, the CRC table) or
-    read behind a flag that is reset (the configuration read-back's written flags, the chain
-    memory's published count), or documented as undefined until written (the access buffers,
-    docs/ports.md, "Clock and reset"). A memory keeps its contents through a reset anyway, so
+    memory is either cleared after reset by its block (the counter memory, the CRC table, the
+    access engine's read buffer) or read behind a flag that is reset (the configuration
+    read-back's written flags, the chain memory's published count), or read only where the
+    host wrote it (the access engine's write buffer; docs/ports.md, "Clock and reset"). A memory keeps its contents through a reset anyway, so
     an initial value would hold only after power-up. What the initial value does do is keep
     Yosys's ``synth_intel_alm`` from mapping the memory to Cyclone V MLABs (it cannot
     initialize them): with it, every memory of the bus tops became flip-flops there

@@ -87,7 +87,8 @@ class CounterRam(wiring.Component):
         full = 2**self._width - 1
         # A memory, not registers (issue 27): Yosys maps it to distributed RAM on ECP5
         # (TRELLIS_DPR16X4) and Xilinx (RAM32M), to MLABs on Cyclone V (Vivado and Quartus not
-        # run here: docs/ports.md, "Clock and reset"); the two read ports (counting, the host's reads) become two copies of it. A whole word is
+        # run here: docs/ports.md, "Clock and reset"); the two read ports (counting, the host's
+        # reads) become two copies of it. A whole word is
         # written each time, both counts updated together: one write port serves the counters
         # a word per clock, so a counter waits for at most ``words - 1`` others.
         # iCE40 has no distributed RAM, and Yosys builds a memory this small from flip-flops

@@ -1,4 +1,4 @@
-"""The register-access buffers (docs/control.md, "Buffers"; docs/ports.md, "Clock and reset"):
+"""The register-access buffers (docs/control.md, "The buffers"; docs/ports.md, "Clock and reset"):
 the read buffer holds the bytes a read stored, byte ``i`` in lane ``i % 4`` of word ``i // 4``,
 and is cleared after every reset (a memory keeps its contents through a reset, and the
 generated Verilog gives it no initial value), so a host never reads an undefined word."""
