@@ -18,6 +18,7 @@ from amaranth.lib.memory import Memory
 from bissmaster.bus import regmap
 from bissmaster.bus.bus_adapters import AxiLiteAdapter, WishboneAdapter
 from bissmaster.bus.register_bank import RegisterBank
+from testkit.block_sim import simulate_with_reset
 
 MAP = regmap.load()
 CH0 = MAP.channel_base
@@ -403,18 +404,11 @@ def test_access_registers_and_done_interrupt():
     run(bench)
 
 
-def _run_with_reset(bench):
-    """One channel's bank; ``bench`` gets (ctx, bank, the clock domain's reset)."""
-    top = Module()
-    top.domains.sync = cd = ClockDomain()
-    top.submodules.bank = bank = RegisterBank(MAP, 1)
-    sim = Simulator(top)
-    sim.add_clock(1e-8)
-
-    async def testbench(ctx):
-        await bench(ctx, bank, cd.rst)
-    sim.add_testbench(testbench)
-    sim.run()
+def _run_with_reset(bench, bank=None):
+    """``bank`` (default: one channel's bank of the map); ``bench`` gets (ctx, bank, the clock
+    domain's reset)."""
+    bank = bank or RegisterBank(MAP, 1)
+    simulate_with_reset(bank, lambda ctx, rst: bench(ctx, bank, rst))
 
 
 def test_configuration_reads_its_reset_value_after_a_reset():
@@ -664,23 +658,16 @@ def test_crc_table_is_cleared_after_a_reset():
     """A memory keeps its contents through a reset; the table must not: after a reset the bank
     writes every entry with its reset value (0), one per clock, holding the core in IDLE
     (cfg_hold) until then, and a write that comes meanwhile acts after it."""
-    held = set(TABLE)
-    top = Module()
-    top.domains.sync = cd = ClockDomain()
-    top.submodules.bank = bank = RegisterBank(MAP, 1, None, [held], [TABLE])
-    sim = Simulator(top)
-    sim.add_clock(1e-8)
-
-    async def bench(ctx):
+    async def bench(ctx, bank, rst):
         ctx.set(bank.cfg_free, 1)
         for _ in range(10):
             await ctx.tick()
         await write(ctx, bank, offset("cfg_w7_crc_start"), 0xBEEF)
         await ctx.tick()
         assert await _table(ctx, bank, 7) == _entry(0, 0xBEEF, 0)
-        ctx.set(cd.rst, 1)
+        ctx.set(rst, 1)
         await ctx.tick()
-        ctx.set(cd.rst, 0)
+        ctx.set(rst, 0)
         # A write right after the reset: it waits for the clear.
         ctx.set(bank.bus.w_en, 1)
         ctx.set(bank.bus.w_addr, offset("cfg_crc1") // 4)
@@ -696,8 +683,7 @@ def test_crc_table_is_cleared_after_a_reset():
             want = _entry(0x0007, 0, 0) if w == 1 else 0
             assert await _table(ctx, bank, w) == want, w
         assert await read(ctx, bank, offset("cfg_w7_crc_start")) == 0
-    sim.add_testbench(bench)
-    sim.run()
+    _run_with_reset(bench, RegisterBank(MAP, 1, None, [set(TABLE)], [TABLE]))
 
 
 @pytest.mark.filterwarnings("ignore::amaranth.hdl.UnusedElaboratable")
