@@ -198,6 +198,35 @@ async def random_setup(c, names=LINE_PRESETS, rates=FAST_RATES, cable_m=None):
     c.setup(name, ma_hz, cfg_end_check=int(c.rng.random() < 0.5))
 
 
+def frame_end_s(c, res, requested_s):
+    """When this cycle's frame ended as the master's line checks count it, from the test's
+    side: the master-pin time its last bit began to arrive (the bit is decided about half a
+    bit later), or the cycle's ``done`` where the encoder sent no whole frame. Noise events
+    count from the frame's end (the decision of its last bit) to the next frame's end
+    (docs/ports.md, "Noise: the line checks"), so a line disturbance after this time may be
+    an event of the next frame. ``requested_s``: when the cycle was requested (a record from
+    before it is another cycle's)."""
+    end = res.t_done_s
+    if c.tb.encoder.records:
+        record = c.tb.encoder.records[-1]
+        if record.t_first_fall_s >= requested_s - 1e-9 and not math.isnan(record.t_last_bit_s):
+            end = min(end, record.t_last_bit_s)
+    return end
+
+
+async def next_frame_after_noise(c, kind):
+    """One clean frame after a line disturbance that may have left a noise event for it (a
+    glitch or a stuck line after the frame before ended, or a stuck line released while the
+    master waits: an SLO fall then is an event): the reference's verdict (a sign-of-life
+    status after the frames a stuck line cost, UNCONFIRMED after a fault), or NOISY_LINE where
+    that is OK or UNCONFIRMED (the checks' order: docs/ports.md). Returns its result."""
+    c.queue(processing_time_s=c.processing())
+    res = await c.tb.request(limit_s=WATCHDOG_S)
+    c.judge_faulted(res, kind, [s for s in FRAME_STATUSES if s != "DELAY_JUMP"])
+    await c.settle()
+    return res
+
+
 async def do_stuck(c, level):
     kind = "slo_stuck_low" if level == 0 else "slo_stuck_high"
     at = c.rng.uniform(0, cycle_time_s(c))
@@ -212,13 +241,26 @@ async def do_stuck(c, level):
     c.stats[f"{kind}_cycles_{'with' if c.end_check else 'without'}_end_check"] += 1
     c.note(kind, res, c.tb.encoder.cable.round_trip_s(), outcome)
     # While the line stays stuck, every request must fail the same defined way.
-    for _ in range(c.rng.randint(0, 2)):
+    extra = c.rng.randint(0, 2)
+    for _ in range(extra):
         res = await c.tb.request(limit_s=WATCHDOG_S)
         want = "SLO_STUCK_LOW" if level == 0 else "NO_ACK"
         c.judge_faulted(res, kind, [want])
         c.note(kind, res, None)
+    # The line may leave a noise event for the next frame (docs/ports.md, "Noise: the line
+    # checks"): a stuck line that began after the frame ended falls while the master waits,
+    # and one released right after the cycle (no request since) gives the encoder's level
+    # back in the frame's tail (a rise, then its stop bit's fall), unless a cycle since ended
+    # in a fault, which starts the count again. A line stuck high, released, may fall to the
+    # encoder's level while the master waits (the encoder still in its timeout after the
+    # cycles the stuck line cost).
+    noise_left = level == 1 or extra == 0
     c.tb.encoder.force_slo(None)
     await c.settle()
+    if noise_left and defences(c.dut):
+        res = await next_frame_after_noise(c, kind)
+        if res.status == STATUS["OK"]:
+            return
     await c.recover(kind)
 
 
@@ -250,10 +292,16 @@ async def do_glitch(c):
 
     res, task = await faulted_cycle(c, inject)
     await task
-    # A glitch after the cycle ended fell while the master waited (or in the cycle's tail): a
-    # noise event for the next frame (docs/ports.md, "Noise: the line checks"), which may
-    # then be NOISY_LINE. That frame is judged here, with that one status allowed beside OK.
-    after_done = glitch_at and glitch_at[0] >= res.t_done_s - 1e-12
+    # Noise events count from the frame's end (the decision of its last bit) to the next
+    # frame's end (docs/ports.md, "Noise: the line checks"): a glitch that reaches past the
+    # end of this cycle's frame, into its tail, the encoder's timeout (with the end check the
+    # cycle ends only after it) or the wait after the cycle, may be an event of the next frame,
+    # which may then be NOISY_LINE. That frame is judged here, with that one status allowed
+    # beside OK. "Past the end": the glitch ends after the frame's last bit began to arrive
+    # (the bit is decided about half a bit later: up to half a bit of glitches is allowed
+    # either outcome), or after `done` where the encoder sent no whole frame.
+    reaches_next = (bool(glitch_at) and glitch_at[0] + width
+                    >= frame_end_s(c, res, glitch_at[0] - at) - 1e-12)
 
     def explain(bits):
         yield from flips(bits)
@@ -262,12 +310,8 @@ async def do_glitch(c):
     outcome = c.judge_faulted(res, "glitch", LINE_ALLOWED["glitch"], explain=explain)
     c.note("glitch", res, c.tb.encoder.cable.round_trip_s(), outcome)
     await c.settle()
-    if after_done and defences(c.dut):
-        c.queue(processing_time_s=c.processing())
-        nxt = await c.tb.request(limit_s=WATCHDOG_S)
-        c.judge_faulted(nxt, "glitch", ["OK", "NOISY_LINE"])
-        await c.settle()
-        res = nxt
+    if reaches_next and defences(c.dut):
+        res = await next_frame_after_noise(c, "glitch")
     if res.status != STATUS["OK"]:
         await c.recover("glitch")
 
@@ -575,6 +619,19 @@ async def apply_config(c, cfg):
         getattr(c.dut, name).value = value
 
 
+def encoder_follows(c, cfg):
+    """The encoder answers with the frame ``cfg`` (a valid configuration) describes, at its
+    MA rate; the campaign judges by it."""
+    fmt = format_of(cfg, c.tb.words)
+    hp = cfg["cfg_ma_half_period"]
+    c.cfg = {**cfg, "spw_tolerance": cfg["cfg_spw_tolerance"]}
+    c.tb.fmt = fmt
+    c.tb.half_period = hp
+    c.tb.source = frames.EncoderFrameSource(fmt, c.tb._position_at,
+                                            sign_of_life=c.tb.sign_of_life)
+    c.preset_name, c.ma_hz = None, CLK_HZ / (2 * hp)
+
+
 @cocotb.test()
 async def config_fuzz(dut):
     """Random configurations, valid and invalid, between and during cycles: a valid one gives
@@ -603,7 +660,12 @@ async def config_fuzz(dut):
             stats["signed_words"] += sum(cfg.get(f"cfg_w{w}_signed", 0) for w in used)
         during = c.rng.random() < 0.25
         if during:
-            await apply_config(c, last_valid)       # the cycle runs on the last valid one
+            # The cycle runs on the last valid configuration, and the encoder answers with its
+            # frame (an iteration since may have set the encoder to another one: a valid
+            # configuration whose delay limit ends it in DELAY_RANGE is not kept as the last
+            # valid one).
+            await apply_config(c, last_valid)
+            encoder_follows(c, last_valid)
             # Change the configuration while a (valid) cycle runs: that cycle keeps its own.
             at = c.rng.uniform(0, cycle_time_s(c))
 
@@ -641,14 +703,7 @@ async def config_fuzz(dut):
             stats["invalid"] += 1
             continue
         # Valid: the encoder now sends what this configuration describes.
-        fmt = format_of(cfg, c.tb.words)
-        hp = cfg["cfg_ma_half_period"]
-        c.cfg = {**cfg, "spw_tolerance": cfg["cfg_spw_tolerance"]}
-        c.tb.fmt = fmt
-        c.tb.half_period = hp
-        c.tb.source = frames.EncoderFrameSource(fmt, c.tb._position_at,
-                                                   sign_of_life=c.tb.sign_of_life)
-        c.preset_name, c.ma_hz = None, CLK_HZ / (2 * hp)
+        encoder_follows(c, cfg)
         rt = c.tb.encoder.cable.round_trip_s() * CLK_HZ
         if cfg["cfg_delay_limit"] and abs(cfg["cfg_delay_limit"] - rt) < 2:
             cfg["cfg_delay_limit"] = c.cfg["cfg_delay_limit"] = 0

@@ -144,6 +144,8 @@ class CycleRecord:
     t_start_rise_s: float = math.nan    # master-pin time of the MA rise that launched Start
     t_end_s: float = math.nan           # encoder time the cycle ended (MA quiet for timeout_s)
     t_ready_s: float = math.nan         # encoder time SLO was released high again (nan: stuck)
+    t_last_bit_s: float = math.nan      # master-pin time the frame's last bit begins to arrive
+                                        # (nominal: without jitter; nan: not sent)
     cdm: int = 0                        # 1 if the cycle ended with MA held low (BiSS C CDM)
     ended: bool = False
     cds: int | None = None              # CDS the control slave put in this frame (None: no
@@ -360,14 +362,17 @@ class BissEncoder(SimSteps):
                 self._run_due()
 
     # -- encoder -> master (SLO) ------------------------------------------------------------
+    def _pin_delay_s(self) -> float:
+        """From the encoder's output to the master pin, without jitter."""
+        return facts.ENCODER_INTERNAL_DELAY_S + self.cable.e2m_s()
+
     def _update_output(self) -> None:
         lvl = self._override if self._override is not None else self._enc_out
         if lvl == self._out_sent:
             return
         self._out_sent = lvl
         now = self._now()
-        tm = now + self._steps(facts.ENCODER_INTERNAL_DELAY_S + self.cable.e2m_s()
-                               + self._jitter())
+        tm = now + self._steps(self._pin_delay_s() + self._jitter())
         tm = max(tm, now, self._last_slo_arrival)
         self._last_slo_arrival = tm
         if self.trace is not None:
@@ -464,6 +469,8 @@ class BissEncoder(SimSteps):
                 bit = int(bits[cyc.index])
                 cyc.index += 1
                 rec.bits_sent.append(bit)
+                if cyc.index == len(bits):
+                    rec.t_last_bit_s = self._sec(self._now()) + self._pin_delay_s()
                 self._enc_out = bit
             else:
                 self._enc_out = 0       # stop bit / start of the timeout
