@@ -90,7 +90,7 @@ BUS_CONFIGS = {
     "axil-1": ("axil", 1, "biss-c", ("ecp5", "ice40", "xilinx", "intel")),
     "axil-4": ("axil", 4, "biss-c", ("ecp5", "xilinx", "intel")),
     # issue 27's iCE40 target: two channels behind AXI4-Lite in the UP5K (the lean core)
-    "axil-2-lean": ("axil", 2, "biss-c-lean", ("ice40", "ecp5")),
+    "axil-2-lean": ("axil", 2, "biss-c-lean", ("ice40", "ecp5", "xilinx", "intel")),
     # the same as a UP5K design builds it: the iCEBreaker's 24 MHz system clock, a half-period
     # setting of 8 bits (MA down to 47 kHz, below BiSS's 80 kHz) and round trips up to 1023
     # clocks (42.6 us, above the protocol's 40 us)
@@ -100,16 +100,16 @@ BUS_CONFIGS = {
     # the UART bridge instead of AXI4-Lite (a board's host link; docs/uart_bridge.md)
     "uart-1": ("uart", 1, "biss-c", ("ecp5", "ice40", "xilinx", "intel")),
     # a chain of four words behind the bus (issue 26; the core alone: `chain-4`)
-    "axil-chain-4": ("axil", 1, "chain", ("ecp5",), CHAIN_4_OPTIONS),
+    "axil-chain-4": ("axil", 1, "chain", ("ecp5", "xilinx", "intel"), CHAIN_4_OPTIONS),
     # one channel of eight long words: what each channel of issue 27's axil-8 target costs
     # (Xilinx and Intel: whether its memories, the CRC table's among them, are RAM there)
     "axil-chain-8": ("axil", 1, "chain", ("ecp5", "xilinx", "intel"), CHAIN_8_OPTIONS),
     # issue 27's target itself: eight such channels. nextpnr packs it and reports the
     # device's share it needs (it does not fit the 25F: "does not fit", with the counts).
-    "axil-8": ("axil", 8, "chain", ("ecp5",), CHAIN_8_OPTIONS),
+    "axil-8": ("axil", 8, "chain", ("ecp5", "xilinx", "intel"), CHAIN_8_OPTIONS),
     # eight axes of one BiSS C word each (the common motion controller): how much of the 25F
     # eight channels take when their frames are short
-    "axil-8-biss-c": ("axil", 8, "biss-c", ("ecp5",)),
+    "axil-8-biss-c": ("axil", 8, "biss-c", ("ecp5", "xilinx", "intel")),
     # the same with a 10-bit half period (MA down to 48.9 kHz at 100 MHz, below BiSS's 80 kHz)
     "axil-8-biss-c-hp10": ("axil", 8, "biss-c", ("ecp5",), ["--half-period-width", "10"]),
 }

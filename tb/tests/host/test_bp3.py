@@ -207,7 +207,9 @@ def _ports(preset):
 
 @pytest.mark.parametrize("preset, params", [
     ("default", MasterParams()),
-    ("biss-c", MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),))),
+    # the biss-c preset: one CRC-6 word, no custom CRCs, no signed words
+    ("biss-c", MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),), custom_crc=False,
+                            signed_words=False)),
 ])
 def test_derived_names_are_ports_of_the_build(preset, params):
     config = bp3.derive_config(_eds(DL=38), params=params)
