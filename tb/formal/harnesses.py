@@ -497,6 +497,12 @@ class LivenessLimits:
     lc: bool = False
     crcs: tuple = (Crc.NONE,)
     quiet_max: int = 2
+    ssi_delay_max: int = 2
+
+    @staticmethod
+    def has_ssi(dut):
+        """The build accepts ``cfg_ssi`` (docs/ports.md, "SSI mode")."""
+        return hasattr(dut, "cfg_ssi")
 
     def assume(self, m, dut, words, *, time_min=0, crcs=True):
         """Assume the master's live settings within these limits. ``time_min`` 1 excludes
@@ -512,6 +518,10 @@ class LivenessLimits:
         if hasattr(dut, "cfg_quiet_time"):
             # The quiet time (docs/ports.md): 1 .. quiet_max clocks, never the 1 us default.
             m.d.comb += Assume((dut.cfg_quiet_time >= 1) & (dut.cfg_quiet_time <= self.quiet_max))
+        if self.has_ssi(dut):
+            # SSI frames (docs/ports.md, "SSI mode"): the set round trip within a small range,
+            # as the other times (``cfg_ssi`` and the word's options stay free).
+            m.d.comb += Assume(dut.cfg_ssi_delay <= self.ssi_delay_max)
         for w in range(words):
             cfg = {name: getattr(dut, f"cfg_w{w}_{name}") for name in ("data_bits", "nenw", "lc", "crc")}
             m.d.comb += Assume(cfg["data_bits"] <= self.data_bits_max)
@@ -529,11 +539,23 @@ class LivenessLimits:
         crc = max({Crc.NONE: 0, Crc.CRC6: 6, Crc.CRC16: 16}[c] for c in self.crcs)
         return words * (self.data_bits_max + 2 * self.nenw + crc) + 6 * self.lc
 
+    def max_ssi_stop_slot(self):
+        """The SSI stop bit's index (docs/ports.md, "SSI mode"): N = data + the error bit or
+        nE/nW (not both: invalid) + the CRC; N, or 2 N + 1 with the double transmission."""
+        crc = max({Crc.NONE: 0, Crc.CRC6: 6, Crc.CRC16: 16}[c] for c in self.crcs)
+        n = self.data_bits_max + max(1, 2 * self.nenw) + crc
+        return 2 * n + 1
+
     def max_bound(self, words, slack):
         h = self.hp_max
-        return (1 + (self.timeout_max + self.quiet_max + 1) + (3 * h + 1) + (self.ack_max + 1)
+        v = h // 2 if h >= 3 else 0
+        biss = (1 + (self.timeout_max + self.quiet_max + 1) + (3 * h + 1) + (self.ack_max + 1)
                 + (self.ack_max + 2 * h) + (self.max_frame_bits(words) + 1) * 2 * h + 3 + slack
-                + 3 * h + (self.timeout_max + 1) + 2)        # the end check
+                + 3 * h + (self.timeout_max + 1) + 2)       # the end check
+        ssi = (1 + (self.timeout_max + self.quiet_max + 1) + (h + 1)
+               + self.max_ssi_stop_slot() * 2 * h + (self.ssi_delay_max + h + v + 1) + 3 + slack
+               + (self.timeout_max + 1) + 2)                # the end check
+        return max(biss, ssi)
 
     def depth(self, words, slack):
         """BMC depth that holds power-up, the break, and the longest cycle, with a margin."""
@@ -583,8 +605,14 @@ class MasterLivenessHarness(Harness):
         if p.words == 2:
             frame_bits = frame_bits + Mux(dut.cfg_w1_enable, _word_bits(dut, 1), 0)
         tw = p.timer_width
+        has_ssi = lim.has_ssi(dut)
+        ssi_live = C(0, 11)
+        if has_ssi:
+            ssi_delay_live = Signal(8)      # <= ssi_delay_max (assumed)
+            m.d.comb += ssi_delay_live.eq(dut.cfg_ssi_delay)
+            ssi_live = Cat(dut.cfg_ssi, dut.cfg_ssi_double, dut.cfg_ssi_error, ssi_delay_live)
         live = Cat(dut.cfg_ma_half_period, dut.cfg_ack_limit, dut.cfg_timeout_limit,
-                   frame_bits[:8], dut.cfg_end_check, dut.cfg_quiet_time[:4])
+                   frame_bits[:8], dut.cfg_end_check, dut.cfg_quiet_time[:4], ssi_live)
         snapshot = Signal(len(live))
         could_accept = Signal()
         m.d.sync += [snapshot.eq(live), could_accept.eq(~dut.busy & ~dut.abort_cycle)]
@@ -593,7 +621,14 @@ class MasterLivenessHarness(Harness):
         hp, ack, timeout, bits = (snapshot[:16], snapshot[16:16 + tw], snapshot[16 + tw:16 + 2 * tw],
                                   snapshot[16 + 2 * tw:16 + 2 * tw + 8])
         end_check = snapshot[16 + 2 * tw + 8]
-        quiet = snapshot[-4:]
+        quiet = snapshot[16 + 2 * tw + 9:16 + 2 * tw + 13]
+        ssi, ssi_double, ssi_error, ssi_delay = (snapshot[-11], snapshot[-10], snapshot[-9],
+                                                 snapshot[-8:])
+        # SSI (docs/ports.md, "SSI mode"): the word's N bits (data, the error bit, nE/nW, CRC;
+        # no LC), the stop bit's index N, or 2 N + 1 with the double transmission (the word,
+        # one 0, the word again).
+        ssi_bits = bits + ssi_error
+        ssi_stop = Mux(ssi_double, 2 * ssi_bits + 1, ssi_bits)
 
         # The bound, clock by clock: 1 to leave IDLE; WAIT_READY up to the timeout limit + the
         # quiet time + 1 (SLO high pulses shorter than the quiet time do not end the low time:
@@ -607,19 +642,41 @@ class MasterLivenessHarness(Harness):
         # stop (at most 3 half periods), then SLO high up to the timeout limit + 1, then the
         # verdict (2 clocks). The half period takes few values: one formula with constant
         # factors per value (a product of two variables would slow the solver down a lot).
+        # An SSI cycle (docs/ports.md, "SSI mode"): the same wait for the quiet line; MA to its
+        # first rise (h + 1: the sampler is armed there); bit k is put on SLO at rise k + 1, so
+        # the stop bit's rise comes ``ssi_stop`` MA periods later; its decision the set round
+        # trip + h + v + 1 after that rise ("exactly as a BiSS bit after a measured round
+        # trip": the NO_ACK row's ``line_delay + hp + v + 1``); ``done`` 3 clocks after it
+        # ("Latency"). With the end check: MA has stopped by then (its last rise is the stop
+        # bit's), so SLO high within the timeout limit + 1, then the verdict (2 clocks).
         def formula(h):
             per_bit = 0 if self.mutation == "tight" else 2 * h
-            return (1 + (timeout + quiet + 1) + (3 * h + 1) + (ack + 1) + (ack + 2 * h)
+            v = h // 2 if h >= 3 else 0     # the vote spacing (docs/ports.md, "Noise immunity")
+            biss = (1 + (timeout + quiet + 1) + (3 * h + 1) + (ack + 1) + (ack + 2 * h)
                     + (bits + 1) * per_bit + 3 + self.slack
                     + Mux(end_check, 3 * h + (timeout + 1) + 2, 0))
+            if not has_ssi:
+                return biss
+            ssi_bound = (1 + (timeout + quiet + 1) + (h + 1) + ssi_stop * per_bit
+                         + (ssi_delay + h + v + 1) + 3 + self.slack
+                         + Mux(end_check, (timeout + 1) + 2, 0))
+            return Mux(ssi, ssi_bound, biss)
         bound = formula(lim.hp_max)
         for h in range(lim.hp_max - 1, 1, -1):
             bound = Mux(hp == h, formula(h), bound)
         bound_done = Signal(16)
         with m.If(accepted):
             m.d.sync += bound_done.eq(bound)
+        # BREAK: the break time; in an SSI cycle the timeout limit as well (docs/ports.md,
+        # "SSI mode": "BREAK (after an abort or a fault) lasts cfg_timeout_limit as well as
+        # cfg_break_time").
+        cycle_ssi, cycle_timeout = Signal(), Signal(tw)
+        with m.If(accepted):
+            m.d.sync += [cycle_ssi.eq(ssi), cycle_timeout.eq(timeout)]
+        pause = Mux(cycle_ssi & (cycle_timeout > dut.cfg_break_time), cycle_timeout,
+                    dut.cfg_break_time)
         bound_idle = Signal(16)
-        m.d.comb += bound_idle.eq(bound_done + 4 * lim.hp_max + dut.cfg_break_time + self.slack)
+        m.d.comb += bound_idle.eq(bound_done + 4 * lim.hp_max + pause + self.slack)
 
         # 1. ``done`` answers every accepted request.
         pending = Signal()
@@ -987,15 +1044,20 @@ class _FrameParser:
     bit, which the solver cannot find on its own for CRC-16 in reasonable time. With ``rtl``
     (per word, per kind: the RTL's CRC register) it also asserts shadow == RTL register.
 
-    ``clear`` restarts the parse (a new cycle). ``mutation="poly"`` uses a wrong CRC-6
-    polynomial (x^6 + x^5 + 1) in ``data_crc``; ``"no_invert"`` forgets the inversion: the
-    solver must find a word on which the RTL and the harness disagree.
+    ``clear`` restarts the parse (a new cycle). ``ssi``: the frame is an SSI frame
+    (docs/ports.md, "SSI mode"): no Ack, Start or CDS, word 0 begins in the first clock after
+    ``clear`` and the first decision is its first bit; a ``cfg[0]`` entry ``ssi_error`` adds
+    the SSI error bit after the data (before the CRC, which covers it). The parse ends with the
+    (first copy of the) word: an SSI double transmission's separator and second copy are not
+    CRC bits. ``mutation="poly"`` uses a wrong CRC-6 polynomial (x^6 + x^5 + 1) in
+    ``data_crc``; ``"no_invert"`` forgets the inversion: the solver must find a word on which
+    the RTL and the harness disagree.
     """
 
     ACK, CDS, WORD, DONE = range(4)
 
     def __init__(self, m, sample, bit, cfg, count, clear=C(0), lemmas=True, rtl=None,
-                 mutation=None):
+                 mutation=None, ssi=C(0)):
         words = len(cfg)
         self.phase = phase = Signal(2, name="p_phase")
         self.pos = pos = Signal(7, name="p_pos")
@@ -1012,7 +1074,8 @@ class _FrameParser:
             c = cfg[w]
             crc_bits = Mux(c["crc"] == Crc.CRC6, 6, Mux(c["crc"] == Crc.CRC16, 16, 0))
             payload = Signal(7, name=f"p_payload{w}")
-            m.d.comb += payload.eq(c["data_bits"] + Mux(c["nenw"], 2, 0) + Mux(c["lc"], 6, 0))
+            m.d.comb += payload.eq(c["data_bits"] + Mux(c["nenw"], 2, 0) + Mux(c["lc"], 6, 0)
+                                   + (c["ssi_error"] if "ssi_error" in c else 0))
             self.payload.append(payload)
             length = Signal(7, name=f"p_len{w}")
             m.d.comb += length.eq(payload + crc_bits)
@@ -1124,6 +1187,9 @@ class _FrameParser:
         m.d.sync += done_strobe.eq(0)
         with m.If(clear):
             m.d.sync += [phase.eq(self.ACK), pos.eq(0), word.eq(0)]
+        with m.Elif((phase == self.ACK) & ssi):
+            # SSI: word 0 begins in the first clock after the clear (no Ack, Start or CDS).
+            m.d.sync += [phase.eq(self.WORD), pos.eq(0), word.eq(0)]
         with m.Elif(sample):
             with m.Switch(phase):
                 with m.Case(self.ACK):
@@ -1317,9 +1383,13 @@ class MasterCrcHarness(Harness):
             m.d.comb += Assume(Cat(*(getattr(dut, f"cfg_w{w}_crc") != Crc.CUSTOM
                                      for w in range(p.words))).all())
 
-        # Accepted request: idle and no abort in the previous clock, busy now.
+        # Accepted request: idle and no abort in the previous clock, busy now. SSI frames
+        # (docs/ports.md, "SSI mode"): ``cfg_ssi`` and the error bit (read only with it).
+        has_ssi = lim.has_ssi(dut)
         live = Cat(*(getattr(dut, f"cfg_w{w}_{n}") for w in range(p.words) for n in names),
-                   dut.cfg_w1_enable if p.words == 2 else C(0, 1))
+                   dut.cfg_w1_enable if p.words == 2 else C(0, 1),
+                   dut.cfg_ssi if has_ssi else C(0, 1),
+                   dut.cfg_ssi & dut.cfg_ssi_error if has_ssi else C(0, 1))
         snapshot = Signal(len(live))
         latched = Signal(len(live))
         could_accept = Signal()
@@ -1336,6 +1406,8 @@ class MasterCrcHarness(Harness):
                 offset += width
             cfg.append(c)
         count = 1 + latched[offset]
+        cfg[0]["ssi_error"] = latched[offset + 2]
+        ssi = latched[offset + 1]
 
         # The bits the decoder consumes, and the core's own "new cycle" reset of the receiver
         # (the parse restarts with it; the configuration is the harness's copy).
@@ -1345,7 +1417,7 @@ class MasterCrcHarness(Harness):
         clear = inside("master.receiver_clear")
         rtl = dict(_crc_state(decoder), ok=decoder("decoder.crc_ok"))
         parse = _FrameParser(m, sample, bit, cfg, count, clear=clear, lemmas=self.lemmas,
-                             rtl=rtl if self.lemmas else None, mutation=self.mutation)
+                             rtl=rtl if self.lemmas else None, mutation=self.mutation, ssi=ssi)
 
         all_ok = Cat(*(parse.ok[w] | (count <= w) for w in range(p.words))).all()
         crc_status = Cat(*(dut.status == STATUS[name] for name in
