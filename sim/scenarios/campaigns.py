@@ -296,10 +296,11 @@ async def do_glitch(c):
     # frame's end (docs/ports.md, "Noise: the line checks"): a glitch that reaches past the
     # end of this cycle's frame, into its tail, the encoder's timeout (with the end check the
     # cycle ends only after it) or the wait after the cycle, may be an event of the next frame,
-    # which may then be NOISY_LINE. That frame is judged here, with that one status allowed
-    # beside OK. "Past the end": the glitch ends after the frame's last bit began to arrive
-    # (the bit is decided about half a bit later: up to half a bit of glitches is allowed
-    # either outcome), or after `done` where the encoder sent no whole frame.
+    # which may then be NOISY_LINE. That frame is judged here (next_frame_after_noise: the
+    # reference's verdict, or NOISY_LINE). "Past the end": the glitch ends after the frame's
+    # last bit began to arrive (the bit is decided about half a bit later: up to half a bit
+    # of glitches is allowed either outcome), or after `done` where the encoder sent no
+    # whole frame.
     reaches_next = (bool(glitch_at) and glitch_at[0] + width
                     >= frame_end_s(c, res, glitch_at[0] - at) - 1e-12)
 
