@@ -148,9 +148,10 @@ def counter_words(slots):
 
 def counter_settle(words):
     """The longest wait, in clocks, for a count to land in a counter memory of ``words`` words:
-    a read issued ``words + 7`` clocks after an event's clock returns it, however many other
-    counts wait (a word waits for each other word at most once; CounterRam's docstring)."""
-    return words + 7
+    a read issued ``words + 3`` clocks after an event's clock returns it, whatever the other
+    counts do (the words take turns, one per clock, over two words at least; CounterRam's
+    docstring)."""
+    return max(words, 2) + 3
 
 
 #: The statuses that end a cycle without a frame verdict (codes 6..12): each has a one-clock

@@ -1113,12 +1113,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$13529$0 (\$10 ),
-    .\port$13540$0 (\$11 ),
-    .\port$13617$0 (\$12 ),
-    .\port$14088$0 (\$13 ),
-    .\port$14099$0 (\$14 ),
-    .\port$14176$0 (\$15 ),
+    .\port$13255$0 (\$10 ),
+    .\port$13266$0 (\$11 ),
+    .\port$13329$0 (\$12 ),
+    .\port$13800$0 (\$13 ),
+    .\port$13811$0 (\$14 ),
+    .\port$13874$0 (\$15 ),
     .\rd__addr$763 (ch0_crc_table_addr),
     .\rd__addr$929 (ch1_crc_table_addr),
     .rst(rst),
@@ -1202,9 +1202,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .crc_table_data(crc_table_data),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$13529$0 (\$10 ),
-    .\port$13540$0 (\$11 ),
-    .\port$13617$0 (\$12 ),
+    .\port$13255$0 (\$10 ),
+    .\port$13266$0 (\$11 ),
+    .\port$13329$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1277,9 +1277,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .crc_table_data(\crc_table_data$892 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$817 ),
-    .\port$14088$0 (\$13 ),
-    .\port$14099$0 (\$14 ),
-    .\port$14176$0 (\$15 ),
+    .\port$13800$0 (\$13 ),
+    .\port$13811$0 (\$14 ),
+    .\port$13874$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$481 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -2075,7 +2075,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc1_w1_crc_width, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$145 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort
 , ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed
 , ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc1_w1_crc_width, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$437 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort
-, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \rd__addr$763 , \port$13529$0 , \port$13540$0 , ch0__ca_done, \port$13617$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \rd__addr$929 , \port$14088$0 , \port$14099$0 , ch1__ca_done, \port$14176$0 , bus__r_addr);
+, cfg_hold, ch0__frame_done, ch0__done_count, ch0__result_updates, \rd__addr$763 , \port$13255$0 , \port$13266$0 , ch0__ca_done, \port$13329$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \rd__addr$929 , \port$13800$0 , \port$13811$0 , ch1__ca_done, \port$13874$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -4250,18 +4250,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$13529$0 ;
-  wire [186:0] \port$13529$0 ;
-  input [79:0] \port$13540$0 ;
-  wire [79:0] \port$13540$0 ;
-  input [9:0] \port$13617$0 ;
-  wire [9:0] \port$13617$0 ;
-  input [186:0] \port$14088$0 ;
-  wire [186:0] \port$14088$0 ;
-  input [79:0] \port$14099$0 ;
-  wire [79:0] \port$14099$0 ;
-  input [9:0] \port$14176$0 ;
-  wire [9:0] \port$14176$0 ;
+  input [186:0] \port$13255$0 ;
+  wire [186:0] \port$13255$0 ;
+  input [79:0] \port$13266$0 ;
+  wire [79:0] \port$13266$0 ;
+  input [9:0] \port$13329$0 ;
+  wire [9:0] \port$13329$0 ;
+  input [186:0] \port$13800$0 ;
+  wire [186:0] \port$13800$0 ;
+  input [79:0] \port$13811$0 ;
+  wire [79:0] \port$13811$0 ;
+  input [9:0] \port$13874$0 ;
+  wire [9:0] \port$13874$0 ;
   (* init = 4'h0 *)
   wire [3:0] rd__addr;
   input \rd__addr$763 ;
@@ -4551,7 +4551,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$171  = \$169  | \$170 ;
   assign \$172  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$173  = \$171  | \$172 ;
-  assign \$178  = ch0_read_select_90 ? { 2'h0, \port$13529$0 [182:177], 4'h0, \port$13529$0 [186:183], 1'h0, \port$13529$0 [176:174], 1'h0, \port$13529$0 [133:131], 3'h0, \port$13529$0 [49], \port$13529$0 [3:0] } : 32'd0;
+  assign \$178  = ch0_read_select_90 ? { 2'h0, \port$13255$0 [182:177], 4'h0, \port$13255$0 [186:183], 1'h0, \port$13255$0 [176:174], 1'h0, \port$13255$0 [133:131], 3'h0, \port$13255$0 [49], \port$13255$0 [3:0] } : 32'd0;
   assign \$179  = \$177  | \$178 ;
   assign \$180  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$181  = \$179  | \$180 ;
@@ -4567,13 +4567,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$191  = \$189  | \$190 ;
   assign \$192  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$193  = \$191  | \$192 ;
-  assign \$238  = ch0_read_select_c2 ? { 17'h00000, \port$13617$0 [9:3], 1'h0, \port$13617$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$238  = ch0_read_select_c2 ? { 17'h00000, \port$13329$0 [9:3], 1'h0, \port$13329$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$239  = \$237  | \$238 ;
-  assign \$240  = ch0_read_select_c3 ? \port$13540$0 [31:0] : 32'd0;
+  assign \$240  = ch0_read_select_c3 ? \port$13266$0 [31:0] : 32'd0;
   assign \$241  = \$239  | \$240 ;
-  assign \$242  = ch0_read_select_c4 ? \port$13540$0 [63:32] : 32'd0;
+  assign \$242  = ch0_read_select_c4 ? \port$13266$0 [63:32] : 32'd0;
   assign \$243  = \$241  | \$242 ;
-  assign \$244  = ch0_read_select_c5 ? { 16'h0000, \port$13540$0 [79:64] } : 32'd0;
+  assign \$244  = ch0_read_select_c5 ? { 16'h0000, \port$13266$0 [79:64] } : 32'd0;
   assign \$245  = \$243  | \$244 ;
   assign \$248  = ch0_read_select_fd ? { 16'h0000, ch0__result_updates } : 32'd0;
   assign \$249  = \$247  | \$248 ;
@@ -4732,7 +4732,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$406  = \$404  | \$405 ;
   assign \$407  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$408  = \$406  | \$407 ;
-  assign \$413  = ch1_read_select_110 ? { 2'h0, \port$14088$0 [182:177], 4'h0, \port$14088$0 [186:183], 1'h0, \port$14088$0 [176:174], 1'h0, \port$14088$0 [133:131], 3'h0, \port$14088$0 [49], \port$14088$0 [3:0] } : 32'd0;
+  assign \$413  = ch1_read_select_110 ? { 2'h0, \port$13800$0 [182:177], 4'h0, \port$13800$0 [186:183], 1'h0, \port$13800$0 [176:174], 1'h0, \port$13800$0 [133:131], 3'h0, \port$13800$0 [49], \port$13800$0 [3:0] } : 32'd0;
   assign \$414  = \$412  | \$413 ;
   assign \$415  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$416  = \$414  | \$415 ;
@@ -4748,13 +4748,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$426  = \$424  | \$425 ;
   assign \$427  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$428  = \$426  | \$427 ;
-  assign \$473  = ch1_read_select_142 ? { 17'h00000, \port$14176$0 [9:3], 1'h0, \port$14176$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$473  = ch1_read_select_142 ? { 17'h00000, \port$13874$0 [9:3], 1'h0, \port$13874$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$474  = \$472  | \$473 ;
-  assign \$475  = ch1_read_select_143 ? \port$14099$0 [31:0] : 32'd0;
+  assign \$475  = ch1_read_select_143 ? \port$13811$0 [31:0] : 32'd0;
   assign \$476  = \$474  | \$475 ;
-  assign \$477  = ch1_read_select_144 ? \port$14099$0 [63:32] : 32'd0;
+  assign \$477  = ch1_read_select_144 ? \port$13811$0 [63:32] : 32'd0;
   assign \$478  = \$476  | \$477 ;
-  assign \$479  = ch1_read_select_145 ? { 16'h0000, \port$14099$0 [79:64] } : 32'd0;
+  assign \$479  = ch1_read_select_145 ? { 16'h0000, \port$13811$0 [79:64] } : 32'd0;
   assign \$480  = \$478  | \$479 ;
   assign \$483  = ch1_read_select_17d ? { 16'h0000, ch1__result_updates } : 32'd0;
   assign \$484  = \$482  | \$483 ;
@@ -7188,7 +7188,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$856  = ch0_result_status_status_snapshot;
     if (\$157 ) begin
-      \$856  = \port$13529$0 [3:0];
+      \$856  = \port$13255$0 [3:0];
     end
     if (rst) begin
       \$856  = 4'h0;
@@ -7198,7 +7198,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$857  = ch0_result_status_cds_snapshot;
     if (\$157 ) begin
-      \$857  = \port$13529$0 [49];
+      \$857  = \port$13255$0 [49];
     end
     if (rst) begin
       \$857  = 1'h0;
@@ -7208,7 +7208,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$858  = ch0_result_status_w0_ne_snapshot;
     if (\$157 ) begin
-      \$858  = \port$13529$0 [131];
+      \$858  = \port$13255$0 [131];
     end
     if (rst) begin
       \$858  = 1'h0;
@@ -7218,7 +7218,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$859  = ch0_result_status_w0_nw_snapshot;
     if (\$157 ) begin
-      \$859  = \port$13529$0 [132];
+      \$859  = \port$13255$0 [132];
     end
     if (rst) begin
       \$859  = 1'h0;
@@ -7228,7 +7228,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$860  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$157 ) begin
-      \$860  = \port$13529$0 [133];
+      \$860  = \port$13255$0 [133];
     end
     if (rst) begin
       \$860  = 1'h0;
@@ -7238,7 +7238,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$861  = ch0_result_status_w1_ne_snapshot;
     if (\$157 ) begin
-      \$861  = \port$13529$0 [174];
+      \$861  = \port$13255$0 [174];
     end
     if (rst) begin
       \$861  = 1'h0;
@@ -7248,7 +7248,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$862  = ch0_result_status_w1_nw_snapshot;
     if (\$157 ) begin
-      \$862  = \port$13529$0 [175];
+      \$862  = \port$13255$0 [175];
     end
     if (rst) begin
       \$862  = 1'h0;
@@ -7258,7 +7258,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$863  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$157 ) begin
-      \$863  = \port$13529$0 [176];
+      \$863  = \port$13255$0 [176];
     end
     if (rst) begin
       \$863  = 1'h0;
@@ -7268,7 +7268,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$864  = ch0_result_status_lc_repeat_snapshot;
     if (\$157 ) begin
-      \$864  = \port$13529$0 [183];
+      \$864  = \port$13255$0 [183];
     end
     if (rst) begin
       \$864  = 1'h0;
@@ -7278,7 +7278,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$865  = ch0_result_status_lc_skip_snapshot;
     if (\$157 ) begin
-      \$865  = \port$13529$0 [184];
+      \$865  = \port$13255$0 [184];
     end
     if (rst) begin
       \$865  = 1'h0;
@@ -7288,7 +7288,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$866  = ch0_result_status_lc_zero_snapshot;
     if (\$157 ) begin
-      \$866  = \port$13529$0 [185];
+      \$866  = \port$13255$0 [185];
     end
     if (rst) begin
       \$866  = 1'h0;
@@ -7298,7 +7298,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$867  = ch0_result_status_spw_mismatch_snapshot;
     if (\$157 ) begin
-      \$867  = \port$13529$0 [186];
+      \$867  = \port$13255$0 [186];
     end
     if (rst) begin
       \$867  = 1'h0;
@@ -7308,7 +7308,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$868  = ch0_result_status_lc_snapshot;
     if (\$157 ) begin
-      \$868  = \port$13529$0 [182:177];
+      \$868  = \port$13255$0 [182:177];
     end
     if (rst) begin
       \$868  = 6'h00;
@@ -7328,7 +7328,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$870  = ch0_result_seq_line_delay_snapshot;
     if (\$157 ) begin
-      \$870  = \port$13529$0 [48:36];
+      \$870  = \port$13255$0 [48:36];
     end
     if (rst) begin
       \$870  = 13'h0000;
@@ -7338,7 +7338,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$871  = ch0_result_w0_lo_data_snapshot;
     if (\$157 ) begin
-      \$871  = \port$13529$0 [107:76];
+      \$871  = \port$13255$0 [107:76];
     end
     if (rst) begin
       \$871  = 32'd0;
@@ -7348,7 +7348,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$872  = ch0_result_w0_hi_data_snapshot;
     if (\$157 ) begin
-      \$872  = { 9'h000, \port$13529$0 [130:108] };
+      \$872  = { 9'h000, \port$13255$0 [130:108] };
     end
     if (rst) begin
       \$872  = 32'd0;
@@ -7358,7 +7358,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$873  = ch0_result_w1_lo_data_snapshot;
     if (\$157 ) begin
-      \$873  = \port$13529$0 [165:134];
+      \$873  = \port$13255$0 [165:134];
     end
     if (rst) begin
       \$873  = 32'd0;
@@ -7368,7 +7368,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$874  = ch0_result_w1_hi_data_snapshot;
     if (\$157 ) begin
-      \$874  = { 24'h000000, \port$13529$0 [173:166] };
+      \$874  = { 24'h000000, \port$13255$0 [173:166] };
     end
     if (rst) begin
       \$874  = 32'd0;
@@ -7378,7 +7378,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$875  = ch0_result_timestamp_time_snapshot;
     if (\$157 ) begin
-      \$875  = \port$13529$0 [35:4];
+      \$875  = \port$13255$0 [35:4];
     end
     if (rst) begin
       \$875  = 32'd0;
@@ -7388,7 +7388,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$876  = ch0_result_line_noise_events_snapshot;
     if (\$157 ) begin
-      \$876  = \port$13529$0 [53:50];
+      \$876  = \port$13255$0 [53:50];
     end
     if (rst) begin
       \$876  = 4'h0;
@@ -7398,7 +7398,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$877  = ch0_result_line_delay_settled_snapshot;
     if (\$157 ) begin
-      \$877  = \port$13529$0 [54];
+      \$877  = \port$13255$0 [54];
     end
     if (rst) begin
       \$877  = 1'h0;
@@ -7408,7 +7408,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$878  = ch0_result_line_delay_spread_snapshot;
     if (\$157 ) begin
-      \$878  = \port$13529$0 [75:68];
+      \$878  = \port$13255$0 [75:68];
     end
     if (rst) begin
       \$878  = 8'h00;
@@ -7418,7 +7418,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$879  = ch0_result_line_settled_delay_snapshot;
     if (\$157 ) begin
-      \$879  = \port$13529$0 [67:55];
+      \$879  = \port$13255$0 [67:55];
     end
     if (rst) begin
       \$879  = 13'h0000;
@@ -8714,7 +8714,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1016  = ch1_result_status_status_snapshot;
     if (\$392 ) begin
-      \$1016  = \port$14088$0 [3:0];
+      \$1016  = \port$13800$0 [3:0];
     end
     if (rst) begin
       \$1016  = 4'h0;
@@ -8724,7 +8724,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1017  = ch1_result_status_cds_snapshot;
     if (\$392 ) begin
-      \$1017  = \port$14088$0 [49];
+      \$1017  = \port$13800$0 [49];
     end
     if (rst) begin
       \$1017  = 1'h0;
@@ -8734,7 +8734,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1018  = ch1_result_status_w0_ne_snapshot;
     if (\$392 ) begin
-      \$1018  = \port$14088$0 [131];
+      \$1018  = \port$13800$0 [131];
     end
     if (rst) begin
       \$1018  = 1'h0;
@@ -8744,7 +8744,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1019  = ch1_result_status_w0_nw_snapshot;
     if (\$392 ) begin
-      \$1019  = \port$14088$0 [132];
+      \$1019  = \port$13800$0 [132];
     end
     if (rst) begin
       \$1019  = 1'h0;
@@ -8754,7 +8754,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1020  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$392 ) begin
-      \$1020  = \port$14088$0 [133];
+      \$1020  = \port$13800$0 [133];
     end
     if (rst) begin
       \$1020  = 1'h0;
@@ -8764,7 +8764,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1021  = ch1_result_status_w1_ne_snapshot;
     if (\$392 ) begin
-      \$1021  = \port$14088$0 [174];
+      \$1021  = \port$13800$0 [174];
     end
     if (rst) begin
       \$1021  = 1'h0;
@@ -8774,7 +8774,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1022  = ch1_result_status_w1_nw_snapshot;
     if (\$392 ) begin
-      \$1022  = \port$14088$0 [175];
+      \$1022  = \port$13800$0 [175];
     end
     if (rst) begin
       \$1022  = 1'h0;
@@ -8784,7 +8784,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1023  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$392 ) begin
-      \$1023  = \port$14088$0 [176];
+      \$1023  = \port$13800$0 [176];
     end
     if (rst) begin
       \$1023  = 1'h0;
@@ -8794,7 +8794,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1024  = ch1_result_status_lc_repeat_snapshot;
     if (\$392 ) begin
-      \$1024  = \port$14088$0 [183];
+      \$1024  = \port$13800$0 [183];
     end
     if (rst) begin
       \$1024  = 1'h0;
@@ -8804,7 +8804,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1025  = ch1_result_status_lc_skip_snapshot;
     if (\$392 ) begin
-      \$1025  = \port$14088$0 [184];
+      \$1025  = \port$13800$0 [184];
     end
     if (rst) begin
       \$1025  = 1'h0;
@@ -8814,7 +8814,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1026  = ch1_result_status_lc_zero_snapshot;
     if (\$392 ) begin
-      \$1026  = \port$14088$0 [185];
+      \$1026  = \port$13800$0 [185];
     end
     if (rst) begin
       \$1026  = 1'h0;
@@ -8824,7 +8824,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1027  = ch1_result_status_spw_mismatch_snapshot;
     if (\$392 ) begin
-      \$1027  = \port$14088$0 [186];
+      \$1027  = \port$13800$0 [186];
     end
     if (rst) begin
       \$1027  = 1'h0;
@@ -8834,7 +8834,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1028  = ch1_result_status_lc_snapshot;
     if (\$392 ) begin
-      \$1028  = \port$14088$0 [182:177];
+      \$1028  = \port$13800$0 [182:177];
     end
     if (rst) begin
       \$1028  = 6'h00;
@@ -8854,7 +8854,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1030  = ch1_result_seq_line_delay_snapshot;
     if (\$392 ) begin
-      \$1030  = \port$14088$0 [48:36];
+      \$1030  = \port$13800$0 [48:36];
     end
     if (rst) begin
       \$1030  = 13'h0000;
@@ -8864,7 +8864,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1031  = ch1_result_w0_lo_data_snapshot;
     if (\$392 ) begin
-      \$1031  = \port$14088$0 [107:76];
+      \$1031  = \port$13800$0 [107:76];
     end
     if (rst) begin
       \$1031  = 32'd0;
@@ -8874,7 +8874,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1032  = ch1_result_w0_hi_data_snapshot;
     if (\$392 ) begin
-      \$1032  = { 9'h000, \port$14088$0 [130:108] };
+      \$1032  = { 9'h000, \port$13800$0 [130:108] };
     end
     if (rst) begin
       \$1032  = 32'd0;
@@ -8884,7 +8884,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1033  = ch1_result_w1_lo_data_snapshot;
     if (\$392 ) begin
-      \$1033  = \port$14088$0 [165:134];
+      \$1033  = \port$13800$0 [165:134];
     end
     if (rst) begin
       \$1033  = 32'd0;
@@ -8894,7 +8894,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1034  = ch1_result_w1_hi_data_snapshot;
     if (\$392 ) begin
-      \$1034  = { 24'h000000, \port$14088$0 [173:166] };
+      \$1034  = { 24'h000000, \port$13800$0 [173:166] };
     end
     if (rst) begin
       \$1034  = 32'd0;
@@ -8904,7 +8904,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1035  = ch1_result_timestamp_time_snapshot;
     if (\$392 ) begin
-      \$1035  = \port$14088$0 [35:4];
+      \$1035  = \port$13800$0 [35:4];
     end
     if (rst) begin
       \$1035  = 32'd0;
@@ -8914,7 +8914,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1036  = ch1_result_line_noise_events_snapshot;
     if (\$392 ) begin
-      \$1036  = \port$14088$0 [53:50];
+      \$1036  = \port$13800$0 [53:50];
     end
     if (rst) begin
       \$1036  = 4'h0;
@@ -8924,7 +8924,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1037  = ch1_result_line_delay_settled_snapshot;
     if (\$392 ) begin
-      \$1037  = \port$14088$0 [54];
+      \$1037  = \port$13800$0 [54];
     end
     if (rst) begin
       \$1037  = 1'h0;
@@ -8934,7 +8934,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1038  = ch1_result_line_delay_spread_snapshot;
     if (\$392 ) begin
-      \$1038  = \port$14088$0 [75:68];
+      \$1038  = \port$13800$0 [75:68];
     end
     if (rst) begin
       \$1038  = 8'h00;
@@ -8944,7 +8944,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$1039  = ch1_result_line_settled_delay_snapshot;
     if (\$392 ) begin
-      \$1039  = \port$14088$0 [67:55];
+      \$1039  = \port$13800$0 [67:55];
     end
     if (rst) begin
       \$1039  = 13'h0000;
@@ -9206,27 +9206,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$13529$0 [3:0];
-  assign ch0__cds = \port$13529$0 [49];
-  assign ch0__word0_ne = \port$13529$0 [131];
-  assign ch0__word0_nw = \port$13529$0 [132];
-  assign ch0__word0_crc_ok = \port$13529$0 [133];
-  assign ch0__word1_ne = \port$13529$0 [174];
-  assign ch0__word1_nw = \port$13529$0 [175];
-  assign ch0__word1_crc_ok = \port$13529$0 [176];
-  assign ch0__lc_repeat = \port$13529$0 [183];
-  assign ch0__lc_skip = \port$13529$0 [184];
-  assign ch0__lc_zero = \port$13529$0 [185];
-  assign ch0__spw_mismatch = \port$13529$0 [186];
-  assign ch0__lc = \port$13529$0 [182:177];
-  assign ch0__line_delay = \port$13529$0 [48:36];
-  assign ch0__word0_position = { 9'h000, \port$13529$0 [130:76] };
-  assign ch0__word1_position = { 24'h000000, \port$13529$0 [173:134] };
-  assign ch0__timestamp = \port$13529$0 [35:4];
-  assign ch0__noise_events = \port$13529$0 [53:50];
-  assign ch0__delay_settled = \port$13529$0 [54];
-  assign ch0__delay_spread = \port$13529$0 [75:68];
-  assign ch0__settled_delay = \port$13529$0 [67:55];
+  assign ch0__status = \port$13255$0 [3:0];
+  assign ch0__cds = \port$13255$0 [49];
+  assign ch0__word0_ne = \port$13255$0 [131];
+  assign ch0__word0_nw = \port$13255$0 [132];
+  assign ch0__word0_crc_ok = \port$13255$0 [133];
+  assign ch0__word1_ne = \port$13255$0 [174];
+  assign ch0__word1_nw = \port$13255$0 [175];
+  assign ch0__word1_crc_ok = \port$13255$0 [176];
+  assign ch0__lc_repeat = \port$13255$0 [183];
+  assign ch0__lc_skip = \port$13255$0 [184];
+  assign ch0__lc_zero = \port$13255$0 [185];
+  assign ch0__spw_mismatch = \port$13255$0 [186];
+  assign ch0__lc = \port$13255$0 [182:177];
+  assign ch0__line_delay = \port$13255$0 [48:36];
+  assign ch0__word0_position = { 9'h000, \port$13255$0 [130:76] };
+  assign ch0__word1_position = { 24'h000000, \port$13255$0 [173:134] };
+  assign ch0__timestamp = \port$13255$0 [35:4];
+  assign ch0__noise_events = \port$13255$0 [53:50];
+  assign ch0__delay_settled = \port$13255$0 [54];
+  assign ch0__delay_spread = \port$13255$0 [75:68];
+  assign ch0__settled_delay = \port$13255$0 [67:55];
   assign ch0__cap_data_bits_w0 = 7'h37;
   assign ch0__cap_data_bits_w1 = 7'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9247,13 +9247,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$13617$0 [2:0];
-  assign ch0__ca_bytes_done = \port$13617$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$13540$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$13540$0 [31:16];
-  assign ch0__count_ca_refused = \port$13540$0 [47:32];
-  assign ch0__count_ca_aborted = \port$13540$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$13540$0 [79:64];
+  assign ch0__ca_status = \port$13329$0 [2:0];
+  assign ch0__ca_bytes_done = \port$13329$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$13266$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$13266$0 [31:16];
+  assign ch0__count_ca_refused = \port$13266$0 [47:32];
+  assign ch0__count_ca_aborted = \port$13266$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$13266$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9273,27 +9273,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__word7_nw = 1'h0;
   assign ch0__word7_crc_ok = 1'h0;
   assign ch0__chain_data = 32'd0;
-  assign ch1__status = \port$14088$0 [3:0];
-  assign ch1__cds = \port$14088$0 [49];
-  assign ch1__word0_ne = \port$14088$0 [131];
-  assign ch1__word0_nw = \port$14088$0 [132];
-  assign ch1__word0_crc_ok = \port$14088$0 [133];
-  assign ch1__word1_ne = \port$14088$0 [174];
-  assign ch1__word1_nw = \port$14088$0 [175];
-  assign ch1__word1_crc_ok = \port$14088$0 [176];
-  assign ch1__lc_repeat = \port$14088$0 [183];
-  assign ch1__lc_skip = \port$14088$0 [184];
-  assign ch1__lc_zero = \port$14088$0 [185];
-  assign ch1__spw_mismatch = \port$14088$0 [186];
-  assign ch1__lc = \port$14088$0 [182:177];
-  assign ch1__line_delay = \port$14088$0 [48:36];
-  assign ch1__word0_position = { 9'h000, \port$14088$0 [130:76] };
-  assign ch1__word1_position = { 24'h000000, \port$14088$0 [173:134] };
-  assign ch1__timestamp = \port$14088$0 [35:4];
-  assign ch1__noise_events = \port$14088$0 [53:50];
-  assign ch1__delay_settled = \port$14088$0 [54];
-  assign ch1__delay_spread = \port$14088$0 [75:68];
-  assign ch1__settled_delay = \port$14088$0 [67:55];
+  assign ch1__status = \port$13800$0 [3:0];
+  assign ch1__cds = \port$13800$0 [49];
+  assign ch1__word0_ne = \port$13800$0 [131];
+  assign ch1__word0_nw = \port$13800$0 [132];
+  assign ch1__word0_crc_ok = \port$13800$0 [133];
+  assign ch1__word1_ne = \port$13800$0 [174];
+  assign ch1__word1_nw = \port$13800$0 [175];
+  assign ch1__word1_crc_ok = \port$13800$0 [176];
+  assign ch1__lc_repeat = \port$13800$0 [183];
+  assign ch1__lc_skip = \port$13800$0 [184];
+  assign ch1__lc_zero = \port$13800$0 [185];
+  assign ch1__spw_mismatch = \port$13800$0 [186];
+  assign ch1__lc = \port$13800$0 [182:177];
+  assign ch1__line_delay = \port$13800$0 [48:36];
+  assign ch1__word0_position = { 9'h000, \port$13800$0 [130:76] };
+  assign ch1__word1_position = { 24'h000000, \port$13800$0 [173:134] };
+  assign ch1__timestamp = \port$13800$0 [35:4];
+  assign ch1__noise_events = \port$13800$0 [53:50];
+  assign ch1__delay_settled = \port$13800$0 [54];
+  assign ch1__delay_spread = \port$13800$0 [75:68];
+  assign ch1__settled_delay = \port$13800$0 [67:55];
   assign ch1__cap_data_bits_w0 = 7'h37;
   assign ch1__cap_data_bits_w1 = 7'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9314,13 +9314,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$14176$0 [2:0];
-  assign ch1__ca_bytes_done = \port$14176$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$14099$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$14099$0 [31:16];
-  assign ch1__count_ca_refused = \port$14099$0 [47:32];
-  assign ch1__count_ca_aborted = \port$14099$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$14099$0 [79:64];
+  assign ch1__ca_status = \port$13874$0 [2:0];
+  assign ch1__ca_bytes_done = \port$13874$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$13811$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$13811$0 [31:16];
+  assign ch1__count_ca_refused = \port$13811$0 [47:32];
+  assign ch1__count_ca_aborted = \port$13811$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$13811$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9998,7 +9998,7 @@ endmodule
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_rbuf_en, crc_table_data, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters
 , periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable
 , cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, cfg_hold
-, regs__frame_done, regs__done_count, regs__result_updates, ma, crc_table_addr, \port$13529$0 , \port$13540$0 , regs__ca_done, \port$13617$0 , ca_rbuf_addr);
+, regs__frame_done, regs__done_count, regs__result_updates, ma, crc_table_addr, \port$13255$0 , \port$13266$0 , regs__ca_done, \port$13329$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -10189,12 +10189,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$13529$0 ;
-  wire [186:0] \port$13529$0 ;
-  output [79:0] \port$13540$0 ;
-  wire [79:0] \port$13540$0 ;
-  output [9:0] \port$13617$0 ;
-  wire [9:0] \port$13617$0 ;
+  output [186:0] \port$13255$0 ;
+  wire [186:0] \port$13255$0 ;
+  output [79:0] \port$13266$0 ;
+  wire [79:0] \port$13266$0 ;
+  output [9:0] \port$13329$0 ;
+  wire [9:0] \port$13329$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10369,7 +10369,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en
   wire [39:0] word1_position;
   assign \$1  = ~ count_busy;
   assign \$2  = \$1  | done;
-  assign \$3  = waited == 4'hf;
+  assign \$3  = waited == 4'hb;
   assign \$4  = \$2  | \$3 ;
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
@@ -10676,9 +10676,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en
   assign \cfg_hold$199  = cfg_hold;
   assign \crc_table_addr$202  = crc_table_addr;
   assign \crc_table_data$204  = crc_table_data;
-  assign \port$13529$0  = \$24 ;
-  assign \port$13540$0  = \$25 ;
-  assign \port$13617$0  = \$26 ;
+  assign \port$13255$0  = \$24 ;
+  assign \port$13266$0  = \$25 ;
+  assign \port$13329$0  = \$26 ;
   assign \crc_table_data.poly  = crc_table_data[15:0];
   assign \crc_table_data.start  = crc_table_data[31:16];
   assign \crc_table_data.inverted  = crc_table_data[32];
@@ -11724,7 +11724,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13139$206 (live[208:206]),
+    .\port$12865$206 (live[208:206]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(sample),
@@ -11785,7 +11785,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13139$166 (live[166]),
+    .\port$12865$166 (live[166]),
     .rises(rises),
     .rst(rst),
     .ssi(live[193]),
@@ -11836,7 +11836,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$58 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13139$193 (live[205:193]),
+    .\port$12865$193 (live[205:193]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -11861,7 +11861,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13152$0 (\bit ),
+    .\port$12878$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -14585,256 +14585,116 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_data, clear, events, host__addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
-  wire [7:0] \$1 ;
-  wire \$10 ;
-  wire \$100 ;
-  wire \$101 ;
-  wire [15:0] \$102 ;
+  wire \$1 ;
+  wire [16:0] \$10 ;
+  wire [3:0] \$100 ;
+  wire [4:0] \$101 ;
+  wire [4:0] \$102 ;
   wire \$103 ;
-  wire \$104 ;
-  wire \$105 ;
-  wire \$106 ;
+  wire [3:0] \$104 ;
+  wire [4:0] \$105 ;
+  wire [4:0] \$106 ;
   wire \$107 ;
-  wire \$108 ;
-  wire \$109 ;
-  wire \$11 ;
-  wire \$110 ;
+  wire [3:0] \$108 ;
+  wire [4:0] \$109 ;
+  wire [15:0] \$11 ;
+  wire [4:0] \$110 ;
   wire \$111 ;
-  wire \$112 ;
-  wire \$113 ;
-  wire \$114 ;
+  wire [3:0] \$112 ;
+  wire [4:0] \$113 ;
+  wire [4:0] \$114 ;
   wire \$115 ;
-  wire \$116 ;
-  wire \$117 ;
-  wire \$118 ;
+  wire [3:0] \$116 ;
+  wire [4:0] \$117 ;
+  wire [4:0] \$118 ;
   wire \$119 ;
-  wire \$12 ;
-  wire \$120 ;
-  wire \$121 ;
-  wire \$122 ;
-  wire \$123 ;
+  wire [16:0] \$12 ;
+  wire [7:0] \$120 ;
+  wire [7:0] \$121 ;
+  wire [7:0] \$122 ;
+  wire [7:0] \$123 ;
   wire \$124 ;
   wire \$125 ;
-  wire \$126 ;
-  wire \$127 ;
-  wire \$128 ;
-  wire \$129 ;
-  wire [7:0] \$13 ;
-  wire \$130 ;
-  wire \$131 ;
-  wire \$132 ;
-  wire \$133 ;
-  wire \$134 ;
-  wire \$135 ;
-  wire \$136 ;
-  wire \$137 ;
-  wire \$138 ;
-  wire \$139 ;
-  wire [7:0] \$14 ;
-  wire \$140 ;
-  wire \$141 ;
-  wire \$142 ;
-  wire \$143 ;
-  wire \$144 ;
-  wire \$145 ;
-  wire \$146 ;
-  wire \$147 ;
-  wire \$148 ;
-  wire \$149 ;
+  wire [3:0] \$126 ;
+  wire [3:0] \$127 ;
+  wire [3:0] \$128 ;
+  wire [3:0] \$129 ;
+  wire \$13 ;
+  wire [3:0] \$130 ;
+  wire [3:0] \$131 ;
+  wire [3:0] \$132 ;
+  wire [3:0] \$133 ;
+  wire [3:0] \$134 ;
+  wire [3:0] \$135 ;
+  wire [3:0] \$136 ;
+  wire [3:0] \$137 ;
+  wire [3:0] \$138 ;
+  wire [3:0] \$139 ;
+  wire \$14 ;
+  wire [3:0] \$140 ;
+  wire [3:0] \$141 ;
+  wire [3:0] \$142 ;
+  wire [3:0] \$143 ;
+  wire [3:0] \$144 ;
+  wire [3:0] \$145 ;
+  wire [3:0] \$146 ;
+  wire [3:0] \$147 ;
+  wire [3:0] \$148 ;
+  wire [3:0] \$149 ;
   wire \$15 ;
-  wire \$150 ;
-  wire \$151 ;
-  wire \$152 ;
-  wire \$153 ;
-  wire \$154 ;
-  wire \$155 ;
-  wire \$156 ;
-  wire [7:0] \$157 ;
-  wire [1:0] \$158 ;
-  wire [1:0] \$159 ;
+  wire [3:0] \$150 ;
+  wire [3:0] \$151 ;
+  wire [3:0] \$152 ;
+  wire [3:0] \$153 ;
+  wire [3:0] \$154 ;
+  wire [3:0] \$155 ;
+  wire [3:0] \$156 ;
+  wire [3:0] \$157 ;
+  wire [3:0] \$158 ;
+  wire [3:0] \$159 ;
   wire \$16 ;
-  wire [1:0] \$160 ;
-  wire [1:0] \$161 ;
-  wire [1:0] \$162 ;
-  wire [1:0] \$163 ;
-  wire [1:0] \$164 ;
-  wire [1:0] \$165 ;
-  wire [1:0] \$166 ;
-  wire [1:0] \$167 ;
-  wire [1:0] \$168 ;
-  wire [1:0] \$169 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire [4:0] \$164 ;
+  wire [4:0] \$165 ;
+  wire [4:0] \$166 ;
+  reg [15:0] \$167 ;
+  reg \$168 ;
   wire \$17 ;
-  wire [1:0] \$170 ;
-  wire [1:0] \$171 ;
-  wire [1:0] \$172 ;
-  wire [1:0] \$173 ;
-  wire [3:0] \$174 ;
-  wire [3:0] \$175 ;
-  wire [3:0] \$176 ;
-  wire [3:0] \$177 ;
-  wire [3:0] \$178 ;
-  wire [3:0] \$179 ;
-  wire [7:0] \$18 ;
-  wire [3:0] \$180 ;
-  wire [3:0] \$181 ;
-  wire [3:0] \$182 ;
-  wire [3:0] \$183 ;
-  wire [3:0] \$184 ;
-  wire [3:0] \$185 ;
-  wire [3:0] \$186 ;
-  wire [3:0] \$187 ;
-  wire [3:0] \$188 ;
-  wire [3:0] \$189 ;
-  wire [7:0] \$19 ;
-  wire [3:0] \$190 ;
-  wire [3:0] \$191 ;
-  wire [3:0] \$192 ;
-  wire [3:0] \$193 ;
-  wire [3:0] \$194 ;
-  wire [3:0] \$195 ;
-  wire [3:0] \$196 ;
-  wire [3:0] \$197 ;
-  wire [3:0] \$198 ;
-  wire [3:0] \$199 ;
-  wire [7:0] \$2 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
   wire \$20 ;
-  wire [3:0] \$200 ;
-  wire [3:0] \$201 ;
-  wire [3:0] \$202 ;
-  wire [3:0] \$203 ;
-  wire [3:0] \$204 ;
-  wire [3:0] \$205 ;
-  wire \$206 ;
-  wire [3:0] \$207 ;
-  wire [4:0] \$208 ;
-  wire [4:0] \$209 ;
   wire \$21 ;
-  wire \$210 ;
-  wire [3:0] \$211 ;
-  wire [4:0] \$212 ;
-  wire [4:0] \$213 ;
-  wire \$214 ;
-  wire [3:0] \$215 ;
-  wire [4:0] \$216 ;
-  wire [4:0] \$217 ;
-  wire \$218 ;
-  wire [3:0] \$219 ;
   wire \$22 ;
-  wire [4:0] \$220 ;
-  wire [4:0] \$221 ;
-  wire \$222 ;
-  wire [3:0] \$223 ;
-  wire [4:0] \$224 ;
-  wire [4:0] \$225 ;
-  wire \$226 ;
-  wire [3:0] \$227 ;
-  wire [4:0] \$228 ;
-  wire [4:0] \$229 ;
-  wire [7:0] \$23 ;
-  wire \$230 ;
-  wire [3:0] \$231 ;
-  wire [4:0] \$232 ;
-  wire [4:0] \$233 ;
-  wire \$234 ;
-  wire [3:0] \$235 ;
-  wire [4:0] \$236 ;
-  wire [4:0] \$237 ;
-  wire \$238 ;
-  wire [3:0] \$239 ;
-  wire [7:0] \$24 ;
-  wire [4:0] \$240 ;
-  wire [4:0] \$241 ;
-  wire \$242 ;
-  wire [3:0] \$243 ;
-  wire [4:0] \$244 ;
-  wire [4:0] \$245 ;
-  wire \$246 ;
-  wire [3:0] \$247 ;
-  wire [4:0] \$248 ;
-  wire [4:0] \$249 ;
+  wire \$23 ;
+  wire \$24 ;
   wire \$25 ;
-  wire \$250 ;
-  wire [3:0] \$251 ;
-  wire [4:0] \$252 ;
-  wire [4:0] \$253 ;
-  wire \$254 ;
-  wire [3:0] \$255 ;
-  wire [4:0] \$256 ;
-  wire [4:0] \$257 ;
-  wire \$258 ;
-  wire [3:0] \$259 ;
   wire \$26 ;
-  wire [4:0] \$260 ;
-  wire [4:0] \$261 ;
-  wire \$262 ;
-  wire [3:0] \$263 ;
-  wire [4:0] \$264 ;
-  wire [4:0] \$265 ;
-  wire \$266 ;
-  wire [3:0] \$267 ;
-  wire [4:0] \$268 ;
-  wire [4:0] \$269 ;
   wire \$27 ;
-  wire \$270 ;
-  wire [15:0] \$271 ;
-  wire [15:0] \$272 ;
-  wire [15:0] \$273 ;
-  wire \$274 ;
-  wire \$275 ;
-  wire \$276 ;
-  wire \$277 ;
-  wire \$278 ;
-  wire \$279 ;
-  wire [7:0] \$28 ;
-  wire \$280 ;
-  wire \$281 ;
-  wire \$282 ;
-  wire \$283 ;
-  wire \$284 ;
-  wire \$285 ;
-  wire \$286 ;
-  wire \$287 ;
-  wire \$288 ;
-  wire \$289 ;
-  wire [7:0] \$29 ;
-  wire \$290 ;
-  wire \$291 ;
-  wire \$292 ;
-  wire \$293 ;
-  wire \$294 ;
-  wire \$295 ;
-  wire \$296 ;
-  wire \$297 ;
-  wire \$298 ;
-  wire \$299 ;
-  wire [7:0] \$3 ;
+  wire \$28 ;
+  wire [15:0] \$29 ;
+  wire \$3 ;
   wire \$30 ;
-  reg [15:0] \$300 ;
-  reg \$301 ;
-  reg [7:0] \$302 ;
-  reg [7:0] \$303 ;
-  reg [2:0] \$304 ;
-  reg [7:0] \$305 ;
-  reg [2:0] \$306 ;
-  reg [1:0] \$307 ;
-  reg \$308 ;
   wire \$31 ;
   wire \$32 ;
-  wire [7:0] \$33 ;
-  wire [7:0] \$34 ;
+  wire \$33 ;
+  wire \$34 ;
   wire \$35 ;
   wire \$36 ;
   wire \$37 ;
-  wire [7:0] \$38 ;
-  wire [7:0] \$39 ;
-  wire [7:0] \$4 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire \$4 ;
   wire \$40 ;
   wire \$41 ;
   wire \$42 ;
   wire \$43 ;
   wire \$44 ;
   wire \$45 ;
-  wire \$46 ;
+  wire [15:0] \$46 ;
   wire \$47 ;
   wire \$48 ;
   wire \$49 ;
@@ -14842,58 +14702,59 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_da
   wire \$50 ;
   wire \$51 ;
   wire \$52 ;
-  wire \$53 ;
-  wire \$54 ;
+  wire [3:0] \$53 ;
+  wire [3:0] \$54 ;
   wire \$55 ;
-  wire \$56 ;
-  wire \$57 ;
-  wire \$58 ;
+  wire [3:0] \$56 ;
+  wire [4:0] \$57 ;
+  wire [4:0] \$58 ;
   wire \$59 ;
   wire \$6 ;
-  wire \$60 ;
-  wire \$61 ;
-  wire \$62 ;
+  wire [3:0] \$60 ;
+  wire [4:0] \$61 ;
+  wire [4:0] \$62 ;
   wire \$63 ;
-  wire [7:0] \$64 ;
-  wire [15:0] \$65 ;
-  wire [16:0] \$66 ;
-  wire [15:0] \$67 ;
-  wire [16:0] \$68 ;
-  wire \$69 ;
-  wire [7:0] \$7 ;
-  wire \$70 ;
+  wire [3:0] \$64 ;
+  wire [4:0] \$65 ;
+  wire [4:0] \$66 ;
+  wire \$67 ;
+  wire [3:0] \$68 ;
+  wire [4:0] \$69 ;
+  wire \$7 ;
+  wire [4:0] \$70 ;
   wire \$71 ;
-  wire \$72 ;
-  wire \$73 ;
-  wire \$74 ;
+  wire [3:0] \$72 ;
+  wire [4:0] \$73 ;
+  wire [4:0] \$74 ;
   wire \$75 ;
-  wire \$76 ;
-  wire \$77 ;
-  wire \$78 ;
+  wire [3:0] \$76 ;
+  wire [4:0] \$77 ;
+  wire [4:0] \$78 ;
   wire \$79 ;
-  wire [7:0] \$8 ;
-  wire \$80 ;
-  wire \$81 ;
-  wire \$82 ;
+  wire \$8 ;
+  wire [3:0] \$80 ;
+  wire [4:0] \$81 ;
+  wire [4:0] \$82 ;
   wire \$83 ;
-  wire \$84 ;
-  wire [15:0] \$85 ;
-  wire \$86 ;
+  wire [3:0] \$84 ;
+  wire [4:0] \$85 ;
+  wire [4:0] \$86 ;
   wire \$87 ;
-  wire \$88 ;
-  wire \$89 ;
-  wire [7:0] \$9 ;
-  wire \$90 ;
+  wire [3:0] \$88 ;
+  wire [4:0] \$89 ;
+  wire [15:0] \$9 ;
+  wire [4:0] \$90 ;
   wire \$91 ;
-  wire \$92 ;
-  wire \$93 ;
-  wire \$94 ;
+  wire [3:0] \$92 ;
+  wire [4:0] \$93 ;
+  wire [4:0] \$94 ;
   wire \$95 ;
-  wire \$96 ;
-  wire \$97 ;
-  wire \$98 ;
+  wire [3:0] \$96 ;
+  wire [4:0] \$97 ;
+  wire [4:0] \$98 ;
   wire \$99 ;
-  reg [7:0] above = 8'h00;
+  (* init = 3'h0 *)
+  wire [2:0] address;
   reg [3:0] amount_0 = 4'h0;
   reg [3:0] amount_1 = 4'h0;
   output busy;
@@ -14903,7 +14764,6 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_da
   reg clear_reg = 1'h0;
   input clk;
   wire clk;
-  wire [7:0] due;
   input [15:0] events;
   wire [15:0] events;
   wire \events.aborted ;
@@ -14944,7 +14804,9 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_da
   wire [31:0] host__data;
   input host__en;
   wire host__en;
-  reg [15:0] marked = 16'hffff;
+  reg [3:0] left = 4'h9;
+  reg [7:0] marked = 8'hff;
+  wire [7:0] now;
   reg [3:0] pending_0 = 4'h0;
   reg [3:0] pending_1 = 4'h0;
   reg [3:0] pending_10 = 4'h0;
@@ -14961,35 +14823,26 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_da
   reg [3:0] pending_7 = 4'h0;
   reg [3:0] pending_8 = 4'h0;
   reg [3:0] pending_9 = 4'h0;
-  wire [7:0] pick;
   wire [2:0] read_addr;
   output [31:0] read_data;
   wire [31:0] read_data;
   wire read_en;
   input rst;
   wire rst;
-  reg running = 1'h0;
-  reg [7:0] sel = 8'h00;
-  (* init = 3'h0 *)
-  wire [2:0] sel_addr;
   wire [19:0] total_0;
   wire [19:0] total_1;
-  reg [2:0] update__addr = 3'h0;
+  reg [2:0] turn = 3'h0;
+  (* init = 3'h0 *)
+  wire [2:0] update__addr;
   wire [31:0] update__data;
   wire update__en;
-  reg [7:0] waiting = 8'h00;
-  reg was_busy = 1'h1;
-  (* init = 3'h0 *)
-  wire [2:0] word;
   reg [2:0] write__addr = 3'h0;
   wire [31:0] write__data;
   wire write__en;
-  reg [7:0] writing = 8'h00;
-  reg [1:0] zero = 2'h0;
+  reg zero = 1'h1;
   reg [31:0] memory [7:0];
   always @(posedge clk) begin
-    if (write__en)
-      memory[write__addr] <= { \$102 , \$85  };
+    memory[write__addr] <= { \$46 , \$29  };
   end
   reg [31:0] _0_;
   reg [31:0] _1_;
@@ -14997,537 +14850,346 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_da
     if (host__en) begin
       _0_ <= memory[host__addr];
     end
-    if (update__en) begin
-      _1_ <= memory[update__addr];
-    end
+    _1_ <= memory[turn];
   end
   assign read_data = _0_;
   assign update__data = _1_;
-  assign \$1  = ~ sel;
-  assign \$2  = waiting & \$1 ;
-  assign \$3  = ~ writing;
-  assign due = \$2  & \$3 ;
-  assign \$4  = due & above;
-  assign \$5  = | \$4 ;
-  assign \$6  = running & \$5 ;
-  assign \$7  = due & above;
-  assign \$8  = due & above;
-  assign \$9  = due & above;
-  assign \$11  = ~ \$10 ;
-  assign \$12  = \$8 [1] & \$11 ;
-  assign \$13  = due & above;
-  assign \$14  = due & above;
-  assign \$15  = | \$14 [1:0];
-  assign \$16  = ~ \$15 ;
-  assign \$17  = \$13 [2] & \$16 ;
-  assign \$18  = due & above;
-  assign \$19  = due & above;
-  assign \$20  = | \$19 [2:0];
-  assign \$21  = ~ \$20 ;
-  assign \$22  = \$18 [3] & \$21 ;
-  assign \$23  = due & above;
-  assign \$24  = due & above;
-  assign \$25  = | \$24 [3:0];
-  assign \$26  = ~ \$25 ;
-  assign \$27  = \$23 [4] & \$26 ;
-  assign \$28  = due & above;
-  assign \$29  = due & above;
-  assign \$30  = | \$29 [4:0];
-  assign \$31  = ~ \$30 ;
-  assign \$32  = \$28 [5] & \$31 ;
-  assign \$33  = due & above;
-  assign \$34  = due & above;
-  assign \$35  = | \$34 [5:0];
-  assign \$36  = ~ \$35 ;
-  assign \$37  = \$33 [6] & \$36 ;
-  assign \$38  = due & above;
-  assign \$39  = due & above;
-  assign \$40  = | \$39 [6:0];
-  assign \$41  = ~ \$40 ;
-  assign \$42  = \$38 [7] & \$41 ;
-  assign \$44  = ~ \$43 ;
-  assign \$45  = due[1] & \$44 ;
-  assign \$46  = | due[1:0];
-  assign \$47  = ~ \$46 ;
-  assign \$48  = due[2] & \$47 ;
-  assign \$49  = | due[2:0];
-  assign \$50  = ~ \$49 ;
-  assign \$51  = due[3] & \$50 ;
-  assign \$52  = | due[3:0];
-  assign \$53  = ~ \$52 ;
-  assign \$54  = due[4] & \$53 ;
-  assign \$55  = | due[4:0];
-  assign \$56  = ~ \$55 ;
-  assign \$57  = due[5] & \$56 ;
-  assign \$58  = | due[5:0];
-  assign \$59  = ~ \$58 ;
-  assign \$60  = due[6] & \$59 ;
-  assign \$61  = | due[6:0];
-  assign \$62  = ~ \$61 ;
-  assign \$63  = due[7] & \$62 ;
-  assign \$64  = running ? { \$63 , \$60 , \$57 , \$54 , \$51 , \$48 , \$45 , due[0] } : 8'h00;
-  assign pick = \$6  ? { \$42 , \$37 , \$32 , \$27 , \$22 , \$17 , \$12 , \$7 [0] } : \$64 ;
-  assign update__en = | sel;
-  assign \$65  = zero[0] ? 16'h0000 : update__data[15:0];
-  assign \$66  = \$65  + amount_0;
-  assign \$67  = zero[1] ? 16'h0000 : update__data[31:16];
-  assign \$68  = \$67  + amount_1;
-  assign \$85  = \$66 [15:0] | { \$84 , \$83 , \$82 , \$81 , \$80 , \$79 , \$78 , \$77 , \$76 , \$75 , \$74 , \$73 , \$72 , \$71 , \$70 , \$69  };
-  assign \$102  = \$68 [15:0] | { \$101 , \$100 , \$99 , \$98 , \$97 , \$96 , \$95 , \$94 , \$93 , \$92 , \$91 , \$90 , \$89 , \$88 , \$87 , \$86  };
-  assign write__en = | writing;
-  assign \$103  = | events_reg;
-  assign \$104  = was_busy | \$103 ;
-  assign busy = \$104  | clear_reg;
-  assign \$105  = | pending_0;
-  assign \$106  = | pending_1;
-  assign \$107  = \$105  | \$106 ;
-  assign \$108  = \$107  | marked[0];
-  assign \$109  = \$108  | marked[1];
-  assign \$110  = | pending_2;
-  assign \$111  = | pending_3;
-  assign \$112  = \$110  | \$111 ;
-  assign \$113  = \$112  | marked[2];
-  assign \$114  = \$113  | marked[3];
-  assign \$115  = | pending_4;
-  assign \$116  = | pending_5;
-  assign \$117  = \$115  | \$116 ;
-  assign \$118  = \$117  | marked[4];
-  assign \$119  = \$118  | marked[5];
-  assign \$120  = | pending_6;
-  assign \$121  = | pending_7;
-  assign \$122  = \$120  | \$121 ;
-  assign \$123  = \$122  | marked[6];
-  assign \$124  = \$123  | marked[7];
-  assign \$125  = | pending_8;
-  assign \$126  = | pending_9;
-  assign \$127  = \$125  | \$126 ;
-  assign \$128  = \$127  | marked[8];
-  assign \$129  = \$128  | marked[9];
-  assign \$130  = | pending_10;
-  assign \$131  = | pending_11;
-  assign \$132  = \$130  | \$131 ;
-  assign \$133  = \$132  | marked[10];
-  assign \$134  = \$133  | marked[11];
-  assign \$135  = | pending_12;
-  assign \$136  = | pending_13;
+  assign \$1  = ! turn;
+  assign \$2  = turn == 1'h1;
+  assign \$3  = turn == 2'h2;
+  assign \$4  = turn == 2'h3;
+  assign \$5  = turn == 3'h4;
+  assign \$6  = turn == 3'h5;
+  assign \$7  = turn == 3'h6;
+  assign \$8  = turn == 3'h7;
+  assign \$9  = zero ? 16'h0000 : update__data[15:0];
+  assign \$10  = \$9  + amount_0;
+  assign \$11  = zero ? 16'h0000 : update__data[31:16];
+  assign \$12  = \$11  + amount_1;
+  assign \$29  = \$10 [15:0] | { \$28 , \$27 , \$26 , \$25 , \$24 , \$23 , \$22 , \$21 , \$20 , \$19 , \$18 , \$17 , \$16 , \$15 , \$14 , \$13  };
+  assign \$46  = \$12 [15:0] | { \$45 , \$44 , \$43 , \$42 , \$41 , \$40 , \$39 , \$38 , \$37 , \$36 , \$35 , \$34 , \$33 , \$32 , \$31 , \$30  };
+  assign \$47  = | left;
+  assign \$48  = | events_reg;
+  assign \$49  = rst | \$48 ;
+  assign \$50  = \$49  | clear_reg;
+  assign busy = \$47  | \$50 ;
+  assign \$51  = turn == 3'h7;
+  assign \$52  = rst | \$51 ;
+  assign \$53  = turn + 1'h1;
+  assign \$54  = \$52  ? 4'h0 : \$53 ;
+  assign \$55  = rst | clear_reg;
+  assign \$56  = \$1  ? 4'h0 : pending_0;
+  assign \$57  = \$56  + events_reg[0];
+  assign \$58  = \$55  ? 5'h00 : \$57 ;
+  assign \$59  = rst | clear_reg;
+  assign \$60  = \$1  ? 4'h0 : pending_1;
+  assign \$61  = \$60  + events_reg[1];
+  assign \$62  = \$59  ? 5'h00 : \$61 ;
+  assign \$63  = rst | clear_reg;
+  assign \$64  = \$2  ? 4'h0 : pending_2;
+  assign \$65  = \$64  + events_reg[2];
+  assign \$66  = \$63  ? 5'h00 : \$65 ;
+  assign \$67  = rst | clear_reg;
+  assign \$68  = \$2  ? 4'h0 : pending_3;
+  assign \$69  = \$68  + events_reg[3];
+  assign \$70  = \$67  ? 5'h00 : \$69 ;
+  assign \$71  = rst | clear_reg;
+  assign \$72  = \$3  ? 4'h0 : pending_4;
+  assign \$73  = \$72  + events_reg[4];
+  assign \$74  = \$71  ? 5'h00 : \$73 ;
+  assign \$75  = rst | clear_reg;
+  assign \$76  = \$3  ? 4'h0 : pending_5;
+  assign \$77  = \$76  + events_reg[5];
+  assign \$78  = \$75  ? 5'h00 : \$77 ;
+  assign \$79  = rst | clear_reg;
+  assign \$80  = \$4  ? 4'h0 : pending_6;
+  assign \$81  = \$80  + events_reg[6];
+  assign \$82  = \$79  ? 5'h00 : \$81 ;
+  assign \$83  = rst | clear_reg;
+  assign \$84  = \$4  ? 4'h0 : pending_7;
+  assign \$85  = \$84  + events_reg[7];
+  assign \$86  = \$83  ? 5'h00 : \$85 ;
+  assign \$87  = rst | clear_reg;
+  assign \$88  = \$5  ? 4'h0 : pending_8;
+  assign \$89  = \$88  + events_reg[8];
+  assign \$90  = \$87  ? 5'h00 : \$89 ;
+  assign \$91  = rst | clear_reg;
+  assign \$92  = \$5  ? 4'h0 : pending_9;
+  assign \$93  = \$92  + events_reg[9];
+  assign \$94  = \$91  ? 5'h00 : \$93 ;
+  assign \$95  = rst | clear_reg;
+  assign \$96  = \$6  ? 4'h0 : pending_10;
+  assign \$97  = \$96  + events_reg[10];
+  assign \$98  = \$95  ? 5'h00 : \$97 ;
+  assign \$99  = rst | clear_reg;
+  assign \$100  = \$6  ? 4'h0 : pending_11;
+  assign \$101  = \$100  + events_reg[11];
+  assign \$102  = \$99  ? 5'h00 : \$101 ;
+  assign \$103  = rst | clear_reg;
+  assign \$104  = \$7  ? 4'h0 : pending_12;
+  assign \$105  = \$104  + events_reg[12];
+  assign \$106  = \$103  ? 5'h00 : \$105 ;
+  assign \$107  = rst | clear_reg;
+  assign \$108  = \$7  ? 4'h0 : pending_13;
+  assign \$109  = \$108  + events_reg[13];
+  assign \$110  = \$107  ? 5'h00 : \$109 ;
+  assign \$111  = rst | clear_reg;
+  assign \$112  = \$8  ? 4'h0 : pending_14;
+  assign \$113  = \$112  + events_reg[14];
+  assign \$114  = \$111  ? 5'h00 : \$113 ;
+  assign \$115  = rst | clear_reg;
+  assign \$116  = \$8  ? 4'h0 : pending_15;
+  assign \$117  = \$116  + events_reg[15];
+  assign \$118  = \$115  ? 5'h00 : \$117 ;
+  assign \$119  = rst | clear_reg;
+  assign \$120  = ~ { \$8 , \$7 , \$6 , \$5 , \$4 , \$3 , \$2 , \$1  };
+  assign \$121  = marked & \$120 ;
+  assign \$122  = \$119  ? 8'hff : \$121 ;
+  assign \$123  = marked & { \$8 , \$7 , \$6 , \$5 , \$4 , \$3 , \$2 , \$1  };
+  assign \$124  = | \$123 ;
+  assign \$125  = rst | \$124 ;
+  assign \$126  = \$1  ? pending_0 : 4'h0;
+  assign \$128  = \$2  ? pending_2 : 4'h0;
+  assign \$129  = \$127  | \$128 ;
+  assign \$130  = \$3  ? pending_4 : 4'h0;
+  assign \$131  = \$129  | \$130 ;
+  assign \$132  = \$4  ? pending_6 : 4'h0;
+  assign \$133  = \$131  | \$132 ;
+  assign \$134  = \$5  ? pending_8 : 4'h0;
+  assign \$135  = \$133  | \$134 ;
+  assign \$136  = \$6  ? pending_10 : 4'h0;
   assign \$137  = \$135  | \$136 ;
-  assign \$138  = \$137  | marked[12];
-  assign \$139  = \$138  | marked[13];
-  assign \$140  = | pending_14;
-  assign \$141  = | pending_15;
-  assign \$142  = \$140  | \$141 ;
-  assign \$143  = \$142  | marked[14];
-  assign \$144  = \$143  | marked[15];
-  assign \$145  = ~ rst;
-  assign \$146  = | { pick[7], pick[5], pick[3], pick[1] };
-  assign \$147  = | { pick[7:6], pick[3:2] };
-  assign \$148  = | pick[7:4];
-  assign \$149  = | due;
-  assign \$151  = | pick[1:0];
-  assign \$152  = | pick[2:0];
-  assign \$153  = | pick[3:0];
-  assign \$154  = | pick[4:0];
-  assign \$155  = | pick[5:0];
-  assign \$156  = | pick[6:0];
-  assign \$157  = \$149  ? { \$156 , \$155 , \$154 , \$153 , \$152 , \$151 , \$150 , 1'h0 } : above;
-  assign \$158  = sel[0] ? marked[1:0] : 2'h0;
-  assign \$160  = sel[1] ? marked[3:2] : 2'h0;
-  assign \$161  = \$159  | \$160 ;
-  assign \$162  = sel[2] ? marked[5:4] : 2'h0;
-  assign \$163  = \$161  | \$162 ;
-  assign \$164  = sel[3] ? marked[7:6] : 2'h0;
-  assign \$165  = \$163  | \$164 ;
-  assign \$166  = sel[4] ? marked[9:8] : 2'h0;
-  assign \$167  = \$165  | \$166 ;
-  assign \$168  = sel[5] ? marked[11:10] : 2'h0;
-  assign \$169  = \$167  | \$168 ;
-  assign \$170  = sel[6] ? marked[13:12] : 2'h0;
-  assign \$171  = \$169  | \$170 ;
-  assign \$172  = sel[7] ? marked[15:14] : 2'h0;
-  assign \$173  = \$171  | \$172 ;
-  assign \$174  = sel[0] ? pending_0 : 4'h0;
-  assign \$176  = sel[1] ? pending_2 : 4'h0;
-  assign \$177  = \$175  | \$176 ;
-  assign \$178  = sel[2] ? pending_4 : 4'h0;
-  assign \$179  = \$177  | \$178 ;
-  assign \$180  = sel[3] ? pending_6 : 4'h0;
-  assign \$181  = \$179  | \$180 ;
-  assign \$182  = sel[4] ? pending_8 : 4'h0;
-  assign \$183  = \$181  | \$182 ;
-  assign \$184  = sel[5] ? pending_10 : 4'h0;
-  assign \$185  = \$183  | \$184 ;
-  assign \$186  = sel[6] ? pending_12 : 4'h0;
-  assign \$187  = \$185  | \$186 ;
-  assign \$188  = sel[7] ? pending_14 : 4'h0;
-  assign \$189  = \$187  | \$188 ;
-  assign \$190  = sel[0] ? pending_1 : 4'h0;
-  assign \$192  = sel[1] ? pending_3 : 4'h0;
-  assign \$193  = \$191  | \$192 ;
-  assign \$194  = sel[2] ? pending_5 : 4'h0;
-  assign \$195  = \$193  | \$194 ;
-  assign \$196  = sel[3] ? pending_7 : 4'h0;
-  assign \$197  = \$195  | \$196 ;
-  assign \$198  = sel[4] ? pending_9 : 4'h0;
-  assign \$199  = \$197  | \$198 ;
-  assign \$200  = sel[5] ? pending_11 : 4'h0;
-  assign \$201  = \$199  | \$200 ;
-  assign \$202  = sel[6] ? pending_13 : 4'h0;
-  assign \$203  = \$201  | \$202 ;
-  assign \$204  = sel[7] ? pending_15 : 4'h0;
-  assign \$205  = \$203  | \$204 ;
-  assign \$206  = rst | clear_reg;
-  assign \$207  = sel[0] ? 4'h0 : pending_0;
-  assign \$208  = \$207  + events_reg[0];
-  assign \$209  = \$206  ? 5'h00 : \$208 ;
-  assign \$210  = rst | clear_reg;
-  assign \$211  = sel[0] ? 4'h0 : pending_1;
-  assign \$212  = \$211  + events_reg[1];
-  assign \$213  = \$210  ? 5'h00 : \$212 ;
-  assign \$214  = rst | clear_reg;
-  assign \$215  = sel[1] ? 4'h0 : pending_2;
-  assign \$216  = \$215  + events_reg[2];
-  assign \$217  = \$214  ? 5'h00 : \$216 ;
-  assign \$218  = rst | clear_reg;
-  assign \$219  = sel[1] ? 4'h0 : pending_3;
-  assign \$220  = \$219  + events_reg[3];
-  assign \$221  = \$218  ? 5'h00 : \$220 ;
-  assign \$222  = rst | clear_reg;
-  assign \$223  = sel[2] ? 4'h0 : pending_4;
-  assign \$224  = \$223  + events_reg[4];
-  assign \$225  = \$222  ? 5'h00 : \$224 ;
-  assign \$226  = rst | clear_reg;
-  assign \$227  = sel[2] ? 4'h0 : pending_5;
-  assign \$228  = \$227  + events_reg[5];
-  assign \$229  = \$226  ? 5'h00 : \$228 ;
-  assign \$230  = rst | clear_reg;
-  assign \$231  = sel[3] ? 4'h0 : pending_6;
-  assign \$232  = \$231  + events_reg[6];
-  assign \$233  = \$230  ? 5'h00 : \$232 ;
-  assign \$234  = rst | clear_reg;
-  assign \$235  = sel[3] ? 4'h0 : pending_7;
-  assign \$236  = \$235  + events_reg[7];
-  assign \$237  = \$234  ? 5'h00 : \$236 ;
-  assign \$238  = rst | clear_reg;
-  assign \$239  = sel[4] ? 4'h0 : pending_8;
-  assign \$240  = \$239  + events_reg[8];
-  assign \$241  = \$238  ? 5'h00 : \$240 ;
-  assign \$242  = rst | clear_reg;
-  assign \$243  = sel[4] ? 4'h0 : pending_9;
-  assign \$244  = \$243  + events_reg[9];
-  assign \$245  = \$242  ? 5'h00 : \$244 ;
-  assign \$246  = rst | clear_reg;
-  assign \$247  = sel[5] ? 4'h0 : pending_10;
-  assign \$248  = \$247  + events_reg[10];
-  assign \$249  = \$246  ? 5'h00 : \$248 ;
-  assign \$250  = rst | clear_reg;
-  assign \$251  = sel[5] ? 4'h0 : pending_11;
-  assign \$252  = \$251  + events_reg[11];
-  assign \$253  = \$250  ? 5'h00 : \$252 ;
-  assign \$254  = rst | clear_reg;
-  assign \$255  = sel[6] ? 4'h0 : pending_12;
-  assign \$256  = \$255  + events_reg[12];
-  assign \$257  = \$254  ? 5'h00 : \$256 ;
-  assign \$258  = rst | clear_reg;
-  assign \$259  = sel[6] ? 4'h0 : pending_13;
-  assign \$260  = \$259  + events_reg[13];
-  assign \$261  = \$258  ? 5'h00 : \$260 ;
-  assign \$262  = rst | clear_reg;
-  assign \$263  = sel[7] ? 4'h0 : pending_14;
-  assign \$264  = \$263  + events_reg[14];
-  assign \$265  = \$262  ? 5'h00 : \$264 ;
-  assign \$266  = rst | clear_reg;
-  assign \$267  = sel[7] ? 4'h0 : pending_15;
-  assign \$268  = \$267  + events_reg[15];
-  assign \$269  = \$266  ? 5'h00 : \$268 ;
-  assign \$270  = rst | clear_reg;
-  assign \$271  = ~ { sel[7], sel[7:6], sel[6:5], sel[5:4], sel[4:3], sel[3:2], sel[2:1], sel[1:0], sel[0] };
-  assign \$272  = marked & \$271 ;
-  assign \$273  = \$270  ? 16'hffff : \$272 ;
-  assign \$274  = | events_reg;
-  assign \$275  = \$274  | clear_reg;
-  assign \$276  = | marked;
-  assign \$277  = \$275  | \$276 ;
-  assign \$278  = | sel;
-  assign \$279  = \$277  | \$278 ;
-  assign \$280  = | writing;
-  assign \$281  = \$279  | \$280 ;
-  assign \$282  = | pending_0;
-  assign \$283  = | pending_1;
-  assign \$284  = | pending_2;
-  assign \$285  = | pending_3;
-  assign \$286  = | pending_4;
-  assign \$287  = | pending_5;
-  assign \$288  = | pending_6;
-  assign \$289  = | pending_7;
-  assign \$290  = | pending_8;
-  assign \$291  = | pending_9;
-  assign \$292  = | pending_10;
-  assign \$293  = | pending_11;
-  assign \$294  = | pending_12;
-  assign \$295  = | pending_13;
-  assign \$296  = | pending_14;
-  assign \$297  = | pending_15;
-  assign \$298  = | { \$297 , \$296 , \$295 , \$294 , \$293 , \$292 , \$291 , \$290 , \$289 , \$288 , \$287 , \$286 , \$285 , \$284 , \$283 , \$282  };
-  assign \$299  = \$281  | \$298 ;
+  assign \$138  = \$7  ? pending_12 : 4'h0;
+  assign \$139  = \$137  | \$138 ;
+  assign \$140  = \$8  ? pending_14 : 4'h0;
+  assign \$141  = \$139  | \$140 ;
+  assign \$142  = rst ? 4'h0 : \$141 ;
+  assign \$143  = \$1  ? pending_1 : 4'h0;
+  assign \$145  = \$2  ? pending_3 : 4'h0;
+  assign \$146  = \$144  | \$145 ;
+  assign \$147  = \$3  ? pending_5 : 4'h0;
+  assign \$148  = \$146  | \$147 ;
+  assign \$149  = \$4  ? pending_7 : 4'h0;
+  assign \$150  = \$148  | \$149 ;
+  assign \$151  = \$5  ? pending_9 : 4'h0;
+  assign \$152  = \$150  | \$151 ;
+  assign \$153  = \$6  ? pending_11 : 4'h0;
+  assign \$154  = \$152  | \$153 ;
+  assign \$155  = \$7  ? pending_13 : 4'h0;
+  assign \$156  = \$154  | \$155 ;
+  assign \$157  = \$8  ? pending_15 : 4'h0;
+  assign \$158  = \$156  | \$157 ;
+  assign \$159  = rst ? 4'h0 : \$158 ;
+  assign \$160  = | events_reg;
+  assign \$161  = rst | \$160 ;
+  assign \$162  = \$161  | clear_reg;
+  assign \$163  = | left;
+  assign \$164  = left - 1'h1;
+  assign \$165  = \$163  ? \$164  : 5'h00;
+  assign \$166  = \$162  ? 5'h09 : \$165 ;
   always @(posedge clk)
-    events_reg <= \$300 ;
+    events_reg <= \$167 ;
   always @(posedge clk)
-    clear_reg <= \$301 ;
+    clear_reg <= \$168 ;
   always @(posedge clk)
-    waiting <= \$302 ;
+    turn <= \$54 [2:0];
   always @(posedge clk)
-    running <= \$145 ;
+    pending_0 <= \$58 [3:0];
   always @(posedge clk)
-    sel <= \$303 ;
+    pending_1 <= \$62 [3:0];
   always @(posedge clk)
-    update__addr <= \$304 ;
+    pending_2 <= \$66 [3:0];
   always @(posedge clk)
-    above <= \$157 ;
+    pending_3 <= \$70 [3:0];
   always @(posedge clk)
-    writing <= \$305 ;
+    pending_4 <= \$74 [3:0];
   always @(posedge clk)
-    write__addr <= \$306 ;
+    pending_5 <= \$78 [3:0];
   always @(posedge clk)
-    zero <= \$307 ;
+    pending_6 <= \$82 [3:0];
   always @(posedge clk)
-    amount_0 <= \$189 ;
+    pending_7 <= \$86 [3:0];
   always @(posedge clk)
-    amount_1 <= \$205 ;
+    pending_8 <= \$90 [3:0];
   always @(posedge clk)
-    pending_0 <= \$209 [3:0];
+    pending_9 <= \$94 [3:0];
   always @(posedge clk)
-    pending_1 <= \$213 [3:0];
+    pending_10 <= \$98 [3:0];
   always @(posedge clk)
-    pending_2 <= \$217 [3:0];
+    pending_11 <= \$102 [3:0];
   always @(posedge clk)
-    pending_3 <= \$221 [3:0];
+    pending_12 <= \$106 [3:0];
   always @(posedge clk)
-    pending_4 <= \$225 [3:0];
+    pending_13 <= \$110 [3:0];
   always @(posedge clk)
-    pending_5 <= \$229 [3:0];
+    pending_14 <= \$114 [3:0];
   always @(posedge clk)
-    pending_6 <= \$233 [3:0];
+    pending_15 <= \$118 [3:0];
   always @(posedge clk)
-    pending_7 <= \$237 [3:0];
+    marked <= \$122 ;
   always @(posedge clk)
-    pending_8 <= \$241 [3:0];
+    write__addr <= turn;
   always @(posedge clk)
-    pending_9 <= \$245 [3:0];
+    zero <= \$125 ;
   always @(posedge clk)
-    pending_10 <= \$249 [3:0];
+    amount_0 <= \$142 ;
   always @(posedge clk)
-    pending_11 <= \$253 [3:0];
+    amount_1 <= \$159 ;
   always @(posedge clk)
-    pending_12 <= \$257 [3:0];
-  always @(posedge clk)
-    pending_13 <= \$261 [3:0];
-  always @(posedge clk)
-    pending_14 <= \$265 [3:0];
-  always @(posedge clk)
-    pending_15 <= \$269 [3:0];
-  always @(posedge clk)
-    marked <= \$273 ;
-  always @(posedge clk)
-    was_busy <= \$308 ;
+    left <= \$166 [3:0];
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [0] = 1'h0;
+      \$167 [0] = 1'h0;
     end else if (events[0]) begin
-      \$300 [0] = 1'h1;
+      \$167 [0] = 1'h1;
     end else begin
-      \$300 [0] = 1'h0;
+      \$167 [0] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [1] = 1'h0;
+      \$167 [1] = 1'h0;
     end else if (events[1]) begin
-      \$300 [1] = 1'h1;
+      \$167 [1] = 1'h1;
     end else begin
-      \$300 [1] = 1'h0;
+      \$167 [1] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [2] = 1'h0;
+      \$167 [2] = 1'h0;
     end else if (events[2]) begin
-      \$300 [2] = 1'h1;
+      \$167 [2] = 1'h1;
     end else begin
-      \$300 [2] = 1'h0;
+      \$167 [2] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [3] = 1'h0;
+      \$167 [3] = 1'h0;
     end else if (events[3]) begin
-      \$300 [3] = 1'h1;
+      \$167 [3] = 1'h1;
     end else begin
-      \$300 [3] = 1'h0;
+      \$167 [3] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [4] = 1'h0;
+      \$167 [4] = 1'h0;
     end else if (events[4]) begin
-      \$300 [4] = 1'h1;
+      \$167 [4] = 1'h1;
     end else begin
-      \$300 [4] = 1'h0;
+      \$167 [4] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [5] = 1'h0;
+      \$167 [5] = 1'h0;
     end else if (events[5]) begin
-      \$300 [5] = 1'h1;
+      \$167 [5] = 1'h1;
     end else begin
-      \$300 [5] = 1'h0;
+      \$167 [5] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [6] = 1'h0;
+      \$167 [6] = 1'h0;
     end else if (events[6]) begin
-      \$300 [6] = 1'h1;
+      \$167 [6] = 1'h1;
     end else begin
-      \$300 [6] = 1'h0;
+      \$167 [6] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [7] = 1'h0;
+      \$167 [7] = 1'h0;
     end else if (events[7]) begin
-      \$300 [7] = 1'h1;
+      \$167 [7] = 1'h1;
     end else begin
-      \$300 [7] = 1'h0;
+      \$167 [7] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [8] = 1'h0;
+      \$167 [8] = 1'h0;
     end else if (events[8]) begin
-      \$300 [8] = 1'h1;
+      \$167 [8] = 1'h1;
     end else begin
-      \$300 [8] = 1'h0;
+      \$167 [8] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [9] = 1'h0;
+      \$167 [9] = 1'h0;
     end else if (events[9]) begin
-      \$300 [9] = 1'h1;
+      \$167 [9] = 1'h1;
     end else begin
-      \$300 [9] = 1'h0;
+      \$167 [9] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [10] = 1'h0;
+      \$167 [10] = 1'h0;
     end else if (events[10]) begin
-      \$300 [10] = 1'h1;
+      \$167 [10] = 1'h1;
     end else begin
-      \$300 [10] = 1'h0;
+      \$167 [10] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [11] = 1'h0;
+      \$167 [11] = 1'h0;
     end else if (events[11]) begin
-      \$300 [11] = 1'h1;
+      \$167 [11] = 1'h1;
     end else begin
-      \$300 [11] = 1'h0;
+      \$167 [11] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [12] = 1'h0;
+      \$167 [12] = 1'h0;
     end else if (events[12]) begin
-      \$300 [12] = 1'h1;
+      \$167 [12] = 1'h1;
     end else begin
-      \$300 [12] = 1'h0;
+      \$167 [12] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [13] = 1'h0;
+      \$167 [13] = 1'h0;
     end else if (events[13]) begin
-      \$300 [13] = 1'h1;
+      \$167 [13] = 1'h1;
     end else begin
-      \$300 [13] = 1'h0;
+      \$167 [13] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [14] = 1'h0;
+      \$167 [14] = 1'h0;
     end else if (events[14]) begin
-      \$300 [14] = 1'h1;
+      \$167 [14] = 1'h1;
     end else begin
-      \$300 [14] = 1'h0;
+      \$167 [14] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [15] = 1'h0;
+      \$167 [15] = 1'h0;
     end else if (events[15]) begin
-      \$300 [15] = 1'h1;
+      \$167 [15] = 1'h1;
     end else begin
-      \$300 [15] = 1'h0;
+      \$167 [15] = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$301  = 1'h0;
+      \$168  = 1'h0;
     end else if (clear) begin
-      \$301  = 1'h1;
+      \$168  = 1'h1;
     end else begin
-      \$301  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$302  = { \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109  };
-    if (rst) begin
-      \$302  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$303  = pick;
-    if (rst) begin
-      \$303  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$304  = { \$148 , \$147 , \$146  };
-    if (rst) begin
-      \$304  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$305  = sel;
-    if (rst) begin
-      \$305  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$306  = update__addr;
-    if (rst) begin
-      \$306  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$307  = \$173 ;
-    if (rst) begin
-      \$307  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
-    \$308  = \$299 ;
-    if (rst) begin
-      \$308  = 1'h1;
+      \$168  = 1'h0;
     end
   end
   assign read_addr = host__addr;
   assign read_en = host__en;
   assign host__data = read_data;
-  assign sel_addr = update__addr;
-  assign total_0 = { 3'h0, \$66  };
-  assign total_1 = { 3'h0, \$68  };
-  assign word = write__addr;
-  assign write__data = { \$102 , \$85  };
+  assign now = { \$8 , \$7 , \$6 , \$5 , \$4 , \$3 , \$2 , \$1  };
+  assign update__addr = turn;
+  assign update__en = 1'h1;
+  assign total_0 = { 3'h0, \$10  };
+  assign total_1 = { 3'h0, \$12  };
+  assign address = write__addr;
+  assign write__data = { \$46 , \$29  };
+  assign write__en = 1'h1;
   assign \events_reg.crc_word0  = events_reg[0];
   assign \events_reg.crc_word1  = events_reg[1];
   assign \events_reg.no_ack  = events_reg[2];
@@ -15560,44 +15222,40 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_da
   assign \events.noisy_line  = events[13];
   assign \events.delay_jump  = events[14];
   assign \events.noise_event  = events[15];
-  assign \$10  = \$9 [0];
-  assign \$43  = due[0];
-  assign \$69  = \$66 [16];
-  assign \$70  = \$66 [16];
-  assign \$71  = \$66 [16];
-  assign \$72  = \$66 [16];
-  assign \$73  = \$66 [16];
-  assign \$74  = \$66 [16];
-  assign \$75  = \$66 [16];
-  assign \$76  = \$66 [16];
-  assign \$77  = \$66 [16];
-  assign \$78  = \$66 [16];
-  assign \$79  = \$66 [16];
-  assign \$80  = \$66 [16];
-  assign \$81  = \$66 [16];
-  assign \$82  = \$66 [16];
-  assign \$83  = \$66 [16];
-  assign \$84  = \$66 [16];
-  assign \$86  = \$68 [16];
-  assign \$87  = \$68 [16];
-  assign \$88  = \$68 [16];
-  assign \$89  = \$68 [16];
-  assign \$90  = \$68 [16];
-  assign \$91  = \$68 [16];
-  assign \$92  = \$68 [16];
-  assign \$93  = \$68 [16];
-  assign \$94  = \$68 [16];
-  assign \$95  = \$68 [16];
-  assign \$96  = \$68 [16];
-  assign \$97  = \$68 [16];
-  assign \$98  = \$68 [16];
-  assign \$99  = \$68 [16];
-  assign \$100  = \$68 [16];
-  assign \$101  = \$68 [16];
-  assign \$150  = pick[0];
-  assign \$159  = \$158 ;
-  assign \$175  = \$174 ;
-  assign \$191  = \$190 ;
+  assign \$13  = \$10 [16];
+  assign \$14  = \$10 [16];
+  assign \$15  = \$10 [16];
+  assign \$16  = \$10 [16];
+  assign \$17  = \$10 [16];
+  assign \$18  = \$10 [16];
+  assign \$19  = \$10 [16];
+  assign \$20  = \$10 [16];
+  assign \$21  = \$10 [16];
+  assign \$22  = \$10 [16];
+  assign \$23  = \$10 [16];
+  assign \$24  = \$10 [16];
+  assign \$25  = \$10 [16];
+  assign \$26  = \$10 [16];
+  assign \$27  = \$10 [16];
+  assign \$28  = \$10 [16];
+  assign \$30  = \$12 [16];
+  assign \$31  = \$12 [16];
+  assign \$32  = \$12 [16];
+  assign \$33  = \$12 [16];
+  assign \$34  = \$12 [16];
+  assign \$35  = \$12 [16];
+  assign \$36  = \$12 [16];
+  assign \$37  = \$12 [16];
+  assign \$38  = \$12 [16];
+  assign \$39  = \$12 [16];
+  assign \$40  = \$12 [16];
+  assign \$41  = \$12 [16];
+  assign \$42  = \$12 [16];
+  assign \$43  = \$12 [16];
+  assign \$44  = \$12 [16];
+  assign \$45  = \$12 [16];
+  assign \$127  = \$126 ;
+  assign \$144  = \$143 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -16008,7 +15666,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, lc_load, ssi, \port$13139$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, lc_load, ssi, \port$12865$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_table_addr, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -16709,8 +16367,8 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13139$206 ;
-  wire [2:0] \port$13139$206 ;
+  input [2:0] \port$12865$206 ;
+  wire [2:0] \port$12865$206 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -17030,7 +16688,7 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
     cpw_top <= \$600 ;
   always @(posedge clk)
     crc_table_addr <= \$601 ;
-  assign error_bit = ssi & \port$13139$206 [0];
+  assign error_bit = ssi & \port$12865$206 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -17059,19 +16717,19 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \$19  = slots == 16'hfffe;
   assign \$20  = sample & \bit ;
   assign \$21  = | words[5:0];
-  assign \$22  = ssi & \port$13139$206 [0];
+  assign \$22  = ssi & \port$12865$206 [0];
   assign \$24  = words[5:0] + \$23 ;
   assign \$25  = ! \$24 ;
-  assign \$26  = ssi & \port$13139$206 [0];
+  assign \$26  = ssi & \port$12865$206 [0];
   assign \$28  = words[5:0] + \$27 ;
   assign \$29  = | \$28 ;
   assign \$30  = \$25  & \$29 ;
   assign \$31  = | words[17:12];
   assign \$32  = | words[5:0];
-  assign \$33  = ssi & \port$13139$206 [0];
+  assign \$33  = ssi & \port$12865$206 [0];
   assign \$35  = words[5:0] + \$34 ;
   assign \$36  = ! \$35 ;
-  assign \$37  = ssi & \port$13139$206 [0];
+  assign \$37  = ssi & \port$12865$206 [0];
   assign \$39  = words[5:0] + \$38 ;
   assign \$40  = | \$39 ;
   assign \$41  = \$36  & \$40 ;
@@ -17092,7 +16750,7 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \$56  = idx == current[34:28];
   assign \$57  = word_count - 1'h1;
   assign \$58  = word == \$57 ;
-  assign \$59  = ssi & \port$13139$206 [2];
+  assign \$59  = ssi & \port$12865$206 [2];
   assign \$60  = word + 1'h1;
   assign \$61  = idx + 1'h1;
   assign \$62  = idx == current[34:28];
@@ -17378,15 +17036,15 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \$342  = \$339  & \$341 ;
   assign \$343  = { data0[53:0], \$67  } | { \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72  };
   assign \$344  = ~ words[6];
-  assign \$345  = ssi & \port$13139$206 [0];
+  assign \$345  = ssi & \port$12865$206 [0];
   assign \$346  = ~ \$345 ;
   assign \$347  = \$344  & \$346 ;
   assign \$348  = ! word;
   assign \$349  = in_word & \$348 ;
   assign \$350  = idx == words[5:0];
   assign \$351  = \$349  & \$350 ;
-  assign \$352  = ssi & \port$13139$206 [0];
-  assign \$353  = ~ \port$13139$206 [1];
+  assign \$352  = ssi & \port$12865$206 [0];
+  assign \$353  = ~ \port$12865$206 [1];
   assign \$354  = \$352  & \$353 ;
   assign \$355  = \bit  ^ \$354 ;
   assign \$356  = ~ words[6];
@@ -18137,7 +17795,7 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13139$206 [0];
+  assign ssi_error = \port$12865$206 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -18150,8 +17808,8 @@ module \biss_master_axil.ch0.core.decoder (rst, \table , word_count, frame_end, 
   assign \index$46  = word;
   assign load_index = crc_table_addr;
   assign crc_next_word = crc_table_addr;
-  assign ssi_double = \port$13139$206 [2];
-  assign ssi_error_low = \port$13139$206 [1];
+  assign ssi_double = \port$12865$206 [2];
+  assign ssi_error_low = \port$12865$206 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -20430,7 +20088,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.ma_stop (rst, \port$13139$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_axil.ch0.core.ma_stop (rst, \port$12865$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20519,8 +20177,8 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13139$166 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13139$166 ;
-  wire \port$13139$166 ;
+  input \port$12865$166 ;
+  wire \port$12865$166 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20640,7 +20298,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13139$166 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13139$166  : 1'h0;
+  assign \$13  = \$12  ? \port$12865$166  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -20808,7 +20466,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, \port$13139$166 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13139$166 , 1'h1 };
+  assign enables = { \port$12865$166 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22952,7 +22610,7 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13139$193 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$12865$193 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -23535,8 +23193,8 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13139$193 ;
-  wire [12:0] \port$13139$193 ;
+  input [12:0] \port$12865$193 ;
+  wire [12:0] \port$12865$193 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -23559,7 +23217,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13139$193 [12:1] + 1'h1;
+  assign \$460  = \port$12865$193 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -24135,7 +23793,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13139$193 [0]),
+    .clear_high(\port$12865$193 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -24278,7 +23936,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13139$193 [0]) begin
+            if (\port$12865$193 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -24363,7 +24021,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13139$193 [0]) begin
+            if (\port$12865$193 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -24402,7 +24060,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13139$193 [12:1] };
+            \$534  = { 1'h0, \port$12865$193 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -24787,11 +24445,11 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13139$193 [12:1] };
-  assign fixed = \port$13139$193 [0];
+  assign fixed_delay = { 1'h0, \port$12865$193 [12:1] };
+  assign fixed = \port$12865$193 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13139$193 [0];
+  assign clear_high = \port$12865$193 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -27368,7 +27026,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$13152$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$12878$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -27410,8 +27068,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13152$0 ;
-  wire \port$13152$0 ;
+  input \port$12878$0 ;
+  wire \port$12878$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -27425,9 +27083,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13152$0  };
-  assign \$2  = { lc[4:0], \port$13152$0  } == last;
-  assign \$3  = { lc[4:0], \port$13152$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$12878$0  };
+  assign \$2  = { lc[4:0], \port$12878$0  } == last;
+  assign \$3  = { lc[4:0], \port$12878$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -27537,7 +27195,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13152$0  };
+  assign lc_next = { lc[4:0], \port$12878$0  };
   assign zero = is_zero;
 endmodule
 
@@ -30676,7 +30334,7 @@ endmodule
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en, ca_rbuf_en, crc_table_data, regs__frame_error, cfg_free, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters
 , periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, regs__cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, regs__cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable
 , cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_width, cfg_w1_crc_width, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, cfg_hold
-, regs__frame_done, regs__done_count, regs__result_updates, ma, crc_table_addr, \port$14088$0 , \port$14099$0 , regs__ca_done, \port$14176$0 , ca_rbuf_addr);
+, regs__frame_done, regs__done_count, regs__result_updates, ma, crc_table_addr, \port$13800$0 , \port$13811$0 , regs__ca_done, \port$13874$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -30867,12 +30525,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$14088$0 ;
-  wire [186:0] \port$14088$0 ;
-  output [79:0] \port$14099$0 ;
-  wire [79:0] \port$14099$0 ;
-  output [9:0] \port$14176$0 ;
-  wire [9:0] \port$14176$0 ;
+  output [186:0] \port$13800$0 ;
+  wire [186:0] \port$13800$0 ;
+  output [79:0] \port$13811$0 ;
+  wire [79:0] \port$13811$0 ;
+  output [9:0] \port$13874$0 ;
+  wire [9:0] \port$13874$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -31047,7 +30705,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en
   wire [39:0] word1_position;
   assign \$1  = ~ count_busy;
   assign \$2  = \$1  | done;
-  assign \$3  = waited == 4'hf;
+  assign \$3  = waited == 4'hb;
   assign \$4  = \$2  | \$3 ;
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
@@ -31354,9 +31012,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$192 , count_en, ca_wbuf_en
   assign \cfg_hold$199  = cfg_hold;
   assign \crc_table_addr$202  = crc_table_addr;
   assign \crc_table_data$204  = crc_table_data;
-  assign \port$14088$0  = \$24 ;
-  assign \port$14099$0  = \$25 ;
-  assign \port$14176$0  = \$26 ;
+  assign \port$13800$0  = \$24 ;
+  assign \port$13811$0  = \$25 ;
+  assign \port$13874$0  = \$26 ;
   assign \crc_table_data.poly  = crc_table_data[15:0];
   assign \crc_table_data.start  = crc_table_data[31:16];
   assign \crc_table_data.inverted  = crc_table_data[32];
@@ -32402,7 +32060,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$13698$206 (live[208:206]),
+    .\port$13410$206 (live[208:206]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(sample),
@@ -32463,7 +32121,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crc_widths(crc_widths),
     .enough(ma_enough),
-    .\port$13698$166 (live[166]),
+    .\port$13410$166 (live[166]),
     .rises(rises),
     .rst(rst),
     .ssi(live[193]),
@@ -32514,7 +32172,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$58 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$13698$193 (live[205:193]),
+    .\port$13410$193 (live[205:193]),
     .receiver_clear(\clear$133 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -32539,7 +32197,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$13711$0 (\bit ),
+    .\port$13423$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -32607,7 +32265,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$11605$0 (\$28 ),
+    .\port$11468$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -35263,256 +34921,116 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_data, clear, events, host__addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
-  wire [7:0] \$1 ;
-  wire \$10 ;
-  wire \$100 ;
-  wire \$101 ;
-  wire [15:0] \$102 ;
+  wire \$1 ;
+  wire [16:0] \$10 ;
+  wire [3:0] \$100 ;
+  wire [4:0] \$101 ;
+  wire [4:0] \$102 ;
   wire \$103 ;
-  wire \$104 ;
-  wire \$105 ;
-  wire \$106 ;
+  wire [3:0] \$104 ;
+  wire [4:0] \$105 ;
+  wire [4:0] \$106 ;
   wire \$107 ;
-  wire \$108 ;
-  wire \$109 ;
-  wire \$11 ;
-  wire \$110 ;
+  wire [3:0] \$108 ;
+  wire [4:0] \$109 ;
+  wire [15:0] \$11 ;
+  wire [4:0] \$110 ;
   wire \$111 ;
-  wire \$112 ;
-  wire \$113 ;
-  wire \$114 ;
+  wire [3:0] \$112 ;
+  wire [4:0] \$113 ;
+  wire [4:0] \$114 ;
   wire \$115 ;
-  wire \$116 ;
-  wire \$117 ;
-  wire \$118 ;
+  wire [3:0] \$116 ;
+  wire [4:0] \$117 ;
+  wire [4:0] \$118 ;
   wire \$119 ;
-  wire \$12 ;
-  wire \$120 ;
-  wire \$121 ;
-  wire \$122 ;
-  wire \$123 ;
+  wire [16:0] \$12 ;
+  wire [7:0] \$120 ;
+  wire [7:0] \$121 ;
+  wire [7:0] \$122 ;
+  wire [7:0] \$123 ;
   wire \$124 ;
   wire \$125 ;
-  wire \$126 ;
-  wire \$127 ;
-  wire \$128 ;
-  wire \$129 ;
-  wire [7:0] \$13 ;
-  wire \$130 ;
-  wire \$131 ;
-  wire \$132 ;
-  wire \$133 ;
-  wire \$134 ;
-  wire \$135 ;
-  wire \$136 ;
-  wire \$137 ;
-  wire \$138 ;
-  wire \$139 ;
-  wire [7:0] \$14 ;
-  wire \$140 ;
-  wire \$141 ;
-  wire \$142 ;
-  wire \$143 ;
-  wire \$144 ;
-  wire \$145 ;
-  wire \$146 ;
-  wire \$147 ;
-  wire \$148 ;
-  wire \$149 ;
+  wire [3:0] \$126 ;
+  wire [3:0] \$127 ;
+  wire [3:0] \$128 ;
+  wire [3:0] \$129 ;
+  wire \$13 ;
+  wire [3:0] \$130 ;
+  wire [3:0] \$131 ;
+  wire [3:0] \$132 ;
+  wire [3:0] \$133 ;
+  wire [3:0] \$134 ;
+  wire [3:0] \$135 ;
+  wire [3:0] \$136 ;
+  wire [3:0] \$137 ;
+  wire [3:0] \$138 ;
+  wire [3:0] \$139 ;
+  wire \$14 ;
+  wire [3:0] \$140 ;
+  wire [3:0] \$141 ;
+  wire [3:0] \$142 ;
+  wire [3:0] \$143 ;
+  wire [3:0] \$144 ;
+  wire [3:0] \$145 ;
+  wire [3:0] \$146 ;
+  wire [3:0] \$147 ;
+  wire [3:0] \$148 ;
+  wire [3:0] \$149 ;
   wire \$15 ;
-  wire \$150 ;
-  wire \$151 ;
-  wire \$152 ;
-  wire \$153 ;
-  wire \$154 ;
-  wire \$155 ;
-  wire \$156 ;
-  wire [7:0] \$157 ;
-  wire [1:0] \$158 ;
-  wire [1:0] \$159 ;
+  wire [3:0] \$150 ;
+  wire [3:0] \$151 ;
+  wire [3:0] \$152 ;
+  wire [3:0] \$153 ;
+  wire [3:0] \$154 ;
+  wire [3:0] \$155 ;
+  wire [3:0] \$156 ;
+  wire [3:0] \$157 ;
+  wire [3:0] \$158 ;
+  wire [3:0] \$159 ;
   wire \$16 ;
-  wire [1:0] \$160 ;
-  wire [1:0] \$161 ;
-  wire [1:0] \$162 ;
-  wire [1:0] \$163 ;
-  wire [1:0] \$164 ;
-  wire [1:0] \$165 ;
-  wire [1:0] \$166 ;
-  wire [1:0] \$167 ;
-  wire [1:0] \$168 ;
-  wire [1:0] \$169 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire [4:0] \$164 ;
+  wire [4:0] \$165 ;
+  wire [4:0] \$166 ;
+  reg [15:0] \$167 ;
+  reg \$168 ;
   wire \$17 ;
-  wire [1:0] \$170 ;
-  wire [1:0] \$171 ;
-  wire [1:0] \$172 ;
-  wire [1:0] \$173 ;
-  wire [3:0] \$174 ;
-  wire [3:0] \$175 ;
-  wire [3:0] \$176 ;
-  wire [3:0] \$177 ;
-  wire [3:0] \$178 ;
-  wire [3:0] \$179 ;
-  wire [7:0] \$18 ;
-  wire [3:0] \$180 ;
-  wire [3:0] \$181 ;
-  wire [3:0] \$182 ;
-  wire [3:0] \$183 ;
-  wire [3:0] \$184 ;
-  wire [3:0] \$185 ;
-  wire [3:0] \$186 ;
-  wire [3:0] \$187 ;
-  wire [3:0] \$188 ;
-  wire [3:0] \$189 ;
-  wire [7:0] \$19 ;
-  wire [3:0] \$190 ;
-  wire [3:0] \$191 ;
-  wire [3:0] \$192 ;
-  wire [3:0] \$193 ;
-  wire [3:0] \$194 ;
-  wire [3:0] \$195 ;
-  wire [3:0] \$196 ;
-  wire [3:0] \$197 ;
-  wire [3:0] \$198 ;
-  wire [3:0] \$199 ;
-  wire [7:0] \$2 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
   wire \$20 ;
-  wire [3:0] \$200 ;
-  wire [3:0] \$201 ;
-  wire [3:0] \$202 ;
-  wire [3:0] \$203 ;
-  wire [3:0] \$204 ;
-  wire [3:0] \$205 ;
-  wire \$206 ;
-  wire [3:0] \$207 ;
-  wire [4:0] \$208 ;
-  wire [4:0] \$209 ;
   wire \$21 ;
-  wire \$210 ;
-  wire [3:0] \$211 ;
-  wire [4:0] \$212 ;
-  wire [4:0] \$213 ;
-  wire \$214 ;
-  wire [3:0] \$215 ;
-  wire [4:0] \$216 ;
-  wire [4:0] \$217 ;
-  wire \$218 ;
-  wire [3:0] \$219 ;
   wire \$22 ;
-  wire [4:0] \$220 ;
-  wire [4:0] \$221 ;
-  wire \$222 ;
-  wire [3:0] \$223 ;
-  wire [4:0] \$224 ;
-  wire [4:0] \$225 ;
-  wire \$226 ;
-  wire [3:0] \$227 ;
-  wire [4:0] \$228 ;
-  wire [4:0] \$229 ;
-  wire [7:0] \$23 ;
-  wire \$230 ;
-  wire [3:0] \$231 ;
-  wire [4:0] \$232 ;
-  wire [4:0] \$233 ;
-  wire \$234 ;
-  wire [3:0] \$235 ;
-  wire [4:0] \$236 ;
-  wire [4:0] \$237 ;
-  wire \$238 ;
-  wire [3:0] \$239 ;
-  wire [7:0] \$24 ;
-  wire [4:0] \$240 ;
-  wire [4:0] \$241 ;
-  wire \$242 ;
-  wire [3:0] \$243 ;
-  wire [4:0] \$244 ;
-  wire [4:0] \$245 ;
-  wire \$246 ;
-  wire [3:0] \$247 ;
-  wire [4:0] \$248 ;
-  wire [4:0] \$249 ;
+  wire \$23 ;
+  wire \$24 ;
   wire \$25 ;
-  wire \$250 ;
-  wire [3:0] \$251 ;
-  wire [4:0] \$252 ;
-  wire [4:0] \$253 ;
-  wire \$254 ;
-  wire [3:0] \$255 ;
-  wire [4:0] \$256 ;
-  wire [4:0] \$257 ;
-  wire \$258 ;
-  wire [3:0] \$259 ;
   wire \$26 ;
-  wire [4:0] \$260 ;
-  wire [4:0] \$261 ;
-  wire \$262 ;
-  wire [3:0] \$263 ;
-  wire [4:0] \$264 ;
-  wire [4:0] \$265 ;
-  wire \$266 ;
-  wire [3:0] \$267 ;
-  wire [4:0] \$268 ;
-  wire [4:0] \$269 ;
   wire \$27 ;
-  wire \$270 ;
-  wire [15:0] \$271 ;
-  wire [15:0] \$272 ;
-  wire [15:0] \$273 ;
-  wire \$274 ;
-  wire \$275 ;
-  wire \$276 ;
-  wire \$277 ;
-  wire \$278 ;
-  wire \$279 ;
-  wire [7:0] \$28 ;
-  wire \$280 ;
-  wire \$281 ;
-  wire \$282 ;
-  wire \$283 ;
-  wire \$284 ;
-  wire \$285 ;
-  wire \$286 ;
-  wire \$287 ;
-  wire \$288 ;
-  wire \$289 ;
-  wire [7:0] \$29 ;
-  wire \$290 ;
-  wire \$291 ;
-  wire \$292 ;
-  wire \$293 ;
-  wire \$294 ;
-  wire \$295 ;
-  wire \$296 ;
-  wire \$297 ;
-  wire \$298 ;
-  wire \$299 ;
-  wire [7:0] \$3 ;
+  wire \$28 ;
+  wire [15:0] \$29 ;
+  wire \$3 ;
   wire \$30 ;
-  reg [15:0] \$300 ;
-  reg \$301 ;
-  reg [7:0] \$302 ;
-  reg [7:0] \$303 ;
-  reg [2:0] \$304 ;
-  reg [7:0] \$305 ;
-  reg [2:0] \$306 ;
-  reg [1:0] \$307 ;
-  reg \$308 ;
   wire \$31 ;
   wire \$32 ;
-  wire [7:0] \$33 ;
-  wire [7:0] \$34 ;
+  wire \$33 ;
+  wire \$34 ;
   wire \$35 ;
   wire \$36 ;
   wire \$37 ;
-  wire [7:0] \$38 ;
-  wire [7:0] \$39 ;
-  wire [7:0] \$4 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire \$4 ;
   wire \$40 ;
   wire \$41 ;
   wire \$42 ;
   wire \$43 ;
   wire \$44 ;
   wire \$45 ;
-  wire \$46 ;
+  wire [15:0] \$46 ;
   wire \$47 ;
   wire \$48 ;
   wire \$49 ;
@@ -35520,58 +35038,59 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_da
   wire \$50 ;
   wire \$51 ;
   wire \$52 ;
-  wire \$53 ;
-  wire \$54 ;
+  wire [3:0] \$53 ;
+  wire [3:0] \$54 ;
   wire \$55 ;
-  wire \$56 ;
-  wire \$57 ;
-  wire \$58 ;
+  wire [3:0] \$56 ;
+  wire [4:0] \$57 ;
+  wire [4:0] \$58 ;
   wire \$59 ;
   wire \$6 ;
-  wire \$60 ;
-  wire \$61 ;
-  wire \$62 ;
+  wire [3:0] \$60 ;
+  wire [4:0] \$61 ;
+  wire [4:0] \$62 ;
   wire \$63 ;
-  wire [7:0] \$64 ;
-  wire [15:0] \$65 ;
-  wire [16:0] \$66 ;
-  wire [15:0] \$67 ;
-  wire [16:0] \$68 ;
-  wire \$69 ;
-  wire [7:0] \$7 ;
-  wire \$70 ;
+  wire [3:0] \$64 ;
+  wire [4:0] \$65 ;
+  wire [4:0] \$66 ;
+  wire \$67 ;
+  wire [3:0] \$68 ;
+  wire [4:0] \$69 ;
+  wire \$7 ;
+  wire [4:0] \$70 ;
   wire \$71 ;
-  wire \$72 ;
-  wire \$73 ;
-  wire \$74 ;
+  wire [3:0] \$72 ;
+  wire [4:0] \$73 ;
+  wire [4:0] \$74 ;
   wire \$75 ;
-  wire \$76 ;
-  wire \$77 ;
-  wire \$78 ;
+  wire [3:0] \$76 ;
+  wire [4:0] \$77 ;
+  wire [4:0] \$78 ;
   wire \$79 ;
-  wire [7:0] \$8 ;
-  wire \$80 ;
-  wire \$81 ;
-  wire \$82 ;
+  wire \$8 ;
+  wire [3:0] \$80 ;
+  wire [4:0] \$81 ;
+  wire [4:0] \$82 ;
   wire \$83 ;
-  wire \$84 ;
-  wire [15:0] \$85 ;
-  wire \$86 ;
+  wire [3:0] \$84 ;
+  wire [4:0] \$85 ;
+  wire [4:0] \$86 ;
   wire \$87 ;
-  wire \$88 ;
-  wire \$89 ;
-  wire [7:0] \$9 ;
-  wire \$90 ;
+  wire [3:0] \$88 ;
+  wire [4:0] \$89 ;
+  wire [15:0] \$9 ;
+  wire [4:0] \$90 ;
   wire \$91 ;
-  wire \$92 ;
-  wire \$93 ;
-  wire \$94 ;
+  wire [3:0] \$92 ;
+  wire [4:0] \$93 ;
+  wire [4:0] \$94 ;
   wire \$95 ;
-  wire \$96 ;
-  wire \$97 ;
-  wire \$98 ;
+  wire [3:0] \$96 ;
+  wire [4:0] \$97 ;
+  wire [4:0] \$98 ;
   wire \$99 ;
-  reg [7:0] above = 8'h00;
+  (* init = 3'h0 *)
+  wire [2:0] address;
   reg [3:0] amount_0 = 4'h0;
   reg [3:0] amount_1 = 4'h0;
   output busy;
@@ -35581,7 +35100,6 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_da
   reg clear_reg = 1'h0;
   input clk;
   wire clk;
-  wire [7:0] due;
   input [15:0] events;
   wire [15:0] events;
   wire \events.aborted ;
@@ -35622,7 +35140,9 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_da
   wire [31:0] host__data;
   input host__en;
   wire host__en;
-  reg [15:0] marked = 16'hffff;
+  reg [3:0] left = 4'h9;
+  reg [7:0] marked = 8'hff;
+  wire [7:0] now;
   reg [3:0] pending_0 = 4'h0;
   reg [3:0] pending_1 = 4'h0;
   reg [3:0] pending_10 = 4'h0;
@@ -35639,35 +35159,26 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_da
   reg [3:0] pending_7 = 4'h0;
   reg [3:0] pending_8 = 4'h0;
   reg [3:0] pending_9 = 4'h0;
-  wire [7:0] pick;
   wire [2:0] read_addr;
   output [31:0] read_data;
   wire [31:0] read_data;
   wire read_en;
   input rst;
   wire rst;
-  reg running = 1'h0;
-  reg [7:0] sel = 8'h00;
-  (* init = 3'h0 *)
-  wire [2:0] sel_addr;
   wire [19:0] total_0;
   wire [19:0] total_1;
-  reg [2:0] update__addr = 3'h0;
+  reg [2:0] turn = 3'h0;
+  (* init = 3'h0 *)
+  wire [2:0] update__addr;
   wire [31:0] update__data;
   wire update__en;
-  reg [7:0] waiting = 8'h00;
-  reg was_busy = 1'h1;
-  (* init = 3'h0 *)
-  wire [2:0] word;
   reg [2:0] write__addr = 3'h0;
   wire [31:0] write__data;
   wire write__en;
-  reg [7:0] writing = 8'h00;
-  reg [1:0] zero = 2'h0;
+  reg zero = 1'h1;
   reg [31:0] memory [7:0];
   always @(posedge clk) begin
-    if (write__en)
-      memory[write__addr] <= { \$102 , \$85  };
+    memory[write__addr] <= { \$46 , \$29  };
   end
   reg [31:0] _0_;
   reg [31:0] _1_;
@@ -35675,537 +35186,346 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_da
     if (host__en) begin
       _0_ <= memory[host__addr];
     end
-    if (update__en) begin
-      _1_ <= memory[update__addr];
-    end
+    _1_ <= memory[turn];
   end
   assign read_data = _0_;
   assign update__data = _1_;
-  assign \$1  = ~ sel;
-  assign \$2  = waiting & \$1 ;
-  assign \$3  = ~ writing;
-  assign due = \$2  & \$3 ;
-  assign \$4  = due & above;
-  assign \$5  = | \$4 ;
-  assign \$6  = running & \$5 ;
-  assign \$7  = due & above;
-  assign \$8  = due & above;
-  assign \$9  = due & above;
-  assign \$11  = ~ \$10 ;
-  assign \$12  = \$8 [1] & \$11 ;
-  assign \$13  = due & above;
-  assign \$14  = due & above;
-  assign \$15  = | \$14 [1:0];
-  assign \$16  = ~ \$15 ;
-  assign \$17  = \$13 [2] & \$16 ;
-  assign \$18  = due & above;
-  assign \$19  = due & above;
-  assign \$20  = | \$19 [2:0];
-  assign \$21  = ~ \$20 ;
-  assign \$22  = \$18 [3] & \$21 ;
-  assign \$23  = due & above;
-  assign \$24  = due & above;
-  assign \$25  = | \$24 [3:0];
-  assign \$26  = ~ \$25 ;
-  assign \$27  = \$23 [4] & \$26 ;
-  assign \$28  = due & above;
-  assign \$29  = due & above;
-  assign \$30  = | \$29 [4:0];
-  assign \$31  = ~ \$30 ;
-  assign \$32  = \$28 [5] & \$31 ;
-  assign \$33  = due & above;
-  assign \$34  = due & above;
-  assign \$35  = | \$34 [5:0];
-  assign \$36  = ~ \$35 ;
-  assign \$37  = \$33 [6] & \$36 ;
-  assign \$38  = due & above;
-  assign \$39  = due & above;
-  assign \$40  = | \$39 [6:0];
-  assign \$41  = ~ \$40 ;
-  assign \$42  = \$38 [7] & \$41 ;
-  assign \$44  = ~ \$43 ;
-  assign \$45  = due[1] & \$44 ;
-  assign \$46  = | due[1:0];
-  assign \$47  = ~ \$46 ;
-  assign \$48  = due[2] & \$47 ;
-  assign \$49  = | due[2:0];
-  assign \$50  = ~ \$49 ;
-  assign \$51  = due[3] & \$50 ;
-  assign \$52  = | due[3:0];
-  assign \$53  = ~ \$52 ;
-  assign \$54  = due[4] & \$53 ;
-  assign \$55  = | due[4:0];
-  assign \$56  = ~ \$55 ;
-  assign \$57  = due[5] & \$56 ;
-  assign \$58  = | due[5:0];
-  assign \$59  = ~ \$58 ;
-  assign \$60  = due[6] & \$59 ;
-  assign \$61  = | due[6:0];
-  assign \$62  = ~ \$61 ;
-  assign \$63  = due[7] & \$62 ;
-  assign \$64  = running ? { \$63 , \$60 , \$57 , \$54 , \$51 , \$48 , \$45 , due[0] } : 8'h00;
-  assign pick = \$6  ? { \$42 , \$37 , \$32 , \$27 , \$22 , \$17 , \$12 , \$7 [0] } : \$64 ;
-  assign update__en = | sel;
-  assign \$65  = zero[0] ? 16'h0000 : update__data[15:0];
-  assign \$66  = \$65  + amount_0;
-  assign \$67  = zero[1] ? 16'h0000 : update__data[31:16];
-  assign \$68  = \$67  + amount_1;
-  assign \$85  = \$66 [15:0] | { \$84 , \$83 , \$82 , \$81 , \$80 , \$79 , \$78 , \$77 , \$76 , \$75 , \$74 , \$73 , \$72 , \$71 , \$70 , \$69  };
-  assign \$102  = \$68 [15:0] | { \$101 , \$100 , \$99 , \$98 , \$97 , \$96 , \$95 , \$94 , \$93 , \$92 , \$91 , \$90 , \$89 , \$88 , \$87 , \$86  };
-  assign write__en = | writing;
-  assign \$103  = | events_reg;
-  assign \$104  = was_busy | \$103 ;
-  assign busy = \$104  | clear_reg;
-  assign \$105  = | pending_0;
-  assign \$106  = | pending_1;
-  assign \$107  = \$105  | \$106 ;
-  assign \$108  = \$107  | marked[0];
-  assign \$109  = \$108  | marked[1];
-  assign \$110  = | pending_2;
-  assign \$111  = | pending_3;
-  assign \$112  = \$110  | \$111 ;
-  assign \$113  = \$112  | marked[2];
-  assign \$114  = \$113  | marked[3];
-  assign \$115  = | pending_4;
-  assign \$116  = | pending_5;
-  assign \$117  = \$115  | \$116 ;
-  assign \$118  = \$117  | marked[4];
-  assign \$119  = \$118  | marked[5];
-  assign \$120  = | pending_6;
-  assign \$121  = | pending_7;
-  assign \$122  = \$120  | \$121 ;
-  assign \$123  = \$122  | marked[6];
-  assign \$124  = \$123  | marked[7];
-  assign \$125  = | pending_8;
-  assign \$126  = | pending_9;
-  assign \$127  = \$125  | \$126 ;
-  assign \$128  = \$127  | marked[8];
-  assign \$129  = \$128  | marked[9];
-  assign \$130  = | pending_10;
-  assign \$131  = | pending_11;
-  assign \$132  = \$130  | \$131 ;
-  assign \$133  = \$132  | marked[10];
-  assign \$134  = \$133  | marked[11];
-  assign \$135  = | pending_12;
-  assign \$136  = | pending_13;
+  assign \$1  = ! turn;
+  assign \$2  = turn == 1'h1;
+  assign \$3  = turn == 2'h2;
+  assign \$4  = turn == 2'h3;
+  assign \$5  = turn == 3'h4;
+  assign \$6  = turn == 3'h5;
+  assign \$7  = turn == 3'h6;
+  assign \$8  = turn == 3'h7;
+  assign \$9  = zero ? 16'h0000 : update__data[15:0];
+  assign \$10  = \$9  + amount_0;
+  assign \$11  = zero ? 16'h0000 : update__data[31:16];
+  assign \$12  = \$11  + amount_1;
+  assign \$29  = \$10 [15:0] | { \$28 , \$27 , \$26 , \$25 , \$24 , \$23 , \$22 , \$21 , \$20 , \$19 , \$18 , \$17 , \$16 , \$15 , \$14 , \$13  };
+  assign \$46  = \$12 [15:0] | { \$45 , \$44 , \$43 , \$42 , \$41 , \$40 , \$39 , \$38 , \$37 , \$36 , \$35 , \$34 , \$33 , \$32 , \$31 , \$30  };
+  assign \$47  = | left;
+  assign \$48  = | events_reg;
+  assign \$49  = rst | \$48 ;
+  assign \$50  = \$49  | clear_reg;
+  assign busy = \$47  | \$50 ;
+  assign \$51  = turn == 3'h7;
+  assign \$52  = rst | \$51 ;
+  assign \$53  = turn + 1'h1;
+  assign \$54  = \$52  ? 4'h0 : \$53 ;
+  assign \$55  = rst | clear_reg;
+  assign \$56  = \$1  ? 4'h0 : pending_0;
+  assign \$57  = \$56  + events_reg[0];
+  assign \$58  = \$55  ? 5'h00 : \$57 ;
+  assign \$59  = rst | clear_reg;
+  assign \$60  = \$1  ? 4'h0 : pending_1;
+  assign \$61  = \$60  + events_reg[1];
+  assign \$62  = \$59  ? 5'h00 : \$61 ;
+  assign \$63  = rst | clear_reg;
+  assign \$64  = \$2  ? 4'h0 : pending_2;
+  assign \$65  = \$64  + events_reg[2];
+  assign \$66  = \$63  ? 5'h00 : \$65 ;
+  assign \$67  = rst | clear_reg;
+  assign \$68  = \$2  ? 4'h0 : pending_3;
+  assign \$69  = \$68  + events_reg[3];
+  assign \$70  = \$67  ? 5'h00 : \$69 ;
+  assign \$71  = rst | clear_reg;
+  assign \$72  = \$3  ? 4'h0 : pending_4;
+  assign \$73  = \$72  + events_reg[4];
+  assign \$74  = \$71  ? 5'h00 : \$73 ;
+  assign \$75  = rst | clear_reg;
+  assign \$76  = \$3  ? 4'h0 : pending_5;
+  assign \$77  = \$76  + events_reg[5];
+  assign \$78  = \$75  ? 5'h00 : \$77 ;
+  assign \$79  = rst | clear_reg;
+  assign \$80  = \$4  ? 4'h0 : pending_6;
+  assign \$81  = \$80  + events_reg[6];
+  assign \$82  = \$79  ? 5'h00 : \$81 ;
+  assign \$83  = rst | clear_reg;
+  assign \$84  = \$4  ? 4'h0 : pending_7;
+  assign \$85  = \$84  + events_reg[7];
+  assign \$86  = \$83  ? 5'h00 : \$85 ;
+  assign \$87  = rst | clear_reg;
+  assign \$88  = \$5  ? 4'h0 : pending_8;
+  assign \$89  = \$88  + events_reg[8];
+  assign \$90  = \$87  ? 5'h00 : \$89 ;
+  assign \$91  = rst | clear_reg;
+  assign \$92  = \$5  ? 4'h0 : pending_9;
+  assign \$93  = \$92  + events_reg[9];
+  assign \$94  = \$91  ? 5'h00 : \$93 ;
+  assign \$95  = rst | clear_reg;
+  assign \$96  = \$6  ? 4'h0 : pending_10;
+  assign \$97  = \$96  + events_reg[10];
+  assign \$98  = \$95  ? 5'h00 : \$97 ;
+  assign \$99  = rst | clear_reg;
+  assign \$100  = \$6  ? 4'h0 : pending_11;
+  assign \$101  = \$100  + events_reg[11];
+  assign \$102  = \$99  ? 5'h00 : \$101 ;
+  assign \$103  = rst | clear_reg;
+  assign \$104  = \$7  ? 4'h0 : pending_12;
+  assign \$105  = \$104  + events_reg[12];
+  assign \$106  = \$103  ? 5'h00 : \$105 ;
+  assign \$107  = rst | clear_reg;
+  assign \$108  = \$7  ? 4'h0 : pending_13;
+  assign \$109  = \$108  + events_reg[13];
+  assign \$110  = \$107  ? 5'h00 : \$109 ;
+  assign \$111  = rst | clear_reg;
+  assign \$112  = \$8  ? 4'h0 : pending_14;
+  assign \$113  = \$112  + events_reg[14];
+  assign \$114  = \$111  ? 5'h00 : \$113 ;
+  assign \$115  = rst | clear_reg;
+  assign \$116  = \$8  ? 4'h0 : pending_15;
+  assign \$117  = \$116  + events_reg[15];
+  assign \$118  = \$115  ? 5'h00 : \$117 ;
+  assign \$119  = rst | clear_reg;
+  assign \$120  = ~ { \$8 , \$7 , \$6 , \$5 , \$4 , \$3 , \$2 , \$1  };
+  assign \$121  = marked & \$120 ;
+  assign \$122  = \$119  ? 8'hff : \$121 ;
+  assign \$123  = marked & { \$8 , \$7 , \$6 , \$5 , \$4 , \$3 , \$2 , \$1  };
+  assign \$124  = | \$123 ;
+  assign \$125  = rst | \$124 ;
+  assign \$126  = \$1  ? pending_0 : 4'h0;
+  assign \$128  = \$2  ? pending_2 : 4'h0;
+  assign \$129  = \$127  | \$128 ;
+  assign \$130  = \$3  ? pending_4 : 4'h0;
+  assign \$131  = \$129  | \$130 ;
+  assign \$132  = \$4  ? pending_6 : 4'h0;
+  assign \$133  = \$131  | \$132 ;
+  assign \$134  = \$5  ? pending_8 : 4'h0;
+  assign \$135  = \$133  | \$134 ;
+  assign \$136  = \$6  ? pending_10 : 4'h0;
   assign \$137  = \$135  | \$136 ;
-  assign \$138  = \$137  | marked[12];
-  assign \$139  = \$138  | marked[13];
-  assign \$140  = | pending_14;
-  assign \$141  = | pending_15;
-  assign \$142  = \$140  | \$141 ;
-  assign \$143  = \$142  | marked[14];
-  assign \$144  = \$143  | marked[15];
-  assign \$145  = ~ rst;
-  assign \$146  = | { pick[7], pick[5], pick[3], pick[1] };
-  assign \$147  = | { pick[7:6], pick[3:2] };
-  assign \$148  = | pick[7:4];
-  assign \$149  = | due;
-  assign \$151  = | pick[1:0];
-  assign \$152  = | pick[2:0];
-  assign \$153  = | pick[3:0];
-  assign \$154  = | pick[4:0];
-  assign \$155  = | pick[5:0];
-  assign \$156  = | pick[6:0];
-  assign \$157  = \$149  ? { \$156 , \$155 , \$154 , \$153 , \$152 , \$151 , \$150 , 1'h0 } : above;
-  assign \$158  = sel[0] ? marked[1:0] : 2'h0;
-  assign \$160  = sel[1] ? marked[3:2] : 2'h0;
-  assign \$161  = \$159  | \$160 ;
-  assign \$162  = sel[2] ? marked[5:4] : 2'h0;
-  assign \$163  = \$161  | \$162 ;
-  assign \$164  = sel[3] ? marked[7:6] : 2'h0;
-  assign \$165  = \$163  | \$164 ;
-  assign \$166  = sel[4] ? marked[9:8] : 2'h0;
-  assign \$167  = \$165  | \$166 ;
-  assign \$168  = sel[5] ? marked[11:10] : 2'h0;
-  assign \$169  = \$167  | \$168 ;
-  assign \$170  = sel[6] ? marked[13:12] : 2'h0;
-  assign \$171  = \$169  | \$170 ;
-  assign \$172  = sel[7] ? marked[15:14] : 2'h0;
-  assign \$173  = \$171  | \$172 ;
-  assign \$174  = sel[0] ? pending_0 : 4'h0;
-  assign \$176  = sel[1] ? pending_2 : 4'h0;
-  assign \$177  = \$175  | \$176 ;
-  assign \$178  = sel[2] ? pending_4 : 4'h0;
-  assign \$179  = \$177  | \$178 ;
-  assign \$180  = sel[3] ? pending_6 : 4'h0;
-  assign \$181  = \$179  | \$180 ;
-  assign \$182  = sel[4] ? pending_8 : 4'h0;
-  assign \$183  = \$181  | \$182 ;
-  assign \$184  = sel[5] ? pending_10 : 4'h0;
-  assign \$185  = \$183  | \$184 ;
-  assign \$186  = sel[6] ? pending_12 : 4'h0;
-  assign \$187  = \$185  | \$186 ;
-  assign \$188  = sel[7] ? pending_14 : 4'h0;
-  assign \$189  = \$187  | \$188 ;
-  assign \$190  = sel[0] ? pending_1 : 4'h0;
-  assign \$192  = sel[1] ? pending_3 : 4'h0;
-  assign \$193  = \$191  | \$192 ;
-  assign \$194  = sel[2] ? pending_5 : 4'h0;
-  assign \$195  = \$193  | \$194 ;
-  assign \$196  = sel[3] ? pending_7 : 4'h0;
-  assign \$197  = \$195  | \$196 ;
-  assign \$198  = sel[4] ? pending_9 : 4'h0;
-  assign \$199  = \$197  | \$198 ;
-  assign \$200  = sel[5] ? pending_11 : 4'h0;
-  assign \$201  = \$199  | \$200 ;
-  assign \$202  = sel[6] ? pending_13 : 4'h0;
-  assign \$203  = \$201  | \$202 ;
-  assign \$204  = sel[7] ? pending_15 : 4'h0;
-  assign \$205  = \$203  | \$204 ;
-  assign \$206  = rst | clear_reg;
-  assign \$207  = sel[0] ? 4'h0 : pending_0;
-  assign \$208  = \$207  + events_reg[0];
-  assign \$209  = \$206  ? 5'h00 : \$208 ;
-  assign \$210  = rst | clear_reg;
-  assign \$211  = sel[0] ? 4'h0 : pending_1;
-  assign \$212  = \$211  + events_reg[1];
-  assign \$213  = \$210  ? 5'h00 : \$212 ;
-  assign \$214  = rst | clear_reg;
-  assign \$215  = sel[1] ? 4'h0 : pending_2;
-  assign \$216  = \$215  + events_reg[2];
-  assign \$217  = \$214  ? 5'h00 : \$216 ;
-  assign \$218  = rst | clear_reg;
-  assign \$219  = sel[1] ? 4'h0 : pending_3;
-  assign \$220  = \$219  + events_reg[3];
-  assign \$221  = \$218  ? 5'h00 : \$220 ;
-  assign \$222  = rst | clear_reg;
-  assign \$223  = sel[2] ? 4'h0 : pending_4;
-  assign \$224  = \$223  + events_reg[4];
-  assign \$225  = \$222  ? 5'h00 : \$224 ;
-  assign \$226  = rst | clear_reg;
-  assign \$227  = sel[2] ? 4'h0 : pending_5;
-  assign \$228  = \$227  + events_reg[5];
-  assign \$229  = \$226  ? 5'h00 : \$228 ;
-  assign \$230  = rst | clear_reg;
-  assign \$231  = sel[3] ? 4'h0 : pending_6;
-  assign \$232  = \$231  + events_reg[6];
-  assign \$233  = \$230  ? 5'h00 : \$232 ;
-  assign \$234  = rst | clear_reg;
-  assign \$235  = sel[3] ? 4'h0 : pending_7;
-  assign \$236  = \$235  + events_reg[7];
-  assign \$237  = \$234  ? 5'h00 : \$236 ;
-  assign \$238  = rst | clear_reg;
-  assign \$239  = sel[4] ? 4'h0 : pending_8;
-  assign \$240  = \$239  + events_reg[8];
-  assign \$241  = \$238  ? 5'h00 : \$240 ;
-  assign \$242  = rst | clear_reg;
-  assign \$243  = sel[4] ? 4'h0 : pending_9;
-  assign \$244  = \$243  + events_reg[9];
-  assign \$245  = \$242  ? 5'h00 : \$244 ;
-  assign \$246  = rst | clear_reg;
-  assign \$247  = sel[5] ? 4'h0 : pending_10;
-  assign \$248  = \$247  + events_reg[10];
-  assign \$249  = \$246  ? 5'h00 : \$248 ;
-  assign \$250  = rst | clear_reg;
-  assign \$251  = sel[5] ? 4'h0 : pending_11;
-  assign \$252  = \$251  + events_reg[11];
-  assign \$253  = \$250  ? 5'h00 : \$252 ;
-  assign \$254  = rst | clear_reg;
-  assign \$255  = sel[6] ? 4'h0 : pending_12;
-  assign \$256  = \$255  + events_reg[12];
-  assign \$257  = \$254  ? 5'h00 : \$256 ;
-  assign \$258  = rst | clear_reg;
-  assign \$259  = sel[6] ? 4'h0 : pending_13;
-  assign \$260  = \$259  + events_reg[13];
-  assign \$261  = \$258  ? 5'h00 : \$260 ;
-  assign \$262  = rst | clear_reg;
-  assign \$263  = sel[7] ? 4'h0 : pending_14;
-  assign \$264  = \$263  + events_reg[14];
-  assign \$265  = \$262  ? 5'h00 : \$264 ;
-  assign \$266  = rst | clear_reg;
-  assign \$267  = sel[7] ? 4'h0 : pending_15;
-  assign \$268  = \$267  + events_reg[15];
-  assign \$269  = \$266  ? 5'h00 : \$268 ;
-  assign \$270  = rst | clear_reg;
-  assign \$271  = ~ { sel[7], sel[7:6], sel[6:5], sel[5:4], sel[4:3], sel[3:2], sel[2:1], sel[1:0], sel[0] };
-  assign \$272  = marked & \$271 ;
-  assign \$273  = \$270  ? 16'hffff : \$272 ;
-  assign \$274  = | events_reg;
-  assign \$275  = \$274  | clear_reg;
-  assign \$276  = | marked;
-  assign \$277  = \$275  | \$276 ;
-  assign \$278  = | sel;
-  assign \$279  = \$277  | \$278 ;
-  assign \$280  = | writing;
-  assign \$281  = \$279  | \$280 ;
-  assign \$282  = | pending_0;
-  assign \$283  = | pending_1;
-  assign \$284  = | pending_2;
-  assign \$285  = | pending_3;
-  assign \$286  = | pending_4;
-  assign \$287  = | pending_5;
-  assign \$288  = | pending_6;
-  assign \$289  = | pending_7;
-  assign \$290  = | pending_8;
-  assign \$291  = | pending_9;
-  assign \$292  = | pending_10;
-  assign \$293  = | pending_11;
-  assign \$294  = | pending_12;
-  assign \$295  = | pending_13;
-  assign \$296  = | pending_14;
-  assign \$297  = | pending_15;
-  assign \$298  = | { \$297 , \$296 , \$295 , \$294 , \$293 , \$292 , \$291 , \$290 , \$289 , \$288 , \$287 , \$286 , \$285 , \$284 , \$283 , \$282  };
-  assign \$299  = \$281  | \$298 ;
+  assign \$138  = \$7  ? pending_12 : 4'h0;
+  assign \$139  = \$137  | \$138 ;
+  assign \$140  = \$8  ? pending_14 : 4'h0;
+  assign \$141  = \$139  | \$140 ;
+  assign \$142  = rst ? 4'h0 : \$141 ;
+  assign \$143  = \$1  ? pending_1 : 4'h0;
+  assign \$145  = \$2  ? pending_3 : 4'h0;
+  assign \$146  = \$144  | \$145 ;
+  assign \$147  = \$3  ? pending_5 : 4'h0;
+  assign \$148  = \$146  | \$147 ;
+  assign \$149  = \$4  ? pending_7 : 4'h0;
+  assign \$150  = \$148  | \$149 ;
+  assign \$151  = \$5  ? pending_9 : 4'h0;
+  assign \$152  = \$150  | \$151 ;
+  assign \$153  = \$6  ? pending_11 : 4'h0;
+  assign \$154  = \$152  | \$153 ;
+  assign \$155  = \$7  ? pending_13 : 4'h0;
+  assign \$156  = \$154  | \$155 ;
+  assign \$157  = \$8  ? pending_15 : 4'h0;
+  assign \$158  = \$156  | \$157 ;
+  assign \$159  = rst ? 4'h0 : \$158 ;
+  assign \$160  = | events_reg;
+  assign \$161  = rst | \$160 ;
+  assign \$162  = \$161  | clear_reg;
+  assign \$163  = | left;
+  assign \$164  = left - 1'h1;
+  assign \$165  = \$163  ? \$164  : 5'h00;
+  assign \$166  = \$162  ? 5'h09 : \$165 ;
   always @(posedge clk)
-    events_reg <= \$300 ;
+    events_reg <= \$167 ;
   always @(posedge clk)
-    clear_reg <= \$301 ;
+    clear_reg <= \$168 ;
   always @(posedge clk)
-    waiting <= \$302 ;
+    turn <= \$54 [2:0];
   always @(posedge clk)
-    running <= \$145 ;
+    pending_0 <= \$58 [3:0];
   always @(posedge clk)
-    sel <= \$303 ;
+    pending_1 <= \$62 [3:0];
   always @(posedge clk)
-    update__addr <= \$304 ;
+    pending_2 <= \$66 [3:0];
   always @(posedge clk)
-    above <= \$157 ;
+    pending_3 <= \$70 [3:0];
   always @(posedge clk)
-    writing <= \$305 ;
+    pending_4 <= \$74 [3:0];
   always @(posedge clk)
-    write__addr <= \$306 ;
+    pending_5 <= \$78 [3:0];
   always @(posedge clk)
-    zero <= \$307 ;
+    pending_6 <= \$82 [3:0];
   always @(posedge clk)
-    amount_0 <= \$189 ;
+    pending_7 <= \$86 [3:0];
   always @(posedge clk)
-    amount_1 <= \$205 ;
+    pending_8 <= \$90 [3:0];
   always @(posedge clk)
-    pending_0 <= \$209 [3:0];
+    pending_9 <= \$94 [3:0];
   always @(posedge clk)
-    pending_1 <= \$213 [3:0];
+    pending_10 <= \$98 [3:0];
   always @(posedge clk)
-    pending_2 <= \$217 [3:0];
+    pending_11 <= \$102 [3:0];
   always @(posedge clk)
-    pending_3 <= \$221 [3:0];
+    pending_12 <= \$106 [3:0];
   always @(posedge clk)
-    pending_4 <= \$225 [3:0];
+    pending_13 <= \$110 [3:0];
   always @(posedge clk)
-    pending_5 <= \$229 [3:0];
+    pending_14 <= \$114 [3:0];
   always @(posedge clk)
-    pending_6 <= \$233 [3:0];
+    pending_15 <= \$118 [3:0];
   always @(posedge clk)
-    pending_7 <= \$237 [3:0];
+    marked <= \$122 ;
   always @(posedge clk)
-    pending_8 <= \$241 [3:0];
+    write__addr <= turn;
   always @(posedge clk)
-    pending_9 <= \$245 [3:0];
+    zero <= \$125 ;
   always @(posedge clk)
-    pending_10 <= \$249 [3:0];
+    amount_0 <= \$142 ;
   always @(posedge clk)
-    pending_11 <= \$253 [3:0];
+    amount_1 <= \$159 ;
   always @(posedge clk)
-    pending_12 <= \$257 [3:0];
-  always @(posedge clk)
-    pending_13 <= \$261 [3:0];
-  always @(posedge clk)
-    pending_14 <= \$265 [3:0];
-  always @(posedge clk)
-    pending_15 <= \$269 [3:0];
-  always @(posedge clk)
-    marked <= \$273 ;
-  always @(posedge clk)
-    was_busy <= \$308 ;
+    left <= \$166 [3:0];
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [0] = 1'h0;
+      \$167 [0] = 1'h0;
     end else if (events[0]) begin
-      \$300 [0] = 1'h1;
+      \$167 [0] = 1'h1;
     end else begin
-      \$300 [0] = 1'h0;
+      \$167 [0] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [1] = 1'h0;
+      \$167 [1] = 1'h0;
     end else if (events[1]) begin
-      \$300 [1] = 1'h1;
+      \$167 [1] = 1'h1;
     end else begin
-      \$300 [1] = 1'h0;
+      \$167 [1] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [2] = 1'h0;
+      \$167 [2] = 1'h0;
     end else if (events[2]) begin
-      \$300 [2] = 1'h1;
+      \$167 [2] = 1'h1;
     end else begin
-      \$300 [2] = 1'h0;
+      \$167 [2] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [3] = 1'h0;
+      \$167 [3] = 1'h0;
     end else if (events[3]) begin
-      \$300 [3] = 1'h1;
+      \$167 [3] = 1'h1;
     end else begin
-      \$300 [3] = 1'h0;
+      \$167 [3] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [4] = 1'h0;
+      \$167 [4] = 1'h0;
     end else if (events[4]) begin
-      \$300 [4] = 1'h1;
+      \$167 [4] = 1'h1;
     end else begin
-      \$300 [4] = 1'h0;
+      \$167 [4] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [5] = 1'h0;
+      \$167 [5] = 1'h0;
     end else if (events[5]) begin
-      \$300 [5] = 1'h1;
+      \$167 [5] = 1'h1;
     end else begin
-      \$300 [5] = 1'h0;
+      \$167 [5] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [6] = 1'h0;
+      \$167 [6] = 1'h0;
     end else if (events[6]) begin
-      \$300 [6] = 1'h1;
+      \$167 [6] = 1'h1;
     end else begin
-      \$300 [6] = 1'h0;
+      \$167 [6] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [7] = 1'h0;
+      \$167 [7] = 1'h0;
     end else if (events[7]) begin
-      \$300 [7] = 1'h1;
+      \$167 [7] = 1'h1;
     end else begin
-      \$300 [7] = 1'h0;
+      \$167 [7] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [8] = 1'h0;
+      \$167 [8] = 1'h0;
     end else if (events[8]) begin
-      \$300 [8] = 1'h1;
+      \$167 [8] = 1'h1;
     end else begin
-      \$300 [8] = 1'h0;
+      \$167 [8] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [9] = 1'h0;
+      \$167 [9] = 1'h0;
     end else if (events[9]) begin
-      \$300 [9] = 1'h1;
+      \$167 [9] = 1'h1;
     end else begin
-      \$300 [9] = 1'h0;
+      \$167 [9] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [10] = 1'h0;
+      \$167 [10] = 1'h0;
     end else if (events[10]) begin
-      \$300 [10] = 1'h1;
+      \$167 [10] = 1'h1;
     end else begin
-      \$300 [10] = 1'h0;
+      \$167 [10] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [11] = 1'h0;
+      \$167 [11] = 1'h0;
     end else if (events[11]) begin
-      \$300 [11] = 1'h1;
+      \$167 [11] = 1'h1;
     end else begin
-      \$300 [11] = 1'h0;
+      \$167 [11] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [12] = 1'h0;
+      \$167 [12] = 1'h0;
     end else if (events[12]) begin
-      \$300 [12] = 1'h1;
+      \$167 [12] = 1'h1;
     end else begin
-      \$300 [12] = 1'h0;
+      \$167 [12] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [13] = 1'h0;
+      \$167 [13] = 1'h0;
     end else if (events[13]) begin
-      \$300 [13] = 1'h1;
+      \$167 [13] = 1'h1;
     end else begin
-      \$300 [13] = 1'h0;
+      \$167 [13] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [14] = 1'h0;
+      \$167 [14] = 1'h0;
     end else if (events[14]) begin
-      \$300 [14] = 1'h1;
+      \$167 [14] = 1'h1;
     end else begin
-      \$300 [14] = 1'h0;
+      \$167 [14] = 1'h0;
     end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$300 [15] = 1'h0;
+      \$167 [15] = 1'h0;
     end else if (events[15]) begin
-      \$300 [15] = 1'h1;
+      \$167 [15] = 1'h1;
     end else begin
-      \$300 [15] = 1'h0;
+      \$167 [15] = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
-      \$301  = 1'h0;
+      \$168  = 1'h0;
     end else if (clear) begin
-      \$301  = 1'h1;
+      \$168  = 1'h1;
     end else begin
-      \$301  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$302  = { \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109  };
-    if (rst) begin
-      \$302  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$303  = pick;
-    if (rst) begin
-      \$303  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$304  = { \$148 , \$147 , \$146  };
-    if (rst) begin
-      \$304  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$305  = sel;
-    if (rst) begin
-      \$305  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$306  = update__addr;
-    if (rst) begin
-      \$306  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$307  = \$173 ;
-    if (rst) begin
-      \$307  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
-    \$308  = \$299 ;
-    if (rst) begin
-      \$308  = 1'h1;
+      \$168  = 1'h0;
     end
   end
   assign read_addr = host__addr;
   assign read_en = host__en;
   assign host__data = read_data;
-  assign sel_addr = update__addr;
-  assign total_0 = { 3'h0, \$66  };
-  assign total_1 = { 3'h0, \$68  };
-  assign word = write__addr;
-  assign write__data = { \$102 , \$85  };
+  assign now = { \$8 , \$7 , \$6 , \$5 , \$4 , \$3 , \$2 , \$1  };
+  assign update__addr = turn;
+  assign update__en = 1'h1;
+  assign total_0 = { 3'h0, \$10  };
+  assign total_1 = { 3'h0, \$12  };
+  assign address = write__addr;
+  assign write__data = { \$46 , \$29  };
+  assign write__en = 1'h1;
   assign \events_reg.crc_word0  = events_reg[0];
   assign \events_reg.crc_word1  = events_reg[1];
   assign \events_reg.no_ack  = events_reg[2];
@@ -36238,44 +35558,40 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_da
   assign \events.noisy_line  = events[13];
   assign \events.delay_jump  = events[14];
   assign \events.noise_event  = events[15];
-  assign \$10  = \$9 [0];
-  assign \$43  = due[0];
-  assign \$69  = \$66 [16];
-  assign \$70  = \$66 [16];
-  assign \$71  = \$66 [16];
-  assign \$72  = \$66 [16];
-  assign \$73  = \$66 [16];
-  assign \$74  = \$66 [16];
-  assign \$75  = \$66 [16];
-  assign \$76  = \$66 [16];
-  assign \$77  = \$66 [16];
-  assign \$78  = \$66 [16];
-  assign \$79  = \$66 [16];
-  assign \$80  = \$66 [16];
-  assign \$81  = \$66 [16];
-  assign \$82  = \$66 [16];
-  assign \$83  = \$66 [16];
-  assign \$84  = \$66 [16];
-  assign \$86  = \$68 [16];
-  assign \$87  = \$68 [16];
-  assign \$88  = \$68 [16];
-  assign \$89  = \$68 [16];
-  assign \$90  = \$68 [16];
-  assign \$91  = \$68 [16];
-  assign \$92  = \$68 [16];
-  assign \$93  = \$68 [16];
-  assign \$94  = \$68 [16];
-  assign \$95  = \$68 [16];
-  assign \$96  = \$68 [16];
-  assign \$97  = \$68 [16];
-  assign \$98  = \$68 [16];
-  assign \$99  = \$68 [16];
-  assign \$100  = \$68 [16];
-  assign \$101  = \$68 [16];
-  assign \$150  = pick[0];
-  assign \$159  = \$158 ;
-  assign \$175  = \$174 ;
-  assign \$191  = \$190 ;
+  assign \$13  = \$10 [16];
+  assign \$14  = \$10 [16];
+  assign \$15  = \$10 [16];
+  assign \$16  = \$10 [16];
+  assign \$17  = \$10 [16];
+  assign \$18  = \$10 [16];
+  assign \$19  = \$10 [16];
+  assign \$20  = \$10 [16];
+  assign \$21  = \$10 [16];
+  assign \$22  = \$10 [16];
+  assign \$23  = \$10 [16];
+  assign \$24  = \$10 [16];
+  assign \$25  = \$10 [16];
+  assign \$26  = \$10 [16];
+  assign \$27  = \$10 [16];
+  assign \$28  = \$10 [16];
+  assign \$30  = \$12 [16];
+  assign \$31  = \$12 [16];
+  assign \$32  = \$12 [16];
+  assign \$33  = \$12 [16];
+  assign \$34  = \$12 [16];
+  assign \$35  = \$12 [16];
+  assign \$36  = \$12 [16];
+  assign \$37  = \$12 [16];
+  assign \$38  = \$12 [16];
+  assign \$39  = \$12 [16];
+  assign \$40  = \$12 [16];
+  assign \$41  = \$12 [16];
+  assign \$42  = \$12 [16];
+  assign \$43  = \$12 [16];
+  assign \$44  = \$12 [16];
+  assign \$45  = \$12 [16];
+  assign \$127  = \$126 ;
+  assign \$144  = \$143 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -36686,7 +36002,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, lc_load, ssi, \port$13698$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
+module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, lc_load, ssi, \port$13410$206 , words, sample, \bit , crc_widths, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_table_addr, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -37387,8 +36703,8 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$13698$206 ;
-  wire [2:0] \port$13698$206 ;
+  input [2:0] \port$13410$206 ;
+  wire [2:0] \port$13410$206 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -37708,7 +37024,7 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
     cpw_top <= \$600 ;
   always @(posedge clk)
     crc_table_addr <= \$601 ;
-  assign error_bit = ssi & \port$13698$206 [0];
+  assign error_bit = ssi & \port$13410$206 [0];
   assign frame_end = ssi ? stopped : done;
   assign \$1  = sample & \bit ;
   assign \$2  = idx == current[34:28];
@@ -37737,19 +37053,19 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \$19  = slots == 16'hfffe;
   assign \$20  = sample & \bit ;
   assign \$21  = | words[5:0];
-  assign \$22  = ssi & \port$13698$206 [0];
+  assign \$22  = ssi & \port$13410$206 [0];
   assign \$24  = words[5:0] + \$23 ;
   assign \$25  = ! \$24 ;
-  assign \$26  = ssi & \port$13698$206 [0];
+  assign \$26  = ssi & \port$13410$206 [0];
   assign \$28  = words[5:0] + \$27 ;
   assign \$29  = | \$28 ;
   assign \$30  = \$25  & \$29 ;
   assign \$31  = | words[17:12];
   assign \$32  = | words[5:0];
-  assign \$33  = ssi & \port$13698$206 [0];
+  assign \$33  = ssi & \port$13410$206 [0];
   assign \$35  = words[5:0] + \$34 ;
   assign \$36  = ! \$35 ;
-  assign \$37  = ssi & \port$13698$206 [0];
+  assign \$37  = ssi & \port$13410$206 [0];
   assign \$39  = words[5:0] + \$38 ;
   assign \$40  = | \$39 ;
   assign \$41  = \$36  & \$40 ;
@@ -37770,7 +37086,7 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \$56  = idx == current[34:28];
   assign \$57  = word_count - 1'h1;
   assign \$58  = word == \$57 ;
-  assign \$59  = ssi & \port$13698$206 [2];
+  assign \$59  = ssi & \port$13410$206 [2];
   assign \$60  = word + 1'h1;
   assign \$61  = idx + 1'h1;
   assign \$62  = idx == current[34:28];
@@ -38056,15 +37372,15 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \$342  = \$339  & \$341 ;
   assign \$343  = { data0[53:0], \$67  } | { \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72  };
   assign \$344  = ~ words[6];
-  assign \$345  = ssi & \port$13698$206 [0];
+  assign \$345  = ssi & \port$13410$206 [0];
   assign \$346  = ~ \$345 ;
   assign \$347  = \$344  & \$346 ;
   assign \$348  = ! word;
   assign \$349  = in_word & \$348 ;
   assign \$350  = idx == words[5:0];
   assign \$351  = \$349  & \$350 ;
-  assign \$352  = ssi & \port$13698$206 [0];
-  assign \$353  = ~ \port$13698$206 [1];
+  assign \$352  = ssi & \port$13410$206 [0];
+  assign \$353  = ~ \port$13410$206 [1];
   assign \$354  = \$352  & \$353 ;
   assign \$355  = \bit  ^ \$354 ;
   assign \$356  = ~ words[6];
@@ -38815,7 +38131,7 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   end
   assign \words$1  = words;
   assign \crc_widths$3  = crc_widths;
-  assign ssi_error = \port$13698$206 [0];
+  assign ssi_error = \port$13410$206 [0];
   assign \bit$11  = \bit ;
   assign index = current[34:28];
   assign \mismatch$15  = mismatch;
@@ -38828,8 +38144,8 @@ module \biss_master_axil.ch1.core.decoder (rst, \table , word_count, frame_end, 
   assign \index$46  = word;
   assign load_index = crc_table_addr;
   assign crc_next_word = crc_table_addr;
-  assign ssi_double = \port$13698$206 [2];
-  assign ssi_error_low = \port$13698$206 [1];
+  assign ssi_double = \port$13410$206 [2];
+  assign ssi_error_low = \port$13410$206 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -41108,7 +40424,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.ma_stop (rst, \port$13698$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
+module \biss_master_axil.ch1.core.ma_stop (rst, \port$13410$166 , ssi, ssi_error, ssi_double, words, crc_widths, clear, rises, enough, \started$23 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -41197,8 +40513,8 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13698$166 , ssi, ssi_error
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$13698$166 ;
-  wire \port$13698$166 ;
+  input \port$13410$166 ;
+  wire \port$13410$166 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -41318,7 +40634,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13698$166 , ssi, ssi_error
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = ! sum_word;
   assign \$11  = sum_word ? 1'h0 : 1'h1;
-  assign \$13  = \$12  ? \port$13698$166  : 1'h0;
+  assign \$13  = \$12  ? \port$13410$166  : 1'h0;
   assign \$14  = \$11  | \$13 ;
   assign \$15  = ! sum_word;
   assign \$16  = sum_word ? 12'h000 : words[11:0];
@@ -41486,7 +40802,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, \port$13698$166 , ssi, ssi_error
           \$2  = 8'h09;
     endcase
   end
-  assign enables = { \port$13698$166 , 1'h1 };
+  assign enables = { \port$13410$166 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -43630,7 +42946,7 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13698$193 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$13410$193 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -44213,8 +43529,8 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$13698$193 ;
-  wire [12:0] \port$13698$193 ;
+  input [12:0] \port$13410$193 ;
+  wire [12:0] \port$13410$193 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -44237,7 +43553,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$460  = \port$13698$193 [12:1] + 1'h1;
+  assign \$460  = \port$13410$193 [12:1] + 1'h1;
   assign \$461  = ~ level;
   assign \$462  = elapsed + 1'h1;
   assign \$463  = elapsed == fixed_at;
@@ -44813,7 +44129,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$13698$193 [0]),
+    .clear_high(\port$13410$193 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -44956,7 +44272,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$530  = \$461 ;
-            if (\port$13698$193 [0]) begin
+            if (\port$13410$193 [0]) begin
               \$530  = 1'h0;
             end
           end
@@ -45041,7 +44357,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$533  = 2'h1;
-            if (\port$13698$193 [0]) begin
+            if (\port$13410$193 [0]) begin
               \$533  = 2'h2;
             end
           end
@@ -45080,7 +44396,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$463 ) begin
-            \$534  = { 1'h0, \port$13698$193 [12:1] };
+            \$534  = { 1'h0, \port$13410$193 [12:1] };
           end
       2'h1:
           if (\$469 ) begin
@@ -45465,11 +44781,11 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$13698$193 [12:1] };
-  assign fixed = \port$13698$193 [0];
+  assign fixed_delay = { 1'h0, \port$13410$193 [12:1] };
+  assign fixed = \port$13410$193 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$13698$193 [0];
+  assign clear_high = \port$13410$193 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -48046,7 +47362,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13711$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$13423$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -48088,8 +47404,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$13711$0 ;
-  wire \port$13711$0 ;
+  input \port$13423$0 ;
+  wire \port$13423$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -48103,9 +47419,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$13711$0  };
-  assign \$2  = { lc[4:0], \port$13711$0  } == last;
-  assign \$3  = { lc[4:0], \port$13711$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$13423$0  };
+  assign \$2  = { lc[4:0], \port$13423$0  } == last;
+  assign \$3  = { lc[4:0], \port$13423$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -48215,7 +47531,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$13711$0  };
+  assign lc_next = { lc[4:0], \port$13423$0  };
   assign zero = is_zero;
 endmodule
 
@@ -51012,7 +50328,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11605$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11468$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -51184,8 +50500,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11605$0 , 
   wire noisy;
   output passed;
   wire passed;
-  output \port$11605$0 ;
-  wire \port$11605$0 ;
+  output \port$11468$0 ;
+  wire \port$11468$0 ;
   output report;
   wire report;
   input report_frame;
@@ -51303,7 +50619,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$11605$0 , 
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$11605$0  = \$2 ;
+  assign \port$11468$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

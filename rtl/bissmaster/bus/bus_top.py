@@ -92,7 +92,7 @@ RETIMED_PULSES = ("abort_cycle",)
 #: Bits of each count in the register map (two counts per counter register, as in the core's
 #: counter memory): :data:`~bissmaster.params.COUNTER_HALF_BITS`. The longest wait of a cycle's
 #: end for its counts is :data:`~bissmaster.layouts.COUNT_SETTLE` (docs/ports.md, Counters: a
-#: count is in the counter memory at most 15 clocks after its event).
+#: read issued 11 clocks after an event returns it).
 COUNT_BITS = COUNTER_HALF_BITS
 #: Global signals of the register map, made by the top.
 GLOBAL_SIGNALS = ("channels", "trigger", "irq_pending")
@@ -225,7 +225,7 @@ class BusChannel(wiring.Component):
         regs = self.regs
         # A cycle's end as the host is told of it (irq_status.done and .error, result.seq):
         # the core's `done`, held until its counts are in the counter memory, so that a host
-        # reading the counters on the interrupt reads this cycle's (at most 16 clocks later;
+        # reading the counters on the interrupt reads this cycle's (at most 12 clocks later;
         # the next cycle's end reports it at once).
         ended = Signal()
         if p.counter_ram:
