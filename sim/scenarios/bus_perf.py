@@ -5,8 +5,9 @@ regression. One cocotb test, ``bus_trigger_latency``: channel 0 reads an encoder
 protocol's fastest slave: Start on the third MA rise), ``irq`` enabled for ``done``. For each
 point (preset, MA rate, cable, trigger source) one frame is started by the input ``trigger``
 (a pulse synchronous to ``clk``) or by a write of the ``trigger`` register, with the master
-idle and SLO high at its pin (the previous cycle over), and the moment the result is readable
-on the bus is measured, split into parts that add up exactly:
+idle and SLO high at its pin for longer than the quiet time (the previous cycle over), and
+the moment the result is readable on the bus is measured, split into parts that add up
+exactly:
 
 * **start**: the trigger's clock edge (the edge at which the top takes the input, or the first
   edge that samples the trigger write's AWVALID high) -> the master's first MA fall (the
@@ -43,6 +44,8 @@ from encoder_model.cocotb_encoder import Cable
 from sim.shared.bus_testbench import CLK_HZ, BusTestbench
 
 PS_PER_CLK = round(1e12 / CLK_HZ)
+#: The quiet time of the default configuration (``cfg_quiet_time`` = 0: 1 us, docs/ports.md).
+QUIET_S = 1e-6
 
 BUS_LATENCY_PRESETS = ["resolute_c_36", "bp3_24"]
 BUS_LATENCY_RATES_HZ = [1e6, 10e6]
@@ -144,9 +147,11 @@ async def bus_trigger_latency(dut):
                     await tb.write("irq_status", done_mask, 0)
                     # The encoder's release of SLO reaches the master one cable delay later;
                     # until then a trigger waits for it (WAIT_READY), which is not latency.
+                    # Nor is the quiet time SLO must then be high before MA starts (1 us by
+                    # default, docs/ports.md, cfg_quiet_time): a quiet line waits it out.
                     while dut.ch0_slo.value != 1:
                         await RisingEdge(dut.clk)
-                    await ClockCycles(dut.clk, 4)
+                    await ClockCycles(dut.clk, round(QUIET_S * CLK_HZ) + 4)
                     assert dut.irq.value == 0, "irq still high after clearing irq_status"
                     first = len(chan.encoder.records)
                     marks = len(aw), len(ar), len(r), len(irqs), len(dones)
