@@ -24,7 +24,7 @@ class CounterRam(wiring.Component):
     counts are taken, and in the next clock both its counts plus those events, saturating at
     ``2**width - 1``, are written back. A count is therefore in the memory at most
     ``words + 2`` clocks after its event's clock, and a read issued ``words + 3`` clocks after
-    it (11 for 16 counters) returns it (``settle``, :func:`~bissmaster.params.counter_settle`;
+    it (11 for 16 counters; the turns run over two words at least) returns it (``settle``, :func:`~bissmaster.params.counter_settle`;
     at least 4 clocks after it, when the event comes just before its word's turn). A counter's
     events between two turns of its word are added together; its pending count has room for
     one in every clock, so none is lost, however fast a source strobes.
@@ -56,8 +56,8 @@ class CounterRam(wiring.Component):
     read_data : Out(32)
     busy : Out(1)
         High in a reset's clock, and while an event or a clear may not yet be in the memory:
-        from the clock after its own until ``settle`` clocks after it. Low, a read issued in
-        that clock returns every event before it.
+        from the clock after its own to the last before ``settle`` clocks after it. Low, a
+        read issued in that clock returns every event before it.
     """
 
     def __init__(self, slots, width):
