@@ -41,11 +41,10 @@ from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
+from master_contract import QUIET_TIME_S
 from sim.shared.bus_testbench import CLK_HZ, BusTestbench
 
 PS_PER_CLK = round(1e12 / CLK_HZ)
-#: The quiet time of the default configuration (``cfg_quiet_time`` = 0: 1 us, docs/ports.md).
-QUIET_S = 1e-6
 
 BUS_LATENCY_PRESETS = ["resolute_c_36", "bp3_24"]
 BUS_LATENCY_RATES_HZ = [1e6, 10e6]
@@ -151,7 +150,7 @@ async def bus_trigger_latency(dut):
                     # default, docs/ports.md, cfg_quiet_time): a quiet line waits it out.
                     while dut.ch0_slo.value != 1:
                         await RisingEdge(dut.clk)
-                    await ClockCycles(dut.clk, round(QUIET_S * CLK_HZ) + 4)
+                    await ClockCycles(dut.clk, round(QUIET_TIME_S * CLK_HZ) + 4)
                     assert dut.irq.value == 0, "irq still high after clearing irq_status"
                     first = len(chan.encoder.records)
                     marks = len(aw), len(ar), len(r), len(irqs), len(dones)

@@ -40,6 +40,7 @@ import time
 import xml.etree.ElementTree as ET
 from importlib import metadata
 
+from master_contract import QUIET_TIME_S
 from sim.shared import runner
 from sim.shared.runner import output_to
 
@@ -168,11 +169,8 @@ def verdict(ok):
 
 
 # -- 1. Request-cycle overhead ------------------------------------------------------------------
-#: The quiet time of the default configuration (``cfg_quiet_time`` = 0: 1 us, docs/ports.md): SLO
-#: must be high that long before the master starts MA, so the dead time is at least that.
-DEFAULT_QUIET_S = 1e-6
-
-
+# The default configuration's quiet time (QUIET_TIME_S, 1 us): SLO must be high that long before
+# the master starts MA, so the dead time is at least that.
 def overhead_section(d, goals):
     out = ["### 1. Request-cycle overhead (periodic, cfg_request_period = 0)", ""]
     if d is None:
@@ -186,9 +184,9 @@ def overhead_section(d, goals):
         spread = max(r["intervals_s"]) - min(r["intervals_s"])
         over = ach - r["minimum_s"]
         dead = max(r["dead_s"])
-        worst_dead = max(worst_dead, (dead - DEFAULT_QUIET_S) / t_ma)
+        worst_dead = max(worst_dead, (dead - QUIET_TIME_S) / t_ma)
         rises_ok = r["ma_rises"] == r["needed_rises"] and r["start_rise"] == [r["start_rise_model"]]
-        ok = dead <= DEFAULT_QUIET_S + t_ma and rises_ok and not r["aborted"]
+        ok = dead <= QUIET_TIME_S + t_ma and rises_ok and not r["aborted"]
         all_ok &= ok
         proc = "min" if r["processing_time_s"] == 0 else f"{r['processing_time_s'] * 1e6:g} us"
         tmo = f"{r['timeout_s'] * 1e6:.3g} us"
@@ -198,15 +196,15 @@ def overhead_section(d, goals):
                      + ("" if spread < 1e-12 else f" ±{spread * 1e9 / 2:.0f}ns"),
                      f"{r['minimum_s'] * 1e6:.3f}", f"{over * 1e9:+.1f}",
                      f"{over / r['minimum_s'] * 100:+.2f}", f"{dead * 1e9:.1f}",
-                     f"{(dead - DEFAULT_QUIET_S) / t_ma:.3f}", "yes" if rises_ok else "NO",
+                     f"{(dead - QUIET_TIME_S) / t_ma:.3f}", "yes" if rises_ok else "NO",
                      verdict(ok)])
     frames_ok = not d["failures"] and not d["ignored_falls"] and d["overrun"] == 0
     all_ok &= frames_ok
     sweep = d["dead_sweep_s"]
     t_sweep = 1 / d["dead_sweep_ma_hz"]
-    sweep_ok = bool(sweep) and max(sweep) <= DEFAULT_QUIET_S + t_sweep
+    sweep_ok = bool(sweep) and max(sweep) <= QUIET_TIME_S + t_sweep
     all_ok &= sweep_ok
-    worst_dead = max(worst_dead, (max(sweep, default=0) - DEFAULT_QUIET_S) / t_sweep)
+    worst_dead = max(worst_dead, (max(sweep, default=0) - QUIET_TIME_S) / t_sweep)
     goals.append(("dead time SLO high -> next MA fall <= quiet time (1 us) + 1 MA period", all_ok,
                   f"worst 1 us + {worst_dead:.3f} MA periods"))
     out += [md_table(["encoder", "preset", "D", "MA/MHz", "proc. / timeout", "achieved/us",
@@ -221,7 +219,7 @@ def overhead_section(d, goals):
             f" at {d['dead_sweep_ma_hz'] / 1e6:g} MHz, fastest slave: min "
             f"{min(sweep, default=float('nan')) * 1e9:.1f} ns, max "
             f"{max(sweep, default=float('nan')) * 1e9:.1f} ns = 1 us (the quiet time) + "
-            f"{(max(sweep, default=float('nan')) - DEFAULT_QUIET_S) / t_sweep:.3f} MA periods: "
+            f"{(max(sweep, default=float('nan')) - QUIET_TIME_S) / t_sweep:.3f} MA periods: "
             f"{verdict(sweep_ok)}."]
     return out
 
